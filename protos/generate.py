@@ -6,8 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from grpc_tools import protoc
 import grpc_tools
+from grpc_tools import protoc
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 

@@ -1,0 +1,1 @@
+"""Accounts and authentication: who may log in and as what."""

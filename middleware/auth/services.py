@@ -1,0 +1,70 @@
+"""Account rules: creating accounts, checking passwords. No Flask request state in here."""
+
+from __future__ import annotations
+
+import secrets
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+from werkzeug.security import check_password_hash, generate_password_hash
+
+from middleware.auth.schemas import InvalidField, clean_new_password, clean_role, clean_username
+from middleware.models import Role, User
+
+# scrypt is a memory-hard KDF; werkzeug salts it and encodes the parameters in the hash.
+PASSWORD_METHOD = "scrypt"
+# Checking a password for an unknown username still costs one hash, so timing does not reveal accounts.
+_DUMMY_HASH = generate_password_hash("telelab-timing-equaliser", method=PASSWORD_METHOD)
+
+
+class AccountExists(ValueError):
+    """The username is taken."""
+
+
+def generate_password() -> str:
+    """A random password that is easy to type from a printout (about 100 bits)."""
+    return "-".join(secrets.token_urlsafe(6) for _ in range(3))
+
+
+def create_user(session: Session, username: str, role: str | Role, password: str) -> User:
+    """Adds an account after validating every field; the caller commits."""
+    clean_name = clean_username(username)
+    clean_password = clean_new_password(password)
+    user_role = clean_role(role)
+    if session.scalar(select(User.id).where(User.username == clean_name)) is not None:
+        raise AccountExists(f"An account named {clean_name!r} already exists.")
+    user = User(
+        username=clean_name,
+        role=user_role.value,
+        password_hash=generate_password_hash(clean_password, method=PASSWORD_METHOD),
+    )
+    session.add(user)
+    session.flush()
+    return user
+
+
+def set_password(session: Session, username: str, password: str) -> User:
+    """Replaces an account's password; the caller commits."""
+    user = find_user(session, username)
+    if user is None:
+        raise InvalidField("username", f"There is no account named {username!r}.")
+    user.password_hash = generate_password_hash(clean_new_password(password), method=PASSWORD_METHOD)
+    return user
+
+
+def find_user(session: Session, username: str) -> User | None:
+    """The account with that username, if any."""
+    try:
+        name = clean_username(username)
+    except InvalidField:
+        return None
+    return session.scalar(select(User).where(User.username == name))
+
+
+def authenticate(session: Session, username: str, password: str) -> User | None:
+    """The active account whose password matches, or None; costs one hash either way."""
+    user = find_user(session, username)
+    if user is None or not user.is_active:
+        check_password_hash(_DUMMY_HASH, password)
+        return None
+    return user if check_password_hash(user.password_hash, password) else None

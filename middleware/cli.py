@@ -1,0 +1,187 @@
+"""The `telelab` command: run the lab, its tiers, migrations and accounts."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Sequence
+
+from middleware.auth.schemas import InvalidField
+
+
+def _app(**overrides: object):  # type: ignore[no-untyped-def]
+    from middleware import create_app
+
+    return create_app(dict(overrides) or None)
+
+
+def cmd_db_upgrade(_args: argparse.Namespace) -> int:
+    """Migrates the configured database to the newest revision."""
+    from middleware.db import upgrade_to_head
+
+    app = _app()
+    upgrade_to_head(app.config["DATABASE_URL"])
+    print(f"database at {_redacted(app.config['DATABASE_URL'])} is at the newest revision")
+    return 0
+
+
+def _read_password(args: argparse.Namespace) -> tuple[str, bool]:
+    """The password from stdin when it is not a terminal, else a generated one; and whether generated."""
+    from middleware.auth.services import generate_password
+
+    if args.generate or sys.stdin.isatty():
+        return generate_password(), True
+    return sys.stdin.readline().rstrip("\n"), False
+
+
+def cmd_users_add(args: argparse.Namespace) -> int:
+    """Creates an account; prints a generated password once."""
+    from middleware.auth.services import AccountExists, create_user
+    from middleware.db import session_factory
+
+    password, generated = _read_password(args)
+    app = _app()
+    with session_factory(app)() as session:
+        try:
+            user = create_user(session, args.name, args.role, password)
+            session.commit()
+        except (InvalidField, AccountExists) as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
+    print(f"created {user.role} {user.username}" + (f" with password {password}" if generated else ""))
+    return 0
+
+
+def cmd_users_set_password(args: argparse.Namespace) -> int:
+    """Replaces an account's password; prints a generated one once."""
+    from middleware.auth.services import set_password
+    from middleware.db import session_factory
+
+    password, generated = _read_password(args)
+    app = _app()
+    with session_factory(app)() as session:
+        try:
+            user = set_password(session, args.name, password)
+            session.commit()
+        except InvalidField as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
+    print(f"password of {user.username} changed" + (f" to {password}" if generated else ""))
+    return 0
+
+
+def cmd_users_list(_args: argparse.Namespace) -> int:
+    """Lists the accounts."""
+    from sqlalchemy import select
+
+    from middleware.db import session_factory
+    from middleware.models import User
+
+    with session_factory(_app())() as session:
+        for user in session.scalars(select(User).order_by(User.username)):
+            print(f"{user.username:24} {user.role:8} {'active' if user.is_active else 'disabled'}")
+    return 0
+
+
+def cmd_web(args: argparse.Namespace) -> int:
+    """Serves the middleware (threaded; one thread per connection, WebSockets included)."""
+    from middleware.serve import serve_forever
+
+    serve_forever(_app(), args.host, args.port)
+    return 0
+
+
+def cmd_skill_server(args: argparse.Namespace) -> int:
+    """Runs one robot's skill server (the skill_server package, in this same interpreter)."""
+    # The tiers meet only over gRPC, so the middleware starts the robot tier as a program, never imports it.
+    argv = [sys.executable, "-m", "skill_server", *args.skill_server_args]
+    os.execv(sys.executable, argv)
+    return 1  # not reached
+
+
+def cmd_up(args: argparse.Namespace) -> int:
+    """Starts the whole lab on this machine."""
+    from middleware.lab_runner import run_lab
+
+    return run_lab(host=args.host, port=args.port, robot_count=args.robots, scene=args.scene)
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    """Runs the benchmarks."""
+    try:
+        from middleware.bench import run_benchmarks
+    except ImportError:
+        print("error: the benchmarks are not part of this build yet", file=sys.stderr)
+        return 2
+    return run_benchmarks(quick=args.quick, output=args.output)
+
+
+def _redacted(url: str) -> str:
+    scheme, sep, rest = url.partition("://")
+    if "@" in rest:
+        rest = "***@" + rest.split("@", 1)[1]
+    return scheme + sep + rest
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of `telelab`."""
+    parser = argparse.ArgumentParser(prog="telelab", description="Telelab, a remote laboratory for mobile robotics.")
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    up = commands.add_parser("up", help="start the whole lab: skill server(s), database, web")
+    up.add_argument("--host", default="127.0.0.1")
+    up.add_argument("--port", type=int, default=5000)
+    up.add_argument("--robots", type=int, default=1, help="how many simulated lab robots (default 1)")
+    up.add_argument("--scene", default="lab", help="scene of the simulated robots (default lab)")
+    up.set_defaults(handler=cmd_up)
+
+    web = commands.add_parser("web", help="serve the middleware only (robots from TELELAB_ROBOTS)")
+    web.add_argument("--host", default="127.0.0.1")
+    web.add_argument("--port", type=int, default=5000)
+    web.set_defaults(handler=cmd_web)
+
+    skill = commands.add_parser("skill-server", help="run one robot's skill server", add_help=False)
+    skill.add_argument("skill_server_args", nargs=argparse.REMAINDER,
+                       help="--port P [--host H] [--scene NAME] [--seed N] [--fast] [--name ROBOT]")
+    skill.set_defaults(handler=cmd_skill_server)
+
+    database = commands.add_parser("db", help="database maintenance")
+    db_commands = database.add_subparsers(dest="db_command", required=True)
+    db_commands.add_parser("upgrade", help="migrate to the newest revision").set_defaults(handler=cmd_db_upgrade)
+
+    users = commands.add_parser("users", help="accounts")
+    user_commands = users.add_subparsers(dest="users_command", required=True)
+    add = user_commands.add_parser("add", help="create an account (password from stdin, or generated)")
+    add.add_argument("name")
+    add.add_argument("--role", required=True, choices=["student", "tutor", "admin"])
+    add.add_argument("--generate", action="store_true", help="generate the password even if stdin is a pipe")
+    add.set_defaults(handler=cmd_users_add)
+    reset = user_commands.add_parser("set-password", help="replace a password (from stdin, or generated)")
+    reset.add_argument("name")
+    reset.add_argument("--generate", action="store_true")
+    reset.set_defaults(handler=cmd_users_set_password)
+    user_commands.add_parser("list", help="list the accounts").set_defaults(handler=cmd_users_list)
+
+    bench = commands.add_parser("bench", help="measure response times, streaming and capacity")
+    bench.add_argument("--quick", action="store_true", help="a short smoke run that asserts no timings")
+    bench.add_argument("--output", default="bench-results", help="folder for the JSON and histograms")
+    bench.set_defaults(handler=cmd_bench)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the `telelab` console script."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["skill-server"] and not {"-h", "--help"} & set(argv[1:2]):
+        # Every flag belongs to the skill server; argparse would try to claim them.
+        return cmd_skill_server(argparse.Namespace(skill_server_args=argv[1:]))
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.handler(args))
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

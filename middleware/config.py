@@ -1,0 +1,73 @@
+"""Configuration read from the environment (TELELAB_*), with defaults for a single machine."""
+
+from __future__ import annotations
+
+import os
+import secrets
+from dataclasses import dataclass
+from datetime import timedelta
+from pathlib import Path
+
+
+class ConfigError(ValueError):
+    """A TELELAB_* setting that cannot be used; the message names it."""
+
+
+@dataclass(frozen=True)
+class RobotAddress:
+    """A robot the middleware may reach: its name (URL-safe) and its skill server's gRPC address."""
+
+    name: str
+    address: str
+
+    @property
+    def title(self) -> str:
+        """A human title derived from the name: 'lab-1' -> 'Lab 1'."""
+        return self.name.replace("-", " ").replace("_", " ").capitalize()
+
+
+def parse_robots(value: str) -> tuple[RobotAddress, ...]:
+    """Parses TELELAB_ROBOTS: 'name=host:port' entries separated by commas."""
+    robots: list[RobotAddress] = []
+    for entry in filter(None, (part.strip() for part in value.split(","))):
+        name, sep, address = entry.partition("=")
+        name, address = name.strip(), address.strip()
+        if not sep or not name or ":" not in address:
+            raise ConfigError(f"TELELAB_ROBOTS entry {entry!r} must look like 'lab-1=127.0.0.1:50051'.")
+        if not all(c.isalnum() or c in "-_" for c in name) or len(name) > 32:
+            raise ConfigError(f"TELELAB_ROBOTS name {name!r} may use only letters, digits, '-' and '_'.")
+        if any(r.name == name for r in robots):
+            raise ConfigError(f"TELELAB_ROBOTS names robot {name!r} twice.")
+        robots.append(RobotAddress(name, address))
+    return tuple(robots)
+
+
+def persistent_secret_key(instance_dir: Path) -> str:
+    """A secret key kept in the instance folder, so sessions survive a restart on one machine."""
+    path = instance_dir / "secret_key"
+    if path.exists():
+        return path.read_text().strip()
+    instance_dir.mkdir(parents=True, exist_ok=True)
+    key = secrets.token_urlsafe(48)
+    path.touch(mode=0o600)
+    path.write_text(key)
+    return key
+
+
+def from_environment(instance_dir: Path, environ: dict[str, str] | None = None) -> dict[str, object]:
+    """The Flask config mapping built from TELELAB_* variables."""
+    env = dict(os.environ if environ is None else environ)
+    secure_cookie = env.get("TELELAB_SECURE_COOKIES", "0").lower() in {"1", "true", "yes"}
+    return {
+        "DATABASE_URL": env.get("TELELAB_DATABASE_URL", f"sqlite:///{instance_dir / 'telelab.sqlite3'}"),
+        "SECRET_KEY": env.get("TELELAB_SECRET_KEY") or persistent_secret_key(instance_dir),
+        "ROBOTS": parse_robots(env.get("TELELAB_ROBOTS", "")),
+        "ROBOT_RPC_TIMEOUT_S": float(env.get("TELELAB_ROBOT_RPC_TIMEOUT_S", "1.0")),
+        "SESSION_COOKIE_HTTPONLY": True,
+        "SESSION_COOKIE_SAMESITE": "Lax",
+        "SESSION_COOKIE_SECURE": secure_cookie,
+        "REMEMBER_COOKIE_SECURE": secure_cookie,
+        "PERMANENT_SESSION_LIFETIME": timedelta(hours=float(env.get("TELELAB_SESSION_HOURS", "8"))),
+        "WTF_CSRF_TIME_LIMIT": None,  # the token lives as long as the session, which expires itself
+        "MAX_CONTENT_LENGTH": 2 * 1024 * 1024,
+    }

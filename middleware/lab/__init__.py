@@ -1,0 +1,1 @@
+"""The lab: robot list, console page, robot API and the robot WebSocket channels."""

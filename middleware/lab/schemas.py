@@ -1,0 +1,65 @@
+"""Validation of drive messages from the browser, before anything reaches a robot."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+
+from middleware.auth.schemas import InvalidField
+
+MAX_MESSAGE_CHARS = 1024
+MAX_SEQUENCE = 2**53  # the largest integer a browser counts exactly
+
+
+@dataclass(frozen=True)
+class DriveLimits:
+    """The robot's velocity limits, from its skill server."""
+
+    max_linear_mps: float
+    max_angular_radps: float
+
+
+@dataclass(frozen=True)
+class DriveRequest:
+    """A validated drive (or stop) command from one socket."""
+
+    sequence: int
+    linear_mps: float
+    angular_radps: float
+
+
+def _finite_within(message: dict[str, object], field: str, limit: float, unit: str) -> float:
+    value = message.get(field)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise InvalidField(field, f"{field} must be a finite number between {-limit:g} and {limit:g} {unit}.")
+    if abs(value) > limit:
+        raise InvalidField(field, f"{field} must be between {-limit:g} and {limit:g} {unit}; got {value:g}.")
+    return float(value)
+
+
+def parse_drive_message(raw: object, limits: DriveLimits, previous_sequence: int) -> DriveRequest:
+    """A DriveRequest from one WebSocket message, or InvalidField naming what is wrong."""
+    if not isinstance(raw, str) or len(raw) > MAX_MESSAGE_CHARS:
+        raise InvalidField("message", f"Send drive commands as JSON text of at most {MAX_MESSAGE_CHARS} characters.")
+    try:
+        message = json.loads(raw)
+    except ValueError:
+        raise InvalidField("message", "The message is not valid JSON.") from None
+    if not isinstance(message, dict):
+        raise InvalidField("message", "The message must be a JSON object.")
+    kind = message.get("type")
+    if kind not in {"drive", "stop"}:
+        raise InvalidField("type", "type must be 'drive' or 'stop'.")
+    sequence = message.get("sequence")
+    if isinstance(sequence, bool) or not isinstance(sequence, int) or not 1 <= sequence <= MAX_SEQUENCE:
+        raise InvalidField("sequence", f"sequence must be a whole number from 1 to {MAX_SEQUENCE}.")
+    if sequence <= previous_sequence:
+        raise InvalidField("sequence", f"sequence must be greater than the previous command's ({previous_sequence}).")
+    if kind == "stop":
+        return DriveRequest(sequence, 0.0, 0.0)
+    return DriveRequest(
+        sequence,
+        _finite_within(message, "linear_mps", limits.max_linear_mps, "m/s"),
+        _finite_within(message, "angular_radps", limits.max_angular_radps, "rad/s"),
+    )

@@ -1,0 +1,165 @@
+"""The robot WebSocket channels: camera and telemetry (fanned out), and drive (validated, forwarded)."""
+
+from __future__ import annotations
+
+import json
+import logging
+from urllib.parse import urlsplit
+
+from flask import Flask, request
+from flask_login import current_user
+from flask_sock import Sock
+
+from middleware.auth.schemas import InvalidField
+from middleware.db import get_session
+from middleware.errors import ApiError
+from middleware.lab.schemas import DriveLimits, parse_drive_message
+from middleware.robots.fanout import FanoutHub
+from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
+from middleware.robots.registry import robot_registry
+
+log = logging.getLogger(__name__)
+sock = Sock()
+
+# Close codes the client knows: it does not reconnect after these.
+CLOSE_NOT_LOGGED_IN = 4401
+CLOSE_FORBIDDEN = 4403
+CLOSE_UNKNOWN_ROBOT = 4404
+CLOSE_TRY_AGAIN_LATER = 1013
+DRIVE_SEND_INTERVAL_MS = 50
+STREAM_POLL_S = 0.5
+
+
+def init_app(app: Flask) -> None:
+    """Registers the channels; incoming messages are small, and idle sockets are pinged."""
+    app.config.setdefault("SOCK_SERVER_OPTIONS", {"ping_interval": 20, "max_message_size": 4096})
+    sock.init_app(app)
+
+    @app.before_request
+    def _websocket_only():  # type: ignore[no-untyped-def]
+        if request.path.startswith("/ws/") and request.headers.get("Upgrade", "").lower() != "websocket":
+            raise ApiError(400, "websocket_required", "This address takes WebSocket connections only.")
+
+
+def _send_json(ws, message: dict[str, object]) -> None:  # type: ignore[no-untyped-def]
+    ws.send(json.dumps(message, separators=(",", ":")))
+
+
+def _refuse(ws, close_code: int, code: str, message: str, field: str | None = None) -> None:  # type: ignore[no-untyped-def]
+    _send_json(ws, {"type": "error", "code": code, "message": message, "field": field})
+    ws.close(reason=close_code, message=message[:120])
+
+
+def _same_origin() -> bool:
+    origin = request.headers.get("Origin")
+    # Browsers always send Origin on WebSockets; its absence means a non-browser client, not a hijack.
+    return origin is None or urlsplit(origin).netloc == request.host
+
+
+def open_robot_channel(ws, robot_name: str) -> RobotLink | None:  # type: ignore[no-untyped-def]
+    """The robot's link after the checks every channel makes, or None once the socket is refused."""
+    if not current_user.is_authenticated:
+        _refuse(ws, CLOSE_NOT_LOGGED_IN, "not_logged_in", "Your session has ended. Log in again.")
+        return None
+    # A socket lives for hours: release the database connection the login check used.
+    get_session().close()
+    if not _same_origin():
+        _refuse(ws, CLOSE_FORBIDDEN, "forbidden_origin", "This page may not open the robot's channels.")
+        return None
+    link = robot_registry().get(robot_name)
+    if link is None:
+        _refuse(ws, CLOSE_UNKNOWN_ROBOT, "unknown_robot", f"There is no robot named {robot_name!r}.", "robot_name")
+        return None
+    return link
+
+
+def relay_stream(ws, hub: FanoutHub) -> None:  # type: ignore[no-untyped-def]
+    """Sends the hub's newest message whenever there is one, and status changes, until the socket closes."""
+    subscription = hub.subscribe()
+    try:
+        while ws.connected:
+            status = subscription.status_change()
+            if status is not None:
+                _send_json(ws, {"type": "status", "robot_online": status.online, "message": status.message})
+            message = subscription.next_message(STREAM_POLL_S)
+            if message is not None:
+                ws.send(message)
+            while ws.receive(timeout=0) is not None:
+                pass  # nothing is expected from viewers; drop it so it cannot pile up
+    finally:
+        subscription.close()
+
+
+@sock.route("/ws/robots/<robot_name>/camera")
+def camera_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-def]
+    """Camera frames, packed once per frame for every viewer."""
+    link = open_robot_channel(ws, robot_name)
+    if link is not None:
+        relay_stream(ws, link.camera)
+
+
+@sock.route("/ws/robots/<robot_name>/telemetry")
+def telemetry_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-def]
+    """Odometry, sonar and laser readings."""
+    link = open_robot_channel(ws, robot_name)
+    if link is not None:
+        relay_stream(ws, link.telemetry)
+
+
+@sock.route("/ws/robots/<robot_name>/drive")
+def drive_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-def]
+    """Drive commands: each validated here, then forwarded; the robot stops when the socket closes."""
+    link = open_robot_channel(ws, robot_name)
+    if link is None:
+        return
+    try:
+        info = link.info()
+    except RobotUnavailable as error:
+        _refuse(ws, CLOSE_TRY_AGAIN_LATER, "robot_offline", f"{error} Try again in a moment.")
+        return
+    limits = DriveLimits(info.max_linear_mps, info.max_angular_radps)
+    sequence_base = link.reserve_sequences()
+    _send_json(ws, {
+        "type": "ready",
+        "max_linear_mps": limits.max_linear_mps,
+        "max_angular_radps": limits.max_angular_radps,
+        "send_interval_ms": DRIVE_SEND_INTERVAL_MS,
+        "sequence_base": sequence_base,
+    })
+    last_sequence = 0
+    try:
+        while True:
+            raw = ws.receive()
+            try:
+                command = parse_drive_message(raw, limits, last_sequence)
+            except InvalidField as invalid:
+                _send_json(ws, {"type": "error", "code": "invalid_field", "message": invalid.message,
+                                "field": invalid.field})
+                continue
+            last_sequence = command.sequence
+            try:
+                result = link.drive(sequence_base + command.sequence, command.linear_mps, command.angular_radps)
+            except CommandRefused as refused:
+                _send_json(ws, {"type": "error", "code": refused.code, "message": refused.message,
+                                "field": refused.field})
+                continue
+            except RobotUnavailable as error:
+                _send_json(ws, {"type": "error", "code": "robot_offline", "message": str(error), "field": None})
+                continue
+            _send_json(ws, {
+                "type": "ack",
+                "sequence": command.sequence,
+                "applied_sequence": max(0, result.applied_sequence - sequence_base),
+                "linear_mps": result.linear_mps,
+                "angular_radps": result.angular_radps,
+            })
+    finally:
+        _stop_quietly(link, sequence_base + last_sequence + 1)
+
+
+def _stop_quietly(link: RobotLink, sequence: int) -> None:
+    """Stops the base when a driver leaves; the robot's deadman covers a failure here."""
+    try:
+        link.drive(sequence, 0.0, 0.0)
+    except (CommandRefused, RobotUnavailable) as error:
+        log.info("stop after the driver left %s failed: %s", link.name, error)

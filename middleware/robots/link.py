@@ -1,0 +1,149 @@
+"""The middleware's connection to one robot's skill server: deadlines, reconnect, streams, control."""
+
+from __future__ import annotations
+
+import secrets
+import threading
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import grpc
+
+from middleware.robots.fanout import FanoutHub
+from middleware.robots.messages import pack_camera_frame, pack_telemetry
+from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
+
+# gRPC reconnects a channel by itself; these bound how long a restarted robot stays unnoticed.
+CHANNEL_OPTIONS = [
+    ("grpc.initial_reconnect_backoff_ms", 200),
+    ("grpc.min_reconnect_backoff_ms", 200),
+    ("grpc.max_reconnect_backoff_ms", 3000),
+    ("grpc.keepalive_time_ms", 10000),
+    ("grpc.keepalive_timeout_ms", 5000),
+]
+
+
+class RobotUnavailable(Exception):
+    """The skill server did not answer in time, or refused for a reason the caller cannot fix."""
+
+
+class CommandRefused(Exception):
+    """The skill server refused a command; field names the offending input when it is one."""
+
+    def __init__(self, code: str, message: str, field: str | None = None) -> None:
+        super().__init__(message)
+        self.code, self.message, self.field = code, message, field
+
+
+@dataclass(frozen=True)
+class DriveResult:
+    """The skill server's answer to a drive command."""
+
+    applied_sequence: int
+    linear_mps: float
+    angular_radps: float
+
+
+class RobotLink:
+    """One channel to one robot, shared by every request and viewer of this process."""
+
+    def __init__(self, name: str, address: str, rpc_timeout_s: float = 1.0) -> None:
+        self.name = name
+        self.address = address
+        self.rpc_timeout_s = rpc_timeout_s
+        self._channel = grpc.insecure_channel(address, options=CHANNEL_OPTIONS)
+        self._stub = robot_pb2_grpc.RobotStub(self._channel)
+        self._info: robot_pb2.RobotInfo | None = None
+        self._control_lock = threading.Lock()
+        # One token per process until round-robin access hands out one per controller.
+        self._controller_token = secrets.token_urlsafe(24)
+        self._token_granted = False
+        self._highest_sequence = 0
+        self.camera = FanoutHub(f"{name}-camera", self._open_camera, pack_camera_frame, _cancel_call)
+        self.telemetry = FanoutHub(f"{name}-telemetry", self._open_telemetry, pack_telemetry, _cancel_call)
+
+    def info(self, refresh: bool = False) -> robot_pb2.RobotInfo:
+        """The robot's description (cached once fetched)."""
+        if self._info is None or refresh:
+            self._info = self._call(self._stub.GetRobotInfo, robot_pb2.GetRobotInfoRequest())
+        return self._info
+
+    def is_online(self) -> bool:
+        """Whether the skill server answers now."""
+        try:
+            self.info(refresh=True)
+        except RobotUnavailable:
+            return False
+        return True
+
+    def reserve_sequences(self) -> int:
+        """A base above every sequence sent so far; a new driver numbers its commands base+1, base+2..."""
+        with self._control_lock:
+            return self._highest_sequence
+
+    def drive(self, sequence: int, linear_mps: float, angular_radps: float) -> DriveResult:
+        """Sends a drive command under this process's controller token, granting it first if needed."""
+        with self._control_lock:
+            self._highest_sequence = max(self._highest_sequence, sequence)
+            if not self._token_granted:
+                self._grant_token()
+            command = robot_pb2.DriveCommand(
+                token=self._controller_token, sequence=sequence, linear_mps=linear_mps, angular_radps=angular_radps
+            )
+            try:
+                ack = self._call(self._stub.Drive, command)
+            except CommandRefused as refused:
+                if refused.code not in {"not_controller", "unauthenticated"}:
+                    raise
+                # The skill server restarted and forgot the token: grant it again and retry once.
+                self._grant_token()
+                ack = self._call(self._stub.Drive, command)
+        return DriveResult(ack.applied_sequence, ack.linear_mps, ack.angular_radps)
+
+    def close(self) -> None:
+        """Stops the streams and closes the channel."""
+        self.camera.close()
+        self.telemetry.close()
+        self._channel.close()
+
+    def _grant_token(self) -> None:
+        # The skill server restarts the sequence numbering on a new grant; ours stays monotonic anyway.
+        self._call(self._stub.SetController, robot_pb2.SetControllerRequest(token=self._controller_token))
+        self._token_granted = True
+
+    def _open_camera(self) -> Iterator[object]:
+        return self._stub.StreamCamera(robot_pb2.StreamCameraRequest(max_fps=15))
+
+    def _open_telemetry(self) -> Iterator[object]:
+        return self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=10))
+
+    def _call(self, method, request):  # type: ignore[no-untyped-def]
+        try:
+            return method(request, timeout=self.rpc_timeout_s)
+        except grpc.RpcError as error:
+            raise _translate(error) from None
+
+
+_REFUSAL_CODES = {
+    grpc.StatusCode.INVALID_ARGUMENT: "invalid_field",
+    grpc.StatusCode.PERMISSION_DENIED: "not_controller",
+    grpc.StatusCode.UNAUTHENTICATED: "unauthenticated",
+    grpc.StatusCode.FAILED_PRECONDITION: "not_possible_now",
+}
+
+
+def _translate(error: grpc.RpcError) -> Exception:
+    code = error.code()  # type: ignore[attr-defined]
+    details = error.details() or ""  # type: ignore[attr-defined]
+    if code in _REFUSAL_CODES:
+        field = details.split(" ", 1)[0] if code == grpc.StatusCode.INVALID_ARGUMENT else None
+        return CommandRefused(_REFUSAL_CODES[code], details, field)
+    if code == grpc.StatusCode.DEADLINE_EXCEEDED:
+        return RobotUnavailable("The robot did not answer in time.")
+    return RobotUnavailable("The robot is not reachable right now.")
+
+
+def _cancel_call(stream: Iterator[object]) -> None:
+    cancel = getattr(stream, "cancel", None)
+    if cancel is not None:
+        cancel()

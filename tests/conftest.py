@@ -1,0 +1,192 @@
+"""Fixtures shared by the whole suite: databases, a running skill server, the app, a live server."""
+
+from __future__ import annotations
+
+import os
+import re
+import secrets
+import threading
+import uuid
+from collections.abc import Iterator
+from http.cookiejar import CookieJar
+from pathlib import Path
+from urllib.parse import urlencode, urlsplit
+from urllib.request import HTTPCookieProcessor, HTTPRedirectHandler, Request, build_opener
+
+import pytest
+from werkzeug.serving import make_server
+
+POSTGRES_SERVER_URL = os.environ.get("TELELAB_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/test")
+STUDENT_PASSWORD = "correct-horse-battery"
+
+
+def _postgres_admin_dsn() -> str:
+    return POSTGRES_SERVER_URL.replace("postgresql+psycopg://", "postgresql://", 1)
+
+
+@pytest.fixture
+def postgres_url() -> Iterator[str]:
+    """A new, empty PostgreSQL database for one test, dropped afterwards."""
+    import psycopg
+
+    if os.environ.get("TELELAB_SKIP_POSTGRES") == "1":
+        pytest.skip("TELELAB_SKIP_POSTGRES=1: PostgreSQL tests skipped on purpose")
+    name = f"telelab_test_{uuid.uuid4().hex[:12]}"
+    try:
+        admin = psycopg.connect(_postgres_admin_dsn(), autocommit=True, connect_timeout=5)
+    except psycopg.OperationalError as error:
+        pytest.fail(f"PostgreSQL at {POSTGRES_SERVER_URL} is not reachable ({error}); "
+                    "start it or set TELELAB_SKIP_POSTGRES=1 to skip these tests knowingly.")
+    with admin:
+        admin.execute(f'CREATE DATABASE "{name}"')
+        parts = urlsplit(POSTGRES_SERVER_URL)
+        yield parts._replace(path=f"/{name}").geturl()
+        admin.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+
+
+@pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)])
+def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
+    """An empty database URL, once on SQLite and once on PostgreSQL."""
+    if request.param == "sqlite":
+        return f"sqlite:///{tmp_path / 'telelab.sqlite3'}"
+    return request.getfixturevalue("postgres_url")
+
+
+@pytest.fixture(scope="session")
+def skill_server_address() -> Iterator[str]:
+    """A real skill server (real-time, default scene) as a child process, shared by the session."""
+    from middleware.lab_runner import SkillServerProcess, wait_until_serving
+
+    robot = SkillServerProcess("lab-1", "lab")
+    robot.start()
+    try:
+        wait_until_serving(robot.address)
+        yield robot.address
+    finally:
+        robot.stop()
+
+
+def make_test_app(database_url: str, robots: str, tmp_path: Path):  # type: ignore[no-untyped-def]
+    """The app on a migrated database with a known student account."""
+    from middleware import create_app
+    from middleware.auth.services import create_user
+    from middleware.config import parse_robots
+    from middleware.db import session_factory, upgrade_to_head
+
+    upgrade_to_head(database_url)
+    app = create_app({
+        "DATABASE_URL": database_url,
+        "SECRET_KEY": secrets.token_hex(16),
+        "ROBOTS": parse_robots(robots),
+        "TESTING": True,
+    })
+    app.instance_path = str(tmp_path / "instance")
+    with session_factory(app)() as session:
+        create_user(session, "student1", "student", STUDENT_PASSWORD)
+        session.commit()
+    return app
+
+
+@pytest.fixture
+def app(tmp_path: Path, skill_server_address: str):  # type: ignore[no-untyped-def]
+    """The middleware on SQLite, wired to the session's skill server."""
+    from middleware.robots.registry import robot_registry
+
+    application = make_test_app(f"sqlite:///{tmp_path / 'app.sqlite3'}",
+                                f"lab-1={skill_server_address},ghost=127.0.0.1:9", tmp_path)
+    yield application
+    robot_registry(application).close()
+
+
+class LiveServer:
+    """The app served on a free loopback port by the same threaded server `telelab web` uses."""
+
+    def __init__(self, app) -> None:  # type: ignore[no-untyped-def]
+        self._server = make_server("127.0.0.1", 0, app, threaded=True)
+        self.url = f"http://127.0.0.1:{self._server.server_port}"
+        self._thread = threading.Thread(target=self._server.serve_forever, daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Stops serving."""
+        self._server.shutdown()
+        self._server.server_close()
+
+
+@pytest.fixture
+def live_server(app) -> Iterator[LiveServer]:  # type: ignore[no-untyped-def]
+    """A running web server for the app."""
+    server = LiveServer(app)
+    yield server
+    server.stop()
+
+
+class LabClient:
+    """A browser-like HTTP client with cookies and CSRF tokens, and WebSockets carrying the session."""
+
+    CSRF_FIELD = re.compile(r'name="csrf_token"[^>]*value="([^"]+)"')
+
+    def __init__(self, base_url: str) -> None:
+        self.base_url = base_url
+        self.cookies = CookieJar()
+        self._opener = build_opener(HTTPCookieProcessor(self.cookies), _NoRedirect())
+
+    def request(self, method: str, path: str, form: dict[str, str] | None = None,
+                headers: dict[str, str] | None = None) -> tuple[int, dict[str, str], str]:
+        """(status, headers, body) of one request; redirects are returned, not followed."""
+        data = urlencode(form).encode() if form is not None else None
+        request = Request(self.base_url + path, data=data, method=method, headers=headers or {})
+        try:
+            with self._opener.open(request, timeout=10) as response:
+                return response.status, dict(response.headers), response.read().decode()
+        except Exception as error:  # urllib raises for 4xx/5xx; they are answers here
+            if hasattr(error, "code"):
+                return error.code, dict(error.headers), error.read().decode()
+            raise
+
+    def csrf_token(self, path: str = "/login") -> str:
+        """The CSRF token in the form at path."""
+        _, _, body = self.request("GET", path)
+        match = self.CSRF_FIELD.search(body)
+        assert match, f"no csrf_token field on {path}"
+        return match.group(1)
+
+    def login(self, username: str = "student1", password: str = STUDENT_PASSWORD) -> int:
+        """Logs in through the form; returns the status of the POST."""
+        token = self.csrf_token()
+        status, _, _ = self.request("POST", "/login", {"username": username, "password": password,
+                                                      "csrf_token": token})
+        return status
+
+    def cookie_header(self) -> str:
+        """The Cookie header a browser would send."""
+        return "; ".join(f"{c.name}={c.value}" for c in self.cookies)
+
+    def websocket(self, path: str, origin: str | None = None):  # type: ignore[no-untyped-def]
+        """A WebSocket to path carrying this client's session cookie."""
+        import simple_websocket
+
+        headers = {"Cookie": self.cookie_header()}
+        if origin is not None:
+            headers["Origin"] = origin
+        return simple_websocket.Client.connect(self.base_url.replace("http", "ws", 1) + path, headers=headers)
+
+
+class _NoRedirect(HTTPRedirectHandler):
+    """Hands redirects back as answers instead of following them."""
+
+    def redirect_request(self, *_args, **_kwargs):  # type: ignore[no-untyped-def]
+        return None
+
+
+@pytest.fixture
+def lab_client(live_server: LiveServer) -> LabClient:
+    """A client of the live server, not logged in."""
+    return LabClient(live_server.url)
+
+
+@pytest.fixture
+def student_client(lab_client: LabClient) -> LabClient:
+    """A client of the live server, logged in as the student."""
+    assert lab_client.login() == 302
+    return lab_client

@@ -1,0 +1,31 @@
+"""Configuration from the environment: robots parse, mistakes are named."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from middleware.config import ConfigError, RobotAddress, from_environment, parse_robots
+
+
+def test_robots_parse_in_order() -> None:
+    assert parse_robots("lab-1=127.0.0.1:50051, lab-2 = host:7") == (
+        RobotAddress("lab-1", "127.0.0.1:50051"), RobotAddress("lab-2", "host:7"),
+    )
+    assert parse_robots("") == ()
+
+
+@pytest.mark.parametrize("value", ["lab-1", "lab-1=nohostport", "=127.0.0.1:1", "bad name=h:1", "a=h:1,a=h:2"])
+def test_bad_robot_entries_name_the_setting(value: str) -> None:
+    with pytest.raises(ConfigError, match="TELELAB_ROBOTS"):
+        parse_robots(value)
+
+
+def test_secret_key_is_generated_once_and_kept(tmp_path: Path) -> None:
+    first = from_environment(tmp_path, {})
+    second = from_environment(tmp_path, {})
+    assert first["SECRET_KEY"] == second["SECRET_KEY"] and len(str(first["SECRET_KEY"])) > 40
+    assert (tmp_path / "secret_key").stat().st_mode & 0o077 == 0
+    assert from_environment(tmp_path, {"TELELAB_SECRET_KEY": "given"})["SECRET_KEY"] == "given"
+    assert str(first["DATABASE_URL"]).startswith("sqlite:///")
