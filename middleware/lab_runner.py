@@ -63,8 +63,9 @@ class SkillServerProcess:
     def _watch(self) -> None:
         process = self.process
         assert process is not None and process.stdout is not None
-        for line in process.stdout:
-            print(f"[{self.name}] {line}", end="", flush=True)
+        with process.stdout:
+            for line in process.stdout:
+                print(f"[{self.name}] {line}", end="", flush=True)
         code = process.wait()
         if not self.stopping:
             print(f"[{self.name}] skill server exited with code {code}; restarting it", flush=True)
@@ -76,14 +77,17 @@ class SkillServerProcess:
     def stop(self, timeout_s: float = 5.0) -> None:
         """Asks the process to stop (SIGTERM), then kills it if it does not."""
         self.stopping = True
-        if self.process is None or self.process.poll() is not None:
+        if self.process is None:
             return
-        self.process.send_signal(signal.SIGTERM)
-        try:
-            self.process.wait(timeout_s)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait()
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGTERM)
+            try:
+                self.process.wait(timeout_s)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        if self._watcher is not None:
+            self._watcher.join(timeout_s)
 
 
 def wait_until_serving(address: str, timeout_s: float = START_TIMEOUT_S) -> None:

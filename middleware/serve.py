@@ -2,18 +2,46 @@
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import socket
+from typing import Any
 
 from flask import Flask
-from werkzeug.serving import make_server
+from werkzeug.serving import BaseWSGIServer, make_server
+
+
+def quiet_websocket_endings(wsgi_app: Any) -> Any:
+    """Stops Werkzeug writing an HTTP response onto a finished WebSocket.
+
+    With flask-sock 0.7 under Werkzeug's server, Werkzeug writes "HTTP/1.1 200 OK" onto the socket
+    after the handler returns (miguelgrinberg/flask-sock#20, #77); browsers read it as a broken frame
+    and see close code 1006 instead of ours (4401, 4404...). Shutting the socket and raising
+    ConnectionError makes Werkzeug treat the request as dropped and write nothing.
+    """
+
+    def app(environ: dict[str, Any], start_response: Any) -> Any:
+        body = wsgi_app(environ, start_response)
+        if "werkzeug.socket" in environ and environ.get("HTTP_UPGRADE", "").lower() == "websocket":
+            with contextlib.suppress(OSError):
+                environ["werkzeug.socket"].shutdown(socket.SHUT_RDWR)
+            raise ConnectionError("WebSocket finished")
+        return body
+
+    return app
+
+
+def make_threaded_server(app: Flask, host: str, port: int) -> BaseWSGIServer:
+    """Werkzeug's threaded server for app, with WebSocket endings made clean."""
+    logging.getLogger("werkzeug").setLevel(logging.WARNING)
+    return make_server(host, port, quiet_websocket_endings(app), threaded=True)
 
 
 def serve_forever(app: Flask, host: str, port: int) -> None:
     """Serves app until interrupted (Ctrl-C), then closes the listening socket and the robot links."""
     from middleware.robots.registry import robot_registry
 
-    logging.getLogger("werkzeug").setLevel(logging.WARNING)
-    server = make_server(host, port, app, threaded=True)
+    server = make_threaded_server(app, host, port)
     try:
         server.serve_forever()
     finally:

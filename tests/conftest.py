@@ -14,7 +14,6 @@ from urllib.parse import urlencode, urlsplit
 from urllib.request import HTTPCookieProcessor, HTTPRedirectHandler, Request, build_opener
 
 import pytest
-from werkzeug.serving import make_server
 
 POSTGRES_SERVER_URL = os.environ.get("TELELAB_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/test")
 STUDENT_PASSWORD = "correct-horse-battery"
@@ -102,7 +101,9 @@ class LiveServer:
     """The app served on a free loopback port by the same threaded server `telelab web` uses."""
 
     def __init__(self, app) -> None:  # type: ignore[no-untyped-def]
-        self._server = make_server("127.0.0.1", 0, app, threaded=True)
+        from middleware.serve import make_threaded_server
+
+        self._server = make_threaded_server(app, "127.0.0.1", 0)
         self.url = f"http://127.0.0.1:{self._server.server_port}"
         self._thread = threading.Thread(target=self._server.serve_forever, daemon=True)
         self._thread.start()

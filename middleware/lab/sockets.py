@@ -28,6 +28,7 @@ CLOSE_UNKNOWN_ROBOT = 4404
 CLOSE_TRY_AGAIN_LATER = 1013
 DRIVE_SEND_INTERVAL_MS = 50
 STREAM_POLL_S = 0.5
+CLOSE_HANDSHAKE_WAIT_S = 1.0
 
 
 def init_app(app: Flask) -> None:
@@ -48,6 +49,9 @@ def _send_json(ws, message: dict[str, object]) -> None:  # type: ignore[no-untyp
 def _refuse(ws, close_code: int, code: str, message: str, field: str | None = None) -> None:  # type: ignore[no-untyped-def]
     _send_json(ws, {"type": "error", "code": code, "message": message, "field": field})
     ws.close(reason=close_code, message=message[:120])
+    # Wait for the client's closing frame: a socket torn down with it unread is reset, and the reset
+    # can discard our error message before the client reads it.
+    ws.thread.join(CLOSE_HANDSHAKE_WAIT_S)
 
 
 def _same_origin() -> bool:

@@ -23,10 +23,16 @@ def receive_json(ws, timeout_s: float = 5.0) -> dict:  # type: ignore[no-untyped
 
 
 def next_telemetry(ws) -> dict:  # type: ignore[no-untyped-def]
-    while True:
+    """The newest telemetry message: older ones queued in the socket are skipped."""
+    newest = None
+    while (pending := ws.receive(timeout=0)) is not None:
+        if isinstance(pending, str) and json.loads(pending)["type"] == "telemetry":
+            newest = json.loads(pending)
+    while newest is None:
         message = receive_json(ws)
         if message["type"] == "telemetry":
-            return message
+            newest = message
+    return newest
 
 
 def closed_with(ws, timeout_s: float = 5.0) -> int:  # type: ignore[no-untyped-def]

@@ -1,0 +1,158 @@
+// <camera-panel>: draws the robot's camera stream on a canvas and shows frame rate and video age.
+// In: `robotName` (string), `frame` (ArrayBuffer from the camera socket), `message` (status/error
+// JSON from the server), `connected` (bool: is the camera socket open). Out: none; it only shows.
+
+import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
+import { framesInWindow, parseFramePacket } from "../../js/camera-frame.js";
+
+const FPS_WINDOW_MS = 1000;
+
+export class CameraPanel extends HTMLElement {
+  #canvas;
+  #placeholder;
+  #fpsOutput;
+  #ageOutput;
+  #sequenceOutput;
+  #messageLine;
+  #decoding = false;
+  #pending = null;
+  #drawTimesMs = [];
+  #robotName = "";
+  #statsTimer = 0;
+  #lastHeader = null;
+  #stage;
+
+  connectedCallback() {
+    this.#build();
+    clearInterval(this.#statsTimer);
+    // Frame rate must fall to 0 when frames stop, so it is refreshed on a clock, not per frame.
+    this.#statsTimer = setInterval(() => this.#showStats(), 250);
+  }
+
+  disconnectedCallback() {
+    clearInterval(this.#statsTimer);
+  }
+
+  // Built on first use rather than in the constructor, which custom elements may not give children.
+  #build() {
+    if (this.#canvas) return;
+    this.classList.add("panel");
+    this.#canvas = h("canvas", { class: "camera__canvas", width: 320, height: 240, role: "img", id: "camera-canvas" });
+    this.#placeholder = h("p", { class: "camera__placeholder", text: "Waiting for video…" });
+    this.#fpsOutput = h("span", { "data-field": "fps", text: "0" });
+    this.#ageOutput = h("span", { "data-field": "video-age", text: "—" });
+    this.#sequenceOutput = h("span", { "data-field": "frame-sequence", text: "—" });
+    this.#messageLine = h("p", { class: "camera__message", "data-field": "camera-message", hidden: true });
+    this.append(
+      h("h2", { class: "panel__title", id: "camera-title", text: "Camera" }),
+      this.#stage = h("div", { class: "camera__stage" }, this.#canvas, this.#placeholder),
+      h("p", { class: "camera__stats" },
+        h("span", {}, this.#fpsOutput, " fps"),
+        h("span", {}, "video age ", this.#ageOutput, " ms"),
+        h("span", {}, "frame ", this.#sequenceOutput)),
+      this.#messageLine,
+    );
+    this.#applyLabel();
+  }
+
+  set robotName(name) {
+    this.#robotName = String(name);
+    this.#applyLabel();
+  }
+
+  /** While the socket is down the last frame stays, dimmed, so nobody mistakes it for live video. */
+  set connected(isConnected) {
+    this.#build();
+    this.#stage.classList.toggle("camera__stage--stale", !isConnected);
+    if (!isConnected && this.#lastHeader) {
+      this.#placeholder.textContent = "Video paused: the camera connection is down.";
+      this.#placeholder.hidden = false;
+    }
+  }
+
+  /** One binary message from the camera socket. Only the newest waiting frame is kept. */
+  set frame(buffer) {
+    this.#build();
+    if (this.#decoding) {
+      this.#pending = buffer;
+      return;
+    }
+    this.#decode(buffer);
+  }
+
+  /** A text message from the camera socket: {type: "status"|"error", ...}. */
+  set message(message) {
+    this.#build();
+    if (message?.type === "status") {
+      const offline = message.robot_online === false;
+      this.#showMessage(message.message || (offline ? "The robot is offline." : ""), offline);
+      this.#placeholder.textContent = offline ? "No video: the robot is offline." : "Waiting for video…";
+      if (offline) {
+        this.#placeholder.hidden = false;
+        this.#stage.classList.add("camera__stage--stale");
+      }
+    } else if (message?.type === "error") {
+      this.#showMessage(message.message || "The camera stream reported an error.", true);
+    }
+  }
+
+  #applyLabel() {
+    this.#canvas?.setAttribute("aria-label", `Live camera of ${this.#robotName || "the robot"}`);
+  }
+
+  #showMessage(text, isProblem) {
+    this.#messageLine.textContent = text;
+    this.#messageLine.hidden = !text;
+    this.#messageLine.classList.toggle("camera__message--problem", Boolean(isProblem));
+  }
+
+  async #decode(buffer) {
+    this.#decoding = true;
+    try {
+      const { header, jpeg } = parseFramePacket(buffer);
+      const bitmap = await createImageBitmap(new Blob([jpeg], { type: "image/jpeg" }));
+      this.#draw(bitmap, header);
+    } catch (error) {
+      // One bad frame must not stop the stream; the next one replaces it anyway.
+      console.warn("camera frame skipped:", error.message);
+    } finally {
+      this.#decoding = false;
+      const next = this.#pending;
+      this.#pending = null;
+      if (next) this.#decode(next);
+    }
+  }
+
+  #draw(bitmap, header) {
+    const canvas = this.#canvas;
+    if (canvas.width !== bitmap.width || canvas.height !== bitmap.height) {
+      canvas.width = bitmap.width;
+      canvas.height = bitmap.height;
+    }
+    canvas.getContext("2d").drawImage(bitmap, 0, 0);
+    bitmap.close();
+    this.#placeholder.hidden = true;
+    this.#stage.classList.remove("camera__stage--stale");
+    this.#lastHeader = header;
+    const now = performance.now();
+    this.#drawTimesMs.push(now);
+    this.#drawTimesMs = this.#drawTimesMs.filter((t) => now - t <= FPS_WINDOW_MS);
+    this.#showStats();
+  }
+
+  #showStats() {
+    this.#fpsOutput.textContent = String(framesInWindow(this.#drawTimesMs, performance.now(), FPS_WINDOW_MS));
+    const header = this.#lastHeader;
+    if (!header) return;
+    const captureS = Number(header.capture_unix_s);
+    if (Number.isFinite(captureS)) {
+      this.#ageOutput.textContent = String(Math.max(0, Math.round(Date.now() - captureS * 1000)));
+    }
+    if (Number.isFinite(Number(header.frame_sequence))) this.#sequenceOutput.textContent = String(header.frame_sequence);
+  }
+}
+
+export function register() {
+  adoptStylesheet(new URL("./camera-panel.css", import.meta.url));
+  defineOnce("camera-panel", CameraPanel);
+}

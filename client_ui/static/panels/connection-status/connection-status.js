@@ -1,0 +1,113 @@
+// <connection-status>: one line per socket (camera, telemetry, drive): connected, reconnecting in
+// N s, or closed with the reason. In: `loginUrl` (string), `robotName` (string), and
+// `update(name, state)` with a transport Channel state. Out: none.
+
+import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
+import { CLOSE_CODES } from "../../js/transport.js";
+
+const LABELS = { camera: "Camera", telemetry: "Telemetry", drive: "Drive" };
+
+/** A sentence for a channel state; pure so it can be tested. */
+export function describeState(state, { robotName = "the robot", nowMs = Date.now() } = {}) {
+  switch (state?.phase) {
+    case "open":
+      return "connected";
+    case "connecting":
+      return "connecting…";
+    case "reconnecting": {
+      const seconds = Math.max(0, Math.ceil((state.retryAt - nowMs) / 1000));
+      const why = state.reason ? ` (${state.reason})` : "";
+      return seconds > 0 ? `reconnecting in ${seconds} s${why}` : "reconnecting…";
+    }
+    case "closed":
+      if (state.code === CLOSE_CODES.NOT_LOGGED_IN) return "closed: your session has ended";
+      if (state.code === CLOSE_CODES.NOT_ALLOWED) return "closed: you are not allowed to use this robot";
+      if (state.code === CLOSE_CODES.UNKNOWN_ROBOT) return `closed: there is no robot called ${robotName}`;
+      return state.reason ? `closed: ${state.reason}` : "closed";
+    default:
+      return "not started";
+  }
+}
+
+export class ConnectionStatus extends HTMLElement {
+  #built = false;
+  #lines = new Map();
+  #states = new Map();
+  #sessionAlert;
+  #loginLink;
+  #tickTimer = 0;
+  #robotName = "the robot";
+
+  connectedCallback() {
+    this.#build();
+  }
+
+  disconnectedCallback() {
+    clearInterval(this.#tickTimer);
+    this.#tickTimer = 0;
+  }
+
+  set loginUrl(url) {
+    this.#build();
+    this.#loginLink.href = url;
+  }
+
+  set robotName(name) {
+    this.#robotName = String(name);
+  }
+
+  /** Show the latest state of the socket called `name`. */
+  update(name, state) {
+    this.#build();
+    this.#states.set(name, state);
+    this.#render(name);
+    if (state.phase === "closed" && state.code === CLOSE_CODES.NOT_LOGGED_IN) this.#sessionAlert.hidden = false;
+    this.#syncTicker();
+  }
+
+  #build() {
+    if (this.#built) return;
+    this.#built = true;
+    this.classList.add("panel", "connection-status");
+    const list = h("ul", { class: "connections", role: "list", "aria-label": "Connections" });
+    for (const [name, label] of Object.entries(LABELS)) {
+      const text = h("span", { class: "connection__text", "data-field": `${name}-connection`, text: "not started" });
+      const line = h("li", { class: "connection", "data-connection": name, "data-phase": "idle" },
+        h("span", { class: "connection__dot", "aria-hidden": "true" }),
+        h("span", { class: "connection__name", text: `${label}:` }), " ", text);
+      this.#lines.set(name, { line, text });
+      list.append(line);
+    }
+    this.#loginLink = h("a", { href: "/login", text: "log in again" });
+    this.#sessionAlert = h("p", { class: "connection__session", id: "session-ended", role: "alert", hidden: true },
+      "Your session has ended — ", this.#loginLink, ".");
+    this.append(h("h2", { class: "visually-hidden", text: "Connection status" }), list, this.#sessionAlert);
+  }
+
+  #render(name) {
+    const entry = this.#lines.get(name);
+    const state = this.#states.get(name);
+    if (!entry || !state) return;
+    entry.line.dataset.phase = state.phase;
+    if (state.code !== null && state.code !== undefined) entry.line.dataset.code = String(state.code);
+    else delete entry.line.dataset.code;
+    const text = describeState(state, { robotName: this.#robotName });
+    if (entry.text.textContent !== text) entry.text.textContent = text;
+  }
+
+  // The "reconnecting in N s" countdown needs a clock only while some socket is waiting.
+  #syncTicker() {
+    const waiting = [...this.#states.values()].some((state) => state.phase === "reconnecting");
+    if (waiting && !this.#tickTimer) {
+      this.#tickTimer = setInterval(() => { for (const name of this.#states.keys()) this.#render(name); }, 1000);
+    } else if (!waiting && this.#tickTimer) {
+      clearInterval(this.#tickTimer);
+      this.#tickTimer = 0;
+    }
+  }
+}
+
+export function register() {
+  adoptStylesheet(new URL("./connection-status.css", import.meta.url));
+  defineOnce("connection-status", ConnectionStatus);
+}

@@ -1,0 +1,133 @@
+"""Builds and runs a skill server: the World, the Robot service, health checking and reflection."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+from collections.abc import Iterator, Sequence
+from concurrent import futures
+from dataclasses import dataclass
+from types import FrameType
+
+import grpc
+from grpc_health.v1 import health, health_pb2, health_pb2_grpc
+from grpc_reflection.v1alpha import reflection
+
+from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
+from skill_server.errors import RobotError
+from skill_server.service import RobotService
+from skill_server.sim.world import World
+from skill_server.skills.registry import default_registry
+
+ROBOT_SERVICE_NAME = robot_pb2.DESCRIPTOR.services_by_name["Robot"].full_name  # "telelab.v1.Robot"
+MAX_WORKERS = 64  # every open stream holds a worker thread
+STOP_GRACE_S = 1.0
+
+
+@dataclass
+class SkillServer:
+    """A running skill server; unpacks as (server, port, world) and stops with stop()."""
+
+    server: grpc.Server
+    port: int
+    world: World
+    health: health.HealthServicer
+    host: str
+    robot_name: str
+    scene: str
+    _health_pool: futures.ThreadPoolExecutor
+
+    def __iter__(self) -> Iterator[object]:
+        return iter((self.server, self.port, self.world))
+
+    @property
+    def address(self) -> str:
+        """host:port, as a gRPC channel target."""
+        return f"{self.host}:{self.port}"
+
+    def stop(self, grace_s: float = STOP_GRACE_S) -> None:
+        """Says NOT_SERVING, ends the streams by stopping the world, then stops gRPC within grace_s."""
+        self.health.enter_graceful_shutdown()
+        self.world.stop()
+        self.server.stop(grace_s).wait()
+        self._health_pool.shutdown(wait=False)
+
+    def wait(self) -> None:
+        """Blocks until the gRPC server has stopped."""
+        self.server.wait_for_termination()
+
+
+def create_server(
+    port: int = 0,
+    scene: str = "lab",
+    realtime: bool = True,
+    seed: int = 0,
+    deadman_timeout_s: float = 0.4,
+    robot_name: str = "lab-1",
+    host: str = "127.0.0.1",
+) -> SkillServer:
+    """Builds the world and the gRPC server, starts both, and returns them (port=0 picks a free port)."""
+    world = World(scene, seed=seed, realtime=realtime, deadman_timeout_s=deadman_timeout_s)
+    server = grpc.server(futures.ThreadPoolExecutor(max_workers=MAX_WORKERS, thread_name_prefix="robot-rpc"))
+    robot_pb2_grpc.add_RobotServicer_to_server(RobotService(world, default_registry(world.spec), robot_name), server)
+    health_pool = futures.ThreadPoolExecutor(max_workers=2, thread_name_prefix="robot-health")
+    health_servicer = health.HealthServicer(experimental_non_blocking=True, experimental_thread_pool=health_pool)
+    health_pb2_grpc.add_HealthServicer_to_server(health_servicer, server)
+    reflection.enable_server_reflection((ROBOT_SERVICE_NAME, health.SERVICE_NAME, reflection.SERVICE_NAME), server)
+    bound_port = server.add_insecure_port(f"{host}:{port}")
+    if bound_port == 0:
+        world.stop()
+        raise OSError(f"could not listen on {host}:{port}")
+    world.start()
+    server.start()
+    for service in ("", ROBOT_SERVICE_NAME):
+        health_servicer.set(service, health_pb2.HealthCheckResponse.SERVING)
+    return SkillServer(server, bound_port, world, health_servicer, host, robot_name, world.scene.name, health_pool)
+
+
+def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    """The command line of `python -m skill_server` (and of `telelab skill-server`)."""
+    parser = argparse.ArgumentParser(prog="python -m skill_server", description="Runs one robot's skill server.")
+    parser.add_argument("--port", type=int, required=True, help="TCP port (0 picks a free one)")
+    parser.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
+    parser.add_argument("--scene", default="lab", help="scene name (default lab)")
+    parser.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    parser.add_argument("--fast", action="store_true", help="step as fast as possible instead of in real time")
+    parser.add_argument("--deadman-s", type=float, default=0.4, help="deadman timeout in sim seconds (default 0.4)")
+    parser.add_argument("--name", default="lab-1", help="robot name (default lab-1)")
+    return parser.parse_args(argv)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Runs a skill server until SIGINT or SIGTERM."""
+    args = parse_args(argv)
+    try:
+        running = create_server(
+            port=args.port,
+            scene=args.scene,
+            realtime=not args.fast,
+            seed=args.seed,
+            deadman_timeout_s=args.deadman_s,
+            robot_name=args.name,
+            host=args.host,
+        )
+    except (RobotError, OSError) as error:
+        print(f"skill server: {error}", file=sys.stderr, flush=True)
+        return 2
+    stop_requested = threading.Event()
+
+    def request_stop(signum: int, frame: FrameType | None) -> None:
+        stop_requested.set()
+
+    signal.signal(signal.SIGINT, request_stop)
+    signal.signal(signal.SIGTERM, request_stop)
+    print(
+        f"skill server {args.name} listening on {args.host}:{running.port} (scene {running.scene})",
+        flush=True,
+    )
+    while not stop_requested.wait(0.5):
+        pass
+    running.stop()
+    return 0

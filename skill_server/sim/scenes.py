@@ -1,0 +1,228 @@
+"""Scenes: rooms, walls, obstacles and floor markings, registered by name and described as data."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from skill_server.errors import UnknownScene
+from skill_server.sim.geometry import Pose2D
+
+Rgba = tuple[float, float, float, float]
+
+FLOOR_THICKNESS_M = 0.05
+MARK_THICKNESS_M = 0.002
+
+
+@dataclass(frozen=True)
+class BoxObstacle:
+    """A solid box standing on the floor (walls are boxes too)."""
+
+    name: str
+    center_x_m: float
+    center_y_m: float
+    half_x_m: float
+    half_y_m: float
+    height_m: float
+    rgba: Rgba
+    yaw_rad: float = 0.0
+
+
+@dataclass(frozen=True)
+class CylinderObstacle:
+    """A solid upright cylinder standing on the floor."""
+
+    name: str
+    center_x_m: float
+    center_y_m: float
+    radius_m: float
+    height_m: float
+    rgba: Rgba
+
+
+@dataclass(frozen=True)
+class FloorMark:
+    """A coloured patch painted on the floor: seen by the camera, invisible to physics and range sensors."""
+
+    center_x_m: float
+    center_y_m: float
+    half_x_m: float
+    half_y_m: float
+    rgba: Rgba
+
+
+@dataclass(frozen=True)
+class SceneBox:
+    """An obstacle's footprint as a box, as RobotInfo.scene_boxes reports it for maps."""
+
+    name: str
+    center_x_m: float
+    center_y_m: float
+    half_x_m: float
+    half_y_m: float
+    yaw_rad: float = 0.0
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    """Everything a world needs to build a scene."""
+
+    name: str
+    floor_half_x_m: float
+    floor_half_y_m: float
+    floor_rgba: Rgba = (0.55, 0.55, 0.52, 1.0)
+    boxes: tuple[BoxObstacle, ...] = ()
+    cylinders: tuple[CylinderObstacle, ...] = ()
+    marks: tuple[FloorMark, ...] = ()
+    spawn: Pose2D = field(default_factory=Pose2D)
+
+    def scene_boxes(self) -> list[SceneBox]:
+        """Walls and obstacles as boxes; a cylinder is reported as its bounding square."""
+        boxes = [SceneBox(b.name, b.center_x_m, b.center_y_m, b.half_x_m, b.half_y_m, b.yaw_rad) for b in self.boxes]
+        boxes += [SceneBox(c.name, c.center_x_m, c.center_y_m, c.radius_m, c.radius_m) for c in self.cylinders]
+        return boxes
+
+
+_SCENES: dict[str, Callable[[], SceneSpec]] = {}
+
+
+def register_scene(name: str, factory: Callable[[], SceneSpec]) -> None:
+    """Makes a scene available to worlds by name (re-registering a name replaces it)."""
+    _SCENES[name] = factory
+
+
+def known_scenes() -> list[str]:
+    """Names of every registered scene, sorted."""
+    return sorted(_SCENES)
+
+
+def get_scene(name: str) -> SceneSpec:
+    """The scene registered under name, or UnknownScene listing the known ones."""
+    try:
+        factory = _SCENES[name]
+    except KeyError:
+        raise UnknownScene(name, list(_SCENES)) from None
+    return factory()
+
+
+def room_walls(half_x_m: float, half_y_m: float, height_m: float = 1.0, thickness_m: float = 0.1) -> list[BoxObstacle]:
+    """Four walls, each its own colour so a turn shows in the camera, whose inner faces bound the room."""
+    half_t = thickness_m / 2.0
+    return [
+        BoxObstacle(
+            "wall_east",
+            half_x_m + half_t,
+            0.0,
+            half_t,
+            half_y_m + thickness_m,
+            height_m,
+            (0.80, 0.25, 0.20, 1.0),
+        ),
+        BoxObstacle(
+            "wall_west",
+            -half_x_m - half_t,
+            0.0,
+            half_t,
+            half_y_m + thickness_m,
+            height_m,
+            (0.20, 0.40, 0.80, 1.0),
+        ),
+        BoxObstacle("wall_north", 0.0, half_y_m + half_t, half_x_m, half_t, height_m, (0.25, 0.65, 0.30, 1.0)),
+        BoxObstacle("wall_south", 0.0, -half_y_m - half_t, half_x_m, half_t, height_m, (0.90, 0.75, 0.20, 1.0)),
+    ]
+
+
+def _grid_marks(
+    half_x_m: float, half_y_m: float, spacing_m: float = 1.0, half_width_m: float = 0.015
+) -> list[FloorMark]:
+    grey = (0.92, 0.92, 0.92, 1.0)
+    marks = []
+    for i in range(-int(half_x_m / spacing_m), int(half_x_m / spacing_m) + 1):
+        marks.append(FloorMark(i * spacing_m, 0.0, half_width_m, half_y_m, grey))
+    for j in range(-int(half_y_m / spacing_m), int(half_y_m / spacing_m) + 1):
+        marks.append(FloorMark(0.0, j * spacing_m, half_x_m, half_width_m, grey))
+    return marks
+
+
+def lab_scene() -> SceneSpec:
+    """The default scene: an 8 m x 6 m room with coloured walls, a few obstacles and a painted floor."""
+    half_x, half_y = 4.0, 3.0
+    marks = _grid_marks(half_x, half_y)
+    marks += [
+        # Tiles and a track give the camera something to see move.
+        FloorMark(1.5, 1.5, 0.35, 0.35, (0.95, 0.55, 0.10, 1.0)),
+        FloorMark(-2.5, -1.5, 0.35, 0.35, (0.55, 0.20, 0.75, 1.0)),
+        FloorMark(-1.0, 2.0, 0.35, 0.35, (0.10, 0.70, 0.75, 1.0)),
+        FloorMark(2.0, 0.0, 1.5, 0.04, (0.85, 0.15, 0.15, 1.0)),  # a red lane straight ahead of the spawn
+        FloorMark(0.0, 0.0, 0.30, 0.30, (0.15, 0.35, 0.85, 1.0)),  # the home square under the spawn
+        FloorMark(-3.0, 2.2, 0.6, 0.04, (0.95, 0.90, 0.15, 1.0)),
+    ]
+    return SceneSpec(
+        name="lab",
+        floor_half_x_m=half_x,
+        floor_half_y_m=half_y,
+        boxes=(
+            *room_walls(half_x, half_y),
+            BoxObstacle("crate", 2.5, 1.4, 0.30, 0.30, 0.50, (0.60, 0.40, 0.20, 1.0)),
+            BoxObstacle("cabinet", -2.2, 1.6, 0.40, 0.25, 0.80, (0.30, 0.30, 0.35, 1.0)),
+            BoxObstacle("bench", -1.0, -2.0, 0.60, 0.25, 0.45, (0.75, 0.75, 0.60, 1.0), yaw_rad=0.0),
+        ),
+        cylinders=(CylinderObstacle("pillar", 1.8, -1.5, 0.25, 1.0, (0.85, 0.85, 0.85, 1.0)),),
+        marks=tuple(marks),
+        spawn=Pose2D(0.0, 0.0, 0.0),
+    )
+
+
+def empty_scene() -> SceneSpec:
+    """A bare 20 m x 20 m floor with a grid, for kinematics tests."""
+    return SceneSpec(name="empty", floor_half_x_m=10.0, floor_half_y_m=10.0, marks=tuple(_grid_marks(10.0, 10.0)))
+
+
+register_scene("lab", lab_scene)
+register_scene("empty", empty_scene)
+
+
+def build_scene(client: Any, spec: SceneSpec, obstacle_collision_group: int) -> list[int]:
+    """Creates the scene's bodies in a pybullet client (only from the world's thread); returns their ids."""
+    bodies: list[int] = []
+    floor_half = [spec.floor_half_x_m + 0.5, spec.floor_half_y_m + 0.5, FLOOR_THICKNESS_M / 2.0]
+    bodies.append(_static_box(client, floor_half, (0.0, 0.0, -FLOOR_THICKNESS_M / 2.0), 0.0, spec.floor_rgba))
+    for box in spec.boxes:
+        half = [box.half_x_m, box.half_y_m, box.height_m / 2.0]
+        bodies.append(
+            _static_box(client, half, (box.center_x_m, box.center_y_m, box.height_m / 2.0), box.yaw_rad, box.rgba)
+        )
+    for cylinder in spec.cylinders:
+        collision = client.createCollisionShape(
+            client.GEOM_CYLINDER, radius=cylinder.radius_m, height=cylinder.height_m
+        )
+        visual = client.createVisualShape(
+            client.GEOM_CYLINDER, radius=cylinder.radius_m, length=cylinder.height_m, rgbaColor=cylinder.rgba
+        )
+        bodies.append(
+            client.createMultiBody(
+                0, collision, visual, [cylinder.center_x_m, cylinder.center_y_m, cylinder.height_m / 2.0]
+            )
+        )
+    for body in bodies:
+        client.setCollisionFilterGroupMask(body, -1, obstacle_collision_group, -1)
+    for index, mark in enumerate(spec.marks):
+        # Each painted layer sits a hair above the previous one so overlapping marks do not z-fight.
+        z_m = MARK_THICKNESS_M / 2.0 + index * 1e-5
+        visual = client.createVisualShape(
+            client.GEOM_BOX,
+            halfExtents=[mark.half_x_m, mark.half_y_m, MARK_THICKNESS_M / 2.0],
+            rgbaColor=mark.rgba,
+        )
+        bodies.append(client.createMultiBody(0, -1, visual, [mark.center_x_m, mark.center_y_m, z_m]))
+    return bodies
+
+
+def _static_box(
+    client: Any, half_extents: list[float], position: tuple[float, float, float], yaw_rad: float, rgba: Rgba
+) -> int:
+    collision = client.createCollisionShape(client.GEOM_BOX, halfExtents=half_extents)
+    visual = client.createVisualShape(client.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba)
+    orientation = client.getQuaternionFromEuler([0.0, 0.0, yaw_rad])
+    return client.createMultiBody(0, collision, visual, list(position), orientation)

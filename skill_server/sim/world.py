@@ -1,0 +1,411 @@
+"""The World: one pybullet client, one loop thread that alone touches it, immutable snapshots out."""
+
+from __future__ import annotations
+
+import math
+import queue
+import threading
+import time
+from collections.abc import Callable
+from concurrent.futures import Future
+from typing import Any, TypeVar
+
+import numpy as np
+import pybullet
+from pybullet_utils import bullet_client
+
+from skill_server.errors import InvalidParameter, WorldStopped
+from skill_server.sim import robot_model
+from skill_server.sim.camera import DEFAULT_CAMERA_FPS, Camera, CameraSpec
+from skill_server.sim.drive_gate import DriveAck, DriveGate
+from skill_server.sim.geometry import Pose2D, yaw_from_quaternion
+from skill_server.sim.laser import Laser, LaserSpec
+from skill_server.sim.odometry import WheelOdometry
+from skill_server.sim.publication import CameraSubscription, Publication
+from skill_server.sim.robot_model import TELEBOT, RobotSpec, ramp_toward, wheel_speeds_radps
+from skill_server.sim.scenes import build_scene, get_scene
+from skill_server.sim.snapshots import CameraFrame, RobotDescription, RobotSnapshot
+from skill_server.sim.sonar import SonarRing, SonarRingSpec
+
+T = TypeVar("T")
+
+PHYSICS_DT_S = 1.0 / 240.0
+PHYSICS_STEPS_PER_TICK = 4  # control at 60 Hz
+SENSOR_EVERY_TICKS = 3  # sonar and laser at 20 Hz
+OBSTACLE_GROUP = 0x1
+ROBOT_GROUP = 0x10  # range sensors cast with a mask that leaves the robot out, so it never sees itself
+SENSOR_RAY_MASK = 0x0F
+MAX_REALTIME_LAG_S = 0.25  # beyond this the loop stops trying to catch up with the wall clock
+
+
+class World:
+    """A simulated robot in a scene, stepped at a fixed rate by its own thread or synchronously."""
+
+    def __init__(
+        self,
+        scene: str = "lab",
+        *,
+        seed: int = 0,
+        realtime: bool = True,
+        deadman_timeout_s: float = 0.4,
+        spec: RobotSpec = TELEBOT,
+        sonar: SonarRingSpec | None = None,
+        laser: LaserSpec | None = None,
+        camera: CameraSpec | None = None,
+    ) -> None:
+        if not (
+            isinstance(deadman_timeout_s, (int, float)) and math.isfinite(deadman_timeout_s) and deadman_timeout_s > 0
+        ):
+            raise InvalidParameter("deadman_timeout_s", "deadman_timeout_s must be a finite number above 0 s")
+        self.scene = get_scene(scene)
+        self.spec = spec
+        self.realtime = realtime
+        self.deadman_timeout_s = float(deadman_timeout_s)
+        self.tick_dt_s = PHYSICS_DT_S * PHYSICS_STEPS_PER_TICK
+        self._sonar = SonarRing(sonar or SonarRingSpec(mount_radius_m=spec.body_radius_m))
+        self._laser = Laser(laser or LaserSpec())
+        self._camera = Camera(camera or CameraSpec(), spec)
+        self._gate = DriveGate(spec)
+        self._commands: queue.SimpleQueue[tuple[Callable[[], Any], Future[Any]]] = queue.SimpleQueue()
+        self._frame_sequence = 0
+        self._tick = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._closed = False
+        self._publication = Publication()
+        # Built in the caller's thread before the loop exists; from start() on only the loop touches it.
+        self._client: Any = bullet_client.BulletClient(connection_mode=pybullet.DIRECT)
+        self._build(seed)
+
+    # ---- lifecycle -------------------------------------------------------------------------------
+
+    def start(self) -> None:
+        """Starts the loop thread; from now on only that thread touches pybullet."""
+        if self._closed:
+            raise WorldStopped("the world was stopped")
+        if self._thread is not None:
+            return
+        self._thread = threading.Thread(target=self._run, name=f"world-{self.scene.name}", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Stops the loop, joins it, disconnects pybullet and wakes every waiting reader."""
+        if self._closed:
+            return
+        self._closed = True
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        self._fail_pending_commands()
+        self._client.disconnect()
+        self._publication.close()
+
+    @property
+    def is_running(self) -> bool:
+        """True while the loop thread is running."""
+        return self._thread is not None and not self._closed
+
+    def __enter__(self) -> World:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.stop()
+
+    # ---- commands from other threads -------------------------------------------------------------
+
+    def set_controller(self, token: str) -> None:
+        """Names the only token whose drive commands are obeyed; "" revokes control and stops the base."""
+        self._gate.set_controller(token)
+
+    def drive(self, token: str, sequence: int, linear_mps: object, angular_radps: object) -> DriveAck:
+        """Sets the base's target velocities if token, values and sequence allow (see DriveGate.submit)."""
+        return self._gate.submit(token, sequence, linear_mps, angular_radps)
+
+    def reset(self, seed: int) -> None:
+        """Rebuilds the scene and robot, with noise seeded anew; sim time restarts at 0."""
+        self._call_in_loop(lambda: self._build(seed))
+
+    def set_pose(self, pose: Pose2D) -> None:
+        """Places the robot at pose (for tests and exercises); odometry restarts there."""
+        self._call_in_loop(lambda: self._place_robot(pose))
+
+    def step_for(self, duration_s: float) -> RobotSnapshot:
+        """Advances the world by duration_s of sim time in the caller's thread (only before start())."""
+        if self._thread is not None or self._closed:
+            raise RuntimeError("step_for is only for a world whose loop was never started")
+        for _ in range(max(1, round(duration_s / self.tick_dt_s))):
+            self._tick_once()
+        return self.snapshot
+
+    def subscribe_camera(self, max_fps: float = DEFAULT_CAMERA_FPS) -> CameraSubscription:
+        """Asks the loop to render; it renders at the highest fps any subscriber asked for (cap 30)."""
+        return self._publication.subscribe_camera(max_fps)
+
+    @property
+    def camera_subscriber_count(self) -> int:
+        """How many viewers currently hold the camera on."""
+        return self._publication.camera_subscriber_count
+
+    # ---- readers (any thread) --------------------------------------------------------------------
+
+    @property
+    def snapshot(self) -> RobotSnapshot:
+        """The latest published snapshot."""
+        return self._publication.snapshot
+
+    @property
+    def latest_frame(self) -> CameraFrame | None:
+        """The latest camera frame, if any was rendered."""
+        return self._publication.frame
+
+    def wait_for_snapshot(
+        self, after_tick: int, timeout_s: float, cancelled: threading.Event | None = None
+    ) -> RobotSnapshot | None:
+        """The newest snapshot with a tick above after_tick; None on timeout, cancel or stop."""
+        return self._publication.wait_for_snapshot(after_tick, timeout_s, cancelled)
+
+    def wait_for_frame(
+        self, after_sequence: int, timeout_s: float, cancelled: threading.Event | None = None
+    ) -> CameraFrame | None:
+        """The newest frame with a sequence above after_sequence; None on timeout, cancel or stop."""
+        return self._publication.wait_for_frame(after_sequence, timeout_s, cancelled)
+
+    def wake_waiters(self) -> None:
+        """Wakes every reader blocked in wait_for_*, so a cancelled stream notices at once."""
+        self._publication.wake_waiters()
+
+    def describe(self) -> RobotDescription:
+        """The robot's figures, sensors and scene."""
+        return RobotDescription(
+            scene_name=self.scene.name,
+            spec=self.spec,
+            deadman_timeout_s=self.deadman_timeout_s,
+            camera=self._camera.spec,
+            sonars=self._sonar.spec.geometries(),
+            laser=self._laser.spec,
+            scene_boxes=tuple(self.scene.scene_boxes()),
+        )
+
+    # ---- the loop (only this part touches pybullet) -----------------------------------------------
+
+    def _run(self) -> None:
+        wall_origin_s = time.monotonic()
+        sim_origin_s = self._sim_time_s
+        while not self._stop.is_set():
+            self._run_pending_commands()
+            if self._sim_time_s < sim_origin_s:  # a reset restarted sim time
+                wall_origin_s, sim_origin_s = time.monotonic(), self._sim_time_s
+            self._tick_once()
+            if not self.realtime:
+                time.sleep(0)  # let gRPC threads take the GIL between ticks
+                continue
+            lag_s = time.monotonic() - (wall_origin_s + self._sim_time_s - sim_origin_s)
+            if lag_s < 0:
+                self._stop.wait(-lag_s)
+            elif lag_s > MAX_REALTIME_LAG_S:
+                wall_origin_s, sim_origin_s = time.monotonic(), self._sim_time_s
+
+    def _call_in_loop(self, action: Callable[[], T]) -> T:
+        if self._closed:
+            raise WorldStopped("the world was stopped")
+        if self._thread is None:
+            return action()
+        future: Future[T] = Future()
+        self._commands.put((action, future))
+        return future.result(timeout=10.0)
+
+    def _run_pending_commands(self) -> None:
+        while True:
+            try:
+                action, future = self._commands.get_nowait()
+            except queue.Empty:
+                return
+            try:
+                future.set_result(action())
+            except Exception as error:  # handed to the caller, who re-raises it in its own thread
+                future.set_exception(error)
+
+    def _fail_pending_commands(self) -> None:
+        while True:
+            try:
+                _, future = self._commands.get_nowait()
+            except queue.Empty:
+                return
+            future.set_exception(WorldStopped("the world was stopped"))
+
+    def _build(self, seed: int) -> None:
+        client = self._client
+        client.resetSimulation()
+        client.setGravity(0.0, 0.0, -9.81)
+        client.setPhysicsEngineParameter(fixedTimeStep=PHYSICS_DT_S, numSubSteps=0)
+        build_scene(client, self.scene, OBSTACLE_GROUP)
+        spawn = self.scene.spawn
+        self._robot = client.loadURDF(
+            str(robot_model.URDF_PATH),
+            [spawn.x_m, spawn.y_m, 0.0],
+            client.getQuaternionFromEuler([0.0, 0.0, spawn.theta_rad]),
+            flags=client.URDF_USE_INERTIA_FROM_FILE | client.URDF_USE_IMPLICIT_CYLINDER,
+        )
+        self._base_z_m = client.getBasePositionAndOrientation(self._robot)[0][2]
+        for link in range(-1, client.getNumJoints(self._robot)):
+            client.setCollisionFilterGroupMask(self._robot, link, ROBOT_GROUP, -1)
+        for caster in (2, 3):  # casters slide: they carry weight but neither grip nor resist turning
+            client.changeDynamics(self._robot, caster, lateralFriction=0.0, rollingFriction=0.0, spinningFriction=0.0)
+        for wheel in (robot_model.LEFT_WHEEL_JOINT, robot_model.RIGHT_WHEEL_JOINT):
+            client.changeDynamics(self._robot, wheel, lateralFriction=1.2)
+        self._seed = seed
+        self._odometry_rng = np.random.default_rng([seed, 1])
+        self._sensor_rng = np.random.default_rng([seed, 2])
+        self._sim_time_s = 0.0
+        self._linear_mps = 0.0  # after the acceleration ramp
+        self._angular_radps = 0.0
+        self._target_linear_mps = 0.0
+        self._target_angular_radps = 0.0
+        self._applied_sequence = 0
+        self._seen_target_version = self._gate.latest().version
+        self._last_command_sim_s = 0.0
+        self._deadman_armed = False
+        self._deadman_stopped = False
+        self._next_frame_sim_s: float | None = None
+        self._odometry = WheelOdometry(self.spec, spawn, self._odometry_rng)
+        self._apply_wheel_speeds()
+        self._read_odometry()
+        self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(self._ground_truth())
+        self._publish_snapshot()
+
+    def _place_robot(self, pose: Pose2D) -> None:
+        client = self._client
+        client.resetBasePositionAndOrientation(
+            self._robot,
+            [pose.x_m, pose.y_m, self._base_z_m],
+            client.getQuaternionFromEuler([0.0, 0.0, pose.theta_rad]),
+        )
+        client.resetBaseVelocity(self._robot, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+        self._linear_mps = self._angular_radps = 0.0
+        self._target_linear_mps = self._target_angular_radps = 0.0
+        self._odometry = WheelOdometry(self.spec, pose, self._odometry_rng)
+        self._read_odometry()
+        self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(self._ground_truth())
+        self._publish_snapshot()
+
+    def _tick_once(self) -> None:
+        self._follow_drive_target()
+        dt_s = self.tick_dt_s
+        self._linear_mps = ramp_toward(
+            self._linear_mps, self._target_linear_mps, self.spec.max_linear_accel_mps2 * dt_s
+        )
+        self._angular_radps = ramp_toward(
+            self._angular_radps, self._target_angular_radps, self.spec.max_angular_accel_radps2 * dt_s
+        )
+        self._apply_wheel_speeds()
+        for _ in range(PHYSICS_STEPS_PER_TICK):
+            self._client.stepSimulation()
+        self._sim_time_s += dt_s
+        self._tick += 1
+        self._read_odometry(dt_s)
+        ground_truth = self._ground_truth()
+        if self._tick % SENSOR_EVERY_TICKS == 0:
+            self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(ground_truth)
+        self._publish_snapshot(ground_truth)
+        self._maybe_render()
+
+    def _follow_drive_target(self) -> None:
+        target = self._gate.latest()
+        if target.version != self._seen_target_version:
+            self._seen_target_version = target.version
+            self._target_linear_mps, self._target_angular_radps = target.linear_mps, target.angular_radps
+            self._applied_sequence = target.sequence
+            self._deadman_armed = target.from_command
+            self._deadman_stopped = False
+            self._last_command_sim_s = self._sim_time_s
+        elif self._deadman_armed and self._sim_time_s - self._last_command_sim_s > self.deadman_timeout_s:
+            self._target_linear_mps = self._target_angular_radps = 0.0
+            self._deadman_armed = False
+            self._deadman_stopped = True
+            self._gate.stopped_by_deadman(target.version)
+
+    def _apply_wheel_speeds(self) -> None:
+        left_radps, right_radps = wheel_speeds_radps(self.spec, self._linear_mps, self._angular_radps)
+        torque_nm = self.spec.wheel_max_torque_nm
+        self._client.setJointMotorControlArray(
+            self._robot,
+            [robot_model.LEFT_WHEEL_JOINT, robot_model.RIGHT_WHEEL_JOINT],
+            pybullet.VELOCITY_CONTROL,
+            targetVelocities=[left_radps, right_radps],
+            forces=[torque_nm, torque_nm],
+        )
+
+    def _read_odometry(self, dt_s: float = 0.0) -> None:
+        states = self._client.getJointStates(self._robot, [robot_model.LEFT_WHEEL_JOINT, robot_model.RIGHT_WHEEL_JOINT])
+        self._odometry.update(states[0][0], states[1][0], dt_s if dt_s > 0 else self.tick_dt_s)
+
+    def _ground_truth(self) -> Pose2D:
+        position, orientation = self._client.getBasePositionAndOrientation(self._robot)
+        return Pose2D(position[0], position[1], yaw_from_quaternion(orientation))
+
+    def _measure_ranges(self, pose: Pose2D) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        sonar_from, sonar_to = self._sonar.rays(pose)
+        laser_from, laser_to = self._laser.rays(pose)
+        fractions = self.cast_rays(np.vstack([sonar_from, laser_from]), np.vstack([sonar_to, laser_to]))
+        sonar_count = self._sonar.ray_count
+        sonar_m = self._sonar.ranges(fractions[:sonar_count], self._sensor_rng)
+        laser_m = self._laser.ranges(fractions[sonar_count:], self._sensor_rng)
+        return tuple(sonar_m.tolist()), tuple(laser_m.tolist())
+
+    def cast_rays(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """Hit fractions (1.0 = no hit) of rays that ignore the robot itself; loop thread or tests only."""
+        results = self._client.rayTestBatch(starts.tolist(), ends.tolist(), collisionFilterMask=SENSOR_RAY_MASK)
+        return np.array([hit[2] if hit[0] >= 0 else 1.0 for hit in results])
+
+    def _publish_snapshot(self, ground_truth: Pose2D | None = None) -> None:
+        reading = self._odometry.reading
+        snapshot = RobotSnapshot(
+            tick=self._tick,
+            sim_time_s=self._sim_time_s,
+            capture_unix_s=time.time(),
+            last_applied_sequence=self._applied_sequence,
+            odometry=reading,
+            ground_truth=ground_truth or self._ground_truth(),
+            sonar_ranges_m=self._sonar_ranges_m,
+            laser_ranges_m=self._laser_ranges_m,
+            deadman_stopped=self._deadman_stopped,
+            commanded_linear_mps=self._linear_mps,
+            commanded_angular_radps=self._angular_radps,
+        )
+        self._publication.publish_snapshot(snapshot)
+
+    def _maybe_render(self) -> None:
+        fps = self._publication.requested_camera_fps
+        if fps <= 0:
+            self._next_frame_sim_s = None
+            return
+        now_s = self._sim_time_s
+        if self._next_frame_sim_s is not None and now_s + 1e-9 < self._next_frame_sim_s:
+            return
+        period_s = 1.0 / fps
+        behind = self._next_frame_sim_s is None or now_s - self._next_frame_sim_s >= period_s
+        self._next_frame_sim_s = now_s + period_s if behind else self._next_frame_sim_s + period_s
+        self.render_frame()
+
+    def render_frame(self) -> CameraFrame:
+        """Renders, encodes and publishes one frame now (loop thread, or tests before start())."""
+        pose = self._odometry.reading.pose
+        jpeg = self._camera.render_jpeg(self._client, self._ground_truth())
+        self._frame_sequence += 1
+        spec = self._camera.spec
+        frame = CameraFrame(
+            frame_sequence=self._frame_sequence,
+            capture_unix_s=time.time(),
+            sim_time_s=self._sim_time_s,
+            last_applied_sequence=self._applied_sequence,
+            pose_at_capture=pose,
+            width_px=spec.width_px,
+            height_px=spec.height_px,
+            jpeg=jpeg,
+        )
+        self._publication.publish_frame(frame)
+        return frame
+
+    def render_rgba(self) -> np.ndarray:
+        """The raw camera image (for tests and inspection before start())."""
+        return self._camera.render_rgba(self._client, self._ground_truth())
