@@ -12,10 +12,8 @@ Log in as student / student (or tutor / tutor).
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import math
-import socket
 import struct
 import threading
 import time
@@ -37,6 +35,8 @@ from flask import (
     url_for,
 )
 from flask_sock import Sock
+
+from middleware.serve import quiet_websocket_endings
 
 HERE = Path(__file__).resolve().parent
 USERS = {"student": ("student", "student"), "tutor": ("tutor", "tutor")}  # name -> (password, role)
@@ -202,26 +202,6 @@ def _robot_loop(stop: threading.Event) -> None:
 def close_socket(ws: Any, code: int, reason: str) -> None:
     """Close with one of the server's close codes."""
     ws.close(code, reason)
-
-
-def quiet_websocket_endings(wsgi_app: Any) -> Any:
-    """Stop Werkzeug writing an HTTP response onto a finished WebSocket.
-
-    With flask-sock 0.7 under Werkzeug's server, Werkzeug writes "HTTP/1.1 200 OK ..." onto the
-    socket after the handler returns; Chrome reads those bytes as a broken frame ("Invalid frame
-    header") and the page sees close code 1006 instead of ours (4401, 4404, ...). Shutting the
-    socket and raising ConnectionError makes Werkzeug treat the request as dropped and write nothing.
-    """
-
-    def app(environ: dict[str, Any], start_response: Any) -> Any:
-        body = wsgi_app(environ, start_response)
-        if "werkzeug.socket" in environ and environ.get("HTTP_UPGRADE", "").lower() == "websocket":
-            with contextlib.suppress(OSError):
-                environ["werkzeug.socket"].shutdown(socket.SHUT_RDWR)
-            raise ConnectionError("WebSocket finished")
-        return body
-
-    return app
 
 
 def _socket_guard(ws: Any, robot_name: str) -> FakeRobot | None:

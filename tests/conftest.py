@@ -191,3 +191,47 @@ def student_client(lab_client: LabClient) -> LabClient:
     """A client of the live server, logged in as the student."""
     assert lab_client.login() == 302
     return lab_client
+
+
+CHROMIUM_PATH = "/usr/bin/chromium"
+CHROMIUM_ARGS = [
+    "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
+    "--disable-component-update", "--disable-sync",
+]
+ARTIFACTS_DIR = Path(__file__).resolve().parent.parent / "test-artifacts"
+
+
+@pytest.fixture(scope="session")
+def chromium():  # type: ignore[no-untyped-def]
+    """Debian's Chromium driven by Playwright (browser downloads do not work here)."""
+    from playwright.sync_api import sync_playwright
+
+    if not Path(CHROMIUM_PATH).exists():
+        pytest.fail(f"{CHROMIUM_PATH} is missing: `make test` installs Debian's chromium package.")
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=CHROMIUM_PATH, args=CHROMIUM_ARGS)
+        yield browser
+        browser.close()
+
+
+@pytest.fixture
+def page(chromium, request: pytest.FixtureRequest):  # type: ignore[no-untyped-def]
+    """A fresh browser tab; its console errors fail the test, and a failing test leaves a screenshot."""
+    context = chromium.new_context(viewport={"width": 1280, "height": 800})
+    tab = context.new_page()
+    errors: list[str] = []
+    tab.on("pageerror", lambda error: errors.append(str(error)))
+    yield tab
+    if not tab.is_closed():
+        ARTIFACTS_DIR.mkdir(exist_ok=True)
+        tab.screenshot(path=str(ARTIFACTS_DIR / f"{request.node.name}.png"))
+    context.close()
+    assert not errors, f"JavaScript errors on the page: {errors}"
+
+
+@pytest.fixture
+def demo_accounts(app) -> dict[str, str]:  # type: ignore[no-untyped-def]
+    """The demo accounts `telelab up` creates, with their generated passwords."""
+    from middleware.lab_runner import ensure_demo_accounts
+
+    return {name: password for name, _role, password in ensure_demo_accounts(app)}
