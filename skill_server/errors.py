@@ -35,3 +35,27 @@ class UnknownScene(RobotError, ValueError):
 
 class WorldStopped(RobotError):
     """The world's loop is not running, so it cannot take the command."""
+
+
+class UnknownSkill(RobotError):
+    """A skill name that the robot does not offer."""
+
+    def __init__(self, name: str, known: list[str]) -> None:
+        super().__init__(f"unknown skill {name!r}; known skills: {', '.join(known)}")
+        self.name = name
+
+
+class UnknownGoal(RobotError):
+    """A goal id that was never issued or whose record has been forgotten."""
+
+
+class ResourceBusy(RobotError):
+    """The resource a skill needs (the wheels, or a perceptive skill's slot) is held by another goal."""
+
+    def __init__(self, message: str, holder_goal_id: str) -> None:
+        super().__init__(message)
+        self.holder_goal_id = holder_goal_id
+
+
+class NoMap(RobotError):
+    """Localization was asked for before any environment model exists."""

@@ -17,6 +17,7 @@ from grpc_reflection.v1alpha import reflection
 
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 from skill_server.errors import RobotError
+from skill_server.sequencer import Sequencer, attach_sequencer
 from skill_server.service import RobotService
 from skill_server.sim.world import World
 from skill_server.skills.registry import default_registry
@@ -38,6 +39,7 @@ class SkillServer:
     robot_name: str
     scene: str
     _health_pool: futures.ThreadPoolExecutor
+    sequencer: Sequencer | None = None
 
     def __iter__(self) -> Iterator[object]:
         return iter((self.server, self.port, self.world))
@@ -51,6 +53,8 @@ class SkillServer:
         """Says NOT_SERVING, ends the streams by stopping the world, then stops gRPC within grace_s."""
         self.health.enter_graceful_shutdown()
         self.world.stop()
+        if self.sequencer is not None:
+            self.sequencer.goals.close()
         self.server.stop(grace_s).wait()
         self._health_pool.shutdown(wait=False)
 
@@ -71,7 +75,9 @@ def create_server(
     """Builds the world and the gRPC server, starts both, and returns them (port=0 picks a free port)."""
     world = World(scene, seed=seed, realtime=realtime, deadman_timeout_s=deadman_timeout_s)
     server = grpc.server(futures.ThreadPoolExecutor(max_workers=MAX_WORKERS, thread_name_prefix="robot-rpc"))
-    robot_pb2_grpc.add_RobotServicer_to_server(RobotService(world, default_registry(world.spec), robot_name), server)
+    registry = default_registry(world.spec)
+    sequencer = attach_sequencer(world, registry)
+    robot_pb2_grpc.add_RobotServicer_to_server(RobotService(world, registry, robot_name, sequencer), server)
     health_pool = futures.ThreadPoolExecutor(max_workers=2, thread_name_prefix="robot-health")
     health_servicer = health.HealthServicer(experimental_non_blocking=True, experimental_thread_pool=health_pool)
     health_pb2_grpc.add_HealthServicer_to_server(health_servicer, server)
@@ -84,7 +90,9 @@ def create_server(
     server.start()
     for service in ("", ROBOT_SERVICE_NAME):
         health_servicer.set(service, health_pb2.HealthCheckResponse.SERVING)
-    return SkillServer(server, bound_port, world, health_servicer, host, robot_name, world.scene.name, health_pool)
+    return SkillServer(
+        server, bound_port, world, health_servicer, host, robot_name, world.scene.name, health_pool, sequencer
+    )
 
 
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:

@@ -8,7 +8,7 @@ import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import Future
-from typing import Any, TypeVar
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
 import pybullet
@@ -28,6 +28,18 @@ from skill_server.sim.snapshots import CameraFrame, RobotDescription, RobotSnaps
 from skill_server.sim.sonar import SonarRing, SonarRingSpec
 
 T = TypeVar("T")
+
+
+class Autonomy(Protocol):
+    """What the loop calls every tick to let skills drive (the sequencer implements it)."""
+
+    def on_tick(self, snapshot: RobotSnapshot, dt_s: float) -> tuple[float, float] | None: ...
+
+    def on_direct_drive(self, version: int) -> None: ...
+
+    def on_controller_changed(self, version: int) -> None: ...
+
+    def on_reset(self, reason: str) -> None: ...
 
 PHYSICS_DT_S = 1.0 / 240.0
 PHYSICS_STEPS_PER_TICK = 4  # control at 60 Hz
@@ -73,6 +85,7 @@ class World:
         self._thread: threading.Thread | None = None
         self._closed = False
         self._publication = Publication()
+        self._autonomy: Autonomy | None = None
         # Built in the caller's thread before the loop exists; from start() on only the loop touches it.
         self._client: Any = bullet_client.BulletClient(connection_mode=pybullet.DIRECT)
         self._build(seed)
@@ -112,6 +125,24 @@ class World:
         self.stop()
 
     # ---- commands from other threads -------------------------------------------------------------
+
+    def attach_autonomy(self, autonomy: Autonomy) -> None:
+        """Lets skills drive: the loop ticks autonomy before moving the base (call before start())."""
+        self._autonomy = autonomy
+
+    def run_in_loop(self, action: Callable[[], T]) -> T:
+        """Runs action in the loop thread (or at once before start()) and returns its result or raises."""
+        return self._call_in_loop(action)
+
+    @property
+    def drive_version(self) -> int:
+        """Grows with every accepted Drive command and controller change."""
+        return self._gate.latest().version
+
+    @property
+    def controller_token(self) -> str:
+        """The token whose commands are obeyed ("" when nobody has control)."""
+        return self._gate.controller_token
 
     def set_controller(self, token: str) -> None:
         """Names the only token whose drive commands are obeyed; "" revokes control and stops the base."""
@@ -272,6 +303,8 @@ class World:
         self._read_odometry()
         self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(self._ground_truth())
         self._publish_snapshot()
+        if self._autonomy is not None:
+            self._autonomy.on_reset("reset")
 
     def _place_robot(self, pose: Pose2D) -> None:
         client = self._client
@@ -287,9 +320,16 @@ class World:
         self._read_odometry()
         self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(self._ground_truth())
         self._publish_snapshot()
+        if self._autonomy is not None:
+            self._autonomy.on_reset("moved to a new pose")
 
     def _tick_once(self) -> None:
         self._follow_drive_target()
+        if self._autonomy is not None:
+            command = self._autonomy.on_tick(self._publication.snapshot, self.tick_dt_s)
+            if command is not None:  # a motor skill holds the wheels; the deadman guards Drive commands only
+                self._target_linear_mps, self._target_angular_radps = command
+                self._deadman_armed = False
         dt_s = self.tick_dt_s
         self._linear_mps = ramp_toward(
             self._linear_mps, self._target_linear_mps, self.spec.max_linear_accel_mps2 * dt_s
@@ -313,6 +353,11 @@ class World:
         target = self._gate.latest()
         if target.version != self._seen_target_version:
             self._seen_target_version = target.version
+            if self._autonomy is not None:
+                if target.from_command:
+                    self._autonomy.on_direct_drive(target.version)
+                else:
+                    self._autonomy.on_controller_changed(target.version)
             self._target_linear_mps, self._target_angular_radps = target.linear_mps, target.angular_radps
             self._applied_sequence = target.sequence
             self._deadman_armed = target.from_command

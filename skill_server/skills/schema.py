@@ -55,6 +55,16 @@ class ParameterSchema:
             return float(value)
         raise InvalidParameter(self.name, f"{self.name} must be a finite number {self._range_text()}")
 
+    def default_value(self) -> float | int | bool | str:
+        """The default in the parameter's own type (the schema's number field holds it as a double)."""
+        if self.type is ParameterType.BOOL:
+            return bool(self.default)
+        if self.type is ParameterType.ENUM:
+            return self.choices[int(self.default)]
+        if self.type is ParameterType.INT:
+            return int(self.default)
+        return float(self.default)
+
     def _range_text(self) -> str:
         unit = f" {self.unit}" if self.unit else ""
         return f"between {self.minimum:g} and {self.maximum:g}{unit}"
@@ -82,4 +92,7 @@ class SkillDescription:
         for name in values:
             if name not in known:
                 raise InvalidParameter(name, f"{name} is not a parameter of {self.name}; known: {sorted(known)}")
-        return {schema.name: schema.validate(values.get(schema.name, schema.default)) for schema in self.parameters}
+        return {
+            schema.name: schema.validate(values[schema.name] if schema.name in values else schema.default_value())
+            for schema in self.parameters
+        }

@@ -14,11 +14,51 @@ class ParameterType(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     PARAMETER_TYPE_INT: _ClassVar[ParameterType]
     PARAMETER_TYPE_BOOL: _ClassVar[ParameterType]
     PARAMETER_TYPE_ENUM: _ClassVar[ParameterType]
+
+class GoalStatus(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = ()
+    GOAL_STATUS_UNSPECIFIED: _ClassVar[GoalStatus]
+    GOAL_STATUS_ACCEPTED: _ClassVar[GoalStatus]
+    GOAL_STATUS_EXECUTING: _ClassVar[GoalStatus]
+    GOAL_STATUS_CANCELING: _ClassVar[GoalStatus]
+    GOAL_STATUS_SUCCEEDED: _ClassVar[GoalStatus]
+    GOAL_STATUS_CANCELED: _ClassVar[GoalStatus]
+    GOAL_STATUS_ABORTED: _ClassVar[GoalStatus]
+
+class GoalEventKind(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = ()
+    GOAL_EVENT_KIND_UNSPECIFIED: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_STARTED: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_STEP_STARTED: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_OBSTACLE_DETECTED: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_PATH_REPLANNED: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_CONVERGED: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_GOAL_REACHED: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_FAILED: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_CANCELED: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_PREEMPTED: _ClassVar[GoalEventKind]
 PARAMETER_TYPE_UNSPECIFIED: ParameterType
 PARAMETER_TYPE_DOUBLE: ParameterType
 PARAMETER_TYPE_INT: ParameterType
 PARAMETER_TYPE_BOOL: ParameterType
 PARAMETER_TYPE_ENUM: ParameterType
+GOAL_STATUS_UNSPECIFIED: GoalStatus
+GOAL_STATUS_ACCEPTED: GoalStatus
+GOAL_STATUS_EXECUTING: GoalStatus
+GOAL_STATUS_CANCELING: GoalStatus
+GOAL_STATUS_SUCCEEDED: GoalStatus
+GOAL_STATUS_CANCELED: GoalStatus
+GOAL_STATUS_ABORTED: GoalStatus
+GOAL_EVENT_KIND_UNSPECIFIED: GoalEventKind
+GOAL_EVENT_KIND_STARTED: GoalEventKind
+GOAL_EVENT_KIND_STEP_STARTED: GoalEventKind
+GOAL_EVENT_KIND_OBSTACLE_DETECTED: GoalEventKind
+GOAL_EVENT_KIND_PATH_REPLANNED: GoalEventKind
+GOAL_EVENT_KIND_CONVERGED: GoalEventKind
+GOAL_EVENT_KIND_GOAL_REACHED: GoalEventKind
+GOAL_EVENT_KIND_FAILED: GoalEventKind
+GOAL_EVENT_KIND_CANCELED: GoalEventKind
+GOAL_EVENT_KIND_PREEMPTED: GoalEventKind
 
 class GetRobotInfoRequest(_message.Message):
     __slots__ = ()
@@ -261,3 +301,234 @@ class CameraFrame(_message.Message):
     height_px: int
     jpeg: bytes
     def __init__(self, frame_sequence: _Optional[int] = ..., capture_unix_s: _Optional[float] = ..., sim_time_s: _Optional[float] = ..., last_applied_sequence: _Optional[int] = ..., pose_at_capture: _Optional[_Union[Pose2D, _Mapping]] = ..., width_px: _Optional[int] = ..., height_px: _Optional[int] = ..., jpeg: _Optional[bytes] = ...) -> None: ...
+
+class ParameterValue(_message.Message):
+    __slots__ = ("double_value", "int_value", "bool_value", "string_value")
+    DOUBLE_VALUE_FIELD_NUMBER: _ClassVar[int]
+    INT_VALUE_FIELD_NUMBER: _ClassVar[int]
+    BOOL_VALUE_FIELD_NUMBER: _ClassVar[int]
+    STRING_VALUE_FIELD_NUMBER: _ClassVar[int]
+    double_value: float
+    int_value: int
+    bool_value: bool
+    string_value: str
+    def __init__(self, double_value: _Optional[float] = ..., int_value: _Optional[int] = ..., bool_value: _Optional[bool] = ..., string_value: _Optional[str] = ...) -> None: ...
+
+class ActivateSkillRequest(_message.Message):
+    __slots__ = ("token", "skill", "parameters", "preempt")
+    class ParametersEntry(_message.Message):
+        __slots__ = ("key", "value")
+        KEY_FIELD_NUMBER: _ClassVar[int]
+        VALUE_FIELD_NUMBER: _ClassVar[int]
+        key: str
+        value: ParameterValue
+        def __init__(self, key: _Optional[str] = ..., value: _Optional[_Union[ParameterValue, _Mapping]] = ...) -> None: ...
+    TOKEN_FIELD_NUMBER: _ClassVar[int]
+    SKILL_FIELD_NUMBER: _ClassVar[int]
+    PARAMETERS_FIELD_NUMBER: _ClassVar[int]
+    PREEMPT_FIELD_NUMBER: _ClassVar[int]
+    token: str
+    skill: str
+    parameters: _containers.MessageMap[str, ParameterValue]
+    preempt: bool
+    def __init__(self, token: _Optional[str] = ..., skill: _Optional[str] = ..., parameters: _Optional[_Mapping[str, ParameterValue]] = ..., preempt: _Optional[bool] = ...) -> None: ...
+
+class ActivateSkillResponse(_message.Message):
+    __slots__ = ("goal", "preempted_goal_id")
+    GOAL_FIELD_NUMBER: _ClassVar[int]
+    PREEMPTED_GOAL_ID_FIELD_NUMBER: _ClassVar[int]
+    goal: GoalState
+    preempted_goal_id: str
+    def __init__(self, goal: _Optional[_Union[GoalState, _Mapping]] = ..., preempted_goal_id: _Optional[str] = ...) -> None: ...
+
+class GoalFeedback(_message.Message):
+    __slots__ = ("sim_time_s", "state", "progress", "distance_error_m", "heading_error_rad", "pose", "pose_source", "values")
+    class ValuesEntry(_message.Message):
+        __slots__ = ("key", "value")
+        KEY_FIELD_NUMBER: _ClassVar[int]
+        VALUE_FIELD_NUMBER: _ClassVar[int]
+        key: str
+        value: float
+        def __init__(self, key: _Optional[str] = ..., value: _Optional[float] = ...) -> None: ...
+    SIM_TIME_S_FIELD_NUMBER: _ClassVar[int]
+    STATE_FIELD_NUMBER: _ClassVar[int]
+    PROGRESS_FIELD_NUMBER: _ClassVar[int]
+    DISTANCE_ERROR_M_FIELD_NUMBER: _ClassVar[int]
+    HEADING_ERROR_RAD_FIELD_NUMBER: _ClassVar[int]
+    POSE_FIELD_NUMBER: _ClassVar[int]
+    POSE_SOURCE_FIELD_NUMBER: _ClassVar[int]
+    VALUES_FIELD_NUMBER: _ClassVar[int]
+    sim_time_s: float
+    state: str
+    progress: float
+    distance_error_m: float
+    heading_error_rad: float
+    pose: Pose2D
+    pose_source: str
+    values: _containers.ScalarMap[str, float]
+    def __init__(self, sim_time_s: _Optional[float] = ..., state: _Optional[str] = ..., progress: _Optional[float] = ..., distance_error_m: _Optional[float] = ..., heading_error_rad: _Optional[float] = ..., pose: _Optional[_Union[Pose2D, _Mapping]] = ..., pose_source: _Optional[str] = ..., values: _Optional[_Mapping[str, float]] = ...) -> None: ...
+
+class GoalEvent(_message.Message):
+    __slots__ = ("index", "sim_time_s", "kind", "message")
+    INDEX_FIELD_NUMBER: _ClassVar[int]
+    SIM_TIME_S_FIELD_NUMBER: _ClassVar[int]
+    KIND_FIELD_NUMBER: _ClassVar[int]
+    MESSAGE_FIELD_NUMBER: _ClassVar[int]
+    index: int
+    sim_time_s: float
+    kind: GoalEventKind
+    message: str
+    def __init__(self, index: _Optional[int] = ..., sim_time_s: _Optional[float] = ..., kind: _Optional[_Union[GoalEventKind, str]] = ..., message: _Optional[str] = ...) -> None: ...
+
+class GoalState(_message.Message):
+    __slots__ = ("goal_id", "skill", "motor", "status", "parameters", "accepted_sim_s", "ended_sim_s", "error_code", "message", "feedback", "goal_reached")
+    class ParametersEntry(_message.Message):
+        __slots__ = ("key", "value")
+        KEY_FIELD_NUMBER: _ClassVar[int]
+        VALUE_FIELD_NUMBER: _ClassVar[int]
+        key: str
+        value: ParameterValue
+        def __init__(self, key: _Optional[str] = ..., value: _Optional[_Union[ParameterValue, _Mapping]] = ...) -> None: ...
+    GOAL_ID_FIELD_NUMBER: _ClassVar[int]
+    SKILL_FIELD_NUMBER: _ClassVar[int]
+    MOTOR_FIELD_NUMBER: _ClassVar[int]
+    STATUS_FIELD_NUMBER: _ClassVar[int]
+    PARAMETERS_FIELD_NUMBER: _ClassVar[int]
+    ACCEPTED_SIM_S_FIELD_NUMBER: _ClassVar[int]
+    ENDED_SIM_S_FIELD_NUMBER: _ClassVar[int]
+    ERROR_CODE_FIELD_NUMBER: _ClassVar[int]
+    MESSAGE_FIELD_NUMBER: _ClassVar[int]
+    FEEDBACK_FIELD_NUMBER: _ClassVar[int]
+    GOAL_REACHED_FIELD_NUMBER: _ClassVar[int]
+    goal_id: str
+    skill: str
+    motor: bool
+    status: GoalStatus
+    parameters: _containers.MessageMap[str, ParameterValue]
+    accepted_sim_s: float
+    ended_sim_s: float
+    error_code: str
+    message: str
+    feedback: GoalFeedback
+    goal_reached: bool
+    def __init__(self, goal_id: _Optional[str] = ..., skill: _Optional[str] = ..., motor: _Optional[bool] = ..., status: _Optional[_Union[GoalStatus, str]] = ..., parameters: _Optional[_Mapping[str, ParameterValue]] = ..., accepted_sim_s: _Optional[float] = ..., ended_sim_s: _Optional[float] = ..., error_code: _Optional[str] = ..., message: _Optional[str] = ..., feedback: _Optional[_Union[GoalFeedback, _Mapping]] = ..., goal_reached: _Optional[bool] = ...) -> None: ...
+
+class CancelGoalRequest(_message.Message):
+    __slots__ = ("token", "goal_id")
+    TOKEN_FIELD_NUMBER: _ClassVar[int]
+    GOAL_ID_FIELD_NUMBER: _ClassVar[int]
+    token: str
+    goal_id: str
+    def __init__(self, token: _Optional[str] = ..., goal_id: _Optional[str] = ...) -> None: ...
+
+class GetGoalRequest(_message.Message):
+    __slots__ = ("goal_id",)
+    GOAL_ID_FIELD_NUMBER: _ClassVar[int]
+    goal_id: str
+    def __init__(self, goal_id: _Optional[str] = ...) -> None: ...
+
+class ListGoalsRequest(_message.Message):
+    __slots__ = ()
+    def __init__(self) -> None: ...
+
+class ListGoalsResponse(_message.Message):
+    __slots__ = ("goals",)
+    GOALS_FIELD_NUMBER: _ClassVar[int]
+    goals: _containers.RepeatedCompositeFieldContainer[GoalState]
+    def __init__(self, goals: _Optional[_Iterable[_Union[GoalState, _Mapping]]] = ...) -> None: ...
+
+class WatchGoalRequest(_message.Message):
+    __slots__ = ("goal_id", "feedback_rate_hz")
+    GOAL_ID_FIELD_NUMBER: _ClassVar[int]
+    FEEDBACK_RATE_HZ_FIELD_NUMBER: _ClassVar[int]
+    goal_id: str
+    feedback_rate_hz: float
+    def __init__(self, goal_id: _Optional[str] = ..., feedback_rate_hz: _Optional[float] = ...) -> None: ...
+
+class GoalUpdate(_message.Message):
+    __slots__ = ("event", "feedback", "state")
+    EVENT_FIELD_NUMBER: _ClassVar[int]
+    FEEDBACK_FIELD_NUMBER: _ClassVar[int]
+    STATE_FIELD_NUMBER: _ClassVar[int]
+    event: GoalEvent
+    feedback: GoalFeedback
+    state: GoalState
+    def __init__(self, event: _Optional[_Union[GoalEvent, _Mapping]] = ..., feedback: _Optional[_Union[GoalFeedback, _Mapping]] = ..., state: _Optional[_Union[GoalState, _Mapping]] = ...) -> None: ...
+
+class GetMapRequest(_message.Message):
+    __slots__ = ()
+    def __init__(self) -> None: ...
+
+class OccupancyGrid(_message.Message):
+    __slots__ = ("resolution_m", "origin_x_m", "origin_y_m", "width_cells", "height_cells", "cells", "scans_integrated", "sim_time_s")
+    RESOLUTION_M_FIELD_NUMBER: _ClassVar[int]
+    ORIGIN_X_M_FIELD_NUMBER: _ClassVar[int]
+    ORIGIN_Y_M_FIELD_NUMBER: _ClassVar[int]
+    WIDTH_CELLS_FIELD_NUMBER: _ClassVar[int]
+    HEIGHT_CELLS_FIELD_NUMBER: _ClassVar[int]
+    CELLS_FIELD_NUMBER: _ClassVar[int]
+    SCANS_INTEGRATED_FIELD_NUMBER: _ClassVar[int]
+    SIM_TIME_S_FIELD_NUMBER: _ClassVar[int]
+    resolution_m: float
+    origin_x_m: float
+    origin_y_m: float
+    width_cells: int
+    height_cells: int
+    cells: bytes
+    scans_integrated: int
+    sim_time_s: float
+    def __init__(self, resolution_m: _Optional[float] = ..., origin_x_m: _Optional[float] = ..., origin_y_m: _Optional[float] = ..., width_cells: _Optional[int] = ..., height_cells: _Optional[int] = ..., cells: _Optional[bytes] = ..., scans_integrated: _Optional[int] = ..., sim_time_s: _Optional[float] = ...) -> None: ...
+
+class StreamLocalizationRequest(_message.Message):
+    __slots__ = ("rate_hz", "max_particles")
+    RATE_HZ_FIELD_NUMBER: _ClassVar[int]
+    MAX_PARTICLES_FIELD_NUMBER: _ClassVar[int]
+    rate_hz: float
+    max_particles: int
+    def __init__(self, rate_hz: _Optional[float] = ..., max_particles: _Optional[int] = ...) -> None: ...
+
+class Particle(_message.Message):
+    __slots__ = ("x_m", "y_m", "theta_rad", "weight")
+    X_M_FIELD_NUMBER: _ClassVar[int]
+    Y_M_FIELD_NUMBER: _ClassVar[int]
+    THETA_RAD_FIELD_NUMBER: _ClassVar[int]
+    WEIGHT_FIELD_NUMBER: _ClassVar[int]
+    x_m: float
+    y_m: float
+    theta_rad: float
+    weight: float
+    def __init__(self, x_m: _Optional[float] = ..., y_m: _Optional[float] = ..., theta_rad: _Optional[float] = ..., weight: _Optional[float] = ...) -> None: ...
+
+class LocalizationUpdate(_message.Message):
+    __slots__ = ("sim_time_s", "active", "converged", "estimate", "std_x_m", "std_y_m", "std_theta_rad", "odometry", "ground_truth", "position_error_m", "heading_error_rad", "odometry_position_error_m", "odometry_heading_error_rad", "update_duration_ms", "particles")
+    SIM_TIME_S_FIELD_NUMBER: _ClassVar[int]
+    ACTIVE_FIELD_NUMBER: _ClassVar[int]
+    CONVERGED_FIELD_NUMBER: _ClassVar[int]
+    ESTIMATE_FIELD_NUMBER: _ClassVar[int]
+    STD_X_M_FIELD_NUMBER: _ClassVar[int]
+    STD_Y_M_FIELD_NUMBER: _ClassVar[int]
+    STD_THETA_RAD_FIELD_NUMBER: _ClassVar[int]
+    ODOMETRY_FIELD_NUMBER: _ClassVar[int]
+    GROUND_TRUTH_FIELD_NUMBER: _ClassVar[int]
+    POSITION_ERROR_M_FIELD_NUMBER: _ClassVar[int]
+    HEADING_ERROR_RAD_FIELD_NUMBER: _ClassVar[int]
+    ODOMETRY_POSITION_ERROR_M_FIELD_NUMBER: _ClassVar[int]
+    ODOMETRY_HEADING_ERROR_RAD_FIELD_NUMBER: _ClassVar[int]
+    UPDATE_DURATION_MS_FIELD_NUMBER: _ClassVar[int]
+    PARTICLES_FIELD_NUMBER: _ClassVar[int]
+    sim_time_s: float
+    active: bool
+    converged: bool
+    estimate: Pose2D
+    std_x_m: float
+    std_y_m: float
+    std_theta_rad: float
+    odometry: Pose2D
+    ground_truth: Pose2D
+    position_error_m: float
+    heading_error_rad: float
+    odometry_position_error_m: float
+    odometry_heading_error_rad: float
+    update_duration_ms: float
+    particles: _containers.RepeatedCompositeFieldContainer[Particle]
+    def __init__(self, sim_time_s: _Optional[float] = ..., active: _Optional[bool] = ..., converged: _Optional[bool] = ..., estimate: _Optional[_Union[Pose2D, _Mapping]] = ..., std_x_m: _Optional[float] = ..., std_y_m: _Optional[float] = ..., std_theta_rad: _Optional[float] = ..., odometry: _Optional[_Union[Pose2D, _Mapping]] = ..., ground_truth: _Optional[_Union[Pose2D, _Mapping]] = ..., position_error_m: _Optional[float] = ..., heading_error_rad: _Optional[float] = ..., odometry_position_error_m: _Optional[float] = ..., odometry_heading_error_rad: _Optional[float] = ..., update_duration_ms: _Optional[float] = ..., particles: _Optional[_Iterable[_Union[Particle, _Mapping]]] = ...) -> None: ...

@@ -64,6 +64,41 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamCameraRequest.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CameraFrame.FromString,
                 _registered_method=True)
+        self.ActivateSkill = channel.unary_unary(
+                '/telelab.v1.Robot/ActivateSkill',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ActivateSkillRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ActivateSkillResponse.FromString,
+                _registered_method=True)
+        self.CancelGoal = channel.unary_unary(
+                '/telelab.v1.Robot/CancelGoal',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CancelGoalRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GoalState.FromString,
+                _registered_method=True)
+        self.GetGoal = channel.unary_unary(
+                '/telelab.v1.Robot/GetGoal',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetGoalRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GoalState.FromString,
+                _registered_method=True)
+        self.ListGoals = channel.unary_unary(
+                '/telelab.v1.Robot/ListGoals',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ListGoalsRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ListGoalsResponse.FromString,
+                _registered_method=True)
+        self.WatchGoal = channel.unary_stream(
+                '/telelab.v1.Robot/WatchGoal',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.WatchGoalRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GoalUpdate.FromString,
+                _registered_method=True)
+        self.GetMap = channel.unary_unary(
+                '/telelab.v1.Robot/GetMap',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetMapRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.OccupancyGrid.FromString,
+                _registered_method=True)
+        self.StreamLocalization = channel.unary_stream(
+                '/telelab.v1.Robot/StreamLocalization',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamLocalizationRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.LocalizationUpdate.FromString,
+                _registered_method=True)
 
 
 class RobotServicer:
@@ -111,6 +146,57 @@ class RobotServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def ActivateSkill(self, request, context):
+        """Starts a skill as a goal. Answers at once: the goal id, or a status code with the reason
+        (NOT_FOUND unknown skill, INVALID_ARGUMENT naming the field and its range, FAILED_PRECONDITION when the
+        wheels or the skill are busy and preempt is false, UNAUTHENTICATED / PERMISSION_DENIED without control).
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def CancelGoal(self, request, context):
+        """Cancels a running goal (it ends CANCELED, reporting the error left); a finished goal is returned unchanged.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def GetGoal(self, request, context):
+        """The state of a running goal or one that finished recently (NOT_FOUND once forgotten).
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def ListGoals(self, request, context):
+        """Running goals and those kept after their end, oldest first.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def WatchGoal(self, request, context):
+        """The goal's state now, then every event and the feedback at the requested rate, then its final state.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def GetMap(self, request, context):
+        """The environment model (occupancy grid) built by the environment_modelling skill.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def StreamLocalization(self, request, context):
+        """Localization estimate with its uncertainty and particles, beside odometry and ground truth.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
 
 def add_RobotServicer_to_server(servicer, server):
     rpc_method_handlers = {
@@ -143,6 +229,41 @@ def add_RobotServicer_to_server(servicer, server):
                     servicer.StreamCamera,
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamCameraRequest.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CameraFrame.SerializeToString,
+            ),
+            'ActivateSkill': grpc.unary_unary_rpc_method_handler(
+                    servicer.ActivateSkill,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ActivateSkillRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ActivateSkillResponse.SerializeToString,
+            ),
+            'CancelGoal': grpc.unary_unary_rpc_method_handler(
+                    servicer.CancelGoal,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CancelGoalRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GoalState.SerializeToString,
+            ),
+            'GetGoal': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetGoal,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetGoalRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GoalState.SerializeToString,
+            ),
+            'ListGoals': grpc.unary_unary_rpc_method_handler(
+                    servicer.ListGoals,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ListGoalsRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ListGoalsResponse.SerializeToString,
+            ),
+            'WatchGoal': grpc.unary_stream_rpc_method_handler(
+                    servicer.WatchGoal,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.WatchGoalRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GoalUpdate.SerializeToString,
+            ),
+            'GetMap': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetMap,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetMapRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.OccupancyGrid.SerializeToString,
+            ),
+            'StreamLocalization': grpc.unary_stream_rpc_method_handler(
+                    servicer.StreamLocalization,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamLocalizationRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.LocalizationUpdate.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -307,6 +428,195 @@ class Robot:
             '/telelab.v1.Robot/StreamCamera',
             protos_dot_telelab_dot_v1_dot_robot__pb2.StreamCameraRequest.SerializeToString,
             protos_dot_telelab_dot_v1_dot_robot__pb2.CameraFrame.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def ActivateSkill(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/ActivateSkill',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.ActivateSkillRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.ActivateSkillResponse.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def CancelGoal(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/CancelGoal',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.CancelGoalRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GoalState.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def GetGoal(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/GetGoal',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GetGoalRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GoalState.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def ListGoals(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/ListGoals',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.ListGoalsRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.ListGoalsResponse.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def WatchGoal(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_stream(
+            request,
+            target,
+            '/telelab.v1.Robot/WatchGoal',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.WatchGoalRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GoalUpdate.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def GetMap(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/GetMap',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GetMapRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.OccupancyGrid.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def StreamLocalization(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_stream(
+            request,
+            target,
+            '/telelab.v1.Robot/StreamLocalization',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.StreamLocalizationRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.LocalizationUpdate.FromString,
             options,
             channel_credentials,
             insecure,

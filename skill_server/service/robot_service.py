@@ -2,43 +2,36 @@
 
 from __future__ import annotations
 
-import math
 import threading
 from collections.abc import Iterator
-from typing import NoReturn
 
 import grpc
 
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 from skill_server.errors import InvalidParameter, MissingControllerToken, NotController, WorldStopped
+from skill_server.sequencer import Sequencer
+from skill_server.service import convert
+from skill_server.service.common import SimTimePacer, abort, stream_rate
+from skill_server.service.goal_rpcs import GoalRpcs
 from skill_server.sim.camera import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS
-from skill_server.sim.geometry import Pose2D
-from skill_server.sim.laser import LaserSpec
-from skill_server.sim.snapshots import CameraFrame, RobotSnapshot
 from skill_server.sim.world import World
 from skill_server.skills.registry import SkillRegistry
-from skill_server.skills.schema import ParameterType, SkillDescription
 
 DEFAULT_TELEMETRY_HZ = 10.0
 MAX_TELEMETRY_HZ = 50.0
 STREAM_POLL_S = 0.25  # how long a stream waits before re-checking that its client is still there
 
-_PARAMETER_TYPES = {
-    ParameterType.DOUBLE: robot_pb2.PARAMETER_TYPE_DOUBLE,
-    ParameterType.INT: robot_pb2.PARAMETER_TYPE_INT,
-    ParameterType.BOOL: robot_pb2.PARAMETER_TYPE_BOOL,
-    ParameterType.ENUM: robot_pb2.PARAMETER_TYPE_ENUM,
-}
 
 
-class RobotService(robot_pb2_grpc.RobotServicer):
-    """telelab.v1.Robot over one World; holds no robot state of its own."""
+class RobotService(GoalRpcs, robot_pb2_grpc.RobotServicer):
+    """telelab.v1.Robot over one World and its Sequencer; holds no robot state of its own."""
 
-    def __init__(self, world: World, skills: SkillRegistry, robot_name: str) -> None:
+    def __init__(self, world: World, skills: SkillRegistry, robot_name: str, sequencer: Sequencer) -> None:
         self._world = world
         self._skills = skills
         self._robot_name = robot_name
         self._laser = world.describe().laser
+        self._sequencer = sequencer
 
     def GetRobotInfo(
         self, request: robot_pb2.GetRobotInfoRequest, context: grpc.ServicerContext
@@ -91,7 +84,7 @@ class RobotService(robot_pb2_grpc.RobotServicer):
         self, request: robot_pb2.ListSkillsRequest, context: grpc.ServicerContext
     ) -> robot_pb2.ListSkillsResponse:
         """Lists the skills with the schema of their parameters."""
-        return robot_pb2.ListSkillsResponse(skills=[_skill_to_proto(s) for s in self._skills.descriptions()])
+        return robot_pb2.ListSkillsResponse(skills=[convert.skill_to_proto(s) for s in self._skills.descriptions()])
 
     def SetController(
         self, request: robot_pb2.SetControllerRequest, context: grpc.ServicerContext
@@ -105,15 +98,15 @@ class RobotService(robot_pb2_grpc.RobotServicer):
         try:
             ack = self._world.drive(request.token, request.sequence, request.linear_mps, request.angular_radps)
         except MissingControllerToken as error:
-            _abort(context, grpc.StatusCode.UNAUTHENTICATED, str(error))
+            abort(context, grpc.StatusCode.UNAUTHENTICATED, str(error))
         except NotController:
-            _abort(
+            abort(
                 context,
                 grpc.StatusCode.PERMISSION_DENIED,
                 "this command's controller token is not the robot's current controller",
             )
         except InvalidParameter as error:
-            _abort(context, grpc.StatusCode.INVALID_ARGUMENT, error.message)
+            abort(context, grpc.StatusCode.INVALID_ARGUMENT, error.message)
         return robot_pb2.DriveAck(
             applied_sequence=ack.applied_sequence, linear_mps=ack.linear_mps, angular_radps=ack.angular_radps
         )
@@ -122,7 +115,7 @@ class RobotService(robot_pb2_grpc.RobotServicer):
         self, request: robot_pb2.StreamTelemetryRequest, context: grpc.ServicerContext
     ) -> Iterator[robot_pb2.Telemetry]:
         """Odometry, ground truth, sonar and laser at the requested rate of sim time."""
-        rate_hz = _stream_rate(context, "rate_hz", request.rate_hz, DEFAULT_TELEMETRY_HZ, MAX_TELEMETRY_HZ, "Hz")
+        rate_hz = stream_rate(context, "rate_hz", request.rate_hz, DEFAULT_TELEMETRY_HZ, MAX_TELEMETRY_HZ, "Hz")
         cancelled = self._cancellation(context)
         pacer = SimTimePacer(1.0 / rate_hz)
         last_tick = -1
@@ -134,13 +127,13 @@ class RobotService(robot_pb2_grpc.RobotServicer):
                 continue
             last_tick = snapshot.tick
             if pacer.due(snapshot.sim_time_s):
-                yield _telemetry_to_proto(snapshot, self._laser)
+                yield convert.telemetry_to_proto(snapshot, self._laser)
 
     def StreamCamera(
         self, request: robot_pb2.StreamCameraRequest, context: grpc.ServicerContext
     ) -> Iterator[robot_pb2.CameraFrame]:
         """JPEG frames, rendered only while someone watches and encoded once for all viewers."""
-        max_fps = _stream_rate(context, "max_fps", request.max_fps, DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS, "fps")
+        max_fps = stream_rate(context, "max_fps", request.max_fps, DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS, "fps")
         cancelled = self._cancellation(context)
         pacer = SimTimePacer(1.0 / max_fps)
         last_sequence = 0
@@ -157,7 +150,7 @@ class RobotService(robot_pb2_grpc.RobotServicer):
                     continue
                 last_sequence = frame.frame_sequence
                 if pacer.due(frame.sim_time_s):
-                    yield _frame_to_proto(frame)
+                    yield convert.frame_to_proto(frame)
 
     def _cancellation(self, context: grpc.ServicerContext) -> threading.Event:
         cancelled = threading.Event()
@@ -168,102 +161,3 @@ class RobotService(robot_pb2_grpc.RobotServicer):
 
         context.add_callback(on_rpc_done)
         return cancelled
-
-
-class SimTimePacer:
-    """Lets through one item per period of sim time, keeping the average rate when items come unevenly."""
-
-    def __init__(self, period_s: float) -> None:
-        self._period_s = period_s
-        self._next_due_s: float | None = None
-        self._last_s = -math.inf
-
-    def due(self, sim_time_s: float) -> bool:
-        """True if an item stamped sim_time_s should be sent (a sim-time restart makes it due at once)."""
-        if sim_time_s < self._last_s:
-            self._next_due_s = None
-        self._last_s = sim_time_s
-        if self._next_due_s is not None and sim_time_s + 1e-9 < self._next_due_s:
-            return False
-        behind = self._next_due_s is None or sim_time_s - self._next_due_s >= self._period_s
-        self._next_due_s = sim_time_s + self._period_s if behind else self._next_due_s + self._period_s
-        return True
-
-
-def _abort(context: grpc.ServicerContext, code: grpc.StatusCode, message: str) -> NoReturn:
-    context.abort(code, message)
-    raise AssertionError("context.abort always raises")
-
-
-def _stream_rate(
-    context: grpc.ServicerContext, field: str, requested: float, default: float, maximum: float, unit: str
-) -> float:
-    if requested == 0:
-        return default
-    if not math.isfinite(requested) or not 0 < requested <= maximum:
-        _abort(
-            context,
-            grpc.StatusCode.INVALID_ARGUMENT,
-            f"{field} must be a finite number above 0 and at most {maximum:g} {unit} (0 means {default:g})",
-        )
-    return requested
-
-
-def _pose_to_proto(pose: Pose2D) -> robot_pb2.Pose2D:
-    return robot_pb2.Pose2D(x_m=pose.x_m, y_m=pose.y_m, theta_rad=pose.theta_rad)
-
-
-def _telemetry_to_proto(snapshot: RobotSnapshot, laser: LaserSpec) -> robot_pb2.Telemetry:
-    return robot_pb2.Telemetry(
-        tick=snapshot.tick,
-        sim_time_s=snapshot.sim_time_s,
-        capture_unix_s=snapshot.capture_unix_s,
-        last_applied_sequence=snapshot.last_applied_sequence,
-        odometry=robot_pb2.Odometry(
-            pose=_pose_to_proto(snapshot.odometry.pose),
-            linear_mps=snapshot.odometry.linear_mps,
-            angular_radps=snapshot.odometry.angular_radps,
-        ),
-        ground_truth=_pose_to_proto(snapshot.ground_truth),
-        sonar=robot_pb2.SonarReading(ranges_m=snapshot.sonar_ranges_m),
-        laser=robot_pb2.LaserScan(
-            angle_min_rad=laser.angle_min_rad,
-            angle_increment_rad=laser.angle_increment_rad,
-            ranges_m=snapshot.laser_ranges_m,
-        ),
-        deadman_stopped=snapshot.deadman_stopped,
-    )
-
-
-def _frame_to_proto(frame: CameraFrame) -> robot_pb2.CameraFrame:
-    return robot_pb2.CameraFrame(
-        frame_sequence=frame.frame_sequence,
-        capture_unix_s=frame.capture_unix_s,
-        sim_time_s=frame.sim_time_s,
-        last_applied_sequence=frame.last_applied_sequence,
-        pose_at_capture=_pose_to_proto(frame.pose_at_capture),
-        width_px=frame.width_px,
-        height_px=frame.height_px,
-        jpeg=frame.jpeg,
-    )
-
-
-def _skill_to_proto(skill: SkillDescription) -> robot_pb2.SkillDescription:
-    return robot_pb2.SkillDescription(
-        name=skill.name,
-        title=skill.title,
-        help=skill.help,
-        parameters=[
-            robot_pb2.ParameterSchema(
-                name=p.name,
-                type=_PARAMETER_TYPES[p.type],
-                unit=p.unit,
-                minimum=p.minimum,
-                maximum=p.maximum,
-                default_value=p.default,
-                help=p.help,
-                choices=list(p.choices),
-            )
-            for p in skill.parameters
-        ],
-    )

@@ -1,0 +1,232 @@
+"""Skill-quality benchmark: go-to-goal, wall following, round trip, localization, speed in fast mode.
+
+Run `python -m benchmarks.skills [--quick] [--output DIR]`; prints a table and writes DIR/skills.json.
+Ground truth is used here only to grade; the skills steer from odometry, sonar, laser and localization.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from skill_server.goals import GoalSnapshot
+from skill_server.sequencer import Sequencer, attach_sequencer
+from skill_server.sim.geometry import Pose2D
+from skill_server.sim.snapshots import RobotSnapshot
+from skill_server.sim.world import World
+
+TOKEN = "benchmark"
+ROOM_HALF_X_M, ROOM_HALF_Y_M = 4.0, 3.0
+
+
+@dataclass
+class Row:
+    """One line of the table."""
+
+    scenario: str
+    figure: str
+    measured: float
+    target: str
+    passed: bool | None  # None: reported only (quick mode asserts nothing)
+
+
+class Bench:
+    """A lab world with a sequencer, stepped synchronously, recording contact clearance as it goes."""
+
+    def __init__(self, seed: int) -> None:
+        self.world = World("lab", seed=seed, realtime=False, deadman_timeout_s=1000.0)
+        self.sequencer: Sequencer = attach_sequencer(self.world)
+        self.world.set_controller(TOKEN)
+        self.boxes = self.world.describe().scene_boxes
+        self.radius_m = self.world.spec.body_radius_m
+        self.min_clearance_m = math.inf
+        self.sim_s = 0.0
+        self.wall_s = 0.0
+
+    def activate(self, skill: str, **parameters: object) -> str:
+        """Starts a goal and returns its id."""
+        return self.sequencer.activate(TOKEN, skill, parameters, preempt=True).goal.goal_id
+
+    def run(self, goal_id: str, limit_s: float, each: Callable[[RobotSnapshot], None] | None = None) -> GoalSnapshot:
+        """Steps until the goal ends, tracking clearance and speed."""
+        goal = self.sequencer.goals.get(goal_id)
+        assert goal is not None
+        start_s, started = self.world.snapshot.sim_time_s, time.perf_counter()
+        while not goal.status.is_terminal and self.world.snapshot.sim_time_s - start_s < limit_s:
+            snapshot = self.world.step_for(0.1)
+            self.min_clearance_m = min(self.min_clearance_m, self.clearance_m(snapshot.ground_truth))
+            if each is not None:
+                each(snapshot)
+        self.sim_s += self.world.snapshot.sim_time_s - start_s
+        self.wall_s += time.perf_counter() - started
+        return goal.snapshot()
+
+    def clearance_m(self, pose: Pose2D) -> float:
+        """Ground-truth gap between the robot's rim and the nearest box (walls included)."""
+        gaps = [math.hypot(max(abs(pose.x_m - b.center_x_m) - b.half_x_m, 0.0),
+                           max(abs(pose.y_m - b.center_y_m) - b.half_y_m, 0.0)) for b in self.boxes]
+        return min(gaps) - self.radius_m
+
+    def map_and_localize(self) -> str:
+        """Maps while localizing from the known start, spinning on the spot, then freezes the map."""
+        mapping = self.activate("environment_modelling")
+        self.world.step_for(0.2)
+        truth = self.world.snapshot.odometry.pose  # odometry starts exact at the spawn
+        localization = self.activate("localization", initial_x_m=truth.x_m, initial_y_m=truth.y_m,
+                                     initial_theta_rad=truth.theta_rad, initial_spread_m=0.02,
+                                     initial_spread_rad=0.02)
+        for heading in (1.6, 3.1, -1.6, 0.0):
+            self.run(self.activate("orientation_control", heading_rad=heading, max_angular_radps=0.6), 30.0)
+        self.sequencer.cancel(TOKEN, mapping)  # a frozen map keeps later pose errors out of it
+        return localization
+
+    @property
+    def speed_factor(self) -> float:
+        """Sim seconds per wall second over everything run so far."""
+        return self.sim_s / self.wall_s if self.wall_s else 0.0
+
+
+def random_goals(count: int, seed: int, bench: Bench, clearance_m: float = 0.5) -> list[tuple[float, float]]:
+    """Seeded goals inside the room at least clearance_m from every obstacle's box and wall."""
+    rng = np.random.default_rng(seed)
+    goals: list[tuple[float, float]] = []
+    while len(goals) < count:
+        x, y = rng.uniform(-ROOM_HALF_X_M + 0.5, ROOM_HALF_X_M - 0.5), rng.uniform(-ROOM_HALF_Y_M + 0.5,
+                                                                                 ROOM_HALF_Y_M - 0.5)
+        if bench.clearance_m(Pose2D(x, y)) + bench.radius_m >= clearance_m:
+            goals.append((float(x), float(y)))
+    return goals
+
+
+def go_to_goal_scenario(quick: bool, rows: list[Row]) -> float:
+    """20 seeded goals in a row, each within its maximum error, none touching an obstacle."""
+    bench = Bench(seed=1)
+    bench.map_and_localize()
+    max_error_m = 0.1
+    errors, reached = [], 0
+    goals = random_goals(3 if quick else 20, seed=2024, bench=bench)
+    for x, y in goals:
+        final = bench.run(bench.activate("go_to_goal", goal_x_m=x, goal_y_m=y, max_error_m=max_error_m), 120.0)
+        truth = bench.world.snapshot.ground_truth
+        error = math.hypot(truth.x_m - x, truth.y_m - y)
+        errors.append(error)
+        reached += final.goal_reached and error <= max_error_m
+    grade = None if quick else reached == len(goals)
+    rows.append(Row("go_to_goal", f"goals ended within {max_error_m} m (of {len(goals)})", reached,
+                    f"{len(goals)}", grade))
+    rows.append(Row("go_to_goal", "worst final error [m]", max(errors), f"<= {max_error_m}",
+                    None if quick else max(errors) <= max_error_m))
+    rows.append(Row("go_to_goal", "closest approach to an obstacle [m]", bench.min_clearance_m, "> 0",
+                    None if quick else bench.min_clearance_m > 0))
+    return bench.speed_factor
+
+
+def wall_following_scenario(quick: bool, rows: list[Row]) -> float:
+    """At 0.3 m/s along the lab's walls: RMS distance error on straight runs, no contact at corners."""
+    bench = Bench(seed=3)
+    distance_m = 0.3
+    bench.world.set_pose(Pose2D(-1.5, -ROOM_HALF_Y_M + bench.radius_m + distance_m, 0.0))
+    errors: list[float] = []
+
+    def sample(snapshot: RobotSnapshot) -> None:
+        pose = snapshot.ground_truth
+        to_x, to_y = ROOM_HALF_X_M - abs(pose.x_m), ROOM_HALF_Y_M - abs(pose.y_m)
+        if min(to_x, to_y) < 0.8 and max(to_x, to_y) > 1.2 and snapshot.sim_time_s > 3.0:
+            errors.append(min(to_x, to_y) - bench.radius_m - distance_m)  # straight run along one wall
+
+    bench.run(bench.activate("wall_following", side="right", distance_m=distance_m, speed_mps=0.3,
+                             duration_s=20.0 if quick else 110.0), 200.0, sample)
+    rms = float(np.sqrt(np.mean(np.square(errors)))) if errors else math.inf
+    rows.append(Row("wall_following", "RMS distance error on straight runs [m]", rms, "<= 0.03",
+                    None if quick else rms <= 0.03))
+    rows.append(Row("wall_following", "closest approach, corners included [m]", bench.min_clearance_m, "> 0",
+                    None if quick else bench.min_clearance_m > 0))
+    return bench.speed_factor
+
+
+def round_trip_scenario(quick: bool, rows: list[Row]) -> float:
+    """Round trips with localization running: back within 5 cm and 5 degrees of the start pose."""
+    bench = Bench(seed=4)
+    bench.map_and_localize()
+    worst_m, worst_deg = 0.0, 0.0
+    for x, y in [(1.5, 1.0)] if quick else [(1.5, 1.0), (-2.5, -0.5), (3.0, -2.2)]:
+        start = bench.world.snapshot.ground_truth
+        bench.run(bench.activate("round_trip", goal_x_m=x, goal_y_m=y), 180.0)
+        end = bench.world.snapshot.ground_truth
+        worst_m = max(worst_m, start.distance_to(end))
+        worst_deg = max(worst_deg, abs(math.degrees(math.remainder(end.theta_rad - start.theta_rad, 2 * math.pi))))
+    rows.append(Row("round_trip", "worst return position error [m]", worst_m, "<= 0.05",
+                    None if quick else worst_m <= 0.05))
+    rows.append(Row("round_trip", "worst return heading error [deg]", worst_deg, "<= 5",
+                    None if quick else worst_deg <= 5))
+    return bench.speed_factor
+
+
+def localization_scenario(quick: bool, rows: list[Row]) -> float:
+    """From a guess 0.5 m off, over a 2-minute drive: median errors, odometry drift, update time."""
+    bench = Bench(seed=5)
+    bench.map_and_localize()
+    truth = bench.world.snapshot.ground_truth
+    offset = 0.5 / math.sqrt(2.0)
+    bench.activate("localization", initial_x_m=truth.x_m + offset, initial_y_m=truth.y_m - offset,
+                   initial_theta_rad=truth.theta_rad + 0.1)
+    position_errors, heading_errors, durations, odometry_drift = [], [], [], [0.0]
+    drive_s = 30.0 if quick else 120.0
+    start_s = bench.world.snapshot.sim_time_s
+
+    def sample(snapshot: RobotSnapshot) -> None:
+        estimate = bench.sequencer.perception.published_estimate
+        odometry_drift.append(snapshot.ground_truth.distance_to(snapshot.odometry.pose))
+        if estimate is None:
+            return
+        durations.append(estimate.update_duration_ms)
+        if snapshot.sim_time_s - start_s > 10.0:  # after convergence
+            position_errors.append(snapshot.ground_truth.distance_to(estimate.pose))
+            heading_errors.append(abs(math.degrees(math.remainder(
+                snapshot.ground_truth.theta_rad - estimate.pose.theta_rad, 2 * math.pi))))
+
+    bench.run(bench.activate("wall_following", side="left", distance_m=0.5, speed_mps=0.3, duration_s=drive_s),
+              drive_s + 5.0, sample)
+    median_m, median_deg = float(np.median(position_errors)), float(np.median(heading_errors))
+    update_ms = float(np.percentile(durations, 95))
+    rows.append(Row("localization", "median position error [m]", median_m, "<= 0.05",
+                    None if quick else median_m <= 0.05))
+    rows.append(Row("localization", "median heading error [deg]", median_deg, "<= 3",
+                    None if quick else median_deg <= 3))
+    rows.append(Row("localization", "raw odometry drift at the end [m]", max(odometry_drift), "> 0.15",
+                    None if quick else max(odometry_drift) > 0.15))
+    rows.append(Row("localization", "update time, 95th percentile [ms]", update_ms, "< 20",
+                    None if quick else update_ms < 20))
+    return bench.speed_factor
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Runs every scenario, prints the table, writes the JSON."""
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.skills", description=__doc__)
+    parser.add_argument("--quick", action="store_true", help="smoke mode: few goals, short drives, no grading")
+    parser.add_argument("--output", type=Path, default=Path("bench-results"), help="folder for skills.json")
+    args = parser.parse_args(argv)
+    rows: list[Row] = []
+    for name, scenario in [("go_to_goal", go_to_goal_scenario), ("wall_following", wall_following_scenario),
+                           ("round_trip", round_trip_scenario), ("localization", localization_scenario)]:
+        speed = scenario(args.quick, rows)
+        rows.append(Row(name, "speed in fast mode [x real time]", speed, ">= 20", None if args.quick else speed >= 20))
+    print(f"{'scenario':<16}{'figure':<48}{'measured':>10}  {'target':<10}result")
+    for row in rows:
+        result = "-" if row.passed is None else ("pass" if row.passed else "MISS")
+        print(f"{row.scenario:<16}{row.figure:<48}{row.measured:>10.3f}  {row.target:<10}{result}")
+    args.output.mkdir(parents=True, exist_ok=True)
+    (args.output / "skills.json").write_text(json.dumps(
+        {"quick": args.quick, "rows": [asdict(row) for row in rows]}, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,265 @@
+"""The sequencer: owns the wheels, runs goals' controllers on the world's tick, and keeps perception data."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+from skill_server.errors import MissingControllerToken, NotController, ResourceBusy, UnknownGoal
+from skill_server.goals import EventKind, Goal, GoalBook, GoalSnapshot, GoalStatus
+from skill_server.sim.robot_model import RobotSpec
+from skill_server.sim.snapshots import RobotSnapshot
+from skill_server.skills.base import SensorLayout, SkillController, TickInput
+from skill_server.skills.obstacles import ObstacleMap
+from skill_server.skills.registry import SkillRegistry
+
+FEEDBACK_PERIOD_S = 0.1  # feedback reaches the goal records at 10 Hz of sim time; events go at once
+
+
+@dataclass(frozen=True)
+class Activation:
+    """An accepted goal, and the goal it preempted if any."""
+
+    goal: GoalSnapshot
+    preempted_goal_id: str
+
+
+class Perception:
+    """Data objects of the perceptive skills, shared with the others (the paper's data objects)."""
+
+    def __init__(self) -> None:
+        self.obstacles = ObstacleMap()
+        self.environment: Any = None  # the environment model (occupancy grid), kept after mapping ends
+        self.localizer: Any = None  # the running localization controller, if any
+        self.published_map: Any = None  # the latest immutable grid of the environment model, for GetMap
+        self.published_estimate: Any = None  # the latest immutable localization estimate, for streams
+
+
+class Sequencer:
+    """Runs at most one motor goal and any number of perceptive goals (one per skill) on the world's tick.
+
+    Every method runs in the world's loop thread (the gRPC adapter gets there through World.run_in_loop),
+    so goals and controllers need no locks of their own; watchers read goal records under the book's lock.
+    """
+
+    def __init__(
+        self,
+        spec: RobotSpec,
+        sensors: SensorLayout,
+        registry: SkillRegistry,
+        goals: GoalBook,
+        controller_token: Callable[[], str],
+        drive_version: Callable[[], int] = lambda: 0,
+    ) -> None:
+        self.spec = spec
+        self.sensors = sensors
+        self.registry = registry
+        self.goals = goals
+        self.perception = Perception()
+        self._controller_token = controller_token
+        self._drive_version = drive_version
+        self._motor_since_version = 0  # Drive commands and controller changes older than the motor goal pass
+        self._motor: tuple[Goal, SkillController] | None = None
+        self._perceptive: dict[str, tuple[Goal, SkillController]] = {}
+        self._stop_wheels = False
+        self._last_laser: tuple[float, ...] | None = None
+        self._sim_time_s = 0.0
+        self._last_feedback_s: dict[str, float] = {}
+
+    # ---- requests (loop thread) ------------------------------------------------------------------
+
+    def validate(self, skill: str, parameters: Mapping[str, object]) -> dict[str, Any]:
+        """The parameters checked against the skill's schema (any thread; raises on the first bad one)."""
+        return self.registry.entry(skill).description.validate(parameters)
+
+    def activate(self, token: str, skill: str, parameters: Mapping[str, object], preempt: bool) -> Activation:
+        """Starts a goal, or raises (unknown skill, invalid parameter, no control, busy)."""
+        entry = self.registry.entry(skill)
+        values = entry.description.validate(parameters)
+        self._check_token(token)
+        holder = self._motor if entry.motor else self._perceptive.get(skill)
+        if holder is not None and not preempt:
+            goal = holder[0]
+            what = "the wheels" if entry.motor else f"the {skill} skill"
+            raise ResourceBusy(f"{what} are held by {goal.goal_id} ({goal.skill}); activate with preempt to "
+                               "cancel it, or cancel it first", goal.goal_id)
+        assert entry.build is not None
+        controller = entry.build(values, self.perception)
+        preempted = ""
+        goal = self.goals.create(skill, entry.motor, values, self._sim_time_s)
+        if holder is not None:
+            preempted = holder[0].goal_id
+            self._end(holder, GoalStatus.CANCELED, "PREEMPTED", f"preempted by {goal.goal_id} ({skill})",
+                      EventKind.PREEMPTED)
+        if entry.motor:
+            self._motor = (goal, controller)
+            self._motor_since_version = self._drive_version()
+        else:
+            self._perceptive[skill] = (goal, controller)
+        goal.announce(self._sim_time_s, EventKind.STARTED, f"{skill} started")
+        return Activation(goal.snapshot(), preempted)
+
+    def cancel(self, token: str, goal_id: str) -> GoalSnapshot:
+        """Cancels a live goal (CANCELED, reporting the error left); a finished goal is returned as it is."""
+        goal = self.goals.get(goal_id)
+        if goal is None:
+            raise UnknownGoal(f"no goal {goal_id!r} (never issued, or finished too long ago)")
+        if goal.status.is_terminal:
+            return goal.snapshot()
+        self._check_token(token)
+        running = self._running(goal_id)
+        if running is not None:
+            self._end(running, GoalStatus.CANCELED, "CANCELED", "canceled by the controller", EventKind.CANCELED)
+        return goal.snapshot()
+
+    # ---- hooks the world calls (loop thread) -------------------------------------------------------
+
+    def on_direct_drive(self, version: int) -> None:
+        """A Drive command arrived: the teleoperator takes the wheels back from any motor goal."""
+        if self._motor is not None and version > self._motor_since_version:
+            self._end(self._motor, GoalStatus.CANCELED, "PREEMPTED", "preempted by a direct Drive command",
+                      EventKind.PREEMPTED)
+
+    def on_controller_changed(self, version: int) -> None:
+        """Control changed hands or was revoked: the motor goal ends, the perceptive ones go on."""
+        if self._motor is not None and version > self._motor_since_version:
+            self._end(self._motor, GoalStatus.ABORTED, "CONTROL_REVOKED", "the controller changed; the base stops",
+                      EventKind.FAILED)
+
+    def on_reset(self, reason: str) -> None:
+        """The world was reset or the robot moved by hand: every goal ends, the obstacle grid is redrawn."""
+        for running in [*([self._motor] if self._motor else []), *self._perceptive.values()]:
+            self._end(running, GoalStatus.ABORTED, "RESET", f"the world was {reason}", EventKind.FAILED)
+        self.perception.obstacles = ObstacleMap()
+        self._last_laser = None
+        self._stop_wheels = False
+
+    def on_tick(self, snapshot: RobotSnapshot, dt_s: float) -> tuple[float, float] | None:
+        """Ticks every running controller; returns the wheel command, or None to leave the wheels alone."""
+        self._sim_time_s = snapshot.sim_time_s
+        new_scan = snapshot.laser_ranges_m is not self._last_laser
+        self._last_laser = snapshot.laser_ranges_m
+        tick = TickInput(
+            sim_time_s=snapshot.sim_time_s,
+            dt_s=dt_s,
+            odometry=snapshot.odometry,
+            sonar_ranges_m=snapshot.sonar_ranges_m,
+            laser_ranges_m=snapshot.laser_ranges_m,
+            new_scan=new_scan,
+            pose=snapshot.odometry.pose,
+            pose_source="odometry",
+            spec=self.spec,
+            sensors=self.sensors,
+            obstacles=self.perception.obstacles,
+        )
+        # Localization first, so the others (and the obstacle grid) use the pose it believes.
+        localization = self._perceptive.get("localization")
+        if localization is not None:
+            self._step(localization, tick)
+        tick = self._with_believed_pose(tick)
+        for skill, running in list(self._perceptive.items()):
+            if skill != "localization":
+                self._step(running, tick)
+        if new_scan:
+            self.perception.obstacles.add_scan(tick)
+        if self._motor is not None:
+            command = self._step(self._motor, tick)
+            if command is not None:
+                return command
+        if self._stop_wheels:
+            self._stop_wheels = False
+            return 0.0, 0.0
+        return None
+
+    # ---- internals ---------------------------------------------------------------------------------
+
+    def _with_believed_pose(self, tick: TickInput) -> TickInput:
+        localizer = self.perception.localizer
+        if localizer is None:
+            return tick
+        pose = localizer.believed_pose(tick.odometry.pose)
+        if pose is None:
+            return tick
+        return replace(tick, pose=pose, pose_source="localization")
+
+    def _step(self, running: tuple[Goal, SkillController], tick: TickInput) -> tuple[float, float] | None:
+        goal, controller = running
+        if goal.status is GoalStatus.ACCEPTED:
+            goal.set_status(GoalStatus.EXECUTING)
+        step = controller.tick(tick)
+        for kind, message in step.events:
+            goal.announce(tick.sim_time_s, kind, message)
+        if step.feedback is not None and (
+            step.outcome is not None
+            or tick.sim_time_s - self._last_feedback_s.get(goal.goal_id, -math.inf) >= FEEDBACK_PERIOD_S - 1e-9
+        ):
+            self._last_feedback_s[goal.goal_id] = tick.sim_time_s
+            goal.report(step.feedback)
+        if step.outcome is not None:
+            outcome = step.outcome
+            kind = EventKind.FAILED if outcome.status is GoalStatus.ABORTED else None
+            self._end(running, outcome.status, outcome.error_code, outcome.message, kind, outcome.reached)
+            return (0.0, 0.0) if goal.motor else None
+        if not goal.motor:
+            return None
+        linear = max(-self.spec.max_linear_mps, min(self.spec.max_linear_mps, step.linear_mps))
+        angular = max(-self.spec.max_angular_radps, min(self.spec.max_angular_radps, step.angular_radps))
+        return linear, angular
+
+    def _end(
+        self,
+        running: tuple[Goal, SkillController],
+        status: GoalStatus,
+        code: str,
+        message: str,
+        kind: EventKind | None,
+        reached: bool = False,
+    ) -> None:
+        goal, controller = running
+        feedback = controller.last_feedback
+        if status is not GoalStatus.SUCCEEDED and feedback.sim_time_s > 0:
+            # The paper's rule: deactivating reports the error left between the robot and the goal.
+            message += (f"; error left {feedback.distance_error_m:.3f} m, "
+                        f"{math.degrees(feedback.heading_error_rad):.1f} deg")
+        if kind is not None:
+            goal.announce(self._sim_time_s, kind, message)
+        goal.finish(status, self._sim_time_s, code, message, reached)
+        controller.stop()
+        self._last_feedback_s.pop(goal.goal_id, None)
+        if self._motor is running:
+            self._motor = None
+            self._stop_wheels = True
+        else:
+            for skill, other in list(self._perceptive.items()):
+                if other is running:
+                    del self._perceptive[skill]
+
+    def _running(self, goal_id: str) -> tuple[Goal, SkillController] | None:
+        if self._motor is not None and self._motor[0].goal_id == goal_id:
+            return self._motor
+        return next((r for r in self._perceptive.values() if r[0].goal_id == goal_id), None)
+
+    def _check_token(self, token: str) -> None:
+        if not token:
+            raise MissingControllerToken("activating or cancelling a skill needs the controller token")
+        if token != self._controller_token():
+            raise NotController("this request's controller token is not the robot's current controller")
+
+
+def attach_sequencer(world: Any, registry: SkillRegistry | None = None, goals: GoalBook | None = None) -> Sequencer:
+    """Builds a sequencer for a world's robot and sensors and lets the world's loop tick it."""
+    from skill_server.skills.registry import default_registry
+
+    info = world.describe()
+    sensors = SensorLayout(
+        sonar_mount_rad=tuple(s.mount_angle_rad for s in info.sonars),
+        sonar_mount_radius_m=info.spec.body_radius_m,
+        sonar_max_range_m=max((s.max_range_m for s in info.sonars), default=0.0),
+        laser=info.laser,
+    )
+    sequencer = Sequencer(info.spec, sensors, registry or default_registry(info.spec), goals or GoalBook(),
+                          lambda: world.controller_token, lambda: world.drive_version)
+    world.attach_autonomy(sequencer)
+    return sequencer

@@ -1,0 +1,226 @@
+"""The localization skill: a particle filter (Monte Carlo localization) against the environment model."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from skill_server.errors import NoMap
+from skill_server.goals import EventKind, GoalFeedback
+from skill_server.sim.geometry import Pose2D, wrap_angle
+from skill_server.skills.base import Outcome, SkillController, TickInput, feedback_for
+from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
+
+LOCALIZATION = "localization"
+BEAM_STEP = 6  # every 6th laser beam: 31 beams are plenty for a likelihood field
+HIT_SIGMA_M = 0.05
+FIELD_CAP_CELLS = 12
+CONVERGED_STD_M, CONVERGED_STD_RAD = 0.06, 0.05
+FIELD_REFRESH_S = 2.0
+
+
+@dataclass(frozen=True)
+class LocalizationEstimate:
+    """What the filter believes, published for streams (immutable)."""
+
+    pose: Pose2D
+    std_x_m: float
+    std_y_m: float
+    std_theta_rad: float
+    converged: bool
+    update_duration_ms: float
+    particles: tuple[tuple[float, float, float, float], ...]
+
+
+def distance_field(occupied: np.ndarray, cap_cells: int) -> np.ndarray:
+    """Approximate distance [cells] from every cell to the nearest occupied one, capped (chamfer passes)."""
+    field = np.where(occupied, 0.0, float(cap_cells))
+    diagonal = math.sqrt(2.0)
+    for _ in range(cap_cells):
+        grown = field.copy()
+        np.minimum(grown[1:, :], field[:-1, :] + 1, out=grown[1:, :])
+        np.minimum(grown[:-1, :], field[1:, :] + 1, out=grown[:-1, :])
+        np.minimum(grown[:, 1:], field[:, :-1] + 1, out=grown[:, 1:])
+        np.minimum(grown[:, :-1], field[:, 1:] + 1, out=grown[:, :-1])
+        np.minimum(grown[1:, 1:], field[:-1, :-1] + diagonal, out=grown[1:, 1:])
+        np.minimum(grown[:-1, :-1], field[1:, 1:] + diagonal, out=grown[:-1, :-1])
+        np.minimum(grown[1:, :-1], field[:-1, 1:] + diagonal, out=grown[1:, :-1])
+        np.minimum(grown[:-1, 1:], field[1:, :-1] + diagonal, out=grown[:-1, 1:])
+        field = grown
+    return field
+
+
+def localization_description() -> SkillDescription:
+    """The schema of localization."""
+    return SkillDescription(
+        name=LOCALIZATION,
+        title="Localization",
+        help=(
+            "Perceptive skill: estimates the robot's pose against the environment model with a particle filter "
+            "(sets of poses whose laser readings best match the map), starting from a guess. While it runs, the "
+            "motor skills steer by its estimate instead of raw odometry. Needs a map (environment_modelling)."
+        ),
+        parameters=(
+            ParameterSchema("initial_x_m", ParameterType.DOUBLE, "m", -50.0, 50.0, 0.0, "Guess of x."),
+            ParameterSchema("initial_y_m", ParameterType.DOUBLE, "m", -50.0, 50.0, 0.0, "Guess of y."),
+            ParameterSchema("initial_theta_rad", ParameterType.DOUBLE, "rad", -math.pi, math.pi, 0.0,
+                            "Guess of the heading."),
+            ParameterSchema("initial_spread_m", ParameterType.DOUBLE, "m", 0.01, 2.0, 0.5,
+                            "How far off the guess may be (standard deviation of the first particles)."),
+            ParameterSchema("initial_spread_rad", ParameterType.DOUBLE, "rad", 0.01, math.pi, 0.2,
+                            "How far off the heading guess may be."),
+            ParameterSchema("particle_count", ParameterType.INT, "", 50, 5000, 400, "Number of particles."),
+        ),
+    )
+
+
+class Localization(SkillController):
+    """Monte Carlo localization with a likelihood field; motion noise grows with the odometry increment."""
+
+    motor = False
+
+    def __init__(self, initial_x_m: float, initial_y_m: float, initial_theta_rad: float, initial_spread_m: float,
+                 initial_spread_rad: float, particle_count: int, perception: object, seed: int = 7) -> None:
+        super().__init__()
+        model = getattr(perception, "environment", None)
+        if model is None or not model.occupied().any():
+            raise NoMap("no environment model yet: run environment_modelling first")
+        self._perception = perception
+        self._model = model
+        self._rng = np.random.default_rng(seed)
+        n = particle_count
+        self._particles = np.column_stack([
+            self._rng.normal(initial_x_m, initial_spread_m, n),
+            self._rng.normal(initial_y_m, initial_spread_m, n),
+            self._rng.normal(initial_theta_rad, initial_spread_rad, n),
+        ])
+        self._weights = np.full(n, 1.0 / n)
+        self._field: np.ndarray | None = None
+        self._field_version = -1
+        self._field_s = -math.inf
+        self._last_odometry: Pose2D | None = None
+        self._estimate = Pose2D(initial_x_m, initial_y_m, initial_theta_rad)
+        self._estimate_odometry: Pose2D | None = None  # odometry reading when the estimate was made
+        self._converged = False
+        self._std = (initial_spread_m, initial_spread_m, initial_spread_rad)
+        perception.localizer = self  # type: ignore[attr-defined]
+
+    def believed_pose(self, odometry: Pose2D) -> Pose2D | None:
+        """The estimate moved on by the odometry since it was made; None until converged."""
+        if not self._converged or self._estimate_odometry is None:
+            return None
+        return compose(self._estimate, relative(self._estimate_odometry, odometry))
+
+    def control(self, tick: TickInput) -> tuple[float, float, Outcome | None, GoalFeedback]:
+        """Predict with odometry, weigh by the scan, resample when the weights degenerate."""
+        odometry = tick.odometry.pose
+        if self._last_odometry is None:
+            self._last_odometry = odometry
+        if tick.new_scan:
+            started = time.perf_counter()
+            self._predict(relative(self._last_odometry, odometry))
+            self._last_odometry = odometry
+            self._refresh_field(tick.sim_time_s)
+            self._weigh(tick)
+            self._summarise(odometry, (time.perf_counter() - started) * 1000.0)
+        std_x, std_y, std_theta = self._std
+        return 0.0, 0.0, None, feedback_for(
+            tick, "tracking" if self._converged else "converging", 1.0 if self._converged else 0.0,
+            math.hypot(std_x, std_y), std_theta, std_x_m=std_x, std_y_m=std_y, std_theta_rad=std_theta,
+            estimate_x_m=self._estimate.x_m, estimate_y_m=self._estimate.y_m,
+            estimate_theta_rad=self._estimate.theta_rad,
+        )
+
+    def stop(self) -> None:
+        """The motor skills go back to odometry."""
+        if getattr(self._perception, "localizer", None) is self:
+            self._perception.localizer = None  # type: ignore[attr-defined]
+            self._perception.published_estimate = None  # type: ignore[attr-defined]
+
+    def _predict(self, delta: Pose2D) -> None:
+        n = len(self._particles)
+        step_m = math.hypot(delta.x_m, delta.y_m)
+        # Noise proportional to the motion, plus a floor that keeps the cloud from collapsing when still.
+        trans_std = 0.04 * step_m + 0.002
+        rot_std = 0.04 * abs(delta.theta_rad) + 0.01 * step_m + 0.002
+        dx = delta.x_m + self._rng.normal(0.0, trans_std, n)
+        dy = delta.y_m + self._rng.normal(0.0, trans_std, n)
+        theta = self._particles[:, 2]
+        self._particles[:, 0] += dx * np.cos(theta) - dy * np.sin(theta)
+        self._particles[:, 1] += dx * np.sin(theta) + dy * np.cos(theta)
+        self._particles[:, 2] = theta + delta.theta_rad + self._rng.normal(0.0, rot_std, n)
+
+    def _refresh_field(self, sim_time_s: float) -> None:
+        if self._field is not None and (self._model.version == self._field_version
+                                        or sim_time_s - self._field_s < FIELD_REFRESH_S):
+            return
+        self._field = distance_field(self._model.occupied(), FIELD_CAP_CELLS) * self._model.resolution_m
+        self._field_version, self._field_s = self._model.version, sim_time_s
+
+    def _weigh(self, tick: TickInput) -> None:
+        assert self._field is not None
+        ranges_m = np.asarray(tick.laser_ranges_m)[::BEAM_STEP]
+        angles = tick.sensors.laser_angles_rad[::BEAM_STEP]
+        valid = ranges_m < tick.sensors.laser.max_range_m - 1e-6
+        ranges_m, angles = ranges_m[valid], angles[valid]
+        if ranges_m.size < 5:
+            return
+        p = self._particles
+        world = p[:, 2:3] + angles[None, :]
+        xs = p[:, 0:1] + ranges_m[None, :] * np.cos(world)
+        ys = p[:, 1:2] + ranges_m[None, :] * np.sin(world)
+        model = self._model
+        ix = np.clip(((xs - model.origin_m) / model.resolution_m).astype(np.int64), 0, model.size - 1)
+        iy = np.clip(((ys - model.origin_m) / model.resolution_m).astype(np.int64), 0, model.size - 1)
+        distance_m = self._field[ix, iy]
+        # Tempered likelihood: beams are not independent, so full products make the filter overconfident.
+        log_likelihood = -0.5 * np.sum((distance_m / HIT_SIGMA_M) ** 2, axis=1) / 4.0
+        log_weights = np.log(self._weights + 1e-300) + log_likelihood
+        log_weights -= log_weights.max()
+        weights = np.exp(log_weights)
+        self._weights = weights / weights.sum()
+        if 1.0 / np.sum(self._weights**2) < 0.5 * len(self._weights):
+            self._resample()
+
+    def _resample(self) -> None:
+        n = len(self._weights)
+        positions = (self._rng.random() + np.arange(n)) / n
+        indices = np.minimum(np.searchsorted(np.cumsum(self._weights), positions), n - 1)
+        self._particles = self._particles[indices]
+        self._weights = np.full(n, 1.0 / n)
+
+    def _summarise(self, odometry: Pose2D, duration_ms: float) -> None:
+        w, p = self._weights, self._particles
+        x, y = float(np.sum(w * p[:, 0])), float(np.sum(w * p[:, 1]))
+        theta = math.atan2(float(np.sum(w * np.sin(p[:, 2]))), float(np.sum(w * np.cos(p[:, 2]))))
+        std_x = math.sqrt(float(np.sum(w * (p[:, 0] - x) ** 2)))
+        std_y = math.sqrt(float(np.sum(w * (p[:, 1] - y) ** 2)))
+        std_theta = math.sqrt(float(np.sum(w * np.angle(np.exp(1j * (p[:, 2] - theta))) ** 2)))
+        self._estimate, self._estimate_odometry = Pose2D(x, y, wrap_angle(theta)), odometry
+        self._std = (std_x, std_y, std_theta)
+        converged = max(std_x, std_y) < CONVERGED_STD_M and std_theta < CONVERGED_STD_RAD
+        if converged and not self._converged:
+            self.announce(EventKind.CONVERGED, f"converged at ({x:.2f}, {y:.2f}) m, std {max(std_x, std_y):.3f} m")
+        self._converged = converged or (self._converged and max(std_x, std_y) < 2 * CONVERGED_STD_M)
+        sample = p[:: max(1, len(p) // 200)]
+        self._perception.published_estimate = LocalizationEstimate(  # type: ignore[attr-defined]
+            self._estimate, std_x, std_y, std_theta, self._converged, duration_ms,
+            tuple((float(a), float(b), float(c), 1.0 / len(p)) for a, b, c in sample),
+        )
+
+
+def relative(origin: Pose2D, pose: Pose2D) -> Pose2D:
+    """pose expressed in origin's frame."""
+    dx, dy = pose.x_m - origin.x_m, pose.y_m - origin.y_m
+    c, s = math.cos(origin.theta_rad), math.sin(origin.theta_rad)
+    return Pose2D(c * dx + s * dy, -s * dx + c * dy, wrap_angle(pose.theta_rad - origin.theta_rad))
+
+
+def compose(base: Pose2D, delta: Pose2D) -> Pose2D:
+    """delta (in base's frame) applied to base."""
+    c, s = math.cos(base.theta_rad), math.sin(base.theta_rad)
+    return Pose2D(base.x_m + c * delta.x_m - s * delta.y_m, base.y_m + s * delta.x_m + c * delta.y_m,
+                  wrap_angle(base.theta_rad + delta.theta_rad))

@@ -1,0 +1,163 @@
+"""The environment_modelling skill: an occupancy grid of the lab from laser (and sonar) readings."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from skill_server.goals import GoalFeedback, GoalStatus
+from skill_server.skills.base import Outcome, SkillController, TickInput, feedback_for
+from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
+
+ENVIRONMENT_MODELLING = "environment_modelling"
+HIT_LOG_ODDS, FREE_LOG_ODDS, CLAMP_LOG_ODDS = 0.9, -0.35, 6.0
+FREE_RANGE_M = 6.0  # beyond this, free space along a beam is not carved (long beams graze too much)
+PUBLISH_PERIOD_S = 1.0
+
+
+@dataclass(frozen=True)
+class PublishedGrid:
+    """An immutable copy of the grid for GetMap: percent occupancy per cell, 255 where unknown."""
+
+    resolution_m: float
+    origin_x_m: float
+    origin_y_m: float
+    width_cells: int
+    height_cells: int
+    cells: bytes  # row-major from (0, 0), x fastest
+    scans_integrated: int
+    sim_time_s: float
+
+
+class EnvironmentModel:
+    """Log-odds occupancy grid in the lab frame; cells are indexed [ix, iy]."""
+
+    def __init__(self, resolution_m: float = 0.05, half_extent_m: float = 6.0) -> None:
+        self.resolution_m = resolution_m
+        self.origin_m = -half_extent_m
+        self.size = int(round(2 * half_extent_m / resolution_m))
+        self.log_odds = np.zeros((self.size, self.size), dtype=np.float32)
+        self.scans_integrated = 0
+        self.version = 0
+
+    def integrate_laser(self, tick: TickInput, beam_step: int = 2) -> None:
+        """Carves free space along the beams and marks their echoes, at the believed pose."""
+        pose = tick.pose
+        ranges_m = np.asarray(tick.laser_ranges_m)[::beam_step]
+        angles_rad = tick.sensors.laser_angles_rad[::beam_step] + pose.theta_rad
+        echoed = ranges_m < tick.sensors.laser.max_range_m - 1e-6
+        res = self.resolution_m
+        steps = np.arange(res, FREE_RANGE_M, res)
+        free_len = np.minimum(ranges_m - res, FREE_RANGE_M)
+        along = steps[None, :] < free_len[:, None]
+        fx = pose.x_m + steps[None, :] * np.cos(angles_rad)[:, None]
+        fy = pose.y_m + steps[None, :] * np.sin(angles_rad)[:, None]
+        self._add(fx[along], fy[along], FREE_LOG_ODDS)
+        hx = pose.x_m + ranges_m[echoed] * np.cos(angles_rad[echoed])
+        hy = pose.y_m + ranges_m[echoed] * np.sin(angles_rad[echoed])
+        self._add(hx, hy, HIT_LOG_ODDS)
+        np.clip(self.log_odds, -CLAMP_LOG_ODDS, CLAMP_LOG_ODDS, out=self.log_odds)
+        self.scans_integrated += 1
+        self.version += 1
+
+    def integrate_sonar(self, tick: TickInput) -> None:
+        """Marks each sonar's echo on its axis (a cone is too wide to carve free space reliably)."""
+        pose = tick.pose
+        ranges_m = np.asarray(tick.sonar_ranges_m)
+        mounts = np.asarray(tick.sensors.sonar_mount_rad) + pose.theta_rad
+        echoed = ranges_m < min(tick.sensors.sonar_max_range_m - 1e-6, 1.5)  # near echoes are sharp enough
+        reach = ranges_m[echoed] + tick.sensors.sonar_mount_radius_m
+        self._add(pose.x_m + reach * np.cos(mounts[echoed]), pose.y_m + reach * np.sin(mounts[echoed]),
+                  0.3 * HIT_LOG_ODDS)
+
+    def _add(self, xs: np.ndarray, ys: np.ndarray, amount: float) -> None:
+        ix = np.floor((xs - self.origin_m) / self.resolution_m).astype(np.int64)
+        iy = np.floor((ys - self.origin_m) / self.resolution_m).astype(np.int64)
+        inside = (ix >= 0) & (ix < self.size) & (iy >= 0) & (iy < self.size)
+        flat = np.unique(ix[inside] * self.size + iy[inside])  # each cell once per scan, like a ray caster
+        self.log_odds.reshape(-1)[flat] += amount
+
+    def occupied(self) -> np.ndarray:
+        """Cells more likely occupied than not, by a margin."""
+        return self.log_odds > 0.5
+
+    def publish(self, sim_time_s: float) -> PublishedGrid:
+        """An immutable copy for readers in other threads."""
+        probability = 1.0 / (1.0 + np.exp(-self.log_odds))
+        percent = np.round(probability * 100).astype(np.uint8)
+        percent[self.log_odds == 0] = 255
+        return PublishedGrid(self.resolution_m, self.origin_m, self.origin_m, self.size, self.size,
+                             percent.T.tobytes(), self.scans_integrated, sim_time_s)
+
+
+def environment_modelling_description() -> SkillDescription:
+    """The schema of environment_modelling."""
+    return SkillDescription(
+        name=ENVIRONMENT_MODELLING,
+        title="Environment modelling",
+        help=(
+            "Perceptive skill: builds an occupancy grid of the lab from the laser (and near sonar echoes) while "
+            "the robot moves, at the pose the robot believes (the localization estimate when localization runs). "
+            "The map is kept after the skill ends; GetMap returns it."
+        ),
+        parameters=(
+            ParameterSchema("use_sonar", ParameterType.BOOL, "", 0.0, 1.0, 1.0,
+                            "Also mark near sonar echoes (behind the laser's half-plane)."),
+            ParameterSchema("restart", ParameterType.BOOL, "", 0.0, 1.0, 0.0,
+                            "Start from an empty map instead of extending the one kept."),
+            ParameterSchema("duration_s", ParameterType.DOUBLE, "s", 0.0, 3600.0, 0.0,
+                            "Stop and succeed after this long (0 = until cancelled)."),
+        ),
+    )
+
+
+class EnvironmentModelling(SkillController):
+    """Integrates scans when the robot has moved enough that a scan adds something."""
+
+    motor = False
+
+    def __init__(self, use_sonar: bool, restart: bool, duration_s: float, perception: object) -> None:
+        super().__init__()
+        self._perception = perception
+        if restart or getattr(perception, "environment", None) is None:
+            perception.environment = EnvironmentModel()  # type: ignore[attr-defined]
+        self._model: EnvironmentModel = perception.environment  # type: ignore[attr-defined]
+        self._use_sonar = bool(use_sonar)
+        self._duration_s = duration_s
+        self._started_s: float | None = None
+        self._last_pose: tuple[float, float, float] | None = None
+        self._published_s = -math.inf
+
+    def control(self, tick: TickInput) -> tuple[float, float, Outcome | None, GoalFeedback]:
+        """Adds the scan if the robot moved 5 cm or turned 3 degrees since the last one."""
+        if self._started_s is None:
+            self._started_s = tick.sim_time_s
+        pose = tick.pose
+        moved = self._last_pose is None or (
+            math.hypot(pose.x_m - self._last_pose[0], pose.y_m - self._last_pose[1]) > 0.05
+            or abs(math.remainder(pose.theta_rad - self._last_pose[2], 2 * math.pi)) > math.radians(3)
+        )
+        if tick.new_scan and moved:
+            self._model.integrate_laser(tick)
+            if self._use_sonar:
+                self._model.integrate_sonar(tick)
+            self._last_pose = (pose.x_m, pose.y_m, pose.theta_rad)
+        outcome = None
+        if self._duration_s > 0 and tick.sim_time_s - self._started_s >= self._duration_s:
+            outcome = Outcome(GoalStatus.SUCCEEDED, "", f"mapped for {self._duration_s:g} s, "
+                              f"{self._model.scans_integrated} scans")
+        if outcome is not None or tick.sim_time_s - self._published_s >= PUBLISH_PERIOD_S:
+            self._published_s = tick.sim_time_s
+            self._perception.published_map = self._model.publish(tick.sim_time_s)  # type: ignore[attr-defined]
+        known = float(np.count_nonzero(self._model.log_odds)) * self._model.resolution_m**2
+        return 0.0, 0.0, outcome, feedback_for(tick, "mapping", 0.0, scans=float(self._model.scans_integrated),
+                                               known_area_m2=known)
+
+    def stop(self) -> None:
+        """Publishes the final map."""
+        self._perception.published_map = self._model.publish(self._last_time())  # type: ignore[attr-defined]
+
+    def _last_time(self) -> float:
+        return self.last_feedback.sim_time_s

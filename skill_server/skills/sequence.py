@@ -1,0 +1,104 @@
+"""Complex skills as sequences of simple ones (the sequencer's composition), and round_trip built so."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from skill_server.goals import EventKind, GoalFeedback, GoalStatus
+from skill_server.sim.geometry import Pose2D
+from skill_server.sim.robot_model import RobotSpec
+from skill_server.skills.base import Outcome, SkillController, TickInput, feedback_for, succeeded
+from skill_server.skills.go_to_goal import COORD_LIMIT_M, GoToGoal
+from skill_server.skills.orientation import OrientationControl
+from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
+
+ROUND_TRIP = "round_trip"
+
+StepFactory = Callable[[Pose2D], SkillController]  # builds a step from the pose where the sequence started
+
+
+class StepSequence(SkillController):
+    """Runs simple skills one after the other on the same goal; the first failure ends the whole."""
+
+    def __init__(self, steps: list[tuple[str, StepFactory]]) -> None:
+        super().__init__()
+        self._steps = steps
+        self._index = -1
+        self._current: SkillController | None = None
+        self._start_pose: Pose2D | None = None
+
+    @property
+    def current_step(self) -> str:
+        """The name of the step running now."""
+        return self._steps[self._index][0] if 0 <= self._index < len(self._steps) else ""
+
+    def control(self, tick: TickInput) -> tuple[float, float, Outcome | None, GoalFeedback]:
+        """Ticks the current step; moves on when it succeeds."""
+        if self._start_pose is None:
+            self._start_pose = tick.pose
+        if self._current is None:
+            self._advance(tick)
+        assert self._current is not None
+        step = self._current.tick(tick)
+        for kind, message in step.events:
+            if kind is not EventKind.GOAL_REACHED:
+                self.announce(kind, f"{self.current_step}: {message}")
+        progress = (self._index + (step.feedback.progress if step.feedback else 0.0)) / len(self._steps)
+        base = step.feedback or GoalFeedback()
+        feedback = feedback_for(tick, f"{self.current_step}:{base.state}", progress, base.distance_error_m,
+                                base.heading_error_rad, step_index=float(self._index), **dict(base.values))
+        if step.outcome is None:
+            return step.linear_mps, step.angular_radps, None, feedback
+        if step.outcome.status is not GoalStatus.SUCCEEDED:
+            return 0.0, 0.0, Outcome(step.outcome.status, step.outcome.error_code,
+                                     f"{self.current_step}: {step.outcome.message}"), feedback
+        if self._index + 1 >= len(self._steps):
+            self.announce(EventKind.GOAL_REACHED, f"back at the start: {step.outcome.message}")
+            return 0.0, 0.0, succeeded(f"all {len(self._steps)} steps done; last: {step.outcome.message}"), feedback
+        self._current = None
+        return 0.0, 0.0, None, feedback
+
+    def _advance(self, tick: TickInput) -> None:
+        assert self._start_pose is not None
+        self._index += 1
+        name, factory = self._steps[self._index]
+        self._current = factory(self._start_pose)
+        self.announce(EventKind.STEP_STARTED, f"step {self._index + 1}/{len(self._steps)}: {name}")
+
+
+def round_trip_description(spec: RobotSpec) -> SkillDescription:
+    """The schema of round_trip."""
+    return SkillDescription(
+        name=ROUND_TRIP,
+        title="Round trip",
+        help=(
+            "Complex skill: go to a point (go-to-goal), come back to where the robot started (go-to-goal) and "
+            "turn back to the start heading (orientation control)."
+        ),
+        parameters=(
+            ParameterSchema("goal_x_m", ParameterType.DOUBLE, "m", -COORD_LIMIT_M, COORD_LIMIT_M, 1.0,
+                            "Turning point x in the lab frame."),
+            ParameterSchema("goal_y_m", ParameterType.DOUBLE, "m", -COORD_LIMIT_M, COORD_LIMIT_M, 0.0,
+                            "Turning point y in the lab frame."),
+            ParameterSchema("speed_mps", ParameterType.DOUBLE, "m/s", 0.05, spec.max_linear_mps, 0.3,
+                            "Cruising speed."),
+            ParameterSchema("max_error_m", ParameterType.DOUBLE, "m", 0.02, 1.0, 0.03,
+                            "Position tolerance at the turning point and back at the start."),
+            ParameterSchema("heading_tolerance_rad", ParameterType.DOUBLE, "rad", 0.005, 0.5, 0.02,
+                            "Heading tolerance back at the start."),
+            ParameterSchema("timeout_s", ParameterType.DOUBLE, "s", 1.0, 1800.0, 300.0,
+                            "Abort with TIMEOUT after this much time per step."),
+        ),
+    )
+
+
+def round_trip(goal_x_m: float, goal_y_m: float, speed_mps: float, max_error_m: float,
+               heading_tolerance_rad: float, timeout_s: float) -> StepSequence:
+    """Go-to-goal out, go-to-goal back, orientation control to the start heading."""
+    return StepSequence([
+        ("go_to_goal", lambda start: GoToGoal(goal_x_m, goal_y_m, speed_mps, max_error_m, timeout_s)),
+        ("return", lambda start: GoToGoal(start.x_m, start.y_m, speed_mps, max_error_m, timeout_s)),
+        ("orientation_control",
+         lambda start: OrientationControl(start.theta_rad, heading_tolerance_rad, 1.0, min(timeout_s, 60.0))),
+    ])
+
