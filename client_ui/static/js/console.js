@@ -8,6 +8,8 @@ import * as cameraPanel from "../panels/camera-panel/camera-panel.js";
 import * as drivePad from "../panels/drive-pad/drive-pad.js";
 import * as odometryPanel from "../panels/odometry-panel/odometry-panel.js";
 import * as connectionStatus from "../panels/connection-status/connection-status.js";
+import * as chatPanel from "../panels/chat-panel/chat-panel.js";
+import { connectChat } from "./chat-session.js";
 
 // Where each panel goes. Later the middleware will send these descriptors (see ARCHITECTURE §5).
 const LAYOUT = [
@@ -15,6 +17,7 @@ const LAYOUT = [
   { module: cameraPanel, tag: "camera-panel", slot: "main" },
   { module: drivePad, tag: "drive-pad", slot: "side" },
   { module: odometryPanel, tag: "odometry-panel", slot: "side" },
+  { module: chatPanel, tag: "chat-panel", slot: "side" },
 ];
 
 function placePanels(root) {
@@ -129,6 +132,7 @@ function start() {
     channel.addEventListener("statechange", ({ detail }) => status.update(name, detail));
   }
   window.addEventListener("online", () => Object.values(channels).forEach((channel) => channel.retryNow()));
+  connectChat(robotPath, panels["chat-panel"]);
 }
 
 start();

@@ -1,0 +1,128 @@
+// <chat-panel>: the robot's chat room. In: `history` ({messages, can_moderate}), `message` (one message),
+// `deleted` (an id), `error` ({message, field}), `link` ("open" | "connecting" | "closed").
+// Out: "chat-send" (detail {body}) and "chat-delete" (detail {id}). Text reaches the DOM only as text.
+
+import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
+
+const MAX_CHARS = 500;
+
+/** Local HH:MM of an ISO time; "" when it cannot be read. */
+export function formatTime(iso) {
+  const date = new Date(iso);
+  if (Number.isNaN(date.getTime())) return "";
+  return date.toLocaleTimeString([], { hour: "2-digit", minute: "2-digit" });
+}
+
+export class ChatPanel extends HTMLElement {
+  #built = false;
+  #list;
+  #input;
+  #send;
+  #errorLine;
+  #empty;
+  #items = new Map();
+  #canModerate = false;
+
+  connectedCallback() {
+    this.#build();
+  }
+
+  #build() {
+    if (this.#built) return;
+    this.#built = true;
+    this.classList.add("panel", "chat");
+    const titleId = "chat-title";
+    this.#list = h("ol", { class: "chat__list", role: "log", "aria-live": "polite", "aria-labelledby": titleId,
+      "data-field": "chat-messages" });
+    this.#empty = h("p", { class: "chat__empty muted", text: "No messages yet. Say hello." });
+    this.#input = h("input", { id: "chat-input", name: "body", type: "text", maxlength: String(MAX_CHARS),
+      autocomplete: "off", enterkeyhint: "send", "aria-describedby": "chat-error", disabled: true });
+    this.#send = h("button", { type: "submit", class: "button button--primary chat__send", text: "Send", disabled: true });
+    this.#errorLine = h("p", { class: "chat__error", id: "chat-error", role: "alert", hidden: true });
+    const form = h("form", { class: "chat__form", onsubmit: (event) => this.#submit(event) },
+      h("label", { for: "chat-input", class: "visually-hidden", text: "Message to everyone on this robot" }),
+      this.#input, this.#send);
+    this.append(h("h2", { class: "panel__title", id: titleId, text: "Chat" }), this.#list, this.#empty, form,
+      this.#errorLine);
+  }
+
+  #submit(event) {
+    event.preventDefault();
+    const body = this.#input.value.trim();
+    if (!body) {
+      this.error = { message: "Write something before sending." };
+      return;
+    }
+    this.dispatchEvent(new CustomEvent("chat-send", { detail: { body }, bubbles: true }));
+    this.#input.value = "";
+    this.#errorLine.hidden = true;
+  }
+
+  #row(message) {
+    const time = h("time", { class: "chat__time", datetime: message.created_at, text: formatTime(message.created_at) });
+    const staff = message.author_role === "tutor" || message.author_role === "admin";
+    const item = h("li", { class: "chat__item", "data-message-id": String(message.id) },
+      h("div", { class: "chat__meta" },
+        h("span", { class: "chat__author", text: message.author }),
+        staff && h("span", { class: `chat__role chat__role--${message.author_role}`, text: message.author_role }),
+        time,
+        this.#canModerate && h("button", {
+          type: "button", class: "chat__delete", text: "Delete",
+          "aria-label": `Delete the message from ${message.author}`,
+          onclick: () => this.dispatchEvent(new CustomEvent("chat-delete", { detail: { id: message.id }, bubbles: true })),
+        })),
+      h("p", { class: "chat__body", "data-field": "chat-body", text: message.body }));
+    return item;
+  }
+
+  #append(message) {
+    if (this.#items.has(message.id)) return;
+    const nearBottom = this.#list.scrollHeight - this.#list.scrollTop - this.#list.clientHeight < 40;
+    const row = this.#row(message);
+    this.#items.set(message.id, row);
+    this.#list.append(row);
+    this.#empty.hidden = true;
+    if (nearBottom) this.#list.scrollTop = this.#list.scrollHeight;
+  }
+
+  set history(value) {
+    this.#build();
+    this.#canModerate = Boolean(value?.can_moderate);
+    this.#items.clear();
+    this.#list.replaceChildren();
+    for (const message of value?.messages ?? []) this.#append(message);
+    this.#empty.hidden = this.#items.size > 0;
+    this.#list.scrollTop = this.#list.scrollHeight;
+  }
+
+  set message(value) {
+    this.#build();
+    if (value && typeof value.id === "number") this.#append(value);
+  }
+
+  set deleted(id) {
+    this.#build();
+    this.#items.get(id)?.remove();
+    this.#items.delete(id);
+    this.#empty.hidden = this.#items.size > 0;
+  }
+
+  set error(value) {
+    this.#build();
+    this.#errorLine.textContent = value?.message ?? "";
+    this.#errorLine.hidden = !value?.message;
+  }
+
+  set link(phase) {
+    this.#build();
+    const open = phase === "open";
+    this.#input.disabled = !open;
+    this.#send.disabled = !open;
+    this.#input.placeholder = open ? "Message" : phase === "closed" ? "Chat closed" : "Connecting…";
+  }
+}
+
+export function register() {
+  adoptStylesheet(new URL("./chat-panel.css", import.meta.url));
+  defineOnce("chat-panel", ChatPanel);
+}

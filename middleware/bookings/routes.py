@@ -1,0 +1,258 @@
+"""Booking pages (week calendar, my bookings, iCalendar export) and the JSON API. Rules live in services."""
+
+from __future__ import annotations
+
+import os
+from datetime import UTC, date, datetime, time, timedelta
+from urllib.parse import urlencode
+
+from flask import Blueprint, Response, abort, current_app, flash, jsonify, redirect, render_template, request, url_for
+from flask_login import current_user, login_required
+
+from middleware.auth.schemas import InvalidField
+from middleware.bookings import ical, services
+from middleware.bookings.schemas import (
+    MAX_BOOKING,
+    SLOT_MINUTES,
+    parse_booking_request,
+    parse_instant,
+    parse_time_zone,
+    parse_week,
+)
+from middleware.bookings.services import BookingRefused
+from middleware.bookings.week import week_days
+from middleware.db import get_session
+from middleware.errors import ApiError
+from middleware.models import Booking
+from middleware.robots.registry import robot_registry
+
+blueprint = Blueprint("bookings", __name__)
+DURATIONS_MIN = list(range(SLOT_MINUTES, int(MAX_BOOKING.total_seconds() // 60) + 1, SLOT_MINUTES))
+
+
+@blueprint.record_once
+def _configure(state) -> None:  # type: ignore[no-untyped-def]
+    state.app.config.setdefault("BOOKING_GRACE_S", float(os.environ.get("TELELAB_BOOKING_GRACE_S", "600")))
+
+
+def _now() -> datetime:
+    return datetime.now(UTC)
+
+
+def _require_robot(robot_name: str) -> str:
+    if robot_registry().get(robot_name) is None:
+        raise ApiError(404, "unknown_robot", f"There is no robot named {robot_name!r}.", "robot_name")
+    return robot_name
+
+
+def _api_error(refused: BookingRefused | InvalidField) -> ApiError:
+    if isinstance(refused, InvalidField):
+        return ApiError(400, "invalid_field", refused.message, refused.field)
+    return ApiError(refused.status, refused.code, refused.message, refused.field)
+
+
+# --- JSON API -----------------------------------------------------------------------------------
+
+
+@blueprint.get("/api/bookings")
+@login_required
+def api_my_bookings():  # type: ignore[no-untyped-def]
+    """The current user's bookings that end in the last 30 days or later."""
+    session, now = get_session(), _now()
+    views = services.describe(session, current_user, services.user_bookings(session, current_user.id,
+                                                                             now - timedelta(days=30)), now)
+    return jsonify({"bookings": [v.to_dict() for v in views]})
+
+
+@blueprint.post("/api/bookings")
+@login_required
+def api_create_booking():  # type: ignore[no-untyped-def]
+    """Books a slot: {robot_name, starts_at, ends_at | duration_min, kind?, course_id?}."""
+    data = request.get_json(silent=True)
+    if not isinstance(data, dict):
+        raise ApiError(400, "invalid_field", "Send the booking as a JSON object.", "body")
+    session, now = get_session(), _now()
+    try:
+        booking_request = parse_booking_request(data)
+        _require_robot(booking_request.robot_name)
+        booking = services.create_booking(session, current_user, booking_request, now)
+    except (BookingRefused, InvalidField) as refused:
+        session.rollback()
+        raise _api_error(refused) from None
+    session.commit()
+    return jsonify({"booking": services.describe(session, current_user, [booking], now)[0].to_dict()}), 201
+
+
+@blueprint.delete("/api/bookings/<int:booking_id>")
+@login_required
+def api_cancel_booking(booking_id: int):  # type: ignore[no-untyped-def]
+    """Cancels a booking (the booker, a tutor of its course, or an admin)."""
+    session, now = get_session(), _now()
+    try:
+        booking = services.cancel_booking(session, current_user, booking_id, now)
+    except BookingRefused as refused:
+        session.rollback()
+        raise _api_error(refused) from None
+    session.commit()
+    return jsonify({"booking": services.describe(session, current_user, [booking], now)[0].to_dict()})
+
+
+@blueprint.get("/api/robots/<robot_name>/bookings")
+@login_required
+def api_robot_bookings(robot_name: str):  # type: ignore[no-untyped-def]
+    """The robot's bookings between ?from= and ?to= (ISO 8601; default: this ISO week in UTC)."""
+    _require_robot(robot_name)
+    now = _now()
+    start, end = services.iso_week_bounds(now)
+    try:
+        if request.args.get("from"):
+            start = parse_instant(request.args["from"], "from")
+        if request.args.get("to"):
+            end = parse_instant(request.args["to"], "to")
+    except InvalidField as invalid:
+        raise _api_error(invalid) from None
+    if end <= start or end - start > timedelta(days=62):
+        raise ApiError(400, "invalid_field", "to must be after from, at most 62 days later.", "to")
+    session = get_session()
+    views = services.describe(session, current_user, services.robot_bookings(session, robot_name, start, end), now)
+    return jsonify({"robot_name": robot_name, "from": start.strftime("%Y-%m-%dT%H:%M:%SZ"),
+                    "to": end.strftime("%Y-%m-%dT%H:%M:%SZ"), "bookings": [v.to_dict() for v in views]})
+
+
+# --- pages ----------------------------------------------------------------------------------------
+
+
+def _page_url(robot_name: str | None, week: str | None, tz: str | None, hours: str | None = None) -> str:
+    args = {k: v for k, v in {"robot": robot_name, "week": week, "tz": tz, "hours": hours}.items() if v}
+    return url_for("bookings.page") + ("?" + urlencode(args) if args else "")
+
+
+@blueprint.get("/bookings")
+@login_required
+def page():  # type: ignore[no-untyped-def]
+    """The week calendar of one robot, with the booking form and the user's own bookings."""
+    registry = robot_registry()
+    names = registry.names()
+    robot_name = request.args.get("robot") or (names[0] if names else None)
+    if robot_name is not None and registry.get(robot_name) is None:
+        abort(404)
+    zone = parse_time_zone(request.args.get("tz"))
+    now = _now()
+    monday = parse_week(request.args.get("week"), zone, now)
+    all_hours = request.args.get("hours") == "all"
+    session = get_session()
+    days = []
+    if robot_name is not None:
+        start = datetime.combine(monday, time(0), tzinfo=zone).astimezone(UTC)
+        views = services.describe(session, current_user, services.robot_bookings(
+            session, robot_name, start - timedelta(days=1), start + timedelta(days=8)), now)
+        days = week_days(monday, zone, views, now, all_hours)
+    mine = [v for v in services.describe(session, current_user,
+                                         services.user_bookings(session, current_user.id, now), now)
+            if v.status in ("booked", "checked_in")]
+    allowance = None
+    if current_user.role == "student":
+        minutes, _course = services.student_allowance(session, current_user.id)
+        allowance = {"week_min": minutes, "used_min": services.minutes_booked_in_week(session, current_user.id, now)}
+    tz_name = str(zone.key)
+    week_iso = monday.isoformat()
+    return render_template(
+        "bookings/week.html", robots=[(n, registry.addresses[n].title) for n in names], robot_name=robot_name,
+        robot_title=registry.addresses[robot_name].title if robot_name else None, days=days, mine=mine,
+        zone=zone, tz_name=tz_name, week=week_iso, all_hours=all_hours, durations=DURATIONS_MIN,
+        courses=services.tutored_courses(session, current_user), allowance=allowance,
+        times=[f"{h:02d}:{m:02d}" for h in range(24) for m in (0, 30)],
+        prev_url=_page_url(robot_name, (monday - timedelta(days=7)).isoformat(), tz_name, "all" if all_hours else None),
+        next_url=_page_url(robot_name, (monday + timedelta(days=7)).isoformat(), tz_name, "all" if all_hours else None),
+        this_week_url=_page_url(robot_name, None, tz_name, "all" if all_hours else None),
+        hours_url=_page_url(robot_name, week_iso, tz_name, None if all_hours else "all"),
+        robot_urls={n: _page_url(n, week_iso, tz_name) for n in names},
+    )
+
+
+def _form_starts_at(form: dict[str, str]) -> str | None:
+    """starts_at from a slot button, or from the date and time fields read in the form's time zone."""
+    if form.get("starts_at"):
+        return form["starts_at"]
+    try:
+        day = date.fromisoformat(form.get("date", ""))
+        hour, minute = (int(part) for part in form.get("time", "").split(":"))
+        local = datetime.combine(day, time(hour, minute), tzinfo=parse_time_zone(form.get("tz")))
+    except ValueError:
+        return None
+    return local.astimezone(UTC).isoformat()
+
+
+@blueprint.post("/bookings")
+@login_required
+def create_from_form():  # type: ignore[no-untyped-def]
+    """The booking form: books, then shows the week again with a sentence saying what happened."""
+    form = request.form.to_dict()
+    back = _page_url(form.get("robot_name"), form.get("week"), form.get("tz"))
+    form["starts_at"] = _form_starts_at(form) or ""
+    if not form["starts_at"]:
+        flash("Choose a free slot, or a date and a time, to book.", "error")
+        return redirect(back, 303)
+    session, now = get_session(), _now()
+    try:
+        booking_request = parse_booking_request(form)
+        _require_robot(booking_request.robot_name)
+        booking = services.create_booking(session, current_user, booking_request, now)
+    except (BookingRefused, InvalidField) as refused:
+        session.rollback()
+        flash(refused.message, "error")
+        return redirect(back, 303)
+    except ApiError as error:
+        flash(error.message, "error")
+        return redirect(back, 303)
+    session.commit()
+    zone = parse_time_zone(form.get("tz"))
+    flash(f"Booked {booking.robot_name} on {booking_request.starts_at.astimezone(zone):%a %d %b, %H:%M}"
+          f"–{booking_request.ends_at.astimezone(zone):%H:%M}.", "success")
+    return redirect(back, 303)
+
+
+@blueprint.post("/bookings/<int:booking_id>/cancel")
+@login_required
+def cancel_from_form(booking_id: int):  # type: ignore[no-untyped-def]
+    """The cancel button of a booking."""
+    back = _page_url(request.form.get("robot_name"), request.form.get("week"), request.form.get("tz"))
+    session = get_session()
+    try:
+        services.cancel_booking(session, current_user, booking_id, _now())
+    except BookingRefused as refused:
+        session.rollback()
+        flash(refused.message, "error")
+        return redirect(back, 303)
+    session.commit()
+    flash("Booking cancelled; the slot is free again.", "success")
+    return redirect(back, 303)
+
+
+@blueprint.get("/bookings.ics")
+@login_required
+def ical_export():  # type: ignore[no-untyped-def]
+    """The user's bookings (and their courses' class sessions) as an iCalendar file."""
+    session, now = get_session(), _now()
+    since = now - timedelta(days=30)
+    bookings: list[Booking] = services.user_bookings(session, current_user.id, since)
+    bookings += services.class_sessions_for_student(session, current_user.id, since)
+    registry = robot_registry()
+    views = services.describe(session, current_user, bookings, now)
+    host = request.host.split(":")[0] or "telelab"
+    grace_min = services.grace_period_s(current_app.config.get("BOOKING_GRACE_S")) / 60
+    events = []
+    for view in sorted(views, key=lambda v: v.starts_at):
+        address = registry.addresses.get(view.robot_name)
+        title = address.title if address else view.robot_name
+        summary = (f"Telelab class session ({view.course_code}) on {title}" if view.kind == "class"
+                   else f"Telelab booking: {title}")
+        events.append(ical.CalendarEvent(
+            uid=f"booking-{view.id}@{host}", starts_at=view.starts_at, ends_at=view.ends_at, summary=summary,
+            description=f"Robot {view.robot_name}. Open "
+                        f"{url_for('lab.console', robot_name=view.robot_name, _external=True)}"
+                        f" within {grace_min:g} minutes of the start, or the slot goes back to the queue.",
+            status="CANCELLED" if view.status in ("cancelled", "released") else "CONFIRMED"))
+    body = ical.calendar(events, f"Telelab bookings of {current_user.username}", now)
+    return Response(body, mimetype="text/calendar", headers={
+        "Content-Disposition": 'attachment; filename="telelab-bookings.ics"', "Cache-Control": "no-store"})

@@ -1,0 +1,1 @@
+"""The chat room of each robot: persisted messages, a per-user rate limit, moderation by tutors."""

@@ -1,0 +1,102 @@
+"""Chat rules: posting under a rate limit counted in the database, reading, and moderation. No request state."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import UTC, datetime, timedelta
+
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session
+
+from middleware.chat.schemas import clean_body
+from middleware.locking import lock_user
+from middleware.models import ChatMessage, User
+
+RATE_LIMIT_MESSAGES = 5
+RATE_LIMIT_WINDOW = timedelta(seconds=10)
+HISTORY_LENGTH = 50
+MODERATOR_ROLES = ("tutor", "admin")
+
+
+class ChatRefused(Exception):
+    """A chat action refused: an HTTP-like status, a stable code, a sentence and the field at fault."""
+
+    def __init__(self, status: int, code: str, message: str, field: str | None = None) -> None:
+        super().__init__(message)
+        self.status, self.code, self.message, self.field = status, code, message, field
+
+
+@dataclass(frozen=True)
+class MessageView:
+    """A message as every client sees it; the body is plain text for the client to escape."""
+
+    id: int
+    robot_name: str
+    body: str
+    author: str
+    author_role: str
+    created_at: datetime
+
+    def to_dict(self) -> dict[str, object]:
+        """The JSON form."""
+        stamp = self.created_at.replace(tzinfo=UTC) if self.created_at.tzinfo is None else self.created_at
+        return {"id": self.id, "robot_name": self.robot_name, "body": self.body, "author": self.author,
+                "author_role": self.author_role, "created_at": stamp.astimezone(UTC).isoformat().replace("+00:00", "Z")}
+
+
+def _views(session: Session, query) -> list[MessageView]:  # type: ignore[no-untyped-def]
+    rows = session.execute(query.join(User, User.id == ChatMessage.user_id)
+                           .add_columns(User.username, User.role)).all()
+    return [MessageView(m.id, m.robot_name, m.body, name, role, m.created_at) for m, name, role in rows]
+
+
+def post_message(session: Session, robot_name: str, user: User, body: object, now: datetime) -> MessageView:
+    """Stores a message after validation and the rate limit (5 per 10 s per user, all robots); caller commits."""
+    text = clean_body(body)
+    lock_user(session, user.id)  # two processes cannot both see "4 so far" and both insert
+    recent = session.scalar(select(func.count()).select_from(ChatMessage)
+                            .where(ChatMessage.user_id == user.id, ChatMessage.created_at > now - RATE_LIMIT_WINDOW))
+    if recent >= RATE_LIMIT_MESSAGES:
+        raise ChatRefused(429, "rate_limited", f"You can send {RATE_LIMIT_MESSAGES} messages every "
+                          f"{RATE_LIMIT_WINDOW.seconds} seconds; wait a moment and send it again.", "body")
+    message = ChatMessage(robot_name=robot_name, user_id=user.id, body=text, created_at=now)
+    session.add(message)
+    session.flush()
+    return MessageView(message.id, robot_name, text, user.username, user.role, now)
+
+
+def recent_messages(
+    session: Session, robot_name: str, after_id: int = 0, limit: int = HISTORY_LENGTH
+) -> list[MessageView]:
+    """Visible messages oldest first: the last `limit` ones, or those after after_id (at most `limit`)."""
+    query = select(ChatMessage).where(ChatMessage.robot_name == robot_name, ChatMessage.deleted_at.is_(None))
+    if after_id:
+        return _views(session, query.where(ChatMessage.id > after_id).order_by(ChatMessage.id).limit(limit))
+    return list(reversed(_views(session, query.order_by(ChatMessage.id.desc()).limit(limit))))
+
+
+def latest_id(session: Session, robot_name: str) -> int:
+    """The newest message id of the room (deleted ones included), 0 when empty."""
+    return session.scalar(select(func.max(ChatMessage.id)).where(ChatMessage.robot_name == robot_name)) or 0
+
+
+def deleted_ids(session: Session, robot_name: str, from_id: int) -> list[int]:
+    """Ids from from_id on that have been deleted."""
+    return list(session.scalars(select(ChatMessage.id).where(
+        ChatMessage.robot_name == robot_name, ChatMessage.id >= from_id, ChatMessage.deleted_at.is_not(None))))
+
+
+def may_moderate(user: User) -> bool:
+    """Tutors and admins may delete messages."""
+    return user.role in MODERATOR_ROLES
+
+
+def delete_message(session: Session, robot_name: str, actor: User, message_id: int, now: datetime) -> None:
+    """Soft-deletes a message of this room (tutors and admins only); the caller commits."""
+    if not may_moderate(actor):
+        raise ChatRefused(403, "forbidden", "Only tutors and admins can delete messages.", "id")
+    message = session.get(ChatMessage, message_id)
+    if message is None or message.robot_name != robot_name or message.deleted_at is not None:
+        raise ChatRefused(404, "unknown_message", f"There is no message {message_id} in this chat.", "id")
+    message.deleted_at = now
+    message.deleted_by_id = actor.id
