@@ -61,13 +61,19 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
     registry.init_app(app)
     register_error_handlers(app)
 
+    from middleware.access import sockets as access_sockets
     from middleware.auth.routes import blueprint as auth_blueprint
+    from middleware.bookings.routes import blueprint as bookings_blueprint
+    from middleware.chat.routes import blueprint as chat_blueprint
     from middleware.lab import sockets
     from middleware.lab.routes import blueprint as lab_blueprint
 
     app.register_blueprint(auth_blueprint)
     app.register_blueprint(lab_blueprint)
+    app.register_blueprint(bookings_blueprint)
+    app.register_blueprint(chat_blueprint)
     sockets.init_app(app)
+    access_sockets.init_app(app)
 
     @app.get("/")
     def home():  # type: ignore[no-untyped-def]

@@ -39,6 +39,7 @@ def make_threaded_server(app: Flask, host: str, port: int) -> BaseWSGIServer:
 
 def serve_forever(app: Flask, host: str, port: int) -> None:
     """Serves app until interrupted (Ctrl-C), then closes the listening socket and the robot links."""
+    from middleware.access.coordinator import access_coordinator
     from middleware.robots.registry import robot_registry
 
     server = make_threaded_server(app, host, port)
@@ -46,4 +47,5 @@ def serve_forever(app: Flask, host: str, port: int) -> None:
         server.serve_forever()
     finally:
         server.server_close()
+        access_coordinator(app).stop_ticker()
         robot_registry(app).close()

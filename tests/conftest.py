@@ -89,11 +89,13 @@ def make_test_app(database_url: str, robots: str, tmp_path: Path):  # type: igno
 @pytest.fixture
 def app(tmp_path: Path, skill_server_address: str):  # type: ignore[no-untyped-def]
     """The middleware on SQLite, wired to the session's skill server."""
+    from middleware.access.coordinator import access_coordinator
     from middleware.robots.registry import robot_registry
 
     application = make_test_app(f"sqlite:///{tmp_path / 'app.sqlite3'}",
                                 f"lab-1={skill_server_address},ghost=127.0.0.1:9", tmp_path)
     yield application
+    access_coordinator(application).stop_ticker()
     robot_registry(application).close()
 
 

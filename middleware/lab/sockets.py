@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import json
 import logging
+import time
 from urllib.parse import urlsplit
 
 from flask import Flask, request
 from flask_login import current_user
 from flask_sock import Sock
 
+from middleware.access.coordinator import access_coordinator
 from middleware.auth.schemas import InvalidField
 from middleware.db import get_session
 from middleware.errors import ApiError
@@ -29,6 +31,7 @@ CLOSE_TRY_AGAIN_LATER = 1013
 DRIVE_SEND_INTERVAL_MS = 50
 STREAM_POLL_S = 0.5
 CLOSE_HANDSHAKE_WAIT_S = 1.0
+HEARTBEAT_INTERVAL_S = 2.0
 
 
 def init_app(app: Flask) -> None:
@@ -42,12 +45,13 @@ def init_app(app: Flask) -> None:
             raise ApiError(400, "websocket_required", "This address takes WebSocket connections only.")
 
 
-def _send_json(ws, message: dict[str, object]) -> None:  # type: ignore[no-untyped-def]
+def send_json(ws, message: dict[str, object]) -> None:  # type: ignore[no-untyped-def]
+    """Sends message as compact JSON text."""
     ws.send(json.dumps(message, separators=(",", ":")))
 
 
 def _refuse(ws, close_code: int, code: str, message: str, field: str | None = None) -> None:  # type: ignore[no-untyped-def]
-    _send_json(ws, {"type": "error", "code": code, "message": message, "field": field})
+    send_json(ws, {"type": "error", "code": code, "message": message, "field": field})
     ws.close(reason=close_code, message=message[:120])
     # Wait for the client's closing frame: a socket torn down with it unread is reset, and the reset
     # can discard our error message before the client reads it.
@@ -84,7 +88,7 @@ def relay_stream(ws, hub: FanoutHub) -> None:  # type: ignore[no-untyped-def]
         while ws.connected:
             status = subscription.status_change()
             if status is not None:
-                _send_json(ws, {"type": "status", "robot_online": status.online, "message": status.message})
+                send_json(ws, {"type": "status", "robot_online": status.online, "message": status.message})
             message = subscription.next_message(STREAM_POLL_S)
             if message is not None:
                 ws.send(message)
@@ -110,9 +114,59 @@ def telemetry_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-d
         relay_stream(ws, link.telemetry)
 
 
+class DriverSeat:
+    """The drive socket's view of its user's control: the token, re-read at most every TOKEN_TTL_S."""
+
+    TOKEN_TTL_S = 0.25
+
+    def __init__(self, robot_name: str, user_id: int) -> None:
+        self.robot_name, self.user_id = robot_name, user_id
+        self._coordinator = access_coordinator()
+        self._token: str | None = None
+        self._read_at = float("-inf")
+        self._heartbeat_at = float("-inf")
+
+    def join(self) -> None:
+        """Connects the driver to the robot's queue (the first user gets control at once)."""
+        self._coordinator.start_ticker()
+        self._coordinator.join(self.robot_name, self.user_id)
+
+    def token(self, fresh: bool = False) -> str | None:
+        """The user's controller token, or None while they observe; keeps their seat alive."""
+        now = time.monotonic()
+        if now - self._heartbeat_at >= HEARTBEAT_INTERVAL_S:
+            self._coordinator.heartbeat(self.robot_name, self.user_id)
+            self._heartbeat_at = now
+        if fresh or now - self._read_at >= self.TOKEN_TTL_S:
+            self._token = self._coordinator.controller_token(self.robot_name, self.user_id)
+            self._read_at = now
+        return self._token
+
+    def resend_token(self) -> bool:
+        """Hands the robot this user's token again (a restarted skill server forgets it)."""
+        token = self.token(fresh=True)
+        if token is None:
+            return False
+        return self._coordinator.sync_token(self._coordinator.snapshot(self.robot_name), force=True)
+
+
+def forward_drive(link: RobotLink, seat: DriverSeat, sequence: int, linear_mps: float, angular_radps: float):  # type: ignore[no-untyped-def]
+    """Drives under the user's token; None with the user observing. Retries once if the robot forgot the token."""
+    token = seat.token()
+    if token is None:
+        return None
+    try:
+        return link.drive(token, sequence, linear_mps, angular_radps)
+    except CommandRefused as refused:
+        if refused.code not in {"not_controller", "unauthenticated"} or not seat.resend_token():
+            raise
+        token = seat.token(fresh=True)
+        return None if token is None else link.drive(token, sequence, linear_mps, angular_radps)
+
+
 @sock.route("/ws/robots/<robot_name>/drive")
 def drive_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-def]
-    """Drive commands: each validated here, then forwarded; the robot stops when the socket closes."""
+    """Drive commands: validated here, forwarded under the controller's token; the robot stops when it closes."""
     link = open_robot_channel(ws, robot_name)
     if link is None:
         return
@@ -121,36 +175,47 @@ def drive_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-def]
     except RobotUnavailable as error:
         _refuse(ws, CLOSE_TRY_AGAIN_LATER, "robot_offline", f"{error} Try again in a moment.")
         return
+    seat = DriverSeat(robot_name, int(current_user.get_id()))
+    seat.join()
     limits = DriveLimits(info.max_linear_mps, info.max_angular_radps)
     sequence_base = link.reserve_sequences()
-    _send_json(ws, {
+    send_json(ws, {
         "type": "ready",
         "max_linear_mps": limits.max_linear_mps,
         "max_angular_radps": limits.max_angular_radps,
         "send_interval_ms": DRIVE_SEND_INTERVAL_MS,
         "sequence_base": sequence_base,
+        "is_controller": seat.token() is not None,
     })
     last_sequence = 0
     try:
         while True:
-            raw = ws.receive()
+            raw = ws.receive(timeout=HEARTBEAT_INTERVAL_S)
+            if raw is None:
+                seat.token()  # an idle driver still holds the seat
+                continue
             try:
                 command = parse_drive_message(raw, limits, last_sequence)
             except InvalidField as invalid:
-                _send_json(ws, {"type": "error", "code": "invalid_field", "message": invalid.message,
-                                "field": invalid.field})
+                send_json(ws, {"type": "error", "code": "invalid_field", "message": invalid.message,
+                               "field": invalid.field})
                 continue
             last_sequence = command.sequence
             try:
-                result = link.drive(sequence_base + command.sequence, command.linear_mps, command.angular_radps)
+                result = forward_drive(link, seat, sequence_base + command.sequence, command.linear_mps,
+                                       command.angular_radps)
             except CommandRefused as refused:
-                _send_json(ws, {"type": "error", "code": refused.code, "message": refused.message,
-                                "field": refused.field})
+                send_json(ws, {"type": "error", "code": refused.code, "message": refused.message,
+                               "field": refused.field})
                 continue
             except RobotUnavailable as error:
-                _send_json(ws, {"type": "error", "code": "robot_offline", "message": str(error), "field": None})
+                send_json(ws, {"type": "error", "code": "robot_offline", "message": str(error), "field": None})
                 continue
-            _send_json(ws, {
+            if result is None:
+                send_json(ws, {"type": "error", "code": "not_controller", "field": None,
+                               "message": "You are observing: someone else has control. Wait for your turn."})
+                continue
+            send_json(ws, {
                 "type": "ack",
                 "sequence": command.sequence,
                 "applied_sequence": max(0, result.applied_sequence - sequence_base),
@@ -158,12 +223,12 @@ def drive_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-def]
                 "angular_radps": result.angular_radps,
             })
     finally:
-        _stop_quietly(link, sequence_base + last_sequence + 1)
+        _stop_quietly(link, seat, sequence_base + last_sequence + 1)
 
 
-def _stop_quietly(link: RobotLink, sequence: int) -> None:
+def _stop_quietly(link: RobotLink, seat: DriverSeat, sequence: int) -> None:
     """Stops the base when a driver leaves; the robot's deadman covers a failure here."""
     try:
-        link.drive(sequence, 0.0, 0.0)
+        forward_drive(link, seat, sequence, 0.0, 0.0)
     except (CommandRefused, RobotUnavailable) as error:
         log.info("stop after the driver left %s failed: %s", link.name, error)

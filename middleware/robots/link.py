@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import secrets
 import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -54,10 +53,7 @@ class RobotLink:
         self._channel = grpc.insecure_channel(address, options=CHANNEL_OPTIONS)
         self._stub = robot_pb2_grpc.RobotStub(self._channel)
         self._info: robot_pb2.RobotInfo | None = None
-        self._control_lock = threading.Lock()
-        # One token per process until round-robin access hands out one per controller.
-        self._controller_token = secrets.token_urlsafe(24)
-        self._token_granted = False
+        self._sequence_lock = threading.Lock()
         self._highest_sequence = 0
         self.camera = FanoutHub(f"{name}-camera", self._open_camera, pack_camera_frame, _cancel_call)
         self.telemetry = FanoutHub(f"{name}-telemetry", self._open_telemetry, pack_telemetry, _cancel_call)
@@ -78,26 +74,21 @@ class RobotLink:
 
     def reserve_sequences(self) -> int:
         """A base above every sequence sent so far; a new driver numbers its commands base+1, base+2..."""
-        with self._control_lock:
+        with self._sequence_lock:
             return self._highest_sequence
 
-    def drive(self, sequence: int, linear_mps: float, angular_radps: float) -> DriveResult:
-        """Sends a drive command under this process's controller token, granting it first if needed."""
-        with self._control_lock:
+    def set_controller(self, token: str) -> None:
+        """Tells the skill server whose commands to obey; an empty token revokes control and stops the base."""
+        self._call(self._stub.SetController, robot_pb2.SetControllerRequest(token=token))
+
+    def drive(self, token: str, sequence: int, linear_mps: float, angular_radps: float) -> DriveResult:
+        """Sends a drive command under the controller's token; the skill server refuses any other token."""
+        with self._sequence_lock:
             self._highest_sequence = max(self._highest_sequence, sequence)
-            if not self._token_granted:
-                self._grant_token()
-            command = robot_pb2.DriveCommand(
-                token=self._controller_token, sequence=sequence, linear_mps=linear_mps, angular_radps=angular_radps
-            )
-            try:
-                ack = self._call(self._stub.Drive, command)
-            except CommandRefused as refused:
-                if refused.code not in {"not_controller", "unauthenticated"}:
-                    raise
-                # The skill server restarted and forgot the token: grant it again and retry once.
-                self._grant_token()
-                ack = self._call(self._stub.Drive, command)
+        command = robot_pb2.DriveCommand(
+            token=token, sequence=sequence, linear_mps=linear_mps, angular_radps=angular_radps
+        )
+        ack = self._call(self._stub.Drive, command)
         return DriveResult(ack.applied_sequence, ack.linear_mps, ack.angular_radps)
 
     def close(self) -> None:
@@ -105,11 +96,6 @@ class RobotLink:
         self.camera.close()
         self.telemetry.close()
         self._channel.close()
-
-    def _grant_token(self) -> None:
-        # The skill server restarts the sequence numbering on a new grant; ours stays monotonic anyway.
-        self._call(self._stub.SetController, robot_pb2.SetControllerRequest(token=self._controller_token))
-        self._token_granted = True
 
     def _open_camera(self) -> Iterator[object]:
         return self._stub.StreamCamera(robot_pb2.StreamCameraRequest(max_fps=15))

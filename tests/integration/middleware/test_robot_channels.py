@@ -163,6 +163,7 @@ def test_malformed_drive_messages_are_refused_and_the_robot_does_not_move(
     telemetry = student_client.websocket("/ws/robots/lab-1/telemetry")
     drive = student_client.websocket("/ws/robots/lab-1/drive")
     assert receive_json(drive)["type"] == "ready"
+    time.sleep(0.3)  # joining handed the robot a new controller token; let telemetry show it
     settled = next_telemetry(telemetry)
     drive.send(message)
     error = receive_json(drive)

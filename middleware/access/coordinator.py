@@ -1,0 +1,170 @@
+"""Runs the round-robin rule for this process: transactions, the ticker, and handing tokens to robots."""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+from datetime import UTC, datetime
+
+from flask import Flask, current_app
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session
+
+from middleware.access import round_robin
+from middleware.access.round_robin import AccessPolicy, QueueState
+from middleware.db import session_factory
+from middleware.models import Course, CourseMembership
+from middleware.robots.link import CommandRefused, RobotUnavailable
+from middleware.robots.registry import robot_registry
+
+log = logging.getLogger(__name__)
+_EXTENSION_KEY = "telelab.access"
+
+
+def _utc_now() -> datetime:
+    return datetime.now(UTC)
+
+
+def _bookings_priority() -> Callable[[Session, str, datetime], int | None]:
+    """The bookings rule when that area is installed; no priority otherwise."""
+    try:
+        from middleware.bookings.services import priority_user_id
+    except ImportError:
+        return lambda _session, _robot, _now: None
+    return priority_user_id
+
+
+def policy_for(app: Flask) -> AccessPolicy:
+    """The access policy from app's configuration: grace period, turn length per user, booking priority."""
+    default_turn_s = float(app.config["DEFAULT_TURN_LENGTH_S"])
+
+    def turn_length_s(session: Session, user_id: int) -> float:
+        # A student in several courses gets the longest of their courses' turns.
+        longest = session.scalar(
+            select(func.max(Course.turn_length_s))
+            .join(CourseMembership, CourseMembership.course_id == Course.id)
+            .where(CourseMembership.user_id == user_id)
+        )
+        return float(longest) if longest else default_turn_s
+
+    return AccessPolicy(float(app.config["ACCESS_GRACE_S"]), turn_length_s, _bookings_priority())
+
+
+class AccessCoordinator:
+    """One per app and process: applies queue operations in their own transactions and keeps robots' tokens."""
+
+    def __init__(self, app: Flask, clock: Callable[[], datetime] = _utc_now) -> None:
+        self.app = app
+        self.clock = clock
+        self.policy = policy_for(app)
+        self._sessions = session_factory(app)
+        self._pushed_tokens: dict[str, str | None] = {}
+        self._push_lock = threading.Lock()
+        self._stop = threading.Event()
+        self._ticker: threading.Thread | None = None
+
+    def apply(self, operation: Callable[..., QueueState], robot_name: str, *args: object) -> QueueState:
+        """Runs one round-robin operation in a transaction of its own, then hands the robot its token."""
+        online = self._robot_online(robot_name)
+        with self._sessions() as session, session.begin():
+            state = operation(session, robot_name, *args, self.policy, self.clock(), online)
+        if online:
+            self.sync_token(state)
+        return state
+
+    def join(self, robot_name: str, user_id: int) -> QueueState:
+        """The user connects to the robot (or reconnects within grace and keeps the seat)."""
+        with self._sessions() as session, session.begin():
+            try:
+                from middleware.bookings.services import check_in
+            except ImportError:
+                pass
+            else:
+                check_in(session, robot_name, user_id, self.clock())
+        return self.apply(round_robin.join, robot_name, user_id)
+
+    def heartbeat(self, robot_name: str, user_id: int) -> bool:
+        """The user is still connected."""
+        with self._sessions() as session, session.begin():
+            return round_robin.heartbeat(session, robot_name, user_id, self.clock())
+
+    def tick(self, robot_name: str) -> QueueState:
+        """Brings the robot's queue up to date."""
+        return self.apply(round_robin.tick, robot_name)
+
+    def snapshot(self, robot_name: str) -> QueueState:
+        """The robot's queue as stored now."""
+        with self._sessions() as session:
+            return round_robin.snapshot(session, robot_name)
+
+    def controller_token(self, robot_name: str, user_id: int) -> str | None:
+        """The token of user_id if they control the robot now, else None."""
+        state = self.snapshot(robot_name)
+        return state.token if state.controller_id == user_id else None
+
+    def now(self) -> datetime:
+        """The coordinator's clock."""
+        return self.clock()
+
+    def turn_length_s(self, user_id: int) -> float:
+        """The turn length that applies to user_id."""
+        with self._sessions() as session:
+            return self.policy.turn_length_s(session, user_id)
+
+    def sync_token(self, state: QueueState, force: bool = False) -> bool:
+        """Makes sure the robot obeys the current controller's token (and only it); False if unreachable."""
+        link = robot_registry(self.app).get(state.robot_name)
+        if link is None:
+            return False
+        with self._push_lock:
+            if not force and self._pushed_tokens.get(state.robot_name, "unset") == state.token:
+                return True
+            try:
+                link.set_controller(state.token or "")
+            except (RobotUnavailable, CommandRefused) as error:
+                log.info("could not hand %s its controller token: %s", state.robot_name, error)
+                self._pushed_tokens.pop(state.robot_name, None)
+                return False
+            self._pushed_tokens[state.robot_name] = state.token
+            return True
+
+    def start_ticker(self) -> None:
+        """Ticks every robot's queue in the background (turn ends, grace periods, faults)."""
+        if self._ticker is not None:
+            return
+        self._ticker = threading.Thread(target=self._tick_forever, name="access-ticker", daemon=True)
+        self._ticker.start()
+
+    def stop_ticker(self) -> None:
+        """Stops the background ticker."""
+        self._stop.set()
+        if self._ticker is not None:
+            self._ticker.join(5)
+
+    def _tick_forever(self) -> None:
+        interval_s = float(self.app.config["ACCESS_TICK_S"])
+        while not self._stop.wait(interval_s):
+            for robot_name in robot_registry(self.app).names():
+                try:
+                    self.tick(robot_name)
+                except Exception:  # noqa: BLE001 - one bad tick must not stop the ticker
+                    log.exception("access tick of %s failed", robot_name)
+
+    def _robot_online(self, robot_name: str) -> bool:
+        link = robot_registry(self.app).get(robot_name)
+        online = link is not None and link.is_online()
+        if not online:
+            with self._push_lock:
+                self._pushed_tokens.pop(robot_name, None)  # a restarted robot forgot the token
+        return online
+
+
+def init_app(app: Flask) -> None:
+    """Creates the coordinator of app; the ticker starts with the first channel that needs it."""
+    app.extensions[_EXTENSION_KEY] = AccessCoordinator(app)
+
+
+def access_coordinator(app: Flask | None = None) -> AccessCoordinator:
+    """The coordinator of app (or of the current app)."""
+    return (app or current_app).extensions[_EXTENSION_KEY]

@@ -1,0 +1,236 @@
+"""The round-robin rule of the 2003 paper's user agent, over the robot_control row and the queue.
+
+"When only a single user is connected, no restrictions on usage are given. However, if multiple
+users are simultaneously connected, only one is given access for a specified amount of time. Once
+the time has expired, the next user in line will be given opportunity to control the robot and the
+first user will be moved to the end of the waiting list."
+
+Every function takes the session, the robot's name and `now`, locks the robot's control row first,
+and leaves committing to the caller. Nothing here reads Flask state or talks to a robot.
+"""
+
+from __future__ import annotations
+
+import secrets
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import datetime, timedelta
+
+from sqlalchemy import delete, select, update
+from sqlalchemy.orm import Session
+
+from middleware.locking import lock_robot_control
+from middleware.models import QueueEntry, RobotControl
+
+TURN_WARNING_S = 20.0
+
+
+@dataclass(frozen=True)
+class AccessPolicy:
+    """The numbers the rule needs, and where to ask for a user's turn length and booking priority."""
+
+    grace_s: float
+    turn_length_s: Callable[[Session, int], float]
+    priority_user_id: Callable[[Session, str, datetime], int | None] = lambda _s, _r, _n: None
+
+
+@dataclass(frozen=True)
+class QueueState:
+    """A robot's queue after a change: the controller, the waiting users in order, and the turn's end."""
+
+    robot_name: str
+    controller_id: int | None
+    token: str | None
+    waiting_ids: tuple[int, ...]
+    turn_ends_at: datetime | None
+    faulted: bool
+    token_changed: bool = False
+
+
+@dataclass(frozen=True)
+class Seat:
+    """What one user sees of the queue."""
+
+    in_queue: bool
+    is_controller: bool
+    position: int  # 0 for the controller, 1.. for the waiting users, -1 when not in the queue
+    queue_size: int
+    turn_remaining_s: float | None  # the controller's countdown; None when the turn has no limit
+    estimated_wait_s: float | None  # until this user gets control; 0 for the controller
+    warning: bool  # the controller's turn ends soon
+    faulted: bool
+
+
+def _as_utc(moment: datetime | None) -> datetime | None:
+    """SQLite hands back naive datetimes; every stored time is UTC."""
+    if moment is None or moment.tzinfo is not None:
+        return moment
+    from datetime import UTC
+
+    return moment.replace(tzinfo=UTC)
+
+
+def lock_robot(session: Session, robot_name: str) -> RobotControl:
+    """The robot's control row, locked for this transaction (created when missing)."""
+    lock_robot_control(session, robot_name)
+    control = session.get(RobotControl, robot_name, populate_existing=True)
+    assert control is not None
+    return control
+
+
+def _entries(session: Session, robot_name: str) -> list[QueueEntry]:
+    return list(session.scalars(
+        select(QueueEntry).where(QueueEntry.robot_name == robot_name).order_by(QueueEntry.enqueued_at, QueueEntry.id)
+    ))
+
+
+def _grant(control: RobotControl, user_id: int, now: datetime) -> None:
+    control.controller_id = user_id
+    control.token = secrets.token_urlsafe(32)
+    control.turn_started_at = now
+    control.turn_ends_at = None
+    control.faulted = False
+
+
+def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: datetime,
+            robot_online: bool) -> QueueState:
+    """Applies the rule to the locked row: drops users gone past grace, grants, rotates, pauses on faults."""
+    token_before = control.token
+    cutoff = now - timedelta(seconds=policy.grace_s)
+    entries = _entries(session, control.robot_name)
+    for gone in [e for e in entries if _as_utc(e.last_seen_at) < cutoff]:
+        session.delete(gone)
+        entries.remove(gone)
+    present = [e.user_id for e in entries]
+    if control.controller_id not in present:
+        control.controller_id = None
+        control.token = None
+        control.turn_ends_at = None
+        control.faulted = False
+
+    priority = policy.priority_user_id(session, control.robot_name, now)
+    if priority is not None and priority in present and control.controller_id != priority:
+        _grant(control, priority, now)
+
+    if not robot_online:
+        if control.controller_id is not None:
+            # Nobody loses a turn to a fault: the clock stops and the controller keeps the seat.
+            control.faulted = True
+            control.turn_ends_at = None
+    elif control.controller_id is None:
+        if present:
+            _grant(control, present[0], now)
+    elif control.faulted:
+        control.faulted = False
+        control.turn_ends_at = None  # a fresh turn, set below if others wait
+
+    waiting = [u for u in present if u != control.controller_id]
+    if robot_online and control.controller_id is not None:
+        limited = waiting and control.controller_id != priority
+        if not limited:
+            control.turn_ends_at = None
+        elif control.turn_ends_at is None:
+            control.turn_ends_at = now + timedelta(seconds=policy.turn_length_s(session, control.controller_id))
+        elif _as_utc(control.turn_ends_at) <= now:
+            previous = next(e for e in entries if e.user_id == control.controller_id)
+            previous.enqueued_at = now  # to the end of the waiting list
+            _grant(control, waiting[0], now)
+            control.turn_ends_at = now + timedelta(seconds=policy.turn_length_s(session, waiting[0]))
+            waiting = waiting[1:] + [previous.user_id]
+    control.updated_at = now
+    session.flush()
+    return QueueState(
+        robot_name=control.robot_name,
+        controller_id=control.controller_id,
+        token=control.token,
+        waiting_ids=tuple(waiting),
+        turn_ends_at=_as_utc(control.turn_ends_at),
+        faulted=control.faulted,
+        token_changed=control.token != token_before,
+    )
+
+
+def tick(session: Session, robot_name: str, policy: AccessPolicy, now: datetime,
+         robot_online: bool = True) -> QueueState:
+    """Brings the queue up to date with the clock and the robot's health."""
+    return _settle(session, lock_robot(session, robot_name), policy, now, robot_online)
+
+
+def join(session: Session, robot_name: str, user_id: int, policy: AccessPolicy, now: datetime,
+         robot_online: bool = True) -> QueueState:
+    """Connects a user to the robot: a new seat at the end, or the same seat refreshed (a reload)."""
+    control = lock_robot(session, robot_name)
+    entry = session.scalar(
+        select(QueueEntry).where(QueueEntry.robot_name == robot_name, QueueEntry.user_id == user_id)
+    )
+    if entry is None:
+        session.add(QueueEntry(robot_name=robot_name, user_id=user_id, enqueued_at=now, last_seen_at=now))
+    else:
+        entry.last_seen_at = now
+    session.flush()
+    return _settle(session, control, policy, now, robot_online)
+
+
+def heartbeat(session: Session, robot_name: str, user_id: int, now: datetime) -> bool:
+    """Marks the user as still connected; False when they no longer hold a seat."""
+    result = session.execute(
+        update(QueueEntry)
+        .where(QueueEntry.robot_name == robot_name, QueueEntry.user_id == user_id)
+        .values(last_seen_at=now)
+    )
+    return bool(result.rowcount)
+
+
+def leave(session: Session, robot_name: str, user_id: int, policy: AccessPolicy, now: datetime,
+          robot_online: bool = True) -> QueueState:
+    """Takes the user out of the queue; control passes on if they held it."""
+    control = lock_robot(session, robot_name)
+    session.execute(delete(QueueEntry).where(QueueEntry.robot_name == robot_name, QueueEntry.user_id == user_id))
+    session.flush()
+    return _settle(session, control, policy, now, robot_online)
+
+
+def pass_turn(session: Session, robot_name: str, user_id: int, policy: AccessPolicy, now: datetime,
+              robot_online: bool = True) -> QueueState:
+    """The controller gives the turn to the next user early and goes to the end of the queue."""
+    control = lock_robot(session, robot_name)
+    if control.controller_id == user_id:
+        entries = _entries(session, robot_name)
+        if any(e.user_id != user_id for e in entries):
+            control.turn_ends_at = now  # expires now: _settle rotates exactly as at the end of a turn
+    return _settle(session, control, policy, now, robot_online)
+
+
+def seat_of(state: QueueState, user_id: int, now: datetime, turn_length_s: float) -> Seat:
+    """What user_id sees: position, queue size, countdown or estimated wait, and the end-of-turn warning."""
+    size = len(state.waiting_ids) + (state.controller_id is not None)
+    remaining = None
+    if state.turn_ends_at is not None:
+        remaining = max(0.0, (state.turn_ends_at - now).total_seconds())
+    if state.controller_id == user_id:
+        return Seat(True, True, 0, size, remaining, 0.0,
+                    remaining is not None and remaining <= TURN_WARNING_S, state.faulted)
+    if user_id not in state.waiting_ids:
+        return Seat(False, False, -1, size, remaining, None, False, state.faulted)
+    position = state.waiting_ids.index(user_id) + 1
+    wait = None
+    if state.controller_id is None:
+        wait = 0.0
+    elif remaining is not None:
+        wait = remaining + (position - 1) * turn_length_s
+    return Seat(True, False, position, size, remaining, wait, False, state.faulted)
+
+
+def snapshot(session: Session, robot_name: str) -> QueueState:
+    """The queue as stored, read without locking (for display; changes go through the locked functions)."""
+    control = session.get(RobotControl, robot_name)
+    entries = _entries(session, robot_name)
+    controller_id = control.controller_id if control else None
+    return QueueState(
+        robot_name=robot_name,
+        controller_id=controller_id,
+        token=control.token if control else None,
+        waiting_ids=tuple(e.user_id for e in entries if e.user_id != controller_id),
+        turn_ends_at=_as_utc(control.turn_ends_at) if control else None,
+        faulted=bool(control and control.faulted),
+    )
