@@ -37,7 +37,6 @@ def _bookings_priority() -> Callable[[Session, str, datetime], int | None]:
 
 def policy_for(app: Flask) -> AccessPolicy:
     """The access policy from app's configuration: grace period, turn length per user, booking priority."""
-    default_turn_s = float(app.config["DEFAULT_TURN_LENGTH_S"])
 
     def turn_length_s(session: Session, user_id: int) -> float:
         # A student in several courses gets the longest of their courses' turns.
@@ -46,7 +45,7 @@ def policy_for(app: Flask) -> AccessPolicy:
             .join(CourseMembership, CourseMembership.course_id == Course.id)
             .where(CourseMembership.user_id == user_id)
         )
-        return float(longest) if longest else default_turn_s
+        return float(longest) if longest else float(app.config["DEFAULT_TURN_LENGTH_S"])
 
     return AccessPolicy(float(app.config["ACCESS_GRACE_S"]), turn_length_s, _bookings_priority())
 
@@ -57,12 +56,16 @@ class AccessCoordinator:
     def __init__(self, app: Flask, clock: Callable[[], datetime] = _utc_now) -> None:
         self.app = app
         self.clock = clock
-        self.policy = policy_for(app)
         self._sessions = session_factory(app)
         self._pushed_tokens: dict[str, str | None] = {}
         self._push_lock = threading.Lock()
         self._stop = threading.Event()
         self._ticker: threading.Thread | None = None
+
+    @property
+    def policy(self) -> AccessPolicy:
+        """The policy as configured now (tests and admins may change the settings while running)."""
+        return policy_for(self.app)
 
     def apply(self, operation: Callable[..., QueueState], robot_name: str, *args: object) -> QueueState:
         """Runs one round-robin operation in a transaction of its own, then hands the robot its token."""

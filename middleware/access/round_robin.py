@@ -208,8 +208,10 @@ def seat_of(state: QueueState, user_id: int, now: datetime, turn_length_s: float
     if state.turn_ends_at is not None:
         remaining = max(0.0, (state.turn_ends_at - now).total_seconds())
     if state.controller_id == user_id:
+        # Short turns would be "ending soon" from their first second; warn in their last quarter then.
+        warn_within_s = min(TURN_WARNING_S, turn_length_s / 4)
         return Seat(True, True, 0, size, remaining, 0.0,
-                    remaining is not None and remaining <= TURN_WARNING_S, state.faulted)
+                    remaining is not None and remaining <= warn_within_s, state.faulted)
     if user_id not in state.waiting_ids:
         return Seat(False, False, -1, size, remaining, None, False, state.faulted)
     position = state.waiting_ids.index(user_id) + 1

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+from datetime import UTC, datetime
 from urllib.parse import urlsplit
 
 from flask import Blueprint, redirect, render_template, request, session, url_for
 from flask_login import current_user, login_required, login_user, logout_user
 
-from middleware.auth.services import authenticate
+from middleware.auth.services import log_in
 from middleware.db import get_session
 
 blueprint = Blueprint("auth", __name__)
@@ -42,7 +43,14 @@ def login_submit():  # type: ignore[no-untyped-def]
     if not username.strip() or not password:
         error = "Enter both your username and your password."
         return render_template("login.html", error=error, username=username, next_url=next_url), 400
-    user = authenticate(get_session(), username, password)
+    db_session = get_session()
+    outcome = log_in(db_session, username, password, request.remote_addr or "unknown", datetime.now(UTC))
+    db_session.commit()
+    if outcome.blocked_minutes is not None:
+        minutes = outcome.blocked_minutes
+        error = f"Too many failed attempts; try again in {minutes} minute{'s' if minutes != 1 else ''}."
+        return render_template("login.html", error=error, username=username, next_url=next_url), 429
+    user = outcome.user
     if user is None:
         return render_template("login.html", error=WRONG_CREDENTIALS, username=username, next_url=next_url), 401
     session.clear()  # a fresh session on login, so a planted session id is worthless

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import secrets
+from dataclasses import dataclass
+from datetime import datetime
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 from werkzeug.security import check_password_hash, generate_password_hash
 
+from middleware.auth import throttle
 from middleware.auth.schemas import InvalidField, clean_new_password, clean_role, clean_username
 from middleware.models import Role, User
 
@@ -68,3 +71,37 @@ def authenticate(session: Session, username: str, password: str) -> User | None:
         check_password_hash(_DUMMY_HASH, password)
         return None
     return user if check_password_hash(user.password_hash, password) else None
+
+
+@dataclass(frozen=True)
+class LoginOutcome:
+    """The answer to a login attempt: the user, or why not (blocked_minutes when rate limited)."""
+
+    user: User | None
+    blocked_minutes: int | None = None
+
+
+def log_in(session: Session, username: str, password: str, address: str, now: datetime) -> LoginOutcome:
+    """Checks a login under the rate limits; a failure is recorded. The caller commits."""
+    blocked = throttle.minutes_blocked(session, username, address, now)
+    if blocked is not None:
+        return LoginOutcome(None, blocked)
+    user = authenticate(session, username, password)
+    if user is None:
+        throttle.record_failure(session, username, address, now)
+    return LoginOutcome(user)
+
+
+def hash_password(password: str) -> str:
+    """The scrypt hash of a password that already passed validation."""
+    return generate_password_hash(password, method=PASSWORD_METHOD)
+
+
+def change_own_password(session: Session, user: User, current_password: str, new_password: str) -> None:
+    """Replaces the user's password when current_password is right; the caller commits."""
+    if not check_password_hash(user.password_hash, current_password or ""):
+        raise InvalidField("current_password", "Your current password is not right. Type it again.")
+    clean = clean_new_password(new_password)
+    if clean == current_password:
+        raise InvalidField("new_password", "Choose a new password different from the current one.")
+    user.password_hash = hash_password(clean)

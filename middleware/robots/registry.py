@@ -1,39 +1,121 @@
-"""The robots this middleware process knows, one RobotLink each."""
+"""The robots this middleware process knows, one RobotLink each, following the robots table.
+
+The table (managed by admins, seeded from TELELAB_ROBOTS) is re-read at most every `refresh_s`
+seconds when someone asks, and at once after a change made in this process (`refresh(force=True)`).
+Disabled robots have no link: `get()` answers None (so pages and sockets give 404s) and their old
+link is closed. Until the table exists (before `telelab db upgrade`), the configuration is used.
+"""
 
 from __future__ import annotations
 
+import logging
+import threading
+import time
+from collections.abc import Callable
+
 from flask import Flask, current_app
+from sqlalchemy.exc import DBAPIError
+from sqlalchemy.orm import Session
 
 from middleware.config import RobotAddress
+from middleware.robots.catalog import RobotEntry, load_entries, seed_from_config
 from middleware.robots.link import RobotLink
 
 _EXTENSION_KEY = "telelab.robots"
+DEFAULT_REFRESH_S = 3.0
+log = logging.getLogger(__name__)
 
 
 class RobotRegistry:
-    """Links to every configured robot, created once per process."""
+    """Links to every enabled robot, created once per process and replaced when the table changes."""
 
-    def __init__(self, robots: tuple[RobotAddress, ...], rpc_timeout_s: float) -> None:
-        self.addresses = {robot.name: robot for robot in robots}
-        self._links = {robot.name: RobotLink(robot.name, robot.address, rpc_timeout_s) for robot in robots}
+    def __init__(self, robots: tuple[RobotAddress, ...], rpc_timeout_s: float,
+                 sessions: Callable[[], Session] | None = None, refresh_s: float = DEFAULT_REFRESH_S) -> None:
+        self._configured = robots
+        self._rpc_timeout_s = rpc_timeout_s
+        self._sessions = sessions
+        self._refresh_s = refresh_s
+        self._seeded = sessions is None
+        self._lock = threading.Lock()
+        self._read_at = -float("inf")
+        self._closed = False
+        self._links: dict[str, RobotLink] = {}
+        # Every robot ever seen (disabled ones too), so a title is always found for a name listed earlier.
+        self._entries: dict[str, RobotEntry] = {}
+        self._apply([RobotEntry(r.name, r.address, r.title) for r in robots])
+
+    @property
+    def addresses(self) -> dict[str, RobotEntry]:
+        """name -> entry (address, title, enabled) of every robot known, including disabled ones."""
+        self._maybe_refresh()
+        return self._entries
 
     def get(self, name: str) -> RobotLink | None:
-        """The link to the robot called name, if there is one."""
+        """The link to the enabled robot called name, if there is one."""
+        self._maybe_refresh()
         return self._links.get(name)
 
     def names(self) -> list[str]:
-        """Every robot's name, in configuration order."""
+        """Every enabled robot's name, in the order they were added."""
+        self._maybe_refresh()
         return list(self._links)
+
+    def refresh(self, force: bool = True) -> None:
+        """Re-reads the robots table now (force) or when the last read is older than refresh_s."""
+        if self._sessions is None or self._closed:
+            return
+        with self._lock:
+            if not force and time.monotonic() - self._read_at < self._refresh_s:
+                return
+            self._read_at = time.monotonic()
+            try:
+                with self._sessions() as session:
+                    if not self._seeded:
+                        seed_from_config(session, self._configured)
+                        self._seeded = True
+                    entries = load_entries(session)
+            except DBAPIError as error:  # no robots table yet (database not migrated): keep what we have
+                log.debug("robots table not readable (%s); using TELELAB_ROBOTS", error.__class__.__name__)
+                return
+            self._apply(entries)
 
     def close(self) -> None:
         """Closes every link (application shutdown, tests)."""
-        for link in self._links.values():
+        self._closed = True
+        for link in list(self._links.values()):
+            link.close()
+
+    def _maybe_refresh(self) -> None:
+        if self._sessions is not None and time.monotonic() - self._read_at >= self._refresh_s:
+            self.refresh(force=False)
+
+    def _apply(self, entries: list[RobotEntry]) -> None:
+        """Swaps in links for the enabled entries, closing links of robots disabled or moved."""
+        links: dict[str, RobotLink] = {}
+        stale: list[RobotLink] = []
+        for entry in entries:
+            old = self._links.get(entry.name)
+            if not entry.enabled:
+                continue
+            if old is not None and self._entries.get(entry.name, entry).address == entry.address:
+                links[entry.name] = old
+            else:
+                links[entry.name] = RobotLink(entry.name, entry.address, self._rpc_timeout_s)
+        stale = [link for name, link in self._links.items() if links.get(name) is not link]
+        self._entries = {**self._entries, **{e.name: e for e in entries}}
+        self._links = links
+        for link in stale:
             link.close()
 
 
 def init_app(app: Flask) -> None:
-    """Creates the registry for app from its ROBOTS setting."""
-    app.extensions[_EXTENSION_KEY] = RobotRegistry(app.config["ROBOTS"], app.config["ROBOT_RPC_TIMEOUT_S"])
+    """Creates the registry for app from its ROBOTS setting and the robots table (seeded here)."""
+    from middleware.db import session_factory
+
+    registry = RobotRegistry(app.config["ROBOTS"], app.config["ROBOT_RPC_TIMEOUT_S"], session_factory(app),
+                             float(app.config.get("ROBOTS_REFRESH_S", DEFAULT_REFRESH_S)))
+    app.extensions[_EXTENSION_KEY] = registry
+    registry.refresh()
 
 
 def robot_registry(app: Flask | None = None) -> RobotRegistry:

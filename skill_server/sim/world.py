@@ -22,6 +22,7 @@ from skill_server.sim.geometry import Pose2D, yaw_from_quaternion
 from skill_server.sim.laser import Laser, LaserSpec
 from skill_server.sim.odometry import WheelOdometry
 from skill_server.sim.publication import CameraSubscription, Publication
+from skill_server.sim.raycast import StaticSceneCaster
 from skill_server.sim.robot_model import TELEBOT, RobotSpec, ramp_toward, wheel_speeds_radps
 from skill_server.sim.scenes import build_scene, get_scene
 from skill_server.sim.snapshots import CameraFrame, RobotDescription, RobotSnapshot
@@ -78,6 +79,7 @@ class World:
         self._laser = Laser(laser or LaserSpec())
         self._camera = Camera(camera or CameraSpec(), spec)
         self._gate = DriveGate(spec)
+        self._caster = StaticSceneCaster(self.scene)  # the scene is static: exact hits without pybullet's cost
         self._commands: queue.SimpleQueue[tuple[Callable[[], Any], Future[Any]]] = queue.SimpleQueue()
         self._frame_sequence = 0
         self._tick = 0
@@ -391,7 +393,7 @@ class World:
     def _measure_ranges(self, pose: Pose2D) -> tuple[tuple[float, ...], tuple[float, ...]]:
         sonar_from, sonar_to = self._sonar.rays(pose)
         laser_from, laser_to = self._laser.rays(pose)
-        fractions = self.cast_rays(np.vstack([sonar_from, laser_from]), np.vstack([sonar_to, laser_to]))
+        fractions = self._caster.cast(np.vstack([sonar_from, laser_from]), np.vstack([sonar_to, laser_to]))
         sonar_count = self._sonar.ray_count
         sonar_m = self._sonar.ranges(fractions[:sonar_count], self._sensor_rng)
         laser_m = self._laser.ranges(fractions[sonar_count:], self._sensor_rng)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -23,10 +24,12 @@ class SensorLayout:
     sonar_max_range_m: float
     laser: LaserSpec
 
-    @property
+    @cached_property
     def laser_angles_rad(self) -> np.ndarray:
-        """Beam directions in the robot frame."""
-        return np.linspace(self.laser.angle_min_rad, self.laser.angle_max_rad, self.laser.beam_count)
+        """Beam directions in the robot frame (computed once: every skill reads them every scan)."""
+        angles = np.linspace(self.laser.angle_min_rad, self.laser.angle_max_rad, self.laser.beam_count)
+        angles.flags.writeable = False
+        return angles
 
 
 @dataclass(frozen=True)

@@ -205,10 +205,10 @@ class Localization(SkillController):
         if converged and not self._converged:
             self.announce(EventKind.CONVERGED, f"converged at ({x:.2f}, {y:.2f}) m, std {max(std_x, std_y):.3f} m")
         self._converged = converged or (self._converged and max(std_x, std_y) < 2 * CONVERGED_STD_M)
-        sample = p[:: max(1, len(p) // 200)]
+        sample = np.column_stack([p[:: max(1, len(p) // 200)], w[:: max(1, len(p) // 200)]])
         self._perception.published_estimate = LocalizationEstimate(  # type: ignore[attr-defined]
             self._estimate, std_x, std_y, std_theta, self._converged, duration_ms,
-            tuple((float(a), float(b), float(c), 1.0 / len(p)) for a, b, c in sample),
+            tuple(map(tuple, sample.tolist())),  # tolist first: a per-element loop costs 0.3 ms per update
         )
 
 

@@ -68,8 +68,24 @@ class Clearance:
     nearest_m: float  # nearest echo in any direction, from the rim
 
 
+_last_clearance: list[tuple[object, object, float, float, Clearance]] = []  # one entry: readings change at 20 Hz
+
+
 def clearance(tick: TickInput, corridor_margin_m: float = 0.04) -> Clearance:
     """How far the robot can drive straight before touching what the laser and sonars see."""
+    # Readings are immutable tuples replaced on every scan, so the same objects mean the same answer.
+    if _last_clearance:
+        laser, sonar, margin_m, radius_m, cached = _last_clearance[0]
+        if (laser is tick.laser_ranges_m and sonar is tick.sonar_ranges_m and margin_m == corridor_margin_m
+                and radius_m == tick.spec.body_radius_m):
+            return cached
+    result = _clearance(tick, corridor_margin_m)
+    _last_clearance[:] = [(tick.laser_ranges_m, tick.sonar_ranges_m, corridor_margin_m, tick.spec.body_radius_m,
+                           result)]
+    return result
+
+
+def _clearance(tick: TickInput, corridor_margin_m: float) -> Clearance:
     sensors: SensorLayout = tick.sensors
     radius_m = tick.spec.body_radius_m
     half_width_m = radius_m + corridor_margin_m

@@ -9,12 +9,14 @@ import * as drivePad from "../panels/drive-pad/drive-pad.js";
 import * as odometryPanel from "../panels/odometry-panel/odometry-panel.js";
 import * as connectionStatus from "../panels/connection-status/connection-status.js";
 import * as chatPanel from "../panels/chat-panel/chat-panel.js";
+import * as queuePanel from "../panels/queue-panel/queue-panel.js";
 import { connectChat } from "./chat-session.js";
 
 // Where each panel goes. Later the middleware will send these descriptors (see ARCHITECTURE §5).
 const LAYOUT = [
   { module: connectionStatus, tag: "connection-status", slot: "status" },
   { module: cameraPanel, tag: "camera-panel", slot: "main" },
+  { module: queuePanel, tag: "queue-panel", slot: "side" },
   { module: drivePad, tag: "drive-pad", slot: "side" },
   { module: odometryPanel, tag: "odometry-panel", slot: "side" },
   { module: chatPanel, tag: "chat-panel", slot: "side" },
@@ -104,6 +106,22 @@ function connectDrive(robotPath, panels) {
   return drive;
 }
 
+function connectQueue(robotPath, panels) {
+  const queue = new Channel(`${robotPath}/queue`);
+  const panel = panels["queue-panel"];
+  queue.addEventListener("message", ({ detail }) => {
+    const message = parseJsonMessage(detail);
+    if (message?.type === "queue") {
+      panel.seat = message;
+      panels["drive-pad"].observing = !message.is_controller;
+    } else if (isStatusOrError(message)) {
+      panel.message = message;
+    }
+  });
+  panel.addEventListener("queue-action", ({ detail }) => queue.sendJson({ type: detail.type }));
+  return queue;
+}
+
 function start() {
   const root = document.querySelector("#console[data-robot]");
   if (!root) return;
@@ -126,6 +144,7 @@ function start() {
     camera: connectCamera(robotPath, panels, onStatus),
     telemetry: connectTelemetry(robotPath, panels, onStatus),
     drive: connectDrive(robotPath, panels),
+    queue: connectQueue(robotPath, panels),
   };
   for (const [name, channel] of Object.entries(channels)) {
     status.update(name, channel.state);

@@ -5,7 +5,7 @@
 import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
 import { CLOSE_CODES } from "../../js/transport.js";
 
-const LABELS = { camera: "Camera", telemetry: "Telemetry", drive: "Drive" };
+const LABELS = { camera: "Camera", telemetry: "Telemetry", drive: "Drive", queue: "Queue" };
 
 /** A sentence for a channel state; pure so it can be tested. */
 export function describeState(state, { robotName = "the robot", nowMs = Date.now() } = {}) {

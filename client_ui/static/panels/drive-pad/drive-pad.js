@@ -50,6 +50,7 @@ export class DrivePad extends HTMLElement {
   #slider;
   #speedOutput;
   #linkNote;
+  #observingNote;
   #ackOutput;
   #appliedOutput;
   #errorLine;
@@ -89,6 +90,15 @@ export class DrivePad extends HTMLElement {
     this.#linkNote.textContent = state === "closed"
       ? "Driving is unavailable: the drive connection is closed."
       : "Connecting to the drive…";
+  }
+
+  /** True while someone else has control: the pad stays usable but says the robot will not obey. */
+  set observing(observing) {
+    this.#build();
+    const wasObserving = this.hasAttribute("data-observing");
+    this.toggleAttribute("data-observing", Boolean(observing));
+    this.#observingNote.hidden = !observing;
+    if (wasObserving && !observing) this.#setError("");  // the refusal no longer applies
   }
 
   set ack(message) {
@@ -138,6 +148,10 @@ export class DrivePad extends HTMLElement {
     });
     this.#speedOutput = h("output", { id: "drive-speed-value", for: "drive-speed", class: "drive__speed-value" });
     this.#linkNote = h("p", { class: "drive__note", "data-field": "drive-link", text: "Connecting to the drive…" });
+    this.#observingNote = h("p", {
+      class: "drive__note drive__note--observing", "data-field": "drive-observing", hidden: true,
+      text: "You are observing: the robot obeys the person whose turn it is.",
+    });
     this.#ackOutput = h("span", { "data-field": "ack-sequence", text: "—" });
     this.#appliedOutput = h("span", { "data-field": "applied-sequence", text: "—" });
     this.#errorLine = h("p", { class: "drive__error", "data-field": "drive-error", role: "alert", hidden: true });
@@ -145,6 +159,7 @@ export class DrivePad extends HTMLElement {
     this.append(
       h("h2", { class: "panel__title", id: "drive-title", text: "Drive" }),
       this.#linkNote,
+      this.#observingNote,
       pad,
       h("div", { class: "drive__speed" },
         h("label", { for: "drive-speed", text: "Speed" }),

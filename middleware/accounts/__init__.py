@@ -1,0 +1,1 @@
+"""Account administration, password changes and resets, invitations by link, and the robots table."""

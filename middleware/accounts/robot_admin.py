@@ -1,0 +1,69 @@
+"""Admin rules for the robots table: add, retitle, readdress, enable and disable. No Flask request state.
+
+The registry (middleware/robots/registry.py) follows the table; the route asks it to refresh after
+committing so this process sees the change at once and other workers within a few seconds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from middleware.accounts.schemas import clean_robot_address, clean_robot_name, clean_robot_title
+from middleware.accounts.services import Refused, require_admin
+from middleware.models import Robot, User
+from middleware.models.accounts import utc_now
+
+
+@dataclass(frozen=True)
+class RobotView:
+    """A row of the robots page."""
+
+    id: int
+    name: str
+    title: str
+    address: str
+    enabled: bool
+
+    def to_dict(self) -> dict[str, object]:
+        """The JSON form."""
+        return {"id": self.id, "name": self.name, "title": self.title, "address": self.address,
+                "enabled": self.enabled}
+
+
+def list_robots(session: Session, actor: User) -> list[RobotView]:
+    """Every robot in the table (admins only)."""
+    require_admin(actor)
+    return [RobotView(r.id, r.name, r.title, r.address, r.enabled)
+            for r in session.scalars(select(Robot).order_by(Robot.id))]
+
+
+def add_robot(session: Session, actor: User, name: object, title: object, address: object) -> Robot:
+    """Adds an enabled robot (admins only); names are unique. The caller commits."""
+    require_admin(actor)
+    clean_name = clean_robot_name(name)
+    robot = Robot(name=clean_name, title=clean_robot_title(title or clean_name), address=clean_robot_address(address))
+    if session.scalar(select(Robot.id).where(Robot.name == clean_name)) is not None:
+        raise Refused(409, "robot_exists", f"A robot named {clean_name!r} exists already.", "name")
+    session.add(robot)
+    session.flush()
+    return robot
+
+
+def update_robot(session: Session, actor: User, robot_id: int, *, title: object = None, address: object = None,
+                 enabled: bool | None = None) -> Robot:
+    """Changes a robot's title, address or enabled flag (admins only). The caller commits."""
+    require_admin(actor)
+    robot = session.get(Robot, robot_id)
+    if robot is None:
+        raise Refused(404, "unknown_robot", f"There is no robot with id {robot_id}.", "robot_id")
+    if title is not None:
+        robot.title = clean_robot_title(title)
+    if address is not None:
+        robot.address = clean_robot_address(address)
+    if enabled is not None:
+        robot.enabled = enabled
+    robot.updated_at = utc_now()
+    return robot

@@ -1,0 +1,74 @@
+"""Validation of account, invitation and robot fields from forms and JSON; errors name the field."""
+
+from __future__ import annotations
+
+import re
+from datetime import timedelta
+
+from middleware.auth.schemas import InvalidField
+
+ROBOT_NAME = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
+ROBOT_ADDRESS = re.compile(r"^[A-Za-z0-9.\-\[\]:]{1,250}:\d{1,5}$")
+INVITATION_DAYS_DEFAULT = 7
+INVITATION_DAYS_MAX = 30
+MAX_ID = 2**31 - 1
+
+
+def clean_id(value: object, field: str) -> int:
+    """A positive whole number (from JSON or a form field)."""
+    if isinstance(value, str) and value.strip().isdigit():
+        value = int(value.strip())
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_ID:
+        raise InvalidField(field, f"{field} must be a positive whole number.")
+    return value
+
+
+def clean_optional_id(value: object, field: str) -> int | None:
+    """clean_id, or None when absent or empty."""
+    return None if value is None or value == "" else clean_id(value, field)
+
+
+def clean_flag(value: object, field: str) -> bool:
+    """A yes/no value: JSON true/false, or the form values '1'/'0', 'true'/'false', 'on'."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, str) and value.strip().lower() in {"1", "true", "on", "yes"}:
+        return True
+    if isinstance(value, str) and value.strip().lower() in {"0", "false", "off", "no"}:
+        return False
+    raise InvalidField(field, f"{field} must be true or false.")
+
+
+def clean_robot_name(value: object) -> str:
+    """A robot name usable in URLs: 1-32 letters, digits, '-' or '_'."""
+    if not isinstance(value, str) or not ROBOT_NAME.fullmatch(value.strip()):
+        raise InvalidField("name", "name must be 1 to 32 letters, digits, '-' or '_' (it appears in addresses).")
+    return value.strip()
+
+
+def clean_robot_title(value: object) -> str:
+    """A title for people: 1-100 characters on one line."""
+    if not isinstance(value, str) or not value.strip() or len(value.strip()) > 100 or not value.isprintable():
+        raise InvalidField("title", "title must be 1 to 100 characters on one line.")
+    return value.strip()
+
+
+def clean_robot_address(value: object) -> str:
+    """host:port of a skill server, port 1-65535."""
+    if not isinstance(value, str) or not ROBOT_ADDRESS.fullmatch(value.strip()):
+        raise InvalidField("address", "address must look like 'robot-host:50051' (a host name or IP, and a port).")
+    port = int(value.strip().rsplit(":", 1)[1])
+    if not 1 <= port <= 65535:
+        raise InvalidField("address", "the port in address must be between 1 and 65535.")
+    return value.strip()
+
+
+def clean_invitation_days(value: object) -> timedelta:
+    """How long an invitation link lasts: 1-30 days (default 7)."""
+    if value is None or value == "":
+        return timedelta(days=INVITATION_DAYS_DEFAULT)
+    if isinstance(value, str) and value.strip().isdigit():
+        value = int(value.strip())
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= INVITATION_DAYS_MAX:
+        raise InvalidField("days", f"days must be a whole number from 1 to {INVITATION_DAYS_MAX}.")
+    return timedelta(days=value)

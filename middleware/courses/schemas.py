@@ -1,0 +1,107 @@
+"""Validation of course fields and of enrolment CSV files; errors name the field."""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from middleware.auth.schemas import InvalidField
+
+COURSE_CODE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,31}$")
+TURN_LENGTH_S = (10, 3600)
+ALLOWANCE_MIN = (0, 10080)
+MAX_CSV_ROWS = 500
+FORMULA_PREFIXES = ("=", "+", "-", "@", "\t", "\r")
+
+
+def clean_code(value: object) -> str:
+    """A course code: 1-32 letters, digits, '.', '_' or '-' (stored upper case)."""
+    if not isinstance(value, str) or not COURSE_CODE.fullmatch(value.strip()):
+        raise InvalidField("code", "code must be 1 to 32 letters, digits, '.', '_' or '-', such as ROB-101.")
+    return value.strip().upper()
+
+
+def clean_title(value: object) -> str:
+    """A course title: 1-200 characters on one line."""
+    if not isinstance(value, str) or not value.strip() or len(value.strip()) > 200 or not value.isprintable():
+        raise InvalidField("title", "title must be 1 to 200 characters on one line.")
+    return value.strip()
+
+
+def clean_whole(value: object, field: str, bounds: tuple[int, int], unit: str) -> int:
+    """A whole number within bounds (inclusive), from JSON or a form field."""
+    low, high = bounds
+    if isinstance(value, str) and re.fullmatch(r"\s*\d{1,9}\s*", value):
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise InvalidField(field, f"{field} must be a whole number of {unit} from {low} to {high}.")
+    return value
+
+
+@dataclass(frozen=True)
+class CourseSettings:
+    """Validated course fields; None means 'leave as it is'."""
+
+    title: str | None = None
+    turn_length_s: int | None = None
+    booking_allowance_min: int | None = None
+
+
+def parse_settings(data: Mapping[str, object]) -> CourseSettings:
+    """The settings present in data (form or JSON), each validated."""
+    return CourseSettings(
+        title=clean_title(data["title"]) if data.get("title") is not None else None,
+        turn_length_s=(clean_whole(data["turn_length_s"], "turn_length_s", TURN_LENGTH_S, "seconds")
+                       if data.get("turn_length_s") not in (None, "") else None),
+        booking_allowance_min=(clean_whole(data["booking_allowance_min"], "booking_allowance_min",
+                                           ALLOWANCE_MIN, "minutes per week")
+                               if data.get("booking_allowance_min") not in (None, "") else None),
+    )
+
+
+@dataclass(frozen=True)
+class CsvRow:
+    """One data row of an enrolment file: its line number and the username cell as written."""
+
+    line: int
+    username: str
+    empty: bool
+
+
+def parse_enrolment_csv(data: bytes) -> list[CsvRow]:
+    """The rows of a CSV file whose header has a 'username' column (UTF-8, with or without a BOM)."""
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise InvalidField("file", "The file is not UTF-8 text. Save it as 'CSV UTF-8' and upload it again.") from None
+    if "\x00" in text:
+        raise InvalidField("file", "The file is not a text CSV file (it contains NUL bytes).")
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
+        rows = list(reader)
+    except csv.Error as error:
+        raise InvalidField("file", f"The file is not valid CSV ({error}).") from None
+    header_index = next((i for i, row in enumerate(rows) if any(cell.strip() for cell in row)), None)
+    if header_index is None:
+        raise InvalidField("file", "The file is empty. Its first line must be the header 'username'.")
+    header = [cell.strip().lower() for cell in rows[header_index]]
+    if "username" not in header:
+        raise InvalidField("file", "The first line must be a header with a 'username' column "
+                                   f"(found: {', '.join(repr(h) for h in header[:5])}).")
+    column = header.index("username")
+    body = rows[header_index + 1:]
+    if len(body) > MAX_CSV_ROWS:
+        raise InvalidField("file", f"The file has {len(body)} rows; upload at most {MAX_CSV_ROWS} at a time.")
+    result = []
+    for offset, row in enumerate(body):
+        cell = row[column].strip() if column < len(row) else ""
+        result.append(CsvRow(header_index + 2 + offset, cell[:200], not any(c.strip() for c in row)))
+    return result
+
+
+def csv_safe(value: str) -> str:
+    """A cell that a spreadsheet will not run as a formula (CSV injection): a leading quote when needed."""
+    return "'" + value if value.startswith(FORMULA_PREFIXES) else value
