@@ -62,16 +62,24 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
     register_error_handlers(app)
 
     from middleware.access import sockets as access_sockets
+    from middleware.accounts.routes import blueprint as accounts_blueprint
     from middleware.auth.routes import blueprint as auth_blueprint
     from middleware.bookings.routes import blueprint as bookings_blueprint
     from middleware.chat.routes import blueprint as chat_blueprint
-    from middleware.lab import sockets
+    from middleware.courses.routes import blueprint as courses_blueprint
+    from middleware.lab import skill_sockets, sockets  # noqa: F401 - importing registers the channels
     from middleware.lab.routes import blueprint as lab_blueprint
+    from middleware.lab.skills import blueprint as skills_blueprint
+    from middleware.preferences.routes import blueprint as preferences_blueprint
 
     app.register_blueprint(auth_blueprint)
     app.register_blueprint(lab_blueprint)
+    app.register_blueprint(skills_blueprint)
+    app.register_blueprint(preferences_blueprint)
     app.register_blueprint(bookings_blueprint)
     app.register_blueprint(chat_blueprint)
+    app.register_blueprint(accounts_blueprint)
+    app.register_blueprint(courses_blueprint)
     sockets.init_app(app)
     access_sockets.init_app(app)
 

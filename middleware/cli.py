@@ -71,6 +71,22 @@ def cmd_users_set_password(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_users_set_active(args: argparse.Namespace) -> int:
+    """Disables or enables an account; a disabled user's session stops working at the next request."""
+    from middleware.accounts.services import set_active_by_name
+    from middleware.db import session_factory
+
+    with session_factory(_app())() as session:
+        try:
+            user = set_active_by_name(session, args.name, args.active)
+            session.commit()
+        except InvalidField as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
+    print(f"{user.username} is {'enabled' if user.is_active else 'disabled'}")
+    return 0
+
+
 def cmd_users_list(_args: argparse.Namespace) -> int:
     """Lists the accounts."""
     from sqlalchemy import select
@@ -162,6 +178,12 @@ def build_parser() -> argparse.ArgumentParser:
     reset.add_argument("--generate", action="store_true")
     reset.set_defaults(handler=cmd_users_set_password)
     user_commands.add_parser("list", help="list the accounts").set_defaults(handler=cmd_users_list)
+    disable = user_commands.add_parser("disable", help="disable an account (its sessions end)")
+    disable.add_argument("name")
+    disable.set_defaults(handler=cmd_users_set_active, active=False)
+    enable = user_commands.add_parser("enable", help="enable a disabled account")
+    enable.add_argument("name")
+    enable.set_defaults(handler=cmd_users_set_active, active=True)
 
     bench = commands.add_parser("bench", help="measure response times, streaming and capacity")
     bench.add_argument("--quick", action="store_true", help="a short smoke run that asserts no timings")

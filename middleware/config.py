@@ -66,6 +66,9 @@ def from_environment(instance_dir: Path, environ: dict[str, str] | None = None) 
         "ACCESS_GRACE_S": float(env.get("TELELAB_GRACE_S", "15")),
         "DEFAULT_TURN_LENGTH_S": float(env.get("TELELAB_DEFAULT_TURN_S", "120")),
         "ACCESS_TICK_S": float(env.get("TELELAB_ACCESS_TICK_S", "0.5")),
+        "GROUND_TRUTH_ROLES": frozenset(
+            r.strip() for r in env.get("TELELAB_GROUND_TRUTH_ROLES", "tutor,admin").split(",") if r.strip()
+        ),
         "SESSION_COOKIE_HTTPONLY": True,
         "SESSION_COOKIE_SAMESITE": "Lax",
         "SESSION_COOKIE_SECURE": secure_cookie,

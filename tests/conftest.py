@@ -106,6 +106,7 @@ class LiveServer:
         from middleware.serve import make_threaded_server
 
         self._server = make_threaded_server(app, "127.0.0.1", 0)
+        self.app = app
         self.url = f"http://127.0.0.1:{self._server.server_port}"
         self._thread = threading.Thread(target=self._server.serve_forever, daemon=True)
         self._thread.start()

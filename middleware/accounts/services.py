@@ -116,10 +116,10 @@ def change_role(session: Session, actor: User, user_id: int, role: object) -> Us
 def reset_password(session: Session, actor: User, user_id: int) -> tuple[User, str]:
     """Gives the account a generated password, shown once; admins, or a tutor for their students."""
     target = get_user(session, user_id)
-    if target.id == actor.id:
-        raise Refused(409, "own_account", "Change your own password on the password page instead.", "user_id")
     if not may_reset_password(session, actor, target):
         raise forbidden("You can reset passwords only of students in the courses you teach.")
+    if target.id == actor.id:
+        raise Refused(409, "own_account", "Change your own password on the password page instead.", "user_id")
     password = generate_password()
     target.password_hash = hash_password(password)
     return target, password

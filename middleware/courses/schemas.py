@@ -105,3 +105,17 @@ def parse_enrolment_csv(data: bytes) -> list[CsvRow]:
 def csv_safe(value: str) -> str:
     """A cell that a spreadsheet will not run as a formula (CSV injection): a leading quote when needed."""
     return "'" + value if value.startswith(FORMULA_PREFIXES) else value
+
+
+def report_csv(enrolled: list[str], created: list[tuple[str, str]], refused: list[tuple[int, str, str]]) -> str:
+    """The enrolment report as CSV (username, password, outcome, line, reason), every cell formula-safe."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\r\n")
+    writer.writerow(["username", "password", "outcome", "line", "reason"])
+    for name, password in created:
+        writer.writerow([csv_safe(name), csv_safe(password), "created and enrolled", "", ""])
+    for name in enrolled:
+        writer.writerow([csv_safe(name), "", "enrolled", "", ""])
+    for line, value, reason in refused:
+        writer.writerow([csv_safe(value), "", "refused", str(line), csv_safe(reason)])
+    return out.getvalue()

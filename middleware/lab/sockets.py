@@ -81,8 +81,12 @@ def open_robot_channel(ws, robot_name: str) -> RobotLink | None:  # type: ignore
     return link
 
 
-def relay_stream(ws, hub: FanoutHub) -> None:  # type: ignore[no-untyped-def]
-    """Sends the hub's newest message whenever there is one, and status changes, until the socket closes."""
+def relay_stream(ws, hub: FanoutHub, choose=None) -> None:  # type: ignore[no-untyped-def]
+    """Sends the hub's newest message whenever there is one, and status changes, until the socket closes.
+
+    choose picks this viewer's version of a message packed in several versions (e.g. with or without
+    the ground truth).
+    """
     subscription = hub.subscribe()
     try:
         while ws.connected:
@@ -91,7 +95,7 @@ def relay_stream(ws, hub: FanoutHub) -> None:  # type: ignore[no-untyped-def]
                 send_json(ws, {"type": "status", "robot_online": status.online, "message": status.message})
             message = subscription.next_message(STREAM_POLL_S)
             if message is not None:
-                ws.send(message)
+                ws.send(message if choose is None else choose(message))
             while ws.receive(timeout=0) is not None:
                 pass  # nothing is expected from viewers; drop it so it cannot pile up
     finally:
@@ -194,6 +198,10 @@ def drive_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-def]
             if raw is None:
                 seat.token()  # an idle driver still holds the seat
                 continue
+            ping_id = parse_ping(raw)
+            if ping_id is not None:
+                send_json(ws, pong(link, ping_id))
+                continue
             try:
                 command = parse_drive_message(raw, limits, last_sequence)
             except InvalidField as invalid:
@@ -221,9 +229,34 @@ def drive_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-def]
                 "applied_sequence": max(0, result.applied_sequence - sequence_base),
                 "linear_mps": result.linear_mps,
                 "angular_radps": result.angular_radps,
+                "robot_rtt_ms": round(result.round_trip_ms, 3),
             })
     finally:
         _stop_quietly(link, seat, sequence_base + last_sequence + 1)
+
+
+def parse_ping(raw: object) -> int | None:
+    """The id of a {"type": "ping", "id": n} message, or None for anything else."""
+    if not isinstance(raw, str) or len(raw) > 128 or '"ping"' not in raw:
+        return None
+    try:
+        message = json.loads(raw)
+    except ValueError:
+        return None
+    if isinstance(message, dict) and message.get("type") == "ping":
+        ping_id = message.get("id")
+        if isinstance(ping_id, int) and not isinstance(ping_id, bool) and 0 <= ping_id < 2**53:
+            return ping_id
+    return None
+
+
+def pong(link: RobotLink, ping_id: int) -> dict[str, object]:
+    """The answer to a ping, with a fresh middleware-to-robot round trip."""
+    try:
+        robot_rtt_ms: float | None = round(link.measure_round_trip_ms(), 3)
+    except RobotUnavailable:
+        robot_rtt_ms = None
+    return {"type": "pong", "id": ping_id, "robot_rtt_ms": robot_rtt_ms}
 
 
 def _stop_quietly(link: RobotLink, seat: DriverSeat, sequence: int) -> None:

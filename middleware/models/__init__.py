@@ -6,10 +6,11 @@ from middleware.models.access import QueueEntry, RobotControl
 from middleware.models.accounts import Role, User
 from middleware.models.base import Base
 from middleware.models.courses import Course, CourseMembership, Invitation, LoginFailure
+from middleware.models.preferences import UserPreference
 from middleware.models.robots import Robot
 from middleware.models.scheduling import Booking, ChatMessage
 
 __all__ = [
     "Base", "Booking", "ChatMessage", "Course", "CourseMembership", "Invitation", "LoginFailure",
-    "QueueEntry", "Robot", "Role", "RobotControl", "User",
+    "QueueEntry", "Robot", "Role", "RobotControl", "User", "UserPreference",
 ]

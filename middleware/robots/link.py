@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 
 import grpc
 
 from middleware.robots.fanout import FanoutHub
-from middleware.robots.messages import pack_camera_frame, pack_telemetry
+from middleware.robots.messages import pack_camera_frame, pack_localization, pack_telemetry
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 
 # gRPC reconnects a channel by itself; these bound how long a restarted robot stays unnoticed.
@@ -41,6 +42,17 @@ class DriveResult:
     applied_sequence: int
     linear_mps: float
     angular_radps: float
+    round_trip_ms: float  # middleware -> skill server -> middleware, the paper's second leg
+
+
+def _json_to_parameter(value: object) -> robot_pb2.ParameterValue:
+    if isinstance(value, bool):
+        return robot_pb2.ParameterValue(bool_value=value)
+    if isinstance(value, int):
+        return robot_pb2.ParameterValue(int_value=value)
+    if isinstance(value, float):
+        return robot_pb2.ParameterValue(double_value=value)
+    return robot_pb2.ParameterValue(string_value=str(value))
 
 
 class RobotLink:
@@ -57,12 +69,52 @@ class RobotLink:
         self._highest_sequence = 0
         self.camera = FanoutHub(f"{name}-camera", self._open_camera, pack_camera_frame, _cancel_call)
         self.telemetry = FanoutHub(f"{name}-telemetry", self._open_telemetry, pack_telemetry, _cancel_call)
+        self.localization = FanoutHub(f"{name}-localization", self._open_localization, pack_localization,
+                                      _cancel_call)
+        self._skills: list[robot_pb2.SkillDescription] | None = None
 
     def info(self, refresh: bool = False) -> robot_pb2.RobotInfo:
         """The robot's description (cached once fetched)."""
         if self._info is None or refresh:
             self._info = self._call(self._stub.GetRobotInfo, robot_pb2.GetRobotInfoRequest())
         return self._info
+
+    def skills(self, refresh: bool = False) -> list[robot_pb2.SkillDescription]:
+        """The skills the robot offers, with their parameter schemas (cached once fetched)."""
+        if self._skills is None or refresh:
+            self._skills = list(self._call(self._stub.ListSkills, robot_pb2.ListSkillsRequest()).skills)
+        return self._skills
+
+    def measure_round_trip_ms(self) -> float:
+        """The duration of one small unary call to the skill server, in milliseconds."""
+        started = time.perf_counter()
+        self._call(self._stub.GetRobotInfo, robot_pb2.GetRobotInfoRequest())
+        return (time.perf_counter() - started) * 1000
+
+    def activate_skill(self, token: str, skill: str, parameters: dict[str, object],
+                       preempt: bool) -> robot_pb2.GoalState:
+        """Starts a skill as a goal under the controller's token."""
+        request = robot_pb2.ActivateSkillRequest(
+            token=token, skill=skill, preempt=preempt,
+            parameters={name: _json_to_parameter(value) for name, value in parameters.items()},
+        )
+        return self._call(self._stub.ActivateSkill, request).goal
+
+    def cancel_goal(self, token: str, goal_id: str) -> robot_pb2.GoalState:
+        """Cancels a goal; the answer says the error left."""
+        return self._call(self._stub.CancelGoal, robot_pb2.CancelGoalRequest(token=token, goal_id=goal_id))
+
+    def get_goal(self, goal_id: str) -> robot_pb2.GoalState:
+        """A running goal or one that ended recently."""
+        return self._call(self._stub.GetGoal, robot_pb2.GetGoalRequest(goal_id=goal_id))
+
+    def watch_goal(self, goal_id: str) -> Iterator[robot_pb2.GoalUpdate]:
+        """The goal's updates until it ends (a stream of its own: goals have few watchers)."""
+        return self._stub.WatchGoal(robot_pb2.WatchGoalRequest(goal_id=goal_id, feedback_rate_hz=5))
+
+    def get_map(self) -> robot_pb2.OccupancyGrid:
+        """The occupancy grid built so far."""
+        return self._call(self._stub.GetMap, robot_pb2.GetMapRequest())
 
     def is_online(self) -> bool:
         """Whether the skill server answers now."""
@@ -88,8 +140,10 @@ class RobotLink:
         command = robot_pb2.DriveCommand(
             token=token, sequence=sequence, linear_mps=linear_mps, angular_radps=angular_radps
         )
+        started = time.perf_counter()
         ack = self._call(self._stub.Drive, command)
-        return DriveResult(ack.applied_sequence, ack.linear_mps, ack.angular_radps)
+        round_trip_ms = (time.perf_counter() - started) * 1000
+        return DriveResult(ack.applied_sequence, ack.linear_mps, ack.angular_radps, round_trip_ms)
 
     def close(self) -> None:
         """Stops the streams and closes the channel."""
@@ -99,6 +153,9 @@ class RobotLink:
 
     def _open_camera(self) -> Iterator[object]:
         return self._stub.StreamCamera(robot_pb2.StreamCameraRequest(max_fps=15))
+
+    def _open_localization(self) -> Iterator[object]:
+        return self._stub.StreamLocalization(robot_pb2.StreamLocalizationRequest(rate_hz=5, max_particles=200))
 
     def _open_telemetry(self) -> Iterator[object]:
         return self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=10))
@@ -111,6 +168,7 @@ class RobotLink:
 
 
 _REFUSAL_CODES = {
+    grpc.StatusCode.NOT_FOUND: "not_found",
     grpc.StatusCode.INVALID_ARGUMENT: "invalid_field",
     grpc.StatusCode.PERMISSION_DENIED: "not_controller",
     grpc.StatusCode.UNAUTHENTICATED: "unauthenticated",
@@ -122,7 +180,10 @@ def _translate(error: grpc.RpcError) -> Exception:
     code = error.code()  # type: ignore[attr-defined]
     details = error.details() or ""  # type: ignore[attr-defined]
     if code in _REFUSAL_CODES:
-        field = details.split(" ", 1)[0] if code == grpc.StatusCode.INVALID_ARGUMENT else None
+        field = None
+        if code == grpc.StatusCode.INVALID_ARGUMENT:
+            trailing = dict(error.trailing_metadata() or ())  # type: ignore[attr-defined]
+            field = trailing.get("field") or details.split(" ", 1)[0]
         return CommandRefused(_REFUSAL_CODES[code], details, field)
     if code == grpc.StatusCode.DEADLINE_EXCEEDED:
         return RobotUnavailable("The robot did not answer in time.")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import base64
 import json
 import struct
 import time
@@ -80,4 +81,137 @@ def robot_info_dict(info: robot_pb2.RobotInfo) -> dict[str, object]:
         "camera_hfov_deg": info.camera_hfov_deg,
         "sonar_count": len(info.sonars),
         "laser_beam_count": info.laser.beam_count,
+        "sonars": [
+            {"mount_angle_rad": s.mount_angle_rad, "cone_half_angle_rad": s.cone_half_angle_rad,
+             "min_range_m": s.min_range_m, "max_range_m": s.max_range_m}
+            for s in info.sonars
+        ],
+        "laser": {
+            "angle_min_rad": info.laser.angle_min_rad, "angle_max_rad": info.laser.angle_max_rad,
+            "beam_count": info.laser.beam_count, "min_range_m": info.laser.min_range_m,
+            "max_range_m": info.laser.max_range_m,
+        },
+        "scene_boxes": [
+            {"name": b.name, "center_x_m": b.center_x_m, "center_y_m": b.center_y_m, "half_x_m": b.half_x_m,
+             "half_y_m": b.half_y_m, "yaw_rad": b.yaw_rad}
+            for b in info.scene_boxes
+        ],
+    }
+
+
+_PARAMETER_TYPES = {
+    robot_pb2.PARAMETER_TYPE_DOUBLE: "double",
+    robot_pb2.PARAMETER_TYPE_INT: "int",
+    robot_pb2.PARAMETER_TYPE_BOOL: "bool",
+    robot_pb2.PARAMETER_TYPE_ENUM: "enum",
+}
+
+
+def parameter_schema_dict(schema: robot_pb2.ParameterSchema) -> dict[str, object]:
+    """One parameter's schema as the skill panel needs it."""
+    kind = _PARAMETER_TYPES.get(schema.type, "string")
+    default: object = schema.default_value
+    if kind == "enum":
+        choices = list(schema.choices)
+        index = int(schema.default_value)
+        default = choices[index] if 0 <= index < len(choices) else (choices[0] if choices else "")
+    elif kind == "int":
+        default = int(schema.default_value)
+    elif kind == "bool":
+        default = bool(schema.default_value)
+    return {
+        "name": schema.name, "type": kind, "unit": schema.unit, "minimum": schema.minimum,
+        "maximum": schema.maximum, "default": default, "help": schema.help, "choices": list(schema.choices),
+    }
+
+
+def _parameter_value(value: robot_pb2.ParameterValue) -> object:
+    kind = value.WhichOneof("kind")
+    return getattr(value, kind) if kind else None
+
+
+def feedback_dict(feedback: robot_pb2.GoalFeedback) -> dict[str, object]:
+    """A goal's feedback as JSON-ready data."""
+    return {
+        "sim_time_s": feedback.sim_time_s,
+        "state": feedback.state,
+        "progress": feedback.progress,
+        "distance_error_m": feedback.distance_error_m,
+        "heading_error_rad": feedback.heading_error_rad,
+        "pose": pose_dict(feedback.pose),
+        "pose_source": feedback.pose_source,
+        "values": dict(feedback.values),
+    }
+
+
+def goal_dict(goal: robot_pb2.GoalState) -> dict[str, object]:
+    """A goal's state as JSON-ready data; the status is the lower-case name of the enum value."""
+    status = robot_pb2.GoalStatus.Name(goal.status).removeprefix("GOAL_STATUS_").lower()
+    return {
+        "goal_id": goal.goal_id,
+        "skill": goal.skill,
+        "motor": goal.motor,
+        "status": status,
+        "parameters": {name: _parameter_value(value) for name, value in goal.parameters.items()},
+        "error_code": goal.error_code,
+        "message": goal.message,
+        "goal_reached": goal.goal_reached,
+        "feedback": feedback_dict(goal.feedback) if goal.HasField("feedback") else None,
+    }
+
+
+FINAL_GOAL_STATUSES = {"succeeded", "canceled", "aborted"}
+
+
+def goal_update_message(update: robot_pb2.GoalUpdate) -> dict[str, object]:
+    """One WatchGoal update as a socket message."""
+    kind = update.WhichOneof("update")
+    if kind == "state":
+        return {"type": "goal", "goal": goal_dict(update.state)}
+    if kind == "event":
+        name = robot_pb2.GoalEventKind.Name(update.event.kind).removeprefix("GOAL_EVENT_KIND_").lower()
+        return {"type": "goal_event", "kind": name, "message": update.event.message,
+                "sim_time_s": update.event.sim_time_s}
+    return {"type": "goal_feedback", "feedback": feedback_dict(update.feedback)}
+
+
+def pack_localization(update: robot_pb2.LocalizationUpdate) -> tuple[str, str]:
+    """The localization message twice, packed once each: with the ground truth, and without it."""
+    message: dict[str, object] = {
+        "type": "localization",
+        "sim_time_s": update.sim_time_s,
+        "active": update.active,
+        "converged": update.converged,
+        "estimate": pose_dict(update.estimate),
+        "std_x_m": update.std_x_m,
+        "std_y_m": update.std_y_m,
+        "std_theta_rad": update.std_theta_rad,
+        "odometry": pose_dict(update.odometry),
+        "update_duration_ms": update.update_duration_ms,
+        "particles": [[round(p.x_m, 3), round(p.y_m, 3), round(p.theta_rad, 3), p.weight] for p in update.particles],
+    }
+    hidden = {"ground_truth": None, "position_error_m": None, "heading_error_rad": None,
+              "odometry_position_error_m": None, "odometry_heading_error_rad": None}
+    shown = {
+        "ground_truth": pose_dict(update.ground_truth),
+        "position_error_m": update.position_error_m if update.active else None,
+        "heading_error_rad": update.heading_error_rad if update.active else None,
+        "odometry_position_error_m": update.odometry_position_error_m,
+        "odometry_heading_error_rad": update.odometry_heading_error_rad,
+    }
+    compact = {"separators": (",", ":")}
+    return json.dumps({**message, **shown}, **compact), json.dumps({**message, **hidden}, **compact)
+
+
+def map_dict(grid: robot_pb2.OccupancyGrid) -> dict[str, object]:
+    """The occupancy grid with its cells in base64."""
+    return {
+        "resolution_m": grid.resolution_m,
+        "origin_x_m": grid.origin_x_m,
+        "origin_y_m": grid.origin_y_m,
+        "width_cells": grid.width_cells,
+        "height_cells": grid.height_cells,
+        "cells_b64": base64.b64encode(grid.cells).decode(),
+        "scans_integrated": grid.scans_integrated,
+        "sim_time_s": grid.sim_time_s,
     }

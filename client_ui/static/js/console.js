@@ -1,36 +1,49 @@
-// The lab console page: fetches the robot's description, places the panels, and wires each panel
-// to its socket. It knows which panels exist, not how they draw; rules stay on the server.
+// The lab console page (the paper's ExperimentTool): asks the middleware which panels this robot's
+// abstractions describe, places them in the order sent, and wires each to its data by kind. It knows no
+// panel's insides: a kind maps to a custom element and a wiring; an unknown kind becomes a notice.
 
-import { ApiError, Channel, fetchJson, parseJsonMessage } from "./transport.js";
-import { DriveSession } from "./drive-session.js";
+import { ApiError, fetchJson } from "./transport.js";
 import { h } from "./dom.js";
-import * as cameraPanel from "../panels/camera-panel/camera-panel.js";
-import * as drivePad from "../panels/drive-pad/drive-pad.js";
-import * as odometryPanel from "../panels/odometry-panel/odometry-panel.js";
+import { checkPanelList } from "./panel-descriptors.js";
+import { ConsoleLayout } from "./console-layout.js";
+import { ConsoleWiring } from "./console-wiring.js";
 import * as connectionStatus from "../panels/connection-status/connection-status.js";
-import * as chatPanel from "../panels/chat-panel/chat-panel.js";
+import * as cameraPanel from "../panels/camera-panel/camera-panel.js";
+import * as mapPanel from "../panels/map-panel/map-panel.js";
+import * as odometryPanel from "../panels/odometry-panel/odometry-panel.js";
+import * as sonarPanel from "../panels/sonar-panel/sonar-panel.js";
+import * as laserPanel from "../panels/laser-panel/laser-panel.js";
+import * as drivePad from "../panels/drive-pad/drive-pad.js";
+import * as skillPanel from "../panels/skill-panel/skill-panel.js";
 import * as queuePanel from "../panels/queue-panel/queue-panel.js";
-import { connectChat } from "./chat-session.js";
+import * as chatPanel from "../panels/chat-panel/chat-panel.js";
+import * as responseTimesPanel from "../panels/response-times-panel/response-times-panel.js";
 
-// Where each panel goes. Later the middleware will send these descriptors (see ARCHITECTURE §5).
-const LAYOUT = [
-  { module: connectionStatus, tag: "connection-status", slot: "status" },
-  { module: cameraPanel, tag: "camera-panel", slot: "main" },
-  { module: queuePanel, tag: "queue-panel", slot: "side" },
-  { module: drivePad, tag: "drive-pad", slot: "side" },
-  { module: odometryPanel, tag: "odometry-panel", slot: "side" },
-  { module: chatPanel, tag: "chat-panel", slot: "side" },
-];
+/** kind -> the custom element that shows it, and its default width in grid columns. */
+export const PANEL_REGISTRY = Object.freeze({
+  camera: { module: cameraPanel, tag: "camera-panel", span: 2 },
+  map: { module: mapPanel, tag: "map-panel", span: 2 },
+  odometry: { module: odometryPanel, tag: "odometry-panel", span: 1 },
+  sonar: { module: sonarPanel, tag: "sonar-panel", span: 1 },
+  laser: { module: laserPanel, tag: "laser-panel", span: 1 },
+  drive: { module: drivePad, tag: "drive-pad", span: 1 },
+  skill: { module: skillPanel, tag: "skill-panel", span: 1 },
+  queue: { module: queuePanel, tag: "queue-panel", span: 1 },
+  chat: { module: chatPanel, tag: "chat-panel", span: 1 },
+  "response-times": { module: responseTimesPanel, tag: "response-times-panel", span: 1 },
+});
 
-function placePanels(root) {
-  const panels = {};
-  for (const { module, tag, slot } of LAYOUT) {
-    module.register();
-    const panel = h(tag);
-    root.querySelector(`[data-slot="${slot}"]`).append(panel);
-    panels[tag] = panel;
-  }
-  return panels;
+const LAYOUT_PREFERENCE = "/api/me/preferences/console-layout";
+
+/** The panels every robot had before the middleware described them; used only if the list cannot be had. */
+function basicPanels(robotPath) {
+  return [
+    { id: "camera", kind: "camera", title: "Camera", channel: `${robotPath}/camera` },
+    { id: "queue", kind: "queue", title: "Turn", channel: `${robotPath}/queue` },
+    { id: "drive", kind: "drive", title: "Drive", channel: `${robotPath}/drive` },
+    { id: "odometry", kind: "odometry", title: "Odometry", channel: `${robotPath}/telemetry` },
+    { id: "chat", kind: "chat", title: "Chat", channel: `${robotPath}/chat` },
+  ];
 }
 
 function showPageError(root, text) {
@@ -39,119 +52,68 @@ function showPageError(root, text) {
   line.hidden = !text;
 }
 
-function showOnline(root, online) {
-  const badge = root.querySelector("#robot-online");
-  badge.textContent = online ? "Online" : "Offline";
-  badge.classList.toggle("badge--online", online);
-  badge.classList.toggle("badge--offline", !online);
-}
-
-/** Route a text message that is a status or an error to a panel's `message` property. */
-function isStatusOrError(message) {
-  return message?.type === "status" || message?.type === "error";
-}
-
-async function loadRobot(root, robotName, pad) {
+async function loadPanelList(robotName, robotPath) {
   try {
-    const robot = await fetchJson(`/api/robots/${encodeURIComponent(robotName)}`);
-    showOnline(root, Boolean(robot.online));
-    if (robot.info) pad.limits = { max_linear_mps: robot.info.max_linear_mps, max_angular_radps: robot.info.max_angular_radps };
+    const answer = await fetchJson(`/api/robots/${encodeURIComponent(robotName)}/panels`);
+    const checked = checkPanelList(answer);
+    if (checked) return { entries: checked, problem: "" };
+    return { entries: checkPanelList({ panels: basicPanels(robotPath) }),
+      problem: "The robot's panel list could not be read; showing the basic panels." };
   } catch (error) {
-    showPageError(root, error instanceof ApiError ? error.message : "The robot's description could not be loaded.");
+    const why = error instanceof ApiError ? error.message : "it could not be loaded";
+    return { entries: checkPanelList({ panels: basicPanels(robotPath) }),
+      problem: `The robot's panel list is unavailable (${why}); showing the basic panels.` };
   }
 }
 
-function connectCamera(robotPath, panels, onStatus) {
-  const camera = new Channel(`${robotPath}/camera`, { binary: true });
-  camera.addEventListener("statechange", ({ detail }) => { panels["camera-panel"].connected = detail.phase === "open"; });
-  camera.addEventListener("message", ({ detail }) => {
-    if (detail instanceof ArrayBuffer) {
-      panels["camera-panel"].frame = detail;
-      return;
-    }
-    const message = parseJsonMessage(detail);
-    if (isStatusOrError(message)) panels["camera-panel"].message = message;
-    if (message?.type === "status") onStatus(message);
-  });
-  return camera;
+async function loadSavedLayout() {
+  try {
+    const answer = await fetchJson(LAYOUT_PREFERENCE);
+    return answer?.value && typeof answer.value === "object" ? answer.value : null;
+  } catch {
+    return null; // no saved layout (or no preferences service): the server's order it is
+  }
 }
 
-function connectTelemetry(robotPath, panels, onStatus) {
-  const telemetry = new Channel(`${robotPath}/telemetry`);
-  telemetry.addEventListener("message", ({ detail }) => {
-    const message = parseJsonMessage(detail);
-    if (message?.type === "telemetry") panels["odometry-panel"].telemetry = message;
-    else if (isStatusOrError(message)) panels["odometry-panel"].message = message;
-    if (message?.type === "status") onStatus(message);
-  });
-  return telemetry;
-}
-
-function connectDrive(robotPath, panels) {
-  const pad = panels["drive-pad"];
-  const drive = new Channel(`${robotPath}/drive`);
-  const session = new DriveSession(drive);
-  session.addEventListener("ready", ({ detail }) => {
-    pad.limits = { max_linear_mps: detail.max_linear_mps, max_angular_radps: detail.max_angular_radps };
-    pad.link = "ready";
-  });
-  session.addEventListener("ack", ({ detail }) => { pad.ack = detail; });
-  session.addEventListener("error", ({ detail }) => { pad.error = detail; });
-  session.addEventListener("status", ({ detail }) => { if (detail.message) pad.error = detail; });
-  drive.addEventListener("statechange", ({ detail }) => {
-    if (detail.phase !== "open") pad.link = detail.phase === "closed" ? "closed" : "connecting";
-  });
-  pad.addEventListener("drive-command", ({ detail }) => session.setCommand(detail));
-  pad.addEventListener("drive-stop", () => session.stop());
-  return drive;
-}
-
-function connectQueue(robotPath, panels) {
-  const queue = new Channel(`${robotPath}/queue`);
-  const panel = panels["queue-panel"];
-  queue.addEventListener("message", ({ detail }) => {
-    const message = parseJsonMessage(detail);
-    if (message?.type === "queue") {
-      panel.seat = message;
-      panels["drive-pad"].observing = !message.is_controller;
-    } else if (isStatusOrError(message)) {
-      panel.message = message;
-    }
-  });
-  panel.addEventListener("queue-action", ({ detail }) => queue.sendJson({ type: detail.type }));
-  return queue;
-}
-
-function start() {
+async function start() {
   const root = document.querySelector("#console[data-robot]");
   if (!root) return;
   const robotName = root.dataset.robot;
   const robotPath = `/ws/robots/${encodeURIComponent(robotName)}`;
-  const panels = placePanels(root);
 
-  const status = panels["connection-status"];
+  connectionStatus.register();
+  const status = h("connection-status");
+  root.querySelector('[data-slot="status"]').append(status);
   status.robotName = robotName;
   status.loginUrl = root.dataset.loginUrl || "/login";
-  panels["camera-panel"].robotName = robotName;
-  panels["drive-pad"].link = "connecting";
 
-  loadRobot(root, robotName, panels["drive-pad"]);
+  const grid = root.querySelector('[data-slot="panels"]');
+  const layout = new ConsoleLayout(grid, root.querySelector('[data-slot="panels-menu"]'), {
+    save: (value) => fetchJson(LAYOUT_PREFERENCE, { method: "PUT", body: { value } }),
+    onSaveError: (error) => showPageError(root, `Your panel layout was not saved: ${error.message}`),
+  });
+  const wiring = new ConsoleWiring({ root, robotName, robotPath, status, layout });
 
-  const onStatus = (message) => {
-    if (typeof message.robot_online === "boolean") showOnline(root, message.robot_online);
-  };
-  const channels = {
-    camera: connectCamera(robotPath, panels, onStatus),
-    telemetry: connectTelemetry(robotPath, panels, onStatus),
-    drive: connectDrive(robotPath, panels),
-    queue: connectQueue(robotPath, panels),
-  };
-  for (const [name, channel] of Object.entries(channels)) {
-    status.update(name, channel.state);
-    channel.addEventListener("statechange", ({ detail }) => status.update(name, detail));
+  const [{ entries, problem }, saved] = await Promise.all([loadPanelList(robotName, robotPath), loadSavedLayout()]);
+  if (problem) showPageError(root, problem);
+  for (const entry of entries) {
+    if (!entry.ok) {
+      layout.addNotice(`${entry.title ? `The panel “${entry.title}”` : "A panel"} could not be shown: ${entry.problem}.`);
+      continue;
+    }
+    const { descriptor } = entry;
+    const { module, tag, span } = PANEL_REGISTRY[descriptor.kind];
+    try {
+      module.register();
+      const panel = h(tag, { "data-panel-id": descriptor.id });
+      layout.addPanel(descriptor, panel, span);
+      wiring.wire(descriptor, panel);
+    } catch (error) {
+      layout.addNotice(`The panel “${descriptor.title}” could not be started: ${error.message}.`);
+    }
   }
-  window.addEventListener("online", () => Object.values(channels).forEach((channel) => channel.retryNow()));
-  connectChat(robotPath, panels["chat-panel"]);
+  layout.restore(saved);
+  wiring.startAll();
 }
 
 start();

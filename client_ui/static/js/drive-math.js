@@ -48,3 +48,41 @@ export function driveCommand(held, speedFraction, limits) {
 export function isStill(command) {
   return command.linear_mps === 0 && command.angular_radps === 0;
 }
+
+/** Step mode: how far one press moves. */
+export const STEP_DISTANCE_M = 0.1;
+export const STEP_ANGLE_RAD = (15 * Math.PI) / 180;
+
+/**
+ * One step as a timed drive: the velocity for `direction` at the chosen speed, and for how long.
+ * Returns null when the speed is zero (no step can be timed).
+ */
+export function stepCommand(direction, speedFraction, limits) {
+  const command = driveCommand([direction], speedFraction, limits);
+  const turning = direction === "left" || direction === "right";
+  const speed = Math.abs(turning ? command.angular_radps : command.linear_mps);
+  if (!(speed > 0)) return null;
+  const duration_ms = Math.round(((turning ? STEP_ANGLE_RAD : STEP_DISTANCE_M) / speed) * 1000);
+  return { command, duration_ms };
+}
+
+/** Apply a radial dead zone to one stick axis value (-1..1), rescaling the rest to 0..1. */
+export function applyDeadZone(value, deadZone = 0.15) {
+  const number = Number(value);
+  if (!Number.isFinite(number) || Math.abs(number) <= deadZone) return 0;
+  return (Math.sign(number) * (Math.min(1, Math.abs(number)) - deadZone)) / (1 - deadZone);
+}
+
+/**
+ * Gamepad left stick -> velocity: up is forward, left turns left (standard mapping: axes[0] x, axes[1] y).
+ */
+export function stickCommand(axes, speedFraction, limits, deadZone = 0.15) {
+  const fraction = clampFraction(speedFraction);
+  const forward = -applyDeadZone(axes?.[1], deadZone);
+  const turn = -applyDeadZone(axes?.[0], deadZone);
+  const round = (value) => Math.round(value * 1e6) / 1e6 || 0;
+  return {
+    linear_mps: round(forward * fraction * finiteLimit(limits?.max_linear_mps)),
+    angular_radps: round(turn * fraction * finiteLimit(limits?.max_angular_radps)),
+  };
+}

@@ -11,7 +11,8 @@ const STILL = Object.freeze({ linear_mps: 0, angular_radps: 0 });
  * Drive protocol over one reconnecting Channel.
  *
  * Events: "ready" (detail: the server's ready message), "ack", "error" (detail: the message),
- * "sent" (detail: the message sent).
+ * "sent" (detail: the message sent), "pong" (detail: {id, total_ms, robot_ms, client_ms}),
+ * "ping-unsupported" (the server answered a ping with an error about its type).
  */
 export class DriveSession extends EventTarget {
   #channel;
@@ -19,6 +20,9 @@ export class DriveSession extends EventTarget {
   #command = STILL;
   #repeatTimer = 0;
   #sendIntervalMs = DEFAULT_SEND_INTERVAL_MS;
+  #pingId = 0;
+  #pingsSent = new Map(); // id -> performance.now() at send
+  #pongSeen = false;
 
   constructor(channel) {
     super();
@@ -51,7 +55,17 @@ export class DriveSession extends EventTarget {
     this.#send({ type: "stop" });
   }
 
+  /** Send a ping for the response-time measurement; false when the socket is not open. */
+  ping() {
+    if (!this.#channel.isOpen) return false;
+    const id = ++this.#pingId;
+    this.#pingsSent.set(id, performance.now());
+    for (const old of this.#pingsSent.keys()) if (old < id - 20) this.#pingsSent.delete(old);
+    return this.#channel.sendJson({ type: "ping", id });
+  }
+
   #onOpen() {
+    this.#pingsSent.clear();
     // Sequence numbers are per socket: the server's counter starts again with each connection.
     this.#sequence = 0;
     if (!isStill(this.#command)) this.#sendCurrent();
@@ -68,7 +82,22 @@ export class DriveSession extends EventTarget {
       this.dispatchEvent(new CustomEvent("ready", { detail: message }));
     } else if (message.type === "ack") {
       this.dispatchEvent(new CustomEvent("ack", { detail: message }));
+    } else if (message.type === "pong") {
+      const sentAt = this.#pingsSent.get(message.id);
+      if (sentAt === undefined) return;
+      this.#pingsSent.delete(message.id);
+      this.#pongSeen = true;
+      const total = performance.now() - sentAt;
+      const robot = Number(message.robot_rtt_ms);
+      this.dispatchEvent(new CustomEvent("pong", { detail: { id: message.id, total_ms: total,
+        robot_ms: Number.isFinite(robot) ? robot : NaN, client_ms: Number.isFinite(robot) ? Math.max(0, total - robot) : total } }));
     } else if (message.type === "error") {
+      // A server without pings refuses them by their type; that is not the driver's problem to read.
+      if (message.field === "type" && this.#pingsSent.size > 0 && !this.#pongSeen) {
+        this.#pingsSent.clear();
+        this.dispatchEvent(new CustomEvent("ping-unsupported", { detail: message }));
+        return;
+      }
       this.dispatchEvent(new CustomEvent("error", { detail: message }));
     } else if (message.type === "status") {
       this.dispatchEvent(new CustomEvent("status", { detail: message }));

@@ -2,11 +2,13 @@
 // and a speed slider. It only expresses intent; the server enforces limits, lease and deadman.
 // In: `limits` ({max_linear_mps, max_angular_radps}), `link` ("connecting"|"ready"|"closed"),
 //     `ack`, `error` (server messages).
+// Modes: press-and-hold (drive while held) and step (each press drives a fixed step, timed client-side).
+// Devices: keyboard, on-screen buttons (pointer/touch/keys) and a gamepad (left stick, A/B stop).
 // Out: "drive-command" (detail: {linear_mps, angular_radps}, sent whenever the intent changes),
 //      "drive-stop" (stop now: Stop button, Escape, window blur, hidden tab, page hide).
 
 import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
-import { driveCommand, KEY_DIRECTIONS } from "../../js/drive-math.js";
+import { driveCommand, isStill, KEY_DIRECTIONS, stickCommand, stepCommand } from "../../js/drive-math.js";
 
 const SVG_NS = "http://www.w3.org/2000/svg";
 const BUTTONS = [
@@ -17,7 +19,8 @@ const BUTTONS = [
   { direction: "backward", label: "Backward", area: "down", path: "M12 19 5 9h14z" },
 ];
 const BUTTON_ACTIVATION_KEYS = new Set(["Enter", " "]);
-const NON_TEXT_INPUT_TYPES = new Set(["button", "submit", "reset", "checkbox", "radio", "image"]);
+const NON_TEXT_INPUT_TYPES = new Set(["button", "submit", "reset", "checkbox", "image"]);
+const STOP_BUTTONS = [0, 1]; // standard mapping: A / B (cross / circle) stop the robot
 
 function icon(path) {
   const svg = document.createElementNS(SVG_NS, "svg");
@@ -34,6 +37,8 @@ function icon(path) {
 function focusWantsArrowKeys(element) {
   if (!element) return false;
   if (element.isContentEditable) return true;
+  // Panels that use the arrow keys themselves (the map's cursor) say so with this attribute.
+  if (element.closest?.("[data-wants-arrow-keys]")) return true;
   if (element.tagName === "TEXTAREA" || element.tagName === "SELECT") return true;
   if (element.tagName === "INPUT") return !NON_TEXT_INPUT_TYPES.has(element.type);
   return false;
@@ -55,6 +60,14 @@ export class DrivePad extends HTMLElement {
   #appliedOutput;
   #errorLine;
   #listening = false;
+  #mode = "hold";
+  #stepTimer = 0;
+  #gamepadIndex = null;
+  #gamepadCommand = { linear_mps: 0, angular_radps: 0 };
+  #gamepadStopWasPressed = false;
+  #gamepadFrame = 0;
+  #gamepadNote;
+  #modeNote;
 
   connectedCallback() {
     this.#build();
@@ -65,9 +78,15 @@ export class DrivePad extends HTMLElement {
     window.addEventListener("blur", this.#onLoseAttention);
     window.addEventListener("pagehide", this.#onLoseAttention);
     document.addEventListener("visibilitychange", this.#onVisibilityChange);
+    window.addEventListener("gamepadconnected", this.#onGamepadConnected);
+    window.addEventListener("gamepaddisconnected", this.#onGamepadDisconnected);
   }
 
   disconnectedCallback() {
+    window.removeEventListener("gamepadconnected", this.#onGamepadConnected);
+    window.removeEventListener("gamepaddisconnected", this.#onGamepadDisconnected);
+    cancelAnimationFrame(this.#gamepadFrame);
+    clearTimeout(this.#stepTimer);
     this.#listening = false;
     document.removeEventListener("keydown", this.#onDocumentKeyDown);
     document.removeEventListener("keyup", this.#onDocumentKeyUp);
@@ -118,6 +137,22 @@ export class DrivePad extends HTMLElement {
     return new Set([...this.#heldKeys.values(), ...this.#heldButtonKeys.values(), ...this.#heldPointers.values()]);
   }
 
+  /** "hold" (drive while pressed) or "step" (each press moves a fixed step). */
+  get mode() {
+    return this.#mode;
+  }
+
+  set mode(mode) {
+    this.#build();
+    this.#mode = mode === "step" ? "step" : "hold";
+    for (const radio of this.querySelectorAll('input[name="drive-mode"]')) radio.checked = radio.value === this.#mode;
+    this.#modeNote.textContent = this.#mode === "step"
+      ? "Step mode: each press drives 0.1 m or turns 15°. The browser drives at the chosen speed for as long as "
+        + "that step takes, then stops, so acceleration makes steps a little short."
+      : "Hold the arrow keys or the buttons to drive; let go to stop.";
+    this.#stopAll();
+  }
+
   get speedFraction() {
     return this.#slider ? Number(this.#slider.value) / 100 : 0.5;
   }
@@ -165,9 +200,17 @@ export class DrivePad extends HTMLElement {
         h("label", { for: "drive-speed", text: "Speed" }),
         this.#slider,
         this.#speedOutput),
+      h("fieldset", { class: "drive__modes" },
+        h("legend", { text: "Mode" }),
+        ["hold", "step"].map((value) => h("label", { class: "drive__mode" },
+          h("input", { type: "radio", name: "drive-mode", value, checked: value === "hold",
+            onchange: () => { this.mode = value; } }),
+          value === "hold" ? " Press and hold" : " Step"))),
       h("p", { class: "drive__hint" },
-        "Hold the arrow keys or the buttons to drive; let go to stop. ",
+        this.#modeNote = h("span", { "data-field": "drive-mode-note",
+          text: "Hold the arrow keys or the buttons to drive; let go to stop." }), " ",
         h("kbd", { text: "Esc" }), " stops."),
+      this.#gamepadNote = h("p", { class: "drive__note", "data-field": "gamepad", hidden: true }),
       h("p", { class: "drive__acks" },
         "Last acknowledged command ", this.#ackOutput, " · applied ", this.#appliedOutput),
       this.#errorLine,
@@ -187,6 +230,10 @@ export class DrivePad extends HTMLElement {
       // Touch captures the pointer implicitly; releasing it lets "pointerleave" fire when the
       // finger slides off the button, so the robot stops instead of driving on.
       if (button.hasPointerCapture?.(event.pointerId)) button.releasePointerCapture(event.pointerId);
+      if (this.#mode === "step") {
+        this.#step(direction);
+        return;
+      }
       this.#heldPointers.set(event.pointerId, direction);
       this.#changed();
     });
@@ -199,6 +246,10 @@ export class DrivePad extends HTMLElement {
       if (!BUTTON_ACTIVATION_KEYS.has(event.key)) return;
       event.preventDefault();
       if (event.repeat) return;
+      if (this.#mode === "step") {
+        this.#step(direction);
+        return;
+      }
       this.#heldButtonKeys.set(event.key, direction);
       this.#changed();
     });
@@ -220,9 +271,13 @@ export class DrivePad extends HTMLElement {
       return;
     }
     const direction = KEY_DIRECTIONS[event.key];
-    if (!direction || event.altKey || event.ctrlKey || event.metaKey) return;
+    if (!direction || event.altKey || event.ctrlKey || event.metaKey || event.defaultPrevented) return;
     if (focusWantsArrowKeys(document.activeElement)) return;
     event.preventDefault(); // no page scrolling while driving
+    if (this.#mode === "step") {
+      if (!event.repeat) this.#step(direction);
+      return;
+    }
     if (this.#heldKeys.has(event.key)) return;
     this.#heldKeys.set(event.key, direction);
     this.#changed();
@@ -243,6 +298,9 @@ export class DrivePad extends HTMLElement {
   };
 
   #stopAll() {
+    clearTimeout(this.#stepTimer);
+    this.#stepTimer = 0;
+    this.removeAttribute("data-stepping");
     this.#heldKeys.clear();
     this.#heldButtonKeys.clear();
     this.#heldPointers.clear();
@@ -256,8 +314,59 @@ export class DrivePad extends HTMLElement {
     this.#emitIfChanged();
   }
 
+  /** One step: drive at the chosen speed for the step's duration, then stop. Presses during a step are ignored. */
+  #step(direction) {
+    if (direction === "stop" || this.#stepTimer) return;
+    const step = stepCommand(direction, this.speedFraction, this.#limits);
+    if (!step) {
+      this.#setError("A step needs a speed above 0 and the robot's limits; wait for the drive to connect.");
+      return;
+    }
+    this.toggleAttribute("data-stepping", true);
+    this.#lastEmitted = step.command;
+    this.dispatchEvent(new CustomEvent("drive-command", { bubbles: true, detail: step.command }));
+    this.#stepTimer = setTimeout(() => {
+      this.#stepTimer = 0;
+      this.removeAttribute("data-stepping");
+      this.#lastEmitted = { linear_mps: 0, angular_radps: 0 };
+      this.dispatchEvent(new CustomEvent("drive-command", { bubbles: true, detail: this.#lastEmitted }));
+    }, step.duration_ms);
+  }
+
+  #onGamepadConnected = (event) => {
+    this.#gamepadIndex = event.gamepad.index;
+    this.#gamepadNote.hidden = false;
+    this.#gamepadNote.textContent = `Gamepad connected (${event.gamepad.id}): the left stick drives, A or B stops.`;
+    cancelAnimationFrame(this.#gamepadFrame);
+    this.#gamepadFrame = requestAnimationFrame(this.#pollGamepad);
+  };
+
+  #onGamepadDisconnected = (event) => {
+    if (event.gamepad.index !== this.#gamepadIndex) return;
+    this.#gamepadIndex = null;
+    cancelAnimationFrame(this.#gamepadFrame);
+    this.#gamepadNote.textContent = "Gamepad disconnected.";
+    this.#gamepadCommand = { linear_mps: 0, angular_radps: 0 };
+    this.#emitIfChanged();
+  };
+
+  // The Gamepad API has no input events: the pad is read once per animation frame while connected.
+  #pollGamepad = () => {
+    const pad = this.#gamepadIndex === null ? null : navigator.getGamepads?.()[this.#gamepadIndex];
+    if (!pad) return;
+    const stopPressed = STOP_BUTTONS.some((index) => pad.buttons[index]?.pressed);
+    if (stopPressed && !this.#gamepadStopWasPressed) this.#stopAll();
+    this.#gamepadStopWasPressed = stopPressed;
+    this.#gamepadCommand = stopPressed ? { linear_mps: 0, angular_radps: 0 }
+      : stickCommand(pad.axes, this.speedFraction, this.#limits);
+    this.#emitIfChanged();
+    this.#gamepadFrame = requestAnimationFrame(this.#pollGamepad);
+  };
+
   #emitIfChanged() {
-    const command = driveCommand(this.heldDirections, this.speedFraction, this.#limits);
+    if (this.#stepTimer) return; // a step in progress owns the wheels until it ends
+    const keys = driveCommand(this.heldDirections, this.speedFraction, this.#limits);
+    const command = isStill(this.#gamepadCommand) ? keys : this.#gamepadCommand;
     const last = this.#lastEmitted;
     if (command.linear_mps === last.linear_mps && command.angular_radps === last.angular_radps) return;
     this.#lastEmitted = command;

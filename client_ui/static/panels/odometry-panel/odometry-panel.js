@@ -1,10 +1,18 @@
 // <odometry-panel>: the robot's pose and speeds as the telemetry socket reports them.
 // In: `telemetry` (a {"type": "telemetry", ...} message), `message` (status/error JSON).
 // Out: none. Each number sits alone in a [data-field] element so tests and people can read it.
+// A small time plot shows the last 30 s of speed and turn rate (redrawn at most 5 times a second).
 
 import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
 
 const DEG_PER_RAD = 180 / Math.PI;
+const PLOT_WINDOW_S = 30;
+const PLOT_REDRAW_MS = 200;
+
+/** Samples of the last windowS seconds before nowS; pure. */
+export function trimHistory(samples, nowS, windowS = PLOT_WINDOW_S) {
+  return samples.filter((sample) => nowS - sample.t_s <= windowS);
+}
 
 /** Format a finite number with fixed decimals; "—" for anything else. Avoids printing "-0.00". */
 export function formatNumber(value, decimals) {
@@ -34,9 +42,24 @@ export class OdometryPanel extends HTMLElement {
   #deadmanNote;
   #messageLine;
   #built = false;
+  #plot;
+  #history = [];
+  #plotTimer = 0;
+  #limits = { max_linear_mps: 0.5, max_angular_radps: 1.5 };
 
   connectedCallback() {
     this.#build();
+    clearInterval(this.#plotTimer);
+    this.#plotTimer = setInterval(() => this.#drawPlot(), PLOT_REDRAW_MS);
+  }
+
+  disconnectedCallback() {
+    clearInterval(this.#plotTimer);
+  }
+
+  /** The robot's limits set the plot's scales. */
+  set limits(limits) {
+    if (limits?.max_linear_mps > 0 && limits?.max_angular_radps > 0) this.#limits = limits;
   }
 
   #build() {
@@ -65,6 +88,13 @@ export class OdometryPanel extends HTMLElement {
       list,
       this.#deadmanNote,
       this.#messageLine,
+      h("figure", { class: "odometry__plot" },
+        this.#plot = h("canvas", { width: 320, height: 110, role: "img", "data-field": "odometry-plot",
+          "aria-label": "Speed and turn rate over the last 30 seconds" }),
+        h("figcaption", {},
+          h("span", { class: "odometry__key odometry__key--speed", text: "speed (m/s)" }),
+          h("span", { class: "odometry__key odometry__key--turn", text: "turn rate (rad/s)" }),
+          h("span", { class: "muted", text: " · last 30 s" }))),
       h("p", { class: "odometry__meta" },
         "tick ", field("tick"), " · last applied command ", field("last-applied")),
     );
@@ -87,7 +117,52 @@ export class OdometryPanel extends HTMLElement {
     set("tick", formatNumber(message?.tick, 0));
     set("last-applied", formatNumber(message?.last_applied_sequence, 0));
     this.#deadmanNote.hidden = message?.deadman_stopped !== true;
+    const linear = Number(odometry.linear_mps);
+    const angular = Number(odometry.angular_radps);
+    if (Number.isFinite(linear) && Number.isFinite(angular)) {
+      const t_s = performance.now() / 1000;
+      this.#history.push({ t_s, linear, angular });
+      if (this.#history.length > 2000) this.#history = trimHistory(this.#history, t_s);
+    }
     this.#messageLine.hidden = true;
+  }
+
+  #drawPlot() {
+    const canvas = this.#plot;
+    if (!canvas || !this.isConnected || !canvas.offsetParent) return;
+    const nowS = performance.now() / 1000;
+    this.#history = trimHistory(this.#history, nowS);
+    const width = Math.max(120, Math.round(canvas.clientWidth * (window.devicePixelRatio || 1)));
+    const height = Math.round(width * 0.34);
+    if (canvas.width !== width || canvas.height !== height) {
+      canvas.width = width;
+      canvas.height = height;
+    }
+    const ctx = canvas.getContext("2d");
+    ctx.setTransform(1, 0, 0, 1, 0, 0);
+    ctx.clearRect(0, 0, width, height);
+    ctx.strokeStyle = "#d3d9e1";
+    ctx.lineWidth = 1;
+    ctx.beginPath();
+    ctx.moveTo(0, height / 2);
+    ctx.lineTo(width, height / 2);
+    ctx.stroke();
+    const x = (t_s) => width - ((nowS - t_s) / PLOT_WINDOW_S) * width;
+    const series = [
+      ["linear", this.#limits.max_linear_mps, "#1d5fc4"],
+      ["angular", this.#limits.max_angular_radps, "#b1261b"],
+    ];
+    ctx.lineWidth = Math.max(1.5, width / 240);
+    for (const [key, limit, colour] of series) {
+      ctx.strokeStyle = colour;
+      ctx.beginPath();
+      this.#history.forEach((sample, index) => {
+        const y = height / 2 - (Math.max(-1, Math.min(1, sample[key] / limit)) * (height / 2 - 3));
+        if (index === 0) ctx.moveTo(x(sample.t_s), y);
+        else ctx.lineTo(x(sample.t_s), y);
+      });
+      ctx.stroke();
+    }
   }
 
   /** A text status/error message from the telemetry socket. */

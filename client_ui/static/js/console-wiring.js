@@ -1,0 +1,330 @@
+// Wiring of placed panels to their data, by kind: which socket feeds which property, and which event
+// becomes which request. Sockets are shared by path (one telemetry socket feeds odometry, sonar, laser
+// and map). An unreadable message or a panel that throws on one leaves a notice in that panel's frame.
+
+import { ApiError, Channel, fetchJson, parseJsonMessage } from "./transport.js";
+import { DriveSession } from "./drive-session.js";
+import { connectChat } from "./chat-session.js";
+import { goalParameterNames } from "./panel-descriptors.js";
+
+const FINAL_GOAL_STATES = new Set(["succeeded", "canceled", "aborted"]);
+const MAP_POLL_MS = 2000;
+const PING_EVERY_MS = 1000;
+
+function isStatusOrError(message) {
+  return message?.type === "status" || message?.type === "error";
+}
+
+export class ConsoleWiring {
+  #root;
+  #robotName;
+  #robotPath;
+  #status;
+  #layout;
+  #channels = new Map();        // path -> Channel
+  #textListeners = new Map();   // path -> [{id, onMessage}]
+  #infoListeners = [];
+  #drive = null;                // {channel, session}
+  #drivePads = [];
+  #skills = [];                 // [{descriptor, panel, goalChannel, goalNames}]
+  #maps = [];
+  #starters = [];
+
+  constructor({ root, robotName, robotPath, status, layout }) {
+    this.#root = root;
+    this.#robotName = robotName;
+    this.#robotPath = robotPath;
+    this.#status = status;
+    this.#layout = layout;
+    window.addEventListener("online", () => this.#channels.forEach((channel) => channel.retryNow()));
+  }
+
+  /** Connect one placed panel to its data by its descriptor's kind. */
+  wire(descriptor, panel) {
+    const wire = {
+      camera: () => this.#camera(descriptor, panel),
+      map: () => this.#map(descriptor, panel),
+      odometry: () => this.#sensor(descriptor, panel, ["limits"]),
+      sonar: () => this.#sensor(descriptor, panel, ["info"]),
+      laser: () => this.#sensor(descriptor, panel, ["info"]),
+      drive: () => this.#drivePad(descriptor, panel),
+      skill: () => this.#skill(descriptor, panel),
+      queue: () => this.#queue(descriptor, panel),
+      chat: () => connectChat(this.#robotPath, panel),
+      "response-times": () => this.#responseTimes(descriptor, panel),
+    }[descriptor.kind];
+    wire();
+  }
+
+  /** Start what needs every panel placed first: the robot's description and the clocks. */
+  startAll() {
+    this.#loadRobot();
+    for (const start of this.#starters) start();
+  }
+
+  // --- shared plumbing -------------------------------------------------------------------------------
+
+  #guard(id, action) {
+    try {
+      action();
+    } catch (error) {
+      console.warn(`panel ${id} ignored a message:`, error);
+      this.#layout.notify(id, `Ignored a message this panel could not show (${error.message}).`);
+    }
+  }
+
+  #channel(path, { binary = false } = {}) {
+    if (this.#channels.has(path)) return this.#channels.get(path);
+    const channel = new Channel(path, { binary });
+    const name = path.split("/").pop();
+    this.#channels.set(path, channel);
+    this.#status.update(name, channel.state);
+    channel.addEventListener("statechange", ({ detail }) => this.#status.update(name, detail));
+    if (!binary) {
+      this.#textListeners.set(path, []);
+      channel.addEventListener("message", ({ detail }) => {
+        const message = parseJsonMessage(detail);
+        if (message?.type === "status" && typeof message.robot_online === "boolean") this.#showOnline(message.robot_online);
+        for (const listener of this.#textListeners.get(path)) {
+          if (!message) this.#layout.notify(listener.id, "Ignored a message that could not be read.");
+          else this.#guard(listener.id, () => listener.onMessage(message));
+        }
+      });
+    }
+    return channel;
+  }
+
+  /** Text messages of the socket at path, parsed, for panel id. */
+  #listen(path, id, onMessage) {
+    const channel = this.#channel(path);
+    this.#textListeners.get(path).push({ id, onMessage });
+    return channel;
+  }
+
+  #onInfo(listener) {
+    this.#infoListeners.push(listener);
+  }
+
+  #showOnline(online) {
+    const badge = this.#root.querySelector("#robot-online");
+    badge.textContent = online ? "Online" : "Offline";
+    badge.classList.toggle("badge--online", online);
+    badge.classList.toggle("badge--offline", !online);
+  }
+
+  async #loadRobot() {
+    try {
+      const robot = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}`);
+      this.#showOnline(Boolean(robot.online));
+      if (robot.info) for (const listener of this.#infoListeners) listener(robot.info);
+    } catch (error) {
+      const line = this.#root.querySelector("#console-error");
+      line.textContent = error instanceof ApiError ? error.message : "The robot's description could not be loaded.";
+      line.hidden = false;
+    }
+  }
+
+  #telemetryPath(descriptor) {
+    return descriptor.channel ?? `${this.#robotPath}/telemetry`;
+  }
+
+  // --- kinds -----------------------------------------------------------------------------------------
+
+  #camera(descriptor, panel) {
+    panel.robotName = this.#robotName;
+    const camera = this.#channel(descriptor.channel ?? `${this.#robotPath}/camera`, { binary: true });
+    camera.addEventListener("statechange", ({ detail }) => { panel.connected = detail.phase === "open"; });
+    camera.addEventListener("message", ({ detail }) => {
+      if (detail instanceof ArrayBuffer) {
+        panel.frame = detail;
+        return;
+      }
+      const message = parseJsonMessage(detail);
+      if (!message) this.#layout.notify(descriptor.id, "Ignored a message that could not be read.");
+      else if (isStatusOrError(message)) this.#guard(descriptor.id, () => { panel.message = message; });
+      if (message?.type === "status" && typeof message.robot_online === "boolean") this.#showOnline(message.robot_online);
+    });
+  }
+
+  /** Odometry, sonar and laser: telemetry in, status and errors as `message`. */
+  #sensor(descriptor, panel, infoProperties) {
+    this.#listen(this.#telemetryPath(descriptor), descriptor.id, (message) => {
+      if (message.type === "telemetry") panel.telemetry = message;
+      else if (isStatusOrError(message)) panel.message = message;
+    });
+    this.#onInfo((info) => this.#guard(descriptor.id, () => {
+      if (infoProperties.includes("info")) panel.info = info;
+      if (infoProperties.includes("limits")) {
+        panel.limits = { max_linear_mps: info.max_linear_mps, max_angular_radps: info.max_angular_radps };
+      }
+    }));
+  }
+
+  #map(descriptor, panel) {
+    this.#maps.push(panel);
+    const telemetryPath = `${this.#robotPath}/telemetry`;
+    this.#listen(telemetryPath, descriptor.id, (message) => {
+      if (message.type === "telemetry") panel.telemetry = message;
+    });
+    const localizationPath = descriptor.channel && !descriptor.channel.endsWith("/telemetry")
+      ? descriptor.channel : `${this.#robotPath}/localization`;
+    this.#listen(localizationPath, descriptor.id, (message) => {
+      if (message.type === "localization") panel.localization = message;
+    });
+    this.#onInfo((info) => this.#guard(descriptor.id, () => { panel.info = info; }));
+    panel.addEventListener("map-target", ({ detail }) => this.#routeTarget(panel, detail));
+
+    let lastCells = null;
+    let visible = true;
+    const frame = this.#layout.frameOf(descriptor.id);
+    new IntersectionObserver((entries) => { visible = entries.some((e) => e.isIntersecting); }).observe(frame);
+    const poll = async () => {
+      if (!visible || !this.#layout.isShown(descriptor.id) || document.visibilityState !== "visible") return;
+      try {
+        const grid = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/map`);
+        if (grid?.cells_b64 === lastCells) return;
+        lastCells = grid?.cells_b64;
+        panel.note = "";
+        this.#guard(descriptor.id, () => { panel.grid = grid; });
+      } catch (error) {
+        lastCells = null;
+        panel.grid = null;
+        panel.note = error?.code === "no_map"
+          ? "No map yet: activate Environment modelling to build one."
+          : `The map could not be loaded: ${error.message}`;
+      }
+    };
+    this.#starters.push(() => {
+      poll();
+      setInterval(poll, MAP_POLL_MS);
+    });
+  }
+
+  /** A target picked on the map goes to the first skill whose schema has goal x/y parameters. */
+  #routeTarget(mapPanel, { x_m, y_m }) {
+    const skill = this.#skills.find((entry) => entry.goalNames);
+    if (!skill) return;
+    skill.panel.parameters = { [skill.goalNames.x]: x_m, [skill.goalNames.y]: y_m };
+    mapPanel.target = [x_m, y_m];
+  }
+
+  #ensureDrive(path) {
+    if (this.#drive) return this.#drive;
+    const channel = this.#channel(path);
+    const session = new DriveSession(channel);
+    this.#drive = { channel, session };
+    return this.#drive;
+  }
+
+  #drivePad(descriptor, pad) {
+    this.#drivePads.push(pad);
+    pad.link = "connecting";
+    const { channel, session } = this.#ensureDrive(descriptor.channel ?? `${this.#robotPath}/drive`);
+    session.addEventListener("ready", ({ detail }) => {
+      pad.limits = { max_linear_mps: detail.max_linear_mps, max_angular_radps: detail.max_angular_radps };
+      pad.link = "ready";
+    });
+    session.addEventListener("ack", ({ detail }) => { pad.ack = detail; });
+    session.addEventListener("error", ({ detail }) => { pad.error = detail; });
+    session.addEventListener("status", ({ detail }) => { if (detail.message) pad.error = detail; });
+    channel.addEventListener("statechange", ({ detail }) => {
+      if (detail.phase !== "open") pad.link = detail.phase === "closed" ? "closed" : "connecting";
+    });
+    pad.addEventListener("drive-command", ({ detail }) => session.setCommand(detail));
+    pad.addEventListener("drive-stop", () => session.stop());
+    this.#onInfo((info) => {
+      pad.limits = { max_linear_mps: info.max_linear_mps, max_angular_radps: info.max_angular_radps };
+    });
+  }
+
+  #queue(descriptor, panel) {
+    const queue = this.#listen(descriptor.channel ?? `${this.#robotPath}/queue`, descriptor.id, (message) => {
+      if (message.type === "queue") {
+        panel.seat = message;
+        for (const pad of this.#drivePads) pad.observing = !message.is_controller;
+      } else if (isStatusOrError(message)) {
+        panel.message = message;
+      }
+    });
+    panel.addEventListener("queue-action", ({ detail }) => queue.sendJson({ type: detail.type }));
+  }
+
+  #responseTimes(descriptor, panel) {
+    const { session } = this.#ensureDrive(`${this.#robotPath}/drive`);
+    let supported = true;
+    session.addEventListener("pong", ({ detail }) => {
+      supported = true;
+      panel.sample = { client_ms: detail.client_ms, robot_ms: detail.robot_ms };
+    });
+    session.addEventListener("ping-unsupported", () => {
+      supported = false;
+      panel.unavailable = "This lab server does not answer pings, so response times cannot be measured.";
+    });
+    this.#starters.push(() => setInterval(() => {
+      if (supported && this.#layout.isShown(descriptor.id) && document.visibilityState === "visible") session.ping();
+    }, PING_EVERY_MS));
+  }
+
+  // --- skills ----------------------------------------------------------------------------------------
+
+  #skill(descriptor, panel) {
+    panel.descriptor = descriptor;
+    const entry = { descriptor, panel, goalChannel: null, goalNames: goalParameterNames(descriptor.schema) };
+    this.#skills.push(entry);
+    const base = `/api/robots/${encodeURIComponent(this.#robotName)}`;
+    panel.addEventListener("skill-activate", async ({ detail }) => {
+      try {
+        const answer = await fetchJson(`${base}/skills/${encodeURIComponent(detail.skill)}/goals`, {
+          method: "POST", body: { parameters: detail.parameters, preempt: Boolean(detail.preempt) } });
+        this.#followGoal(entry, answer.goal);
+      } catch (error) {
+        panel.error = { code: error.code ?? "network", message: error.message, field: error.field ?? null };
+      }
+    });
+    panel.addEventListener("skill-cancel", async ({ detail }) => {
+      try {
+        const answer = await fetchJson(`${base}/goals/${encodeURIComponent(detail.goal_id)}`, { method: "DELETE" });
+        this.#guard(descriptor.id, () => { panel.goal = answer.goal; });
+      } catch (error) {
+        panel.error = { code: error.code ?? "network", message: error.message, field: null };
+      }
+    });
+  }
+
+  /** Show a goal and follow it on its socket until it ends. */
+  #followGoal(entry, goal) {
+    const { descriptor, panel } = entry;
+    this.#guard(descriptor.id, () => { panel.goal = goal; });
+    entry.goalChannel?.close("a newer goal replaced it");
+    if (!goal?.goal_id || FINAL_GOAL_STATES.has(goal.status)) return;
+    const channel = new Channel(`${this.#robotPath}/goals/${encodeURIComponent(goal.goal_id)}`);
+    entry.goalChannel = channel;
+    channel.addEventListener("message", ({ detail }) => {
+      const message = parseJsonMessage(detail);
+      if (!message) {
+        this.#layout.notify(descriptor.id, "Ignored a goal message that could not be read.");
+        return;
+      }
+      this.#guard(descriptor.id, () => {
+        if (message.type === "goal" && message.goal) {
+          panel.goal = message.goal;
+          if (message.goal.feedback) this.#shareFeedback(entry, message.goal.feedback);
+          if (FINAL_GOAL_STATES.has(message.goal.status)) channel.close("the goal ended");
+        } else if (message.type === "goal_event") {
+          panel.goalEvent = message;
+        } else if (message.type === "goal_feedback") {
+          panel.feedback = message.feedback;
+          this.#shareFeedback(entry, message.feedback);
+        } else if (message.type === "error") {
+          panel.error = { code: message.code, message: message.message, field: null };
+        }
+      });
+    });
+  }
+
+  /** Go-to-goal style feedback also shows on the map (its goal and any obstacle values). */
+  #shareFeedback(entry, feedback) {
+    if (!entry.goalNames) return;
+    for (const map of this.#maps) map.goalFeedback = feedback;
+  }
+}

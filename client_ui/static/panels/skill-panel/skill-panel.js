@@ -1,0 +1,268 @@
+// <skill-panel>: the visual proxy of one skill controller, generated from the skill's parameter schema.
+// In: `descriptor` ({skill, title, motor, schema: [param]}), `goal` (goal object), `goalEvent`
+//     ({kind, message, sim_time_s}), `feedback` (feedback object), `error` ({code, message, field} or null),
+//     `parameters` ({name: value}: fill fields, e.g. from a click on the map).
+// Out: "skill-activate" (detail {skill, parameters, preempt}), "skill-cancel" (detail {skill, goal_id}).
+// The browser's constraint validation gives early hints; the server's verdict is shown next to the field.
+
+import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
+
+const ACTIVE = new Set(["accepted", "executing", "canceling"]);
+const MAX_EVENTS = 30;
+const DEG_PER_RAD = 180 / Math.PI;
+const STATUS_WORDS = {
+  accepted: "Accepted", executing: "Running", canceling: "Canceling…", succeeded: "Succeeded",
+  canceled: "Canceled", aborted: "Aborted",
+};
+
+/** "goal_x_m" -> "Goal x"; the unit is shown apart. */
+export function parameterLabel(name) {
+  const words = String(name).replace(/_(m|mps|rad|radps|s|deg|ms)$/, "").split("_").filter(Boolean);
+  const text = words.join(" ");
+  return text ? text[0].toUpperCase() + text.slice(1) : String(name);
+}
+
+/** The value an input holds, typed by the parameter's schema; undefined when empty. */
+export function readValue(parameter, input) {
+  if (parameter.type === "bool") return input.checked;
+  if (input.value === "") return undefined;
+  if (parameter.type === "double") return Number(input.value);
+  if (parameter.type === "int") return Number.parseInt(input.value, 10);
+  return input.value;
+}
+
+/** A limit for people: 3.141592653589793 -> "3.142". */
+export function shortNumber(value) {
+  return String(Number(Number(value).toPrecision(4)));
+}
+
+function fixed(value, decimals) {
+  const number = Number(value);
+  return Number.isFinite(number) ? number.toFixed(decimals) : "—";
+}
+
+let panelCount = 0;
+
+export class SkillPanel extends HTMLElement {
+  #built = false;
+  #descriptor = null;
+  #uid = `skill-${(panelCount += 1)}`;
+  #form;
+  #inputs = new Map();   // name -> {parameter, input, errorLine}
+  #activate;
+  #cancel;
+  #preempt;
+  #formError;
+  #status;
+  #progress;
+  #fields = {};
+  #events;
+  #result;
+  #goal = null;
+
+  connectedCallback() {
+    this.#build();
+  }
+
+  set descriptor(descriptor) {
+    this.#descriptor = descriptor;
+    this.#built = false;
+    this.replaceChildren();
+    this.#build();
+  }
+
+  get descriptor() {
+    return this.#descriptor;
+  }
+
+  /** Fill some fields (for instance a goal picked on the map) without activating. */
+  set parameters(values) {
+    this.#build();
+    for (const [name, value] of Object.entries(values ?? {})) {
+      const entry = this.#inputs.get(name);
+      if (!entry) continue;
+      if (entry.parameter.type === "bool") entry.input.checked = Boolean(value);
+      else entry.input.value = typeof value === "number" ? String(Math.round(value * 100) / 100) : String(value);
+      this.#clearFieldError(entry);
+    }
+  }
+
+  /** The goal as the server reports it; drives the buttons and the result line. */
+  set goal(goal) {
+    this.#build();
+    if (!goal || typeof goal !== "object" || typeof goal.status !== "string") return;
+    const isNewGoal = goal.goal_id !== this.#goal?.goal_id;
+    this.#goal = goal;
+    if (isNewGoal) this.#events.replaceChildren();
+    this.dataset.status = goal.status;
+    this.dataset.goalId = String(goal.goal_id ?? "");
+    this.#status.textContent = STATUS_WORDS[goal.status] ?? goal.status;
+    const active = ACTIVE.has(goal.status);
+    this.#cancel.disabled = !active || goal.status === "canceling";
+    if (goal.feedback) this.feedback = goal.feedback;
+    if (!active) {
+      const reached = goal.goal_reached ? " The goal was reached." : "";
+      const code = goal.error_code ? ` (${goal.error_code})` : "";
+      this.#result.textContent = `${STATUS_WORDS[goal.status] ?? goal.status}${code}: ${goal.message || "no details."}${reached}`;
+      this.#result.dataset.outcome = goal.status;
+      this.#result.hidden = false;
+      if (goal.status === "succeeded") this.#progress.value = 1;
+    } else {
+      this.#result.hidden = true;
+    }
+  }
+
+  set goalEvent(event) {
+    this.#build();
+    if (!event || typeof event.kind !== "string") return;
+    const time = Number.isFinite(Number(event.sim_time_s)) ? `${Number(event.sim_time_s).toFixed(1)} s · ` : "";
+    this.#events.prepend(h("li", { "data-event": event.kind }, `${time}${event.kind.replaceAll("_", " ")}`,
+      event.message ? `: ${event.message}` : ""));
+    while (this.#events.children.length > MAX_EVENTS) this.#events.lastElementChild.remove();
+  }
+
+  set feedback(feedback) {
+    this.#build();
+    if (!feedback || typeof feedback !== "object") return;
+    const progress = Number(feedback.progress);
+    if (Number.isFinite(progress)) this.#progress.value = Math.min(1, Math.max(0, progress));
+    this.#fields.state.textContent = typeof feedback.state === "string" ? feedback.state : "—";
+    this.#fields.distance.textContent = fixed(feedback.distance_error_m, 3);
+    this.#fields.heading.textContent = fixed(Number(feedback.heading_error_rad) * DEG_PER_RAD, 1);
+    const pose = feedback.pose ?? {};
+    this.#fields.pose.textContent = `(${fixed(pose.x_m, 2)}, ${fixed(pose.y_m, 2)}) m, ${fixed(Number(pose.theta_rad) * DEG_PER_RAD, 0)}°`
+      + (feedback.pose_source ? ` by ${feedback.pose_source}` : "");
+  }
+
+  /** A refusal of the last activation or cancel: shown next to its field, or above the buttons. */
+  set error(error) {
+    this.#build();
+    for (const entry of this.#inputs.values()) this.#clearFieldError(entry);
+    this.#preempt.hidden = true;
+    if (!error) {
+      this.#formError.hidden = true;
+      return;
+    }
+    const entry = error.field ? this.#inputs.get(error.field) : null;
+    if (entry) {
+      entry.errorLine.textContent = error.message || "This value was refused.";
+      entry.errorLine.hidden = false;
+      entry.input.setAttribute("aria-invalid", "true");
+      entry.input.focus();
+      this.#formError.hidden = true;
+      return;
+    }
+    this.#formError.textContent = error.message || "The skill could not be started.";
+    this.#formError.hidden = false;
+    this.#preempt.hidden = error.code !== "busy";
+  }
+
+  #clearFieldError(entry) {
+    entry.errorLine.hidden = true;
+    entry.errorLine.textContent = "";
+    entry.input.removeAttribute("aria-invalid");
+  }
+
+  #build() {
+    if (this.#built || !this.#descriptor) return;
+    this.#built = true;
+    const descriptor = this.#descriptor;
+    this.classList.add("panel", "skill");
+    this.dataset.skill = descriptor.skill;
+    this.#form = h("form", { class: "skill__form", onsubmit: (event) => this.#submit(event, false) });
+    for (const parameter of descriptor.schema) this.#form.append(this.#field(parameter));
+    this.#activate = h("button", { type: "submit", class: "button button--primary", "data-action": "activate",
+      text: "Activate" });
+    this.#cancel = h("button", { type: "button", class: "button button--secondary", "data-action": "cancel",
+      text: "Deactivate", disabled: true, onclick: () => this.#emitCancel() });
+    this.#preempt = h("button", { type: "button", class: "button button--warn", "data-action": "preempt", hidden: true,
+      text: "Preempt it", title: "Stop the skill that is driving and start this one",
+      onclick: (event) => this.#submit(event, true) });
+    this.#formError = h("p", { class: "skill__error", role: "alert", "data-field": "skill-error", hidden: true });
+    this.#form.append(this.#formError, h("div", { class: "skill__actions" }, this.#activate, this.#cancel, this.#preempt));
+
+    const field = (name) => (this.#fields[name] = h("span", { "data-field": `skill-${name}`, text: "—" }));
+    this.#status = h("span", { class: "skill__status", "data-field": "skill-status", text: "Idle" });
+    this.#progress = h("progress", { max: "1", value: "0", "aria-label": `${descriptor.title} progress` });
+    this.#events = h("ol", { class: "skill__events", "aria-label": `${descriptor.title} events`, "data-field": "skill-events" });
+    this.#result = h("p", { class: "skill__result", role: "status", "data-field": "skill-result", hidden: true });
+    this.append(
+      h("h2", { class: "panel__title", text: descriptor.title }),
+      h("p", { class: "skill__kind muted",
+        text: descriptor.motor ? "Motor skill: drives the wheels; only one runs at a time."
+          : "Perceptive skill: runs beside the motor skills." }),
+      this.#form,
+      h("div", { class: "skill__live", "aria-live": "polite" },
+        h("p", { class: "skill__line" }, "Status: ", this.#status, " · state ", field("state")),
+        this.#progress,
+        h("dl", { class: "skill__figures" },
+          h("div", {}, h("dt", { text: "Distance error" }), h("dd", {}, field("distance"), " m")),
+          h("div", {}, h("dt", { text: "Heading error" }), h("dd", {}, field("heading"), "°")),
+          h("div", {}, h("dt", { text: "Pose" }), h("dd", {}, field("pose")))),
+        this.#result),
+      h("details", { class: "skill__log" }, h("summary", { text: "Events" }), this.#events),
+    );
+  }
+
+  #field(parameter) {
+    const id = `${this.#uid}-${parameter.name}`;
+    const helpId = `${id}-help`;
+    const errorId = `${id}-error`;
+    const attrs = { id, name: parameter.name, "aria-describedby": `${helpId} ${errorId}`, "data-parameter": parameter.name };
+    let input;
+    if (parameter.type === "bool") {
+      input = h("input", { ...attrs, type: "checkbox", checked: Boolean(parameter.default) });
+    } else if (parameter.type === "enum") {
+      input = h("select", attrs, (parameter.choices ?? []).map((choice) =>
+        h("option", { value: String(choice), selected: choice === parameter.default, text: String(choice) })));
+    } else if (parameter.type === "string") {
+      input = h("input", { ...attrs, type: "text", value: parameter.default ?? "" });
+    } else {
+      input = h("input", {
+        ...attrs, type: "number", inputmode: parameter.type === "int" ? "numeric" : "decimal", required: true,
+        step: parameter.type === "int" ? "1" : "any",
+        min: Number.isFinite(parameter.minimum) ? String(parameter.minimum) : null,
+        max: Number.isFinite(parameter.maximum) ? String(parameter.maximum) : null,
+        value: parameter.default === undefined || parameter.default === null ? "" : String(parameter.default),
+      });
+    }
+    const entry = { parameter, input, errorLine: h("p", { class: "skill__field-error", id: errorId,
+      "data-field-error": parameter.name, hidden: true }) };
+    this.#inputs.set(parameter.name, entry);
+    input.addEventListener("input", () => this.#clearFieldError(entry));
+    const numeric = parameter.type === "double" || parameter.type === "int";
+    const range = numeric && Number.isFinite(parameter.minimum) && Number.isFinite(parameter.maximum)
+      ? ` (${shortNumber(parameter.minimum)} to ${shortNumber(parameter.maximum)})` : "";
+    const label = h("label", { for: id }, parameterLabel(parameter.name),
+      parameter.unit ? h("span", { class: "skill__unit", text: ` [${parameter.unit}]` }) : null);
+    return h("div", { class: `skill__field skill__field--${parameter.type}` },
+      label, input,
+      h("p", { class: "skill__help", id: helpId, text: `${parameter.help ?? ""}${range}` }),
+      entry.errorLine);
+  }
+
+  #submit(event, preempt) {
+    event.preventDefault();
+    if (!this.#form.reportValidity()) return; // the browser's hint points at the field
+    const parameters = {};
+    for (const [name, { parameter, input }] of this.#inputs) {
+      const value = readValue(parameter, input);
+      if (value !== undefined) parameters[name] = value;
+    }
+    this.error = null;
+    this.#result.hidden = true;
+    this.dispatchEvent(new CustomEvent("skill-activate", { bubbles: true,
+      detail: { skill: this.#descriptor.skill, parameters, preempt } }));
+  }
+
+  #emitCancel() {
+    if (!this.#goal) return;
+    this.dispatchEvent(new CustomEvent("skill-cancel", { bubbles: true,
+      detail: { skill: this.#descriptor.skill, goal_id: this.#goal.goal_id } }));
+  }
+}
+
+export function register() {
+  adoptStylesheet(new URL("./skill-panel.css", import.meta.url));
+  defineOnce("skill-panel", SkillPanel);
+}

@@ -1,0 +1,278 @@
+"""Course pages and API: list and create courses, settings, members, enrolment by name and by CSV file."""
+
+from __future__ import annotations
+
+import base64
+
+from flask import Blueprint, Response, flash, jsonify, redirect, render_template, request, url_for
+from flask_login import current_user, login_required
+
+from middleware.accounts.invitations import list_invitations
+from middleware.accounts.routes import _now, api_error, page_refusal
+from middleware.accounts.services import Refused, forbidden
+from middleware.auth.schemas import InvalidField
+from middleware.courses import services
+from middleware.courses.schemas import (
+    ALLOWANCE_MIN,
+    TURN_LENGTH_S,
+    parse_settings,
+    report_csv,
+)
+from middleware.db import get_session
+from middleware.errors import ApiError
+from middleware.models import Role
+
+blueprint = Blueprint("courses", __name__)
+
+
+def _require_teacher() -> None:
+    if current_user.role not in (Role.TUTOR, Role.ADMIN):
+        raise forbidden("Only tutors and admins manage courses.")
+
+
+def _page(template: str, status: int = 200, **context):  # type: ignore[no-untyped-def]
+    return render_template(template, turn_bounds=TURN_LENGTH_S, allowance_bounds=ALLOWANCE_MIN, **context), status
+
+
+# --- pages ----------------------------------------------------------------------------------------
+
+
+def _index(errors: dict[str, str] | None = None, form: dict[str, str] | None = None, status: int = 200):  # type: ignore[no-untyped-def]
+    _require_teacher()
+    return _page("courses/index.html", status, courses=services.list_courses(get_session(), current_user),
+                 errors=errors or {}, form=form or {})
+
+
+@blueprint.get("/courses")
+@login_required
+def index():  # type: ignore[no-untyped-def]
+    """The courses the tutor teaches (every course for an admin) and the form to create one."""
+    try:
+        return _index()
+    except Refused as refused:
+        page_refusal(refused)
+        raise
+
+
+@blueprint.post("/courses")
+@login_required
+def create():  # type: ignore[no-untyped-def]
+    """Creates a course and opens it."""
+    dbs, form = get_session(), request.form.to_dict()
+    try:
+        _require_teacher()
+        settings = parse_settings({k: form.get(k) for k in ("turn_length_s", "booking_allowance_min")})
+        course = services.create_course(dbs, current_user, form.get("code"), form.get("title"), settings)
+    except Refused as refused:
+        page_refusal(refused)
+        dbs.rollback()
+        return _index({refused.field or "code": refused.message}, form, refused.status)
+    except InvalidField as invalid:
+        dbs.rollback()
+        return _index({invalid.field: invalid.message}, form, 400)
+    dbs.commit()
+    flash(f"Course {course.code} created. Enrol students or invite them below.", "success")
+    return redirect(url_for("courses.detail", course_id=course.id), 303)
+
+
+def _detail(course_id: int, status: int = 200, errors: dict[str, str] | None = None,
+            form: dict[str, str] | None = None, report: services.EnrolmentReport | None = None):  # type: ignore[no-untyped-def]
+    dbs = get_session()
+    course = services.managed_course(dbs, current_user, course_id)
+    report_href = None
+    if report is not None:
+        data = report_csv(report.enrolled, report.created, report.refused).encode()
+        report_href = "data:text/csv;charset=utf-8;base64," + base64.b64encode(data).decode()
+    response = _page("courses/detail.html", status, course=services.describe(dbs, current_user, course),
+                     members=services.members(dbs, current_user, course_id), errors=errors or {},
+                     form=form or {}, report=report, report_href=report_href,
+                     invitations=list_invitations(dbs, current_user, course_id, _now())[:20])
+    if report is not None:
+        return response[0], response[1], {"Cache-Control": "no-store"}
+    return response
+
+
+@blueprint.get("/courses/<int:course_id>")
+@login_required
+def detail(course_id: int):  # type: ignore[no-untyped-def]
+    """One course: settings, members, enrolment, CSV upload and invitations (its tutors, admins)."""
+    try:
+        return _detail(course_id)
+    except Refused as refused:
+        page_refusal(refused)
+        raise
+
+
+def _course_form(course_id: int, action, success: str):  # type: ignore[no-untyped-def]
+    dbs, form = get_session(), request.form.to_dict()
+    try:
+        action(dbs, form)
+    except Refused as refused:
+        page_refusal(refused)
+        dbs.rollback()
+        return _detail(course_id, refused.status, {refused.field or "form": refused.message}, form)
+    except InvalidField as invalid:
+        dbs.rollback()
+        return _detail(course_id, 400, {invalid.field: invalid.message}, form)
+    dbs.commit()
+    flash(success, "success")
+    return redirect(url_for("courses.detail", course_id=course_id), 303)
+
+
+@blueprint.post("/courses/<int:course_id>/settings")
+@login_required
+def settings(course_id: int):  # type: ignore[no-untyped-def]
+    """Saves the title, turn length and booking allowance."""
+    return _course_form(course_id, lambda dbs, form: services.update_settings(
+        dbs, current_user, course_id, parse_settings(form)), "Course settings saved.")
+
+
+@blueprint.post("/courses/<int:course_id>/members")
+@login_required
+def enrol(course_id: int):  # type: ignore[no-untyped-def]
+    """Enrols one existing student by username."""
+    name = request.form.get("username", "").strip().lower()
+    return _course_form(course_id, lambda dbs, form: services.enrol(dbs, current_user, course_id, form.get("username")),
+                        f"{name} enrolled.")
+
+
+@blueprint.post("/courses/<int:course_id>/members/<int:user_id>/remove")
+@login_required
+def unenrol(course_id: int, user_id: int):  # type: ignore[no-untyped-def]
+    """Removes a student from the course."""
+    return _course_form(course_id, lambda dbs, _form: services.unenrol(dbs, current_user, course_id, user_id),
+                        "Student removed from the course.")
+
+
+def _uploaded_bytes() -> bytes:
+    upload = request.files.get("file")
+    if upload is None or not upload.filename:
+        raise InvalidField("file", "Choose a CSV file to upload.")
+    return upload.read()
+
+
+@blueprint.post("/courses/<int:course_id>/members.csv")
+@login_required
+def enrol_csv(course_id: int):  # type: ignore[no-untyped-def]
+    """Enrols (and creates accounts for) the usernames in an uploaded CSV file; shows the report once."""
+    dbs = get_session()
+    try:
+        services.managed_course(dbs, current_user, course_id)  # who may, before what was sent
+        report = services.enrol_from_csv(dbs, current_user, course_id, _uploaded_bytes())
+    except Refused as refused:
+        page_refusal(refused)
+        dbs.rollback()
+        return _detail(course_id, refused.status, {"file": refused.message})
+    except InvalidField as invalid:
+        dbs.rollback()
+        return _detail(course_id, 400, {"file": invalid.message})
+    dbs.commit()
+    return _detail(course_id, report=report)
+
+
+# --- JSON API -----------------------------------------------------------------------------------
+
+
+def _api(action, status: int = 200):  # type: ignore[no-untyped-def]
+    dbs = get_session()
+    try:
+        body = action(dbs)
+    except (Refused, InvalidField) as error:
+        dbs.rollback()
+        raise api_error(error) from None
+    dbs.commit()
+    return jsonify(body), status
+
+
+def _json_body() -> dict[str, object]:
+    data = request.get_json(silent=True)
+    if not isinstance(data, dict):
+        raise ApiError(400, "invalid_field", "Send a JSON object.", "body")
+    return data
+
+
+@blueprint.get("/api/courses")
+@login_required
+def api_courses():  # type: ignore[no-untyped-def]
+    """The courses the user belongs to (every course for an admin)."""
+    return _api(lambda dbs: {"courses": [c.to_dict() for c in services.list_courses(dbs, current_user)]})
+
+
+@blueprint.post("/api/courses")
+@login_required
+def api_create_course():  # type: ignore[no-untyped-def]
+    """{code, title, turn_length_s?, booking_allowance_min?}: creates a course (tutors, admins)."""
+    data = _json_body()
+
+    def action(dbs):  # type: ignore[no-untyped-def]
+        parsed = parse_settings({k: data.get(k) for k in ("turn_length_s", "booking_allowance_min")})
+        course = services.create_course(dbs, current_user, data.get("code"), data.get("title"), parsed)
+        return {"course": services.describe(dbs, current_user, course).to_dict()}
+
+    return _api(action, 201)
+
+
+@blueprint.get("/api/courses/<int:course_id>")
+@login_required
+def api_course(course_id: int):  # type: ignore[no-untyped-def]
+    """A course with its members (its tutors, admins)."""
+    def action(dbs):  # type: ignore[no-untyped-def]
+        course = services.managed_course(dbs, current_user, course_id)
+        return {"course": services.describe(dbs, current_user, course).to_dict(),
+                "members": [m.to_dict() for m in services.members(dbs, current_user, course_id)]}
+
+    return _api(action)
+
+
+@blueprint.patch("/api/courses/<int:course_id>")
+@login_required
+def api_update_course(course_id: int):  # type: ignore[no-untyped-def]
+    """{title?, turn_length_s?, booking_allowance_min?}: changes a course (its tutors, admins)."""
+    data = _json_body()
+
+    def action(dbs):  # type: ignore[no-untyped-def]
+        services.managed_course(dbs, current_user, course_id)
+        course = services.update_settings(dbs, current_user, course_id, parse_settings(data))
+        return {"course": services.describe(dbs, current_user, course).to_dict()}
+
+    return _api(action)
+
+
+@blueprint.post("/api/courses/<int:course_id>/members")
+@login_required
+def api_enrol(course_id: int):  # type: ignore[no-untyped-def]
+    """{username}: enrols an existing student account."""
+    data = _json_body()
+    return _api(lambda dbs: {"enrolled": services.enrol(dbs, current_user, course_id, data.get("username")).username},
+                201)
+
+
+@blueprint.delete("/api/courses/<int:course_id>/members/<int:user_id>")
+@login_required
+def api_unenrol(course_id: int, user_id: int):  # type: ignore[no-untyped-def]
+    """Removes a student from the course."""
+    def action(dbs):  # type: ignore[no-untyped-def]
+        services.unenrol(dbs, current_user, course_id, user_id)
+        return {"removed": user_id}
+
+    return _api(action)
+
+
+@blueprint.post("/api/courses/<int:course_id>/members.csv")
+@login_required
+def api_enrol_csv(course_id: int):  # type: ignore[no-untyped-def]
+    """A CSV file (multipart field 'file'): the enrolment report as JSON, or as CSV with ?format=csv."""
+    dbs = get_session()
+    try:
+        services.managed_course(dbs, current_user, course_id)  # who may, before what was sent
+        report = services.enrol_from_csv(dbs, current_user, course_id, _uploaded_bytes())
+    except (Refused, InvalidField) as error:
+        dbs.rollback()
+        raise api_error(error) from None
+    dbs.commit()
+    if request.args.get("format") == "csv":
+        return Response(report_csv(report.enrolled, report.created, report.refused), mimetype="text/csv",
+                        headers={"Content-Disposition": 'attachment; filename="enrolment-report.csv"',
+                                 "Cache-Control": "no-store"})
+    return jsonify(report.to_dict()), 200, {"Cache-Control": "no-store"}
+

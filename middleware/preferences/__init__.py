@@ -1,0 +1,1 @@
+"""Per-user preferences, such as the layout of the lab console."""

@@ -1,0 +1,65 @@
+"""GET and PUT of the current user's named preferences (JSON values)."""
+
+from __future__ import annotations
+
+import json
+import re
+
+from flask import Blueprint, jsonify, request
+from flask_login import current_user, login_required
+from sqlalchemy import select
+
+from middleware.db import get_session
+from middleware.errors import ApiError
+from middleware.models import UserPreference
+from middleware.models.accounts import utc_now
+
+blueprint = Blueprint("preferences", __name__)
+
+KEY_PATTERN = re.compile(r"^[a-z][a-z0-9-]{0,63}$")
+MAX_VALUE_BYTES = 8 * 1024
+
+
+def _key(key: str) -> str:
+    if not KEY_PATTERN.fullmatch(key):
+        raise ApiError(404, "unknown_preference", "Preference names are lowercase words joined by '-'.", "key")
+    return key
+
+
+def _find(key: str) -> UserPreference | None:
+    return get_session().scalar(
+        select(UserPreference).where(UserPreference.user_id == int(current_user.get_id()), UserPreference.key == key)
+    )
+
+
+@blueprint.get("/api/me/preferences/<key>")
+@login_required
+def read(key: str):  # type: ignore[no-untyped-def]
+    """The stored value, or null."""
+    preference = _find(_key(key))
+    return jsonify({"value": json.loads(preference.value_json) if preference else None})
+
+
+@blueprint.put("/api/me/preferences/<key>")
+@login_required
+def write(key: str):  # type: ignore[no-untyped-def]
+    """Stores a JSON value of at most 8 KB."""
+    name = _key(key)
+    body = request.get_json(silent=True)
+    if not isinstance(body, dict) or "value" not in body:
+        raise ApiError(400, "invalid_field", "Send a JSON object with a 'value'.", "value")
+    try:
+        text: str | None = json.dumps(body["value"], separators=(",", ":"), allow_nan=False)
+    except ValueError:
+        text = None
+    if text is None or len(text.encode()) > MAX_VALUE_BYTES:
+        raise ApiError(400, "invalid_field", f"value must be finite JSON of at most {MAX_VALUE_BYTES} bytes.", "value")
+    session = get_session()
+    preference = _find(name)
+    if preference is None:
+        session.add(UserPreference(user_id=int(current_user.get_id()), key=name, value_json=text))
+    else:
+        preference.value_json, preference.updated_at = text, utc_now()
+    session.commit()
+    return jsonify({"value": body["value"]})
+

@@ -1,0 +1,80 @@
+"""A tutor creates a course, uploads a CSV and reads the report; an invited student joins and lands in the lab."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer
+from tests.integration.bookings.conftest import course_people  # noqa: F401
+
+pytestmark = pytest.mark.e2e
+
+
+def log_in(tab, live_server: LiveServer, username: str) -> None:  # type: ignore[no-untyped-def]
+    tab.goto(f"{live_server.url}/login")
+    tab.fill("#username", username)
+    tab.fill("#password", STUDENT_PASSWORD)
+    tab.get_by_role("button", name="Log in").click()
+    tab.locator('[data-field="username"]').wait_for()
+
+
+def test_tutor_enrols_a_class_from_csv_and_an_invited_student_joins(chromium, page, live_server: LiveServer,  # type: ignore[no-untyped-def]
+                                                                     course_people, tmp_path) -> None:  # noqa: F811
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    log_in(page, live_server, "tutor1")
+    page.get_by_role("link", name="Courses").click()
+    page.get_by_label("Code").fill("NAV-1")
+    page.get_by_label("Title").fill("Navigation")
+    page.get_by_label("Turn length (seconds)").fill("5")
+    page.get_by_role("button", name="Create course").click()
+    error = page.locator('[data-error-for="turn_length_s"]')
+    assert "from 10 to 3600" in error.text_content()
+    assert page.get_by_label("Turn length (seconds)").get_attribute("aria-invalid") == "true"
+    page.screenshot(path=str(ARTIFACTS_DIR / "courses-field-error-desktop.png"), full_page=True)
+    page.get_by_label("Turn length (seconds)").fill("90")
+    page.get_by_role("button", name="Create course").click()
+    page.locator("h1", has_text="NAV-1 · Navigation").wait_for()
+
+    roster = tmp_path / "class.csv"
+    roster.write_text("\ufeffusername\nstudent1\nnewstudent\ntutor2\nstudent1\n=1+1\n", encoding="utf-8")
+    page.get_by_label("CSV file of usernames").set_input_files(str(roster))
+    page.get_by_role("button", name="Upload and enrol").click()
+    report = page.locator("#csv-report")
+    report.wait_for()
+    assert report.locator('[data-field="created-count"]').text_content() == "1"
+    assert report.locator('[data-field="refused-count"]').text_content() == "3"
+    assert "tutor account" in report.locator("#refused-rows").text_content()
+    with page.expect_download() as download:
+        page.get_by_role("link", name="Download the report (CSV)").click()
+    saved = tmp_path / "report.csv"
+    download.value.save_as(saved)
+    assert "newstudent" in saved.read_text() and "'=1+1" in saved.read_text()
+    page.screenshot(path=str(ARTIFACTS_DIR / "courses-report-desktop.png"), full_page=True)
+
+    page.get_by_role("button", name="Create an invitation link").click()
+    link = page.locator("#invitation-link").text_content().strip()
+    assert "/join/" in link
+
+    phone_context = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
+    phone = phone_context.new_page()
+    errors: list[str] = []
+    phone.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        phone.goto(link)
+        phone.get_by_label("Username").fill("invitee")
+        phone.get_by_label("Password", exact=True).fill("my-own-long-password")
+        phone.get_by_label("Password again").fill("my-own-long-password")
+        phone.screenshot(path=str(ARTIFACTS_DIR / "join-phone.png"), full_page=True)
+        phone.get_by_role("button", name="Create my account").click()
+        phone.locator(".robot-list, .empty-state").first.wait_for()
+        assert phone.url.endswith("/lab")
+        assert phone.locator('[data-field="username"]').text_content() == "invitee"
+        phone.goto(link)
+        assert "already been used" in phone.locator("#error-heading").text_content()
+        assert errors == []
+    finally:
+        phone_context.close()
+
+    page.goto(f"{live_server.url}/courses")
+    page.set_viewport_size({"width": 390, "height": 844})
+    page.screenshot(path=str(ARTIFACTS_DIR / "courses-phone.png"), full_page=True)

@@ -1,0 +1,315 @@
+"""The visual-proxy console in Debian's Chromium against the real three tiers: panels placed from the
+middleware's descriptors show live data, and their actions reach the robot."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import pytest
+
+from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer
+
+pytestmark = pytest.mark.e2e
+SKILL_TIMEOUT_MS = 60_000
+
+
+def open_console(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    page.goto(f"{live_server.url}/login")
+    page.fill("#username", "student1")
+    page.fill("#password", STUDENT_PASSWORD)
+    page.get_by_role("button", name="Log in").click()
+    page.locator('[data-field="username"]').first.wait_for(state="attached")
+    page.goto(f"{live_server.url}/lab/lab-1")
+    page.locator('[data-connection="drive"][data-phase="open"]').wait_for()
+
+
+def number(page, selector: str) -> float:  # type: ignore[no-untyped-def]
+    text = (page.locator(selector).first.text_content() or "").strip()
+    try:
+        return float(text)
+    except ValueError:
+        return float("nan")
+
+
+def wait_for(predicate, timeout_s: float, message: str) -> None:  # type: ignore[no-untyped-def]
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.1)
+    raise AssertionError(message)
+
+
+def descriptors(page) -> list[dict]:  # type: ignore[no-untyped-def]
+    return page.evaluate("fetch('/api/robots/lab-1/panels').then((r) => r.json()).then((b) => b.panels)")
+
+
+def odometry(page, field: str) -> float:  # type: ignore[no-untyped-def]
+    return number(page, f'odometry-panel [data-field="{field}"]')
+
+
+def wait_for_control(page) -> None:  # type: ignore[no-untyped-def]
+    page.locator('queue-panel[data-role="controller"]').wait_for()
+    wait_for(lambda: not math.isnan(odometry(page, "x")), 10, "no odometry arrived")
+
+
+def test_every_panel_appears_from_its_descriptor_and_shows_live_data(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    open_console(page, live_server)
+    panels = descriptors(page)
+    kinds = {panel["kind"] for panel in panels}
+    assert {"camera", "map", "odometry", "sonar", "laser", "drive", "skill", "queue", "chat", "response-times"} <= kinds
+    order = page.locator("section.panel-frame[data-panel-id]").evaluate_all(
+        "(frames) => frames.map((frame) => frame.dataset.panelId)")
+    assert order == [panel["id"] for panel in panels], "the panels are not placed in the order the server sent"
+    for panel in panels:
+        region = page.get_by_role("region", name=panel["title"], exact=True)
+        assert region.count() == 1, f"no region named {panel['title']!r}"
+        assert region.get_attribute("data-panel-id") == panel["id"]
+    skills = [panel["skill"] for panel in panels if panel["kind"] == "skill"]
+    assert "go_to_goal" in skills and "orientation_control" in skills and "direct_control" not in skills
+    for skill in skills:
+        page.locator(f'skill-panel[data-skill="{skill}"] button[data-action="activate"]').wait_for(state="attached")
+
+    wait_for(lambda: not math.isnan(odometry(page, "x")), 10, "odometry shows no numbers")
+    page.locator('sonar-panel [data-field="sonar-nearest"]').filter(has_text=" m").wait_for()
+    page.locator('laser-panel [data-field="laser-nearest"]').filter(has_text=" m").wait_for()
+    assert int(page.locator('laser-panel [data-field="laser-hits"]').text_content()) > 0
+    page.locator('map-panel [data-field="map-summary"]').filter(has_text="Robot at").wait_for()
+    wait_for(lambda: number(page, '[data-field="rtt-client-last"]') >= 0, 15, "no browser round trip measured")
+    wait_for(lambda: number(page, '[data-field="rtt-robot-p95"]') >= 0, 15, "no robot round trip measured")
+    assert number(page, '[data-field="rtt-client-mean"]') >= 0
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS_DIR / "panels-desktop.png"), full_page=True)
+    page.screenshot(path=str(ARTIFACTS_DIR / "panels-desktop-viewport.png"))
+
+
+def test_orientation_control_turns_the_robot_and_ends_succeeded(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    open_console(page, live_server)
+    wait_for_control(page)
+    panel = page.locator('skill-panel[data-skill="orientation_control"]')
+    start = odometry(page, "heading-rad")
+    target = math.atan2(math.sin(start + 1.2), math.cos(start + 1.2))
+    panel.locator('input[name="heading_rad"]').fill(f"{target:.2f}")
+    panel.locator('button[data-action="activate"]').click()
+    page.locator('skill-panel[data-skill="orientation_control"][data-status="succeeded"]').wait_for(
+        timeout=SKILL_TIMEOUT_MS)
+    heading = odometry(page, "heading-rad")
+    error = math.atan2(math.sin(heading - round(target, 2)), math.cos(heading - round(target, 2)))
+    assert abs(error) < 0.1, f"heading {heading:.3f} rad, asked for {target:.2f} rad"
+    assert "Succeeded" in panel.locator('[data-field="skill-result"]').text_content()
+    assert panel.locator('[data-event="started"]').count() >= 1 or panel.locator("[data-event]").count() >= 1
+
+
+def test_values_are_checked_in_the_browser_and_the_servers_verdict_shows_next_to_the_field(  # type: ignore[no-untyped-def]
+    page, live_server: LiveServer
+) -> None:
+    open_console(page, live_server)
+    wait_for_control(page)
+    panel = page.locator('skill-panel[data-skill="orientation_control"]')
+    heading = panel.locator('input[name="heading_rad"]')
+    requests: list[str] = []
+    page.on("request", lambda request: requests.append(request.url) if request.method == "POST" else None)
+    heading.fill("10")
+    panel.locator('button[data-action="activate"]').click()
+    assert heading.evaluate("(input) => input.validity.rangeOverflow"), "the browser accepted 10 rad"
+    page.wait_for_timeout(300)
+    assert not [url for url in requests if "/goals" in url], "an out-of-range value was sent"
+
+    # A client whose schema is out of date (no max any more) must still hear the server's verdict.
+    heading.evaluate("(input) => input.removeAttribute('max')")
+    with page.expect_response(lambda r: r.url.endswith("/skills/orientation_control/goals")) as answer:
+        panel.locator('button[data-action="activate"]').click()
+    assert answer.value.status == 400
+    assert answer.value.json()["error"]["field"] == "heading_rad"
+    error_line = panel.locator('[data-field-error="heading_rad"]')
+    error_line.wait_for()
+    assert error_line.text_content().strip()
+    assert heading.get_attribute("aria-invalid") == "true"
+    described_by = heading.get_attribute("aria-describedby") or ""
+    assert error_line.get_attribute("id") in described_by.split()
+    panel.screenshot(path=str(ARTIFACTS_DIR / "skill-panel-field-error.png"))
+
+
+def test_clicking_the_map_sends_the_robot_there_with_go_to_goal(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    open_console(page, live_server)
+    wait_for_control(page)
+    x0, y0 = odometry(page, "x"), odometry(page, "y")
+    candidates = [(0.0, 0.0), (0.8, 0.3), (-0.6, 0.4)]
+    goal_x, goal_y = max(candidates, key=lambda c: min(math.hypot(c[0] - x0, c[1] - y0), 0.9))
+    canvas = page.locator('map-panel [data-field="map-canvas"]')
+    canvas.scroll_into_view_if_needed()
+    wait_for(lambda: page.evaluate("document.querySelector('map-panel').cssPointOf(0, 0) !== null"), 5, "map not drawn")
+    px, py = page.evaluate(f"document.querySelector('map-panel').cssPointOf({goal_x}, {goal_y})")
+    canvas.click(position={"x": px, "y": py})
+    go = page.locator('skill-panel[data-skill="go_to_goal"]')
+    x_field, y_field = go.locator('input[name="goal_x_m"]'), go.locator('input[name="goal_y_m"]')
+    assert abs(float(x_field.input_value()) - goal_x) < 0.05 and abs(float(y_field.input_value()) - goal_y) < 0.05
+
+    # The keyboard does the same: arrows move the cursor (not the robot), Enter sets the target.
+    canvas.focus()
+    linear_before = odometry(page, "linear")
+    for _ in range(3):
+        page.keyboard.press("ArrowRight")
+    page.keyboard.press("ArrowUp")
+    page.keyboard.press("Enter")
+    wait_for(lambda: abs(float(x_field.input_value()) - (goal_x + 0.3)) < 0.05, 3, "the keyboard cursor set no target")
+    assert abs(float(y_field.input_value()) - (goal_y + 0.1)) < 0.05
+    assert abs(linear_before) < 0.02 and abs(odometry(page, "linear")) < 0.02, "the map's arrow keys drove the robot"
+    canvas.click(position={"x": px, "y": py})
+
+    go.locator('button[data-action="activate"]').click()
+    page.locator('skill-panel[data-skill="go_to_goal"][data-status="executing"], '
+                 'skill-panel[data-skill="go_to_goal"][data-status="succeeded"]').first.wait_for()
+    page.screenshot(path=str(ARTIFACTS_DIR / "panels-go-to-goal-running.png"))
+    page.locator('skill-panel[data-skill="go_to_goal"][data-status="succeeded"]').wait_for(timeout=SKILL_TIMEOUT_MS)
+    assert math.hypot(odometry(page, "x") - goal_x, odometry(page, "y") - goal_y) < 0.25
+    assert go.locator("progress").evaluate("(bar) => bar.value") == pytest.approx(1.0)
+
+
+def test_hidden_moved_and_widened_panels_stay_so_after_a_reload(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    open_console(page, live_server)
+
+    def order() -> list[str]:
+        return page.locator("section.panel-frame[data-panel-id]:visible").evaluate_all(
+            "(frames) => frames.map((frame) => frame.dataset.panelId)")
+
+    before = order()
+    assert before.index("laser") > before.index("sonar")
+
+    def saved(action) -> None:  # type: ignore[no-untyped-def]
+        with page.expect_response(lambda r: r.url.endswith("/api/me/preferences/console-layout")
+                                  and r.request.method == "PUT") as answer:
+            action()
+        assert answer.value.ok, answer.value.text()
+
+    saved(lambda: page.get_by_role("button", name="Hide Sonar").click())
+    assert page.locator('section[data-panel-id="sonar"]').is_hidden()
+    saved(lambda: (page.get_by_role("button", name="Move Laser up").focus(), page.keyboard.press("Enter")))
+    saved(lambda: page.get_by_role("button", name="Wide Odometry").click())
+    after = order()
+    expected = [panel for panel in before if panel != "sonar"]
+    above = expected.index("laser") - 1
+    expected[above], expected[above + 1] = expected[above + 1], expected[above]
+    assert after == expected
+
+    page.reload()
+    page.locator('[data-connection="drive"][data-phase="open"]').wait_for()
+    page.locator('section[data-panel-id="laser"]').wait_for()
+    assert page.locator('section[data-panel-id="sonar"]').is_hidden()
+    assert order() == after
+    assert page.locator('section[data-panel-id="odometry"]').get_attribute("data-span") == "2"
+    menu = page.get_by_test_id("panels-menu")
+    menu.locator("summary").click()
+    assert "1 hidden" in menu.locator("summary").text_content()
+    checkbox = menu.get_by_role("checkbox", name="Sonar", exact=True)
+    assert not checkbox.is_checked()
+    page.screenshot(path=str(ARTIFACTS_DIR / "panels-menu-open.png"))
+    saved(lambda: checkbox.check())
+    page.locator('section[data-panel-id="sonar"]').wait_for()
+    saved(lambda: page.get_by_role("button", name="Reset layout").click())
+    assert order() == [panel["id"] for panel in descriptors(page)]
+
+
+def test_a_malformed_descriptor_shows_a_notice_and_the_other_panels_still_work(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    def break_one(route) -> None:  # type: ignore[no-untyped-def]
+        answer = route.fetch()
+        body = answer.json()
+        body["panels"].insert(2, {"id": "hologram", "kind": "hologram", "title": "Hologram"})
+        body["panels"].insert(4, 42)
+        body["panels"].append({"id": "skill-bad", "kind": "skill", "title": "Bad skill", "skill": "x", "schema": "no"})
+        route.fulfill(response=answer, body=json.dumps(body))
+
+    page.route("**/api/robots/*/panels", break_one)
+    open_console(page, live_server)
+    notices = page.locator('[data-notice="bad-descriptor"]')
+    notices.first.wait_for()
+    assert notices.count() == 3
+    texts = " ".join(notices.all_text_contents())
+    assert "Hologram" in texts and "hologram" in texts and "Bad skill" in texts
+    wait_for(lambda: not math.isnan(odometry(page, "x")), 10, "odometry stopped working next to a broken panel")
+    page.locator('sonar-panel [data-field="sonar-nearest"]').filter(has_text=" m").wait_for()
+    assert page.locator('skill-panel[data-skill="go_to_goal"]').count() == 1
+    page.screenshot(path=str(ARTIFACTS_DIR / "panels-bad-descriptor.png"))
+
+
+def test_an_unreadable_stream_message_leaves_a_notice_not_a_blank_page(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    def garble(ws) -> None:  # type: ignore[no-untyped-def]
+        server = ws.connect_to_server()
+        sent = {"n": 0}
+
+        def to_page(message) -> None:  # type: ignore[no-untyped-def]
+            sent["n"] += 1
+            if sent["n"] == 5:
+                ws.send("{not json")
+                ws.send(json.dumps({"type": "telemetry", "odometry": {"pose": "sideways"}, "sonar": 3}))
+            ws.send(message)
+
+        server.on_message(to_page)
+        ws.on_message(lambda message: server.send(message))
+
+    page.route_web_socket("**/ws/robots/lab-1/telemetry", garble)
+    open_console(page, live_server)
+    page.locator('section[data-panel-id="odometry"] [data-field="panel-notice"]').filter(
+        has_text="could not be read").wait_for()
+    time.sleep(0.5)
+    wait_for(lambda: not math.isnan(odometry(page, "x")), 10, "odometry stopped after a bad message")
+    page.locator('laser-panel [data-field="laser-nearest"]').filter(has_text=" m").wait_for()
+
+
+def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(chromium, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    context = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
+    phone = context.new_page()
+    errors: list[str] = []
+    phone.on("pageerror", lambda error: errors.append(str(error)))
+    try:
+        open_console(phone, live_server)
+        wait_for(lambda: not math.isnan(odometry(phone, "x")), 10, "no odometry on the phone")
+        lefts = phone.locator("section.panel-frame[data-panel-id]:visible").evaluate_all(
+            "(frames) => frames.map((frame) => Math.round(frame.getBoundingClientRect().left))")
+        assert len(set(lefts)) == 1, f"panels are not in one column: {lefts}"
+        assert phone.evaluate("document.documentElement.scrollWidth") <= 390, "the page scrolls sideways"
+        ARTIFACTS_DIR.mkdir(exist_ok=True)
+        phone.screenshot(path=str(ARTIFACTS_DIR / "panels-phone.png"))
+        phone.locator('section[data-panel-id="map"]').scroll_into_view_if_needed()
+        phone.screenshot(path=str(ARTIFACTS_DIR / "panels-phone-map.png"))
+        phone.locator('section[data-panel-id="skill-go_to_goal"]').scroll_into_view_if_needed()
+        phone.screenshot(path=str(ARTIFACTS_DIR / "panels-phone-skill.png"))
+
+        results = phone.evaluate("""async () => {
+          const layout = await import('/static/js/layout.js');
+          const geometry = await import('/static/js/map-geometry.js');
+          const polar = await import('/static/js/polar.js');
+          const stats = await import('/static/js/stats.js');
+          const descriptors = await import('/static/js/panel-descriptors.js');
+          let l = layout.normalizeLayout({order: ['b', 'a'], hidden: ['a', 'gone']}, ['a', 'b', 'c']);
+          const normalized = l;
+          l = layout.layoutReducer(l, {type: 'move', id: 'c', by: -1});
+          const view = geometry.fitView({minX: -4, maxX: 4, minY: -3, maxY: 3}, 800, 600, 0);
+          const there = geometry.worldToCanvas(view, 1.5, -2);
+          return {
+            normalized, moved: l.order,
+            roundTrip: geometry.canvasToWorld(view, ...there), there,
+            corners: geometry.boxCorners({center_x_m: 1, center_y_m: 0, half_x_m: 1, half_y_m: 0.5, yaw_rad: Math.PI / 2}),
+            nearest: polar.nearestReading([2, 0.7, Infinity, 0.4], [0, 0.5, 1, 1.5], 3),
+            left: polar.polarToScreen(100, 100, 10, 1, Math.PI / 2),
+            p95: stats.percentile([1, 2, 3, 4, 5, 6, 7, 8, 9, 100], 95),
+            goal: descriptors.goalParameterNames([{name: 'speed_mps', type: 'double'}, {name: 'goal_x_m', type: 'double'},
+                                                  {name: 'goal_y_m', type: 'double'}]),
+            bad: descriptors.checkDescriptor({id: 'x', kind: 'hologram', title: 'X'}).ok,
+          };
+        }""")
+    finally:
+        context.close()
+    assert results["normalized"] == {"order": ["b", "c", "a"], "hidden": ["a"], "spans": {"a": 1, "b": 1, "c": 1}}
+    assert results["moved"] == ["c", "b", "a"]
+    assert results["there"] == [550, 500]
+    assert results["roundTrip"] == pytest.approx([1.5, -2])
+    assert results["corners"][0] == pytest.approx([1.5, -1])
+    assert results["nearest"] == {"index": 3, "range_m": 0.4, "bearing_rad": 1.5}
+    assert results["left"] == pytest.approx([90, 100])
+    assert results["p95"] == 100
+    assert results["goal"] == {"x": "goal_x_m", "y": "goal_y_m"}
+    assert results["bad"] is False
+    assert not errors, errors

@@ -1,0 +1,158 @@
+"""The skill API and panel descriptors through the middleware, against the real skill server."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import pytest
+
+from tests.conftest import LabClient
+
+
+def api(client: LabClient, method: str, path: str, body: object | None = None) -> tuple[int, dict]:
+    """A JSON request with the CSRF header a page would send."""
+    headers = {"X-CSRFToken": client.csrf_token("/lab/lab-1"), "Content-Type": "application/json"}
+    data = None if body is None else json.dumps(body)
+    from urllib.request import Request
+
+    request = Request(client.base_url + path, data=None if data is None else data.encode(), method=method,
+                      headers=headers)
+    try:
+        with client._opener.open(request, timeout=10) as response:
+            return response.status, json.loads(response.read())
+    except Exception as error:
+        if hasattr(error, "code"):
+            return error.code, json.loads(error.read())
+        raise
+
+
+def take_control(client: LabClient):  # type: ignore[no-untyped-def]
+    """Opens the queue channel (joining the queue) and waits until this client controls the robot."""
+    queue = client.websocket("/ws/robots/lab-1/queue")
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        message = json.loads(queue.receive(timeout=5))
+        if message.get("type") == "queue" and message["is_controller"]:
+            return queue
+    raise AssertionError("never got control")
+
+
+def test_panels_are_described_by_the_abstractions_including_every_skill(student_client: LabClient) -> None:
+    status, body = api(student_client, "GET", "/api/robots/lab-1/panels")
+    assert status == 200 and body["skills_available"]
+    kinds = [panel["kind"] for panel in body["panels"]]
+    assert {"camera", "map", "odometry", "sonar", "laser", "drive", "queue", "chat", "response-times"} <= set(kinds)
+    skills = {panel["skill"]: panel for panel in body["panels"] if panel["kind"] == "skill"}
+    assert {"go_to_goal", "orientation_control", "wall_following", "round_trip", "localization"} <= set(skills)
+    assert "direct_control" not in skills, "direct control is the drive panel"
+    heading = skills["orientation_control"]["schema"]
+    assert all({"name", "type", "unit", "minimum", "maximum", "default", "help"} <= set(p) for p in heading)
+
+
+def test_the_controller_runs_a_skill_and_watches_it_succeed(student_client: LabClient) -> None:
+    queue = take_control(student_client)
+    status, body = api(student_client, "GET", "/api/robots/lab-1/panels")
+    schema = next(p for p in body["panels"] if p.get("skill") == "orientation_control")["schema"]
+    heading_name = next(p["name"] for p in schema if "heading" in p["name"] and p["type"] == "double")
+    status, body = api(student_client, "POST", "/api/robots/lab-1/skills/orientation_control/goals",
+                       {"parameters": {heading_name: math.pi / 2}, "preempt": True})
+    assert status == 202, body
+    goal = body["goal"]
+    assert goal["skill"] == "orientation_control" and goal["status"] in {"accepted", "executing"}
+    watch = student_client.websocket(f"/ws/robots/lab-1/goals/{goal['goal_id']}")
+    kinds = []
+    final = None
+    deadline = time.monotonic() + 30
+    while final is None and time.monotonic() < deadline:
+        message = json.loads(watch.receive(timeout=10))
+        kinds.append(message["type"])
+        if message["type"] == "goal" and message["goal"]["status"] in {"succeeded", "aborted", "canceled"}:
+            final = message["goal"]
+    assert final is not None and final["status"] == "succeeded", final
+    assert "goal_feedback" in kinds or "goal_event" in kinds
+    status, body = api(student_client, "GET", f"/api/robots/lab-1/goals/{goal['goal_id']}")
+    assert status == 200 and body["goal"]["status"] == "succeeded"
+    queue.close()
+
+
+def test_cancelling_reports_the_error_left(student_client: LabClient) -> None:
+    queue = take_control(student_client)
+    status, body = api(student_client, "POST", "/api/robots/lab-1/skills/go_to_goal/goals",
+                       {"parameters": {}, "preempt": True})
+    assert status == 202, body
+    time.sleep(0.5)
+    status, body = api(student_client, "DELETE", f"/api/robots/lab-1/goals/{body['goal']['goal_id']}")
+    assert status == 200 and body["goal"]["status"] in {"canceled", "succeeded", "aborted"}
+    assert body["goal"]["message"]
+    queue.close()
+
+
+@pytest.mark.parametrize(
+    ("path", "body", "status", "code", "field"),
+    [
+        ("/skills/orientation_control/goals", {"parameters": {"target_heading_rad": "north"}}, 400, "invalid_field",
+         "target_heading_rad"),
+        ("/skills/orientation_control/goals", {"parameters": {"nonsense": 1}}, 400, "invalid_field", None),
+        ("/skills/orientation_control/goals", {"parameters": [1, 2]}, 400, "invalid_field", "parameters"),
+        ("/skills/orientation_control/goals", {"parameters": {}, "preempt": "yes"}, 400, "invalid_field", "preempt"),
+        ("/skills/orientation_control/goals", "nope", 400, "invalid_field", "body"),
+        ("/skills/teleport/goals", {"parameters": {}}, 404, "unknown_skill", None),
+        ("/skills/Bad-Name/goals", {"parameters": {}}, 404, "unknown_skill", "skill"),
+    ],
+)
+def test_bad_activations_are_refused_naming_the_field(
+    student_client: LabClient, path: str, body: object, status: int, code: str, field: str | None
+) -> None:
+    queue = take_control(student_client)
+    answer_status, answer = api(student_client, "POST", "/api/robots/lab-1" + path, body)
+    assert (answer_status, answer["error"]["code"]) == (status, code), answer
+    if field is not None:
+        assert answer["error"]["field"] == field
+    assert answer["error"]["message"]
+    queue.close()
+
+
+def test_an_observer_cannot_start_skills_and_a_missing_csrf_token_is_refused(
+    student_client: LabClient, live_server
+) -> None:  # type: ignore[no-untyped-def]
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from tests.conftest import STUDENT_PASSWORD
+
+    queue = take_control(student_client)
+    with session_factory(live_server.app)() as session:
+        create_user(session, "observer", "student", STUDENT_PASSWORD)
+        session.commit()
+    observer = LabClient(live_server.url)
+    assert observer.login("observer") == 302
+    status, body = api(observer, "POST", "/api/robots/lab-1/skills/orientation_control/goals", {"parameters": {}})
+    assert status == 403 and body["error"]["code"] == "not_controller"
+    status, _, raw = student_client.request("POST", "/api/robots/lab-1/skills/orientation_control/goals", {})
+    assert status == 400 and "csrf" in raw.lower()
+    queue.close()
+
+
+def test_preferences_round_trip_and_refuse_bad_values(student_client: LabClient) -> None:
+    assert api(student_client, "GET", "/api/me/preferences/console-layout") == (200, {"value": None})
+    layout = {"hidden": ["sonar"], "order": ["camera", "map"], "span": {"camera": 2}}
+    assert api(student_client, "PUT", "/api/me/preferences/console-layout", {"value": layout}) == (200, {"value": layout})
+    assert api(student_client, "GET", "/api/me/preferences/console-layout") == (200, {"value": layout})
+    status, body = api(student_client, "PUT", "/api/me/preferences/console-layout", {"value": "x" * 9000})
+    assert status == 400 and body["error"]["field"] == "value"
+    status, body = api(student_client, "PUT", "/api/me/preferences/Bad_Key", {"value": 1})
+    assert status == 404 and body["error"]["field"] == "key"
+    assert api(student_client, "GET", "/api/me/preferences/console-layout")[1] == {"value": layout}
+
+
+def test_the_drive_channel_answers_pings_with_the_robot_round_trip(student_client: LabClient) -> None:
+    drive = student_client.websocket("/ws/robots/lab-1/drive")
+    assert json.loads(drive.receive(timeout=5))["type"] == "ready"
+    drive.send(json.dumps({"type": "ping", "id": 7}))
+    pong = json.loads(drive.receive(timeout=5))
+    assert pong["type"] == "pong" and pong["id"] == 7 and pong["robot_rtt_ms"] > 0
+    drive.send(json.dumps({"type": "drive", "sequence": 1, "linear_mps": 0.0, "angular_radps": 0.0}))
+    ack = json.loads(drive.receive(timeout=5))
+    assert ack["type"] == "ack" and ack["robot_rtt_ms"] > 0
+    drive.close()
