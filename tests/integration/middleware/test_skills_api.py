@@ -137,7 +137,8 @@ def test_an_observer_cannot_start_skills_and_a_missing_csrf_token_is_refused(
 def test_preferences_round_trip_and_refuse_bad_values(student_client: LabClient) -> None:
     assert api(student_client, "GET", "/api/me/preferences/console-layout") == (200, {"value": None})
     layout = {"hidden": ["sonar"], "order": ["camera", "map"], "span": {"camera": 2}}
-    assert api(student_client, "PUT", "/api/me/preferences/console-layout", {"value": layout}) == (200, {"value": layout})
+    stored = api(student_client, "PUT", "/api/me/preferences/console-layout", {"value": layout})
+    assert stored == (200, {"value": layout})
     assert api(student_client, "GET", "/api/me/preferences/console-layout") == (200, {"value": layout})
     status, body = api(student_client, "PUT", "/api/me/preferences/console-layout", {"value": "x" * 9000})
     assert status == 400 and body["error"]["field"] == "value"
