@@ -35,6 +35,7 @@ class Perception:
         self.localizer: Any = None  # the running localization controller, if any
         self.published_map: Any = None  # the latest immutable grid of the environment model, for GetMap
         self.published_estimate: Any = None  # the latest immutable localization estimate, for streams
+        self.floor_plan: Any = None  # the lab as built (a SceneSpec), which mapping may start from
 
 
 class Sequencer:
@@ -261,5 +262,6 @@ def attach_sequencer(world: Any, registry: SkillRegistry | None = None, goals: G
     )
     sequencer = Sequencer(info.spec, sensors, registry or default_registry(info.spec), goals or GoalBook(),
                           lambda: world.controller_token, lambda: world.drive_version)
+    sequencer.perception.floor_plan = getattr(world, "scene", None)
     world.attach_autonomy(sequencer)
     return sequencer

@@ -69,11 +69,9 @@ class StaticSceneCaster:
 
 
 def _slab(origin: np.ndarray, direction: np.ndarray, half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Entry and exit parameters of rays through the slab -half..half on one axis (parallel rays: all or none)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1, t2 = (-half - origin) / direction, (half - origin) / direction
-    parallel = direction == 0.0
-    inside = np.abs(origin) <= half
-    near = np.where(parallel, np.where(inside, -np.inf, np.inf), np.minimum(t1, t2))
-    far = np.where(parallel, np.where(inside, np.inf, -np.inf), np.maximum(t1, t2))
-    return near, far
+    """Entry and exit parameters of rays through the slab -half..half on one axis."""
+    # A ray parallel to the slab gets a vanishing direction instead: its parameters become huge with the right
+    # signs, so it is inside the slab all along or never, without a branch.
+    inverse = 1.0 / np.where(direction == 0.0, 1e-300, direction)
+    t1, t2 = (-half - origin) * inverse, (half - origin) * inverse
+    return np.minimum(t1, t2), np.maximum(t1, t2)

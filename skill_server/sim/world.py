@@ -45,6 +45,7 @@ class Autonomy(Protocol):
 PHYSICS_DT_S = 1.0 / 240.0
 PHYSICS_STEPS_PER_TICK = 4  # control at 60 Hz
 SENSOR_EVERY_TICKS = 3  # sonar and laser at 20 Hz
+SOLVER_ITERATIONS = 50  # pybullet's default; 20 let the wheels slip twice as much
 OBSTACLE_GROUP = 0x1
 ROBOT_GROUP = 0x10  # range sensors cast with a mask that leaves the robot out, so it never sees itself
 SENSOR_RAY_MASK = 0x0F
@@ -270,7 +271,8 @@ class World:
         client = self._client
         client.resetSimulation()
         client.setGravity(0.0, 0.0, -9.81)
-        client.setPhysicsEngineParameter(fixedTimeStep=PHYSICS_DT_S, numSubSteps=0)
+        client.setPhysicsEngineParameter(fixedTimeStep=PHYSICS_DT_S, numSubSteps=0,
+                                         numSolverIterations=SOLVER_ITERATIONS)
         build_scene(client, self.scene, OBSTACLE_GROUP)
         spawn = self.scene.spawn
         self._robot = client.loadURDF(

@@ -22,11 +22,12 @@ from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDesc
 
 GO_TO_GOAL = "go_to_goal"
 LOOKAHEAD_M = 0.35
-REPLAN_PERIOD_S = 1.5
+REPLAN_PERIOD_S = 3.0  # a blocked path replans at once; this only refines it as the grid fills in
 STOP_CLEARANCE_M = 0.06  # never drive forward with less than this between the rim and an echo
 UNREACHABLE_AFTER_S = 2.0  # a goal blocked or without a path for this long is given up
 STUCK_AFTER_S = 4.0  # blocked ahead with no way around for this long: COLLISION_AHEAD
 COORD_LIMIT_M = 50.0
+STOP_FRACTION = 0.3
 
 
 def go_to_goal_description(spec: RobotSpec) -> SkillDescription:
@@ -83,8 +84,9 @@ class GoToGoal(SkillController):
             self._started_s = now
             self._start_distance_m = max(distance_m, 1e-6)
         bearing_error = heading_error(bearing_to(pose, *self.goal), pose)
-        # Stop close in, or as soon as the distance starts growing again inside the tolerance (a pass).
-        if distance_m <= max(0.5 * self._max_error_m, 0.015) or (
+        # Stop close in (a third of the tolerance leaves room for the pose estimate's own error), or as soon as
+        # the distance starts growing again inside the tolerance (a pass).
+        if distance_m <= max(STOP_FRACTION * self._max_error_m, 0.015) or (
             distance_m <= self._max_error_m and distance_m > self._closest_m + 0.002
         ):
             self.announce(EventKind.GOAL_REACHED, f"goal reached, {distance_m:.3f} m from it")

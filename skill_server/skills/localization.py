@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -17,9 +17,12 @@ from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDesc
 LOCALIZATION = "localization"
 BEAM_STEP = 6  # every 6th laser beam: 31 beams are plenty for a likelihood field
 HIT_SIGMA_M = 0.05
+RANDOM_ECHO_LIKELIHOOD = 0.05  # per beam, relative to a perfect hit's 1.0
+LIKELIHOOD_TEMPER = 3.0
 FIELD_CAP_CELLS = 12
 CONVERGED_STD_M, CONVERGED_STD_RAD = 0.06, 0.05
 FIELD_REFRESH_S = 2.0
+UPDATE_MIN_M, UPDATE_MIN_RAD = 0.03, 0.03  # motion between two updates once converged
 
 
 @dataclass(frozen=True)
@@ -106,6 +109,7 @@ class Localization(SkillController):
         self._estimate_odometry: Pose2D | None = None  # odometry reading when the estimate was made
         self._converged = False
         self._std = (initial_spread_m, initial_spread_m, initial_spread_rad)
+        self._published: LocalizationEstimate | None = None
         perception.localizer = self  # type: ignore[attr-defined]
 
     def believed_pose(self, odometry: Pose2D) -> Pose2D | None:
@@ -119,13 +123,23 @@ class Localization(SkillController):
         odometry = tick.odometry.pose
         if self._last_odometry is None:
             self._last_odometry = odometry
-        if tick.new_scan:
+        delta = relative(self._last_odometry, odometry)
+        # Like AMCL, a converged filter waits for some motion: re-weighing the same view of a standing robot
+        # only makes it overconfident, and it is most of the skills' cost in fast mode.
+        moved = (not self._converged or math.hypot(delta.x_m, delta.y_m) >= UPDATE_MIN_M
+                 or abs(delta.theta_rad) >= UPDATE_MIN_RAD)
+        if tick.new_scan and moved:
             started = time.perf_counter()
-            self._predict(relative(self._last_odometry, odometry))
+            self._predict(delta)
             self._last_odometry = odometry
             self._refresh_field(tick.sim_time_s)
             self._weigh(tick)
             self._summarise(odometry, (time.perf_counter() - started) * 1000.0)
+        elif tick.new_scan and self._published is not None:
+            # No update while standing still, but readers get the estimate moved on by odometry to this scan.
+            pose = self.believed_pose(odometry) or self._estimate
+            self._published = replace(self._published, pose=pose)
+            self._perception.published_estimate = self._published  # type: ignore[attr-defined]
         std_x, std_y, std_theta = self._std
         return 0.0, 0.0, None, feedback_for(
             tick, "tracking" if self._converged else "converging", 1.0 if self._converged else 0.0,
@@ -157,7 +171,13 @@ class Localization(SkillController):
         if self._field is not None and (self._model.version == self._field_version
                                         or sim_time_s - self._field_s < FIELD_REFRESH_S):
             return
-        self._field = distance_field(self._model.occupied(), FIELD_CAP_CELLS) * self._model.resolution_m
+        occupied = self._model.occupied()
+        field = distance_field(occupied, FIELD_CAP_CELLS)
+        if getattr(self._model, "surfaces_on_cell_edges", False):
+            # Surfaces on cell edges: a signed distance to them (negative inside), zero exactly on the edge once
+            # interpolated, so echoes are pulled onto the surface from both sides instead of sinking into walls.
+            field = np.where(occupied, 0.5 - distance_field(~occupied, FIELD_CAP_CELLS), field - 0.5)
+        self._field = field * self._model.resolution_m
         self._field_version, self._field_s = self._model.version, sim_time_s
 
     def _weigh(self, tick: TickInput) -> None:
@@ -172,18 +192,29 @@ class Localization(SkillController):
         world = p[:, 2:3] + angles[None, :]
         xs = p[:, 0:1] + ranges_m[None, :] * np.cos(world)
         ys = p[:, 1:2] + ranges_m[None, :] * np.sin(world)
-        model = self._model
-        ix = np.clip(((xs - model.origin_m) / model.resolution_m).astype(np.int64), 0, model.size - 1)
-        iy = np.clip(((ys - model.origin_m) / model.resolution_m).astype(np.int64), 0, model.size - 1)
-        distance_m = self._field[ix, iy]
-        # Tempered likelihood: beams are not independent, so full products make the filter overconfident.
-        log_likelihood = -0.5 * np.sum((distance_m / HIT_SIGMA_M) ** 2, axis=1) / 4.0
+        distance_m = self._field_at(xs, ys)
+        # Each beam: a Gaussian around the map's surfaces plus a floor for things the map lacks (people, boxes
+        # moved), so one unexplained echo cannot outvote the rest; tempered because beams are not independent.
+        beam_likelihood = np.exp(-0.5 * (distance_m / HIT_SIGMA_M) ** 2) + RANDOM_ECHO_LIKELIHOOD
+        log_likelihood = np.sum(np.log(beam_likelihood), axis=1) / LIKELIHOOD_TEMPER
         log_weights = np.log(self._weights + 1e-300) + log_likelihood
         log_weights -= log_weights.max()
         weights = np.exp(log_weights)
         self._weights = weights / weights.sum()
         if 1.0 / np.sum(self._weights**2) < 0.5 * len(self._weights):
             self._resample()
+
+    def _field_at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """Distance [m] to the nearest occupied cell, bilinear between cell centres (no 5 cm steps, no bias)."""
+        assert self._field is not None
+        model = self._model
+        fx = np.clip((xs - model.origin_m) / model.resolution_m - 0.5, 0.0, model.size - 1.001)
+        fy = np.clip((ys - model.origin_m) / model.resolution_m - 0.5, 0.0, model.size - 1.001)
+        ix, iy = fx.astype(np.int64), fy.astype(np.int64)
+        ax, ay = fx - ix, fy - iy
+        field = self._field
+        return ((1 - ax) * ((1 - ay) * field[ix, iy] + ay * field[ix, iy + 1])
+                + ax * ((1 - ay) * field[ix + 1, iy] + ay * field[ix + 1, iy + 1]))
 
     def _resample(self) -> None:
         n = len(self._weights)
@@ -206,10 +237,11 @@ class Localization(SkillController):
             self.announce(EventKind.CONVERGED, f"converged at ({x:.2f}, {y:.2f}) m, std {max(std_x, std_y):.3f} m")
         self._converged = converged or (self._converged and max(std_x, std_y) < 2 * CONVERGED_STD_M)
         sample = np.column_stack([p[:: max(1, len(p) // 200)], w[:: max(1, len(p) // 200)]])
-        self._perception.published_estimate = LocalizationEstimate(  # type: ignore[attr-defined]
+        self._published = LocalizationEstimate(
             self._estimate, std_x, std_y, std_theta, self._converged, duration_ms,
             tuple(map(tuple, sample.tolist())),  # tolist first: a per-element loop costs 0.3 ms per update
         )
+        self._perception.published_estimate = self._published  # type: ignore[attr-defined]
 
 
 def relative(origin: Pose2D, pose: Pose2D) -> Pose2D:

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from skill_server.goals import GoalFeedback, GoalStatus
+from skill_server.sim.scenes import SceneSpec
 from skill_server.skills.base import Outcome, SkillController, TickInput, feedback_for
 from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
 
@@ -41,6 +42,7 @@ class EnvironmentModel:
         self.log_odds = np.zeros((self.size, self.size), dtype=np.float32)
         self.scans_integrated = 0
         self.version = 0
+        self.surfaces_on_cell_edges = False  # True once a floor plan is drawn in (see add_floor_plan)
 
     def integrate_laser(self, tick: TickInput, beam_step: int = 2) -> None:
         """Carves free space along the beams and marks their echoes, at the believed pose."""
@@ -60,6 +62,25 @@ class EnvironmentModel:
         self._add(hx, hy, HIT_LOG_ODDS)
         np.clip(self.log_odds, -CLAMP_LOG_ODDS, CLAMP_LOG_ODDS, out=self.log_odds)
         self.scans_integrated += 1
+        self.version += 1
+
+    def add_floor_plan(self, scene: SceneSpec) -> None:
+        """Draws the lab's floor plan (walls and furniture as built) in: obstacles occupied, the floor free."""
+        centers = self.origin_m + (np.arange(self.size) + 0.5) * self.resolution_m
+        xs, ys = np.meshgrid(centers, centers, indexing="ij")
+        # A cell is an obstacle's if its centre lies inside it, so drawn surfaces fall on cell edges (the lab's
+        # furniture is laid out on the 5 cm grid); readings put theirs mid-cell instead.
+        occupied = np.zeros_like(self.log_odds, dtype=bool)
+        for box in scene.boxes:
+            c, s = math.cos(box.yaw_rad), math.sin(box.yaw_rad)
+            dx, dy = xs - box.center_x_m, ys - box.center_y_m
+            occupied |= (np.abs(c * dx + s * dy) <= box.half_x_m) & (np.abs(-s * dx + c * dy) <= box.half_y_m)
+        for cylinder in scene.cylinders:
+            occupied |= np.hypot(xs - cylinder.center_x_m, ys - cylinder.center_y_m) <= cylinder.radius_m
+        floor = (np.abs(xs) <= scene.floor_half_x_m) & (np.abs(ys) <= scene.floor_half_y_m)
+        self.log_odds[floor] = np.minimum(self.log_odds[floor], -CLAMP_LOG_ODDS)
+        self.log_odds[occupied] = CLAMP_LOG_ODDS
+        self.surfaces_on_cell_edges = True
         self.version += 1
 
     def integrate_sonar(self, tick: TickInput) -> None:
@@ -107,6 +128,8 @@ def environment_modelling_description() -> SkillDescription:
                             "Also mark near sonar echoes (behind the laser's half-plane)."),
             ParameterSchema("restart", ParameterType.BOOL, "", 0.0, 1.0, 0.0,
                             "Start from an empty map instead of extending the one kept."),
+            ParameterSchema("use_floor_plan", ParameterType.BOOL, "", 0.0, 1.0, 0.0,
+                            "Start from the lab's floor plan (walls and furniture as built), then add readings."),
             ParameterSchema("duration_s", ParameterType.DOUBLE, "s", 0.0, 3600.0, 0.0,
                             "Stop and succeed after this long (0 = until cancelled)."),
         ),
@@ -118,12 +141,16 @@ class EnvironmentModelling(SkillController):
 
     motor = False
 
-    def __init__(self, use_sonar: bool, restart: bool, duration_s: float, perception: object) -> None:
+    def __init__(self, use_sonar: bool, restart: bool, duration_s: float, perception: object,
+                 use_floor_plan: bool = False) -> None:
         super().__init__()
         self._perception = perception
         if restart or getattr(perception, "environment", None) is None:
             perception.environment = EnvironmentModel()  # type: ignore[attr-defined]
         self._model: EnvironmentModel = perception.environment  # type: ignore[attr-defined]
+        floor_plan = getattr(perception, "floor_plan", None)
+        if use_floor_plan and floor_plan is not None:
+            self._model.add_floor_plan(floor_plan)
         self._use_sonar = bool(use_sonar)
         self._duration_s = duration_s
         self._started_s: float | None = None

@@ -131,30 +131,28 @@ def _thin(cells: list[tuple[int, int]], every: int = 4) -> list[tuple[int, int]]
 def path_is_blocked(grid: ObstacleMap, waypoints: tuple[tuple[float, float], ...], body_radius_m: float,
                     start_xy: tuple[float, float], check_length_m: float = 1.5) -> bool:
     """True if the next stretch of the path passes closer to a seen obstacle than the body's radius."""
-    occupied = grid.occupied()
     res = grid.resolution_m
-    radius_cells = int(math.ceil(body_radius_m / res))
+    points = [start_xy]
     travelled = 0.0
-    previous = start_xy
     for point in waypoints:
-        segment = math.dist(previous, point)
-        samples = max(1, int(segment / res))
-        for k in range(1, samples + 1):
-            x = previous[0] + (point[0] - previous[0]) * k / samples
-            y = previous[1] + (point[1] - previous[1]) * k / samples
-            ix, iy = grid.cell_of(x, y)
-            window = occupied[max(0, ix - radius_cells):ix + radius_cells + 1,
-                              max(0, iy - radius_cells):iy + radius_cells + 1]
-            if window.any() and _disk_hit(window, ix - max(0, ix - radius_cells), iy - max(0, iy - radius_cells),
-                                          radius_cells):
-                return True
-        travelled += segment
-        previous = point
+        points.append(point)
+        travelled += math.dist(points[-2], point)
         if travelled > check_length_m:
-            return False
-    return False
-
-
-def _disk_hit(window: np.ndarray, cx: int, cy: int, radius_cells: int) -> bool:
-    xs, ys = np.nonzero(window)
-    return bool(np.any((xs - cx) ** 2 + (ys - cy) ** 2 <= radius_cells * radius_cells))
+            break
+    # Sample the stretch every cell, then compare every sample with the occupied cells around it at once.
+    samples = [np.linspace(a, b, max(1, int(math.dist(a, b) / res)) + 1)[1:]
+               for a, b in zip(points[:-1], points[1:], strict=True)]
+    if not samples:
+        return False
+    cells = np.floor((np.concatenate(samples) - grid.origin_m) / res).astype(np.int64)
+    radius_cells = int(math.ceil(body_radius_m / res))
+    lo = np.maximum(cells.min(axis=0) - radius_cells, 0)
+    hi = np.minimum(cells.max(axis=0) + radius_cells + 1, grid.size)
+    if np.any(hi <= lo):
+        return False
+    occupied_x, occupied_y = np.nonzero(grid.occupied_window(lo[0], hi[0], lo[1], hi[1]))
+    if occupied_x.size == 0:
+        return False
+    dx = cells[:, 0:1] - (occupied_x[None, :] + lo[0])
+    dy = cells[:, 1:2] - (occupied_y[None, :] + lo[1])
+    return bool(np.any(dx * dx + dy * dy <= radius_cells * radius_cells))
