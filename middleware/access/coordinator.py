@@ -14,7 +14,7 @@ from sqlalchemy.orm import Session
 from middleware.access import round_robin
 from middleware.access.round_robin import AccessPolicy, QueueState
 from middleware.db import session_factory
-from middleware.models import Course, CourseMembership
+from middleware.models import Course, CourseMembership, RobotControl
 from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.registry import robot_registry
 
@@ -102,9 +102,10 @@ class AccessCoordinator:
             return round_robin.snapshot(session, robot_name)
 
     def controller_token(self, robot_name: str, user_id: int) -> str | None:
-        """The token of user_id if they control the robot now, else None."""
-        state = self.snapshot(robot_name)
-        return state.token if state.controller_id == user_id else None
+        """The token of user_id if they control the robot now, else None (one primary-key read)."""
+        with self._sessions() as session:
+            control = session.get(RobotControl, robot_name)
+            return control.token if control is not None and control.controller_id == user_id else None
 
     def now(self) -> datetime:
         """The coordinator's clock."""

@@ -17,6 +17,7 @@ from pybullet_utils import bullet_client
 from skill_server.errors import InvalidParameter, WorldStopped
 from skill_server.sim import robot_model
 from skill_server.sim.camera import DEFAULT_CAMERA_FPS, Camera, CameraSpec
+from skill_server.sim.course_monitor import CourseMonitor
 from skill_server.sim.drive_gate import DriveAck, DriveGate
 from skill_server.sim.geometry import Pose2D, yaw_from_quaternion
 from skill_server.sim.laser import Laser, LaserSpec
@@ -81,7 +82,9 @@ class World:
         self._camera = Camera(camera or CameraSpec(), spec)
         self._gate = DriveGate(spec)
         self._caster = StaticSceneCaster(self.scene)  # the scene is static: exact hits without pybullet's cost
+        self.course_monitor = CourseMonitor(self.scene.course) if self.scene.course is not None else None
         self._commands: queue.SimpleQueue[tuple[Callable[[], Any], Future[Any]]] = queue.SimpleQueue()
+        self._command_waiting = threading.Event()  # set when a command is queued, so the loop wakes early
         self._frame_sequence = 0
         self._tick = 0
         self._stop = threading.Event()
@@ -235,9 +238,23 @@ class World:
                 continue
             lag_s = time.monotonic() - (wall_origin_s + self._sim_time_s - sim_origin_s)
             if lag_s < 0:
-                self._stop.wait(-lag_s)
+                self._serve_commands_for(-lag_s)
             elif lag_s > MAX_REALTIME_LAG_S:
                 wall_origin_s, sim_origin_s = time.monotonic(), self._sim_time_s
+
+    def _serve_commands_for(self, duration_s: float) -> None:
+        """Waits until the next tick is due, running commands as they arrive rather than at the tick.
+
+        A command (a skill activation, a cancel) is answered within a millisecond instead of waiting up
+        to a control period; the physics still advances only on the fixed schedule.
+        """
+        deadline_s = time.monotonic() + duration_s
+        while not self._stop.is_set():
+            remaining_s = deadline_s - time.monotonic()
+            if remaining_s <= 0 or not self._command_waiting.wait(remaining_s):
+                return
+            self._command_waiting.clear()
+            self._run_pending_commands()
 
     def _call_in_loop(self, action: Callable[[], T]) -> T:
         if self._closed:
@@ -246,6 +263,7 @@ class World:
             return action()
         future: Future[T] = Future()
         self._commands.put((action, future))
+        self._command_waiting.set()
         return future.result(timeout=10.0)
 
     def _run_pending_commands(self) -> None:
@@ -348,6 +366,9 @@ class World:
         self._tick += 1
         self._read_odometry(dt_s)
         ground_truth = self._ground_truth()
+        if self.course_monitor is not None and self.course_monitor.observe(ground_truth, self._sim_time_s):
+            self._place_robot(self.scene.spawn)  # a border line touched: the run restarts at A
+            ground_truth = self.scene.spawn
         if self._tick % SENSOR_EVERY_TICKS == 0:
             self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(ground_truth)
         self._publish_snapshot(ground_truth)
