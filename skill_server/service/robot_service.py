@@ -12,6 +12,7 @@ from skill_server.errors import InvalidParameter, MissingControllerToken, NotCon
 from skill_server.sequencer import Sequencer
 from skill_server.service import convert
 from skill_server.service.common import SimTimePacer, abort, stream_rate
+from skill_server.service.course_rpcs import CourseRpcs
 from skill_server.service.goal_rpcs import GoalRpcs
 from skill_server.sim.camera import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS
 from skill_server.sim.world import World
@@ -23,7 +24,7 @@ STREAM_POLL_S = 0.25  # how long a stream waits before re-checking that its clie
 
 
 
-class RobotService(GoalRpcs, robot_pb2_grpc.RobotServicer):
+class RobotService(GoalRpcs, CourseRpcs, robot_pb2_grpc.RobotServicer):
     """telelab.v1.Robot over one World and its Sequencer; holds no robot state of its own."""
 
     def __init__(self, world: World, skills: SkillRegistry, robot_name: str, sequencer: Sequencer) -> None:

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from skill_server.errors import UnknownScene
+from skill_server.sim.course_monitor import BorderLine, CourseSpec
 from skill_server.sim.geometry import Pose2D
 
 Rgba = tuple[float, float, float, float]
@@ -76,6 +77,7 @@ class SceneSpec:
     cylinders: tuple[CylinderObstacle, ...] = ()
     marks: tuple[FloorMark, ...] = ()
     spawn: Pose2D = field(default_factory=Pose2D)
+    course: CourseSpec | None = None  # course scenes: A, B and border lines the course monitor watches
 
     def scene_boxes(self) -> list[SceneBox]:
         """Walls and obstacles as boxes; a cylinder is reported as its bounding square."""
@@ -179,8 +181,63 @@ def empty_scene() -> SceneSpec:
     return SceneSpec(name="empty", floor_half_x_m=10.0, floor_half_y_m=10.0, marks=tuple(_grid_marks(10.0, 10.0)))
 
 
+WHITE_LINE = (0.97, 0.97, 0.97, 1.0)
+POINT_A_RGBA = (0.15, 0.35, 0.85, 1.0)
+POINT_B_RGBA = (0.95, 0.55, 0.10, 1.0)
+
+
+def _line_mark(line: BorderLine) -> FloorMark:
+    """An axis-aligned white line as a floor mark."""
+    half = line.half_width_m
+    return FloorMark((line.x1_m + line.x2_m) / 2, (line.y1_m + line.y2_m) / 2,
+                     abs(line.x2_m - line.x1_m) / 2 + half, abs(line.y2_m - line.y1_m) / 2 + half, WHITE_LINE)
+
+
+def _point_marks(course: CourseSpec) -> list[FloorMark]:
+    return [FloorMark(course.a_x_m, course.a_y_m, 0.30, 0.30, POINT_A_RGBA),
+            FloorMark(course.b_x_m, course.b_y_m, 0.30, 0.30, POINT_B_RGBA)]
+
+
+def course_a_scene() -> SceneSpec:
+    """Thesis course A: from A to B (5 m straight ahead) and back to A, as fast as possible."""
+    half_x, half_y = 4.0, 2.0
+    course = CourseSpec(a_x_m=-2.5, a_y_m=0.0, b_x_m=2.5, b_y_m=0.0, round_trip=True)
+    marks = [*_grid_marks(half_x, half_y), *_point_marks(course)]
+    return SceneSpec(name="course-A", floor_half_x_m=half_x, floor_half_y_m=half_y,
+                     boxes=tuple(room_walls(half_x, half_y)), marks=tuple(marks),
+                     spawn=Pose2D(course.a_x_m, course.a_y_m, 0.0), course=course)
+
+
+def course_b_lines(w: float = 0.6) -> tuple[BorderLine, ...]:
+    """The borders of an S-shaped corridor 2w wide: east 3 m from A, north 3 m, east 3 m to B (A at -3,-1.5)."""
+    ox, oy = -3.0, -1.5  # A; the centre line is A -> (0,-1.5) -> (0,1.5) -> B (3,1.5)
+    segments = [
+        (ox - w, oy - w, ox - w, oy + w),          # behind A
+        (ox - w, oy - w, ox + 3 + w, oy - w),      # south of the first leg
+        (ox - w, oy + w, ox + 3 - w, oy + w),      # north of the first leg
+        (ox + 3 + w, oy - w, ox + 3 + w, oy + 3 - w),  # east of the second leg
+        (ox + 3 - w, oy + w, ox + 3 - w, oy + 3 + w),  # west of the second leg
+        (ox + 3 - w, oy + 3 + w, ox + 6 + w, oy + 3 + w),  # north of the last leg
+        (ox + 3 + w, oy + 3 - w, ox + 6 + w, oy + 3 - w),  # south of the last leg
+        (ox + 6 + w, oy + 3 - w, ox + 6 + w, oy + 3 + w),  # past B
+    ]
+    return tuple(BorderLine(*segment) for segment in segments)
+
+
+def course_b_scene() -> SceneSpec:
+    """Thesis course B: from A to B along a winding corridor bordered by white lines; a touch restarts the run."""
+    half_x, half_y = 4.5, 3.0
+    course = CourseSpec(a_x_m=-3.0, a_y_m=-1.5, b_x_m=3.0, b_y_m=1.5, round_trip=False, lines=course_b_lines())
+    marks = [*(_line_mark(line) for line in course.lines), *_point_marks(course)]
+    return SceneSpec(name="course-B", floor_half_x_m=half_x, floor_half_y_m=half_y,
+                     floor_rgba=(0.35, 0.37, 0.36, 1.0), boxes=tuple(room_walls(half_x, half_y)), marks=tuple(marks),
+                     spawn=Pose2D(course.a_x_m, course.a_y_m, 0.0), course=course)
+
+
 register_scene("lab", lab_scene)
 register_scene("empty", empty_scene)
+register_scene("course-A", course_a_scene)
+register_scene("course-B", course_b_scene)
 
 
 def build_scene(client: Any, spec: SceneSpec, obstacle_collision_group: int) -> list[int]:

@@ -532,3 +532,57 @@ class LocalizationUpdate(_message.Message):
     update_duration_ms: float
     particles: _containers.RepeatedCompositeFieldContainer[Particle]
     def __init__(self, sim_time_s: _Optional[float] = ..., active: _Optional[bool] = ..., converged: _Optional[bool] = ..., estimate: _Optional[_Union[Pose2D, _Mapping]] = ..., std_x_m: _Optional[float] = ..., std_y_m: _Optional[float] = ..., std_theta_rad: _Optional[float] = ..., odometry: _Optional[_Union[Pose2D, _Mapping]] = ..., ground_truth: _Optional[_Union[Pose2D, _Mapping]] = ..., position_error_m: _Optional[float] = ..., heading_error_rad: _Optional[float] = ..., odometry_position_error_m: _Optional[float] = ..., odometry_heading_error_rad: _Optional[float] = ..., update_duration_ms: _Optional[float] = ..., particles: _Optional[_Iterable[_Union[Particle, _Mapping]]] = ...) -> None: ...
+
+class GetCourseRunRequest(_message.Message):
+    __slots__ = ()
+    def __init__(self) -> None: ...
+
+class CourseRun(_message.Message):
+    __slots__ = ("is_course", "scene_name", "phase", "attempt", "elapsed_s", "errors", "last_attempt", "last_total_time_s", "last_errors", "last_finished_unix_s")
+    IS_COURSE_FIELD_NUMBER: _ClassVar[int]
+    SCENE_NAME_FIELD_NUMBER: _ClassVar[int]
+    PHASE_FIELD_NUMBER: _ClassVar[int]
+    ATTEMPT_FIELD_NUMBER: _ClassVar[int]
+    ELAPSED_S_FIELD_NUMBER: _ClassVar[int]
+    ERRORS_FIELD_NUMBER: _ClassVar[int]
+    LAST_ATTEMPT_FIELD_NUMBER: _ClassVar[int]
+    LAST_TOTAL_TIME_S_FIELD_NUMBER: _ClassVar[int]
+    LAST_ERRORS_FIELD_NUMBER: _ClassVar[int]
+    LAST_FINISHED_UNIX_S_FIELD_NUMBER: _ClassVar[int]
+    is_course: bool
+    scene_name: str
+    phase: str
+    attempt: int
+    elapsed_s: float
+    errors: int
+    last_attempt: int
+    last_total_time_s: float
+    last_errors: int
+    last_finished_unix_s: float
+    def __init__(self, is_course: _Optional[bool] = ..., scene_name: _Optional[str] = ..., phase: _Optional[str] = ..., attempt: _Optional[int] = ..., elapsed_s: _Optional[float] = ..., errors: _Optional[int] = ..., last_attempt: _Optional[int] = ..., last_total_time_s: _Optional[float] = ..., last_errors: _Optional[int] = ..., last_finished_unix_s: _Optional[float] = ...) -> None: ...
+
+class StreamCourseEventsRequest(_message.Message):
+    __slots__ = ("after_index",)
+    AFTER_INDEX_FIELD_NUMBER: _ClassVar[int]
+    after_index: int
+    def __init__(self, after_index: _Optional[int] = ...) -> None: ...
+
+class CourseEvent(_message.Message):
+    __slots__ = ("index", "kind", "sim_time_s", "unix_s", "attempt", "elapsed_s", "errors", "message")
+    INDEX_FIELD_NUMBER: _ClassVar[int]
+    KIND_FIELD_NUMBER: _ClassVar[int]
+    SIM_TIME_S_FIELD_NUMBER: _ClassVar[int]
+    UNIX_S_FIELD_NUMBER: _ClassVar[int]
+    ATTEMPT_FIELD_NUMBER: _ClassVar[int]
+    ELAPSED_S_FIELD_NUMBER: _ClassVar[int]
+    ERRORS_FIELD_NUMBER: _ClassVar[int]
+    MESSAGE_FIELD_NUMBER: _ClassVar[int]
+    index: int
+    kind: str
+    sim_time_s: float
+    unix_s: float
+    attempt: int
+    elapsed_s: float
+    errors: int
+    message: str
+    def __init__(self, index: _Optional[int] = ..., kind: _Optional[str] = ..., sim_time_s: _Optional[float] = ..., unix_s: _Optional[float] = ..., attempt: _Optional[int] = ..., elapsed_s: _Optional[float] = ..., errors: _Optional[int] = ..., message: _Optional[str] = ...) -> None: ...

@@ -99,6 +99,16 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamLocalizationRequest.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.LocalizationUpdate.FromString,
                 _registered_method=True)
+        self.GetCourseRun = channel.unary_unary(
+                '/telelab.v1.Robot/GetCourseRun',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetCourseRunRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CourseRun.FromString,
+                _registered_method=True)
+        self.StreamCourseEvents = channel.unary_stream(
+                '/telelab.v1.Robot/StreamCourseEvents',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamCourseEventsRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CourseEvent.FromString,
+                _registered_method=True)
 
 
 class RobotServicer:
@@ -197,6 +207,20 @@ class RobotServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def GetCourseRun(self, request, context):
+        """The course run now (course scenes: phase, attempt, elapsed time, errors, last finished attempt).
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def StreamCourseEvents(self, request, context):
+        """Course events as they happen (started, reached_b, reached_a, line_contact, finished) after after_index.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
 
 def add_RobotServicer_to_server(servicer, server):
     rpc_method_handlers = {
@@ -264,6 +288,16 @@ def add_RobotServicer_to_server(servicer, server):
                     servicer.StreamLocalization,
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamLocalizationRequest.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.LocalizationUpdate.SerializeToString,
+            ),
+            'GetCourseRun': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetCourseRun,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetCourseRunRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CourseRun.SerializeToString,
+            ),
+            'StreamCourseEvents': grpc.unary_stream_rpc_method_handler(
+                    servicer.StreamCourseEvents,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamCourseEventsRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CourseEvent.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -617,6 +651,60 @@ class Robot:
             '/telelab.v1.Robot/StreamLocalization',
             protos_dot_telelab_dot_v1_dot_robot__pb2.StreamLocalizationRequest.SerializeToString,
             protos_dot_telelab_dot_v1_dot_robot__pb2.LocalizationUpdate.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def GetCourseRun(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/GetCourseRun',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GetCourseRunRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.CourseRun.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def StreamCourseEvents(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_stream(
+            request,
+            target,
+            '/telelab.v1.Robot/StreamCourseEvents',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.StreamCourseEventsRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.CourseEvent.FromString,
             options,
             channel_credentials,
             insecure,

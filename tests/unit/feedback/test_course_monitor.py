@@ -1,0 +1,88 @@
+"""Course runs: arrival at A and B, border-line contact (an error that restarts the run), and run times."""
+
+from __future__ import annotations
+
+import pytest
+
+from skill_server.sim.course_monitor import BorderLine, CourseMonitor, CourseSpec, segment_distance_m, touches_line
+from skill_server.sim.geometry import Pose2D
+from skill_server.sim.scenes import get_scene, known_scenes
+
+
+def drive(monitor: CourseMonitor, points: list[tuple[float, float]], start_s: float, step_s: float = 0.5) -> float:
+    """Feeds poses one step apart; returns the time after the last."""
+    t = start_s
+    for x, y in points:
+        monitor.observe(Pose2D(x, y, 0.0), t)
+        t += step_s
+    return t
+
+
+def kinds(monitor: CourseMonitor) -> list[str]:
+    return [event.kind for event in monitor.events_after(0, 0)]
+
+
+def test_course_a_times_the_round_trip_from_leaving_a_to_coming_back() -> None:
+    monitor = CourseMonitor(get_scene("course-A").course)
+    drive(monitor, [(-2.5, 0.0), (-2.4, 0.0)], 0.0)  # still within A: nothing starts
+    assert kinds(monitor) == []
+    t = drive(monitor, [(-2.0, 0.0), (0.0, 0.0), (2.4, 0.0), (0.0, 0.0), (-2.45, 0.0)], 10.0, 2.0)
+    assert kinds(monitor) == ["started", "reached_b", "reached_a", "finished"]
+    state = monitor.state()
+    assert state.phase == "finished" and state.last_attempt == 1
+    assert state.last_total_time_s == pytest.approx(8.0) and state.last_errors == 0
+    # Leaving A again starts attempt 2.
+    drive(monitor, [(-2.5, 0.0), (-1.5, 0.0)], t)
+    assert monitor.state().attempt == 2 and monitor.state().phase == "to_b"
+
+
+def test_course_b_is_one_way_and_a_line_contact_restarts_the_run_counting_an_error() -> None:
+    course = get_scene("course-B").course
+    monitor = CourseMonitor(course)
+    drive(monitor, [(-3.0, -1.5), (-2.0, -1.5)], 0.0)
+    # Drifting south onto the border line y = -2.1: the body (0.2 m) touches it at y < -1.875.
+    assert monitor.observe(Pose2D(-1.0, -1.9, 0.0), 1.0) is True
+    assert kinds(monitor)[-1] == "line_contact" and monitor.state().errors == 1
+    assert monitor.state().phase == "at_start"
+    # The world puts the robot back at A; the same attempt goes on and its clock keeps running.
+    t = drive(monitor, [(-3.0, -1.5), (-2.0, -1.5), (0.0, -1.5), (0.0, 0.0), (0.0, 1.5), (2.0, 1.5), (3.0, 1.5)],
+              2.0, 1.0)
+    state = monitor.state()
+    assert kinds(monitor)[-2:] == ["reached_b", "finished"]
+    assert state.last_attempt == 1 and state.last_errors == 1
+    assert state.last_total_time_s == pytest.approx(t - 1.0 - 0.5 * 1 - 1.0, abs=1.5)
+
+
+def test_the_winding_centre_line_of_course_b_touches_no_border() -> None:
+    course = get_scene("course-B").course
+    centre = [(-3 + i * 0.1, -1.5) for i in range(31)] + [(0.0, -1.5 + i * 0.1) for i in range(31)]
+    centre += [(i * 0.1, 1.5) for i in range(31)]
+    assert all(touches_line(Pose2D(x, y), course) is None for x, y in centre)
+
+
+@pytest.mark.parametrize(("point", "expected"), [((0.0, 1.0), 1.0), ((-1.0, 0.0), 1.0), ((3.0, 0.0), 1.0),
+                                                 ((1.0, 0.0), 0.0)])
+def test_segment_distance(point: tuple[float, float], expected: float) -> None:
+    assert segment_distance_m(*point, BorderLine(0.0, 0.0, 2.0, 0.0)) == pytest.approx(expected)
+
+
+def test_course_scenes_are_registered_and_plain_scenes_have_no_course() -> None:
+    assert {"course-A", "course-B"} <= set(known_scenes())
+    assert get_scene("lab").course is None
+    a = get_scene("course-A")
+    assert a.course.round_trip and a.course.lines == ()
+    assert (a.spawn.x_m, a.spawn.y_m) == (a.course.a_x_m, a.course.a_y_m)
+    assert isinstance(CourseSpec, type)
+
+
+def test_the_world_puts_the_robot_back_at_a_after_a_line_contact() -> None:
+    from skill_server.sim.world import World
+
+    with World("course-B", realtime=False) as world:
+        world.set_pose(Pose2D(-2.0, -1.5, 0.0))
+        world.step_for(0.1)
+        assert world.course_monitor.state().phase == "to_b"
+        world.set_pose(Pose2D(-1.0, -1.95, 0.0))
+        snapshot = world.step_for(0.1)
+        assert snapshot.ground_truth.distance_to(Pose2D(-3.0, -1.5)) < 0.05
+        assert world.course_monitor.state().errors == 1
