@@ -12,7 +12,10 @@ from skill_server.errors import NoMap
 from skill_server.goals import EventKind, GoalFeedback
 from skill_server.sim.geometry import Pose2D, wrap_angle
 from skill_server.skills.base import Outcome, SkillController, TickInput, feedback_for
+from skill_server.skills.scan_matching import compose, distance_field, relative, signed_point_field
 from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
+
+__all__ = ["LOCALIZATION", "Localization", "LocalizationEstimate", "compose", "distance_field", "relative"]
 
 LOCALIZATION = "localization"
 BEAM_STEP = 6  # every 6th laser beam: 31 beams are plenty for a likelihood field
@@ -23,6 +26,8 @@ FIELD_CAP_CELLS = 12
 CONVERGED_STD_M, CONVERGED_STD_RAD = 0.06, 0.05
 FIELD_REFRESH_S = 2.0
 UPDATE_MIN_M, UPDATE_MIN_RAD = 0.03, 0.03  # motion between two updates once converged
+MAP_ERROR_GAIN = 0.5  # reported std per axis includes this times the echoes' residual RMS (map mismatch)
+MAP_ERROR_LEVER_M = 2.0  # typical beam length [m]: turns the residual into a heading uncertainty
 
 
 @dataclass(frozen=True)
@@ -36,24 +41,9 @@ class LocalizationEstimate:
     converged: bool
     update_duration_ms: float
     particles: tuple[tuple[float, float, float, float], ...]
-
-
-def distance_field(occupied: np.ndarray, cap_cells: int) -> np.ndarray:
-    """Approximate distance [cells] from every cell to the nearest occupied one, capped (chamfer passes)."""
-    field = np.where(occupied, 0.0, float(cap_cells))
-    diagonal = math.sqrt(2.0)
-    for _ in range(cap_cells):
-        grown = field.copy()
-        np.minimum(grown[1:, :], field[:-1, :] + 1, out=grown[1:, :])
-        np.minimum(grown[:-1, :], field[1:, :] + 1, out=grown[:-1, :])
-        np.minimum(grown[:, 1:], field[:, :-1] + 1, out=grown[:, 1:])
-        np.minimum(grown[:, :-1], field[:, 1:] + 1, out=grown[:, :-1])
-        np.minimum(grown[1:, 1:], field[:-1, :-1] + diagonal, out=grown[1:, 1:])
-        np.minimum(grown[:-1, :-1], field[1:, 1:] + diagonal, out=grown[:-1, :-1])
-        np.minimum(grown[1:, :-1], field[:-1, 1:] + diagonal, out=grown[1:, :-1])
-        np.minimum(grown[:-1, 1:], field[1:, :-1] + diagonal, out=grown[:-1, 1:])
-        field = grown
-    return field
+    odometry: Pose2D | None = None  # the odometry reading pose was moved on to (readers extrapolate from it)
+    residual_rms_m: float = 0.0  # RMS distance of the scan's echoes to the map at the estimate
+    particle_std_m: float = 0.0  # the cloud's own spread, hypot(x, y), before the map-mismatch term
 
 
 def localization_description() -> SkillDescription:
@@ -110,6 +100,7 @@ class Localization(SkillController):
         self._converged = False
         self._std = (initial_spread_m, initial_spread_m, initial_spread_rad)
         self._published: LocalizationEstimate | None = None
+        self._beams: tuple[np.ndarray, np.ndarray] | None = None  # the last update's beams (ranges, angles)
         perception.localizer = self  # type: ignore[attr-defined]
 
     def believed_pose(self, odometry: Pose2D) -> Pose2D | None:
@@ -135,10 +126,11 @@ class Localization(SkillController):
             self._refresh_field(tick.sim_time_s)
             self._weigh(tick)
             self._summarise(odometry, (time.perf_counter() - started) * 1000.0)
-        elif tick.new_scan and self._published is not None:
-            # No update while standing still, but readers get the estimate moved on by odometry to this scan.
-            pose = self.believed_pose(odometry) or self._estimate
-            self._published = replace(self._published, pose=pose)
+        elif self._published is not None and self._estimate_odometry is not None:
+            # Between updates (every tick, not only on scans) readers get the estimate moved on by the latest
+            # odometry, so it does not trail the robot by up to a scan period (2 cm at 0.3 m/s).
+            pose = compose(self._estimate, relative(self._estimate_odometry, odometry))
+            self._published = replace(self._published, pose=pose, odometry=odometry)
             self._perception.published_estimate = self._published  # type: ignore[attr-defined]
         std_x, std_y, std_theta = self._std
         return 0.0, 0.0, None, feedback_for(
@@ -172,6 +164,12 @@ class Localization(SkillController):
                                         or sim_time_s - self._field_s < FIELD_REFRESH_S):
             return
         occupied = self._model.occupied()
+        if not getattr(self._model, "surfaces_on_cell_edges", False) and hasattr(self._model, "surface_points"):
+            # A map from readings: signed distance to the echoes' sub-cell points, negative behind a surface (seen
+            # from the free side), so bilinear interpolation puts the zero on the surface, not on cell centres.
+            self._field = signed_point_field(self._model, FIELD_CAP_CELLS)
+            self._field_version, self._field_s = self._model.version, sim_time_s
+            return
         field = distance_field(occupied, FIELD_CAP_CELLS)
         if getattr(self._model, "surfaces_on_cell_edges", False):
             # Surfaces on cell edges: a signed distance to them (negative inside), zero exactly on the edge once
@@ -188,6 +186,7 @@ class Localization(SkillController):
         ranges_m, angles = ranges_m[valid], angles[valid]
         if ranges_m.size < 5:
             return
+        self._beams = (ranges_m, angles)
         p = self._particles
         world = p[:, 2:3] + angles[None, :]
         xs = p[:, 0:1] + ranges_m[None, :] * np.cos(world)
@@ -216,6 +215,21 @@ class Localization(SkillController):
         return ((1 - ax) * ((1 - ay) * field[ix, iy] + ay * field[ix, iy + 1])
                 + ax * ((1 - ay) * field[ix + 1, iy] + ay * field[ix + 1, iy + 1]))
 
+    def _residual_rms(self, pose: Pose2D) -> float:
+        """RMS distance [m] to the map of the last scan's echoes placed at pose (outliers, beyond 3 sigma, left out:
+        the random-echo floor explains them)."""
+        if self._beams is None or self._field is None:
+            return 0.0
+        ranges_m, angles = self._beams
+        world = pose.theta_rad + angles
+        gaps = self._field_at(pose.x_m + ranges_m * np.cos(world), pose.y_m + ranges_m * np.sin(world))
+        inliers = gaps[np.abs(gaps) < 3.0 * HIT_SIGMA_M]
+        return float(np.sqrt(np.mean(inliers**2))) if inliers.size else 3.0 * HIT_SIGMA_M
+
+    def _particle_std(self, x: float, y: float) -> tuple[float, float]:
+        w, p = self._weights, self._particles
+        return math.sqrt(float(np.sum(w * (p[:, 0] - x) ** 2))), math.sqrt(float(np.sum(w * (p[:, 1] - y) ** 2)))
+
     def _resample(self) -> None:
         n = len(self._weights)
         positions = (self._rng.random() + np.arange(n)) / n
@@ -231,28 +245,21 @@ class Localization(SkillController):
         std_y = math.sqrt(float(np.sum(w * (p[:, 1] - y) ** 2)))
         std_theta = math.sqrt(float(np.sum(w * np.angle(np.exp(1j * (p[:, 2] - theta))) ** 2)))
         self._estimate, self._estimate_odometry = Pose2D(x, y, wrap_angle(theta)), odometry
-        self._std = (std_x, std_y, std_theta)
         converged = max(std_x, std_y) < CONVERGED_STD_M and std_theta < CONVERGED_STD_RAD
         if converged and not self._converged:
             self.announce(EventKind.CONVERGED, f"converged at ({x:.2f}, {y:.2f}) m, std {max(std_x, std_y):.3f} m")
         self._converged = converged or (self._converged and max(std_x, std_y) < 2 * CONVERGED_STD_M)
+        # The cloud's spread only measures how well poses are told apart by this map; it says nothing about the map
+        # being wrong (a missed or moved object, surfaces off by part of a cell), which shifts every particle alike.
+        # The echoes' residual at the estimate measures that mismatch, and is added as a correlated error term.
+        residual_m = self._residual_rms(self._estimate)
+        std_x, std_y = math.hypot(std_x, MAP_ERROR_GAIN * residual_m), math.hypot(std_y, MAP_ERROR_GAIN * residual_m)
+        std_theta = math.hypot(std_theta, MAP_ERROR_GAIN * residual_m / MAP_ERROR_LEVER_M)
+        self._std = (std_x, std_y, std_theta)
         sample = np.column_stack([p[:: max(1, len(p) // 200)], w[:: max(1, len(p) // 200)]])
         self._published = LocalizationEstimate(
             self._estimate, std_x, std_y, std_theta, self._converged, duration_ms,
             tuple(map(tuple, sample.tolist())),  # tolist first: a per-element loop costs 0.3 ms per update
+            odometry, residual_m, math.hypot(*self._particle_std(x, y)),
         )
         self._perception.published_estimate = self._published  # type: ignore[attr-defined]
-
-
-def relative(origin: Pose2D, pose: Pose2D) -> Pose2D:
-    """pose expressed in origin's frame."""
-    dx, dy = pose.x_m - origin.x_m, pose.y_m - origin.y_m
-    c, s = math.cos(origin.theta_rad), math.sin(origin.theta_rad)
-    return Pose2D(c * dx + s * dy, -s * dx + c * dy, wrap_angle(pose.theta_rad - origin.theta_rad))
-
-
-def compose(base: Pose2D, delta: Pose2D) -> Pose2D:
-    """delta (in base's frame) applied to base."""
-    c, s = math.cos(base.theta_rad), math.sin(base.theta_rad)
-    return Pose2D(base.x_m + c * delta.x_m - s * delta.y_m, base.y_m + s * delta.x_m + c * delta.y_m,
-                  wrap_angle(base.theta_rad + delta.theta_rad))
