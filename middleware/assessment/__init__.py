@@ -1,0 +1,1 @@
+"""Assessment: question bank, quizzes, timed theoretical and experimental tests, the corrector, the survey."""

@@ -1,0 +1,186 @@
+"""The online test corrector: attempt views, tutors' overrides with a reason, comments, and the grades export."""
+
+from __future__ import annotations
+
+import csv
+import io
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from middleware.accounts.services import Refused
+from middleware.assessment.attempts import _items, settle, settle_due
+from middleware.assessment.bank import list_exams, managed_exam, question_dict, questions_of
+from middleware.assessment.policy import as_utc, may_teach, readable_attempt, teaching_course
+from middleware.courses.schemas import csv_safe
+from middleware.models import CourseMembership, User
+from middleware.models.assessment import Attempt, AttemptReview, Exam
+
+
+def final_results(attempt: Attempt, reviews: list[AttemptReview]) -> list[dict[str, Any]]:
+    """The automatic results with each item's latest override applied (and its reason)."""
+    latest = {r.item: r for r in sorted(reviews, key=lambda r: r.id) if r.points is not None and r.item}
+    out = []
+    for result in attempt.results or []:
+        item = dict(result)
+        override = latest.get(result["item"])
+        if override is not None:
+            item.update(auto_points=result["points"], points=override.points, override_reason=override.reason)
+        out.append(item)
+    return out
+
+
+def final_score(attempt: Attempt, reviews: list[AttemptReview]) -> float | None:
+    """The attempt's mark after overrides (None while in progress)."""
+    if attempt.status != "submitted":
+        return None
+    return round(sum(float(r["points"]) for r in final_results(attempt, reviews)), 4)
+
+
+def reviews_of(session: Session, attempt_id: int) -> list[AttemptReview]:
+    """The attempt's overrides and comments, oldest first."""
+    return list(session.scalars(select(AttemptReview).where(AttemptReview.attempt_id == attempt_id)
+                                .order_by(AttemptReview.id)))
+
+
+def attempt_view(session: Session, actor: User, attempt_id: int, now: datetime) -> dict[str, Any]:
+    """An attempt as its student or a tutor sees it; keys and marks only once submitted; never the trace."""
+    attempt, exam = readable_attempt(session, actor, attempt_id)
+    settle(session, attempt, now)
+    reviews = reviews_of(session, attempt.id)
+    submitted = attempt.status == "submitted"
+    names = dict(session.execute(select(User.id, User.username).where(
+        User.id.in_({r.author_id for r in reviews} | {attempt.user_id}))).all())
+    remaining = None
+    if not submitted and attempt.deadline_at is not None:
+        remaining = max(0.0, (as_utc(attempt.deadline_at) - now).total_seconds())
+    return {
+        "id": attempt.id, "exam": exam_dict(exam, now), "student": names.get(attempt.user_id),
+        "status": attempt.status, "started_at": as_utc(attempt.started_at).isoformat(),
+        "deadline_at": as_utc(attempt.deadline_at).isoformat() if attempt.deadline_at else None,
+        "remaining_s": remaining, "server_now": now.isoformat(),
+        "submitted_at": as_utc(attempt.submitted_at).isoformat() if attempt.submitted_at else None,
+        "submitted_by": attempt.submitted_by,
+        "questions": [question_dict(q, with_key=False) for q in questions_of(session, exam)],
+        "items": sorted(_items(exam)),
+        "answers": attempt.answers or {},
+        "results": final_results(attempt, reviews) if submitted else None,
+        "score": final_score(attempt, reviews), "max_score": attempt.max_score,
+        "reviews": [{"id": r.id, "author": names.get(r.author_id), "item": r.item, "points": r.points,
+                     "reason": r.reason, "comment": r.comment, "at": as_utc(r.created_at).isoformat()}
+                    for r in reviews],
+    }
+
+
+def exam_dict(exam: Exam, now: datetime) -> dict[str, Any]:
+    """An exam as lists show it (no keys)."""
+    from middleware.assessment.attempts import window_state
+
+    task = None
+    if exam.task:
+        task = {k: v for k, v in exam.task.items() if k in ("kind", "instructions", "points", "x_m", "y_m",
+                                                             "distance_m", "rubric")}
+    return {"id": exam.id, "course_id": exam.course_id, "title": exam.title, "kind": exam.kind,
+            "opens_at": as_utc(exam.opens_at).isoformat() if exam.opens_at else None,
+            "closes_at": as_utc(exam.closes_at).isoformat() if exam.closes_at else None,
+            "duration_s": exam.duration_s, "max_attempts": exam.max_attempts, "question_ids": exam.question_ids,
+            "robot_name": exam.robot_name, "task": task, "state": window_state(exam, now)}
+
+
+def list_attempts(session: Session, actor: User, exam_id: int, now: datetime) -> list[dict[str, Any]]:
+    """Every attempt at an exam with its student and mark (the course's tutors, admins)."""
+    exam = managed_exam(session, actor, exam_id)
+    settle_due(session, now, exam_id=exam.id)
+    rows = session.execute(select(Attempt, User.username).join(User, User.id == Attempt.user_id)
+                           .where(Attempt.exam_id == exam.id).order_by(User.username, Attempt.id)).all()
+    out = []
+    for attempt, username in rows:
+        reviews = reviews_of(session, attempt.id)
+        out.append({"id": attempt.id, "student": username, "status": attempt.status,
+                    "submitted_at": as_utc(attempt.submitted_at).isoformat() if attempt.submitted_at else None,
+                    "submitted_by": attempt.submitted_by, "auto_score": attempt.auto_score,
+                    "score": final_score(attempt, reviews), "max_score": attempt.max_score,
+                    "reviewed": any(r.points is not None for r in reviews)})
+    return out
+
+
+def _reviewable(session: Session, actor: User, attempt_id: int, now: datetime) -> Attempt:
+    attempt, exam = readable_attempt(session, actor, attempt_id)
+    if not may_teach(session, actor, exam.course_id):
+        raise Refused(403, "forbidden", "Only the course's tutors review attempts.")
+    settle(session, attempt, now)
+    if attempt.status != "submitted":
+        raise Refused(409, "not_submitted", "The attempt is still in progress; review it once submitted.",
+                      "attempt_id")
+    return attempt
+
+
+def override_mark(session: Session, actor: User, attempt_id: int, item: object, points: object, reason: object,
+                  comment: object, now: datetime) -> AttemptReview:
+    """Replaces one item's mark; the reason is required and kept, the automatic mark stays visible."""
+    attempt = _reviewable(session, actor, attempt_id, now)
+    result = next((r for r in attempt.results or [] if r["item"] == str(item)), None)
+    if result is None:
+        raise Refused(400, "invalid_field", "Choose an item of this attempt.", "item")
+    try:
+        value = float(points)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not 0 <= value <= float(result["max_points"]):
+        raise Refused(400, "invalid_field", f"points must be from 0 to {result['max_points']:g}.", "points")
+    if not isinstance(reason, str) or not reason.strip() or len(reason) > 2000:
+        raise Refused(400, "invalid_field", "Say why the mark changes (1 to 2000 characters).", "reason")
+    text = comment.strip() if isinstance(comment, str) else ""
+    review = AttemptReview(attempt_id=attempt.id, author_id=actor.id, item=str(item), points=round(value, 4),
+                           reason=reason.strip(), comment=text[:4000], created_at=now)
+    session.add(review)
+    session.flush()
+    return review
+
+
+def add_comment(session: Session, actor: User, attempt_id: int, item: object, comment: object,
+                now: datetime) -> AttemptReview:
+    """A tutor's comment on the attempt (item None) or on one item."""
+    attempt = _reviewable(session, actor, attempt_id, now)
+    if not isinstance(comment, str) or not comment.strip() or len(comment) > 4000:
+        raise Refused(400, "invalid_field", "Write a comment of 1 to 4000 characters.", "comment")
+    if item not in (None, "") and str(item) not in {r["item"] for r in attempt.results or []}:
+        raise Refused(400, "invalid_field", "Choose an item of this attempt.", "item")
+    review = AttemptReview(attempt_id=attempt.id, author_id=actor.id, item=str(item) if item else None,
+                           points=None, reason="", comment=comment.strip(), created_at=now)
+    session.add(review)
+    session.flush()
+    return review
+
+
+def best_scores(session: Session, course_id: int, now: datetime) -> dict[tuple[int, int], float]:
+    """(user id, exam id) -> the best final mark of the user's submitted attempts."""
+    settle_due(session, now)
+    best: dict[tuple[int, int], float] = {}
+    attempts = session.scalars(select(Attempt).join(Exam, Exam.id == Attempt.exam_id)
+                               .where(Exam.course_id == course_id, Attempt.status == "submitted"))
+    for attempt in list(attempts):
+        score = final_score(attempt, reviews_of(session, attempt.id)) or 0.0
+        key = (attempt.user_id, attempt.exam_id)
+        best[key] = max(best.get(key, 0.0), score)
+    return best
+
+
+def grades_csv(session: Session, actor: User, course_id: int, now: datetime) -> str:
+    """One row per student, one column per exam (best final mark out of its maximum), every cell formula-safe."""
+    teaching_course(session, actor, course_id)
+    exams = list_exams(session, course_id)
+    students = session.execute(select(User.id, User.username)
+                               .join(CourseMembership, CourseMembership.user_id == User.id)
+                               .where(CourseMembership.course_id == course_id, CourseMembership.role == "student")
+                               .order_by(User.username)).all()
+    best = best_scores(session, course_id, now)
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\r\n")
+    writer.writerow(["username", *[csv_safe(f"{e.title} ({e.kind})") for e in exams]])
+    for user_id, username in students:
+        writer.writerow([csv_safe(username), *[("" if (user_id, e.id) not in best else f"{best[(user_id, e.id)]:g}")
+                                               for e in exams]])
+    return out.getvalue()

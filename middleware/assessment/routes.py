@@ -1,0 +1,345 @@
+"""Assessment JSON API: bank, exams, attempts, the corrector, grades, recommendations, survey. Routes stay thin."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from datetime import UTC, datetime
+from typing import Any
+
+from flask import Blueprint, Response, current_app, jsonify, request
+from flask_login import current_user, login_required
+from sqlalchemy.orm import Session
+
+from middleware.accounts.routes import api_error
+from middleware.accounts.services import Refused
+from middleware.assessment import attempts, bank, recommendations, review, survey
+from middleware.assessment.attempts import TimeUp
+from middleware.assessment.schemas import parse_exam, parse_question, parse_survey
+from middleware.auth.schemas import InvalidField
+from middleware.db import get_session, session_factory
+from middleware.errors import ApiError
+
+blueprint = Blueprint("assessment", __name__)
+
+
+def server_now() -> datetime:
+    """The server's clock (tests may set ASSESSMENT_CLOCK); the browser's clock is never used."""
+    clock = current_app.config.get("ASSESSMENT_CLOCK")
+    return clock() if clock else datetime.now(UTC)
+
+
+def controls_robot(robot_name: str, user_id: int) -> bool:
+    """True when the user controls the robot now (their turn, or their booking's priority gave it to them)."""
+    from middleware.access.coordinator import access_coordinator
+
+    try:
+        return access_coordinator().controller_token(robot_name, user_id) is not None
+    except Exception:  # an unknown robot: nobody controls it
+        return False
+
+
+def start_recording(attempt_id: int, robot_name: str) -> None:
+    """Records the robot's ground truth for the attempt in this process, flushing to the database."""
+    from middleware.assessment import recorder
+    from middleware.robots.registry import robot_registry
+
+    link = robot_registry().get(robot_name)
+    if link is None:
+        return
+    factory = session_factory(current_app._get_current_object())  # type: ignore[attr-defined]
+
+    def flush(trace: list[list[float]]) -> bool:
+        with factory() as session, session.begin():
+            return attempts.record_trace(session, attempt_id, trace)
+
+    recorder.start(attempt_id, link, flush)
+
+
+def run(action: Callable[[Session], Any], status: int = 200) -> tuple[Response, int]:
+    """Runs action in the request's transaction: commit on success, roll back on a refusal (a TimeUp commits)."""
+    dbs = get_session()
+    try:
+        body = action(dbs)
+    except TimeUp as late:
+        dbs.commit()  # the attempt was submitted as it stood at the deadline
+        raise api_error(late) from None
+    except (Refused, InvalidField) as error:
+        dbs.rollback()
+        raise api_error(error) from None
+    dbs.commit()
+    return jsonify(body), status
+
+
+def json_body() -> dict[str, Any]:
+    """The request's JSON object, or a 400."""
+    data = request.get_json(silent=True)
+    if not isinstance(data, dict):
+        raise ApiError(400, "invalid_field", "Send a JSON object.", "body")
+    return data
+
+
+# --- bank -----------------------------------------------------------------------------------------
+
+
+@blueprint.get("/api/courses/<int:course_id>/questions")
+@login_required
+def api_questions(course_id: int):  # type: ignore[no-untyped-def]
+    """The course's question bank, with keys (its tutors, admins)."""
+    return run(lambda dbs: {"questions": [bank.question_dict(q) for q in
+                                          bank.list_questions(dbs, current_user, course_id)]})
+
+
+@blueprint.post("/api/courses/<int:course_id>/questions")
+@login_required
+def api_add_question(course_id: int):  # type: ignore[no-untyped-def]
+    """{kind, prompt, topics, points, ...kind's fields}: adds a question."""
+    data = json_body()
+
+    def action(dbs):  # type: ignore[no-untyped-def]
+        bank.teaching_course(dbs, current_user, course_id)
+        return {"question": bank.question_dict(bank.add_question(dbs, current_user, course_id, parse_question(data)))}
+
+    return run(action, 201)
+
+
+@blueprint.put("/api/questions/<int:question_id>")
+@login_required
+def api_update_question(question_id: int):  # type: ignore[no-untyped-def]
+    """Replaces a question."""
+    data = json_body()
+
+    def action(dbs):  # type: ignore[no-untyped-def]
+        bank.course_question(dbs, current_user, question_id)
+        return {"question": bank.question_dict(bank.update_question(dbs, current_user, question_id,
+                                                                    parse_question(data)))}
+
+    return run(action)
+
+
+@blueprint.delete("/api/questions/<int:question_id>")
+@login_required
+def api_delete_question(question_id: int):  # type: ignore[no-untyped-def]
+    """Removes a question from the bank."""
+    return run(lambda dbs: bank.delete_question(dbs, current_user, question_id) or {"deleted": question_id})
+
+
+@blueprint.get("/api/courses/<int:course_id>/bank.json")
+@login_required
+def api_export_bank(course_id: int):  # type: ignore[no-untyped-def]
+    """The bank as a file to download."""
+    dbs = get_session()
+    try:
+        text = bank.export_bank(dbs, current_user, course_id)
+    except Refused as refused:
+        raise api_error(refused) from None
+    return Response(text, mimetype="application/json",
+                    headers={"Content-Disposition": f'attachment; filename="question-bank-{course_id}.json"'})
+
+
+@blueprint.post("/api/courses/<int:course_id>/bank")
+@login_required
+def api_import_bank(course_id: int):  # type: ignore[no-untyped-def]
+    """A bank file (the upload 'file', or the JSON body): every question is added, or none."""
+    def action(dbs):  # type: ignore[no-untyped-def]
+        bank.teaching_course(dbs, current_user, course_id)
+        upload = request.files.get("file")
+        data = upload.read() if upload is not None else request.get_data()
+        return {"imported": len(bank.import_bank(dbs, current_user, course_id, data))}
+
+    return run(action, 201)
+
+
+# --- exams ----------------------------------------------------------------------------------------
+
+
+@blueprint.get("/api/courses/<int:course_id>/exams")
+@login_required
+def api_exams(course_id: int):  # type: ignore[no-untyped-def]
+    """The course's quizzes and tests (its students and tutors, admins)."""
+    def action(dbs):  # type: ignore[no-untyped-def]
+        if not bank.may_teach(dbs, current_user, course_id):
+            bank.student_course(dbs, current_user, course_id)
+        now = server_now()
+        return {"exams": [review.exam_dict(e, now) for e in bank.list_exams(dbs, course_id)]}
+
+    return run(action)
+
+
+@blueprint.post("/api/courses/<int:course_id>/exams")
+@login_required
+def api_create_exam(course_id: int):  # type: ignore[no-untyped-def]
+    """{title, kind, opens_at, closes_at, duration_s, max_attempts, question_ids, task fields}: a new exam."""
+    data = json_body()
+
+    def action(dbs):  # type: ignore[no-untyped-def]
+        bank.teaching_course(dbs, current_user, course_id)
+        exam = bank.create_exam(dbs, current_user, course_id, parse_exam(data))
+        return {"exam": review.exam_dict(exam, server_now())}
+
+    return run(action, 201)
+
+
+@blueprint.put("/api/exams/<int:exam_id>")
+@login_required
+def api_update_exam(exam_id: int):  # type: ignore[no-untyped-def]
+    """Changes an exam (questions and task frozen once started)."""
+    data = json_body()
+
+    def action(dbs):  # type: ignore[no-untyped-def]
+        bank.managed_exam(dbs, current_user, exam_id)
+        return {"exam": review.exam_dict(bank.update_exam(dbs, current_user, exam_id, parse_exam(data)),
+                                         server_now())}
+
+    return run(action)
+
+
+# --- attempts -------------------------------------------------------------------------------------
+
+
+@blueprint.get("/api/exams/<int:exam_id>/attempts")
+@login_required
+def api_exam_attempts(exam_id: int):  # type: ignore[no-untyped-def]
+    """Every attempt at the exam (its course's tutors, admins)."""
+    return run(lambda dbs: {"attempts": review.list_attempts(dbs, current_user, exam_id, server_now())})
+
+
+def start_attempt(dbs: Session, exam_id: int) -> Any:
+    """Starts (or resumes) the student's attempt; starts recording for an experimental test."""
+    attempt = attempts.start_attempt(dbs, current_user, exam_id, server_now(), controls_robot)
+    exam = bank.get_exam(dbs, exam_id)
+    dbs.commit()
+    if exam.kind == "experimental" and exam.robot_name:
+        start_recording(attempt.id, exam.robot_name)
+    return attempt
+
+
+@blueprint.post("/api/exams/<int:exam_id>/attempts")
+@login_required
+def api_start_attempt(exam_id: int):  # type: ignore[no-untyped-def]
+    """Starts the student's attempt (or returns the one in progress)."""
+    return run(lambda dbs: {"attempt": review.attempt_view(dbs, current_user, start_attempt(dbs, exam_id).id,
+                                                           server_now())}, 201)
+
+
+@blueprint.get("/api/attempts/<int:attempt_id>")
+@login_required
+def api_attempt(attempt_id: int):  # type: ignore[no-untyped-def]
+    """The attempt: questions, answers, time left by the server's clock; marks and comments once submitted."""
+    return run(lambda dbs: {"attempt": review.attempt_view(dbs, current_user, attempt_id, server_now())})
+
+
+@blueprint.patch("/api/attempts/<int:attempt_id>/answers")
+@login_required
+def api_save_answers(attempt_id: int):  # type: ignore[no-untyped-def]
+    """{answers: {item: answer}}: saves answers as the student goes (refused after the deadline)."""
+    data = json_body()
+    answers = data.get("answers")
+    if not isinstance(answers, dict):
+        raise ApiError(400, "invalid_field", "answers must be an object of item -> answer.", "answers")
+
+    def action(dbs):  # type: ignore[no-untyped-def]
+        attempt = attempts.save_answers(dbs, current_user, attempt_id, answers, server_now())
+        return {"saved": sorted(answers), "answers": attempt.answers}
+
+    return run(action)
+
+
+def finish_recording(attempt_id: int) -> list[list[float]] | None:
+    """The trace this process recorded for the attempt (None: use what was flushed to the database)."""
+    from middleware.assessment import recorder
+
+    return recorder.stop(attempt_id)
+
+
+@blueprint.post("/api/attempts/<int:attempt_id>/submit")
+@login_required
+def api_submit(attempt_id: int):  # type: ignore[no-untyped-def]
+    """{answers?}: submits the attempt; it is graded at once (quizzes show the correction immediately)."""
+    data = request.get_json(silent=True) or {}
+    answers = data.get("answers") if isinstance(data, dict) and isinstance(data.get("answers"), dict) else None
+
+    def action(dbs):  # type: ignore[no-untyped-def]
+        owner = attempts.get_attempt(dbs, attempt_id)
+        trace = finish_recording(attempt_id) if owner.user_id == current_user.id else None
+        attempts.submit_attempt(dbs, current_user, attempt_id, server_now(), answers, trace)
+        return {"attempt": review.attempt_view(dbs, current_user, attempt_id, server_now())}
+
+    return run(action)
+
+
+@blueprint.post("/api/attempts/<int:attempt_id>/overrides")
+@login_required
+def api_override(attempt_id: int):  # type: ignore[no-untyped-def]
+    """{item, points, reason, comment?}: a tutor replaces one item's mark."""
+    data = json_body()
+    return run(lambda dbs: {"review_id": review.override_mark(
+        dbs, current_user, attempt_id, data.get("item"), data.get("points"), data.get("reason"),
+        data.get("comment"), server_now()).id}, 201)
+
+
+@blueprint.post("/api/attempts/<int:attempt_id>/comments")
+@login_required
+def api_comment(attempt_id: int):  # type: ignore[no-untyped-def]
+    """{comment, item?}: a tutor's comment the student sees with the corrected attempt."""
+    data = json_body()
+    return run(lambda dbs: {"review_id": review.add_comment(dbs, current_user, attempt_id, data.get("item"),
+                                                            data.get("comment"), server_now()).id}, 201)
+
+
+# --- grades, recommendations, survey -------------------------------------------------------------
+
+
+@blueprint.get("/api/courses/<int:course_id>/grades.csv")
+@login_required
+def api_grades_csv(course_id: int):  # type: ignore[no-untyped-def]
+    """Best final mark per student and exam, as CSV (its tutors, admins)."""
+    dbs = get_session()
+    try:
+        text = review.grades_csv(dbs, current_user, course_id, server_now())
+    except Refused as refused:
+        dbs.rollback()
+        raise api_error(refused) from None
+    dbs.commit()
+    return Response(text, mimetype="text/csv", headers={
+        "Content-Disposition": f'attachment; filename="grades-{course_id}.csv"', "Cache-Control": "no-store"})
+
+
+@blueprint.get("/api/courses/<int:course_id>/recommendations")
+@login_required
+def api_recommendations(course_id: int):  # type: ignore[no-untyped-def]
+    """The student's per-topic results and the activities recommended for weak topics."""
+    def action(dbs):  # type: ignore[no-untyped-def]
+        bank.student_course(dbs, current_user, course_id)
+        scores = recommendations.topic_scores(dbs, current_user.id, course_id)
+        return {"topics": [{"topic": s.topic, "points": s.points, "max_points": s.max_points,
+                            "ratio": round(s.ratio, 4)} for s in scores],
+                "recommendations": [r.__dict__ for r in recommendations.recommend(dbs, current_user.id, course_id,
+                                                                                   server_now())]}
+
+    return run(action)
+
+
+@blueprint.post("/api/courses/<int:course_id>/survey")
+@login_required
+def api_survey(course_id: int):  # type: ignore[no-untyped-def]
+    """{ratings: {item: 1-5}, comments}: the student's evaluation of the system, once."""
+    data = json_body()
+
+    def action(dbs):  # type: ignore[no-untyped-def]
+        bank.student_course(dbs, current_user, course_id)
+        ratings, comments = parse_survey(data)
+        survey.submit_survey(dbs, current_user, course_id, ratings, comments)
+        return {"answered": True}
+
+    return run(action, 201)
+
+
+@blueprint.get("/api/courses/<int:course_id>/survey/results")
+@login_required
+def api_survey_results(course_id: int):  # type: ignore[no-untyped-def]
+    """The distribution of answers per question and the comments (its tutors, admins)."""
+    def action(dbs):  # type: ignore[no-untyped-def]
+        items, comments = survey.results(dbs, current_user, course_id)
+        return {"questions": [i.to_dict() for i in items], "comments": comments}
+
+    return run(action)
