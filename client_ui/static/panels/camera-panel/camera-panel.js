@@ -1,9 +1,13 @@
 // <camera-panel>: draws the robot's camera stream on a canvas and shows frame rate and video age.
 // In: `robotName` (string), `frame` (ArrayBuffer from the camera socket), `message` (status/error
-// JSON from the server), `connected` (bool: is the camera socket open). Out: none; it only shows.
+// JSON from the server), `connected` (bool: is the camera socket open), and for the feedback layer
+// `info` (RobotInfo: camera size and field of view), `driveReady` / `driveSent` (the drive socket's
+// "ready" and every message sent on it), `feedbackEnabled` (bool).
+// Out: `camera-feedback-change` {enabled} when the person turns the motion preview on or off.
 
 import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
 import { framesInWindow, parseFramePacket } from "../../js/camera-frame.js";
+import { FeedbackLayer } from "./camera-feedback.js";
 
 const FPS_WINDOW_MS = 1000;
 
@@ -21,6 +25,12 @@ export class CameraPanel extends HTMLElement {
   #statsTimer = 0;
   #lastHeader = null;
   #stage;
+  #feedback = new FeedbackLayer();
+  #bitmap = null;
+  #feedbackToggle;
+  #delayOutput;
+  #injectedBadge;
+  #animation = 0;
 
   connectedCallback() {
     this.#build();
@@ -43,13 +53,27 @@ export class CameraPanel extends HTMLElement {
     this.#ageOutput = h("span", { "data-field": "video-age", text: "—" });
     this.#sequenceOutput = h("span", { "data-field": "frame-sequence", text: "—" });
     this.#messageLine = h("p", { class: "camera__message", "data-field": "camera-message", hidden: true });
+    this.#delayOutput = h("span", { "data-field": "video-delay", text: "—" });
+    this.#injectedBadge = h("span", { class: "camera__injected", "data-field": "injected-delay", hidden: true });
+    this.#feedbackToggle = h("input", { type: "checkbox", id: "camera-feedback-toggle", "data-field": "feedback-toggle" });
+    this.#feedbackToggle.checked = this.#feedback.enabled;
+    this.#feedbackToggle.addEventListener("change", () => {
+      this.feedbackEnabled = this.#feedbackToggle.checked;
+      this.dispatchEvent(new CustomEvent("camera-feedback-change", { bubbles: true,
+        detail: { enabled: this.#feedbackToggle.checked } }));
+    });
     this.append(
       h("h2", { class: "panel__title", id: "camera-title", text: "Camera" }),
       this.#stage = h("div", { class: "camera__stage" }, this.#canvas, this.#placeholder),
       h("p", { class: "camera__stats" },
         h("span", {}, this.#fpsOutput, " fps"),
         h("span", {}, "video age ", this.#ageOutput, " ms"),
-        h("span", {}, "frame ", this.#sequenceOutput)),
+        h("span", {}, "frame ", this.#sequenceOutput),
+        h("span", { title: "From sending a command to the first frame that shows it" },
+          "video delay ", this.#delayOutput, " s"),
+        this.#injectedBadge),
+      h("p", { class: "camera__feedback" },
+        h("label", {}, this.#feedbackToggle, " Motion preview: move the picture at once with my commands")),
       this.#messageLine,
     );
     this.#applyLabel();
@@ -80,9 +104,38 @@ export class CameraPanel extends HTMLElement {
     this.#decode(buffer);
   }
 
+  /** The robot's description: the camera's size and field of view. */
+  set info(info) {
+    this.#feedback.setInfo(info);
+    this.#requestDraw();
+  }
+
+  /** The drive socket's "ready" message: its sequence_base maps frames' sequences to ours. */
+  set driveReady(message) {
+    this.#feedback.reset(message?.sequence_base);
+  }
+
+  /** A message just sent on the drive socket: the picture moves at once. */
+  set driveSent(message) {
+    this.#feedback.recordSent(message, performance.now());
+    this.#requestDraw();
+  }
+
+  set feedbackEnabled(enabled) {
+    this.#feedback.enabled = Boolean(enabled);
+    if (this.#feedbackToggle) this.#feedbackToggle.checked = this.#feedback.enabled;
+    this.#requestDraw();
+  }
+
+  get feedbackEnabled() {
+    return this.#feedback.enabled;
+  }
+
   /** A text message from the camera socket: {type: "status"|"error", ...}. */
   set message(message) {
     this.#build();
+    if (message && "injected_delay_s" in message) this.#showInjectedDelay(Number(message.injected_delay_s));
+    if (message?.type === "status" && !("robot_online" in message)) return;
     if (message?.type === "status") {
       const offline = message.robot_online === false;
       this.#showMessage(message.message || (offline ? "The robot is offline." : ""), offline);
@@ -123,14 +176,33 @@ export class CameraPanel extends HTMLElement {
     }
   }
 
+  #showInjectedDelay(seconds) {
+    const active = Number.isFinite(seconds) && seconds > 0;
+    this.#injectedBadge.hidden = !active;
+    this.#injectedBadge.textContent = active ? `Added delay ${seconds.toFixed(1)} s` : "";
+  }
+
+  #requestDraw() {
+    if (this.#animation || !this.#bitmap) return;
+    this.#animation = requestAnimationFrame(() => {
+      this.#animation = 0;
+      const moving = this.#feedback.draw(this.#canvas, this.#bitmap, performance.now());
+      // While predicted motion continues the picture keeps moving, frame or no frame.
+      if (moving) this.#requestDraw();
+    });
+  }
+
   #draw(bitmap, header) {
     const canvas = this.#canvas;
     if (canvas.width !== bitmap.width || canvas.height !== bitmap.height) {
       canvas.width = bitmap.width;
       canvas.height = bitmap.height;
     }
-    canvas.getContext("2d").drawImage(bitmap, 0, 0);
-    bitmap.close();
+    this.#bitmap?.close();
+    this.#bitmap = bitmap;
+    this.#feedback.recordFrame(header, performance.now());
+    this.#feedback.draw(canvas, bitmap, performance.now());
+    this.#requestDraw();
     this.#placeholder.hidden = true;
     this.#stage.classList.remove("camera__stage--stale");
     this.#lastHeader = header;
@@ -149,6 +221,8 @@ export class CameraPanel extends HTMLElement {
       this.#ageOutput.textContent = String(Math.max(0, Math.round(Date.now() - captureS * 1000)));
     }
     if (Number.isFinite(Number(header.frame_sequence))) this.#sequenceOutput.textContent = String(header.frame_sequence);
+    const delayMs = this.#feedback.videoDelayMs(header, Date.now());
+    this.#delayOutput.textContent = Number.isFinite(delayMs) ? (delayMs / 1000).toFixed(2) : "—";
   }
 }
 

@@ -1,0 +1,174 @@
+"""The experiment page and its JSON API: trials for students, delays and the class's results for tutors."""
+
+from __future__ import annotations
+
+import json
+
+from flask import Blueprint, Response, jsonify, render_template, request
+from flask_login import current_user, login_required
+from sqlalchemy import select
+
+from middleware.accounts.services import Refused
+from middleware.auth.schemas import InvalidField
+from middleware.db import get_session
+from middleware.errors import ApiError
+from middleware.experiment import services
+from middleware.experiment.robot_course import course_run
+from middleware.models import User, UserPreference
+from middleware.models.accounts import utc_now
+from middleware.models.experiment import Trial
+from middleware.robots.link import RobotUnavailable
+from middleware.robots.registry import robot_registry
+
+blueprint = Blueprint("experiment", __name__)
+FEEDBACK_PREFERENCE_KEY = "camera-feedback"
+
+
+def _actor() -> User:
+    return get_session().get(User, int(current_user.get_id()))  # type: ignore[return-value]
+
+
+def _run(action):  # type: ignore[no-untyped-def]
+    """Runs a service call, committing on success; refusals become JSON errors naming the field."""
+    session = get_session()
+    try:
+        result = action(session)
+        session.commit()
+        return result
+    except Refused as refused:
+        session.rollback()
+        raise ApiError(refused.status, refused.code, refused.message, refused.field) from None
+    except InvalidField as invalid:
+        session.rollback()
+        raise ApiError(400, "invalid_field", invalid.message, invalid.field) from None
+
+
+def _trial_dict(trial: Trial) -> dict[str, object]:
+    return {"id": trial.id, "robot_name": trial.robot_name, "course": trial.course, "delay_s": trial.delay_s,
+            "feedback": trial.feedback, "status": trial.status, "total_time_s": trial.total_time_s,
+            "errors": trial.errors}
+
+
+def course_robots() -> list[dict[str, str]]:
+    """Online robots whose skill server runs a course scene."""
+    registry = robot_registry()
+    found = []
+    for name in registry.names():
+        link = registry.get(name)
+        try:
+            scene = link.info().scene_name if link is not None else ""
+        except RobotUnavailable:
+            continue
+        if scene in services.COURSES:
+            found.append({"name": name, "scene": scene})
+    return found
+
+
+def _set_feedback_preference(session, user_id: int, enabled: bool) -> None:  # type: ignore[no-untyped-def]
+    """The trial's condition becomes the console's motion-preview setting."""
+    row = session.scalar(select(UserPreference).where(UserPreference.user_id == user_id,
+                                                      UserPreference.key == FEEDBACK_PREFERENCE_KEY))
+    value = json.dumps(enabled)
+    if row is None:
+        session.add(UserPreference(user_id=user_id, key=FEEDBACK_PREFERENCE_KEY, value_json=value))
+    else:
+        row.value_json, row.updated_at = value, utc_now()
+
+
+@blueprint.get("/experiment")
+@login_required
+def page():  # type: ignore[no-untyped-def]
+    """Students run trials; tutors set delays and read the results."""
+    return render_template("experiment/experiment.html", is_teacher=current_user.role in ("tutor", "admin"))
+
+
+@blueprint.get("/api/experiment/state")
+@login_required
+def state():  # type: ignore[no-untyped-def]
+    """The student's trial in progress, their delay, and the robots that run a course."""
+    session = get_session()
+    actor = _actor()
+    trial = services.current_trial(session, actor)
+    return jsonify({"trial": _trial_dict(trial) if trial else None, "robots": course_robots(),
+                    "delay_s": services.get_video_delay(session, actor.id)})
+
+
+@blueprint.post("/api/experiment/trials")
+@login_required
+def start_trial():  # type: ignore[no-untyped-def]
+    """Assigns a random condition on the chosen course robot and applies its delay and feedback setting."""
+    body = request.get_json(silent=True) or {}
+    robot_name = body.get("robot_name")
+    robots = {r["name"]: r["scene"] for r in course_robots()}
+    if not isinstance(robot_name, str) or robot_name not in robots:
+        raise ApiError(400, "invalid_field", "Choose a robot that runs a course scene.", "robot_name")
+
+    def action(session):  # type: ignore[no-untyped-def]
+        trial = services.assign_trial(session, _actor(), robot_name, robots[robot_name])
+        _set_feedback_preference(session, trial.user_id, trial.feedback)
+        return trial
+
+    return jsonify({"trial": _trial_dict(_run(action))}), 201
+
+
+@blueprint.post("/api/experiment/trials/<int:trial_id>/finish")
+@login_required
+def finish(trial_id: int):  # type: ignore[no-untyped-def]
+    """Records the run the robot's course monitor finished after the trial began."""
+    session = get_session()
+    trial = session.get(Trial, trial_id)
+    if trial is None or trial.user_id != int(current_user.get_id()):
+        raise ApiError(404, "unknown_trial", "There is no such trial of yours.", "trial_id")
+    link = robot_registry().get(trial.robot_name)
+    try:
+        run = course_run(link) if link is not None else None
+    except RobotUnavailable as error:
+        raise ApiError(503, "robot_offline", f"{error} Try again in a moment.") from None
+    if run is None or not run.is_course or run.last_attempt == 0 \
+            or run.last_finished_unix_s < trial.created_at.timestamp():
+        raise ApiError(409, "run_not_finished", "The robot has not seen you finish the course since this trial "
+                       "began. Drive from A to B" + (" and back" if trial.course == "course-A" else "") + " first.")
+    result = services.RunResult(run.last_total_time_s, run.last_errors)
+    return jsonify({"trial": _trial_dict(_run(lambda s: services.finish_trial(s, _actor(), trial_id, result)))})
+
+
+@blueprint.post("/api/experiment/trials/<int:trial_id>/abandon")
+@login_required
+def abandon(trial_id: int):  # type: ignore[no-untyped-def]
+    """Gives the trial up; it is not counted."""
+    return jsonify({"trial": _trial_dict(_run(lambda s: services.abandon_trial(s, _actor(), trial_id)))})
+
+
+@blueprint.put("/api/experiment/delays/<username>")
+@login_required
+def put_delay(username: str):  # type: ignore[no-untyped-def]
+    """A tutor sets one user's added video delay: {"delay_s": 0..7}."""
+    body = request.get_json(silent=True)
+    if not isinstance(body, dict) or "delay_s" not in body:
+        raise ApiError(400, "invalid_field", "Send a JSON object with delay_s.", "delay_s")
+    session = get_session()
+    user = session.scalar(select(User).where(User.username == username.lower()))
+    user_id = user.id if user is not None else -1
+    row = _run(lambda s: services.set_video_delay(s, _actor(), user_id, body["delay_s"]))
+    return jsonify({"username": username.lower(), "delay_s": row.delay_s})
+
+
+@blueprint.get("/api/experiment/results")
+@login_required
+def results():  # type: ignore[no-untyped-def]
+    """Every completed trial and the means with standard errors per condition (tutors)."""
+    rows = _run(lambda s: services.class_trials(s, _actor()))
+    summary = services.summarise(trial for trial, _ in rows)
+    return jsonify({
+        "trials": [{**_trial_dict(t), "username": name} for t, name in rows],
+        "summary": [g.__dict__ for g in summary],
+    })
+
+
+@blueprint.get("/experiment/results.csv")
+@login_required
+def results_csv():  # type: ignore[no-untyped-def]
+    """The class's trials as CSV."""
+    rows = _run(lambda s: services.class_trials(s, _actor()))
+    return Response(services.results_csv(rows), mimetype="text/csv",
+                    headers={"Content-Disposition": "attachment; filename=experiment-results.csv"})

@@ -1,0 +1,156 @@
+"""Injected video delay: one viewer's camera and telemetry held until capture time + delay (commands are not).
+
+The thesis added delay with a distant proxy; here the relay does it per viewer. `DelayQueue` is the pure
+part (ordering, bounds); `parse_delay_s` validates a requested delay; `ViewerDelay` reads the user's
+delay from the database (so every worker process applies it) at most every REFRESH_S.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import struct
+import time
+from collections import deque
+from collections.abc import Callable
+
+from middleware.auth.schemas import InvalidField
+from middleware.models.experiment import MAX_INJECTED_DELAY_S, VideoDelay
+
+DEFAULT_MAX_MESSAGES = 600  # 7 s of 20 Hz telemetry or 30 fps video, with room to spare
+DEFAULT_MAX_BYTES = 32 * 1024 * 1024
+REFRESH_S = 1.0
+
+
+def parse_delay_s(value: object, field: str = "delay_s") -> float:
+    """A delay in seconds, 0 to 7; anything else (negative, absurd, NaN, text, bool) is refused naming field."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InvalidField(field, f"{field} must be a number of seconds from 0 to {MAX_INJECTED_DELAY_S:g}.")
+    delay = float(value)
+    if not math.isfinite(delay) or delay < 0 or delay > MAX_INJECTED_DELAY_S:
+        raise InvalidField(field, f"{field} must be from 0 to {MAX_INJECTED_DELAY_S:g} seconds.")
+    return round(delay, 3)
+
+
+def capture_time_s(message: bytes | str) -> float | None:
+    """The capture_unix_s of a packed camera (bytes) or telemetry (JSON text) message, if it has one."""
+    try:
+        if isinstance(message, bytes | bytearray):
+            (length,) = struct.unpack(">I", message[:4])
+            header = json.loads(message[4 : 4 + length])
+        else:
+            header = json.loads(message)
+    except (ValueError, struct.error, TypeError):
+        return None
+    value = header.get("capture_unix_s") if isinstance(header, dict) else None
+    return float(value) if isinstance(value, int | float) and math.isfinite(value) else None
+
+
+class DelayQueue:
+    """Messages held until their release time, in arrival order; bounded in count and bytes (oldest dropped)."""
+
+    def __init__(self, delay_s: float, max_messages: int = DEFAULT_MAX_MESSAGES, max_bytes: int = DEFAULT_MAX_BYTES):
+        self.delay_s = parse_delay_s(delay_s)
+        if max_messages < 1 or max_bytes < 1:
+            raise ValueError("a delay queue holds at least one message")
+        self._max_messages, self._max_bytes = max_messages, max_bytes
+        self._held: deque[tuple[float, bytes | str]] = deque()
+        self._bytes = 0
+        self.dropped = 0
+
+    def __len__(self) -> int:
+        return len(self._held)
+
+    @property
+    def held_bytes(self) -> int:
+        """Bytes currently held."""
+        return self._bytes
+
+    def push(self, message: bytes | str, capture_s: float | None, now_s: float) -> None:
+        """Holds message until capture_s + delay (never before now_s, and never before an earlier message)."""
+        release = max(now_s, (capture_s if capture_s is not None else now_s) + self.delay_s)
+        if self._held and release < self._held[-1][0]:
+            release = self._held[-1][0]  # keep arrival order even if the robot's clock stepped back
+        self._held.append((release, message))
+        self._bytes += len(message)
+        while len(self._held) > self._max_messages or (self._bytes > self._max_bytes and len(self._held) > 1):
+            _, old = self._held.popleft()
+            self._bytes -= len(old)
+            self.dropped += 1
+
+    def pop_due(self, now_s: float) -> list[bytes | str]:
+        """The messages whose time has come, oldest first."""
+        due: list[bytes | str] = []
+        while self._held and self._held[0][0] <= now_s:
+            _, message = self._held.popleft()
+            self._bytes -= len(message)
+            due.append(message)
+        return due
+
+    def seconds_until_next(self, now_s: float) -> float | None:
+        """How long until the next release, or None when nothing is held."""
+        return max(0.0, self._held[0][0] - now_s) if self._held else None
+
+    def set_delay(self, delay_s: float) -> None:
+        """Changes the delay for messages pushed from now on (held ones keep their time)."""
+        self.delay_s = parse_delay_s(delay_s)
+
+
+class ViewerDelay:
+    """One viewer's delay, re-read through read_delay_s() at most every refresh_s."""
+
+    def __init__(self, read_delay_s: Callable[[], float], refresh_s: float = REFRESH_S,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self._read, self._refresh_s, self._clock = read_delay_s, refresh_s, clock
+        self._value = 0.0
+        self._read_at = float("-inf")
+
+    def current(self) -> tuple[float, bool]:
+        """(delay_s, changed since the last call that read it)."""
+        now = self._clock()
+        if now - self._read_at < self._refresh_s:
+            return self._value, False
+        self._read_at = now
+        try:
+            value = float(self._read())
+        except Exception:  # noqa: BLE001 - a database hiccup keeps the last known delay
+            return self._value, False
+        changed = value != self._value
+        self._value = value
+        return value, changed
+
+
+def read_user_delay_s(session, user_id: int) -> float:  # type: ignore[no-untyped-def]
+    """The delay stored for user_id, 0 when none."""
+    row = session.get(VideoDelay, user_id)
+    return float(row.delay_s) if row is not None else 0.0
+
+
+def viewer_delay() -> ViewerDelay:
+    """The delay reader of the logged-in viewer of a socket; each read uses (and returns) its own connection."""
+    from flask import current_app
+    from flask_login import current_user
+
+    from middleware.db import session_factory
+
+    factory = session_factory(current_app._get_current_object())  # type: ignore[attr-defined]
+    user_id = int(current_user.get_id())
+
+    def read() -> float:
+        with factory() as session:
+            return read_user_delay_s(session, user_id)
+
+    return ViewerDelay(read)
+
+
+def apply_viewer_delay(ws, delay: ViewerDelay | None, held: DelayQueue, online: bool = True) -> float:  # type: ignore[no-untyped-def]
+    """The viewer's delay now; a change is applied to held and announced on the socket (with the robot's status)."""
+    if delay is None:
+        return 0.0
+    value, changed = delay.current()
+    if changed:
+        held.set_delay(value)
+        ws.send(json.dumps({"type": "status", "robot_online": online, "injected_delay_s": value,
+                            "message": f"An added delay of {value:g} s is on your video." if value else ""},
+                           separators=(",", ":")))
+    return value

@@ -1,0 +1,48 @@
+"""The teleoperation-under-delay experiment: per-user injected video delay, and the trials run under it."""
+
+from __future__ import annotations
+
+from datetime import datetime
+
+from sqlalchemy import Boolean, CheckConstraint, DateTime, Float, ForeignKey, Integer, String
+from sqlalchemy.orm import Mapped, mapped_column
+
+from middleware.models.accounts import utc_now
+from middleware.models.base import Base
+
+MAX_INJECTED_DELAY_S = 7.0
+
+
+class VideoDelay(Base):
+    """An added delay on one user's camera and telemetry, applied by every worker's relay (commands are not delayed)."""
+
+    __tablename__ = "video_delays"
+    __table_args__ = (CheckConstraint("delay_s >= 0 AND delay_s <= 7", name="delay_in_range"),)
+
+    user_id: Mapped[int] = mapped_column(ForeignKey("users.id", ondelete="CASCADE"), primary_key=True)
+    delay_s: Mapped[float] = mapped_column(Float)
+    set_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+    updated_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+
+
+class Trial(Base):
+    """One run of a course by a student in an assigned condition (course, delay, feedback on/off)."""
+
+    __tablename__ = "experiment_trials"
+    __table_args__ = (
+        CheckConstraint("course IN ('course-A', 'course-B')", name="course_known"),
+        CheckConstraint("status IN ('assigned', 'completed', 'abandoned')", name="status_known"),
+        CheckConstraint("delay_s >= 0 AND delay_s <= 7", name="trial_delay_in_range"),
+    )
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    user_id: Mapped[int] = mapped_column(ForeignKey("users.id", ondelete="CASCADE"), index=True)
+    robot_name: Mapped[str] = mapped_column(String(64))
+    course: Mapped[str] = mapped_column(String(16))
+    delay_s: Mapped[float] = mapped_column(Float)
+    feedback: Mapped[bool] = mapped_column(Boolean)
+    status: Mapped[str] = mapped_column(String(16), default="assigned")
+    total_time_s: Mapped[float | None] = mapped_column(Float, nullable=True)
+    errors: Mapped[int] = mapped_column(Integer, default=0)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+    finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
