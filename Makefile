@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 RUN_STAMP := $(VENV)/.run-installed
 TEST_STAMP := $(VENV)/.test-installed
 
-.PHONY: run test protos bench lint chromium clean
+.PHONY: run test protos bench lint chromium ffmpeg clean
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -19,7 +19,10 @@ $(TEST_STAMP): pyproject.toml | $(VENV)/bin/python
 	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(RUN_STAMP) $@
 
-run: $(RUN_STAMP)
+# ffmpeg encodes the demo lesson's video from the simulator, needed only until that video exists.
+DEMO_VIDEO := instance/lessons/demo-first-moves.webm
+
+run: $(RUN_STAMP) $(if $(wildcard $(DEMO_VIDEO)),,ffmpeg)
 	$(VENV)/bin/telelab up
 
 test: $(TEST_STAMP) chromium
@@ -30,6 +33,12 @@ chromium:
 	  echo "Installing Debian's chromium for the browser tests"; \
 	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq chromium; }
+
+ffmpeg:
+	@command -v ffmpeg >/dev/null 2>&1 || { \
+	  echo "Installing Debian's ffmpeg to record the demo lesson's video"; \
+	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq ffmpeg; }
 
 protos: $(TEST_STAMP)
 	$(PY) protos/generate.py

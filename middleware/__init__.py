@@ -63,10 +63,13 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
 
     from middleware.access import sockets as access_sockets
     from middleware.accounts.routes import blueprint as accounts_blueprint
+    from middleware.assessment.pages import blueprint as assessment_pages_blueprint
+    from middleware.assessment.routes import blueprint as assessment_blueprint
     from middleware.auth.routes import blueprint as auth_blueprint
     from middleware.bookings.routes import blueprint as bookings_blueprint
     from middleware.chat.routes import blueprint as chat_blueprint
     from middleware.courses.routes import blueprint as courses_blueprint
+    from middleware.experiment.routes import blueprint as experiment_blueprint
     from middleware.lab import skill_sockets, sockets  # noqa: F401 - importing registers the channels
     from middleware.lab.routes import blueprint as lab_blueprint
     from middleware.lab.skills import blueprint as skills_blueprint
@@ -80,8 +83,21 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
     app.register_blueprint(chat_blueprint)
     app.register_blueprint(accounts_blueprint)
     app.register_blueprint(courses_blueprint)
+    app.register_blueprint(experiment_blueprint)
+    app.register_blueprint(assessment_blueprint)
+    app.register_blueprint(assessment_pages_blueprint)
     sockets.init_app(app)
     access_sockets.init_app(app)
+
+    from middleware.lessons.routes import blueprint as lessons_blueprint
+    from middleware.practice import manager as practice_manager
+    from middleware.practice.routes import blueprint as practice_blueprint
+    from middleware.tours.routes import blueprint as tours_blueprint
+
+    practice_manager.init_app(app)
+    app.register_blueprint(practice_blueprint)
+    app.register_blueprint(lessons_blueprint)
+    app.register_blueprint(tours_blueprint)
 
     @app.get("/")
     def home():  # type: ignore[no-untyped-def]

@@ -122,6 +122,13 @@ def ensure_demo_accounts(app) -> list[tuple[str, str, str]]:  # type: ignore[no-
     return created
 
 
+def seed_demo_content(app) -> list[str]:  # type: ignore[no-untyped-def]
+    """The teaching area's demo data: example tours and a lesson whose video is recorded from the simulator."""
+    from middleware.tours.demo import seed_demo_content as seed
+
+    return seed(app)
+
+
 def run_lab(host: str, port: int, robot_count: int, scene: str) -> int:
     """Starts skill servers, migrates the database, creates demo accounts, and serves until Ctrl-C."""
     from middleware import create_app
@@ -138,6 +145,7 @@ def run_lab(host: str, port: int, robot_count: int, scene: str) -> int:
         app = create_app()
         upgrade_to_head(app.config["DATABASE_URL"])
         created = ensure_demo_accounts(app)
+        seed_demo_content(app)
         _print_banner(host, port, created)
         serve_forever(app, host, port)
     except LabStartError as error:

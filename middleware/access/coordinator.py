@@ -47,7 +47,9 @@ def policy_for(app: Flask) -> AccessPolicy:
         )
         return float(longest) if longest else float(app.config["DEFAULT_TURN_LENGTH_S"])
 
-    return AccessPolicy(float(app.config["ACCESS_GRACE_S"]), turn_length_s, _bookings_priority())
+    from middleware.tours.services import with_guided_priority  # a live guided class ranks like a booking
+
+    return AccessPolicy(float(app.config["ACCESS_GRACE_S"]), turn_length_s, with_guided_priority(_bookings_priority()))
 
 
 class AccessCoordinator:

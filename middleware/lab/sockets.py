@@ -15,6 +15,7 @@ from middleware.access.coordinator import access_coordinator
 from middleware.auth.schemas import InvalidField
 from middleware.db import get_session
 from middleware.errors import ApiError
+from middleware.lab.delay import DelayQueue, ViewerDelay, apply_viewer_delay, capture_time_s, viewer_delay
 from middleware.lab.schemas import DriveLimits, parse_drive_message
 from middleware.robots.fanout import FanoutHub
 from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
@@ -81,21 +82,31 @@ def open_robot_channel(ws, robot_name: str) -> RobotLink | None:  # type: ignore
     return link
 
 
-def relay_stream(ws, hub: FanoutHub, choose=None) -> None:  # type: ignore[no-untyped-def]
+def relay_stream(ws, hub: FanoutHub, choose=None, delay: ViewerDelay | None = None) -> None:  # type: ignore[no-untyped-def]
     """Sends the hub's newest message whenever there is one, and status changes, until the socket closes.
 
     choose picks this viewer's version of a message packed in several versions (e.g. with or without
-    the ground truth).
+    the ground truth). delay, when given, holds each message until its capture time + the viewer's injected
+    delay (middleware/lab/delay.py); a change of delay is announced as {"type": "status", "injected_delay_s"}.
     """
     subscription = hub.subscribe()
+    held = DelayQueue(0.0)
     try:
         while ws.connected:
             status = subscription.status_change()
             if status is not None:
                 send_json(ws, {"type": "status", "robot_online": status.online, "message": status.message})
-            message = subscription.next_message(STREAM_POLL_S)
+            delay_s = apply_viewer_delay(ws, delay, held, hub.status_with_version()[0].online)
+            wait_s = held.seconds_until_next(time.time())
+            message = subscription.next_message(STREAM_POLL_S if wait_s is None else min(wait_s, STREAM_POLL_S))
             if message is not None:
-                ws.send(message if choose is None else choose(message))
+                message = message if choose is None else choose(message)
+                if delay_s > 0 or len(held):  # after a delay ends, the held ones go first
+                    held.push(message, capture_time_s(message), time.time())
+                else:
+                    ws.send(message)
+            for due in held.pop_due(time.time()):
+                ws.send(due)
             while ws.receive(timeout=0) is not None:
                 pass  # nothing is expected from viewers; drop it so it cannot pile up
     finally:
@@ -107,7 +118,7 @@ def camera_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-def]
     """Camera frames, packed once per frame for every viewer."""
     link = open_robot_channel(ws, robot_name)
     if link is not None:
-        relay_stream(ws, link.camera)
+        relay_stream(ws, link.camera, delay=viewer_delay())
 
 
 @sock.route("/ws/robots/<robot_name>/telemetry")
@@ -115,7 +126,7 @@ def telemetry_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-d
     """Odometry, sonar and laser readings."""
     link = open_robot_channel(ws, robot_name)
     if link is not None:
-        relay_stream(ws, link.telemetry)
+        relay_stream(ws, link.telemetry, delay=viewer_delay())
 
 
 class DriverSeat:

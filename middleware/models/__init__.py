@@ -4,11 +4,14 @@ from __future__ import annotations
 
 from middleware.models.access import QueueEntry, RobotControl
 from middleware.models.accounts import Role, User
+from middleware.models.assessment import Attempt, AttemptReview, Exam, Question, SurveyResponse  # noqa: F401
 from middleware.models.base import Base
 from middleware.models.courses import Course, CourseMembership, Invitation, LoginFailure
+from middleware.models.experiment import Trial, VideoDelay  # noqa: F401
 from middleware.models.preferences import UserPreference
 from middleware.models.robots import Robot
 from middleware.models.scheduling import Booking, ChatMessage
+from middleware.models.teaching import GuidedSession, Lesson, Tour  # noqa: F401
 
 __all__ = [
     "Base", "Booking", "ChatMessage", "Course", "CourseMembership", "Invitation", "LoginFailure",

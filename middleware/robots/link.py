@@ -112,6 +112,10 @@ class RobotLink:
         """The goal's updates until it ends (a stream of its own: goals have few watchers)."""
         return self._stub.WatchGoal(robot_pb2.WatchGoalRequest(goal_id=goal_id, feedback_rate_hz=5))
 
+    def stream_telemetry(self, rate_hz: float) -> Iterator[robot_pb2.Telemetry]:
+        """A telemetry stream of its own, ground truth included (for graders; never forwarded to browsers)."""
+        return self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=rate_hz))
+
     def get_map(self) -> robot_pb2.OccupancyGrid:
         """The occupancy grid built so far."""
         return self._call(self._stub.GetMap, robot_pb2.GetMapRequest())

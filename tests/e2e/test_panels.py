@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import time
 
 import pytest
@@ -168,6 +169,87 @@ def test_clicking_the_map_sends_the_robot_there_with_go_to_goal(page, live_serve
     assert go.locator("progress").evaluate("(bar) => bar.value") == pytest.approx(1.0)
 
 
+def test_a_busy_robot_offers_to_preempt_and_deactivating_reports_the_error_left(  # type: ignore[no-untyped-def]
+    page, live_server: LiveServer
+) -> None:
+    open_console(page, live_server)
+    wait_for_control(page)
+    go = page.locator('skill-panel[data-skill="go_to_goal"]')
+    x0, y0 = odometry(page, "x"), odometry(page, "y")
+    go.locator('input[name="goal_x_m"]').fill("-3" if x0 > 0 else "3")
+    go.locator('input[name="goal_y_m"]').fill("0")
+    go.locator('input[name="speed_mps"]').fill("0.1")
+    go.locator('button[data-action="activate"]').click()
+    page.locator('skill-panel[data-skill="go_to_goal"][data-status="executing"]').wait_for()
+
+    turn = page.locator('skill-panel[data-skill="orientation_control"]')
+    turn.locator('button[data-action="activate"]').click()
+    turn.locator('[data-field="skill-error"]').wait_for()
+    preempt = turn.get_by_role("button", name="Preempt it")
+    preempt.wait_for()
+    turn.screenshot(path=str(ARTIFACTS_DIR / "skill-panel-busy.png"))
+    preempt.click()
+    page.locator('skill-panel[data-skill="go_to_goal"]:not([data-status="executing"]):not([data-status="accepted"])').wait_for()
+    assert go.get_attribute("data-status") in {"canceled", "aborted"}
+    page.locator('skill-panel[data-skill="orientation_control"][data-status="succeeded"], '
+                 'skill-panel[data-skill="orientation_control"][data-status="executing"]').first.wait_for()
+
+    # Deactivating a running goal ends it canceled, with the error left in its message.
+    go.locator('button[data-action="activate"]').click()
+    go.locator('button[data-action="preempt"]').or_(page.locator(
+        'skill-panel[data-skill="go_to_goal"][data-status="executing"]')).first.wait_for()
+    if go.locator('button[data-action="preempt"]').is_visible():
+        go.locator('button[data-action="preempt"]').click()
+    page.locator('skill-panel[data-skill="go_to_goal"][data-status="executing"]').wait_for()
+    go.get_by_role("button", name="Deactivate").click()
+    page.locator('skill-panel[data-skill="go_to_goal"][data-status="canceled"]').wait_for()
+    result = go.locator('[data-field="skill-result"]').text_content()
+    assert "Canceled" in result and " m" in result, result
+    assert abs(odometry(page, "x") - x0) < 3.5 and abs(odometry(page, "y") - y0) < 3.5
+
+
+def test_environment_modelling_and_localization_show_on_the_map(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    open_console(page, live_server)
+    wait_for_control(page)
+    modelling = page.locator('skill-panel[data-skill="environment_modelling"]')
+    modelling.locator('button[data-action="activate"]').click()
+    page.locator('skill-panel[data-skill="environment_modelling"][data-status="executing"]').wait_for()
+    page.locator('section[data-panel-id="map"]').scroll_into_view_if_needed()  # the map is fetched while seen
+    summary = page.locator('map-panel [data-field="map-summary"]')
+    summary.filter(has_text=re.compile(r"map of [1-9]\d* scans")).wait_for(timeout=20_000)
+    x, y = odometry(page, "x"), odometry(page, "y")
+    heading = odometry(page, "heading-rad")
+    localization = page.locator('skill-panel[data-skill="localization"]')
+    localization.locator('input[name="initial_x_m"]').fill(f"{x:.2f}")
+    localization.locator('input[name="initial_y_m"]').fill(f"{y:.2f}")
+    localization.locator('input[name="initial_theta_rad"]').fill(f"{heading:.2f}")
+    localization.locator('button[data-action="activate"]').click()
+    page.locator('skill-panel[data-skill="localization"][data-status="executing"]').wait_for()
+    summary.filter(has_text="localized at").wait_for(timeout=15_000)
+    page.locator('section[data-panel-id="map"]').scroll_into_view_if_needed()
+    page.locator('section[data-panel-id="map"]').screenshot(path=str(ARTIFACTS_DIR / "map-panel-localization.png"))
+    for panel in (localization, modelling):
+        panel.get_by_role("button", name="Deactivate").click()
+    page.locator('skill-panel[data-skill="localization"][data-status="canceled"]').wait_for()
+    page.locator('skill-panel[data-skill="environment_modelling"][data-status="canceled"], '
+                 'skill-panel[data-skill="environment_modelling"][data-status="succeeded"]').first.wait_for()
+
+
+def test_step_mode_moves_a_short_step_per_press(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    open_console(page, live_server)
+    wait_for_control(page)
+    page.get_by_role("radio", name="Step").check()
+    assert "0.1 m" in page.locator('[data-field="drive-mode-note"]').text_content()
+    x0, y0 = odometry(page, "x"), odometry(page, "y")
+    page.evaluate("document.activeElement.blur()")  # arrow keys on a focused radio belong to the radio
+    page.keyboard.press("ArrowUp")
+    wait_for(lambda: abs(odometry(page, "linear")) > 0.02, 3, "a step did not start")
+    wait_for(lambda: abs(odometry(page, "linear")) < 0.01, 5, "a step did not end")
+    moved = math.hypot(odometry(page, "x") - x0, odometry(page, "y") - y0)
+    assert 0.03 < moved < 0.2, f"one step moved {moved:.3f} m"
+    page.get_by_role("radio", name="Press and hold").check()
+
+
 def test_hidden_moved_and_widened_panels_stay_so_after_a_reload(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
     open_console(page, live_server)
 
@@ -231,6 +313,7 @@ def test_a_malformed_descriptor_shows_a_notice_and_the_other_panels_still_work(p
     wait_for(lambda: not math.isnan(odometry(page, "x")), 10, "odometry stopped working next to a broken panel")
     page.locator('sonar-panel [data-field="sonar-nearest"]').filter(has_text=" m").wait_for()
     assert page.locator('skill-panel[data-skill="go_to_goal"]').count() == 1
+    page.locator('queue-panel[data-role="controller"]').wait_for()
     page.screenshot(path=str(ARTIFACTS_DIR / "panels-bad-descriptor.png"))
 
 

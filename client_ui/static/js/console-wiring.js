@@ -6,6 +6,7 @@ import { ApiError, Channel, fetchJson, parseJsonMessage } from "./transport.js";
 import { DriveSession } from "./drive-session.js";
 import { connectChat } from "./chat-session.js";
 import { goalParameterNames } from "./panel-descriptors.js";
+import { bindFeedback } from "./feedback-wiring.js";
 
 const FINAL_GOAL_STATES = new Set(["succeeded", "canceled", "aborted"]);
 const MAP_POLL_MS = 2000;
@@ -28,6 +29,7 @@ export class ConsoleWiring {
   #drivePads = [];
   #skills = [];                 // [{descriptor, panel, goalChannel, goalNames}]
   #maps = [];
+  #cameras = [];                // camera panels: the feedback layer follows the drive session
   #starters = [];
 
   constructor({ root, robotName, robotPath, status, layout }) {
@@ -132,6 +134,8 @@ export class ConsoleWiring {
 
   #camera(descriptor, panel) {
     panel.robotName = this.#robotName;
+    this.#cameras.push(panel);
+    bindFeedback(panel, (listener) => this.#onInfo(listener));
     const camera = this.#channel(descriptor.channel ?? `${this.#robotPath}/camera`, { binary: true });
     camera.addEventListener("statechange", ({ detail }) => { panel.connected = detail.phase === "open"; });
     camera.addEventListener("message", ({ detail }) => {
@@ -213,6 +217,8 @@ export class ConsoleWiring {
     const channel = this.#channel(path);
     const session = new DriveSession(channel);
     this.#drive = { channel, session };
+    session.addEventListener("ready", ({ detail }) => this.#cameras.forEach((camera) => { camera.driveReady = detail; }));
+    session.addEventListener("sent", ({ detail }) => this.#cameras.forEach((camera) => { camera.driveSent = detail; }));
     return this.#drive;
   }
 

@@ -8,29 +8,24 @@ import { checkPanelList } from "./panel-descriptors.js";
 import { ConsoleLayout } from "./console-layout.js";
 import { ConsoleWiring } from "./console-wiring.js";
 import * as connectionStatus from "../panels/connection-status/connection-status.js";
-import * as cameraPanel from "../panels/camera-panel/camera-panel.js";
-import * as mapPanel from "../panels/map-panel/map-panel.js";
-import * as odometryPanel from "../panels/odometry-panel/odometry-panel.js";
-import * as sonarPanel from "../panels/sonar-panel/sonar-panel.js";
-import * as laserPanel from "../panels/laser-panel/laser-panel.js";
-import * as drivePad from "../panels/drive-pad/drive-pad.js";
-import * as skillPanel from "../panels/skill-panel/skill-panel.js";
-import * as queuePanel from "../panels/queue-panel/queue-panel.js";
-import * as chatPanel from "../panels/chat-panel/chat-panel.js";
-import * as responseTimesPanel from "../panels/response-times-panel/response-times-panel.js";
 
-/** kind -> the custom element that shows it, and its default width in grid columns. */
+const panelModule = (name) => new URL(`../panels/${name}/${name}.js`, import.meta.url).href;
+
+/**
+ * kind -> the custom element that shows it, the module defining it (loaded on demand, so one broken
+ * panel module costs that panel only) and its default width in grid columns.
+ */
 export const PANEL_REGISTRY = Object.freeze({
-  camera: { module: cameraPanel, tag: "camera-panel", span: 2 },
-  map: { module: mapPanel, tag: "map-panel", span: 2 },
-  odometry: { module: odometryPanel, tag: "odometry-panel", span: 1 },
-  sonar: { module: sonarPanel, tag: "sonar-panel", span: 1 },
-  laser: { module: laserPanel, tag: "laser-panel", span: 1 },
-  drive: { module: drivePad, tag: "drive-pad", span: 1 },
-  skill: { module: skillPanel, tag: "skill-panel", span: 1 },
-  queue: { module: queuePanel, tag: "queue-panel", span: 1 },
-  chat: { module: chatPanel, tag: "chat-panel", span: 1 },
-  "response-times": { module: responseTimesPanel, tag: "response-times-panel", span: 1 },
+  camera: { module: panelModule("camera-panel"), tag: "camera-panel", span: 2 },
+  map: { module: panelModule("map-panel"), tag: "map-panel", span: 2 },
+  odometry: { module: panelModule("odometry-panel"), tag: "odometry-panel", span: 1 },
+  sonar: { module: panelModule("sonar-panel"), tag: "sonar-panel", span: 1 },
+  laser: { module: panelModule("laser-panel"), tag: "laser-panel", span: 1 },
+  drive: { module: panelModule("drive-pad"), tag: "drive-pad", span: 1 },
+  skill: { module: panelModule("skill-panel"), tag: "skill-panel", span: 1 },
+  queue: { module: panelModule("queue-panel"), tag: "queue-panel", span: 1 },
+  chat: { module: panelModule("chat-panel"), tag: "chat-panel", span: 1 },
+  "response-times": { module: panelModule("response-times-panel"), tag: "response-times-panel", span: 1 },
 });
 
 const LAYOUT_PREFERENCE = "/api/me/preferences/console-layout";
@@ -96,14 +91,20 @@ async function start() {
 
   const [{ entries, problem }, saved] = await Promise.all([loadPanelList(robotName, robotPath), loadSavedLayout()]);
   if (problem) showPageError(root, problem);
+  const kinds = [...new Set(entries.filter((entry) => entry.ok).map((entry) => entry.descriptor.kind))];
+  const modules = new Map(await Promise.all(kinds.map((kind) => import(PANEL_REGISTRY[kind].module)
+    .then((module) => [kind, module], (error) => [kind, error]))));
+  root.querySelector("[data-console-loading]")?.remove();
   for (const entry of entries) {
     if (!entry.ok) {
       layout.addNotice(`${entry.title ? `The panel “${entry.title}”` : "A panel"} could not be shown: ${entry.problem}.`);
       continue;
     }
     const { descriptor } = entry;
-    const { module, tag, span } = PANEL_REGISTRY[descriptor.kind];
+    const { tag, span } = PANEL_REGISTRY[descriptor.kind];
+    const module = modules.get(descriptor.kind);
     try {
+      if (module instanceof Error) throw new Error(`its code did not load (${module.message})`);
       module.register();
       const panel = h(tag, { "data-panel-id": descriptor.id });
       layout.addPanel(descriptor, panel, span);

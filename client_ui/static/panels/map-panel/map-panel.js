@@ -15,12 +15,14 @@ import { isEcho } from "../../js/polar.js";
 const CURSOR_STEP_M = 0.1;
 const COLOURS = {
   box: "#5b6778", odometry: "#1d5fc4", localized: "#7a3bb8", truth: "#17703a", laser: "#d1390f",
-  sonar: "rgb(194 106 0 / 9%)", particle: "rgb(122 59 184 / 55%)", target: "#b1261b", cursor: "#c26a00",
+  sonar: "rgb(194 106 0 / 7%)", particle: "rgb(122 59 184 / 55%)", target: "#b1261b", cursor: "#c26a00",
 };
 
 function fixed(value, decimals = 2) {
   const number = Number(value);
-  return Number.isFinite(number) ? number.toFixed(decimals) : "—";
+  if (!Number.isFinite(number)) return "—";
+  const text = number.toFixed(decimals);
+  return Number(text) === 0 ? (0).toFixed(decimals) : text; // no "-0.00"
 }
 
 function isPose(pose) {
@@ -41,11 +43,12 @@ export function gridImage(grid) {
       image.data[o + 3] = 0; // unknown: transparent
       continue;
     }
-    const shade = Math.round(255 - (Math.min(100, value) / 100) * 215);
+    // Free space (below 50 %) is white on the grey unknown background; occupied cells darken with belief.
+    const shade = value < 50 ? 255 : Math.round(200 - ((Math.min(100, value) - 50) / 50) * 170);
     image.data[o] = shade;
     image.data[o + 1] = shade;
-    image.data[o + 2] = shade;
-    image.data[o + 3] = 200;
+    image.data[o + 2] = value < 50 ? 255 : shade;
+    image.data[o + 3] = value < 50 ? 235 : 255;
   }
   const canvas = document.createElement("canvas");
   canvas.width = width;
@@ -200,7 +203,7 @@ export class MapPanel extends HTMLElement {
     this.#view = { ...view, ratio };
     const ctx = canvas.getContext("2d");
     ctx.setTransform(1, 0, 0, 1, 0, 0);
-    ctx.fillStyle = "#f7f9fb";
+    ctx.fillStyle = this.#gridCanvas ? "#e4e8ee" : "#f7f9fb"; // with a map, grey means "not seen yet"
     ctx.fillRect(0, 0, width, height);
     ctx.setTransform(...worldTransform(view));
     const px = 1 / view.scale; // one device pixel in metres
@@ -218,7 +221,8 @@ export class MapPanel extends HTMLElement {
       ctx.fill();
     }
     const poses = this.#poses();
-    const sensorPose = poses.odometry;
+    // Readings are drawn where the robot believes it is: the localized pose once localization runs.
+    const sensorPose = poses.localized ?? poses.odometry;
     if (sensorPose) this.#drawSensors(ctx, sensorPose, px);
     for (const particle of (this.#localization?.particles ?? []).slice(0, 3000)) {
       if (!Array.isArray(particle)) continue;

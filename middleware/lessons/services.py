@@ -1,0 +1,116 @@
+"""Lessons: checking and saving them, finding their videos, and the skill schema used to check cues."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from middleware.lessons.commands import SkillSchemas
+from middleware.lessons.cues import Cue, CueError, parse_cue_track, to_webvtt
+from middleware.models.accounts import utc_now
+from middleware.models.teaching import Lesson
+
+VIDEO_NAME = re.compile(r"^[a-z0-9][a-z0-9_-]{0,100}\.(webm|mp4)$")
+SLUG = re.compile(r"^[a-z0-9][a-z0-9-]{0,63}$")
+MAX_TITLE = 120
+MAX_SUMMARY = 500
+
+
+class LessonInvalid(Exception):
+    """A lesson that cannot be saved: errors name the field, and the line for cue errors."""
+
+    def __init__(self, errors: list[CueError]) -> None:
+        super().__init__(errors[0].message if errors else "invalid lesson")
+        self.errors = errors
+
+
+@dataclass(frozen=True)
+class LessonDraft:
+    """A checked lesson, ready to store."""
+
+    slug: str
+    title: str
+    summary: str
+    video_name: str
+    cues: list[Cue]
+
+
+def video_dir(instance_path: str) -> Path:
+    """The folder of lesson videos (in the instance folder, never in the code tree)."""
+    return Path(instance_path) / "lessons"
+
+
+def available_videos(instance_path: str) -> list[str]:
+    """The video files a lesson may use."""
+    folder = video_dir(instance_path)
+    if not folder.is_dir():
+        return []
+    return sorted(p.name for p in folder.iterdir() if p.is_file() and VIDEO_NAME.fullmatch(p.name))
+
+
+def _text(data: dict[str, object], name: str, limit: int, required: bool = True) -> str:
+    value = data.get(name, "")
+    if not isinstance(value, str):
+        raise LessonInvalid([CueError(0, name, f"{name} must be text.")])
+    value = value.strip()
+    if required and not value:
+        raise LessonInvalid([CueError(0, name, f"Give the lesson a {name}.")])
+    if len(value) > limit:
+        raise LessonInvalid([CueError(0, name, f"{name} has at most {limit} characters.")])
+    return value
+
+
+def check_lesson(data: object, skills: SkillSchemas, videos: list[str]) -> LessonDraft:
+    """A checked lesson from the editor's JSON: title, summary, slug, video_name, cues (WebVTT or SRT text)."""
+    if not isinstance(data, dict):
+        raise LessonInvalid([CueError(0, "body", "Send a JSON object with title, video_name and cues.")])
+    title = _text(data, "title", MAX_TITLE)
+    summary = _text(data, "summary", MAX_SUMMARY, required=False)
+    slug = data.get("slug") or re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-")[:64] or "lesson"
+    if not isinstance(slug, str) or not SLUG.fullmatch(slug):
+        raise LessonInvalid([CueError(0, "slug", "slug may use lower-case letters, digits and '-' (at most 64).")])
+    video = data.get("video_name")
+    if not isinstance(video, str) or video not in videos:
+        choices = ", ".join(videos) or "none yet: put a .webm or .mp4 file in the instance's lessons folder"
+        raise LessonInvalid([CueError(0, "video_name", f"Choose one of the lesson videos ({choices}).")])
+    cues, errors = parse_cue_track(data.get("cues"), skills)
+    if errors:
+        raise LessonInvalid(errors)
+    return LessonDraft(slug, title, summary, video, cues)
+
+
+def save_lesson(session: Session, draft: LessonDraft, author_id: int | None, lesson: Lesson | None = None) -> Lesson:
+    """Creates or updates a lesson from a checked draft; the caller commits."""
+    clash = session.scalar(select(Lesson).where(Lesson.slug == draft.slug))
+    if clash is not None and clash is not lesson:
+        raise LessonInvalid([CueError(0, "slug", f"Another lesson is called {draft.slug!r} already.")])
+    if lesson is None:
+        lesson = Lesson(author_id=author_id)
+        session.add(lesson)
+    lesson.slug, lesson.title, lesson.summary = draft.slug, draft.title, draft.summary
+    lesson.video_name, lesson.cues_vtt = draft.video_name, to_webvtt(draft.cues)
+    lesson.updated_at = utc_now()
+    session.flush()
+    return lesson
+
+
+def stored_cues(lesson: Lesson) -> list[Cue]:
+    """The cues of a stored lesson (its track was checked on save; re-read without a schema)."""
+    cues, errors = parse_cue_track(lesson.cues_vtt, None)
+    if errors:  # only if the row was edited by hand
+        raise LessonInvalid(errors)
+    return cues
+
+
+def lesson_dict(lesson: Lesson, with_cues: bool = True) -> dict[str, object]:
+    """JSON-ready form of a lesson."""
+    data: dict[str, object] = {"id": lesson.id, "slug": lesson.slug, "title": lesson.title,
+                               "summary": lesson.summary, "video_name": lesson.video_name}
+    if with_cues:
+        data["cues"] = [c.to_dict() for c in stored_cues(lesson)]
+        data["cues_vtt"] = lesson.cues_vtt
+    return data

@@ -1,0 +1,1 @@
+"""Tours: fully guided demonstrations on a practice robot, and live guided classes on a lab robot."""

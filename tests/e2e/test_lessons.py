@@ -1,0 +1,165 @@
+"""Video lessons in Chromium: the playback rule (play, pause, seek into and out of cues, buffering, end)
+driving a real practice robot, and the pure playback module on its own."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from middleware.robots.messages import goal_dict
+from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer
+
+pytestmark = pytest.mark.e2e
+TRACK = """WEBVTT
+
+00:00:01.000 --> 00:00:03.000
+{"drive": {"linear_mps": 0.1, "angular_radps": 0}}
+
+00:00:05.000 --> 00:00:08.000
+{"skill": "go_to_goal", "parameters": {"goal_x_m": 0.3, "goal_y_m": 0.0, "speed_mps": 0.1}}
+"""
+
+
+def log_in(tab, live_server: LiveServer, username: str = "student1") -> None:  # type: ignore[no-untyped-def]
+    tab.goto(f"{live_server.url}/login")
+    tab.fill("#username", username)
+    tab.fill("#password", STUDENT_PASSWORD)
+    tab.get_by_role("button", name="Log in").click()
+    tab.locator('[data-field="username"]').wait_for()
+
+
+@pytest.fixture
+def lesson_id(live_server: LiveServer) -> int:
+    """A lesson on a 10 s test-pattern video made by ffmpeg, with two cues."""
+    from middleware.db import session_factory
+    from middleware.lessons.cues import parse_cue_track
+    from middleware.lessons.services import LessonDraft, save_lesson, video_dir
+
+    folder = video_dir(live_server.app.instance_path)
+    folder.mkdir(parents=True, exist_ok=True)
+    subprocess.run(["ffmpeg", "-loglevel", "error", "-y", "-f", "lavfi", "-i", "testsrc=size=160x120:rate=10",
+                    "-t", "10", "-c:v", "libvpx", "-b:v", "200k", str(folder / "pattern.webm")], check=True)
+    cues, errors = parse_cue_track(TRACK, None)
+    assert not errors
+    with session_factory(live_server.app)() as session:
+        lesson = save_lesson(session, LessonDraft("pattern", "Pattern", "", "pattern.webm", cues), None)
+        session.commit()
+        return lesson.id
+
+
+def _log(page) -> list[str]:  # type: ignore[no-untyped-def]
+    """The page's robot log, oldest first, as 'kind: text without the time'."""
+    items = page.eval_on_selector_all("[data-slot=log] li", "els => els.map(e => e.dataset.kind + ': ' + "
+                                      "e.textContent.split(' · ')[1])")
+    return list(reversed(items))
+
+
+def _wait_for(page, text: str, timeout_ms: float = 15000) -> None:  # type: ignore[no-untyped-def]
+    page.wait_for_function("t => [...document.querySelectorAll('[data-slot=log] li')].some(e => "
+                           "e.textContent.includes(t))", arg=text, timeout=timeout_ms)
+
+
+def test_the_video_drives_the_practice_robot_by_the_exact_rule(page, live_server: LiveServer, lesson_id: int) -> None:  # type: ignore[no-untyped-def]
+    from middleware.practice.manager import practice_manager
+
+    manager = practice_manager(live_server.app)
+    manager.cap = 1
+    try:
+        log_in(page, live_server)
+        page.goto(f"{live_server.url}/practice")
+        page.get_by_role("button", name="Start my practice robot").click()
+        page.wait_for_selector("#practice[data-running=true]", timeout=60000)
+        page.goto(f"{live_server.url}/lessons/{lesson_id}")
+        page.wait_for_selector("#lesson[data-ready=true]")
+        video = "document.querySelector('video')"
+        page.evaluate(f"{video}.muted = true")
+        # play: entering cue 1 sends its command
+        page.evaluate(f"{video}.play()")
+        _wait_for(page, "cue 1 acknowledged")
+        # pause inside the cue stops the robot at once
+        page.evaluate(f"{video}.pause()")
+        _wait_for(page, "stop (pause) acknowledged")
+        drive_goal = page.get_attribute("#lesson", "data-last-goal")
+        # seeking into cue 2 while paused stops (again) and sends nothing
+        page.evaluate(f"{video}.currentTime = 5.5")
+        _wait_for(page, "stop (seeking) acknowledged")
+        assert not any(line.startswith("run: cue 2") for line in _log(page))
+        # play resumes the command of the cue covering the position
+        page.evaluate(f"{video}.play()")
+        _wait_for(page, "cue 2 acknowledged")
+        goal_id = page.get_attribute("#lesson", "data-last-goal")
+        # seeking out of every cue while playing stops and resumes nothing
+        page.evaluate(f"{video}.currentTime = 3.5")
+        _wait_for(page, "stop (seeking) acknowledged")
+        # buffering stops the robot ("waiting" is dispatched: a real stall cannot be made on a local file)
+        page.evaluate(f"{video}.currentTime = 6.0")
+        _wait_for(page, "cue 2 (seek)")
+        page.evaluate(f"{video}.dispatchEvent(new Event('waiting'))")
+        _wait_for(page, "stop (buffering) acknowledged")
+        # the end stops the robot
+        page.evaluate(f"{video}.currentTime = 9.5")
+        _wait_for(page, "stop (end) acknowledged", 20000)
+        log = [line for line in _log(page) if not line.startswith("ack")]
+        runs_and_stops = [line.split(" →")[0] for line in log]
+        expected_order = ["run: cue 1 (", "stop: stop (pause)", "stop: stop (seeking)", "run: cue 2 (play)",
+                          "stop: stop (seeking)", "run: cue 2 (seek)", "stop: stop (buffering)", "stop: stop (end)"]
+        cursor = 0
+        for expected in expected_order:
+            cursor = next(i for i in range(cursor, len(runs_and_stops)) if runs_and_stops[i].startswith(expected))
+        assert not any(line.startswith("error") for line in log), log
+        # the robot really stopped: the cue's goals were preempted by the stops
+        robot = manager.get(_user_id(live_server, "student1"))
+        assert robot is not None
+        for goal in (drive_goal, goal_id):
+            assert goal_dict(robot.link.get_goal(goal))["status"] in {"canceled", "succeeded"}
+        assert page.text_content("[data-latency=cueToAck]") != "–"
+        assert page.text_content("[data-latency=pauseToAck]") != "–"
+        ARTIFACTS_DIR.mkdir(exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS_DIR / "lesson-1280.png"), full_page=True)
+        page.set_viewport_size({"width": 390, "height": 844})
+        page.screenshot(path=str(ARTIFACTS_DIR / "lesson-390.png"), full_page=True)
+        Path(ARTIFACTS_DIR / "lesson-latency.txt").write_text(
+            "\n".join(f"{k}: {page.text_content(f'[data-latency={k}]')}"
+                      for k in ("cueToAck", "middlewareToAck", "pauseDetect", "pauseToAck")))
+    finally:
+        manager.shutdown()
+
+
+def _user_id(live_server: LiveServer, name: str) -> int:
+    from sqlalchemy import select
+
+    from middleware.db import session_factory
+    from middleware.models import User
+
+    with session_factory(live_server.app)() as session:
+        return session.scalar(select(User.id).where(User.username == name))
+
+
+def test_the_pure_playback_rule(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    log_in(page, live_server)
+    result = page.evaluate("""async () => {
+      const m = await import('/static/js/lesson-playback.js');
+      const calls = [];
+      const p = new m.CuePlayback({ run: (i, why) => calls.push(`run ${i} ${why}`),
+                                    stop: (why) => calls.push(`stop ${why}`) });
+      p.cueChange(1);            // paused: nothing
+      p.play();                  // play inside cue 1
+      p.play();                  // "playing" after "play": no second send
+      p.cueChange(null);         // leaves cue 1
+      p.cueChange(2);            // enters cue 2
+      p.cueChange(3);            // adjacent cue 3: no stop between
+      p.pause();
+      p.seekStart(); p.seekEnd(true, 2);   // seek while paused: stop only
+      p.play();
+      p.buffering(); p.play();
+      p.seekStart(); p.seekEnd(false, null); // seek out of cues while playing
+      p.ended();
+      return { calls, at: [m.cueAt([{start_s: 1, end_s: 2}], 2), m.cueAt([{start_s: 1, end_s: 2}], 1.5)?.start_s,
+               m.cueIndexOf('cue-12'), m.cueIndexOf('<b>')] };
+    }""")
+    assert result["calls"] == ["run 1 play", "stop cue-exit", "run 2 enter", "run 3 enter", "stop pause",
+                               "stop seeking", "run 2 play", "stop buffering", "run 2 play", "stop seeking",
+                               "stop end"]
+    assert result["at"] == [None, 1, 12, None]
