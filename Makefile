@@ -25,7 +25,7 @@ DEMO_VIDEO := instance/lessons/demo-first-moves.webm
 run: $(RUN_STAMP) $(if $(wildcard $(DEMO_VIDEO)),,ffmpeg)
 	$(VENV)/bin/telelab up
 
-test: $(TEST_STAMP) chromium
+test: $(TEST_STAMP) chromium ffmpeg
 	$(PY) -m pytest
 
 chromium:
