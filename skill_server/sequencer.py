@@ -117,6 +117,11 @@ class Sequencer:
 
     # ---- hooks the world calls (loop thread) -------------------------------------------------------
 
+    @property
+    def motor_goal_running(self) -> bool:
+        """Whether a motor goal holds the wheels (read from other threads as a hint only)."""
+        return self._motor is not None
+
     def on_direct_drive(self, version: int) -> None:
         """A Drive command arrived: the teleoperator takes the wheels back from any motor goal."""
         if self._motor is not None and version > self._motor_since_version:

@@ -108,6 +108,10 @@ class RobotService(GoalRpcs, CourseRpcs, robot_pb2_grpc.RobotServicer):
             )
         except InvalidParameter as error:
             abort(context, grpc.StatusCode.INVALID_ARGUMENT, error.message)
+        if self._sequencer.motor_goal_running:
+            # The teleoperator takes the wheels back: end the motor goal before answering, so a stop that
+            # was acknowledged has also ended the goal (the loop runs queued commands between ticks).
+            self._world.run_in_loop(lambda: self._sequencer.on_direct_drive(self._world.drive_version))
         return robot_pb2.DriveAck(
             applied_sequence=ack.applied_sequence, linear_mps=ack.linear_mps, angular_radps=ack.angular_radps
         )
