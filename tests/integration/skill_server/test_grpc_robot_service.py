@@ -88,7 +88,10 @@ def test_telemetry_messages_advance_and_carry_every_sensor(robot: robot_pb2_grpc
     ticks = [m.tick for m in messages]
     sim_times = [m.sim_time_s for m in messages]
     assert ticks == sorted(set(ticks)) and sim_times == sorted(set(sim_times))
-    assert sim_times[-1] - sim_times[0] == pytest.approx(0.4, abs=0.05)  # the default 10 Hz of sim time
+    # The default is 10 Hz of sim time: never closer than a period (less one control tick). In fast mode a busy
+    # machine may deliver later snapshots, so the spacing is bounded below, not pinned.
+    gaps = [b - a for a, b in zip(sim_times, sim_times[1:], strict=False)]
+    assert min(gaps) >= 0.1 - 1 / 60 - 1e-9
     assert [m.capture_unix_s for m in messages] == sorted(m.capture_unix_s for m in messages)
     last = messages[-1]
     assert len(last.sonar.ranges_m) == 16 and len(last.laser.ranges_m) == 181
