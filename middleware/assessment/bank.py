@@ -13,7 +13,7 @@ from middleware.assessment.policy import get_exam, may_teach, student_course, te
 from middleware.assessment.schemas import BANK_FORMAT, ExamInput, QuestionInput, parse_bank_file
 from middleware.auth.schemas import InvalidField
 from middleware.models import User
-from middleware.models.assessment import Exam, Question
+from middleware.models.assessment import Attempt, Exam, Question
 
 
 def question_dict(question: Question, with_key: bool = True) -> dict[str, Any]:
@@ -60,10 +60,19 @@ def update_question(session: Session, actor: User, question_id: int, data: Quest
 
 
 def delete_question(session: Session, actor: User, question_id: int) -> None:
-    """Removes a question from the bank and from the course's exams that have no attempt yet."""
+    """Removes a question from the bank and from the course's exams that have no attempt yet (exams already
+    attempted keep the id: their attempts' results are stored, and questions_of skips it)."""
     question = course_question(session, actor, question_id)
+    for exam in list_exams(session, question.course_id):
+        if question.id in (exam.question_ids or []) and not has_attempts(session, exam.id):
+            exam.question_ids = [i for i in exam.question_ids if i != question.id]
     session.delete(question)
     session.flush()
+
+
+def has_attempts(session: Session, exam_id: int) -> bool:
+    """True once anyone has started the exam."""
+    return session.scalar(select(Attempt.id).where(Attempt.exam_id == exam_id).limit(1)) is not None
 
 
 def export_bank(session: Session, actor: User, course_id: int) -> str:
@@ -111,11 +120,9 @@ def managed_exam(session: Session, actor: User, exam_id: int) -> Exam:
 
 def update_exam(session: Session, actor: User, exam_id: int, data: ExamInput) -> Exam:
     """Changes an exam; its questions and task are frozen once someone has started it."""
-    from middleware.models.assessment import Attempt
-
     exam = managed_exam(session, actor, exam_id)
     _check_questions(session, exam.course_id, data.question_ids)
-    started = session.scalar(select(Attempt.id).where(Attempt.exam_id == exam.id).limit(1)) is not None
+    started = has_attempts(session, exam.id)
     if started and (data.question_ids != exam.question_ids or data.task != exam.task or data.kind != exam.kind):
         raise Refused(409, "exam_started", "Students have started this test: only its title and times can change.",
                       "question_ids")
@@ -123,6 +130,16 @@ def update_exam(session: Session, actor: User, exam_id: int, data: ExamInput) ->
     exam.duration_s, exam.max_attempts, exam.question_ids = data.duration_s, data.max_attempts, data.question_ids
     exam.task, exam.robot_name = data.task, data.robot_name
     return exam
+
+
+def delete_exam(session: Session, actor: User, exam_id: int) -> None:
+    """Deletes a test nobody has attempted; one with attempts is kept (its marks are grades)."""
+    exam = managed_exam(session, actor, exam_id)
+    if has_attempts(session, exam.id):
+        raise Refused(409, "exam_has_attempts", f"“{exam.title}” has attempts, so it cannot be deleted: their marks "
+                      "are grades. Change its closing time to close it instead.", "exam_id")
+    session.delete(exam)
+    session.flush()
 
 
 def list_exams(session: Session, course_id: int) -> list[Exam]:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+from datetime import UTC
 from typing import Any
 
 from flask import Blueprint, Response, abort, flash, redirect, render_template, request, url_for
@@ -74,28 +76,97 @@ def hub():  # type: ignore[no-untyped-def]
     return render_template("assessment/hub.html", courses=courses, css=CSS, now=now)
 
 
+def _moment_field(moment: Any) -> str:
+    """A stored UTC moment as a datetime-local value (seconds only when there are some)."""
+    if moment is None:
+        return ""
+    moment = moment.astimezone(UTC) if moment.tzinfo else moment
+    return moment.strftime("%Y-%m-%dT%H:%M:%S" if moment.second else "%Y-%m-%dT%H:%M")
+
+
+def _question_form(question: Any) -> dict[str, Any]:
+    """The bank editor's fields for a stored question."""
+    spec = question.spec
+    correct = spec.get("correct")
+    return {"kind": question.kind, "prompt": question.prompt, "topics": ", ".join(question.topics),
+            "points": f"{question.points:g}", "choices": "\n".join(spec.get("choices", [])),
+            "correct": ", ".join(map(str, correct)) if isinstance(correct, list) else str(correct or 0)
+            if "choices" in spec else "",
+            "value": repr(spec["value"]) if "value" in spec else "",
+            "tolerance": repr(spec["tolerance"]) if "tolerance" in spec else "",
+            "unit": spec.get("unit", ""), "accepted": "\n".join(spec.get("accepted", [])),
+            "case_sensitive": "1" if spec.get("case_sensitive") else ""}
+
+
+TASK_FIELDS = ("x_m", "y_m", "x1_m", "y1_m", "x2_m", "y2_m", "distance_m", "min_travel_m")
+
+
+def _exam_form(exam: Any) -> dict[str, Any]:
+    """The test editor's fields for a stored exam (the task's too)."""
+    form: dict[str, Any] = {
+        "title": exam.title, "kind": exam.kind, "opens_at": _moment_field(exam.opens_at),
+        "closes_at": _moment_field(exam.closes_at), "duration_s": exam.duration_s or "",
+        "max_attempts": exam.max_attempts or "", "question_ids": [str(i) for i in exam.question_ids or []],
+        "robot_name": exam.robot_name or "lab-1"}
+    task = exam.task or {}
+    if task:
+        form.update({"task_kind": task["kind"], "task_points": repr(task.get("points", 10)),
+                     "task_topics": ", ".join(task.get("topics") or []), "instructions": task.get("instructions", ""),
+                     "rubric": ", ".join(f"{bound!r}:{share!r}" for bound, share in task.get("rubric") or [])})
+        form.update({name: repr(task[name]) for name in TASK_FIELDS if name in task})
+    return form
+
+
 def _course_page(course_id: int, status: int = 200, errors: dict[str, str] | None = None,
-                 form: dict[str, str] | None = None):  # type: ignore[no-untyped-def]
+                 form: dict[str, Any] | None = None, editing: tuple[str, int] | None = None,
+                 error_key: str = ""):  # type: ignore[no-untyped-def]
+    """The tutor's page; editing ("question" | "exam", id) opens that item's edit form (prefilled unless form)."""
     dbs, now = get_session(), server_now()
     try:
         course = bank.teaching_course(dbs, current_user, course_id)
         questions = bank.list_questions(dbs, current_user, course_id)
     except Refused as refused:
         _refused(refused)
-    exams = [review.exam_dict(e, now) for e in bank.list_exams(dbs, course_id)]
+    exam_rows = bank.list_exams(dbs, course_id)
+    exams = [{**review.exam_dict(e, now), "has_attempts": bank.has_attempts(dbs, e.id)} for e in exam_rows]
+    qform: dict[str, Any] = dict(form or {}) if error_key == "question" else {}
+    eform: dict[str, Any] = dict(form or {}) if error_key == "exam" else {}
+    edit_question = edit_exam = None
+    if editing and editing[0] == "question":
+        edit_question = next((q for q in questions if q.id == editing[1]), None)
+        if edit_question is None:
+            abort(404)
+        qform = qform or _question_form(edit_question)
+    elif editing and editing[0] == "exam":
+        edit_exam = next((e for e in exams if e["id"] == editing[1]), None)
+        if edit_exam is None:
+            abort(404)
+        eform = eform or _exam_form(next(e for e in exam_rows if e.id == editing[1]))
+    if isinstance(eform.get("question_ids"), str):
+        eform["question_ids"] = [eform["question_ids"]]
     return render_template("assessment/course.html", course=course, questions=questions, exams=exams,
-                           errors=errors or {}, form=form or {}, css=CSS), status
+                           errors=errors or {}, qform=qform, eform=eform, edit_question=edit_question,
+                           edit_exam=edit_exam, css=CSS), status
 
 
 @blueprint.get("/courses/<int:course_id>/assessment")
 @login_required
 def course_page(course_id: int):  # type: ignore[no-untyped-def]
-    """The tutor's bank editor, tests, grades export and survey results for a course."""
+    """The tutor's bank editor, tests, grades export and survey results for a course; ?question=<id> or ?exam=<id>
+    opens that question's or test's edit form."""
+    for kind in ("question", "exam"):
+        wanted = request.args.get(kind, "")
+        if wanted.isdigit():
+            return _course_page(course_id, editing=(kind, int(wanted)))
     return _course_page(course_id)
 
 
-def _course_action(course_id: int, action, success: str, error_key: str):  # type: ignore[no-untyped-def]
+def _course_action(course_id: int, action, success: str, error_key: str,  # type: ignore[no-untyped-def]
+                   editing: tuple[str, int] | None = None, keep_form: bool = True):
+    """Runs a form's action; on a refusal, the page again with the message (and the form as sent, if keep_form)."""
     dbs, form = get_session(), request.form.to_dict()
+    if error_key == "exam":
+        form["question_ids"] = request.form.getlist("question_ids")  # type: ignore[assignment]
     try:
         bank.teaching_course(dbs, current_user, course_id)
         action(dbs, form)
@@ -103,13 +174,29 @@ def _course_action(course_id: int, action, success: str, error_key: str):  # typ
         if refused.status in (403, 404):
             _refused(refused)
         dbs.rollback()
-        return _course_page(course_id, refused.status, {error_key: refused.message}, form)
+        return _course_page(course_id, refused.status, {error_key: refused.message}, form if keep_form else None,
+                            editing, error_key)
     except InvalidField as invalid:
         dbs.rollback()
-        return _course_page(course_id, 400, {error_key: f"{invalid.field}: {invalid.message}"}, form)
+        return _course_page(course_id, 400, {error_key: f"{invalid.field}: {invalid.message}"}, form, editing,
+                            error_key)
     dbs.commit()
     flash(success, "success")
     return redirect(url_for("assessment_pages.course_page", course_id=course_id), 303)
+
+
+def _own_question(dbs: Any, course_id: int, question_id: int) -> Any:
+    question = bank.course_question(dbs, current_user, question_id)
+    if question.course_id != course_id:
+        raise Refused(404, "unknown_question", f"There is no question with id {question_id} here.", "question_id")
+    return question
+
+
+def _own_exam(dbs: Any, course_id: int, exam_id: int) -> Any:
+    exam = bank.managed_exam(dbs, current_user, exam_id)
+    if exam.course_id != course_id:
+        raise Refused(404, "unknown_exam", f"There is no test with id {exam_id} here.", "exam_id")
+    return exam
 
 
 @blueprint.post("/courses/<int:course_id>/assessment/questions")
@@ -119,6 +206,30 @@ def add_question(course_id: int):  # type: ignore[no-untyped-def]
     return _course_action(course_id, lambda dbs, form: bank.add_question(dbs, current_user, course_id,
                                                                          parse_question(form)),
                           "Question added to the bank.", "question")
+
+
+@blueprint.post("/courses/<int:course_id>/assessment/questions/<int:question_id>")
+@login_required
+def edit_question(course_id: int, question_id: int):  # type: ignore[no-untyped-def]
+    """Replaces a question from its edit form (attempts already graded keep their marks)."""
+    def action(dbs, form):  # type: ignore[no-untyped-def]
+        _own_question(dbs, course_id, question_id)
+        bank.update_question(dbs, current_user, question_id, parse_question(form))
+
+    return _course_action(course_id, action, f"Question #{question_id} saved.", "question",
+                          ("question", question_id))
+
+
+@blueprint.post("/courses/<int:course_id>/assessment/questions/<int:question_id>/delete")
+@login_required
+def delete_question(course_id: int, question_id: int):  # type: ignore[no-untyped-def]
+    """Removes a question from the bank (and from the tests nobody has attempted)."""
+    def action(dbs, _form):  # type: ignore[no-untyped-def]
+        _own_question(dbs, course_id, question_id)
+        bank.delete_question(dbs, current_user, question_id)
+
+    return _course_action(course_id, action, f"Question #{question_id} deleted.", "question",
+                          ("question", question_id), keep_form=False)
 
 
 @blueprint.post("/courses/<int:course_id>/assessment/bank")
@@ -138,12 +249,33 @@ def import_bank(course_id: int):  # type: ignore[no-untyped-def]
 @login_required
 def create_exam(course_id: int):  # type: ignore[no-untyped-def]
     """Creates a quiz or a timed test from the test editor's form."""
-    def action(dbs, form):  # type: ignore[no-untyped-def]
-        data = dict(form)
-        data["question_ids"] = request.form.getlist("question_ids")
-        bank.create_exam(dbs, current_user, course_id, parse_exam(data))
+    return _course_action(course_id, lambda dbs, form: bank.create_exam(dbs, current_user, course_id,
+                                                                        parse_exam(form)), "Test created.", "exam")
 
-    return _course_action(course_id, action, "Test created.", "exam")
+
+@blueprint.post("/courses/<int:course_id>/assessment/exams/<int:exam_id>")
+@login_required
+def edit_exam(course_id: int, exam_id: int):  # type: ignore[no-untyped-def]
+    """Changes a test from its edit form (only its title and times once someone has started it)."""
+    def action(dbs, form):  # type: ignore[no-untyped-def]
+        exam = _own_exam(dbs, course_id, exam_id)
+        data = parse_exam(form)
+        if set(data.question_ids) == set(exam.question_ids or []):  # the checkboxes' order is the bank's
+            data = replace(data, question_ids=list(exam.question_ids))
+        bank.update_exam(dbs, current_user, exam_id, data)
+
+    return _course_action(course_id, action, "Test saved.", "exam", ("exam", exam_id))
+
+
+@blueprint.post("/courses/<int:course_id>/assessment/exams/<int:exam_id>/delete")
+@login_required
+def delete_exam(course_id: int, exam_id: int):  # type: ignore[no-untyped-def]
+    """Deletes a test nobody has attempted; a test with attempts is refused with the reason."""
+    def action(dbs, _form):  # type: ignore[no-untyped-def]
+        _own_exam(dbs, course_id, exam_id)
+        bank.delete_exam(dbs, current_user, exam_id)
+
+    return _course_action(course_id, action, "Test deleted.", "exam", ("exam", exam_id), keep_form=False)
 
 
 @blueprint.get("/assessment/exams/<int:exam_id>")

@@ -1,8 +1,8 @@
 """Customized learning activities: per-topic results of a student, and activities recommended for weak topics.
 
-Providers are pluggable: each is a function (session, course_id, weak topics, now) -> recommendations. This
-package registers practice quizzes; tours and lessons do not exist yet, and will register their own provider
-with register_provider() when they do.
+Providers are pluggable: each is a function (session, course_id, weak topics, now) -> recommendations, added with
+register_provider(). Registered here: the course's open practice quizzes (by their questions' topics), and the
+tours and lessons tagged with the topic (their `topics` field; tours and lessons belong to no course).
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from middleware.assessment.attempts import window_state
 from middleware.assessment.bank import list_exams, questions_of
 from middleware.assessment.review import final_results, reviews_of
 from middleware.models.assessment import Attempt, Exam
+from middleware.models.teaching import Lesson, Tour
 
 WEAK_BELOW = 0.6  # a topic is weak when the student scored less than 60% of its points
 
@@ -40,7 +41,7 @@ class TopicScore:
 class Recommendation:
     """One activity to do for a weak topic."""
 
-    kind: str  # practice_quiz (tour, lesson: later)
+    kind: str  # practice_quiz, tour, lesson
     title: str
     topic: str
     href: str
@@ -51,7 +52,7 @@ _PROVIDERS: list[Provider] = []
 
 
 def register_provider(provider: Provider) -> Provider:
-    """Adds a source of recommendations (practice quizzes here; tours and lessons when they exist)."""
+    """Adds a source of recommendations (practice quizzes, tours and lessons here)."""
     _PROVIDERS.append(provider)
     return provider
 
@@ -89,7 +90,30 @@ def practice_quizzes(session: Session, course_id: int, topics: list[str], now: d
     return out
 
 
+def _tagged(rows: list[Tour] | list[Lesson], kind: str, path: str, topics: list[str]) -> list[Recommendation]:
+    out = []
+    for row in rows:
+        tags = {t.strip() for t in (row.topics or "").split(",")}
+        out.extend(Recommendation(kind, row.title, topic, f"/{path}/{row.id}") for topic in topics if topic in tags)
+    return out
+
+
+@register_provider
+def tours(session: Session, course_id: int, topics: list[str], now: datetime) -> list[Recommendation]:
+    """Tours tagged with a weak topic."""
+    return _tagged(list(session.scalars(select(Tour).where(Tour.topics != "").order_by(Tour.title, Tour.id))),
+                   "tour", "tours", topics)
+
+
+@register_provider
+def lessons(session: Session, course_id: int, topics: list[str], now: datetime) -> list[Recommendation]:
+    """Video lessons tagged with a weak topic."""
+    return _tagged(list(session.scalars(select(Lesson).where(Lesson.topics != "").order_by(Lesson.title, Lesson.id))),
+                   "lesson", "lessons", topics)
+
+
 def recommend(session: Session, user_id: int, course_id: int, now: datetime) -> list[Recommendation]:
-    """Activities for the student's weak topics in the course, from every provider."""
+    """Activities for the student's weak topics in the course from every provider, weakest topic first."""
     topics = weak_topics(topic_scores(session, user_id, course_id))
-    return [r for provider in _PROVIDERS for r in provider(session, course_id, topics, now)] if topics else []
+    found = [r for provider in _PROVIDERS for r in provider(session, course_id, topics, now)] if topics else []
+    return sorted(found, key=lambda r: topics.index(r.topic) if r.topic in topics else len(topics))

@@ -193,6 +193,13 @@ def api_update_exam(exam_id: int):  # type: ignore[no-untyped-def]
     return run(action)
 
 
+@blueprint.delete("/api/exams/<int:exam_id>")
+@login_required
+def api_delete_exam(exam_id: int):  # type: ignore[no-untyped-def]
+    """Deletes a test nobody has attempted (409 exam_has_attempts otherwise)."""
+    return run(lambda dbs: bank.delete_exam(dbs, current_user, exam_id) or {"deleted": exam_id})
+
+
 # --- attempts -------------------------------------------------------------------------------------
 
 

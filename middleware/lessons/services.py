@@ -18,6 +18,27 @@ VIDEO_NAME = re.compile(r"^[a-z0-9][a-z0-9_-]{0,100}\.(webm|mp4)$")
 SLUG = re.compile(r"^[a-z0-9][a-z0-9-]{0,63}$")
 MAX_TITLE = 120
 MAX_SUMMARY = 500
+MAX_TOPICS, MAX_TOPIC = 10, 60
+
+
+def normalise_topics(value: object) -> str:
+    """Topics ("Sensors, odometry" or a list) as stored on tours and lessons: "odometry, sensors" (lower case,
+    sorted, no repeats); ValueError names the problem. Recommendations match them to question topics."""
+    if value is None:
+        return ""
+    if isinstance(value, str):
+        value = value.split(",")
+    if not isinstance(value, list) or not all(isinstance(t, str) for t in value):
+        raise ValueError("topics must be text: names separated by commas.")
+    topics = sorted({" ".join(t.split()).lower() for t in value} - {""})
+    if len(topics) > MAX_TOPICS or any(len(t) > MAX_TOPIC for t in topics):
+        raise ValueError(f"topics: at most {MAX_TOPICS} names of at most {MAX_TOPIC} characters each.")
+    return ", ".join(topics)
+
+
+def topic_list(text: str | None) -> list[str]:
+    """The stored topics as a list."""
+    return [t for t in (part.strip() for part in (text or "").split(",")) if t]
 
 
 class LessonInvalid(Exception):
@@ -37,6 +58,7 @@ class LessonDraft:
     summary: str
     video_name: str
     cues: list[Cue]
+    topics: str = ""
 
 
 def video_dir(instance_path: str) -> Path:
@@ -65,7 +87,7 @@ def _text(data: dict[str, object], name: str, limit: int, required: bool = True)
 
 
 def check_lesson(data: object, skills: SkillSchemas, videos: list[str]) -> LessonDraft:
-    """A checked lesson from the editor's JSON: title, summary, slug, video_name, cues (WebVTT or SRT text)."""
+    """A checked lesson from the editor's JSON: title, summary, slug, topics, video_name, cues (WebVTT or SRT)."""
     if not isinstance(data, dict):
         raise LessonInvalid([CueError(0, "body", "Send a JSON object with title, video_name and cues.")])
     title = _text(data, "title", MAX_TITLE)
@@ -77,10 +99,14 @@ def check_lesson(data: object, skills: SkillSchemas, videos: list[str]) -> Lesso
     if not isinstance(video, str) or video not in videos:
         choices = ", ".join(videos) or "none yet: put a .webm or .mp4 file in the instance's lessons folder"
         raise LessonInvalid([CueError(0, "video_name", f"Choose one of the lesson videos ({choices}).")])
+    try:
+        topics = normalise_topics(data.get("topics"))
+    except ValueError as error:
+        raise LessonInvalid([CueError(0, "topics", str(error))]) from None
     cues, errors = parse_cue_track(data.get("cues"), skills)
     if errors:
         raise LessonInvalid(errors)
-    return LessonDraft(slug, title, summary, video, cues)
+    return LessonDraft(slug, title, summary, video, cues, topics)
 
 
 def save_lesson(session: Session, draft: LessonDraft, author_id: int | None, lesson: Lesson | None = None) -> Lesson:
@@ -91,7 +117,7 @@ def save_lesson(session: Session, draft: LessonDraft, author_id: int | None, les
     if lesson is None:
         lesson = Lesson(author_id=author_id)
         session.add(lesson)
-    lesson.slug, lesson.title, lesson.summary = draft.slug, draft.title, draft.summary
+    lesson.slug, lesson.title, lesson.summary, lesson.topics = draft.slug, draft.title, draft.summary, draft.topics
     lesson.video_name, lesson.cues_vtt = draft.video_name, to_webvtt(draft.cues)
     lesson.updated_at = utc_now()
     session.flush()
@@ -109,7 +135,8 @@ def stored_cues(lesson: Lesson) -> list[Cue]:
 def lesson_dict(lesson: Lesson, with_cues: bool = True) -> dict[str, object]:
     """JSON-ready form of a lesson."""
     data: dict[str, object] = {"id": lesson.id, "slug": lesson.slug, "title": lesson.title,
-                               "summary": lesson.summary, "video_name": lesson.video_name}
+                               "summary": lesson.summary, "video_name": lesson.video_name,
+                               "topics": topic_list(lesson.topics)}
     if with_cues:
         data["cues"] = [c.to_dict() for c in stored_cues(lesson)]
         data["cues_vtt"] = lesson.cues_vtt

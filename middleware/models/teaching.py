@@ -20,6 +20,7 @@ class Tour(Base):
     slug: Mapped[str] = mapped_column(String(64), unique=True)
     title: Mapped[str] = mapped_column(String(120))
     summary: Mapped[str] = mapped_column(String(500), default="")
+    topics: Mapped[str] = mapped_column(Text, default="", server_default="")  # "a, b": lower-case, for recommendations
     steps_json: Mapped[str] = mapped_column(Text)
     author_id: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
@@ -53,6 +54,7 @@ class Lesson(Base):
     slug: Mapped[str] = mapped_column(String(64), unique=True)
     title: Mapped[str] = mapped_column(String(120))
     summary: Mapped[str] = mapped_column(String(500), default="")
+    topics: Mapped[str] = mapped_column(Text, default="", server_default="")  # "a, b": lower-case, for recommendations
     video_name: Mapped[str] = mapped_column(String(128))
     cues_vtt: Mapped[str] = mapped_column(Text)
     author_id: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)

@@ -33,7 +33,8 @@ DEMO_CUES = """WEBVTT
 """
 
 DEMO_TOURS = [
-    {"slug": "direct-control", "title": "Direct control",
+    {"slug": "direct-control", "topics": "direct control, odometry",
+     "title": "Direct control",
      "summary": "Drive the robot yourself: speeds and the deadman.",
      "steps": [
          {"title": "The camera", "text": "This is what the robot sees. Watch it while the robot moves.",
@@ -48,7 +49,8 @@ DEMO_TOURS = [
           "condition": {"type": "skill_finished"}},
          {"title": "Your turn", "text": "Open the console and drive with the arrow keys.", "panel": "drive",
           "condition": {"type": "manual"}}]},
-    {"slug": "go-to-goal", "title": "Go to a goal", "summary": "The robot plans a path and drives to a point.",
+    {"slug": "go-to-goal", "topics": "navigation, path planning",
+     "title": "Go to a goal", "summary": "The robot plans a path and drives to a point.",
      "steps": [
          {"title": "The map", "text": "The lab from above: the robot, its laser and the obstacles.", "panel": "map",
           "condition": {"type": "time", "seconds": 3}},
@@ -58,7 +60,8 @@ DEMO_TOURS = [
           "condition": {"type": "skill_finished"}},
          {"title": "Done", "text": "The goal counts as reached within max_error_m.", "panel": "odometry",
           "condition": {"type": "manual"}}]},
-    {"slug": "wall-following", "title": "Wall following", "summary": "Keep a distance to a wall with the sonars.",
+    {"slug": "wall-following", "topics": "sensors, sonar, wall following",
+     "title": "Wall following", "summary": "Keep a distance to a wall with the sonars.",
      "steps": [
          {"title": "Sonars", "text": "The ring of sonars measures the distance to the walls.", "panel": "sonar",
           "condition": {"type": "time", "seconds": 3}},
@@ -67,7 +70,8 @@ DEMO_TOURS = [
           "command": {"skill": "wall_following",
                       "parameters": {"distance_m": 0.4, "side": "right", "speed_mps": 0.2, "duration_s": 10.0}},
           "condition": {"type": "skill_finished"}}]},
-    {"slug": "localization", "title": "Localization", "summary": "Where am I? Particles converge on the pose.",
+    {"slug": "localization", "topics": "laser, localization, sensors",
+     "title": "Localization", "summary": "Where am I? Particles converge on the pose.",
      "steps": [
          {"title": "Laser", "text": "The laser sees walls and furniture; localization compares them with the plan.",
           "panel": "laser", "condition": {"type": "time", "seconds": 3}},
@@ -103,7 +107,8 @@ def seed_demo_content(app: Flask, record_video: bool = True) -> list[str]:
                 added.append(f"tour {data['slug']}")
         if video.exists() and session.scalar(select(Lesson).where(Lesson.slug == "first-moves")) is None:
             draft = LessonDraft("first-moves", "First moves", "The video drives your robot: forward, a turn, "
-                                "then a goal. Pause and the robot stops.", DEMO_VIDEO, cues)
+                                "then a goal. Pause and the robot stops.", DEMO_VIDEO, cues,
+                                "direct control, navigation, odometry")
             save_lesson(session, draft, author)
             added.append("lesson first-moves")
         session.commit()

@@ -16,6 +16,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware.lessons.commands import CommandInvalid, RobotCommand, SkillSchemas, parse_command
+from middleware.lessons.services import normalise_topics, topic_list
 from middleware.models.accounts import utc_now
 from middleware.models.teaching import GuidedSession, Tour
 
@@ -124,15 +125,19 @@ def check_tour(data: object, skills: SkillSchemas | None) -> tuple[str, str, str
 
 def save_tour(session: Session, data: object, skills: SkillSchemas | None, author_id: int | None,
               tour: Tour | None = None) -> Tour:
-    """Creates or updates a tour from the editor's JSON; the caller commits."""
+    """Creates or updates a tour from the editor's JSON (topics optional: "a, b"); the caller commits."""
     slug, title, summary, steps = check_tour(data, skills)
+    try:
+        topics = normalise_topics(data.get("topics"))  # type: ignore[union-attr]  # check_tour: a dict
+    except ValueError as error:
+        raise TourInvalid("topics", str(error)) from None
     clash = session.scalar(select(Tour).where(Tour.slug == slug))
     if clash is not None and clash is not tour:
         raise TourInvalid("slug", f"Another tour is called {slug!r} already.")
     if tour is None:
         tour = Tour(author_id=author_id)
         session.add(tour)
-    tour.slug, tour.title, tour.summary = slug, title, summary
+    tour.slug, tour.title, tour.summary, tour.topics = slug, title, summary, topics
     tour.steps_json = json.dumps([s.to_dict() for s in steps])
     tour.updated_at = utc_now()
     session.flush()
@@ -147,7 +152,7 @@ def tour_steps(tour: Tour) -> list[TourStep]:
 def tour_dict(tour: Tour) -> dict[str, object]:
     """JSON-ready form."""
     return {"id": tour.id, "slug": tour.slug, "title": tour.title, "summary": tour.summary,
-            "steps": [s.to_dict() for s in tour_steps(tour)]}
+            "topics": topic_list(tour.topics), "steps": [s.to_dict() for s in tour_steps(tour)]}
 
 
 # --- live guided sessions ----------------------------------------------------------------------

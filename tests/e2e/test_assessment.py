@@ -110,3 +110,28 @@ def test_student_answers_the_survey_and_the_tutor_sees_the_chart(chromium, page,
     tutor.goto(f"{live_server.url}/courses/{course_people['course']}/assessment")
     tutor.screenshot(path=str(ARTIFACTS_DIR / "assessment-course-phone.png"), full_page=True)
     tutor.context.close()
+
+
+def test_tutor_edits_a_question_and_the_course_page_fits_a_phone(chromium, page, app,  # type: ignore[no-untyped-def]
+                                                                 live_server: LiveServer, course_people) -> None:  # noqa: F811
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    _make_test(app, course_people, duration_s=600)
+    page.set_viewport_size({"width": 390, "height": 844})
+    log_in(page, live_server, "tutor1")
+    page.goto(f"{live_server.url}/courses/{course_people['course']}/assessment")
+    assert page.evaluate("document.scrollingElement.scrollWidth") <= 390
+    page.get_by_text("New test or quiz").click()
+    page.get_by_label("Kind", exact=True).first.select_option("experimental")
+    page.get_by_label("Task", exact=True).select_option("wall_following")
+    assert page.get_by_label("Distance to keep (m, 0.05 to 5)").is_visible()
+    assert not page.get_by_label("Target x (m)").is_visible()
+    page.screenshot(path=str(ARTIFACTS_DIR / "assessment-course-phone-editor.png"), full_page=True)
+    assert page.evaluate("document.scrollingElement.scrollWidth") <= 390
+    page.get_by_role("link", name="Edit question #2").click()
+    page.get_by_label("Question", exact=True).fill("Max laser range of lab-1, in metres?")
+    page.get_by_label("Tolerance ± (numeric)").fill("0.25")
+    page.get_by_role("button", name="Save the question").click()
+    page.locator(".flash--success", has_text="Question #2 saved.").wait_for()
+    assert "Max laser range of lab-1, in metres?" in page.locator("#questions").text_content()
+    assert page.evaluate("document.scrollingElement.scrollWidth") <= 390
+    page.screenshot(path=str(ARTIFACTS_DIR / "assessment-course-phone-edited.png"), full_page=True)

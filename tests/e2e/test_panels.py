@@ -341,7 +341,9 @@ def test_an_unreadable_stream_message_leaves_a_notice_not_a_blank_page(page, liv
     page.locator('laser-panel [data-field="laser-nearest"]').filter(has_text=" m").wait_for()
 
 
-def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(chromium, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(  # type: ignore[no-untyped-def]
+    chromium, live_server: LiveServer
+) -> None:
     context = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
     phone = context.new_page()
     errors: list[str] = []
@@ -374,11 +376,13 @@ def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(ch
           return {
             normalized, moved: l.order,
             roundTrip: geometry.canvasToWorld(view, ...there), there,
-            corners: geometry.boxCorners({center_x_m: 1, center_y_m: 0, half_x_m: 1, half_y_m: 0.5, yaw_rad: Math.PI / 2}),
+            corners: geometry.boxCorners(
+              {center_x_m: 1, center_y_m: 0, half_x_m: 1, half_y_m: 0.5, yaw_rad: Math.PI / 2}),
             nearest: polar.nearestReading([2, 0.7, Infinity, 0.4], [0, 0.5, 1, 1.5], 3),
             left: polar.polarToScreen(100, 100, 10, 1, Math.PI / 2),
             p95: stats.percentile([1, 2, 3, 4, 5, 6, 7, 8, 9, 100], 95),
-            goal: descriptors.goalParameterNames([{name: 'speed_mps', type: 'double'}, {name: 'goal_x_m', type: 'double'},
+            goal: descriptors.goalParameterNames([{name: 'speed_mps', type: 'double'},
+              {name: 'goal_x_m', type: 'double'},
                                                   {name: 'goal_y_m', type: 'double'}]),
             bad: descriptors.checkDescriptor({id: 'x', kind: 'hologram', title: 'X'}).ok,
           };

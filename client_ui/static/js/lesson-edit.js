@@ -16,8 +16,8 @@ function showErrors(errors) {
 
 function values() {
   const data = new FormData(form);
-  return { title: data.get("title"), summary: data.get("summary"), video_name: data.get("video_name"),
-    cues: data.get("cues") };
+  return { title: data.get("title"), summary: data.get("summary"), topics: data.get("topics"),
+    video_name: data.get("video_name"), cues: data.get("cues") };
 }
 
 form.querySelector("[data-action=check]").addEventListener("click", async () => {

@@ -40,7 +40,7 @@ form.addEventListener("submit", async (event) => {
   const id = form.dataset.tourId;
   try {
     const saved = await fetchJson(id ? `/api/tours/${id}` : "/api/tours", { method: id ? "PUT" : "POST",
-      body: { title: data.get("title"), summary: data.get("summary"), steps } });
+      body: { title: data.get("title"), summary: data.get("summary"), topics: data.get("topics"), steps } });
     result.textContent = "Saved.";
     if (!id) window.location.assign(`/tours/${saved.id}/edit`);
   } catch (error) {
