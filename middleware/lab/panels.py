@@ -53,12 +53,17 @@ class SkillController:
         }
 
 
-def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | None) -> list[dict[str, object]]:
-    """Every panel of the console of robot_name, in the order they are placed."""
+def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | None,
+                 personal: bool = False) -> list[dict[str, object]]:
+    """Every panel of the console of robot_name, in the order they are placed (personal: a practice robot)."""
     base = f"/ws/robots/{robot_name}"
+    turn_help = ("Your personal practice robot: only you see it, so you control it whenever you are here."
+                 if personal else "Who controls the robot and who waits.")
+    chat_help = ("Your personal practice robot: nobody else reads this chat; notes to yourself."
+                 if personal else "Talk with the others connected to this robot.")
     repositories = [
         DynamicRepository("camera", "camera", "Camera", f"{base}/camera", "The robot's camera, live."),
-        DynamicRepository("queue", "queue", "Turn", f"{base}/queue", "Who controls the robot and who waits."),
+        DynamicRepository("queue", "queue", "Turn", f"{base}/queue", turn_help),
         DynamicRepository("drive", "drive", "Drive", f"{base}/drive",
                           "Direct control: arrow keys, the pad or a gamepad."),
         DynamicRepository("map", "map", "Lab model", f"{base}/localization",
@@ -73,8 +78,7 @@ def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | Non
         if skill.name != DIRECT_CONTROL_SKILL:
             panels.append(SkillController(robot_name, skill).describe())
     panels += [
-        DynamicRepository("chat", "chat", "Chat", f"{base}/chat", "Talk with the others connected to this robot.")
-        .describe(),
+        DynamicRepository("chat", "chat", "Chat", f"{base}/chat", chat_help).describe(),
         DynamicRepository("response-times", "response-times", "Response times", f"{base}/drive",
                           "Round trips: browser to middleware, and middleware to the robot.").describe(),
     ]

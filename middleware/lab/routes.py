@@ -39,11 +39,11 @@ def index():  # type: ignore[no-untyped-def]
 @blueprint.get("/lab/<robot_name>")
 @login_required
 def console(robot_name: str):  # type: ignore[no-untyped-def]
-    """The lab console of one robot."""
-    registry = robot_registry()
-    if registry.get(robot_name) is None:
+    """The lab console of one robot (a practice robot's for its owner only: the registry checks)."""
+    title = robot_registry().title(robot_name)
+    if title is None:
         abort(404)
-    return render_template("console.html", robot_name=robot_name, robot_title=registry.addresses[robot_name].title)
+    return render_template("console.html", robot_name=robot_name, robot_title=title)
 
 
 @blueprint.get("/api/robots/<robot_name>")
@@ -58,6 +58,4 @@ def robot_description(robot_name: str):  # type: ignore[no-untyped-def]
         info: dict[str, object] | None = robot_info_dict(link.info(refresh=True))
     except RobotUnavailable:
         info = None
-    return jsonify(
-        {"name": robot_name, "title": registry.addresses[robot_name].title, "online": info is not None, "info": info}
-    )
+    return jsonify({"name": robot_name, "title": registry.title(robot_name), "online": info is not None, "info": info})

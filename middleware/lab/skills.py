@@ -83,8 +83,9 @@ def panels(robot_name: str):  # type: ignore[no-untyped-def]
         skills = link.skills(refresh=True)
     except RobotUnavailable:
         skills = None
-    return jsonify({"robot": robot_name, "skills_available": skills is not None,
-                    "panels": robot_panels(robot_name, skills)})
+    personal = robot_registry().is_personal_name(robot_name)
+    return jsonify({"robot": robot_name, "skills_available": skills is not None, "personal": personal,
+                    "panels": robot_panels(robot_name, skills, personal)})
 
 
 @blueprint.post("/api/robots/<robot_name>/skills/<skill>/goals")

@@ -4,9 +4,22 @@ from __future__ import annotations
 
 import time
 
-from flask import Blueprint, Response, current_app, jsonify, render_template, request, send_from_directory
+from flask import (
+    Blueprint,
+    Response,
+    current_app,
+    flash,
+    jsonify,
+    redirect,
+    render_template,
+    request,
+    send_from_directory,
+    url_for,
+)
 from flask_login import current_user, login_required
+from werkzeug.exceptions import RequestEntityTooLarge
 
+from middleware import csrf
 from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.lessons.commands import RobotCommand
@@ -19,6 +32,13 @@ from middleware.lessons.services import (
     save_lesson,
     stored_cues,
     video_dir,
+)
+from middleware.lessons.uploads import (
+    DEFAULT_MAX_VIDEO_BYTES,
+    MULTIPART_OVERHEAD,
+    UploadRefused,
+    store_video,
+    too_large_message,
 )
 from middleware.models.teaching import Lesson
 from middleware.practice.control import execute, reference_skills, resolve_target
@@ -77,7 +97,61 @@ def edit(lesson_id: int | None = None):  # type: ignore[no-untyped-def]
     _require_tutor()
     lesson = _lesson(lesson_id) if lesson_id is not None else None
     return render_template("teaching/lesson_edit.html", lesson=lesson,
-                           videos=available_videos(current_app.instance_path))
+                           videos=available_videos(current_app.instance_path),
+                           uploaded_video=request.args.get("video"),
+                           max_video_mb=_max_video_bytes() // (1024 * 1024))
+
+
+def _max_video_bytes() -> int:
+    return int(current_app.config.get("LESSON_VIDEO_MAX_BYTES", DEFAULT_MAX_VIDEO_BYTES))
+
+
+def _receive_video() -> str:
+    """Checks the request (tutor, size, CSRF) and stores its "video" file; its new name or UploadRefused."""
+    limit = _max_video_bytes()
+    if request.content_length is not None and request.content_length > limit + MULTIPART_OVERHEAD:
+        raise UploadRefused(413, "video_too_large", too_large_message(limit))  # refused before reading it
+    # The app reads at most MAX_CONTENT_LENGTH (2 MB) of any request; this route alone takes a video,
+    # so the limit is raised here, for this request, only after the login and the tutor role were checked.
+    request.max_content_length = limit + MULTIPART_OVERHEAD
+    try:
+        csrf.protect()  # exempt from the automatic check, which would read the body under the 2 MB limit
+        upload = request.files.get("video")
+    except RequestEntityTooLarge:
+        raise UploadRefused(413, "video_too_large", too_large_message(limit)) from None
+    if upload is None or not upload.filename:
+        raise UploadRefused(400, "missing_video", "video: choose a .webm or .mp4 file to upload.")
+    try:
+        return store_video(current_app.instance_path, upload.filename, upload.stream, limit)
+    finally:
+        upload.close()
+
+
+@blueprint.post("/lessons/videos")
+@blueprint.post("/api/lessons/videos", endpoint="upload_video_api")
+@csrf.exempt
+@login_required
+def upload_video():  # type: ignore[no-untyped-def]
+    """Uploads a lesson video (tutors; multipart field "video", with the CSRF token).
+
+    The API answers {"video_name"} or an error naming the field; the editor's form is sent back to the
+    editor, with the new video chosen, or with the error.
+    """
+    api = request.path.startswith("/api/")
+    _require_tutor()
+    lesson_id = request.args.get("lesson", type=int)
+    back = url_for("lessons.edit", lesson_id=lesson_id) if lesson_id else url_for("lessons.edit")
+    try:
+        name = _receive_video()
+    except UploadRefused as refused:
+        if api:
+            raise ApiError(refused.status, refused.code, refused.message, refused.field) from None
+        flash(refused.message, "error")
+        return redirect(back, 303)
+    if api:
+        return jsonify({"video_name": name, "videos": available_videos(current_app.instance_path)}), 201
+    flash(f"Uploaded as {name}; it is chosen below as the lesson's video.", "success")
+    return redirect(f"{back}?video={name}", 303)
 
 
 @blueprint.get("/lessons/<int:lesson_id>/cues.vtt")

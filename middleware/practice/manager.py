@@ -3,6 +3,10 @@
 One PracticeManager per app and process: the robots it starts are children of this process and their
 owners' tokens live in its memory. A deployment with several worker processes would need the robots'
 addresses and tokens in the database (or one process owning the robots); `telelab up` runs one process.
+
+The robot registry resolves `practice-...` names through the manager for their owners only, so a practice
+robot opens in the lab console (/lab/<name>) with every panel, and every robot page, API and channel
+answers anyone else with a 404.
 """
 
 from __future__ import annotations
@@ -22,12 +26,14 @@ from flask import Flask, current_app
 from middleware.config import ConfigError
 from middleware.lab_runner import LabStartError, SkillServerProcess, wait_until_serving
 from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
+from middleware.robots.registry import PersonalRobot, robot_registry
 
 log = logging.getLogger(__name__)
 _EXTENSION_KEY = "telelab.practice"
 DEFAULT_CAP = 4
 DEFAULT_IDLE_S = 900.0
-SAFE_NAME = re.compile(r"[^a-z0-9_-]")
+PRACTICE_PREFIX = "practice-"
+PLAIN_USERNAME = re.compile(r"^[a-z0-9][a-z0-9_-]{0,22}$")  # fits the 32-character robot names as it is
 
 
 class PracticeCapReached(Exception):
@@ -38,19 +44,48 @@ class PracticeStartFailed(Exception):
     """The practice robot's skill server did not start."""
 
 
+class PracticeLink(RobotLink):
+    """A practice robot's link: its owner is its only controller, whichever of their tokens it was handed last.
+
+    The access coordinator hands the owner's queue token to the robot when they join its queue from the
+    console; the lessons and tours use the same token afterwards. An empty token (the owner left the
+    queue) is not passed on: nobody else can ever hold this robot, so the owner keeps it.
+    """
+
+    def __init__(self, name: str, address: str, rpc_timeout_s: float = 1.0) -> None:
+        super().__init__(name, address, rpc_timeout_s)
+        self.owner_token = ""
+
+    def set_controller(self, token: str) -> None:
+        """Makes token the owner's token on the robot; an empty one is ignored (see the class)."""
+        if not token:
+            return
+        super().set_controller(token)
+        self.owner_token = token
+
+    def watched(self) -> bool:
+        """Whether someone watches one of its streams now (a console open on it)."""
+        return any(hub.viewer_count > 0 for hub in (self.camera, self.telemetry, self.localization))
+
+
 @dataclass
 class PracticeRobot:
-    """One learner's robot: the process, the link, the owner's controller token and the last use."""
+    """One learner's robot: the process, the link (holding the owner's controller token) and the last use."""
 
     name: str
     owner_id: int
     process: SkillServerProcess
-    link: RobotLink
-    token: str
+    link: PracticeLink
     started_at: float
     last_used_at: float
+    username: str = ""
     _sequence: int = 0
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+
+    @property
+    def token(self) -> str:
+        """The token the robot obeys: the owner's."""
+        return self.link.owner_token
 
     def next_sequence(self) -> int:
         """The next drive sequence number (strictly increasing for this robot)."""
@@ -63,9 +98,15 @@ class PracticeRobot:
         self.last_used_at = now
 
 
-def practice_name(username: str) -> str:
-    """The robot name of username's practice robot: `practice-<username>` with only URL-safe characters."""
-    return "practice-" + SAFE_NAME.sub("-", username.lower())[:40]
+def practice_name(username: str, owner_id: int) -> str:
+    """The robot name of a user's practice robot: unique, URL-safe and at most 32 characters.
+
+    `practice-<username>` when the username fits as it is; `practice-_<id>` otherwise (no username starts
+    with "_", so the two forms never meet).
+    """
+    if PLAIN_USERNAME.fullmatch(username):
+        return PRACTICE_PREFIX + username
+    return f"{PRACTICE_PREFIX}_{owner_id}"
 
 
 def read_limits(environ: dict[str, str] | None = None) -> tuple[int, float]:
@@ -109,6 +150,20 @@ class PracticeManager:
             robot.touch(self._clock())
         return robot
 
+    def by_name(self, name: str) -> PracticeRobot | None:
+        """The running practice robot called name, whoever owns it (the caller checks the owner)."""
+        robot = next((r for r in list(self._robots.values()) if r.name == name), None)
+        if robot is not None:
+            robot.touch(self._clock())
+        return robot
+
+    def personal_robot(self, name: str) -> PersonalRobot | None:
+        """The registry's view of the practice robot called name (its resolver)."""
+        robot = self.by_name(name)
+        if robot is None:
+            return None
+        return PersonalRobot(robot.link, f"Practice robot of {robot.username}", robot.owner_id)
+
     def count(self) -> int:
         """How many practice robots run or are starting now."""
         with self._lock:
@@ -128,14 +183,13 @@ class PracticeManager:
                     f"All {self.cap} practice robots are in use. Try again in a few minutes, "
                     "or watch a lab robot in the meantime.")
             self._starting.add(owner_id)
-        name = practice_name(username)
+        name = practice_name(username, owner_id)
         process = SkillServerProcess(name, self.scene)
         try:
             process.start()
             wait_until_serving(process.address)
-            link = RobotLink(name, process.address, self._rpc_timeout_s)
-            token = secrets.token_urlsafe(32)
-            link.set_controller(token)  # the owner is the only controller, for the robot's whole life
+            link = PracticeLink(name, process.address, self._rpc_timeout_s)
+            link.set_controller(secrets.token_urlsafe(32))  # the owner is the only controller, for its whole life
         except (LabStartError, RobotUnavailable, CommandRefused) as error:
             process.stop()
             with self._lock:
@@ -143,7 +197,7 @@ class PracticeManager:
             log.warning("practice robot %s did not start: %s", name, error)
             raise PracticeStartFailed("Your practice robot did not start. Try again in a moment.") from None
         now = self._clock()
-        robot = PracticeRobot(name, owner_id, process, link, token, now, now)
+        robot = PracticeRobot(name, owner_id, process, link, now, now, username=username)
         with self._lock:
             self._starting.discard(owner_id)
             self._robots[owner_id] = robot
@@ -161,8 +215,13 @@ class PracticeManager:
         return True
 
     def stop_idle(self) -> list[str]:
-        """Stops every robot unused for idle_s; returns their names."""
+        """Stops every robot unused for idle_s (a console watching it counts as a use); returns their names."""
         now = self._clock()
+        with self._lock:
+            robots = list(self._robots.values())
+        for robot in robots:
+            if robot.link.watched():
+                robot.touch(now)
         with self._lock:
             idle = [r for r in self._robots.values() if now - r.last_used_at >= self.idle_s]
         for robot in idle:
@@ -212,6 +271,7 @@ def init_app(app: Flask) -> None:
                               float(app.config.get("PRACTICE_IDLE_S", idle_s)),
                               float(app.config["ROBOT_RPC_TIMEOUT_S"]))
     app.extensions[_EXTENSION_KEY] = manager
+    robot_registry(app).set_personal(PRACTICE_PREFIX, manager.personal_robot)
     if not _managers:
         atexit.register(_stop_all_at_exit)  # practice robots are children: never leave them behind
     _managers.add(manager)

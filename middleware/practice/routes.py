@@ -5,14 +5,14 @@ from __future__ import annotations
 import re
 import time
 
-from flask import Blueprint, jsonify, render_template, request
+from flask import Blueprint, jsonify, render_template, request, url_for
 from flask_login import current_user, login_required
 
 from middleware.errors import ApiError
 from middleware.lab.sockets import CLOSE_NOT_LOGGED_IN, _refuse, relay_stream, sock
 from middleware.lessons.commands import CommandInvalid, parse_command
 from middleware.practice.control import PRACTICE_TARGET, execute, goal_state, resolve_target, skill_schemas
-from middleware.practice.manager import PracticeCapReached, PracticeStartFailed, practice_manager
+from middleware.practice.manager import PracticeCapReached, PracticeStartFailed, practice_manager, practice_name
 from middleware.robots.link import RobotUnavailable
 
 blueprint = Blueprint("practice", __name__)
@@ -28,14 +28,26 @@ def status_dict(user_id: int) -> dict[str, object]:
     manager = practice_manager()
     robot = manager.get(user_id)
     return {"running": robot is not None, "name": robot.name if robot else None,
+            "console_url": url_for("lab.console", robot_name=robot.name) if robot else None,
             "in_use": manager.count(), "cap": manager.cap, "idle_stop_s": manager.idle_s}
+
+
+def _hand_back_control(robot_name: str, user_id: int) -> None:
+    """A restarted practice robot obeys the owner's queue token at once if they hold its control already."""
+    from middleware.access.coordinator import access_coordinator
+
+    coordinator = access_coordinator()
+    state = coordinator.snapshot(robot_name)
+    if state.controller_id == user_id and state.token:
+        coordinator.sync_token(state, force=True)
 
 
 @blueprint.get("/practice")
 @login_required
 def page():  # type: ignore[no-untyped-def]
-    """The practice robot page."""
-    return render_template("teaching/practice.html")
+    """The practice robot page, with the link to its full console."""
+    name = practice_name(current_user.username, _user_id())
+    return render_template("teaching/practice.html", console_url=url_for("lab.console", robot_name=name))
 
 
 @blueprint.get("/api/practice")
@@ -50,11 +62,12 @@ def status():  # type: ignore[no-untyped-def]
 def start():  # type: ignore[no-untyped-def]
     """Starts the user's practice robot (or answers the running one)."""
     try:
-        practice_manager().start(_user_id(), current_user.username)
+        robot = practice_manager().start(_user_id(), current_user.username)
     except PracticeCapReached as full:
         raise ApiError(429, "practice_cap_reached", str(full)) from None
     except PracticeStartFailed as failed:
         raise ApiError(503, "practice_start_failed", str(failed)) from None
+    _hand_back_control(robot.name, _user_id())
     return jsonify(status_dict(_user_id())), 201
 
 

@@ -4,6 +4,12 @@ The table (managed by admins, seeded from TELELAB_ROBOTS) is re-read at most eve
 seconds when someone asks, and at once after a change made in this process (`refresh(force=True)`).
 Disabled robots have no link: `get()` answers None (so pages and sockets give 404s) and their old
 link is closed. Until the table exists (before `telelab db upgrade`), the configuration is used.
+
+Personal robots (the practice robots) are not in the table: names with the personal prefix are resolved
+by the resolver their owner registers (`set_personal`), and only for the logged-in user who owns the robot.
+Every robot path (pages, APIs, channels, the access coordinator) finds its link through `get()`, so this
+one ownership check answers everyone else as if the robot did not exist (404). They are never listed in
+`names()`, and lab robots may not use the prefix.
 """
 
 from __future__ import annotations
@@ -12,8 +18,9 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 
-from flask import Flask, current_app
+from flask import Flask, current_app, has_request_context
 from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import Session
 
@@ -24,6 +31,29 @@ from middleware.robots.link import RobotLink
 _EXTENSION_KEY = "telelab.robots"
 DEFAULT_REFRESH_S = 3.0
 log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class PersonalRobot:
+    """A robot that belongs to one user (a practice robot): its link, its title and its owner."""
+
+    link: RobotLink
+    title: str
+    owner_id: int
+
+
+PersonalResolver = Callable[[str], PersonalRobot | None]
+
+
+def current_user_id() -> int | None:
+    """The logged-in user of the current request; None outside a request or for anonymous visitors."""
+    if not has_request_context():
+        return None
+    from flask_login import current_user
+
+    if not current_user.is_authenticated:
+        return None
+    return int(current_user.get_id())
 
 
 class RobotRegistry:
@@ -42,6 +72,8 @@ class RobotRegistry:
         self._links: dict[str, RobotLink] = {}
         # Every robot ever seen (disabled ones too), so a title is always found for a name listed earlier.
         self._entries: dict[str, RobotEntry] = {}
+        self._personal_prefix: str | None = None
+        self._personal_resolver: PersonalResolver | None = None
         self._apply([RobotEntry(r.name, r.address, r.title) for r in robots])
 
     @property
@@ -51,14 +83,48 @@ class RobotRegistry:
         return self._entries
 
     def get(self, name: str) -> RobotLink | None:
-        """The link to the enabled robot called name, if there is one."""
+        """The link to the enabled robot called name, if there is one (a personal robot: for its owner only)."""
+        if self.is_personal_name(name):
+            personal = self.personal(name)
+            return None if personal is None else personal.link
         self._maybe_refresh()
         return self._links.get(name)
 
     def names(self) -> list[str]:
-        """Every enabled robot's name, in the order they were added."""
+        """Every enabled lab robot's name, in the order they were added (personal robots are never listed)."""
         self._maybe_refresh()
-        return list(self._links)
+        return [name for name in self._links if not self.is_personal_name(name)]
+
+    def title(self, name: str) -> str | None:
+        """The title to show for a robot that get() answers for now; None otherwise."""
+        if self.is_personal_name(name):
+            personal = self.personal(name)
+            return None if personal is None else personal.title
+        if self.get(name) is None:
+            return None
+        return self._entries[name].title
+
+    def set_personal(self, prefix: str, resolver: PersonalResolver) -> None:
+        """Names starting with prefix are personal robots, found by resolver (and hidden from everyone else)."""
+        self._personal_prefix, self._personal_resolver = prefix, resolver
+
+    def is_personal_name(self, name: str) -> bool:
+        """Whether name is in the personal robots' namespace."""
+        return self._personal_prefix is not None and name.startswith(self._personal_prefix)
+
+    def personal(self, name: str, user_id: int | None = None) -> PersonalRobot | None:
+        """The personal robot called name if user_id (by default the logged-in user) owns it; None otherwise.
+
+        The ownership check of every robot path: anyone else, anonymous visitors and code outside a
+        request get None, exactly as for a name nobody uses.
+        """
+        if self._personal_resolver is None or not self.is_personal_name(name):
+            return None
+        owner = current_user_id() if user_id is None else user_id
+        if owner is None:
+            return None
+        robot = self._personal_resolver(name)
+        return robot if robot is not None and robot.owner_id == owner else None
 
     def refresh(self, force: bool = True) -> None:
         """Re-reads the robots table now (force) or when the last read is older than refresh_s."""

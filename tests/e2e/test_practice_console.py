@@ -1,0 +1,55 @@
+"""A learner's practice robot in the full lab console, in Chromium: opened from the practice page, its
+panels show live data and its owner has control; and a tutor uploads a lesson video through the editor."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import LiveServer
+from tests.e2e.test_lessons import log_in
+from tests.e2e.test_panels import odometry, wait_for
+
+pytestmark = pytest.mark.e2e
+
+
+def test_the_owner_opens_the_practice_console_and_its_panels_show_live_data(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+    from middleware.practice.manager import practice_manager
+
+    log_in(page, live_server)
+    page.goto(f"{live_server.url}/practice")
+    try:
+        page.get_by_role("button", name="Start my practice robot").click()
+        page.locator("#practice[data-running=true]").wait_for(timeout=30_000)
+        page.get_by_role("link", name="Open in the console").click()
+        page.wait_for_url("**/lab/practice-student1")
+        page.locator('[data-connection="drive"][data-phase="open"]').wait_for(timeout=30_000)
+        page.locator('queue-panel[data-role="controller"]').wait_for(timeout=30_000)
+        wait_for(lambda: not math.isnan(odometry(page, "x")), 15, "the practice robot's odometry shows no numbers")
+        page.locator('laser-panel [data-field="laser-nearest"]').filter(has_text=" m").wait_for()
+        page.locator('skill-panel[data-skill="go_to_goal"] button[data-action="activate"]').wait_for(state="attached")
+        assert page.get_by_role("region", name="Camera", exact=True).count() == 1
+    finally:
+        practice_manager(live_server.app).shutdown()
+
+
+def test_a_tutor_uploads_a_video_from_the_lesson_editor(page, live_server: LiveServer, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from tests.conftest import STUDENT_PASSWORD
+
+    with session_factory(live_server.app)() as session:
+        create_user(session, "tutor9", "tutor", STUDENT_PASSWORD)
+        session.commit()
+    clip = tmp_path / "My clip.webm"
+    clip.write_bytes(b"\x1a\x45\xdf\xa3" + bytes(1000))
+    log_in(page, live_server, "tutor9")
+    page.goto(f"{live_server.url}/lessons/new")
+    page.locator("#video-upload input[type=file]").set_input_files(str(clip))
+    page.locator("#video-upload").get_by_role("button", name="Upload", exact=True).click()
+    page.locator(".flash--success").filter(has_text="Uploaded as upload-").wait_for()
+    chosen = page.locator("select[name=video_name]").input_value()
+    assert chosen.startswith("upload-") and chosen.endswith(".webm")
+    assert (Path(live_server.app.instance_path) / "lessons" / chosen).is_file()

@@ -1,0 +1,251 @@
+"""A practice robot in the full lab console, for its owner only; and lesson video uploads (tutors only)."""
+
+from __future__ import annotations
+
+import json
+import secrets
+import time
+from http.client import HTTPConnection
+from pathlib import Path
+from urllib.parse import urlsplit
+from urllib.request import Request
+
+import pytest
+import simple_websocket
+
+from tests.conftest import LabClient
+from tests.integration.middleware.test_robot_channels import closed_with, receive_json
+
+PASSWORD = "correct-horse-battery"
+CHANNELS = ("camera", "telemetry", "drive", "queue", "chat", "localization", "goals/g-1")
+
+
+def _user(app, username: str, role: str = "student") -> None:  # type: ignore[no-untyped-def]
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+
+    with session_factory(app)() as session:
+        create_user(session, username, role, PASSWORD)
+        session.commit()
+
+
+def _client(live_server, username: str, role: str = "student") -> LabClient:  # type: ignore[no-untyped-def]
+    _user(live_server.app, username, role)
+    client = LabClient(live_server.url)
+    assert client.login(username, PASSWORD) == 302
+    return client
+
+
+def _api(client: LabClient, method: str, path: str, body: object | None = None) -> tuple[int, dict]:
+    token = client.csrf_token("/teaching")
+    data = None if body is None else json.dumps(body).encode()
+    request = Request(client.base_url + path, data=data, method=method,
+                      headers={"Content-Type": "application/json", "X-CSRFToken": token, "Accept": "application/json"})
+    try:
+        with client._opener.open(request, timeout=20) as response:
+            return response.status, json.loads(response.read())
+    except Exception as error:  # noqa: BLE001 - 4xx/5xx are answers here
+        return error.code, json.loads(error.read())  # type: ignore[attr-defined]
+
+
+def refusal(client: LabClient, path: str) -> tuple[str, int]:
+    """The error code and close code a channel refuses with.
+
+    On a busy machine the server's closing wait (1 s) can end before this client reads, and the reset then
+    loses the message (a 1005 close): that attempt is repeated, it says nothing about the refusal.
+    """
+    for _attempt in range(3):
+        ws = client.websocket(path)
+        try:
+            error = receive_json(ws)
+        except simple_websocket.ConnectionClosed:
+            continue
+        return error["code"], closed_with(ws)
+    raise AssertionError(f"{path}: the socket closed three times before its error could be read")
+
+
+@pytest.fixture
+def practice(live_server):  # type: ignore[no-untyped-def]
+    """ann's running practice robot, and two clients: ann (its owner) and bob."""
+    from middleware.practice.manager import practice_manager
+
+    ann, bob = _client(live_server, "ann"), _client(live_server, "bob")
+    practice_manager(live_server.app).cap = 2
+    status, started = _api(ann, "POST", "/api/practice")
+    assert status == 201 and started["name"] == "practice-ann" and started["console_url"] == "/lab/practice-ann"
+    try:
+        yield ann, bob
+    finally:
+        practice_manager(live_server.app).shutdown()
+
+
+def test_the_owner_has_the_full_console_and_everyone_else_gets_404s(live_server, practice) -> None:  # type: ignore[no-untyped-def]
+    ann, bob = practice
+    status, _, page = ann.request("GET", "/lab/practice-ann")
+    assert status == 200 and 'data-robot="practice-ann"' in page
+    status, panels = _api(ann, "GET", "/api/robots/practice-ann/panels")
+    assert status == 200 and panels["personal"] and panels["skills_available"]
+    kinds = {p["kind"] for p in panels["panels"]}
+    assert {"camera", "map", "odometry", "sonar", "laser", "drive", "skill", "response-times", "queue"} <= kinds
+    status, description = _api(ann, "GET", "/api/robots/practice-ann")
+    assert status == 200 and description["online"] and description["title"] == "Practice robot of ann"
+    assert "practice-ann" not in ann.request("GET", "/lab")[2]  # never listed among the lab robots
+
+    assert bob.request("GET", "/lab/practice-ann")[0] == 404
+    for method, path, body in [
+        ("GET", "/api/robots/practice-ann", None),
+        ("GET", "/api/robots/practice-ann/panels", None),
+        ("GET", "/api/robots/practice-ann/map", None),
+        ("GET", "/api/robots/practice-ann/goals/g-1", None),
+        ("DELETE", "/api/robots/practice-ann/goals/g-1", None),
+        ("POST", "/api/robots/practice-ann/skills/go_to_goal/goals", {"parameters": {"goal_x_m": 0.5}}),
+        ("GET", "/api/robots/practice-ann/chat", None),
+    ]:
+        status, error = _api(bob, method, path, body)
+        assert (status, error["error"]["code"]) == (404, "unknown_robot"), (method, path)
+    for channel in CHANNELS:
+        assert refusal(bob, f"/ws/robots/practice-ann/{channel}") == ("unknown_robot", 4404), channel
+    anonymous = LabClient(live_server.url)
+    assert anonymous.request("GET", "/lab/practice-ann")[0] == 302  # to the login page
+    assert refusal(anonymous, "/ws/robots/practice-ann/camera") == ("not_logged_in", 4401)
+
+
+def test_the_owner_takes_control_through_the_queue_and_lessons_keep_working(live_server, practice) -> None:  # type: ignore[no-untyped-def]
+    ann, _bob = practice
+    status, error = _api(ann, "POST", "/api/robots/practice-ann/skills/go_to_goal/goals",
+                         {"parameters": {"goal_x_m": 0.3, "goal_y_m": 0.0}})
+    assert status == 403 and error["error"]["code"] == "not_controller"  # not in its queue yet
+    queue = ann.websocket("/ws/robots/practice-ann/queue")
+    deadline = time.monotonic() + 10
+    seat = receive_json(queue)
+    while not seat.get("is_controller") and time.monotonic() < deadline:
+        seat = receive_json(queue)
+    assert seat["is_controller"] and seat["controller"] == "ann" and seat["queue_size"] == 1
+    status, activated = _api(ann, "POST", "/api/robots/practice-ann/skills/go_to_goal/goals",
+                             {"parameters": {"goal_x_m": 0.3, "goal_y_m": 0.0}, "preempt": True})
+    assert status == 202, activated
+    # The queue's token was handed to the robot; the practice commands (lessons, tours) use it too.
+    status, stopped = _api(ann, "POST", "/api/practice/commands", {"command": {"stop": True}})
+    assert status == 202 and stopped["robot"] == "practice-ann"
+    queue.send(json.dumps({"type": "leave"}))
+    status, stopped = _api(ann, "POST", "/api/practice/commands", {"command": {"stop": True}})
+    assert status == 202  # leaving the queue does not take the robot from its owner
+    queue.close()
+    ws = ann.websocket("/ws/robots/practice-ann/camera")
+    deadline = time.monotonic() + 10
+    frame = None
+    while frame is None and time.monotonic() < deadline:
+        message = ws.receive(timeout=1)
+        frame = message if isinstance(message, bytes) else None
+    assert frame is not None, "no camera frame from the practice robot"
+    ws.close()
+
+
+def test_practice_names_are_unique_short_and_never_a_username() -> None:
+    from middleware.practice.manager import practice_name
+
+    assert practice_name("ann", 7) == "practice-ann"
+    assert practice_name("a.b", 7) == practice_name("x" * 40, 7) == "practice-_7"
+    assert len(practice_name("a" * 23, 1)) == 32
+
+
+# --- lesson video uploads -------------------------------------------------------------------------------
+
+WEBM_HEAD = b"\x1a\x45\xdf\xa3\x9f\x42\x86\x81\x01"
+MP4_HEAD = b"\x00\x00\x00\x18ftypisom\x00\x00\x02\x00"
+
+
+def _upload(client: LabClient, filename: str, content: bytes, path: str = "/api/lessons/videos",
+            csrf: bool = True, extra_headers: dict[str, str] | None = None) -> tuple[int, dict[str, str], bytes]:
+    """A multipart POST of one "video" file (and the CSRF token as a form field, as the editor sends it)."""
+    boundary = "----telelab" + secrets.token_hex(8)
+    parts = []
+    if csrf:
+        parts.append(f'--{boundary}\r\nContent-Disposition: form-data; name="csrf_token"\r\n\r\n'
+                     f'{client.csrf_token("/teaching")}\r\n'.encode())
+    parts.append(f'--{boundary}\r\nContent-Disposition: form-data; name="video"; filename="{filename}"\r\n'
+                 f"Content-Type: application/octet-stream\r\n\r\n".encode() + content + b"\r\n")
+    body = b"".join(parts) + f"--{boundary}--\r\n".encode()
+    headers = {"Content-Type": f"multipart/form-data; boundary={boundary}", "Accept": "application/json",
+               **(extra_headers or {})}
+    request = Request(client.base_url + path, data=body, method="POST", headers=headers)
+    try:
+        with client._opener.open(request, timeout=30) as response:
+            return response.status, dict(response.headers), response.read()
+    except Exception as error:  # noqa: BLE001 - 4xx/5xx are answers here
+        return error.code, dict(error.headers), error.read()  # type: ignore[attr-defined]
+
+
+def _videos(live_server) -> list[str]:  # type: ignore[no-untyped-def]
+    folder = Path(live_server.app.instance_path) / "lessons"
+    return sorted(p.name for p in folder.iterdir()) if folder.is_dir() else []
+
+
+def test_a_tutor_uploads_webm_and_mp4_under_generated_names(live_server) -> None:  # type: ignore[no-untyped-def]
+    tutor = _client(live_server, "tutor2", "tutor")
+    big = WEBM_HEAD + bytes(3 * 1024 * 1024)  # above the app's 2 MB limit for other requests
+    status, _, body = _upload(tutor, "../../etc/Evil Clip.webm", big)
+    assert status == 201, body
+    name = json.loads(body)["video_name"]
+    assert name.startswith("upload-") and name.endswith(".webm") and "evil" not in name.lower()
+    stored = Path(live_server.app.instance_path) / "lessons" / name
+    assert stored.read_bytes() == big
+    status, _, body = _upload(tutor, "clip.MP4", MP4_HEAD + b"rest")
+    assert status == 201 and json.loads(body)["video_name"].endswith(".mp4")
+    assert len(_videos(live_server)) == 2  # nothing else, no partial files
+    status, _, page = tutor.request("GET", "/lessons/new")
+    assert name in page
+
+    status, headers, _ = _upload(tutor, "clip.webm", WEBM_HEAD + b"x", path="/lessons/videos")
+    assert status == 303 and "/lessons/new?video=upload-" in headers["Location"]
+    chosen = headers["Location"].split("video=")[1]
+    status, _, page = tutor.request("GET", f"/lessons/new?video={chosen}")
+    assert f'value="{chosen}" selected' in page and "Uploaded as" in page
+
+
+@pytest.mark.parametrize(("filename", "content", "code"), [
+    ("clip.webm", MP4_HEAD + b"rest", "invalid_video_content"),
+    ("clip.mp4", WEBM_HEAD + b"rest", "invalid_video_content"),
+    ("clip.mp4", b"<html><script>alert(1)</script>", "invalid_video_content"),
+    ("clip.avi", WEBM_HEAD + b"rest", "invalid_video_type"),
+    ("clip.webm.html", WEBM_HEAD + b"rest", "invalid_video_type"),
+    ("clip", WEBM_HEAD + b"rest", "invalid_video_type"),
+    ("clip.webm", b"", "empty_video"),
+])
+def test_wrong_types_and_contents_are_refused_naming_the_field(live_server, filename: str, content: bytes,  # type: ignore[no-untyped-def]
+                                                               code: str) -> None:
+    tutor = _client(live_server, "tutor3", "tutor")
+    status, _, body = _upload(tutor, filename, content)
+    error = json.loads(body)["error"]
+    assert (status, error["code"], error["field"]) == (400, code, "video")
+    assert "video" in error["message"]
+    assert _videos(live_server) == []
+
+
+def test_too_large_videos_are_refused_while_read_and_before(live_server) -> None:  # type: ignore[no-untyped-def]
+    tutor = _client(live_server, "tutor4", "tutor")
+    live_server.app.config["LESSON_VIDEO_MAX_BYTES"] = 100_000
+    status, _, body = _upload(tutor, "clip.webm", WEBM_HEAD + bytes(150_000))  # within the body allowance
+    error = json.loads(body)["error"]
+    assert (status, error["code"], error["field"]) == (413, "video_too_large", "video")
+    # A declared length far above the limit is refused before any of the body is read.
+    url = urlsplit(tutor.base_url)
+    connection = HTTPConnection(url.hostname, url.port, timeout=10)
+    connection.putrequest("POST", "/api/lessons/videos")
+    for header, value in {"Cookie": tutor.cookie_header(), "Content-Length": str(500 * 1024 * 1024),
+                          "Content-Type": "multipart/form-data; boundary=x", "Accept": "application/json"}.items():
+        connection.putheader(header, value)
+    connection.endheaders()
+    response = connection.getresponse()
+    assert response.status == 413 and json.loads(response.read())["error"]["field"] == "video"
+    connection.close()
+    assert _videos(live_server) == []
+
+
+def test_students_and_forged_forms_cannot_upload(live_server, student_client) -> None:  # type: ignore[no-untyped-def]
+    status, _, body = _upload(student_client, "clip.webm", WEBM_HEAD + b"rest")
+    assert status == 403 and json.loads(body)["error"]["code"] == "not_tutor"
+    tutor = _client(live_server, "tutor5", "tutor")
+    status, _, body = _upload(tutor, "clip.webm", WEBM_HEAD + b"rest", csrf=False)
+    assert status == 400 and json.loads(body)["error"]["code"] == "csrf_failed"
+    assert _videos(live_server) == []
