@@ -23,12 +23,21 @@ def quiet_websocket_endings(wsgi_app: Any) -> Any:
     def app(environ: dict[str, Any], start_response: Any) -> Any:
         body = wsgi_app(environ, start_response)
         if "werkzeug.socket" in environ and environ.get("HTTP_UPGRADE", "").lower() == "websocket":
-            with contextlib.suppress(OSError):
-                environ["werkzeug.socket"].shutdown(socket.SHUT_RDWR)
+            _linger_and_close(environ["werkzeug.socket"])
             raise ConnectionError("WebSocket finished")
         return body
 
     return app
+
+
+def _linger_and_close(sock: socket.socket, linger_s: float = 1.0) -> None:
+    """Sends FIN, then reads until the peer closes: closing with unread bytes (the client's closing frame)
+    would send a reset, and a reset can discard our last messages before the client reads them."""
+    with contextlib.suppress(OSError):
+        sock.shutdown(socket.SHUT_WR)
+        sock.settimeout(linger_s)
+        while sock.recv(4096):
+            pass
 
 
 def make_threaded_server(app: Flask, host: str, port: int) -> BaseWSGIServer:
