@@ -6,15 +6,15 @@ Prediction quality. A scripted drive per motion type (the console's default spee
 runs in the simulator in fast mode with seeded noise; commands go at 20 Hz as the console sends them (one
 stop on release). At several moments the frame captured `delay` seconds ago (the stale frame, which shows
 the commands up to its last_applied_sequence) is warped by the product's own code in headless Chromium: the
-camera panel's FeedbackLayer is fed the commands sent since the drive began and the frame's header, its
-transform (feedback-math.js) is drawn with the panel's canvas calls, and the pixels are read back. The warped
-and the unwarped stale frame are compared with the frame the simulator renders at the present moment: mean
-absolute error over every pixel and RGB channel (0-255; the black fill counts), graded warped < stale. Info
-rows: an oracle warps the same stale frame by the true motion (the prediction's error apart from the affine
-model's); the error over only the pixels the warp shows, beside the stale frame's on the same pixels; and two
-what-ifs that are not the product (the black fill replaced by the stale frame, or by its mean colour).
+camera panel's FeedbackLayer is fed the commands sent since the drive began, the frame's header and the laser
+scan taken with it, its transform (feedback-math.js) is drawn by the panel's drawWarped (edges continued, the
+console's default), and the pixels are read back. The warped and the unwarped stale frame are compared with
+the frame the simulator renders at the present moment: mean absolute error over every pixel and RGB channel
+(0-255), graded warped < stale. Info rows: the same with the black fill (the thesis's, the console's other
+choice); an oracle warps the same stale frame by the true motion (the prediction's error apart from the
+affine model's); the error over only the pixels the warp shows, beside the stale frame's on the same pixels.
 
-Cost. In the same Chromium, time per frame of the warp (black fill, setTransform, drawImage) beside the
+Cost. In the same Chromium, time per frame of the panel's warp (edges continued; black fill) beside the
 thesis's per-pixel algorithm (getImageData, a JavaScript loop that shifts and scales with black fill,
 putImageData; in benchmarks/feedback_harness.js, not in the product), interleaved frame by frame at 320x240
 and 640x480. Each timed frame ends with a 1-pixel getImageData so that the drawing is finished, not merely
@@ -40,6 +40,7 @@ import numpy as np
 
 from benchmarks.report import Measurement, print_table, write_json
 from skill_server.sim.geometry import Pose2D
+from skill_server.sim.laser import LaserSpec
 from skill_server.sim.world import World
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -65,6 +66,7 @@ LAST_PRESENT_S = IDLE_BEFORE_S + HOLD_S + 0.5  # the latest present moment grade
 FIRST_CAPTURE_S = 0.25
 HFOV_DEG = 60.0
 SEED = 7
+LASER = LaserSpec()
 
 
 @dataclass
@@ -75,6 +77,7 @@ class Capture:
     rgba: np.ndarray
     last_applied_sequence: int
     pose: Pose2D
+    laser_ranges_m: tuple[float, ...]
 
 
 class _QuietHandler(SimpleHTTPRequestHandler):
@@ -150,7 +153,8 @@ def scripted_drive(motion: tuple[float, float], render_ticks: set[int],
                 snapshot = world.snapshot
                 rgba = world.render_rgba().copy()
                 rgba[..., 3] = 255
-                captures[tick] = Capture(tick, rgba, snapshot.last_applied_sequence, snapshot.ground_truth)
+                captures[tick] = Capture(tick, rgba, snapshot.last_applied_sequence, snapshot.ground_truth,
+                                         snapshot.laser_ranges_m)
             if tick % COMMAND_EVERY_TICKS == 0:
                 held = command_at(motion, tick)
                 message: dict[str, Any] | None = None
@@ -210,7 +214,7 @@ def measure_prediction(page: Any, motions: list[str], delays: list[float], momen
         for delay in delays:
             stale_errors, warped_errors, oracle_errors = [], [], []
             stale_shown, warped_shown, coverage = [], [], []  # over the pixels the warp shows (no black fill)
-            stale_fill_errors, mean_fill_errors = [], []
+            black_errors, depths = [], []
             for tick in plan[delay]:
                 stale, present = captures[tick], captures[tick + round(delay * TICK_HZ)]
                 now_ms = ms_of(present.tick)
@@ -221,6 +225,9 @@ def measure_prediction(page: Any, motions: list[str], delays: list[float], momen
                     "hfovDeg": HFOV_DEG, "commands": [{"message": c["message"], "sentMs": c["sentMs"]} for c in sent],
                     "appliedSequence": stale.last_applied_sequence, "nowMs": now_ms,
                     "truePose": relative_pose(stale.pose, present.pose),
+                    # The telemetry the console has with this frame (delayed alike): the scan taken with it.
+                    "scan": {"angle_min_rad": LASER.angle_min_rad, "angle_increment_rad": LASER.angle_increment_rad,
+                             "ranges_m": list(stale.laser_ranges_m)},
                 })
                 identity = decode_rgba(result["identity"], stale.rgba.shape)
                 if mae(identity, stale.rgba) > 0.5:
@@ -229,15 +236,9 @@ def measure_prediction(page: Any, motions: list[str], delays: list[float], momen
                 oracle = decode_rgba(result["oracle"], stale.rgba.shape)
                 cover = decode_rgba(result["coverage"], stale.rgba.shape)[..., :1].astype(np.float64) / 255.0
                 covered = cover[..., 0] >= 1.0
-                # What-ifs, not the product: the black fill (weight 1 - cover) replaced by the stale frame itself,
-                # or by the stale frame's mean colour.
-                stale_fill = np.clip(warped + (1.0 - cover) * stale.rgba, 0, 255).astype(np.uint8)
-                mean_colour = stale.rgba[..., :3].reshape(-1, 3).mean(axis=0)
-                mean_fill = warped.astype(np.float64)
-                mean_fill[..., :3] += (1.0 - cover) * mean_colour
-                mean_fill = np.clip(mean_fill, 0, 255).astype(np.uint8)
-                stale_fill_errors.append(mae(stale_fill, present.rgba))
-                mean_fill_errors.append(mae(mean_fill, present.rgba))
+                warped_black = decode_rgba(result["warpedBlack"], stale.rgba.shape)
+                black_errors.append(mae(warped_black, present.rgba))
+                depths.append(result["depthM"])
                 errors = (mae(stale.rgba, present.rgba), mae(warped, present.rgba), mae(oracle, present.rgba))
                 stale_errors.append(errors[0])
                 warped_errors.append(errors[1])
@@ -255,7 +256,7 @@ def measure_prediction(page: Any, motions: list[str], delays: list[float], momen
                     "coverage": coverage[-1],
                     "mae_stale_where_shown": shown[0] if covered.any() else None,
                     "mae_warped_where_shown": shown[1] if covered.any() else None,
-                    "mae_warped_stale_fill": stale_fill_errors[-1], "mae_warped_mean_fill": mean_fill_errors[-1],
+                    "mae_warped_black_fill": black_errors[-1], "reference_depth_m": depths[-1],
                     "predicted_pose": result["predictedPose"], "true_pose": relative_pose(stale.pose, present.pose),
                     "transform": result["transform"], "oracle_transform": result["oracleTransform"],
                 })
@@ -281,12 +282,13 @@ def measure_prediction(page: Any, motions: list[str], delays: list[float], momen
             else:
                 rows.append(Measurement(scenario, "MAE warped where it shows pixels", None, "0-255", "-", None,
                                         None, share))
-            rows += [
-                Measurement(scenario, "what-if: stale frame as the fill", float(np.mean(stale_fill_errors)),
-                            "0-255", "-", stale_mean, None, "not the product"),
-                Measurement(scenario, "what-if: mean colour as the fill", float(np.mean(mean_fill_errors)),
-                            "0-255", "-", stale_mean, None, "not the product"),
-            ]
+            black_mean = float(np.mean(black_errors))
+            known = [d for d in depths if d is not None]
+            rows.append(Measurement(scenario, "MAE warped, black fill (thesis) vs present", black_mean, "0-255", "-",
+                                    stale_mean, None, "the console's other fill choice"))
+            rows.append(Measurement(scenario, "depth the zoom assumed (laser median)",
+                                    float(np.median(known)) if known else None, "m", "-", None, None,
+                                    f"{len(known)} of {len(depths)} moments from the scan"))
     return rows, details
 
 
@@ -307,9 +309,11 @@ def measure_cost(page: Any, frame: np.ndarray, frames: int, warmup: int,
         layer, loop = result["layer"]["median"], result["perPixel"]["median"]
         scenario = f"cost {size}"
         rows += [
-            Measurement(scenario, "feedback layer (canvas), median", layer, "ms/frame", "< per-pixel", loop,
+            Measurement(scenario, "feedback layer (canvas, edges), median", layer, "ms/frame", "< per-pixel", loop,
                         None if quick else layer < loop,
                         f"p95 {result['layer']['p95']:.2f}, mean {result['layer']['mean']:.2f}"),
+            Measurement(scenario, "feedback layer, black fill, median", result["layerBlack"]["median"], "ms/frame", "-",
+                        None, None, f"p95 {result['layerBlack']['p95']:.2f}"),
             Measurement(scenario, "thesis per-pixel loop, median", loop, "ms/frame", "-", None, None,
                         f"p95 {result['perPixel']['p95']:.2f}, mean {result['perPixel']['mean']:.2f}"),
             Measurement(scenario, "per-pixel / feedback layer", loop / layer if layer > 0 else float("nan"), "x",

@@ -2,8 +2,8 @@
 // client_ui/static (so the product's ES modules import as they do in the console).
 //
 // - predictWarp: the product's bookkeeping and transform (the camera panel's FeedbackLayer, hence
-//   feedback-math.js's CommandLog and warpTransform), drawn with the camera panel's canvas calls
-//   (black fill, one setTransform, one drawImage), read back for grading.
+//   feedback-math.js's CommandLog and warpTransform, with the laser's depth), drawn by the panel's own
+//   drawWarped (edges continued, or black as the thesis), read back for grading.
 // - measureCost: time per frame of that warp beside thesisPerPixel, the thesis's per-pixel approach
 //   (algorithm 3.1's shift with black fill, and the zoom algorithm 3.2 intends) in a JavaScript loop.
 //   thesisPerPixel exists only here, for comparison: the product must not carry it.
@@ -35,19 +35,6 @@
     canvas.width = width;
     canvas.height = height;
     return canvas;
-  }
-
-  /** The camera panel's warp (FeedbackLayer.draw in camera-feedback.js), without the predicted-path overlay. */
-  function drawWarp(ctx, bitmap, t, width, height) {
-    ctx.setTransform(1, 0, 0, 1, 0, 0);
-    const warped = Math.abs(t.shiftX) > 0.05 || Math.abs(t.scale - 1) > 1e-3;
-    if (warped) {
-      ctx.fillStyle = "#000";
-      ctx.fillRect(0, 0, width, height);
-      ctx.setTransform(t.scale, 0, 0, t.scale, t.tx, t.ty);
-    }
-    ctx.drawImage(bitmap, 0, 0, width, height);
-    ctx.setTransform(1, 0, 0, 1, 0, 0);
   }
 
   /**
@@ -88,11 +75,12 @@
    * One moment of a scripted drive: the stale frame warped by the commands it does not show, as the console
    * would draw it when that frame arrives at nowMs, and the same frame warped by the true motion (oracle).
    */
-  async function predictWarp({ stale, width, height, hfovDeg, commands, appliedSequence, nowMs, truePose }) {
+  async function predictWarp({ stale, width, height, hfovDeg, commands, appliedSequence, nowMs, truePose, scan }) {
     const math = await import(MATH);
-    const { FeedbackLayer } = await import(PANEL);
+    const { FeedbackLayer, drawWarped } = await import(PANEL);
     const layer = new FeedbackLayer();
     layer.setInfo({ camera_hfov_deg: hfovDeg, camera_width_px: width, camera_height_px: height });
+    layer.setScan(scan);
     layer.reset(0);
     for (const command of commands) layer.recordSent(command.message, command.sentMs);
     layer.recordFrame({ last_applied_sequence: appliedSequence }, nowMs);
@@ -102,23 +90,25 @@
     const transform = layer.lastTransform;
     const canvas = canvasOf(width, height);
     const ctx = canvas.getContext("2d");
-    drawWarp(ctx, bitmap, transform, width, height);
-    const warped = encode(ctx.getImageData(0, 0, width, height).data);
-    const oracleTransform = math.warpTransform(truePose, math.cameraModel({ width, height, hfovDeg }));
-    drawWarp(ctx, bitmap, oracleTransform, width, height);
-    const oracle = encode(ctx.getImageData(0, 0, width, height).data);
-    drawWarp(ctx, bitmap, { shiftX: 0, scale: 1, tx: 0, ty: 0 }, width, height);
-    const identity = encode(ctx.getImageData(0, 0, width, height).data);
-    // Where the warped frame shows the stale frame's pixels (white) rather than the black fill.
+    const drawn = (image, t, fill) => {
+      drawWarped(ctx, image, t, fill);
+      return encode(ctx.getImageData(0, 0, width, height).data);
+    };
+    const warped = drawn(bitmap, transform, "edges");
+    const warpedBlack = drawn(bitmap, transform, "black");
+    const depth = Number.isFinite(transform.depthM) ? transform.depthM : undefined;
+    const oracleTransform = math.warpTransform(truePose, math.cameraModel({ width, height, hfovDeg }), depth);
+    const oracle = drawn(bitmap, oracleTransform, "edges");
+    const identity = drawn(bitmap, { shiftX: 0, scale: 1, tx: 0, ty: 0 }, "edges");
+    // Where the warped frame shows the stale frame's pixels (white) rather than the fill.
     const white = canvasOf(width, height);
     const whiteCtx = white.getContext("2d");
     whiteCtx.fillStyle = "#fff";
     whiteCtx.fillRect(0, 0, width, height);
-    drawWarp(ctx, white, transform, width, height);
-    const coverage = encode(ctx.getImageData(0, 0, width, height).data);
+    const coverage = drawn(white, transform, "black");
     bitmap.close();
     return {
-      warped, oracle, identity, coverage,
+      warped, warpedBlack, oracle, identity, coverage, depthM: transform.depthM ?? null,
       outstanding: layer.log.outstanding().length,
       transform: { scale: transform.scale, tx: transform.tx, ty: transform.ty, shiftX: transform.shiftX },
       predictedPose: transform.pose,
@@ -144,6 +134,7 @@
    */
   async function measureCost({ frame, width, height, frames, warmup }) {
     const math = await import(MATH);
+    const { drawWarped } = await import(PANEL);
     const bitmap = await bitmapFrom(frame, width, height);
     const camera = math.cameraModel({ width, height });
     const transforms = Array.from({ length: frames + warmup }, (_, i) => {
@@ -152,6 +143,7 @@
         camera);
     });
     const layerCtx = canvasOf(width, height).getContext("2d");
+    const blackCtx = canvasOf(width, height).getContext("2d");
     const loopCtx = canvasOf(width, height).getContext("2d");
     const out = loopCtx.createImageData(width, height);
     // The whole panel draw as the console runs it: prediction from 20 outstanding commands (a pose like the sweep above), warp, path.
@@ -166,6 +158,7 @@
     const panelCanvas = canvasOf(width, height);
     const panelCtx = panelCanvas.getContext("2d");
     const layerMs = [];
+    const blackMs = [];
     const loopMs = [];
     const panelMs = [];
     for (let i = 0; i < frames + warmup; i += 1) {
@@ -175,24 +168,29 @@
       panelCtx.getImageData(0, 0, 1, 1);
       const whole = performance.now() - started;
       started = performance.now();
-      drawWarp(layerCtx, bitmap, t, width, height);
+      drawWarped(layerCtx, bitmap, t, "edges");
       layerCtx.getImageData(0, 0, 1, 1);
       const layer = performance.now() - started;
+      started = performance.now();
+      drawWarped(blackCtx, bitmap, t, "black");
+      blackCtx.getImageData(0, 0, 1, 1);
+      const black = performance.now() - started;
       started = performance.now();
       thesisPerPixel(loopCtx, bitmap, t, width, height, out);
       loopCtx.getImageData(0, 0, 1, 1);
       const loop = performance.now() - started;
       if (i >= warmup) {
         layerMs.push(layer);
+        blackMs.push(black);
         loopMs.push(loop);
         panelMs.push(whole);
       }
     }
     // Both methods on one transform, to check the comparison does the same job (bilinear vs nearest differ a little).
     const check = transforms[0];
-    drawWarp(layerCtx, bitmap, check, width, height);
+    drawWarped(blackCtx, bitmap, check, "black");
     thesisPerPixel(loopCtx, bitmap, check, width, height, out);
-    const a = layerCtx.getImageData(0, 0, width, height).data;
+    const a = blackCtx.getImageData(0, 0, width, height).data;
     const b = loopCtx.getImageData(0, 0, width, height).data;
     let sum = 0;
     for (let i = 0; i < a.length; i += 4) sum += Math.abs(a[i] - b[i]) + Math.abs(a[i + 1] - b[i + 1]) + Math.abs(a[i + 2] - b[i + 2]);
@@ -201,7 +199,7 @@
       median: median(values), p95: percentile(values, 95), mean: values.reduce((s, v) => s + v, 0) / values.length,
     });
     return {
-      layer: summary(layerMs), perPixel: summary(loopMs), panelDraw: summary(panelMs),
+      layer: summary(layerMs), layerBlack: summary(blackMs), perPixel: summary(loopMs), panelDraw: summary(panelMs),
       agreementMae: sum / ((a.length / 4) * 3), frames, crossOriginIsolated: self.crossOriginIsolated,
     };
   }

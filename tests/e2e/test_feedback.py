@@ -40,6 +40,24 @@ def left_edge_brightness(page) -> float:  # type: ignore[no-untyped-def]
     }""")
 
 
+def live_server_preference(page, key: str):  # type: ignore[no-untyped-def]
+    """The logged-in user's saved preference, read through the page's session."""
+    return page.evaluate(f"fetch('/api/me/preferences/{key}').then((r) => r.json()).then((a) => a.value)")
+
+
+def canvas_row(page) -> list[int]:  # type: ignore[no-untyped-def]
+    """Grey levels of the canvas's middle row."""
+    return page.evaluate("""() => {
+        const c = document.querySelector('#camera-canvas');
+        const d = c.getContext('2d').getImageData(0, c.height >> 1, c.width, 1).data;
+        return Array.from({length: c.width}, (_, x) => (d[4 * x] + d[4 * x + 1] + d[4 * x + 2]) / 3);
+    }""")
+
+
+def row_error(a: list[int], b: list[int]) -> float:
+    return sum(abs(x - y) for x, y in zip(a, b, strict=True)) / max(1, len(a))
+
+
 def canvas_data(page, name: str) -> float:  # type: ignore[no-untyped-def]
     value = page.evaluate(f"document.querySelector('#camera-canvas').dataset.{name}")
     return float(value) if value not in (None, "") else float("nan")
@@ -61,6 +79,7 @@ def test_a_key_press_shifts_the_picture_before_the_delayed_video_shows_the_turn(
     wait_for(lambda: canvas_data(page, "outstandingCommands") == 0, 10, "stale commands outstanding at start")
     assert left_edge_brightness(page) > 20, "the idle picture should not be black at its edge"
     assert abs(canvas_data(page, "warpShiftPx")) < 0.5
+    idle_row = canvas_row(page)
 
     page.locator("body").focus()
     pressed_at = time.monotonic()
@@ -68,12 +87,31 @@ def test_a_key_press_shifts_the_picture_before_the_delayed_video_shows_the_turn(
     wait_for(lambda: canvas_data(page, "warpShiftPx") > 20, 2, "the picture did not move with the key")
     shifted_after_s = time.monotonic() - pressed_at
     # The video cannot show the turn yet: its frames are held 2.5 s; the layer still warps by our commands.
+    shifted_row, shift = canvas_row(page), round(canvas_data(page, "warpShiftPx"))
     assert canvas_data(page, "outstandingCommands") > 0
     assert shifted_after_s < INJECTED_DELAY_S
-    assert left_edge_brightness(page) < 5, "turning left should uncover black at the left edge"
+    # The idle picture, moved right by the shift (edge columns and the dashed outline left out).
+    span = slice(4, len(idle_row) - shift - 4)
+    moved = row_error([shifted_row[x + shift] for x in range(span.start, span.stop)], idle_row[span])
+    assert moved < 12, f"the shown picture is not the idle one moved {shift} px (error {moved:.1f})"
+    # By default the uncovered left part continues the picture's edge instead of black.
+    assert left_edge_brightness(page) > 20, "the uncovered part should continue the picture's edge"
     ARTIFACTS_DIR.mkdir(exist_ok=True)
     page.screenshot(path=str(ARTIFACTS_DIR / "feedback-turning-under-delay.png"))
     time.sleep(0.6)
+    page.keyboard.up("ArrowLeft")
+    wait_for(lambda: canvas_data(page, "outstandingCommands") == 0, INJECTED_DELAY_S + 8,
+             "the delayed video never caught up with the commands")
+
+    # The thesis's black fill, chosen in the panel, is kept for the next visit.
+    page.locator('[data-field="feedback-fill"]').select_option("black")
+    wait_for(lambda: live_server_preference(page, "camera-feedback-fill") == "black", 3, "fill choice not saved")
+    page.locator("body").focus()
+    page.keyboard.down("ArrowLeft")
+    wait_for(lambda: canvas_data(page, "warpShiftPx") > 20, 2, "the picture did not move with the key")
+    assert left_edge_brightness(page) < 5, "with the black fill, turning left uncovers black at the left edge"
+    page.screenshot(path=str(ARTIFACTS_DIR / "feedback-turning-black-fill.png"))
+    time.sleep(0.3)
     page.keyboard.up("ArrowLeft")
 
     # Once the delayed frames show the turn, nothing is outstanding and the picture is unwarped again.

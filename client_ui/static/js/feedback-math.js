@@ -17,6 +17,12 @@ export const DEFAULT_MOTION = Object.freeze({
 /** Distance of the surface the forward/back scaling assumes [m] when nothing better is known. */
 export const DEFAULT_REFERENCE_DEPTH_M = 1.5;
 
+/** Bounds of a measured reference depth [m]: nearer than the bumper or beyond the lab means a bad reading. */
+export const REFERENCE_DEPTH_LIMITS_M = Object.freeze({ min: 0.3, max: 8 });
+
+/** Fewest laser beams inside the field of view that make a depth worth trusting. */
+const MIN_DEPTH_BEAMS = 5;
+
 /**
  * Pinhole model of the camera at a given image size.
  * @returns {{width, height, f, cx, cy, vpX, vpY, heightM, pitchDown}} f, cx, cy, vp in pixels
@@ -134,6 +140,76 @@ export function warpTransform(pose, camera, referenceDepthM = DEFAULT_REFERENCE_
     shiftX,
     visible,
   };
+}
+
+/**
+ * How far away the surfaces that fill the picture are, from a laser scan: the median range of the beams inside
+ * the camera's field of view. The forward/back scaling is right for that depth (a fixed guess is not: the
+ * lab's walls are 0.5 to 5 m away). NaN when the scan has too few readings there.
+ * @param {{angle_min_rad, angle_increment_rad, ranges_m}} scan the telemetry's laser scan (x ahead, angles left)
+ */
+export function referenceDepthFromScan(scan, camera) {
+  const ranges = Array.isArray(scan?.ranges_m) ? scan.ranges_m : [];
+  const angleMin = Number(scan?.angle_min_rad);
+  const increment = Number(scan?.angle_increment_rad);
+  if (!Number.isFinite(angleMin) || !Number.isFinite(increment) || increment <= 0) return NaN;
+  const halfFov = Math.atan(camera.cx / camera.f);
+  const inView = [];
+  ranges.forEach((range, index) => {
+    const value = Number(range);
+    if (Math.abs(angleMin + index * increment) <= halfFov && Number.isFinite(value) && value > 0) inView.push(value);
+  });
+  if (inView.length < MIN_DEPTH_BEAMS) return NaN;
+  inView.sort((a, b) => a - b);
+  const middle = Math.floor(inView.length / 2);
+  const median = inView.length % 2 ? inView[middle] : (inView[middle - 1] + inView[middle]) / 2;
+  return Math.min(REFERENCE_DEPTH_LIMITS_M.max, Math.max(REFERENCE_DEPTH_LIMITS_M.min, median));
+}
+
+/** True when a transform moves the picture at all (otherwise the frame is drawn as it came). */
+export function isWarped(transform) {
+  return Math.abs(transform.shiftX) > 0.05 || Math.abs(transform.scale - 1) > 1e-3;
+}
+
+/**
+ * Where the warped picture leaves the canvas uncovered, and which of its edge pixels continue into each part:
+ * the canvas is cut into 3 x 3 zones around the picture; every zone but the centre is filled by stretching the
+ * picture's nearest edge row, column or corner pixel (what a clamp-to-edge texture would show). Each entry is
+ * drawImage's 8 numbers [sx, sy, sw, sh, dx, dy, dw, dh], source in the bitmap's pixels, destination in the
+ * canvas's (identity transform); the picture itself covers the canvas scaled by `scale` and moved by tx, ty.
+ */
+export function edgeFillRects(transform, source, target) {
+  const { scale, tx, ty } = transform;
+  const sw = Number(source.width);
+  const sh = Number(source.height);
+  const cw = Number(target.width);
+  const ch = Number(target.height);
+  const clampX = (value) => Math.min(cw, Math.max(0, value));
+  const clampY = (value) => Math.min(ch, Math.max(0, value));
+  const left = clampX(tx);
+  const right = clampX(tx + scale * cw);
+  const top = clampY(ty);
+  const bottom = clampY(ty + scale * ch);
+  // Source span of the picture's visible middle band, in bitmap pixels.
+  const toSourceX = (x) => ((x - tx) / scale) * (sw / cw);
+  const toSourceY = (y) => ((y - ty) / scale) * (sh / ch);
+  const columns = [
+    { d0: 0, d1: left, s0: 0, s1: 1 },
+    { d0: left, d1: right, s0: toSourceX(left), s1: toSourceX(right) },
+    { d0: right, d1: cw, s0: sw - 1, s1: sw },
+  ];
+  const rows = [
+    { d0: 0, d1: top, s0: 0, s1: 1 },
+    { d0: top, d1: bottom, s0: toSourceY(top), s1: toSourceY(bottom) },
+    { d0: bottom, d1: ch, s0: sh - 1, s1: sh },
+  ];
+  const rects = [];
+  rows.forEach((row, r) => columns.forEach((column, c) => {
+    if ((r === 1 && c === 1) || column.d1 - column.d0 < 0.5 || row.d1 - row.d0 < 0.5) return;
+    rects.push([column.s0, row.s0, Math.max(1e-3, column.s1 - column.s0), Math.max(1e-3, row.s1 - row.s0),
+      column.d0, row.d0, column.d1 - column.d0, row.d1 - row.d0]);
+  }));
+  return rects;
 }
 
 /** Image point of a floor point (x ahead, y left of the camera, metres), or null behind/above the horizon. */

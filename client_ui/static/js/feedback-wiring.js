@@ -4,16 +4,23 @@
 import { fetchJson } from "./transport.js";
 
 export const FEEDBACK_PREFERENCE = "/api/me/preferences/camera-feedback";
+export const FILL_PREFERENCE = "/api/me/preferences/camera-feedback-fill";
 
-/** Loads and saves the "motion preview" choice of this user; passes RobotInfo to the panel. */
+function save(url, value) {
+  fetchJson(url, { method: "PUT", body: { value } }).catch((error) => {
+    console.warn("the motion preview choice was not saved:", error.message);
+  });
+}
+
+/** Loads and saves this user's "motion preview" choices (on/off, fill); passes RobotInfo to the panel. */
 export function bindFeedback(panel, onInfo) {
   onInfo((info) => { panel.info = info; });
   fetchJson(FEEDBACK_PREFERENCE)
     .then((answer) => { if (typeof answer?.value === "boolean") panel.feedbackEnabled = answer.value; })
     .catch(() => {}); // no saved choice: the layer stays on
-  panel.addEventListener("camera-feedback-change", ({ detail }) => {
-    fetchJson(FEEDBACK_PREFERENCE, { method: "PUT", body: { value: Boolean(detail.enabled) } }).catch((error) => {
-      console.warn("the motion preview choice was not saved:", error.message);
-    });
-  });
+  fetchJson(FILL_PREFERENCE)
+    .then((answer) => { if (typeof answer?.value === "string") panel.feedbackFill = answer.value; })
+    .catch(() => {}); // no saved choice: the edges are continued
+  panel.addEventListener("camera-feedback-change", ({ detail }) => save(FEEDBACK_PREFERENCE, Boolean(detail.enabled)));
+  panel.addEventListener("camera-feedback-fill-change", ({ detail }) => save(FILL_PREFERENCE, String(detail.fill)));
 }

@@ -28,7 +28,7 @@ def test_quick_feedback_benchmark_prints_a_table_and_writes_json_grading_nothing
                        "MAE warped by true motion (oracle)"):
             assert (f"{motion}, 1 s", figure) in figures
     for size in ("320x240", "640x480"):
-        for figure in ("feedback layer (canvas), median", "thesis per-pixel loop, median",
+        for figure in ("feedback layer (canvas, edges), median", "thesis per-pixel loop, median",
                        "per-pixel / feedback layer"):
             assert (f"cost {size}", figure) in figures
     assert all(row["passed"] is None for row in report["rows"]), "quick mode grades nothing"

@@ -151,3 +151,82 @@ def test_hostile_camera_numbers_fall_back_to_a_sane_model(module_page, hostile: 
         return [c.f, c.width, t.scale, t.tx, t.ty].every(Number.isFinite);
     """)
     assert result is True
+
+
+def scan_js(ranges: str) -> str:
+    """A 181-beam laser scan over -90..90 degrees (the Telebot's) with the given JS ranges array."""
+    return f"{{angle_min_rad: -Math.PI / 2, angle_increment_rad: Math.PI / 180, ranges_m: {ranges}}}"
+
+
+def test_the_zoom_depth_is_the_median_laser_range_inside_the_cameras_field_of_view(module_page) -> None:  # type: ignore[no-untyped-def]
+    result = run(module_page, f"""
+        const camera = m.cameraModel({{width: 320, height: 240, hfovDeg: 60}});
+        // 3 m straight ahead within +-30 degrees, a 0.4 m wall beside the robot outside the view.
+        const ranges = Array.from({{length: 181}}, (_, i) => Math.abs(i - 90) <= 30 ? 3 : 0.4);
+        const inView = m.referenceDepthFromScan({scan_js("ranges")}, camera);
+        const far = m.referenceDepthFromScan({scan_js("ranges.map(() => 50)")}, camera);
+        const near = m.referenceDepthFromScan({scan_js("ranges.map(() => 0.01)")}, camera);
+        const noEcho = m.referenceDepthFromScan({scan_js("ranges.map(() => null)")}, camera);
+        const hostile = [null, {{}}, {{angle_min_rad: 'x', angle_increment_rad: 0.1, ranges_m: [1, 2, 3, 4, 5, 6]}},
+                         {{angle_min_rad: 0, angle_increment_rad: -1, ranges_m: [1, 1, 1, 1, 1, 1]}}]
+          .map((scan) => m.referenceDepthFromScan(scan, camera));
+        const pose = {{x_m: -0.5, y_m: 0, theta_rad: 0}};
+        return {{inView, far, near, noEcho: String(noEcho), hostile: hostile.map(String),
+                 scaleAt3: m.warpTransform(pose, camera, inView).scale,
+                 scaleDefault: m.warpTransform(pose, camera).scale}};
+    """)
+    assert result["inView"] == pytest.approx(3.0)
+    assert result["far"] == pytest.approx(8.0) and result["near"] == pytest.approx(0.3)  # clamped to the lab's sizes
+    assert result["hostile"] == ["NaN"] * 4 and result["noEcho"] == "NaN"
+    # Backing away 0.5 m from surfaces 3 m off shrinks the picture to 3/3.5, not to 1.5/2.
+    assert result["scaleAt3"] == pytest.approx(3 / 3.5)
+    assert result["scaleDefault"] == pytest.approx(1.5 / 2.0)
+
+
+def test_edge_fill_covers_exactly_what_the_warped_picture_leaves_uncovered(module_page) -> None:  # type: ignore[no-untyped-def]
+    result = run(module_page, """
+        const camera = m.cameraModel({width: 320, height: 240});
+        const area = (rects) => rects.reduce((sum, r) => sum + r[6] * r[7], 0);
+        const turned = {scale: 1, tx: 100, ty: 0, shiftX: 100};
+        const shrunk = m.warpTransform({x_m: -0.5, y_m: 0, theta_rad: 0}, camera, 1.5);
+        const gone = {scale: 1, tx: 1280, ty: 0, shiftX: 1280};
+        const size = {width: 320, height: 240};
+        return {
+          turned: m.edgeFillRects(turned, size, size),
+          shrunkArea: area(m.edgeFillRects(shrunk, size, size)),
+          shrunkPicture: (shrunk.scale * 320) * (shrunk.scale * 240),
+          gone: m.edgeFillRects(gone, size, size),
+          still: m.edgeFillRects({scale: 1, tx: 0, ty: 0, shiftX: 0}, size, size).length,
+          warped: [m.isWarped(turned), m.isWarped({scale: 1, tx: 0, ty: 0, shiftX: 0.01})],
+        };
+    """)
+    # A left turn moves the picture 100 px right: the left 100 columns continue the picture's first column.
+    assert result["turned"] == [[0, 0, 1, 240, 0, 0, 100, 240]]
+    # Backing away leaves a border all round: the eight zones and the picture tile the canvas.
+    assert result["shrunkArea"] + result["shrunkPicture"] == pytest.approx(320 * 240)
+    # Turned right out of sight: the whole canvas continues the first column.
+    assert result["gone"] == [[0, 0, 1, 240, 0, 0, 320, 240]]
+    assert result["still"] == 0 and result["warped"] == [True, False]
+
+
+def test_the_panel_fills_the_uncovered_view_with_continued_edges_or_black(module_page) -> None:  # type: ignore[no-untyped-def]
+    result = module_page.evaluate("""async () => {
+        const { drawWarped } = await import('/panels/camera-panel/camera-feedback.js');
+        const source = new OffscreenCanvas(320, 240);
+        const sctx = source.getContext('2d');
+        sctx.fillStyle = 'rgb(200, 40, 40)';
+        sctx.fillRect(0, 0, 320, 240);
+        const bitmap = await createImageBitmap(source);
+        const canvas = document.createElement('canvas');
+        canvas.width = 320; canvas.height = 240;
+        const ctx = canvas.getContext('2d');
+        const turned = {scale: 1, tx: 100, ty: 0, shiftX: 100};
+        const pixel = () => Array.from(ctx.getImageData(40, 120, 1, 1).data.slice(0, 3));
+        drawWarped(ctx, bitmap, turned, 'edges');
+        const edges = pixel();
+        drawWarped(ctx, bitmap, turned, 'black');
+        const black = pixel();
+        return {edges, black};
+    }""")
+    assert result["edges"] == [200, 40, 40]
+    assert result["black"] == [0, 0, 0]

@@ -2,12 +2,14 @@
 // In: `robotName` (string), `frame` (ArrayBuffer from the camera socket), `message` (status/error
 // JSON from the server), `connected` (bool: is the camera socket open), and for the feedback layer
 // `info` (RobotInfo: camera size and field of view), `driveReady` / `driveSent` (the drive socket's
-// "ready" and every message sent on it), `feedbackEnabled` (bool).
-// Out: `camera-feedback-change` {enabled} when the person turns the motion preview on or off.
+// "ready" and every message sent on it), `feedbackEnabled` (bool), `feedbackFill` ("edges" | "black": what
+// fills the view the frame does not cover), `telemetry` (its laser scan sets the depth the zoom assumes).
+// Out: `camera-feedback-change` {enabled} when the person turns the motion preview on or off,
+// `camera-feedback-fill-change` {fill} when they choose the fill.
 
 import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
 import { framesInWindow, parseFramePacket } from "../../js/camera-frame.js";
-import { FeedbackLayer } from "./camera-feedback.js";
+import { FILL_MODES, FeedbackLayer } from "./camera-feedback.js";
 
 const FPS_WINDOW_MS = 1000;
 
@@ -28,6 +30,7 @@ export class CameraPanel extends HTMLElement {
   #feedback = new FeedbackLayer();
   #bitmap = null;
   #feedbackToggle;
+  #fillSelect;
   #delayOutput;
   #injectedBadge;
   #animation = 0;
@@ -62,6 +65,15 @@ export class CameraPanel extends HTMLElement {
       this.dispatchEvent(new CustomEvent("camera-feedback-change", { bubbles: true,
         detail: { enabled: this.#feedbackToggle.checked } }));
     });
+    this.#fillSelect = h("select", { id: "camera-feedback-fill", "data-field": "feedback-fill" },
+      h("option", { value: "edges", text: "continue the picture" }),
+      h("option", { value: "black", text: "black (as the thesis)" }));
+    this.#fillSelect.value = this.#feedback.fill;
+    this.#fillSelect.addEventListener("change", () => {
+      this.feedbackFill = this.#fillSelect.value;
+      this.dispatchEvent(new CustomEvent("camera-feedback-fill-change", { bubbles: true,
+        detail: { fill: this.#feedback.fill } }));
+    });
     this.append(
       h("h2", { class: "panel__title", id: "camera-title", text: "Camera" }),
       this.#stage = h("div", { class: "camera__stage" }, this.#canvas, this.#placeholder),
@@ -73,7 +85,8 @@ export class CameraPanel extends HTMLElement {
           "video delay ", this.#delayOutput, " s"),
         this.#injectedBadge),
       h("p", { class: "camera__feedback" },
-        h("label", {}, this.#feedbackToggle, " Motion preview: move the picture at once with my commands")),
+        h("label", {}, this.#feedbackToggle, " Motion preview: move the picture at once with my commands"),
+        h("label", { class: "camera__fill" }, "Where the frame shows nothing: ", this.#fillSelect)),
       this.#messageLine,
     );
     this.#applyLabel();
@@ -129,6 +142,23 @@ export class CameraPanel extends HTMLElement {
 
   get feedbackEnabled() {
     return this.#feedback.enabled;
+  }
+
+  /** "edges" or "black"; anything else is ignored (a stale saved choice must not break the view). */
+  set feedbackFill(fill) {
+    if (!FILL_MODES.includes(fill)) return;
+    this.#feedback.fill = fill;
+    if (this.#fillSelect) this.#fillSelect.value = fill;
+    this.#requestDraw();
+  }
+
+  get feedbackFill() {
+    return this.#feedback.fill;
+  }
+
+  /** A telemetry message: its laser scan tells how far away what the camera sees is. */
+  set telemetry(message) {
+    this.#feedback.setScan(message?.laser);
   }
 
   /** A text message from the camera socket: {type: "status"|"error", ...}. */
