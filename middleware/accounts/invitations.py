@@ -40,7 +40,7 @@ class InvitationView:
     course_code: str | None
     created_at: datetime
     expires_at: datetime
-    status: str  # pending | accepted | expired
+    status: str  # pending | accepted | expired | revoked
 
     def to_dict(self) -> dict[str, object]:
         """The JSON form."""
@@ -75,7 +75,38 @@ def create_invitation(session: Session, actor: User, role: object, course_id: in
 def _status(invitation: Invitation, now: datetime) -> str:
     if invitation.accepted_at is not None:
         return "accepted"
+    if invitation.revoked_at is not None:
+        return "revoked"
     return "expired" if _as_utc(invitation.expires_at) <= now else "pending"
+
+
+def _view(invitation: Invitation, course_code: str | None, now: datetime) -> InvitationView:
+    return InvitationView(invitation.id, invitation.role, course_code, _as_utc(invitation.created_at),
+                          _as_utc(invitation.expires_at), _status(invitation, now))
+
+
+def revoke_invitation(session: Session, actor: User, invitation_id: int, now: datetime) -> InvitationView:
+    """Withdraws a pending invitation (its course's tutors, admins); its link stops working. The caller commits."""
+    invitation = session.get(Invitation, invitation_id)
+    if invitation is None:
+        raise Refused(404, "unknown_invitation", "There is no such invitation.", "invitation_id")
+    if actor.role != Role.ADMIN and (invitation.course_id is None
+                                     or not is_course_tutor(session, actor.id, invitation.course_id)):
+        raise forbidden("You can withdraw invitations only of courses you teach.")
+    status = _status(invitation, now)
+    if status != "pending":
+        raise Refused(409, "invitation_not_pending", f"This invitation is {status}; only a pending one can be "
+                      "withdrawn.", "invitation_id")
+    # Conditional, so a link being accepted at this moment is either used or withdrawn, never both.
+    withdrawn = session.execute(
+        update(Invitation).where(Invitation.id == invitation.id, Invitation.accepted_at.is_(None),
+                                 Invitation.revoked_at.is_(None)).values(revoked_at=now)
+    ).rowcount
+    if withdrawn != 1:
+        raise Refused(409, "invitation_not_pending", "This invitation was used a moment ago.", "invitation_id")
+    session.refresh(invitation)
+    course = session.get(Course, invitation.course_id) if invitation.course_id is not None else None
+    return _view(invitation, course.code if course else None, now)
 
 
 def list_invitations(session: Session, actor: User, course_id: int | None, now: datetime) -> list[InvitationView]:
@@ -89,12 +120,11 @@ def list_invitations(session: Session, actor: User, course_id: int | None, now: 
             raise forbidden("You can see the invitations only of courses you teach.")
         query = query.where(Invitation.course_id == course_id)
     rows = session.execute(query.order_by(Invitation.created_at.desc(), Invitation.id.desc()).limit(200))
-    return [InvitationView(i.id, i.role, code, _as_utc(i.created_at), _as_utc(i.expires_at), _status(i, now))
-            for i, code in rows]
+    return [_view(invitation, code, now) for invitation, code in rows]
 
 
 class InvitationUnusable(Exception):
-    """The link cannot be used: reason is 'unknown', 'expired' or 'used'."""
+    """The link cannot be used: reason is 'unknown', 'expired', 'used' or 'revoked'."""
 
     def __init__(self, reason: str) -> None:
         super().__init__(reason)
@@ -110,7 +140,7 @@ def find_usable(session: Session, token: str, now: datetime) -> tuple[Invitation
         raise InvitationUnusable("unknown")
     status = _status(invitation, now)
     if status != "pending":
-        raise InvitationUnusable("used" if status == "accepted" else "expired")
+        raise InvitationUnusable({"accepted": "used", "revoked": "revoked"}.get(status, "expired"))
     course = session.get(Course, invitation.course_id) if invitation.course_id is not None else None
     return invitation, course
 
@@ -124,7 +154,8 @@ def accept(session: Session, token: str, username: object, password: object, pas
     if password_again != clean_password:
         raise InvalidField("password_again", "The two passwords differ; type the same password twice.")
     used = session.execute(
-        update(Invitation).where(Invitation.id == invitation.id, Invitation.accepted_at.is_(None))
+        update(Invitation).where(Invitation.id == invitation.id, Invitation.accepted_at.is_(None),
+                                 Invitation.revoked_at.is_(None))
         .values(accepted_at=now)
     ).rowcount
     if used != 1:

@@ -6,14 +6,18 @@ robot_admin.py, which raise Refused or InvalidField.
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from datetime import UTC, datetime
+from typing import Any
 
-from flask import Blueprint, abort, flash, jsonify, redirect, render_template, request, session, url_for
-from flask_login import current_user, login_required, login_user, logout_user
+from flask import Blueprint, abort, flash, jsonify, redirect, render_template, request, url_for
+from flask_login import current_user, login_required, logout_user
 
 from middleware.accounts import invitations, robot_admin, services
 from middleware.accounts.schemas import clean_flag, clean_id, clean_invitation_days, clean_optional_id
 from middleware.accounts.services import Refused
+from middleware.auth import sessions
 from middleware.auth.schemas import InvalidField
 from middleware.auth.services import change_own_password
 from middleware.courses.services import list_courses
@@ -40,6 +44,18 @@ def page_refusal(error: Refused) -> None:
     if error.status in (403, 404):
         get_session().rollback()
         abort(error.status)
+
+
+def refusals_as_pages(view: Callable[..., Any]) -> Callable[..., Any]:
+    """A page view whose Refused about the page itself (403, 404) becomes that error page."""
+    @functools.wraps(view)
+    def page(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return view(*args, **kwargs)
+        except Refused as refused:
+            page_refusal(refused)
+            raise
+    return page
 
 
 def _json_body() -> dict[str, object]:
@@ -74,6 +90,7 @@ def password_submit():  # type: ignore[no-untyped-def]
         field = "new_password" if invalid.field == "password" else invalid.field
         return render_template("accounts/password.html", errors={field: invalid.message}), 400
     dbs.commit()
+    sessions.password_changed(current_user)
     flash("Your password has been changed.", "success")
     return redirect(url_for("lab.index"), 303)
 
@@ -90,6 +107,7 @@ def api_password():  # type: ignore[no-untyped-def]
         raise api_error(InvalidField("new_password" if invalid.field == "password" else invalid.field,
                                      invalid.message)) from None
     dbs.commit()
+    sessions.password_changed(current_user)
     return jsonify({"changed": True})
 
 
@@ -104,13 +122,10 @@ def _users_page(errors: dict[str, str] | None = None, form: dict[str, str] | Non
 
 @blueprint.get("/admin/users")
 @login_required
+@refusals_as_pages
 def users_page():  # type: ignore[no-untyped-def]
     """Every account, with forms to create, disable or enable, re-role and reset (admins)."""
-    try:
-        return _users_page()
-    except Refused as refused:
-        page_refusal(refused)
-        raise
+    return _users_page()
 
 
 @blueprint.post("/admin/users")
@@ -249,13 +264,10 @@ def api_reset_password(user_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.get("/admin/invitations")
 @login_required
+@refusals_as_pages
 def invitations_page():  # type: ignore[no-untyped-def]
     """Every invitation and the form to invite anyone (admins)."""
-    try:
-        views = invitations.list_invitations(get_session(), current_user, None, _now())
-    except Refused as refused:
-        page_refusal(refused)
-        raise
+    views = invitations.list_invitations(get_session(), current_user, None, _now())
     return render_template("accounts/invitations.html", invitations=views, errors={},
                            courses=list_courses(get_session(), current_user))
 
@@ -305,6 +317,39 @@ def api_create_invitation():  # type: ignore[no-untyped-def]
                     "url": url_for("accounts.join", token=token, _external=True)}), 201, {"Cache-Control": "no-store"}
 
 
+@blueprint.post("/invitations/<int:invitation_id>/revoke")
+@login_required
+def invitations_revoke(invitation_id: int):  # type: ignore[no-untyped-def]
+    """Withdraws a pending invitation from the page that lists it."""
+    dbs = get_session()
+    back = request.form.get("back") or ""
+    back = back if back.startswith("/") and not back.startswith("//") else url_for("lab.index")
+    try:
+        invitations.revoke_invitation(dbs, current_user, invitation_id, _now())
+    except Refused as refused:
+        dbs.rollback()
+        page_refusal(refused)
+        flash(refused.message, "error")
+        return redirect(back, 303)
+    dbs.commit()
+    flash("The invitation was withdrawn: its link no longer works.", "success")
+    return redirect(back, 303)
+
+
+@blueprint.delete("/api/invitations/<int:invitation_id>")
+@login_required
+def api_revoke_invitation(invitation_id: int):  # type: ignore[no-untyped-def]
+    """Withdraws a pending invitation; answers it as lists show it."""
+    dbs = get_session()
+    try:
+        view = invitations.revoke_invitation(dbs, current_user, invitation_id, _now())
+    except Refused as refused:
+        dbs.rollback()
+        raise api_error(refused) from None
+    dbs.commit()
+    return jsonify({"invitation": view.to_dict()})
+
+
 UNUSABLE = {
     "unknown": (404, "This invitation link is not valid",
                 "The link is not one we issued. Check that you copied all of it, or ask your tutor for a new one."),
@@ -312,6 +357,8 @@ UNUSABLE = {
                 "Invitation links last a few days. Ask your tutor or the lab's admin for a new one."),
     "used": (410, "This invitation has already been used",
              "Each link creates one account. If it was you, log in; otherwise ask for a new link."),
+    "revoked": (410, "This invitation was withdrawn",
+                "The person who invited you withdrew this link. Ask them for a new one if you still need an account."),
 }
 
 
@@ -350,9 +397,7 @@ def join_submit(token: str):  # type: ignore[no-untyped-def]
     dbs.commit()
     if current_user.is_authenticated:
         logout_user()
-    session.clear()
-    login_user(user)
-    session.permanent = True
+    sessions.begin(user)
     flash(f"Welcome, {user.username}. Your account is ready.", "success")
     return redirect(url_for("lab.index"), 303)
 
@@ -371,13 +416,10 @@ def _robots_page(errors: dict[str, str] | None = None, form: dict[str, str] | No
 
 @blueprint.get("/admin/robots")
 @login_required
+@refusals_as_pages
 def robots_page():  # type: ignore[no-untyped-def]
     """The robots table with whether each answers, and forms to add and change robots (admins)."""
-    try:
-        return _robots_page()
-    except Refused as refused:
-        page_refusal(refused)
-        raise
+    return _robots_page()
 
 
 @blueprint.post("/admin/robots")

@@ -8,7 +8,7 @@ from flask import Blueprint, Response, flash, jsonify, redirect, render_template
 from flask_login import current_user, login_required
 
 from middleware.accounts.invitations import list_invitations
-from middleware.accounts.routes import _now, api_error, page_refusal
+from middleware.accounts.routes import _now, api_error, page_refusal, refusals_as_pages
 from middleware.accounts.services import Refused, forbidden
 from middleware.auth.schemas import InvalidField
 from middleware.courses import services
@@ -45,13 +45,10 @@ def _index(errors: dict[str, str] | None = None, form: dict[str, str] | None = N
 
 @blueprint.get("/courses")
 @login_required
+@refusals_as_pages
 def index():  # type: ignore[no-untyped-def]
     """The courses the tutor teaches (every course for an admin) and the form to create one."""
-    try:
-        return _index()
-    except Refused as refused:
-        page_refusal(refused)
-        raise
+    return _index()
 
 
 @blueprint.post("/courses")
@@ -94,13 +91,10 @@ def _detail(course_id: int, status: int = 200, errors: dict[str, str] | None = N
 
 @blueprint.get("/courses/<int:course_id>")
 @login_required
+@refusals_as_pages
 def detail(course_id: int):  # type: ignore[no-untyped-def]
     """One course: settings, members, enrolment, CSV upload and invitations (its tutors, admins)."""
-    try:
-        return _detail(course_id)
-    except Refused as refused:
-        page_refusal(refused)
-        raise
+    return _detail(course_id)
 
 
 def _course_form(course_id: int, action, success: str):  # type: ignore[no-untyped-def]

@@ -50,6 +50,7 @@ def test_tutor_enrols_a_class_from_csv_and_an_invited_student_joins(chromium, pa
     download.value.save_as(saved)
     assert "newstudent" in saved.read_text() and "'=1+1" in saved.read_text()
     page.screenshot(path=str(ARTIFACTS_DIR / "courses-report-desktop.png"), full_page=True)
+    course_url = page.url.removesuffix("/members.csv")  # the upload answered on the form's URL
 
     page.get_by_role("button", name="Create an invitation link").click()
     link = page.locator("#invitation-link").text_content().strip()
@@ -74,6 +75,18 @@ def test_tutor_enrols_a_class_from_csv_and_an_invited_student_joins(chromium, pa
         assert errors == []
     finally:
         phone_context.close()
+
+    # A second link, withdrawn from the course page before anyone uses it.
+    page.goto(course_url)
+    page.get_by_role("button", name="Create an invitation link").click()
+    withdrawn = page.locator("#invitation-link").text_content().strip()
+    page.goto(course_url)
+    page.locator("#course-invitations button", has_text="Withdraw").first.click()
+    page.locator(".flash, [role=status], [role=alert]", has_text="withdrawn").first.wait_for()
+    assert "revoked" in page.locator("#course-invitations").text_content()
+    page.screenshot(path=str(ARTIFACTS_DIR / "courses-invitation-withdrawn.png"), full_page=True)
+    page.goto(withdrawn)
+    assert "withdrawn" in page.locator("#error-heading").text_content()
 
     page.goto(f"{live_server.url}/courses")
     page.set_viewport_size({"width": 390, "height": 844})

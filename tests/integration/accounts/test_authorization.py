@@ -7,6 +7,8 @@ Pages answer 403 (anonymous: a redirect to the login page); the API answers 401/
 
 from __future__ import annotations
 
+from datetime import UTC, datetime, timedelta
+
 import pytest
 
 from tests.conftest import LabClient
@@ -17,7 +19,8 @@ TEACHERS = {"tutor1", "tutor2", "admin1"}
 COURSE = {"tutor1", "admin1"}
 ADMIN = {"admin1"}
 
-# (method, path, allowed logged-in users, form or JSON body). {c}: ROB1, {s}: student1, {r}: robot ghost.
+# (method, path, allowed logged-in users, form or JSON body). {c}: ROB1, {s}: student1, {r}: robot ghost,
+# {i}: a pending invitation into ROB1.
 PAGES = [
     ("GET", "/courses", TEACHERS, None),
     ("POST", "/courses", TEACHERS, {"code": "NEW1", "title": "New"}),
@@ -36,6 +39,7 @@ PAGES = [
     ("POST", "/admin/robots", ADMIN, {"name": "evil", "address": "127.0.0.1:1"}),
     ("POST", "/admin/robots/{r}", ADMIN, {"enabled": "0"}),
     ("GET", "/admin/invitations", ADMIN, None),
+    ("POST", "/invitations/{i}/revoke", COURSE, {"back": "/lab"}),
     ("GET", "/account/password", ALL, None),
     ("POST", "/account/password", ALL, {"current_password": "x", "new_password": "y", "new_password_again": "y"}),
 ]
@@ -48,6 +52,7 @@ APIS = [
     ("DELETE", "/api/courses/{c}/members/{s}", COURSE, None),
     ("POST", "/api/courses/{c}/members.csv", COURSE, {}),
     ("POST", "/api/invitations", COURSE, {"course_id": "{c}", "role": "student"}),
+    ("DELETE", "/api/invitations/{i}", COURSE, None),
     ("GET", "/api/users", ADMIN, None),
     ("POST", "/api/users", ADMIN, {"username": "intruder", "role": "admin"}),
     ("PATCH", "/api/users/{s}", ADMIN, {"role": "admin", "is_active": False}),
@@ -70,14 +75,20 @@ def _fill(value: object, ids: dict[str, int]) -> object:
 def _ids(app, course_people: dict[str, int]) -> dict[str, int]:  # type: ignore[no-untyped-def]
     from sqlalchemy import select
 
+    from middleware.accounts.invitations import create_invitation
     from middleware.db import session_factory
-    from middleware.models import Robot
+    from middleware.models import Robot, User
     from middleware.robots.registry import robot_registry
 
     robot_registry(app).refresh()
     with session_factory(app)() as session:
         robot_id = session.scalar(select(Robot.id).where(Robot.name == "ghost"))
-    return {"c": course_people["course"], "s": course_people["student1"], "r": int(robot_id or 0)}
+        tutor = session.get(User, course_people["tutor1"])
+        invitation, _ = create_invitation(session, tutor, "student", course_people["course"], timedelta(days=1),
+                                          datetime.now(UTC))
+        session.commit()
+        return {"c": course_people["course"], "s": course_people["student1"], "r": int(robot_id or 0),
+                "i": invitation.id}
 
 
 def _page(client: LabClient, method: str, path: str, form: dict[str, str] | None, logged_in: bool) -> int:

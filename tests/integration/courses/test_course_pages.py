@@ -77,3 +77,38 @@ def test_an_invitation_link_creates_an_enrolled_account_once(client_as, course_p
     assert status == 410 and "already been used" in page
     status, _, page = client_as(None).request("GET", "/join/" + "A" * 43)
     assert status == 404 and "not valid" in page
+
+
+def test_a_tutor_withdraws_a_pending_invitation_and_its_link_stops_working(client_as, course_people) -> None:
+    tutor = client_as("tutor1")
+    status, answer = api(tutor, "POST", "/api/invitations", {"course_id": course_people["course"]})
+    assert status == 201
+    path = "/join/" + answer["url"].rsplit("/join/", 1)[1]
+    invitation_id = answer["id"]
+    # Only the course's tutors and admins may withdraw it.
+    status, refused = api(client_as("tutor2"), "DELETE", f"/api/invitations/{invitation_id}")
+    assert status == 403 and refused["error"]["code"] == "forbidden"
+    assert api(client_as("student1"), "DELETE", f"/api/invitations/{invitation_id}")[0] == 403
+    assert api(tutor, "DELETE", "/api/invitations/999999")[0] == 404
+    # From the course page, with its button.
+    _, _, page = tutor.request("GET", f"/courses/{course_people['course']}")
+    assert f"/invitations/{invitation_id}/revoke" in page
+    token = tutor.csrf_token(f"/courses/{course_people['course']}")
+    status, headers, _ = tutor.request("POST", f"/invitations/{invitation_id}/revoke", {
+        "csrf_token": token, "back": f"/courses/{course_people['course']}"})
+    assert status == 303 and headers["Location"].endswith(f"/courses/{course_people['course']}")
+    _, _, page = tutor.request("GET", f"/courses/{course_people['course']}")
+    assert "revoked" in page and f"/invitations/{invitation_id}/revoke" not in page
+    status, _, page = client_as(None).request("GET", path)
+    assert status == 410 and "withdrawn" in page
+    guest = client_as(None)
+    status, _, _ = guest.request("POST", path, {"username": "latecomer", "password": "long-enough-pw",
+                                                "password_again": "long-enough-pw",
+                                                "csrf_token": guest.csrf_token("/login")})
+    assert status == 410
+    status, again = api(tutor, "DELETE", f"/api/invitations/{invitation_id}")
+    assert status == 409 and again["error"]["code"] == "invitation_not_pending"
+    # An admin withdraws any pending one through the API.
+    _, other = api(tutor, "POST", "/api/invitations", {"course_id": course_people["course"]})
+    status, body = api(client_as("admin1"), "DELETE", f"/api/invitations/{other['id']}")
+    assert status == 200 and body["invitation"]["status"] == "revoked"
