@@ -11,6 +11,7 @@ from flask_wtf.csrf import CSRFProtect
 
 from middleware import config as config_module
 from middleware import db
+from middleware.auth import identity, sessions
 from middleware.errors import register_error_handlers
 from middleware.models import User
 from middleware.robots import registry
@@ -28,8 +29,8 @@ login_manager.session_protection = "strong"
 def _load_user(user_id: str) -> User | None:
     if not user_id.isdigit():
         return None
-    user = db.get_session().get(User, int(user_id))
-    return user if user is not None and user.is_active else None
+    user = identity.load_user(db.get_session(), int(user_id))
+    return user if user is not None and sessions.opened_with_current_password(user) else None
 
 
 @login_manager.unauthorized_handler

@@ -60,6 +60,9 @@ class AccessCoordinator:
         self.clock = clock
         self._sessions = session_factory(app)
         self._pushed_tokens: dict[str, str | None] = {}
+        # (controller_id, token) per robot as this process last read or set it; only a hint (see
+        # known_controller_token): the skill server, which refuses any other token, is the authority.
+        self._known_controllers: dict[str, tuple[int | None, str | None]] = {}
         self._push_lock = threading.Lock()
         self._stop = threading.Event()
         self._ticker: threading.Thread | None = None
@@ -74,6 +77,7 @@ class AccessCoordinator:
         online = self._robot_online(robot_name)
         with self._sessions() as session, session.begin():
             state = operation(session, robot_name, *args, self.policy, self.clock(), online)
+        self._known_controllers[robot_name] = (state.controller_id, state.token)
         if online:
             self.sync_token(state)
         return state
@@ -103,11 +107,27 @@ class AccessCoordinator:
         with self._sessions() as session:
             return round_robin.snapshot(session, robot_name)
 
-    def controller_token(self, robot_name: str, user_id: int) -> str | None:
-        """The token of user_id if they control the robot now, else None (one primary-key read)."""
-        with self._sessions() as session:
-            control = session.get(RobotControl, robot_name)
-            return control.token if control is not None and control.controller_id == user_id else None
+    def controller_token(self, robot_name: str, user_id: int, session: Session | None = None) -> str | None:
+        """The token of user_id if they control the robot now, else None (one primary-key read, in the caller's
+        session when given: a request already holds one)."""
+        if session is None:
+            with self._sessions() as own:
+                return self.controller_token(robot_name, user_id, own)
+        control = session.get(RobotControl, robot_name, populate_existing=True)
+        self._known_controllers[robot_name] = (control.controller_id, control.token) if control else (None, None)
+        return control.token if control is not None and control.controller_id == user_id else None
+
+    def known_controller_token(self, robot_name: str, user_id: int, session: Session | None = None) -> str | None:
+        """controller_token without a database read when this process already knows user_id controls the robot.
+
+        For calls the skill server checks: a token it refuses as not the controller's means the turn moved on
+        in another process, and the caller asks controller_token again. A "no" is never taken from here, so
+        a turn given elsewhere is seen at once.
+        """
+        known = self._known_controllers.get(robot_name)
+        if known is not None and known[0] == user_id and known[1]:
+            return known[1]
+        return self.controller_token(robot_name, user_id, session)
 
     def now(self) -> datetime:
         """The coordinator's clock."""

@@ -2,18 +2,28 @@
 
 from __future__ import annotations
 
+import time
 from datetime import UTC, datetime
 from urllib.parse import urlsplit
 
 from flask import Blueprint, redirect, render_template, request, session, url_for
-from flask_login import current_user, login_required, login_user, logout_user
+from flask_login import current_user, login_required, logout_user
 
+from middleware.auth import sessions
 from middleware.auth.services import log_in
 from middleware.db import get_session
 
 blueprint = Blueprint("auth", __name__)
 
 WRONG_CREDENTIALS = "Wrong username or password. Check both and try again."
+SESSION_RENEW_S = 300
+
+
+@blueprint.before_app_request
+def renew_session_expiry() -> None:
+    """A session lasts PERMANENT_SESSION_LIFETIME from the last activity, to within SESSION_RENEW_S."""
+    if session.permanent and time.time() - float(session.get(sessions.RENEWED_AT_KEY, 0)) >= SESSION_RENEW_S:
+        session[sessions.RENEWED_AT_KEY] = int(time.time())
 
 
 def safe_next_url(value: str | None) -> str | None:
@@ -53,9 +63,7 @@ def login_submit():  # type: ignore[no-untyped-def]
     user = outcome.user
     if user is None:
         return render_template("login.html", error=WRONG_CREDENTIALS, username=username, next_url=next_url), 401
-    session.clear()  # a fresh session on login, so a planted session id is worthless
-    login_user(user)
-    session.permanent = True
+    sessions.begin(user)
     return redirect(next_url or url_for("lab.index"))
 
 

@@ -4,17 +4,21 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
+from typing import TypeVar
 
 from flask import Blueprint, jsonify, request
 from flask_login import current_user, login_required
 
 from middleware.access.coordinator import access_coordinator
+from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.lab.panels import robot_panels
 from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
 from middleware.robots.messages import goal_dict, map_dict
 from middleware.robots.registry import robot_registry
 
+T = TypeVar("T")
 blueprint = Blueprint("skills", __name__)
 
 NAME_PATTERN = re.compile(r"^[a-z][a-z0-9_]{0,63}$")
@@ -33,12 +37,29 @@ def robot_link(robot_name: str) -> RobotLink:
     return link
 
 
-def controller_token(robot_name: str) -> str:
-    """The current user's controller token, or a 403 saying they observe."""
-    token = access_coordinator().controller_token(robot_name, int(current_user.get_id()))
+def controller_token(robot_name: str, known: bool = False) -> str:
+    """The current user's controller token (known: as this process last saw it), or a 403 saying they observe."""
+    coordinator = access_coordinator()
+    read = coordinator.known_controller_token if known else coordinator.controller_token
+    token = read(robot_name, int(current_user.get_id()), get_session())
     if token is None:
         raise ApiError(403, "not_controller", "You are observing: skills run for the person whose turn it is.")
     return token
+
+
+def as_controller(robot_name: str, call: Callable[[str], T]) -> T:
+    """call(token) with the user's controller token, read from the database only when the robot refuses the
+    token this process knows (the turn moved on elsewhere): saves a read on every skill request."""
+    token = controller_token(robot_name, known=True)
+    try:
+        return call(token)
+    except CommandRefused as refused:
+        if refused.code != "not_controller":
+            raise
+        fresh = controller_token(robot_name)
+        if fresh == token:
+            raise
+    return call(fresh)
 
 
 def refusal(error: CommandRefused | RobotUnavailable, not_found_code: str = "unknown_skill") -> ApiError:
@@ -96,9 +117,8 @@ def activate(robot_name: str, skill: str):  # type: ignore[no-untyped-def]
     if not NAME_PATTERN.fullmatch(skill):
         raise ApiError(404, "unknown_skill", "There is no skill by that name.", "skill")
     parameters, preempt = parse_activation(request.get_json(silent=True))
-    token = controller_token(robot_name)
     try:
-        goal = link.activate_skill(token, skill, parameters, preempt)
+        goal = as_controller(robot_name, lambda token: link.activate_skill(token, skill, parameters, preempt))
     except (CommandRefused, RobotUnavailable) as error:
         raise refusal(error) from None
     return jsonify({"goal": goal_dict(goal)}), 202
@@ -127,9 +147,9 @@ def goal(robot_name: str, goal_id: str):  # type: ignore[no-untyped-def]
 def cancel(robot_name: str, goal_id: str):  # type: ignore[no-untyped-def]
     """Cancels a goal; its message reports the error left."""
     link = robot_link(robot_name)
-    token = controller_token(robot_name)
+    goal_id = _goal_id(goal_id)
     try:
-        state = link.cancel_goal(token, _goal_id(goal_id))
+        state = as_controller(robot_name, lambda token: link.cancel_goal(token, goal_id))
     except (CommandRefused, RobotUnavailable) as error:
         raise refusal(error, "unknown_goal") from None
     return jsonify({"goal": goal_dict(state)})

@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from tests.conftest import LabClient
+from tests.conftest import STUDENT_PASSWORD, LabClient
 
 
 def api(client: LabClient, method: str, path: str, body: object | None = None) -> tuple[int, dict]:
@@ -28,9 +28,9 @@ def api(client: LabClient, method: str, path: str, body: object | None = None) -
         raise
 
 
-def take_control(client: LabClient):  # type: ignore[no-untyped-def]
+def take_control(client: LabClient, robot: str = "lab-1"):  # type: ignore[no-untyped-def]
     """Opens the queue channel (joining the queue) and waits until this client controls the robot."""
-    queue = client.websocket("/ws/robots/lab-1/queue")
+    queue = client.websocket(f"/ws/robots/{robot}/queue")
     deadline = time.monotonic() + 10
     while time.monotonic() < deadline:
         message = json.loads(queue.receive(timeout=5))
@@ -131,6 +131,45 @@ def test_an_observer_cannot_start_skills_and_a_missing_csrf_token_is_refused(
     assert status == 403 and body["error"]["code"] == "not_controller"
     status, _, raw = student_client.request("POST", "/api/robots/lab-1/skills/orientation_control/goals", {})
     assert status == 400 and "csrf" in raw.lower()
+    queue.close()
+
+
+def test_a_turn_moved_on_in_another_process_is_seen_when_the_robot_refuses_the_known_token(  # type: ignore[no-untyped-def]
+    student_client: LabClient, live_server
+) -> None:
+    """The skill API skips the token read when it knows the user controls the robot; the robot is the check."""
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from middleware.models import RobotControl
+    from middleware.robots.registry import robot_registry
+
+    def activate() -> tuple[int, dict]:
+        return api(student_client, "POST", "/api/robots/lab-1/skills/orientation_control/goals",
+                   {"parameters": {"heading_rad": 0.1}, "preempt": True})
+
+    queue = take_control(student_client)
+    assert activate()[0] == 202
+    link = robot_registry(live_server.app).get("lab-1")
+
+    def another_process_sets(controller_id: int | None, token: str) -> None:
+        # What a second web process does when the turn changes there: the row, then the robot's token.
+        with session_factory(live_server.app)() as session, session.begin():
+            control = session.get(RobotControl, "lab-1")
+            control.controller_id, control.token = controller_id, token
+        link.set_controller(token)
+
+    with session_factory(live_server.app)() as session:
+        student_id = session.get(RobotControl, "lab-1").controller_id
+    another_process_sets(student_id, "a-new-turn-token")  # a new turn of the same student: retried, accepted
+    status, body = activate()
+    assert status == 202, body
+    with session_factory(live_server.app)() as session:
+        other = create_user(session, "next-in-line", "student", STUDENT_PASSWORD)
+        session.commit()
+        other_id = other.id
+    another_process_sets(other_id, "someone-elses-token")  # the turn went elsewhere: refused as an observer
+    status, body = activate()
+    assert status == 403 and body["error"]["code"] == "not_controller"
     queue.close()
 
 

@@ -11,7 +11,6 @@ from urllib.parse import urlsplit
 from urllib.request import Request
 
 import pytest
-import simple_websocket
 
 from tests.conftest import LabClient
 from tests.integration.middleware.test_robot_channels import closed_with, receive_json
@@ -49,19 +48,9 @@ def _api(client: LabClient, method: str, path: str, body: object | None = None) 
 
 
 def refusal(client: LabClient, path: str) -> tuple[str, int]:
-    """The error code and close code a channel refuses with.
-
-    On a busy machine the server's closing wait (1 s) can end before this client reads, and the reset then
-    loses the message (a 1005 close): that attempt is repeated, it says nothing about the refusal.
-    """
-    for _attempt in range(3):
-        ws = client.websocket(path)
-        try:
-            error = receive_json(ws)
-        except simple_websocket.ConnectionClosed:
-            continue
-        return error["code"], closed_with(ws)
-    raise AssertionError(f"{path}: the socket closed three times before its error could be read")
+    """The error code and close code a channel refuses with."""
+    ws = client.websocket(path)
+    return receive_json(ws)["code"], closed_with(ws)
 
 
 @pytest.fixture

@@ -16,6 +16,12 @@ def test_robots_parse_in_order() -> None:
     assert parse_robots("") == ()
 
 
+@pytest.mark.parametrize(("name", "title"), [("lab-1", "Lab 1"), ("course-a", "Course A"), ("LAB_2", "Lab 2"),
+                                             ("practice-bob", "Practice bob")])
+def test_robot_titles_come_from_their_names(name: str, title: str) -> None:
+    assert RobotAddress(name, "h:1").title == title
+
+
 @pytest.mark.parametrize("value", ["lab-1", "lab-1=nohostport", "=127.0.0.1:1", "bad name=h:1", "a=h:1,a=h:2"])
 def test_bad_robot_entries_name_the_setting(value: str) -> None:
     with pytest.raises(ConfigError, match="TELELAB_ROBOTS"):
