@@ -120,7 +120,8 @@ def cmd_up(args: argparse.Namespace) -> int:
     """Starts the whole lab on this machine."""
     from middleware.lab_runner import run_lab
 
-    return run_lab(host=args.host, port=args.port, robot_count=args.robots, scene=args.scene)
+    return run_lab(host=args.host, port=args.port, robot_count=args.robots, scene=args.scene,
+                   course_robots=args.course_robots)
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
@@ -148,6 +149,8 @@ def build_parser() -> argparse.ArgumentParser:
     up.add_argument("--port", type=int, default=5000)
     up.add_argument("--robots", type=int, default=1, help="how many simulated lab robots (default 1)")
     up.add_argument("--scene", default="lab", help="scene of the simulated robots (default lab)")
+    up.add_argument("--no-course-robots", dest="course_robots", action="store_false",
+                    help="do not start the experiment's robots course-a and course-b")
     up.set_defaults(handler=cmd_up)
 
     web = commands.add_parser("web", help="serve the middleware only (robots from TELELAB_ROBOTS)")

@@ -18,6 +18,8 @@ from middleware.models import Role
 
 LISTENING_LINE = re.compile(r"listening on (?P<address>\S+:\d+)")
 DEMO_ACCOUNTS = (("student", Role.STUDENT), ("tutor", Role.TUTOR), ("admin", Role.ADMIN))
+# The teleoperation-under-delay experiment's robots (thesis chapter 4): one per course scene, idle until driven.
+COURSE_ROBOTS = (("course-a", "course-A"), ("course-b", "course-B"))
 START_TIMEOUT_S = 60.0
 
 
@@ -129,18 +131,26 @@ def seed_demo_content(app) -> list[str]:  # type: ignore[no-untyped-def]
     return seed(app)
 
 
-def run_lab(host: str, port: int, robot_count: int, scene: str) -> int:
+def lab_robots(robot_count: int, scene: str, course_robots: bool = True) -> list[SkillServerProcess]:
+    """The skill servers `telelab up` runs: lab-1..lab-N in scene, then the experiment's course robots."""
+    robots = [SkillServerProcess(f"lab-{i + 1}", scene) for i in range(robot_count)]
+    if course_robots:
+        robots += [SkillServerProcess(name, course_scene) for name, course_scene in COURSE_ROBOTS]
+    return robots
+
+
+def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: bool = True) -> int:
     """Starts skill servers, migrates the database, creates demo accounts, and serves until Ctrl-C."""
     from middleware import create_app
     from middleware.db import upgrade_to_head
     from middleware.serve import serve_forever
 
-    robots = [SkillServerProcess(f"lab-{i + 1}", scene) for i in range(robot_count)]
+    robots = lab_robots(robot_count, scene, course_robots)
     try:
         for robot in robots:
             robot.start()
             wait_until_serving(robot.address)
-            print(f"robot {robot.name}: skill server at {robot.address} (scene {scene})", flush=True)
+            print(f"robot {robot.name}: skill server at {robot.address} (scene {robot.scene})", flush=True)
         os.environ["TELELAB_ROBOTS"] = ",".join(f"{r.name}={r.address}" for r in robots)
         app = create_app()
         upgrade_to_head(app.config["DATABASE_URL"])

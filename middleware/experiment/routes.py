@@ -8,16 +8,17 @@ from flask import Blueprint, Response, jsonify, render_template, request
 from flask_login import current_user, login_required
 from sqlalchemy import select
 
+from middleware.access.coordinator import access_coordinator
 from middleware.accounts.services import Refused
 from middleware.auth.schemas import InvalidField
 from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.experiment import services
-from middleware.experiment.robot_course import course_run
+from middleware.experiment.progress import CourseRunNow, course_route, finished_in_trial, progress_view
 from middleware.models import User, UserPreference
 from middleware.models.accounts import utc_now
 from middleware.models.experiment import Trial
-from middleware.robots.link import RobotUnavailable
+from middleware.robots.link import RobotLink, RobotUnavailable
 from middleware.robots.registry import robot_registry
 
 blueprint = Blueprint("experiment", __name__)
@@ -64,6 +65,28 @@ def course_robots() -> list[dict[str, str]]:
     return found
 
 
+def _course_run_now(link: RobotLink | None) -> CourseRunNow | None:
+    """The robot's course run now; None when the robot is gone or runs no course. RobotUnavailable passes up."""
+    run = link.course_run() if link is not None else None
+    if run is None or not run.is_course:
+        return None
+    return CourseRunNow(run.phase, run.attempt, run.elapsed_s, run.errors, run.last_attempt, run.last_total_time_s,
+                        run.last_errors, run.last_finished_unix_s, run.started_unix_s, run.last_started_unix_s)
+
+
+def _run_progress(trial: Trial) -> dict[str, object]:
+    """The trial's run as the page shows it while the student drives."""
+    try:
+        run = _course_run_now(robot_registry().get(trial.robot_name))
+    except RobotUnavailable:
+        run = None
+    if run is None:
+        return {"online": False, "finished": False,
+                "message": f"The robot {trial.robot_name} does not answer right now; its progress shows again "
+                           "when it does."}
+    return progress_view(trial, run)
+
+
 def _set_feedback_preference(session, user_id: int, enabled: bool) -> None:  # type: ignore[no-untyped-def]
     """The trial's condition becomes the console's motion-preview setting."""
     row = session.scalar(select(UserPreference).where(UserPreference.user_id == user_id,
@@ -85,12 +108,19 @@ def page():  # type: ignore[no-untyped-def]
 @blueprint.get("/api/experiment/state")
 @login_required
 def state():  # type: ignore[no-untyped-def]
-    """The student's trial in progress, their delay, and the robots that run a course."""
+    """The student's trial in progress with its run now, their delay, their last recorded trial, and, while no
+    trial is in progress, the robots that run a course (the page polls this at 2 Hz during a trial)."""
     session = get_session()
     actor = _actor()
     trial = services.current_trial(session, actor)
-    return jsonify({"trial": _trial_dict(trial) if trial else None, "robots": course_robots(),
-                    "delay_s": services.get_video_delay(session, actor.id)})
+    last = services.last_completed_trial(session, actor)
+    return jsonify({
+        "trial": _trial_dict(trial) if trial else None,
+        "run": _run_progress(trial) if trial else None,
+        "last_trial": _trial_dict(last) if last else None,
+        "robots": course_robots() if trial is None else [],
+        "delay_s": services.get_video_delay(session, actor.id),
+    })
 
 
 @blueprint.post("/api/experiment/trials")
@@ -119,15 +149,17 @@ def finish(trial_id: int):  # type: ignore[no-untyped-def]
     trial = session.get(Trial, trial_id)
     if trial is None or trial.user_id != int(current_user.get_id()):
         raise ApiError(404, "unknown_trial", "There is no such trial of yours.", "trial_id")
-    link = robot_registry().get(trial.robot_name)
+    if trial.status == "assigned" and access_coordinator().controller_token(trial.robot_name, trial.user_id,
+                                                                            session) is None:
+        raise ApiError(403, "not_controller", f"Only the person driving {trial.robot_name} can record its run: take "
+                       "your turn in its console and drive the course yourself.")
     try:
-        run = course_run(link) if link is not None else None
+        run = _course_run_now(robot_registry().get(trial.robot_name))
     except RobotUnavailable as error:
         raise ApiError(503, "robot_offline", f"{error} Try again in a moment.") from None
-    if run is None or not run.is_course or run.last_attempt == 0 \
-            or run.last_finished_unix_s < trial.created_at.timestamp():
+    if run is None or not finished_in_trial(trial, run):
         raise ApiError(409, "run_not_finished", "The robot has not seen you finish the course since this trial "
-                       "began. Drive from A to B" + (" and back" if trial.course == "course-A" else "") + " first.")
+                       f"began. Drive from {course_route(trial)} first.")
     result = services.RunResult(run.last_total_time_s, run.last_errors)
     return jsonify({"trial": _trial_dict(_run(lambda s: services.finish_trial(s, _actor(), trial_id, result)))})
 

@@ -67,6 +67,12 @@ def current_trial(session, student: User) -> Trial | None:  # type: ignore[no-un
                           .order_by(Trial.id.desc()).limit(1))
 
 
+def last_completed_trial(session, student: User) -> Trial | None:  # type: ignore[no-untyped-def]
+    """The student's most recently recorded trial, if any."""
+    return session.scalar(select(Trial).where(Trial.user_id == student.id, Trial.status == "completed")
+                          .order_by(Trial.id.desc()).limit(1))
+
+
 def choose_condition(done: Iterable[tuple[str, float, bool]], courses: Sequence[str],
                      rng: random.Random) -> tuple[str, float, bool]:
     """A random condition among the ones this student has run least (balanced), on the courses available."""

@@ -31,7 +31,8 @@ class CourseRpcs:
             is_course=True, scene_name=self._world.scene.name, phase=state.phase, attempt=state.attempt,
             elapsed_s=state.elapsed_s, errors=state.errors, last_attempt=state.last_attempt,
             last_total_time_s=state.last_total_time_s, last_errors=state.last_errors,
-            last_finished_unix_s=state.last_finished_unix_s,
+            last_finished_unix_s=state.last_finished_unix_s, started_unix_s=state.started_unix_s,
+            last_started_unix_s=state.last_started_unix_s,
         )
 
     def StreamCourseEvents(self, request: robot_pb2.StreamCourseEventsRequest,

@@ -70,6 +70,8 @@ class CourseState:
     last_total_time_s: float = 0.0
     last_errors: int = 0
     last_finished_unix_s: float = 0.0
+    started_unix_s: float = 0.0  # wall clock when the present attempt started (0: none yet)
+    last_started_unix_s: float = 0.0
 
 
 def segment_distance_m(px: float, py: float, line: BorderLine) -> float:
@@ -96,9 +98,10 @@ class CourseMonitor:
     _phase: str = "at_start"
     _attempt: int = 0
     _started_sim_s: float = 0.0
+    _started_unix_s: float = 0.0
     _elapsed_s: float = 0.0
     _errors: int = 0
-    _last: tuple[int, float, int, float] = (0, 0.0, 0, 0.0)
+    _last: tuple[int, float, int, float, float] = (0, 0.0, 0, 0.0, 0.0)
     _events: deque[CourseEvent] = field(default_factory=lambda: deque(maxlen=MAX_EVENTS))
     _count: int = 0
     _changed: threading.Condition = field(default_factory=threading.Condition)
@@ -123,6 +126,7 @@ class CourseMonitor:
                     self._attempt += 1
                     self._errors = 0
                     self._started_sim_s = sim_time_s
+                    self._started_unix_s = time.time()
                 self._phase = "to_b"
                 self._emit("started", sim_time_s, f"Run {self._attempt} started: drive to B.")
             elif at_a and self._phase == "finished":
@@ -147,15 +151,15 @@ class CourseMonitor:
 
     def _finish(self, sim_time_s: float) -> None:
         self._phase = "finished"
-        self._last = (self._attempt, round(self._elapsed_s, 3), self._errors, time.time())
+        self._last = (self._attempt, round(self._elapsed_s, 3), self._errors, time.time(), self._started_unix_s)
         self._emit("finished", sim_time_s, f"Finished in {self._elapsed_s:.1f} s with {self._errors} error(s).")
 
     def state(self) -> CourseState:
         """The present state (any thread)."""
         with self._changed:
-            attempt, total, errors, finished = self._last
+            attempt, total, errors, finished, started = self._last
             return CourseState(self._phase, self._attempt, round(self._elapsed_s, 3), self._errors,
-                               attempt, total, errors, finished)
+                               attempt, total, errors, finished, self._started_unix_s, started)
 
     def events_after(self, index: int, timeout_s: float) -> list[CourseEvent]:
         """Events numbered above index, waiting up to timeout_s for one (any thread)."""

@@ -538,7 +538,7 @@ class GetCourseRunRequest(_message.Message):
     def __init__(self) -> None: ...
 
 class CourseRun(_message.Message):
-    __slots__ = ("is_course", "scene_name", "phase", "attempt", "elapsed_s", "errors", "last_attempt", "last_total_time_s", "last_errors", "last_finished_unix_s")
+    __slots__ = ("is_course", "scene_name", "phase", "attempt", "elapsed_s", "errors", "last_attempt", "last_total_time_s", "last_errors", "last_finished_unix_s", "started_unix_s", "last_started_unix_s")
     IS_COURSE_FIELD_NUMBER: _ClassVar[int]
     SCENE_NAME_FIELD_NUMBER: _ClassVar[int]
     PHASE_FIELD_NUMBER: _ClassVar[int]
@@ -549,6 +549,8 @@ class CourseRun(_message.Message):
     LAST_TOTAL_TIME_S_FIELD_NUMBER: _ClassVar[int]
     LAST_ERRORS_FIELD_NUMBER: _ClassVar[int]
     LAST_FINISHED_UNIX_S_FIELD_NUMBER: _ClassVar[int]
+    STARTED_UNIX_S_FIELD_NUMBER: _ClassVar[int]
+    LAST_STARTED_UNIX_S_FIELD_NUMBER: _ClassVar[int]
     is_course: bool
     scene_name: str
     phase: str
@@ -559,7 +561,9 @@ class CourseRun(_message.Message):
     last_total_time_s: float
     last_errors: int
     last_finished_unix_s: float
-    def __init__(self, is_course: _Optional[bool] = ..., scene_name: _Optional[str] = ..., phase: _Optional[str] = ..., attempt: _Optional[int] = ..., elapsed_s: _Optional[float] = ..., errors: _Optional[int] = ..., last_attempt: _Optional[int] = ..., last_total_time_s: _Optional[float] = ..., last_errors: _Optional[int] = ..., last_finished_unix_s: _Optional[float] = ...) -> None: ...
+    started_unix_s: float
+    last_started_unix_s: float
+    def __init__(self, is_course: _Optional[bool] = ..., scene_name: _Optional[str] = ..., phase: _Optional[str] = ..., attempt: _Optional[int] = ..., elapsed_s: _Optional[float] = ..., errors: _Optional[int] = ..., last_attempt: _Optional[int] = ..., last_total_time_s: _Optional[float] = ..., last_errors: _Optional[int] = ..., last_finished_unix_s: _Optional[float] = ..., started_unix_s: _Optional[float] = ..., last_started_unix_s: _Optional[float] = ...) -> None: ...
 
 class StreamCourseEventsRequest(_message.Message):
     __slots__ = ("after_index",)

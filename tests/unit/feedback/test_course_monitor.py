@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import pytest
 
 from skill_server.sim.course_monitor import BorderLine, CourseMonitor, CourseSpec, segment_distance_m, touches_line
@@ -25,15 +27,21 @@ def kinds(monitor: CourseMonitor) -> list[str]:
 def test_course_a_times_the_round_trip_from_leaving_a_to_coming_back() -> None:
     monitor = CourseMonitor(get_scene("course-A").course)
     drive(monitor, [(-2.5, 0.0), (-2.4, 0.0)], 0.0)  # still within A: nothing starts
-    assert kinds(monitor) == []
+    assert kinds(monitor) == [] and monitor.state().started_unix_s == 0.0
+    before = time.time()
     t = drive(monitor, [(-2.0, 0.0), (0.0, 0.0), (2.4, 0.0), (0.0, 0.0), (-2.45, 0.0)], 10.0, 2.0)
     assert kinds(monitor) == ["started", "reached_b", "reached_a", "finished"]
     state = monitor.state()
     assert state.phase == "finished" and state.last_attempt == 1
     assert state.last_total_time_s == pytest.approx(8.0) and state.last_errors == 0
+    # The wall clock at the start of each attempt tells a trial which runs began within it.
+    assert before <= state.last_started_unix_s == state.started_unix_s <= state.last_finished_unix_s
     # Leaving A again starts attempt 2.
+    time.sleep(0.01)
     drive(monitor, [(-2.5, 0.0), (-1.5, 0.0)], t)
-    assert monitor.state().attempt == 2 and monitor.state().phase == "to_b"
+    later = monitor.state()
+    assert later.attempt == 2 and later.phase == "to_b"
+    assert later.started_unix_s > later.last_started_unix_s == state.last_started_unix_s
 
 
 def test_course_b_is_one_way_and_a_line_contact_restarts_the_run_counting_an_error() -> None:

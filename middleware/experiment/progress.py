@@ -1,0 +1,90 @@
+"""A trial's run as it happens: whether the robot's finished run counts for the trial, and what to tell the student.
+
+Pure functions over the robot's course run (copied from GetCourseRun by the routes) and the trial; no Flask, no gRPC.
+The page polls these twice a second, so arrival at A and B and every line contact show while the student drives.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import UTC, datetime
+
+from middleware.models.experiment import Trial
+
+
+@dataclass(frozen=True)
+class CourseRunNow:
+    """The robot's course run as its course monitor reports it now."""
+
+    phase: str  # at_start | to_b | to_a | finished
+    attempt: int
+    elapsed_s: float  # since the attempt started, restarts after line contacts included
+    errors: int  # line contacts in this attempt
+    last_attempt: int  # the last finished attempt, 0 when none
+    last_total_time_s: float
+    last_errors: int
+    last_finished_unix_s: float
+    started_unix_s: float = 0.0  # when the present attempt started (0: none)
+    last_started_unix_s: float = 0.0  # when the last finished attempt started
+
+
+def _unix_s(moment: datetime) -> float:
+    """Seconds since the epoch; SQLite hands back naive datetimes, which are UTC here."""
+    return (moment.replace(tzinfo=UTC) if moment.tzinfo is None else moment).timestamp()
+
+
+# The skill server's clock stamps the attempts; it may be another machine's, a little off.
+CLOCK_SLACK_S = 1.0
+
+
+def finished_in_trial(trial: Trial, run: CourseRunNow) -> bool:
+    """Whether the robot finished a run that began after the trial did (that run is the trial's result).
+
+    A run that was under way when the trial began does not count, even if it ends later: its clock started
+    before the trial's condition (delay, feedback) applied.
+    """
+    return run.last_attempt > 0 and run.last_started_unix_s >= _unix_s(trial.created_at) - CLOCK_SLACK_S
+
+
+def course_route(trial: Trial) -> str:
+    """The drive the trial's course asks for: "A to B", and back on course A."""
+    return "A to B" + (" and back" if trial.course == "course-A" else "")
+
+
+def _attempt_under_way(run: CourseRunNow) -> bool:
+    return run.phase in ("to_b", "to_a") or (run.phase == "at_start" and run.attempt > 0
+                                              and run.last_attempt != run.attempt)
+
+
+def progress_message(trial: Trial, run: CourseRunNow) -> str:
+    """One sentence for the student: where the run is and what to do next."""
+    if finished_in_trial(trial, run):
+        return (f"Finished in {run.last_total_time_s:.1f} s with {run.last_errors} line "
+                f"contact{'' if run.last_errors == 1 else 's'}.")
+    if _attempt_under_way(run) and run.started_unix_s < _unix_s(trial.created_at) - CLOCK_SLACK_S:
+        return (f"This run began before your trial, so it will not count: finish it ({course_route(trial)}), return "
+                "to A (blue) and start again.")
+    if run.phase == "to_b":
+        contacts = f" {run.errors} line contact{'' if run.errors == 1 else 's'} so far." if run.errors else ""
+        return f"Run {run.attempt} under way: drive to B (orange).{contacts}"
+    if run.phase == "to_a":
+        return "Reached B: now drive back to A (blue)."
+    if run.phase == "at_start" and run.attempt > 0 and run.last_attempt != run.attempt:
+        return "The robot touched a white line and is back at A; the clock keeps running. Drive to B again."
+    if run.phase == "finished":
+        return "The robot is still where an earlier run ended: drive it back to A (blue) to begin."
+    return "The robot is at A (blue): drive off to start the clock."
+
+
+def progress_view(trial: Trial, run: CourseRunNow) -> dict[str, object]:
+    """The run for the page: phase, the time and line contacts that matter now, finished or not, the sentence."""
+    finished = finished_in_trial(trial, run)
+    return {
+        "online": True,
+        "phase": "finished" if finished else run.phase,
+        "attempt": run.last_attempt if finished else run.attempt,
+        "time_s": round(run.last_total_time_s if finished else run.elapsed_s, 1),
+        "errors": run.last_errors if finished else run.errors,
+        "finished": finished,
+        "message": progress_message(trial, run),
+    }
