@@ -60,6 +60,14 @@ def test_two_students_chat_and_one_books_a_slot(chromium, page, live_server: Liv
         other.goto(f"{live_server.url}/bookings?tz=Europe/Madrid")
         other.screenshot(path=str(ARTIFACTS_DIR / "bookings-phone.png"))
         assert other.locator("#time-zone").text_content() == "Europe/Madrid"
+        # The console's turn panel lists the robot's next bookings: the booker sees it as theirs.
+        for tab, whose in ((page, "yours"), (other, "booked")):
+            tab.goto(f"{live_server.url}/lab/lab-1")
+            listed = tab.locator('queue-panel [data-field="robot-bookings"] li').first
+            listed.wait_for(timeout=15000)
+            assert listed.text_content().endswith(whose), listed.text_content()
+        other.locator("queue-panel").scroll_into_view_if_needed()
+        other.screenshot(path=str(ARTIFACTS_DIR / "console-bookings-phone.png"))
     finally:
         other_context.close()
     assert not errors, errors

@@ -11,6 +11,8 @@ import { bindFeedback } from "./feedback-wiring.js";
 const FINAL_GOAL_STATES = new Set(["succeeded", "canceled", "aborted"]);
 const MAP_POLL_MS = 2000;
 const PING_EVERY_MS = 1000;
+const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
+const BOOKINGS_REFRESH_MS = 60 * 1000;
 
 function isStatusOrError(message) {
   return message?.type === "status" || message?.type === "error";
@@ -136,6 +138,10 @@ export class ConsoleWiring {
     panel.robotName = this.#robotName;
     this.#cameras.push(panel);
     bindFeedback(panel, (listener) => this.#onInfo(listener));
+    // The laser scan gives the feedback layer the depth of what the camera sees.
+    this.#listen(`${this.#robotPath}/telemetry`, descriptor.id, (message) => {
+      if (message.type === "telemetry") panel.telemetry = message;
+    });
     const camera = this.#channel(descriptor.channel ?? `${this.#robotPath}/camera`, { binary: true });
     camera.addEventListener("statechange", ({ detail }) => { panel.connected = detail.phase === "open"; });
     camera.addEventListener("message", ({ detail }) => {
@@ -253,6 +259,17 @@ export class ConsoleWiring {
       }
     });
     panel.addEventListener("queue-action", ({ detail }) => queue.sendJson({ type: detail.type }));
+    panel.robotName = this.#robotName;
+    const loadBookings = () => {
+      const from = new Date();
+      const to = new Date(from.getTime() + BOOKINGS_AHEAD_MS);
+      const query = `from=${encodeURIComponent(from.toISOString())}&to=${encodeURIComponent(to.toISOString())}`;
+      fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/bookings?${query}`)
+        .then((answer) => { panel.bookings = answer.bookings; })
+        .catch(() => { panel.bookings = null; }); // e.g. a practice robot, which takes no bookings
+    };
+    loadBookings();
+    setInterval(loadBookings, BOOKINGS_REFRESH_MS);
   }
 
   #responseTimes(descriptor, panel) {

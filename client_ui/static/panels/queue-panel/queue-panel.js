@@ -1,5 +1,7 @@
-// <queue-panel>: the user's seat in the robot's round-robin queue, as the queue socket reports it.
-// In: `seat` (a {"type": "queue", ...} message), `message` (status/error JSON).
+// <queue-panel>: the user's seat in the robot's round-robin queue, as the queue socket reports it, and the
+// robot's next bookings (a booked slot gives its holder control first).
+// In: `seat` (a {"type": "queue", ...} message), `message` (status/error JSON), `bookings` (the robot's
+// bookings from /api/robots/<name>/bookings, or null when they cannot be read), `robotName`.
 // Out: "queue-action" CustomEvent with detail {type: "pass" | "leave" | "join"}.
 // The server decides everything shown here; this panel only words it.
 
@@ -25,10 +27,34 @@ export function describeSeat(seat) {
   return `${who} You are number ${seat.position} in line.`;
 }
 
+const SLOT_FORMAT = new Intl.DateTimeFormat(undefined, { weekday: "short", day: "numeric", month: "short",
+  hour: "2-digit", minute: "2-digit" });
+const END_FORMAT = new Intl.DateTimeFormat(undefined, { hour: "2-digit", minute: "2-digit" });
+
+/** The bookings still to come or under way, soonest first, at most limit. */
+export function upcomingBookings(bookings, nowMs, limit = 3) {
+  return (Array.isArray(bookings) ? bookings : [])
+    .filter((b) => (b.status === "booked" || b.status === "checked_in") && Date.parse(b.ends_at) > nowMs)
+    .sort((a, b) => Date.parse(a.starts_at) - Date.parse(b.starts_at))
+    .slice(0, limit);
+}
+
+/** "Mon 24 Nov, 09:00–09:30 · yours" in the browser's time zone. */
+export function describeBooking(booking, nowMs) {
+  const starts = Date.parse(booking.starts_at);
+  const when = `${SLOT_FORMAT.format(starts)}–${END_FORMAT.format(Date.parse(booking.ends_at))}`;
+  const whose = booking.mine ? "yours" : booking.kind === "class" ? `class ${booking.course_code ?? ""}`.trim()
+    : booking.booked_by ? `booked by ${booking.booked_by}` : "booked";
+  return `${when} · ${whose}${starts <= nowMs ? " · now" : ""}`;
+}
+
 export class QueuePanel extends HTMLElement {
   #built = false;
   #fields = {};
   #buttons = {};
+  #bookingList;
+  #bookingSection;
+  #bookLink;
 
   connectedCallback() {
     this.#build();
@@ -57,8 +83,29 @@ export class QueuePanel extends HTMLElement {
         button("leave", "Leave the queue", "Stop waiting; you keep watching"),
         button("join", "Join the queue", "Take a place at the end of the line")),
       h("p", { class: "queue__message", "data-field": "queue-message", hidden: true }),
+      this.#bookingSection = h("section", { class: "queue__bookings", "aria-label": "Bookings of this robot",
+        hidden: true },
+      h("h3", { class: "queue__bookings-title", text: "Next bookings" }),
+      this.#bookingList = h("ul", { class: "queue__booking-list", "data-field": "robot-bookings" }),
+      this.#bookLink = h("a", { class: "queue__book-link", href: "/bookings", text: "Book a time" })),
     );
     this.seat = null;
+  }
+
+  set robotName(name) {
+    this.#build();
+    this.#bookLink.href = `/bookings?robot=${encodeURIComponent(String(name))}`;
+  }
+
+  /** The robot's bookings; null hides the list (they could not be read). */
+  set bookings(bookings) {
+    this.#build();
+    this.#bookingSection.hidden = bookings === null || bookings === undefined;
+    const now = Date.now();
+    const upcoming = upcomingBookings(bookings, now);
+    this.#bookingList.replaceChildren(...(upcoming.length
+      ? upcoming.map((b) => h("li", { class: b.mine ? "queue__booking--mine" : "", text: describeBooking(b, now) }))
+      : [h("li", { class: "muted", text: "None in the next two weeks: the queue decides." })]));
   }
 
   /** The seat message from the server. */
