@@ -8,12 +8,12 @@ import secrets
 import tempfile
 import threading
 import time
-from http.client import HTTPConnection
 from http.cookiejar import CookieJar
 from pathlib import Path
 from urllib.parse import urlencode
 from urllib.request import HTTPCookieProcessor, HTTPRedirectHandler, Request, build_opener
 
+import grpc
 import simple_websocket
 from flask import Flask
 from flask_sock import Sock
@@ -24,6 +24,7 @@ from middleware.config import parse_robots
 from middleware.db import session_factory, upgrade_to_head
 from middleware.lab_runner import SkillServerProcess, wait_until_serving
 from middleware.serve import make_threaded_server
+from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 
 PASSWORD = "benchmark-password"
 CSRF_FIELD = re.compile(r'name="csrf_token"[^>]*value="([^"]+)"')
@@ -49,13 +50,21 @@ class Served:
         self.server.server_close()
 
 
-def floor_app() -> Flask:
-    """The bare minimum the middleware is compared with: a route that does nothing, a WebSocket echo."""
+def floor_app(robot_address: str) -> Flask:
+    """The bare minimum the middleware is compared with: a route that does nothing, a route that makes one bare
+    gRPC unary call to the skill server (the least any HTTP -> gRPC path can cost), a WebSocket echo."""
     app = Flask("floor")
     sock = Sock(app)
+    channel = grpc.insecure_channel(robot_address)
+    stub = robot_pb2_grpc.RobotStub(channel)
 
     @app.get("/ping")
     def ping():  # type: ignore[no-untyped-def]
+        return "ok"
+
+    @app.post("/relay")
+    def relay():  # type: ignore[no-untyped-def]
+        stub.GetRobotInfo(robot_pb2.GetRobotInfoRequest(), timeout=5)
         return "ok"
 
     @sock.route("/echo")
@@ -65,6 +74,16 @@ def floor_app() -> Flask:
             ws.send(message)
 
     return app
+
+
+class WebSocketClient(simple_websocket.Client):
+    """simple_websocket's client, minus a loss: its handshake reads the server's answer and takes only the first
+    event, so frames that came in the same read (a refusal's error and close, or a channel's first message)
+    waited in wsproto for more data that never came, and the socket ended as a bare 1005 close."""
+
+    def _thread(self) -> None:
+        self.connected = self._handle_events()  # what came with the handshake's answer
+        super()._thread()
 
 
 class Browser:
@@ -106,7 +125,7 @@ class Browser:
     def websocket(self, path: str) -> simple_websocket.Client:
         """A WebSocket carrying the session cookie."""
         cookie = "; ".join(f"{c.name}={c.value}" for c in self.cookies)
-        return simple_websocket.Client.connect(self.base_url.replace("http", "ws", 1) + path,
+        return WebSocketClient.connect(self.base_url.replace("http", "ws", 1) + path,
                                                headers={"Cookie": cookie})
 
 
@@ -129,19 +148,21 @@ class LabUnderTest:
             session.commit()
         self.usernames = [f"bench{i}" for i in range(users)]
         self.middleware = Served(self.app)
-        self.floor = Served(floor_app())
+        self.floor = Served(floor_app(self.robot.address))
+        self.floor_client = build_opener()
 
     def browser(self, index: int = 0) -> Browser:
         """User number index, logged in."""
         return Browser(self.middleware.url, self.usernames[index])
 
-    def floor_get(self) -> float:
-        """One request to the floor route on a new connection, in seconds."""
+    def floor_request(self, path: str = "/ping", body: bytes | None = None) -> float:
+        """One request to a floor route, in seconds, on a new connection through the same client (urllib) as
+        the users' requests, so the client's own cost is in the floor too."""
+        request = Request(self.floor.url + path, data=body, method="GET" if body is None else "POST",
+                          headers={} if body is None else {"Content-Type": "application/json"})
         started = time.perf_counter()
-        connection = HTTPConnection("127.0.0.1", self.floor.port, timeout=10)
-        connection.request("GET", "/ping")
-        connection.getresponse().read()
-        connection.close()
+        with self.floor_client.open(request, timeout=10) as response:
+            response.read()
         return time.perf_counter() - started
 
     def stop(self) -> None:

@@ -8,6 +8,7 @@ import secrets
 import threading
 import uuid
 from collections.abc import Iterator
+from contextlib import contextmanager
 from http.cookiejar import CookieJar
 from pathlib import Path
 from urllib.parse import urlencode, urlsplit
@@ -117,6 +118,27 @@ class LiveServer:
         self._server.server_close()
 
 
+@contextmanager
+def served_lab(robots: str, tmp_path: Path) -> Iterator[LiveServer]:
+    """The app on a fresh SQLite database with student1 and tutor1, wired to robots ('name=host:port,...'), served."""
+    from middleware.access.coordinator import access_coordinator
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from middleware.robots.registry import robot_registry
+
+    application = make_test_app(f"sqlite:///{tmp_path / 'lab.sqlite3'}", robots, tmp_path)
+    with session_factory(application)() as session:
+        create_user(session, "tutor1", "tutor", STUDENT_PASSWORD)
+        session.commit()
+    server = LiveServer(application)
+    try:
+        yield server
+    finally:
+        server.stop()
+        access_coordinator(application).stop_ticker()
+        robot_registry(application).close()
+
+
 @pytest.fixture
 def live_server(app) -> Iterator[LiveServer]:  # type: ignore[no-untyped-def]
     """A running web server for the app."""
@@ -168,12 +190,12 @@ class LabClient:
 
     def websocket(self, path: str, origin: str | None = None):  # type: ignore[no-untyped-def]
         """A WebSocket to path carrying this client's session cookie."""
-        import simple_websocket
+        from benchmarks.lab_under_test import WebSocketClient
 
         headers = {"Cookie": self.cookie_header()}
         if origin is not None:
             headers["Origin"] = origin
-        return simple_websocket.Client.connect(self.base_url.replace("http", "ws", 1) + path, headers=headers)
+        return WebSocketClient.connect(self.base_url.replace("http", "ws", 1) + path, headers=headers)
 
 
 class _NoRedirect(HTTPRedirectHandler):

@@ -46,6 +46,10 @@ def console(robot_name: str):  # type: ignore[no-untyped-def]
     return render_template("console.html", robot_name=robot_name, robot_title=title)
 
 
+# Pages poll this; one gRPC call per second per robot answers them all, and "online" lags by at most that.
+ROBOT_INFO_MAX_AGE_S = 1.0
+
+
 @blueprint.get("/api/robots/<robot_name>")
 @login_required
 def robot_description(robot_name: str):  # type: ignore[no-untyped-def]
@@ -55,7 +59,7 @@ def robot_description(robot_name: str):  # type: ignore[no-untyped-def]
     if link is None:
         raise ApiError(404, "unknown_robot", f"There is no robot named {robot_name!r}.", "robot_name")
     try:
-        info: dict[str, object] | None = robot_info_dict(link.info(refresh=True))
+        info: dict[str, object] | None = robot_info_dict(link.info(max_age_s=ROBOT_INFO_MAX_AGE_S))
     except RobotUnavailable:
         info = None
     return jsonify({"name": robot_name, "title": registry.title(robot_name), "online": info is not None, "info": info})

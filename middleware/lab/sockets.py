@@ -10,6 +10,7 @@ from urllib.parse import urlsplit
 from flask import Flask, request
 from flask_login import current_user
 from flask_sock import Sock
+from simple_websocket import ConnectionClosed
 
 from middleware.access.coordinator import access_coordinator
 from middleware.auth.schemas import InvalidField
@@ -109,6 +110,8 @@ def relay_stream(ws, hub: FanoutHub, choose=None, delay: ViewerDelay | None = No
                 ws.send(due)
             while ws.receive(timeout=0) is not None:
                 pass  # nothing is expected from viewers; drop it so it cannot pile up
+    except (ConnectionClosed, OSError):
+        pass  # the viewer went (a closed tab mid-send): the end of this stream, not an error to log
     finally:
         subscription.close()
 

@@ -65,6 +65,8 @@ class RobotLink:
         self._channel = grpc.insecure_channel(address, options=CHANNEL_OPTIONS)
         self._stub = robot_pb2_grpc.RobotStub(self._channel)
         self._info: robot_pb2.RobotInfo | None = None
+        self._info_at = 0.0
+        self._closed = False
         self._sequence_lock = threading.Lock()
         self._highest_sequence = 0
         self.camera = FanoutHub(f"{name}-camera", self._open_camera, pack_camera_frame, _cancel_call)
@@ -73,10 +75,12 @@ class RobotLink:
                                       _cancel_call)
         self._skills: list[robot_pb2.SkillDescription] | None = None
 
-    def info(self, refresh: bool = False) -> robot_pb2.RobotInfo:
-        """The robot's description (cached once fetched)."""
-        if self._info is None or refresh:
+    def info(self, refresh: bool = False, max_age_s: float | None = None) -> robot_pb2.RobotInfo:
+        """The robot's description (cached once fetched; asked again when refresh, or older than max_age_s)."""
+        stale = max_age_s is not None and time.monotonic() - self._info_at > max_age_s
+        if self._info is None or refresh or stale:
             self._info = self._call(self._stub.GetRobotInfo, robot_pb2.GetRobotInfoRequest())
+            self._info_at = time.monotonic()
         return self._info
 
     def skills(self, refresh: bool = False) -> list[robot_pb2.SkillDescription]:
@@ -120,6 +124,10 @@ class RobotLink:
         """The occupancy grid built so far."""
         return self._call(self._stub.GetMap, robot_pb2.GetMapRequest())
 
+    def course_run(self) -> robot_pb2.CourseRun:
+        """The course run now (phase, time, line contacts, last finished attempt); is_course false off a course."""
+        return self._call(self._stub.GetCourseRun, robot_pb2.GetCourseRunRequest())
+
     def is_online(self) -> bool:
         """Whether the skill server answers now."""
         try:
@@ -153,6 +161,7 @@ class RobotLink:
         """Stops the streams and closes the channel."""
         self.camera.close()
         self.telemetry.close()
+        self._closed = True
         self._channel.close()
 
     def _open_camera(self) -> Iterator[object]:
@@ -169,6 +178,11 @@ class RobotLink:
             return method(request, timeout=self.rpc_timeout_s)
         except grpc.RpcError as error:
             raise _translate(error) from None
+        except ValueError:
+            if not self._closed:
+                raise
+            # A handler still running while the app shuts down, such as a driver's parting stop.
+            raise RobotUnavailable(f"The link to {self.name} is closed.") from None
 
 
 _REFUSAL_CODES = {

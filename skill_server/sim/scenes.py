@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -244,7 +245,9 @@ def build_scene(client: Any, spec: SceneSpec, obstacle_collision_group: int) -> 
     """Creates the scene's bodies in a pybullet client (only from the world's thread); returns their ids."""
     bodies: list[int] = []
     floor_half = [spec.floor_half_x_m + 0.5, spec.floor_half_y_m + 0.5, FLOOR_THICKNESS_M / 2.0]
-    bodies.append(_static_box(client, floor_half, (0.0, 0.0, -FLOOR_THICKNESS_M / 2.0), 0.0, spec.floor_rgba))
+    floor_collision = client.createCollisionShape(client.GEOM_BOX, halfExtents=floor_half)
+    floor_visual = _flat_visual(client, floor_half[0], floor_half[1], spec.floor_rgba, FLOOR_THICKNESS_M / 2.0)
+    bodies.append(client.createMultiBody(0, floor_collision, floor_visual, [0.0, 0.0, -FLOOR_THICKNESS_M / 2.0]))
     for box in spec.boxes:
         half = [box.half_x_m, box.half_y_m, box.height_m / 2.0]
         bodies.append(
@@ -266,14 +269,34 @@ def build_scene(client: Any, spec: SceneSpec, obstacle_collision_group: int) -> 
         client.setCollisionFilterGroupMask(body, -1, obstacle_collision_group, -1)
     for index, mark in enumerate(spec.marks):
         # Each painted layer sits a hair above the previous one so overlapping marks do not z-fight.
-        z_m = MARK_THICKNESS_M / 2.0 + index * 1e-5
-        visual = client.createVisualShape(
-            client.GEOM_BOX,
-            halfExtents=[mark.half_x_m, mark.half_y_m, MARK_THICKNESS_M / 2.0],
-            rgbaColor=mark.rgba,
-        )
+        z_m = MARK_THICKNESS_M + index * 1e-5
+        visual = _flat_visual(client, mark.half_x_m, mark.half_y_m, mark.rgba)
         bodies.append(client.createMultiBody(0, -1, visual, [mark.center_x_m, mark.center_y_m, z_m]))
     return bodies
+
+
+# The camera's renderer (pybullet's TinyRenderer, on the CPU) scans every triangle's screen bounding box: a box's
+# hidden bottom and edge faces under the floor and the paint cost as much as the visible top. A flat patch
+# is its top face alone, cut into tiles no longer than this so a long line seen in perspective has small boxes.
+FLAT_TILE_M = 1.0
+
+
+def _flat_visual(client: Any, half_x_m: float, half_y_m: float, rgba: Rgba, z_m: float = 0.0) -> int:
+    """A visual shape of an upward-facing rectangle z_m above its body's origin (floors and paint), in tiles."""
+    nx = max(1, math.ceil(2 * half_x_m / FLAT_TILE_M))
+    ny = max(1, math.ceil(2 * half_y_m / FLAT_TILE_M))
+    xs = [-half_x_m + 2 * half_x_m * i / nx for i in range(nx + 1)]
+    ys = [-half_y_m + 2 * half_y_m * j / ny for j in range(ny + 1)]
+    vertices = [[x, y, 0.0] for y in ys for x in xs]
+    indices = []
+    for j in range(ny):
+        for i in range(nx):
+            a = j * (nx + 1) + i
+            b, c, d = a + 1, a + nx + 1, a + nx + 2
+            indices += [a, b, d, a, d, c]
+    return client.createVisualShape(client.GEOM_MESH, vertices=vertices, indices=indices,
+                                    normals=[[0.0, 0.0, 1.0]] * len(vertices), rgbaColor=rgba,
+                                    visualFramePosition=[0.0, 0.0, z_m])
 
 
 def _static_box(

@@ -51,6 +51,43 @@ def pose(telemetry: dict) -> tuple[float, float, float]:
     return p["x_m"], p["y_m"], p["theta_rad"]
 
 
+class _SlowReader:
+    """A socket whose first read waits, so the server's answer and the frames after it arrive as one read."""
+
+    def __init__(self, sock) -> None:  # type: ignore[no-untyped-def]
+        self._sock, self._waited = sock, False
+
+    def recv(self, size: int) -> bytes:
+        if not self._waited:
+            self._waited = True
+            time.sleep(0.3)
+        return self._sock.recv(size)
+
+    def __getattr__(self, name: str):  # type: ignore[no-untyped-def]
+        return getattr(self._sock, name)
+
+
+@pytest.mark.parametrize("client_class", ["plain", "ours"])
+def test_frames_in_the_same_read_as_the_handshake_reach_the_test_client(lab_client: LabClient,  # type: ignore[no-untyped-def]
+                                                                        client_class: str) -> None:
+    from benchmarks.lab_under_test import WebSocketClient
+
+    base = simple_websocket.Client if client_class == "plain" else WebSocketClient
+
+    class Slow(base):  # type: ignore[misc, valid-type]
+        def handshake(self) -> None:
+            self.sock = _SlowReader(self.sock)
+            super().handshake()
+
+    ws = Slow.connect(lab_client.base_url.replace("http", "ws", 1) + "/ws/robots/lab-1/drive")
+    if client_class == "plain":  # simple_websocket's own client loses them: the reason for WebSocketClient
+        with pytest.raises(simple_websocket.ConnectionClosed) as lost:
+            ws.receive(timeout=5)
+        assert lost.value.reason == 1005
+    else:
+        assert json.loads(ws.receive(timeout=5))["code"] == "not_logged_in" and closed_with(ws) == 4401
+
+
 def test_a_websocket_without_a_session_is_refused(lab_client: LabClient) -> None:
     for channel in ("drive", "camera", "telemetry"):
         ws = lab_client.websocket(f"/ws/robots/lab-1/{channel}")

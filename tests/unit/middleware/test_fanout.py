@@ -85,3 +85,29 @@ def test_a_failing_upstream_reports_offline_and_reconnects() -> None:
     assert statuses is not None and statuses.online
     viewer.close()
     hub.close()
+
+
+class GoneViewer:
+    """A viewer socket whose peer has vanished: writing to it fails as a closed tab's does."""
+
+    connected = True
+    sends = 0
+
+    def send(self, _message: object) -> None:
+        self.sends += 1
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def receive(self, timeout: float = 0) -> None:
+        return None
+
+
+def test_a_viewer_gone_mid_send_ends_its_stream_quietly_and_releases_the_upstream() -> None:
+    from middleware.lab.sockets import relay_stream
+
+    upstream = Upstream()
+    hub = FanoutHub("t", upstream.open, upstream.pack, upstream.cancel)
+    viewer = GoneViewer()
+    relay_stream(viewer, hub)  # returns instead of raising (Flask would log it as a server error)
+    assert viewer.sends == 1
+    assert upstream.cancelled.wait(2.0), "its subscription was closed"
+    hub.close()
