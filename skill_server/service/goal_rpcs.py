@@ -19,7 +19,7 @@ from skill_server.errors import (
     UnknownSkill,
     WorldStopped,
 )
-from skill_server.goals import Goal
+from skill_server.goals import Goal, GoalStatus
 from skill_server.service import goal_convert
 from skill_server.service.common import SimTimePacer, abort, stream_rate
 
@@ -85,7 +85,8 @@ class GoalRpcs:
     def WatchGoal(
         self, request: robot_pb2.WatchGoalRequest, context: grpc.ServicerContext
     ) -> Iterator[robot_pb2.GoalUpdate]:
-        """State, then events as they happen and feedback at the asked rate, then the final state."""
+        """State, then events as they happen, every later state (executing, canceling, the final one) and
+        feedback at the asked rate."""
         rate_hz = stream_rate(context, "feedback_rate_hz", request.feedback_rate_hz, DEFAULT_FEEDBACK_HZ,
                               MAX_FEEDBACK_HZ, "Hz")
         goal = self._goal(request.goal_id, context)
@@ -100,7 +101,7 @@ class GoalRpcs:
         pacer = SimTimePacer(1.0 / rate_hz)
         first = goal.snapshot()
         yield robot_pb2.GoalUpdate(state=goal_convert.goal_to_proto(first))
-        events_sent, feedback_seen = 0, first.feedback_version
+        events_sent, feedback_seen, status_sent = 0, first.feedback_version, first.status
         while context.is_active() and not cancelled.is_set() and not book.closed:
             for event in goal.events_since(events_sent):
                 yield robot_pb2.GoalUpdate(event=goal_convert.event_to_proto(events_sent, event))
@@ -108,8 +109,11 @@ class GoalRpcs:
             snapshot = goal.snapshot()
             if snapshot.event_count > events_sent:
                 continue
-            if snapshot.status.is_terminal:
+            if snapshot.status != status_sent:
+                # A watcher that began while the goal was only accepted must still see it start executing.
+                status_sent = snapshot.status
                 yield robot_pb2.GoalUpdate(state=goal_convert.goal_to_proto(snapshot))
+            if snapshot.status.is_terminal:
                 return
             if snapshot.feedback_version != feedback_seen:
                 feedback_seen = snapshot.feedback_version
@@ -117,9 +121,10 @@ class GoalRpcs:
                     yield robot_pb2.GoalUpdate(feedback=goal_convert.feedback_to_proto(snapshot.feedback))
             seen = feedback_seen
 
-            def changed(goal: Goal = goal, seen: int = seen, sent: int = events_sent) -> bool:
+            def changed(goal: Goal = goal, seen: int = seen, sent: int = events_sent,
+                        status: GoalStatus = status_sent) -> bool:
                 return cancelled.is_set() or goal.feedback_version != seen or len(goal.events) > sent or (
-                    goal.status.is_terminal)
+                    goal.status != status)
 
             book.wait(WATCH_POLL_S, changed)
 

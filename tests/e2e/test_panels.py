@@ -9,6 +9,7 @@ import re
 import time
 
 import pytest
+from playwright.sync_api import TimeoutError as PlaywrightTimeoutError
 
 from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer
 
@@ -49,6 +50,16 @@ def descriptors(page) -> list[dict]:  # type: ignore[no-untyped-def]
 
 def odometry(page, field: str) -> float:  # type: ignore[no-untyped-def]
     return number(page, f'odometry-panel [data-field="{field}"]')
+
+
+def wait_for_status(page, skill: str, status: str, timeout_ms: float = 30_000) -> None:  # type: ignore[no-untyped-def]
+    """Waits for a skill panel to show status; on a timeout says what it shows instead."""
+    panel = page.locator(f'skill-panel[data-skill="{skill}"]')
+    try:
+        page.locator(f'skill-panel[data-skill="{skill}"][data-status="{status}"]').wait_for(timeout=timeout_ms)
+    except PlaywrightTimeoutError:
+        raise AssertionError(f"{skill} never showed {status!r}: it shows {panel.get_attribute('data-status')!r}, "
+                             f"reading {' '.join(panel.inner_text().split())!r}") from None
 
 
 def wait_for_control(page) -> None:  # type: ignore[no-untyped-def]
@@ -180,7 +191,7 @@ def test_a_busy_robot_offers_to_preempt_and_deactivating_reports_the_error_left(
     go.locator('input[name="goal_y_m"]').fill("0")
     go.locator('input[name="speed_mps"]').fill("0.1")
     go.locator('button[data-action="activate"]').click()
-    page.locator('skill-panel[data-skill="go_to_goal"][data-status="executing"]').wait_for()
+    wait_for_status(page, "go_to_goal", "executing")
 
     turn = page.locator('skill-panel[data-skill="orientation_control"]')
     turn.locator('button[data-action="activate"]').click()
@@ -200,7 +211,7 @@ def test_a_busy_robot_offers_to_preempt_and_deactivating_reports_the_error_left(
         'skill-panel[data-skill="go_to_goal"][data-status="executing"]')).first.wait_for()
     if go.locator('button[data-action="preempt"]').is_visible():
         go.locator('button[data-action="preempt"]').click()
-    page.locator('skill-panel[data-skill="go_to_goal"][data-status="executing"]').wait_for()
+    wait_for_status(page, "go_to_goal", "executing")
     go.get_by_role("button", name="Deactivate").click()
     page.locator('skill-panel[data-skill="go_to_goal"][data-status="canceled"]').wait_for()
     result = go.locator('[data-field="skill-result"]').text_content()
@@ -213,7 +224,7 @@ def test_environment_modelling_and_localization_show_on_the_map(page, live_serve
     wait_for_control(page)
     modelling = page.locator('skill-panel[data-skill="environment_modelling"]')
     modelling.locator('button[data-action="activate"]').click()
-    page.locator('skill-panel[data-skill="environment_modelling"][data-status="executing"]').wait_for()
+    wait_for_status(page, "environment_modelling", "executing")
     page.locator('section[data-panel-id="map"]').scroll_into_view_if_needed()  # the map is fetched while seen
     summary = page.locator('map-panel [data-field="map-summary"]')
     summary.filter(has_text=re.compile(r"map of [1-9]\d* scans")).wait_for(timeout=20_000)
@@ -224,7 +235,7 @@ def test_environment_modelling_and_localization_show_on_the_map(page, live_serve
     localization.locator('input[name="initial_y_m"]').fill(f"{y:.2f}")
     localization.locator('input[name="initial_theta_rad"]').fill(f"{heading:.2f}")
     localization.locator('button[data-action="activate"]').click()
-    page.locator('skill-panel[data-skill="localization"][data-status="executing"]').wait_for()
+    wait_for_status(page, "localization", "executing")
     summary.filter(has_text="localized at").wait_for(timeout=15_000)
     page.locator('section[data-panel-id="map"]').scroll_into_view_if_needed()
     page.locator('section[data-panel-id="map"]').screenshot(path=str(ARTIFACTS_DIR / "map-panel-localization.png"))

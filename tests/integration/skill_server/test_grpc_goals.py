@@ -72,6 +72,37 @@ def test_two_watchers_see_the_same_events_and_the_final_state(controlled: robot_
     assert kept.status == robot_pb2.GOAL_STATUS_SUCCEEDED
 
 
+def test_a_watcher_that_begins_while_the_goal_is_accepted_sees_it_execute_then_cancel(  # type: ignore[no-untyped-def]
+    fresh_server: SkillServer, controlled: robot_pb2_grpc.RobotStub
+) -> None:
+    """A perceptive goal changes status only on its first tick and when canceled: both must reach the watcher."""
+    world, sequencer = fresh_server.world, fresh_server.sequencer
+    assert sequencer is not None
+    loop_held, release = threading.Event(), threading.Event()
+    activated: list[str] = []
+
+    def activate_then_hold_the_loop() -> None:
+        activation = sequencer.activate(TOKEN, "detect_obstacle", {}, False)
+        activated.append(activation.goal.goal_id)
+        loop_held.set()
+        release.wait(DEADLINE_S)  # no tick, so the goal stays accepted while the watch begins
+
+    holder = threading.Thread(target=world.run_in_loop, args=(activate_then_hold_the_loop,))
+    holder.start()
+    try:
+        assert loop_held.wait(DEADLINE_S)
+        stream = controlled.WatchGoal(robot_pb2.WatchGoalRequest(goal_id=activated[0]), timeout=DEADLINE_S)
+        first = next(stream)
+        assert first.state.status == robot_pb2.GOAL_STATUS_ACCEPTED
+    finally:
+        release.set()
+        holder.join()
+    states = (update.state.status for update in stream if update.WhichOneof("update") == "state")
+    assert next(states) == robot_pb2.GOAL_STATUS_EXECUTING
+    controlled.CancelGoal(robot_pb2.CancelGoalRequest(token=TOKEN, goal_id=activated[0]), timeout=DEADLINE_S)
+    assert list(states)[-1] == robot_pb2.GOAL_STATUS_CANCELED
+
+
 def test_cancel_reports_the_error_left_and_preemption_is_per_request(controlled: robot_pb2_grpc.RobotStub) -> None:
     first = activate(controlled, "go_to_goal", goal_x_m=-3.0, goal_y_m=0.0).goal
     with pytest.raises(grpc.RpcError) as busy:
