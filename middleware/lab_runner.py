@@ -27,6 +27,22 @@ class LabStartError(RuntimeError):
     """A part of the lab did not start; the message says which and why."""
 
 
+class LabStopRequested(Exception):
+    """SIGTERM (a service manager, `kill`) or SIGHUP (the terminal closed): stop as Ctrl-C does."""
+
+
+def _request_stop(signum: int, _frame: object) -> None:
+    signal.signal(signum, signal.SIG_IGN)  # a second signal must not cut the children's shutdown short
+    raise LabStopRequested(signal.Signals(signum).name)
+
+
+def stop_on_termination_signals() -> None:
+    """Turns SIGTERM and SIGHUP into LabStopRequested in the main thread, so the skill servers are stopped
+    instead of left running without their parent."""
+    signal.signal(signal.SIGTERM, _request_stop)
+    signal.signal(signal.SIGHUP, _request_stop)
+
+
 @dataclass
 class SkillServerProcess:
     """One robot's skill server, run as a child process and restarted if it dies."""
@@ -140,12 +156,13 @@ def lab_robots(robot_count: int, scene: str, course_robots: bool = True) -> list
 
 
 def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: bool = True) -> int:
-    """Starts skill servers, migrates the database, creates demo accounts, and serves until Ctrl-C."""
+    """Starts skill servers, migrates the database, creates demo accounts, and serves until Ctrl-C or SIGTERM."""
     from middleware import create_app
     from middleware.db import upgrade_to_head
     from middleware.serve import serve_forever
 
     robots = lab_robots(robot_count, scene, course_robots)
+    stop_on_termination_signals()
     try:
         for robot in robots:
             robot.start()
@@ -161,7 +178,7 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
     except LabStartError as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, LabStopRequested):
         print("\nstopping the lab", flush=True)
     finally:
         for robot in robots:

@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
-from middleware.lab_runner import lab_robots
+import os
+import signal
+
+import pytest
+
+from middleware.lab_runner import LabStopRequested, lab_robots, stop_on_termination_signals
 
 
 def test_the_lab_starts_its_robots_and_one_robot_per_course() -> None:
@@ -15,3 +20,19 @@ def test_the_lab_starts_its_robots_and_one_robot_per_course() -> None:
 
 def test_the_course_robots_can_be_left_out() -> None:
     assert [r.name for r in lab_robots(1, "lab", course_robots=False)] == ["lab-1"]
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP])
+def test_a_termination_signal_stops_the_lab_like_ctrl_c_and_a_second_one_cannot_cut_the_stop_short(
+    signum: signal.Signals,
+) -> None:
+    saved = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGHUP)}
+    try:
+        stop_on_termination_signals()
+        with pytest.raises(LabStopRequested, match=signum.name):
+            os.kill(os.getpid(), signum)
+        assert signal.getsignal(signum) is signal.SIG_IGN
+        os.kill(os.getpid(), signum)  # ignored while the robots are being stopped
+    finally:
+        for number, handler in saved.items():
+            signal.signal(number, handler)
