@@ -26,11 +26,14 @@ from middleware.lessons.commands import RobotCommand
 from middleware.lessons.cues import parse_cue_track
 from middleware.lessons.services import (
     LessonInvalid,
+    VideoNotDeletable,
     available_videos,
     check_lesson,
+    delete_unused_video,
     lesson_dict,
     save_lesson,
     stored_cues,
+    unused_videos,
     video_dir,
 )
 from middleware.lessons.uploads import (
@@ -98,6 +101,7 @@ def edit(lesson_id: int | None = None):  # type: ignore[no-untyped-def]
     lesson = _lesson(lesson_id) if lesson_id is not None else None
     return render_template("teaching/lesson_edit.html", lesson=lesson,
                            videos=available_videos(current_app.instance_path),
+                           unused_videos=unused_videos(get_session(), current_app.instance_path),
                            uploaded_video=request.args.get("video"),
                            max_video_mb=_max_video_bytes() // (1024 * 1024))
 
@@ -152,6 +156,27 @@ def upload_video():  # type: ignore[no-untyped-def]
         return jsonify({"video_name": name, "videos": available_videos(current_app.instance_path)}), 201
     flash(f"Uploaded as {name}; it is chosen below as the lesson's video.", "success")
     return redirect(f"{back}?video={name}", 303)
+
+
+@blueprint.post("/lessons/videos/<name>/delete")
+@blueprint.delete("/api/lessons/videos/<name>", endpoint="delete_video_api")
+@login_required
+def delete_video(name: str):  # type: ignore[no-untyped-def]
+    """Deletes an uploaded video no lesson plays (tutors). The editor's button comes back to the editor."""
+    api = request.path.startswith("/api/")
+    _require_tutor()
+    try:
+        delete_unused_video(get_session(), current_app.instance_path, name)
+    except VideoNotDeletable as refused:
+        if api:
+            raise ApiError(refused.status, refused.code, refused.message, refused.field) from None
+        flash(refused.message, "error")
+    else:
+        if api:
+            return jsonify({"deleted": name, "videos": available_videos(current_app.instance_path)})
+        flash(f"Deleted {name}.", "success")
+    lesson_id = request.args.get("lesson", type=int)
+    return redirect(url_for("lessons.edit", lesson_id=lesson_id) if lesson_id else url_for("lessons.edit"), 303)
 
 
 @blueprint.get("/lessons/<int:lesson_id>/cues.vtt")

@@ -74,6 +74,31 @@ def available_videos(instance_path: str) -> list[str]:
     return sorted(p.name for p in folder.iterdir() if p.is_file() and VIDEO_NAME.fullmatch(p.name))
 
 
+class VideoNotDeletable(Exception):
+    """A video that cannot be deleted: the status, a stable code and a sentence naming the video."""
+
+    def __init__(self, status: int, code: str, message: str) -> None:
+        super().__init__(message)
+        self.status, self.code, self.message, self.field = status, code, message, "video_name"
+
+
+def unused_videos(session: Session, instance_path: str) -> list[str]:
+    """The lesson videos no lesson plays (an upload never chosen, or one a lesson stopped using)."""
+    used = set(session.scalars(select(Lesson.video_name)))
+    return [name for name in available_videos(instance_path) if name not in used]
+
+
+def delete_unused_video(session: Session, instance_path: str, name: str) -> None:
+    """Deletes a lesson video that no lesson plays; VideoNotDeletable otherwise, and nothing changes."""
+    if not VIDEO_NAME.fullmatch(name) or not (video_dir(instance_path) / name).is_file():
+        raise VideoNotDeletable(404, "unknown_video", "There is no lesson video by that name.")
+    users = session.scalars(select(Lesson.title).where(Lesson.video_name == name).order_by(Lesson.title)).all()
+    if users:
+        raise VideoNotDeletable(409, "video_in_use", f"{name} is the video of {', '.join(users)}: "
+                                "give that lesson another video first.")
+    (video_dir(instance_path) / name).unlink(missing_ok=True)
+
+
 def _text(data: dict[str, object], name: str, limit: int, required: bool = True) -> str:
     value = data.get(name, "")
     if not isinstance(value, str):

@@ -238,3 +238,48 @@ def test_students_and_forged_forms_cannot_upload(live_server, student_client) ->
     status, _, body = _upload(tutor, "clip.webm", WEBM_HEAD + b"rest", csrf=False)
     assert status == 400 and json.loads(body)["error"]["code"] == "csrf_failed"
     assert _videos(live_server) == []
+
+
+def _lesson_with_video(app, video_name: str) -> None:  # type: ignore[no-untyped-def]
+    from middleware.db import session_factory
+    from middleware.models.teaching import Lesson
+
+    with session_factory(app)() as session:
+        session.add(Lesson(slug="plays-it", title="Plays it", summary="", video_name=video_name, cues_vtt="WEBVTT\n"))
+        session.commit()
+
+
+def test_a_tutor_deletes_a_video_no_lesson_plays_but_never_one_a_lesson_plays(  # type: ignore[no-untyped-def]
+    live_server, student_client
+) -> None:
+    tutor = _client(live_server, "tutor6", "tutor")
+    kept = json.loads(_upload(tutor, "kept.webm", WEBM_HEAD + b"kept")[2])["video_name"]
+    spare = json.loads(_upload(tutor, "spare.webm", WEBM_HEAD + b"spare")[2])["video_name"]
+    other = json.loads(_upload(tutor, "other.mp4", MP4_HEAD + b"other")[2])["video_name"]
+    _lesson_with_video(live_server.app, kept)
+    _, _, page = tutor.request("GET", "/lessons/new")
+    assert f"/lessons/videos/{spare}/delete" in page and f"/lessons/videos/{kept}/delete" not in page
+
+    # Refusals change nothing and name the field.
+    assert _api(student_client, "DELETE", f"/api/lessons/videos/{spare}")[0] == 403
+    status, body = _api(tutor, "DELETE", f"/api/lessons/videos/{kept}")
+    assert (status, body["error"]["code"], body["error"]["field"]) == (409, "video_in_use", "video_name")
+    assert "Plays it" in body["error"]["message"]
+    assert _api(tutor, "DELETE", "/api/lessons/videos/..%2Fapp.sqlite3")[0] == 404  # no route takes a slash
+    for name in ("..", "app.sqlite3", "missing.webm", "UPPER.webm", ".hidden.webm.part"):
+        status, body = _api(tutor, "DELETE", f"/api/lessons/videos/{name}")
+        assert (status, body["error"]["code"]) == (404, "unknown_video"), name
+    assert _videos(live_server) == sorted([kept, spare, other])
+
+    status, body = _api(tutor, "DELETE", f"/api/lessons/videos/{spare}")
+    assert status == 200 and body["deleted"] == spare and spare not in body["videos"]
+    # The editor's button: back to the editor with a message; a refusal is a message too.
+    token = tutor.csrf_token("/lessons/new")
+    status, headers, _ = tutor.request("POST", f"/lessons/videos/{other}/delete", {"csrf_token": token})
+    assert status == 303 and headers["Location"].endswith("/lessons/new")
+    status, headers, _ = tutor.request("POST", f"/lessons/videos/{kept}/delete", {"csrf_token": token})
+    assert status == 303
+    _, _, page = tutor.request("GET", "/lessons/new")
+    assert "give that lesson another video first" in page and "unused-videos" not in page
+    assert tutor.request("POST", f"/lessons/videos/{kept}/delete", {})[0] == 400  # no CSRF token
+    assert _videos(live_server) == [kept]
