@@ -15,6 +15,7 @@ from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.experiment import services
 from middleware.experiment.progress import CourseRunNow, course_route, finished_in_trial, progress_view
+from middleware.lab.delay import delay_book
 from middleware.models import User, UserPreference
 from middleware.models.accounts import utc_now
 from middleware.models.experiment import Trial
@@ -35,6 +36,7 @@ def _run(action):  # type: ignore[no-untyped-def]
     try:
         result = action(session)
         session.commit()
+        delay_book().forget()  # trials and tutors change delays: this process's viewers see it at once
         return result
     except Refused as refused:
         session.rollback()

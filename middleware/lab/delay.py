@@ -1,8 +1,9 @@
 """Injected video delay: one viewer's camera and telemetry held until capture time + delay (commands are not).
 
 The thesis added delay with a distant proxy; here the relay does it per viewer. `DelayQueue` is the pure
-part (ordering, bounds); `parse_delay_s` validates a requested delay; `ViewerDelay` reads the user's
-delay from the database (so every worker process applies it) at most every REFRESH_S.
+part (ordering, bounds); `parse_delay_s` validates a requested delay; `ViewerDelay` follows one viewer's
+delay through the process's `DelayBook`, which reads every user's delay from the database (so every worker
+process applies it) in one query at most every REFRESH_S.
 """
 
 from __future__ import annotations
@@ -10,9 +11,12 @@ from __future__ import annotations
 import json
 import math
 import struct
+import threading
 import time
 from collections import deque
 from collections.abc import Callable
+
+from sqlalchemy import select
 
 from middleware.auth.schemas import InvalidField
 from middleware.models.experiment import MAX_INJECTED_DELAY_S, VideoDelay
@@ -20,6 +24,7 @@ from middleware.models.experiment import MAX_INJECTED_DELAY_S, VideoDelay
 DEFAULT_MAX_MESSAGES = 600  # 7 s of 20 Hz telemetry or 30 fps video, with room to spare
 DEFAULT_MAX_BYTES = 32 * 1024 * 1024
 REFRESH_S = 1.0
+_BOOK_KEY = "telelab.delay_book"
 
 
 def parse_delay_s(value: object, field: str = "delay_s") -> float:
@@ -120,27 +125,69 @@ class ViewerDelay:
         return value, changed
 
 
-def read_user_delay_s(session, user_id: int) -> float:  # type: ignore[no-untyped-def]
-    """The delay stored for user_id, 0 when none."""
-    row = session.get(VideoDelay, user_id)
-    return float(row.delay_s) if row is not None else 0.0
+class DelayBook:
+    """Every user's injected delay in this process, read in one query at most every refresh_s.
+
+    Each viewer asked the database for its own delay every second: with 100 viewers that was 100 queries a
+    second and a fifth of the middleware's time under the capacity load. One shared read costs one query.
+    A failed read keeps the last known delays until the next period.
+    """
+
+    def __init__(self, load: Callable[[], dict[int, float]], refresh_s: float = REFRESH_S,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self._load, self._refresh_s, self._clock = load, refresh_s, clock
+        self._delays: dict[int, float] = {}
+        self._loaded_at = float("-inf")
+        self._lock = threading.Lock()
+
+    def delay_of(self, user_id: int) -> float:
+        """user_id's delay as read at most refresh_s ago (0 when none is set)."""
+        if self._clock() - self._loaded_at >= self._refresh_s:
+            with self._lock:
+                if self._clock() - self._loaded_at >= self._refresh_s:
+                    try:
+                        self._delays = self._load()
+                    finally:
+                        self._loaded_at = self._clock()  # after a failure too: not one retry per viewer
+        return self._delays.get(user_id, 0.0)
+
+    def forget(self) -> None:
+        """The next read goes to the database (a delay was just changed in this process)."""
+        self._loaded_at = float("-inf")
 
 
-def viewer_delay() -> ViewerDelay:
-    """The delay reader of the logged-in viewer of a socket; each read uses (and returns) its own connection."""
+def read_all_delays_s(session) -> dict[int, float]:  # type: ignore[no-untyped-def]
+    """Every stored delay, by user id."""
+    return {user_id: float(delay_s) for user_id, delay_s in session.execute(
+        select(VideoDelay.user_id, VideoDelay.delay_s))}
+
+
+def delay_book(app=None) -> DelayBook:  # type: ignore[no-untyped-def]
+    """The delay book of app (or of the current app), made on first use."""
     from flask import current_app
-    from flask_login import current_user
 
     from middleware.db import session_factory
 
-    factory = session_factory(current_app._get_current_object())  # type: ignore[attr-defined]
+    app = app or current_app._get_current_object()  # type: ignore[attr-defined]
+    book = app.extensions.get(_BOOK_KEY)
+    if book is None:
+        factory = session_factory(app)
+
+        def load() -> dict[int, float]:
+            with factory() as session:
+                return read_all_delays_s(session)
+
+        book = app.extensions.setdefault(_BOOK_KEY, DelayBook(load))
+    return book
+
+
+def viewer_delay() -> ViewerDelay:
+    """The delay of the logged-in viewer of a socket, from the process's delay book."""
+    from flask_login import current_user
+
+    book = delay_book()
     user_id = int(current_user.get_id())
-
-    def read() -> float:
-        with factory() as session:
-            return read_user_delay_s(session, user_id)
-
-    return ViewerDelay(read)
+    return ViewerDelay(lambda: book.delay_of(user_id), refresh_s=0.0)  # the book limits the reads
 
 
 def apply_viewer_delay(ws, delay: ViewerDelay | None, held: DelayQueue, online: bool = True) -> float:  # type: ignore[no-untyped-def]

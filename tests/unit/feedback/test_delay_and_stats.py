@@ -11,7 +11,7 @@ import pytest
 
 from middleware.auth.schemas import InvalidField
 from middleware.experiment.services import CONDITIONS, choose_condition, results_csv, summarise
-from middleware.lab.delay import DelayQueue, ViewerDelay, capture_time_s, parse_delay_s
+from middleware.lab.delay import DelayBook, DelayQueue, ViewerDelay, capture_time_s, parse_delay_s
 from middleware.models.experiment import Trial
 
 
@@ -73,6 +73,71 @@ def test_viewer_delay_is_reread_at_most_every_refresh_and_reports_changes() -> N
     assert delay.current() == (3.0, True)
     now[0] = 3.0
     assert delay.current() == (3.0, False)
+
+
+def test_the_delay_book_reads_every_viewers_delay_in_one_query_per_period() -> None:
+    now = [0.0]
+    stored = {1: 3.0}
+    loads = []
+
+    def load() -> dict[int, float]:
+        loads.append(now[0])
+        return dict(stored)
+
+    book = DelayBook(load, refresh_s=1.0, clock=lambda: now[0])
+    assert [book.delay_of(user) for user in (1, 2, 1, 3)] == [3.0, 0.0, 3.0, 0.0]
+    assert loads == [0.0]  # four viewers, one read
+    stored[2] = 1.0
+    assert book.delay_of(2) == 0.0  # within the period
+    now[0] = 1.0
+    assert (book.delay_of(2), book.delay_of(1)) == (1.0, 3.0) and loads == [0.0, 1.0]
+    stored[1] = 0.0
+    book.forget()  # changed in this process: read at once
+    assert book.delay_of(1) == 0.0 and len(loads) == 3
+
+
+def test_a_failed_read_keeps_the_last_delays_and_is_not_retried_by_every_viewer() -> None:
+    now = [0.0]
+    answers: list[dict[int, float] | Exception] = [{1: 3.0}, RuntimeError("database gone"), {1: 1.0}]
+    calls = []
+
+    def load() -> dict[int, float]:
+        calls.append(now[0])
+        answer = answers[len(calls) - 1]
+        if isinstance(answer, Exception):
+            raise answer
+        return answer
+
+    book = DelayBook(load, refresh_s=1.0, clock=lambda: now[0])
+    viewer = ViewerDelay(lambda: book.delay_of(1), refresh_s=0.0, clock=lambda: now[0])
+    assert viewer.current() == (3.0, True)
+    now[0] = 1.0
+    assert viewer.current() == (3.0, False)  # the read failed: the last delay holds
+    assert viewer.current() == (3.0, False) and len(calls) == 2  # and no retry until the next period
+    now[0] = 2.0
+    assert viewer.current() == (1.0, True)
+
+
+def test_many_viewers_at_once_make_one_read() -> None:
+    import threading
+
+    calls = []
+    gate = threading.Event()
+
+    def load() -> dict[int, float]:
+        calls.append(1)
+        gate.wait(5)
+        return {7: 2.0}
+
+    book = DelayBook(load, refresh_s=60.0)
+    answers: list[float] = []
+    viewers = [threading.Thread(target=lambda: answers.append(book.delay_of(7))) for _ in range(20)]
+    for viewer in viewers:
+        viewer.start()
+    gate.set()
+    for viewer in viewers:
+        viewer.join(5)
+    assert answers == [2.0] * 20 and calls == [1]
 
 
 def _trial(i: int, course: str, delay: float, feedback: bool, time_s: float, errors: int = 0) -> Trial:
