@@ -18,6 +18,7 @@ from middleware.accounts import invitations, robot_admin, services
 from middleware.accounts.schemas import clean_flag, clean_id, clean_invitation_days, clean_optional_id
 from middleware.accounts.services import Refused
 from middleware.auth import sessions
+from middleware.auth.routes import safe_next_url
 from middleware.auth.schemas import InvalidField
 from middleware.auth.services import change_own_password
 from middleware.courses.services import list_courses
@@ -56,6 +57,11 @@ def refusals_as_pages(view: Callable[..., Any]) -> Callable[..., Any]:
             page_refusal(refused)
             raise
     return page
+
+
+def _back_url() -> str:
+    """The form's "back" page when it is a path on this site, else the lab's index."""
+    return safe_next_url(request.form.get("back")) or url_for("lab.index")
 
 
 def _json_body() -> dict[str, object]:
@@ -277,8 +283,7 @@ def invitations_page():  # type: ignore[no-untyped-def]
 def invitations_create():  # type: ignore[no-untyped-def]
     """Creates an invitation (a tutor for their course, an admin for anyone) and shows its link once."""
     dbs = get_session()
-    back = request.form.get("back") or ""
-    back = back if back.startswith("/") and not back.startswith("//") else url_for("lab.index")
+    back = _back_url()
     try:
         course_id = clean_optional_id(request.form.get("course_id"), "course_id")
         invitation, token = invitations.create_invitation(
@@ -322,8 +327,7 @@ def api_create_invitation():  # type: ignore[no-untyped-def]
 def invitations_revoke(invitation_id: int):  # type: ignore[no-untyped-def]
     """Withdraws a pending invitation from the page that lists it."""
     dbs = get_session()
-    back = request.form.get("back") or ""
-    back = back if back.startswith("/") and not back.startswith("//") else url_for("lab.index")
+    back = _back_url()
     try:
         invitations.revoke_invitation(dbs, current_user, invitation_id, _now())
     except Refused as refused:
