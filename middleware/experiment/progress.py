@@ -51,9 +51,13 @@ def course_route(trial: Trial) -> str:
     return "A to B" + (" and back" if trial.course == "course-A" else "")
 
 
+def _sent_back_to_a(run: CourseRunNow) -> bool:
+    """A line contact put the robot back at A in the middle of an attempt (its clock keeps running)."""
+    return run.phase == "at_start" and run.attempt > 0 and run.last_attempt != run.attempt
+
+
 def _attempt_under_way(run: CourseRunNow) -> bool:
-    return run.phase in ("to_b", "to_a") or (run.phase == "at_start" and run.attempt > 0
-                                              and run.last_attempt != run.attempt)
+    return run.phase in ("to_b", "to_a") or _sent_back_to_a(run)
 
 
 def progress_message(trial: Trial, run: CourseRunNow) -> str:
@@ -69,7 +73,7 @@ def progress_message(trial: Trial, run: CourseRunNow) -> str:
         return f"Run {run.attempt} under way: drive to B (orange).{contacts}"
     if run.phase == "to_a":
         return "Reached B: now drive back to A (blue)."
-    if run.phase == "at_start" and run.attempt > 0 and run.last_attempt != run.attempt:
+    if _sent_back_to_a(run):
         return "The robot touched a white line and is back at A; the clock keeps running. Drive to B again."
     if run.phase == "finished":
         return "The robot is still where an earlier run ended: drive it back to A (blue) to begin."
