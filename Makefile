@@ -26,6 +26,7 @@ run: $(RUN_STAMP) $(if $(wildcard $(DEMO_VIDEO)),,ffmpeg)
 	$(VENV)/bin/telelab up
 
 test: $(TEST_STAMP) chromium ffmpeg
+	$(VENV)/bin/mypy
 	$(PY) -m pytest
 
 chromium:
@@ -46,8 +47,10 @@ protos: $(TEST_STAMP)
 bench: $(TEST_STAMP)
 	$(VENV)/bin/telelab bench
 
+# mypy checks what pyproject.toml's [tool.mypy] files lists (middleware, skill_server, protos).
 lint: $(TEST_STAMP)
 	$(VENV)/bin/ruff check .
+	$(VENV)/bin/mypy
 
 clean:
 	rm -rf $(VENV) .pytest_cache

@@ -117,7 +117,7 @@ def harness_page() -> Iterator[Any]:
             page = browser.new_context().new_page()
             errors: list[str] = []
             page.on("pageerror", lambda error: errors.append(str(error)))
-            page.goto(f"{url}/js/")
+            page.goto(f"{url}/lib/")
             page.add_script_tag(content=HARNESS.read_text())
             yield page
             if errors:

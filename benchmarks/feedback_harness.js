@@ -8,7 +8,7 @@
 //   (algorithm 3.1's shift with black fill, and the zoom algorithm 3.2 intends) in a JavaScript loop.
 //   thesisPerPixel exists only here, for comparison: the product must not carry it.
 (() => {
-  const MATH = "/js/feedback-math.js";
+  const MATH = "/lib/feedback-math.js";
   const PANEL = "/panels/camera-panel/camera-feedback.js";
 
   function decode(b64) {

@@ -22,7 +22,7 @@ from middleware import create_app
 from middleware.auth.services import create_user
 from middleware.config import parse_robots
 from middleware.db import session_factory, upgrade_to_head
-from middleware.lab_runner import SkillServerProcess, wait_until_serving
+from middleware.robots.processes import SkillServerProcess, wait_until_serving
 from middleware.serve import make_threaded_server
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 
@@ -31,7 +31,7 @@ CSRF_FIELD = re.compile(r'name="csrf_token"[^>]*value="([^"]+)"')
 
 
 class _NoRedirect(HTTPRedirectHandler):
-    def redirect_request(self, *_args, **_kwargs):  # type: ignore[no-untyped-def]
+    def redirect_request(self, *_args, **_kwargs):
         return None
 
 
@@ -59,16 +59,16 @@ def floor_app(robot_address: str) -> Flask:
     stub = robot_pb2_grpc.RobotStub(channel)
 
     @app.get("/ping")
-    def ping():  # type: ignore[no-untyped-def]
+    def ping():
         return "ok"
 
     @app.post("/relay")
-    def relay():  # type: ignore[no-untyped-def]
+    def relay():
         stub.GetRobotInfo(robot_pb2.GetRobotInfoRequest(), timeout=5)
         return "ok"
 
     @sock.route("/echo")
-    def echo(ws) -> None:  # type: ignore[no-untyped-def]
+    def echo(ws) -> None:
         while True:
             message = ws.receive()
             ws.send(message)
@@ -94,12 +94,12 @@ class Browser:
         self.cookies = CookieJar()
         self.opener = build_opener(HTTPCookieProcessor(self.cookies), _NoRedirect())
         body = self.get("/login")[1]
-        token = CSRF_FIELD.search(body).group(1)  # type: ignore[union-attr]
+        token = CSRF_FIELD.search(body).group(1)
         status, _ = self.send("POST", "/login", urlencode({"username": username, "password": PASSWORD,
                                                            "csrf_token": token}).encode())
         if status != 302:
             raise RuntimeError(f"{username} could not log in ({status})")
-        self.csrf = CSRF_FIELD.search(self.get("/lab")[1]).group(1)  # type: ignore[union-attr]
+        self.csrf = CSRF_FIELD.search(self.get("/lab")[1]).group(1)
 
     def send(self, method: str, path: str, data: bytes | None = None,
              headers: dict[str, str] | None = None) -> tuple[int, str]:

@@ -145,7 +145,7 @@ def measure_camera(browser: Browser, duration_s: float) -> list[tuple[float, flo
 
 def measure_fanout(lab: LabUnderTest, browsers: list[Browser], viewers: int, duration_s: float) -> tuple[float, float]:
     """(frames per second at one measured viewer, middleware packs per frame) with `viewers` others watching."""
-    hub = robot_registry(lab.app).get("lab-1").camera  # type: ignore[union-attr]
+    hub = robot_registry(lab.app).get("lab-1").camera
     sockets = [browsers[i % len(browsers)].websocket("/ws/robots/lab-1/camera") for i in range(viewers)]
     stop = threading.Event()
 
@@ -182,7 +182,7 @@ def measure_fanout(lab: LabUnderTest, browsers: list[Browser], viewers: int, dur
     return frames / duration_s, packed / max(produced, 1)
 
 
-def _capacity_load(base_url: str, usernames: list[str], watch: bool, duration_s: float, results,  # type: ignore[no-untyped-def]
+def _capacity_load(base_url: str, usernames: list[str], watch: bool, duration_s: float, results,
                    go) -> None:
     """One load-generator process: its users log in, then watch telemetry or poll the robot's state."""
     browsers = [Browser(base_url, name) for name in usernames]
@@ -284,8 +284,8 @@ BENCH_LESSON_CUES = """WEBVTT
 def create_bench_lesson(lab: LabUnderTest) -> int:
     """A lesson with a drive cue, saved through the same checks the lesson editor uses."""
     from middleware.db import session_factory
-    from middleware.lessons.services import check_lesson, save_lesson
-    from middleware.practice.control import reference_skills
+    from middleware.teaching.lessons import check_lesson, save_lesson
+    from middleware.teaching.targets import reference_skills
 
     videos = Path(lab.app.instance_path) / "lessons"
     videos.mkdir(parents=True, exist_ok=True)
@@ -341,7 +341,7 @@ def cpu_seconds(pid: int) -> float:
 
 def camera_cpu_share(lab: LabUnderTest, browser: Browser, duration_s: float) -> float:
     """Percent of one core the real-time skill server uses while one viewer watches at 15 fps."""
-    pid = lab.robot.process.pid  # type: ignore[union-attr]
+    pid = lab.robot.process.pid
     viewer = browser.websocket("/ws/robots/lab-1/camera")
     time.sleep(1.0)
     cpu_before, wall_before = cpu_seconds(pid), time.monotonic()

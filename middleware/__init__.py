@@ -5,44 +5,38 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from flask import Flask, redirect, url_for
-from flask_login import LoginManager, current_user
-from flask_wtf.csrf import CSRFProtect
+from flask import Flask, Response, redirect, url_for
+from flask.typing import ResponseReturnValue
+from flask_login import current_user
 
 from middleware import config as config_module
-from middleware import db
-from middleware.auth import identity, sessions
+from middleware import db, realtime, validation
+from middleware.access import commands
+from middleware.access import coordinator as access_coordinator
+from middleware.access import sockets as access_sockets
+from middleware.access.coordinator import AccessHooks
+from middleware.accounts import routes as accounts_routes
+from middleware.assessment import pages as assessment_pages
+from middleware.assessment import routes as assessment_routes
+from middleware.auth import cookies as auth_cookies
+from middleware.auth import routes as auth_routes
+from middleware.bookings import routes as bookings_routes
+from middleware.bookings import services as bookings_services
+from middleware.chat import routes as chat_routes
+from middleware.chat import sockets as chat_sockets
+from middleware.courses import routes as courses_routes
 from middleware.errors import register_error_handlers
-from middleware.models import User
+from middleware.experiment import routes as experiment_routes
+from middleware.extensions import csrf, login_manager
+from middleware.lab import routes as lab_routes
+from middleware.lab import skills as lab_skills
+from middleware.lab import sockets as lab_sockets
+from middleware.preferences import routes as preferences_routes
 from middleware.robots import registry
+from middleware.teaching import lesson_routes, practice_robots, practice_routes, tour_live, tour_routes
+from middleware.teaching.tours import with_guided_priority
 
 CLIENT_UI_DIR = Path(__file__).resolve().parent.parent / "client_ui"
-
-csrf = CSRFProtect()
-login_manager = LoginManager()
-login_manager.login_view = "auth.login"
-login_manager.login_message = "Log in to open the lab."
-login_manager.session_protection = "strong"
-
-
-@login_manager.user_loader
-def _load_user(user_id: str) -> User | None:
-    if not user_id.isdigit():
-        return None
-    user = identity.load_user(db.get_session(), int(user_id))
-    return user if user is not None and sessions.opened_with_current_password(user) else None
-
-
-@login_manager.unauthorized_handler
-def _unauthorized():  # type: ignore[no-untyped-def]
-    from flask import request
-
-    from middleware.errors import ApiError
-
-    if request.path.startswith("/api/"):
-        raise ApiError(401, "not_logged_in", "Log in first; your session may have ended.")
-    return redirect(url_for("auth.login", next=request.full_path.rstrip("?")))
-
 
 def create_app(config: dict[str, Any] | None = None) -> Flask:
     """The Telelab web application; config overrides the TELELAB_* environment."""
@@ -56,60 +50,25 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
     if config:
         app.config.update(config)
 
+    validation.init_app(app)
     db.init_app(app)
+    auth_cookies.init_app(app)
     csrf.init_app(app)
     login_manager.init_app(app)
-    registry.init_app(app)
     register_error_handlers(app)
-
-    from middleware.access import sockets as access_sockets
-    from middleware.accounts.routes import blueprint as accounts_blueprint
-    from middleware.assessment.pages import blueprint as assessment_pages_blueprint
-    from middleware.assessment.routes import blueprint as assessment_blueprint
-    from middleware.auth.routes import blueprint as auth_blueprint
-    from middleware.bookings.routes import blueprint as bookings_blueprint
-    from middleware.chat.routes import blueprint as chat_blueprint
-    from middleware.courses.routes import blueprint as courses_blueprint
-    from middleware.experiment.routes import blueprint as experiment_blueprint
-    from middleware.lab import skill_sockets, sockets  # noqa: F401 - importing registers the channels
-    from middleware.lab.routes import blueprint as lab_blueprint
-    from middleware.lab.skills import blueprint as skills_blueprint
-    from middleware.preferences.routes import blueprint as preferences_blueprint
-
-    app.register_blueprint(auth_blueprint)
-    app.register_blueprint(lab_blueprint)
-    app.register_blueprint(skills_blueprint)
-    app.register_blueprint(preferences_blueprint)
-    app.register_blueprint(bookings_blueprint)
-    app.register_blueprint(chat_blueprint)
-    app.register_blueprint(accounts_blueprint)
-    app.register_blueprint(courses_blueprint)
-    app.register_blueprint(experiment_blueprint)
-    app.register_blueprint(assessment_blueprint)
-    app.register_blueprint(assessment_pages_blueprint)
-    sockets.init_app(app)
-    access_sockets.init_app(app)
-
-    from middleware.lessons.routes import blueprint as lessons_blueprint
-    from middleware.practice import manager as practice_manager
-    from middleware.practice.routes import blueprint as practice_blueprint
-    from middleware.tours.routes import blueprint as tours_blueprint
-
-    practice_manager.init_app(app)
-    app.register_blueprint(practice_blueprint)
-    app.register_blueprint(lessons_blueprint)
-    app.register_blueprint(tours_blueprint)
+    _compose_robot_access(app)
+    _register_areas(app)
 
     @app.get("/")
-    def home():  # type: ignore[no-untyped-def]
+    def home() -> ResponseReturnValue:
         return redirect(url_for("lab.index" if current_user.is_authenticated else "auth.login"))
 
     @app.get("/healthz")
-    def health():  # type: ignore[no-untyped-def]
+    def health() -> ResponseReturnValue:
         return {"status": "ok"}
 
     @app.after_request
-    def _security_headers(response):  # type: ignore[no-untyped-def]
+    def _security_headers(response: Response) -> Response:
         response.headers.setdefault("X-Content-Type-Options", "nosniff")
         response.headers.setdefault("X-Frame-Options", "DENY")
         response.headers.setdefault("Referrer-Policy", "same-origin")
@@ -121,3 +80,25 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
         return response
 
     return app
+
+
+def _compose_robot_access(app: Flask) -> None:
+    """The robots, the access rule with the hooks bookings and live classes add to it, the practice robots,
+    and the one command path over them (the areas themselves never import one another for these)."""
+    robots = registry.init_app(app)
+    priority = with_guided_priority(bookings_services.priority_user_id)
+    coordinator = access_coordinator.init_app(app, AccessHooks(priority, bookings_services.check_in))
+    practice_robots.init_app(app, robots)
+    commands.init_app(app, robots, coordinator)
+
+
+def _register_areas(app: Flask) -> None:
+    """Each area's pages, API and WebSocket channels."""
+    for blueprint in (auth_routes.blueprint, lab_routes.blueprint, lab_skills.blueprint, preferences_routes.blueprint,
+                      bookings_routes.blueprint, chat_routes.blueprint, accounts_routes.blueprint,
+                      courses_routes.blueprint, experiment_routes.blueprint, assessment_routes.blueprint,
+                      assessment_pages.blueprint, practice_routes.blueprint, lesson_routes.blueprint,
+                      tour_routes.blueprint):
+        app.register_blueprint(blueprint)
+    realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
+                            practice_routes.register, tour_live.register])

@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from middleware.auth.schemas import InvalidField
 
 
-def _app(**overrides: object):  # type: ignore[no-untyped-def]
+def _app(**overrides: object):
     from middleware import create_app
 
     return create_app(dict(overrides) or None)

@@ -55,10 +55,31 @@ def persistent_secret_key(instance_dir: Path) -> str:
     return key
 
 
+def _positive_number(env: dict[str, str], name: str, default: str) -> float:
+    """The number in env[name] (default when unset); a ConfigError naming it unless finite and above 0."""
+    raw = env.get(name, default)
+    try:
+        value = float(raw)
+    except ValueError:
+        value = float("nan")
+    if not 0 < value < float("inf"):
+        raise ConfigError(f"{name} must be a number above 0, not {raw!r}.")
+    return value
+
+
+def trusted_proxies(env: dict[str, str]) -> int:
+    """TELELAB_TRUSTED_PROXIES: how many proxies in front of the app set X-Forwarded-* (0: trust none)."""
+    raw = env.get("TELELAB_TRUSTED_PROXIES", "0").strip()
+    if raw not in {"0", "1", "2", "3", "4", "5"}:
+        raise ConfigError(f"TELELAB_TRUSTED_PROXIES must be a whole number from 0 to 5, not {raw!r}.")
+    return int(raw)
+
+
 def from_environment(instance_dir: Path, environ: dict[str, str] | None = None) -> dict[str, object]:
     """The Flask config mapping built from TELELAB_* variables."""
     env = dict(os.environ if environ is None else environ)
     secure_cookie = env.get("TELELAB_SECURE_COOKIES", "0").lower() in {"1", "true", "yes"}
+    idle = timedelta(minutes=_positive_number(env, "TELELAB_SESSION_IDLE_MINUTES", "120"))
     return {
         "DATABASE_URL": env.get("TELELAB_DATABASE_URL", f"sqlite:///{instance_dir / 'telelab.sqlite3'}"),
         "SECRET_KEY": env.get("TELELAB_SECRET_KEY") or persistent_secret_key(instance_dir),
@@ -72,9 +93,13 @@ def from_environment(instance_dir: Path, environ: dict[str, str] | None = None) 
         ),
         "SESSION_COOKIE_HTTPONLY": True,
         "SESSION_COOKIE_SAMESITE": "Lax",
+        # Always Secure when set; otherwise Secure whenever the request came over HTTPS (auth/cookies.py).
         "SESSION_COOKIE_SECURE": secure_cookie,
         "REMEMBER_COOKIE_SECURE": secure_cookie,
-        "PERMANENT_SESSION_LIFETIME": timedelta(hours=float(env.get("TELELAB_SESSION_HOURS", "8"))),
+        "TRUSTED_PROXIES": trusted_proxies(env),
+        "SESSION_LIFETIME": timedelta(hours=_positive_number(env, "TELELAB_SESSION_HOURS", "8")),
+        "SESSION_IDLE_TIMEOUT": idle,
+        "PERMANENT_SESSION_LIFETIME": idle,  # the cookie's expiry slides with use, like the idle timeout
         # The auth blueprint renews the cookie every few minutes instead (re-signing it on every request cost
         # about 0.4 ms of each API call).
         "SESSION_REFRESH_EACH_REQUEST": False,

@@ -1,12 +1,23 @@
-"""Database engine, per-request sessions and migrations to head."""
+"""Database engine, the request's unit of work, sessions for work outside requests, and migrations to head.
+
+The unit of work (indico's RH.process is the model): a request's session (get_session()) commits once,
+after the view returned (a page, JSON, a redirect: all successes), and is rolled back when the view raised.
+Services only flush; routes never commit or roll back. The error handlers (middleware/errors.py) call
+discard_changes(); after_commit(callback) runs something outside the database (start a recorder, wake
+sockets, re-read the robots table elsewhere) only once the change is committed. A WebSocket message or a
+background thread uses unit_of_work(app): its own session, committed when the block ends, rolled back
+when it raises.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from alembic import command
 from alembic.config import Config as AlembicConfig
-from flask import Flask, g
+from flask import Flask, Response, g
 from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.orm import Session, sessionmaker
 
@@ -20,7 +31,7 @@ def make_engine(url: str) -> Engine:
         engine = create_engine(url, connect_args={"timeout": 15, "check_same_thread": False})
 
         @event.listens_for(engine, "connect")
-        def _sqlite_pragmas(dbapi_connection, _record) -> None:  # type: ignore[no-untyped-def]
+        def _sqlite_pragmas(dbapi_connection, _record) -> None:
             cursor = dbapi_connection.cursor()
             cursor.execute("PRAGMA foreign_keys=ON")
             cursor.execute("PRAGMA journal_mode=WAL")
@@ -31,15 +42,60 @@ def make_engine(url: str) -> Engine:
 
 
 def init_app(app: Flask) -> None:
-    """Binds an engine and a session factory to app; sessions close at the end of each request."""
+    """Binds an engine and a session factory to app, and the unit of work to its requests."""
     engine = make_engine(app.config["DATABASE_URL"])
     app.extensions[_EXTENSION_KEY] = sessionmaker(bind=engine, expire_on_commit=False)
 
+    @app.after_request
+    def _end_unit_of_work(response: Response) -> Response:
+        # Runs for the view's response and for an error handler's (which discarded the changes first).
+        # A failing commit raises: the request becomes a 500 and its handler rolls back.
+        finish_request()
+        return response
+
     @app.teardown_appcontext
     def _close_session(_exc: BaseException | None) -> None:
+        g.pop("db_after_commit", None)
         session = g.pop("db_session", None)
         if session is not None:
-            session.close()
+            session.close()  # rolls back whatever was not committed (an error past every handler)
+
+
+def finish_request() -> None:
+    """Ends the request's unit of work: commit, then the after_commit callbacks; or, once discarded, roll back."""
+    session: Session | None = g.get("db_session")
+    callbacks: list[Callable[[], None]] = g.pop("db_after_commit", [])
+    if g.get("db_discarded"):
+        if session is not None:
+            session.rollback()
+        return
+    if session is not None and session.in_transaction():
+        session.commit()
+    for callback in callbacks:
+        callback()
+
+
+def discard_changes() -> None:
+    """Ends the request's unit of work without its changes: rolled back now (so the error page, or the form
+    shown again, reads a clean session) and nothing is committed at the end. For the error handlers."""
+    g.db_discarded = True
+    g.pop("db_after_commit", None)
+    session: Session | None = g.get("db_session")
+    if session is not None:
+        session.rollback()
+
+
+def after_commit(callback: Callable[[], None]) -> None:
+    """Runs callback once the request's changes are committed (never if they are discarded)."""
+    g.setdefault("db_after_commit", []).append(callback)
+
+
+@contextmanager
+def unit_of_work(app: Flask) -> Iterator[Session]:
+    """A session of its own, outside the request's (a socket's message, a background thread): committed when
+    the block ends, rolled back when it raises."""
+    with session_factory(app)() as session, session.begin():
+        yield session
 
 
 def session_factory(app: Flask) -> sessionmaker[Session]:

@@ -1,14 +1,32 @@
-"""Errors as people and API clients see them: sentences for pages, JSON with a stable code for /api."""
+"""Errors as people and API clients see them: sentences for pages, JSON with a stable code for /api.
+
+Services raise a `Refused` (or an area's subclass: `BookingRefused`, `InvalidField`, `TimeUp`, ...); routes
+let it pass, and the one handler here renders it: `{"error": {"code", "message", "field"}}` with its status
+under /api/ and /ws/, the error page with the sentence elsewhere. Every handler ends the request's unit of
+work without its changes (middleware/db.py). A form page that shows itself again with the sentence wraps
+its action in `unless_refused`, which does the same before answering.
+"""
 
 from __future__ import annotations
 
-from flask import Flask, Response, jsonify, render_template, request
+from collections.abc import Callable
+from typing import ClassVar, TypeVar
+
+from flask import Flask, flash, jsonify, redirect, render_template, request
+from flask.typing import ResponseReturnValue
 from flask_wtf.csrf import CSRFError
 from werkzeug.exceptions import HTTPException
+from werkzeug.http import HTTP_STATUS_CODES
+
+from middleware.db import discard_changes
+
+T = TypeVar("T")
 
 
-class ApiError(Exception):
-    """An error an API client sees as JSON: a stable code, a sentence, and the offending field."""
+class Refused(Exception):
+    """A request refused: an HTTP status, a stable code, a sentence saying what to do, and the field at fault."""
+
+    keeps_changes: ClassVar[bool] = False  # True: what the request did before the refusal is still committed
 
     def __init__(self, status: int, code: str, message: str, field: str | None = None) -> None:
         super().__init__(message)
@@ -19,32 +37,74 @@ class ApiError(Exception):
         return {"error": {"code": self.code, "message": self.message, "field": self.field}}
 
 
-def _wants_json() -> bool:
+class ApiError(Refused):
+    """A refusal a route raises about the request itself (a body that is not JSON, an unknown robot)."""
+
+
+def end_refused_request(refused: Refused) -> None:
+    """The request's changes go, unless the refusal keeps them (a test's time ran out: it was submitted)."""
+    if not refused.keeps_changes:
+        discard_changes()
+
+
+def unless_refused(action: Callable[[], T], answer: Callable[[Refused], T],
+                   about_the_page: tuple[int, ...] = (403, 404)) -> T:
+    """action(), or answer(refusal) when it is refused: the form shown again with the sentence, or a redirect
+    with it flashed. The request's changes are discarded first. A refusal whose status is about_the_page
+    (not allowed here, nothing here) is not the form's to show: it passes on to the error page."""
+    try:
+        return action()
+    except Refused as refused:
+        if refused.status in about_the_page:
+            raise
+        end_refused_request(refused)
+        return answer(refused)
+
+
+def flashed(back: str) -> Callable[[Refused], ResponseReturnValue]:
+    """The answer of a form whose refusal is a sentence flashed on the page it goes back to (a warning when
+    the refusal kept what was done: a late answer was still submitted)."""
+    def answer(refused: Refused) -> ResponseReturnValue:
+        flash(refused.message, "warning" if refused.keeps_changes else "error")
+        return redirect(back, 303)
+
+    return answer
+
+
+def wants_json() -> bool:
+    """Whether this request's errors are JSON (the API and the sockets' handshakes) rather than a page."""
     return request.path.startswith("/api/") or request.path.startswith("/ws/")
 
 
-def _error_response(status: int, code: str, title: str, message: str) -> tuple[Response | str, int]:
-    if _wants_json():
-        return jsonify(ApiError(status, code, message).to_dict()), status
+def _error_response(status: int, code: str, title: str, message: str,
+                    field: str | None = None) -> ResponseReturnValue:
+    if wants_json():
+        return jsonify(Refused(status, code, message, field).to_dict()), status
     return render_template("error.html", title=title, message=message), status
 
 
 def register_error_handlers(app: Flask) -> None:
     """Installs handlers so no error reaches a user as a stack trace or a bare status line."""
 
-    @app.errorhandler(ApiError)
-    def _api_error(error: ApiError):  # type: ignore[no-untyped-def]
-        return jsonify(error.to_dict()), error.status
+    @app.errorhandler(Refused)
+    def _refused(error: Refused) -> ResponseReturnValue:
+        end_refused_request(error)
+        if wants_json():
+            return jsonify(error.to_dict()), error.status
+        title = HTTP_STATUS_CODES.get(error.status, "Refused")
+        return render_template("error.html", title=title, message=error.message), error.status
 
     @app.errorhandler(CSRFError)
-    def _csrf_error(error: CSRFError):  # type: ignore[no-untyped-def]
+    def _csrf_error(error: CSRFError) -> ResponseReturnValue:
+        discard_changes()
         return _error_response(
             400, "csrf_failed", "The form has expired",
             "The form was missing its security token or it had expired. Reload the page and try again.",
         )
 
     @app.errorhandler(HTTPException)
-    def _http_error(error: HTTPException):  # type: ignore[no-untyped-def]
+    def _http_error(error: HTTPException) -> ResponseReturnValue:
+        discard_changes()
         status = error.code or 500
         messages = {
             403: "You are not allowed to open this page.",
@@ -56,7 +116,8 @@ def register_error_handlers(app: Flask) -> None:
         return _error_response(status, error.name.lower().replace(" ", "_"), error.name, message)
 
     @app.errorhandler(Exception)
-    def _unexpected(error: Exception):  # type: ignore[no-untyped-def]
+    def _unexpected(error: Exception) -> ResponseReturnValue:
+        discard_changes()
         app.logger.exception("Unhandled error on %s", request.path)
         return _error_response(500, "internal_error", "Something went wrong",
                                "Something went wrong on our side. Try again; if it persists, tell your tutor.")

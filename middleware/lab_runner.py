@@ -3,28 +3,15 @@
 from __future__ import annotations
 
 import os
-import re
 import signal
-import subprocess
 import sys
-import threading
-import time
-from dataclasses import dataclass, field
-
-import grpc
-from grpc_health.v1 import health_pb2, health_pb2_grpc
 
 from middleware.models import Role
+from middleware.robots.processes import SkillServerProcess, SkillServerStartError
 
-LISTENING_LINE = re.compile(r"listening on (?P<address>\S+:\d+)")
 DEMO_ACCOUNTS = (("student", Role.STUDENT), ("tutor", Role.TUTOR), ("admin", Role.ADMIN))
 # The teleoperation-under-delay experiment's robots (thesis chapter 4): one per course scene, idle until driven.
 COURSE_ROBOTS = (("course-a", "course-A"), ("course-b", "course-B"))
-START_TIMEOUT_S = 60.0
-
-
-class LabStartError(RuntimeError):
-    """A part of the lab did not start; the message says which and why."""
 
 
 class LabStopRequested(Exception):
@@ -43,88 +30,7 @@ def stop_on_termination_signals() -> None:
     signal.signal(signal.SIGHUP, _request_stop)
 
 
-@dataclass
-class SkillServerProcess:
-    """One robot's skill server, run as a child process and restarted if it dies."""
-
-    name: str
-    scene: str
-    address: str = ""
-    process: subprocess.Popen[str] | None = None
-    stopping: bool = False
-    restarts: int = 0
-    _watcher: threading.Thread | None = field(default=None, repr=False)
-
-    def start(self, port: int = 0) -> None:
-        """Starts the process and waits for the line that gives its address."""
-        command = [sys.executable, "-m", "skill_server", "--port", str(port), "--name", self.name,
-                   "--scene", self.scene]
-        # A new session: Ctrl-C reaches only `telelab up`, which then stops the children in order.
-        self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                        start_new_session=True)
-        deadline = time.monotonic() + START_TIMEOUT_S
-        assert self.process.stdout is not None
-        while time.monotonic() < deadline:
-            line = self.process.stdout.readline()
-            if not line:
-                raise LabStartError(f"The skill server of {self.name} exited while starting (code "
-                                    f"{self.process.wait()}). Run `telelab skill-server --port 0` to see why.")
-            match = LISTENING_LINE.search(line)
-            if match:
-                self.address = match["address"]
-                break
-        else:
-            raise LabStartError(f"The skill server of {self.name} did not start within {START_TIMEOUT_S:.0f} s.")
-        self._watcher = threading.Thread(target=self._watch, name=f"watch-{self.name}", daemon=True)
-        self._watcher.start()
-
-    def _watch(self) -> None:
-        process = self.process
-        assert process is not None and process.stdout is not None
-        with process.stdout:
-            for line in process.stdout:
-                print(f"[{self.name}] {line}", end="", flush=True)
-        code = process.wait()
-        if not self.stopping:
-            print(f"[{self.name}] skill server exited with code {code}; restarting it", flush=True)
-            self.restarts += 1
-            time.sleep(1.0)
-            if not self.stopping:
-                self.start(port=int(self.address.rsplit(":", 1)[1]))
-
-    def stop(self, timeout_s: float = 5.0) -> None:
-        """Asks the process to stop (SIGTERM), then kills it if it does not."""
-        self.stopping = True
-        if self.process is None:
-            return
-        if self.process.poll() is None:
-            self.process.send_signal(signal.SIGTERM)
-            try:
-                self.process.wait(timeout_s)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
-        if self._watcher is not None:
-            self._watcher.join(timeout_s)
-
-
-def wait_until_serving(address: str, timeout_s: float = START_TIMEOUT_S) -> None:
-    """Blocks until the skill server at address reports SERVING through gRPC health checking."""
-    deadline = time.monotonic() + timeout_s
-    with grpc.insecure_channel(address) as channel:
-        stub = health_pb2_grpc.HealthStub(channel)
-        while time.monotonic() < deadline:
-            try:
-                reply = stub.Check(health_pb2.HealthCheckRequest(service=""), timeout=1.0)
-                if reply.status == health_pb2.HealthCheckResponse.SERVING:
-                    return
-            except grpc.RpcError:
-                pass
-            time.sleep(0.2)
-    raise LabStartError(f"The skill server at {address} did not report SERVING within {timeout_s:.0f} s.")
-
-
-def ensure_demo_accounts(app) -> list[tuple[str, str, str]]:  # type: ignore[no-untyped-def]
+def ensure_demo_accounts(app) -> list[tuple[str, str, str]]:
     """Creates the demo accounts that do not exist yet; returns (name, role, password) of the new ones."""
     from middleware.auth.services import create_user, find_user, generate_password
     from middleware.db import session_factory
@@ -140,11 +46,23 @@ def ensure_demo_accounts(app) -> list[tuple[str, str, str]]:  # type: ignore[no-
     return created
 
 
-def seed_demo_content(app) -> list[str]:  # type: ignore[no-untyped-def]
-    """The teaching area's demo data: example tours and a lesson whose video is recorded from the simulator."""
-    from middleware.tours.demo import seed_demo_content as seed
+def seed_demo_content(app) -> list[str]:
+    """The demo data: the demo course with its tests (so the demo student can book and be assessed), then the
+    teaching area's example tours and the lesson whose video is recorded from the simulator."""
+    from middleware.teaching.demo_content import seed_demo_content as seed
 
-    return seed(app)
+    return seed_demo_course(app) + seed(app)
+
+
+def seed_demo_course(app) -> list[str]:
+    """The demo course "Mobile robotics (demo)" when it does not exist yet; returns what was added."""
+    from middleware.db import session_factory
+    from middleware.demo_course import seed_demo_course as seed
+
+    with session_factory(app)() as session:
+        added = seed(session).added
+        session.commit()
+    return added
 
 
 def lab_robots(robot_count: int, scene: str, course_robots: bool = True) -> list[SkillServerProcess]:
@@ -165,17 +83,16 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
     stop_on_termination_signals()
     try:
         for robot in robots:
-            robot.start()
-            wait_until_serving(robot.address)
+            robot.serve()
             print(f"robot {robot.name}: skill server at {robot.address} (scene {robot.scene})", flush=True)
         os.environ["TELELAB_ROBOTS"] = ",".join(f"{r.name}={r.address}" for r in robots)
         app = create_app()
         upgrade_to_head(app.config["DATABASE_URL"])
         created = ensure_demo_accounts(app)
-        seed_demo_content(app)
-        _print_banner(host, port, created)
+        seeded = seed_demo_content(app)
+        _print_banner(host, port, created, seeded)
         serve_forever(app, host, port)
-    except LabStartError as error:
+    except SkillServerStartError as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
     except (KeyboardInterrupt, LabStopRequested):
@@ -187,8 +104,10 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
     return 0
 
 
-def _print_banner(host: str, port: int, created: list[tuple[str, str, str]]) -> None:
+def _print_banner(host: str, port: int, created: list[tuple[str, str, str]], seeded: list[str] | None = None) -> None:
     lines = ["", f"Telelab is running at http://{host}:{port}  (Ctrl-C stops it)"]
+    if seeded:
+        lines.append("Demo data added: " + "; ".join(seeded) + ".")
     if created:
         lines.append("Demo accounts (the passwords are shown only this once; "
                      "change one with `telelab users set-password NAME`):")

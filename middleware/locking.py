@@ -7,7 +7,9 @@ so a second process waits (busy timeout) and then reads what the first one commi
 
 from __future__ import annotations
 
-from sqlalchemy import select, update
+from typing import Any, cast
+
+from sqlalchemy import CursorResult, Update, select, update
 from sqlalchemy.dialects.postgresql import insert as postgresql_insert
 from sqlalchemy.orm import Session
 
@@ -18,13 +20,16 @@ def _is_sqlite(session: Session) -> bool:
     return session.get_bind().dialect.name == "sqlite"
 
 
+def rows_matched(session: Session, statement: Update) -> int:
+    """How many rows a conditional UPDATE matched (0: its condition no longer held, e.g. another worker won)."""
+    return cast("CursorResult[Any]", session.execute(statement)).rowcount
+
+
 def lock_robot_control(session: Session, robot_name: str) -> None:
     """Locks the robot's robot_control row until the transaction ends, creating the row if missing."""
     if _is_sqlite(session):
-        touched = session.execute(
-            update(RobotControl).where(RobotControl.robot_name == robot_name)
-            .values(robot_name=RobotControl.robot_name)
-        ).rowcount
+        touched = rows_matched(session, update(RobotControl).where(RobotControl.robot_name == robot_name)
+                               .values(robot_name=RobotControl.robot_name))
         if touched == 0:
             session.add(RobotControl(robot_name=robot_name))
             session.flush()

@@ -10,6 +10,8 @@ from typing import Any
 from flask import Flask
 from werkzeug.serving import BaseWSGIServer, make_server
 
+from middleware.realtime import WEBSOCKET_ENDED
+
 
 def quiet_websocket_endings(wsgi_app: Any) -> Any:
     """Stops Werkzeug writing an HTTP response onto a finished WebSocket.
@@ -22,7 +24,7 @@ def quiet_websocket_endings(wsgi_app: Any) -> Any:
 
     def app(environ: dict[str, Any], start_response: Any) -> Any:
         body = wsgi_app(environ, start_response)
-        if "werkzeug.socket" in environ and environ.get("HTTP_UPGRADE", "").lower() == "websocket":
+        if "werkzeug.socket" in environ and environ.get(WEBSOCKET_ENDED):  # not a handshake refused over HTTP
             _linger_and_close(environ["werkzeug.socket"])
             raise ConnectionError("WebSocket finished")
         return body

@@ -59,3 +59,7 @@ class ResourceBusy(RobotError):
 
 class NoMap(RobotError):
     """Localization was asked for before any environment model exists."""
+
+
+class NoTrack(RobotError):
+    """A track's run or events were asked for in a scene without a track."""

@@ -6,6 +6,7 @@ import enum
 import itertools
 import threading
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from skill_server.sim.geometry import Pose2D
@@ -227,10 +228,10 @@ class GoalBook:
         """True once the server stopped."""
         return self._closed
 
-    def wait(self, predicate_timeout_s: float, predicate: object) -> None:
+    def wait(self, predicate_timeout_s: float, predicate: Callable[[], bool]) -> None:
         """Blocks until predicate() is true, the book closes, or the timeout passes."""
         with self.changed:
-            self.changed.wait_for(lambda: self._closed or predicate(), predicate_timeout_s)  # type: ignore[operator]
+            self.changed.wait_for(lambda: self._closed or predicate(), predicate_timeout_s)
 
     def wake(self) -> None:
         """Wakes every watcher so it can re-check its cancel flag."""

@@ -12,7 +12,9 @@ from skill_server.goals import EventKind, Goal, GoalBook, GoalSnapshot, GoalStat
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.sim.snapshots import RobotSnapshot
 from skill_server.skills.base import SensorLayout, SkillController, TickInput
+from skill_server.skills.catalog import default_registry
 from skill_server.skills.obstacles import ObstacleMap
+from skill_server.skills.perception import Perception
 from skill_server.skills.registry import SkillRegistry
 
 FEEDBACK_PERIOD_S = 0.1  # feedback reaches the goal records at 10 Hz of sim time; events go at once
@@ -24,18 +26,6 @@ class Activation:
 
     goal: GoalSnapshot
     preempted_goal_id: str
-
-
-class Perception:
-    """Data objects of the perceptive skills, shared with the others (the paper's data objects)."""
-
-    def __init__(self) -> None:
-        self.obstacles = ObstacleMap()
-        self.environment: Any = None  # the environment model (occupancy grid), kept after mapping ends
-        self.localizer: Any = None  # the running localization controller, if any
-        self.published_map: Any = None  # the latest immutable grid of the environment model, for GetMap
-        self.published_estimate: Any = None  # the latest immutable localization estimate, for streams
-        self.floor_plan: Any = None  # the lab as built (a SceneSpec), which mapping may start from
 
 
 class Sequencer:
@@ -86,7 +76,6 @@ class Sequencer:
             what = "the wheels" if entry.motor else f"the {skill} skill"
             raise ResourceBusy(f"{what} are held by {goal.goal_id} ({goal.skill}); activate with preempt to "
                                "cancel it, or cancel it first", goal.goal_id)
-        assert entry.build is not None
         controller = entry.build(values, self.perception)
         preempted = ""
         goal = self.goals.create(skill, entry.motor, values, self._sim_time_s)
@@ -122,11 +111,12 @@ class Sequencer:
         """Whether a motor goal holds the wheels (read from other threads as a hint only)."""
         return self._motor is not None
 
-    def on_direct_drive(self, version: int) -> None:
-        """A Drive command arrived: the teleoperator takes the wheels back from any motor goal."""
+    def preempt_motor_goal_for_drive(self, version: int) -> None:
+        """Ends the motor goal as PREEMPTED if it began before drive target version (the Robot facade decides when)."""
         if self._motor is not None and version > self._motor_since_version:
             self._end(self._motor, GoalStatus.CANCELED, "PREEMPTED", "preempted by a direct Drive command",
                       EventKind.PREEMPTED)
+            self._stop_wheels = False  # the Drive that preempted the goal owns the wheels now: no stop over it
 
     def on_controller_changed(self, version: int) -> None:
         """Control changed hands or was revoked: the motor goal ends, the perceptive ones go on."""
@@ -160,13 +150,14 @@ class Sequencer:
             sensors=self.sensors,
             obstacles=self.perception.obstacles,
         )
-        # Localization first, so the others (and the obstacle grid) use the pose it believes.
-        localization = self._perceptive.get("localization")
-        if localization is not None:
-            self._step(localization, tick)
+        # Pose estimators first, so the others (and the obstacle grid) use the pose they believe.
+        perceptive = list(self._perceptive.values())
+        for running in perceptive:
+            if running[1].estimates_pose:
+                self._step(running, tick)
         tick = self._with_believed_pose(tick)
-        for skill, running in list(self._perceptive.items()):
-            if skill != "localization":
+        for running in perceptive:
+            if not running[1].estimates_pose:
                 self._step(running, tick)
         if new_scan:
             self.perception.obstacles.add_scan(tick)
@@ -205,8 +196,8 @@ class Sequencer:
             goal.report(step.feedback)
         if step.outcome is not None:
             outcome = step.outcome
-            kind = EventKind.FAILED if outcome.status is GoalStatus.ABORTED else None
-            self._end(running, outcome.status, outcome.error_code, outcome.message, kind, outcome.reached)
+            announced = EventKind.FAILED if outcome.status is GoalStatus.ABORTED else None
+            self._end(running, outcome.status, outcome.error_code, outcome.message, announced, outcome.reached)
             return (0.0, 0.0) if goal.motor else None
         if not goal.motor:
             return None
@@ -256,8 +247,6 @@ class Sequencer:
 
 def attach_sequencer(world: Any, registry: SkillRegistry | None = None, goals: GoalBook | None = None) -> Sequencer:
     """Builds a sequencer for a world's robot and sensors and lets the world's loop tick it."""
-    from skill_server.skills.registry import default_registry
-
     info = world.describe()
     sensors = SensorLayout(
         sonar_mount_rad=tuple(s.mount_angle_rad for s in info.sonars),

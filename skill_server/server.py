@@ -17,10 +17,10 @@ from grpc_reflection.v1alpha import reflection
 
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 from skill_server.errors import RobotError
-from skill_server.sequencer import Sequencer, attach_sequencer
+from skill_server.robot import Robot
+from skill_server.sequencer import Sequencer
 from skill_server.service import RobotService
 from skill_server.sim.world import World
-from skill_server.skills.registry import default_registry
 
 ROBOT_SERVICE_NAME = robot_pb2.DESCRIPTOR.services_by_name["Robot"].full_name  # "telelab.v1.Robot"
 MAX_WORKERS = 64  # every open stream holds a worker thread
@@ -33,13 +33,30 @@ class SkillServer:
 
     server: grpc.Server
     port: int
-    world: World
+    robot: Robot
     health: health.HealthServicer
     host: str
-    robot_name: str
-    scene: str
     _health_pool: futures.ThreadPoolExecutor
-    sequencer: Sequencer | None = None
+
+    @property
+    def world(self) -> World:
+        """The robot's world (tests place the robot and read its snapshots)."""
+        return self.robot.world
+
+    @property
+    def sequencer(self) -> Sequencer:
+        """The robot's sequencer."""
+        return self.robot.sequencer
+
+    @property
+    def robot_name(self) -> str:
+        """The name the robot answers to in GetRobotInfo."""
+        return self.robot.name
+
+    @property
+    def scene(self) -> str:
+        """The scene's name."""
+        return self.robot.world.scene.name
 
     def __iter__(self) -> Iterator[object]:
         return iter((self.server, self.port, self.world))
@@ -52,9 +69,7 @@ class SkillServer:
     def stop(self, grace_s: float = STOP_GRACE_S) -> None:
         """Says NOT_SERVING, ends the streams by stopping the world, then stops gRPC within grace_s."""
         self.health.enter_graceful_shutdown()
-        self.world.stop()
-        if self.sequencer is not None:
-            self.sequencer.goals.close()
+        self.robot.stop()
         self.server.stop(grace_s).wait()
         self._health_pool.shutdown(wait=False)
 
@@ -73,26 +88,22 @@ def create_server(
     host: str = "127.0.0.1",
 ) -> SkillServer:
     """Builds the world and the gRPC server, starts both, and returns them (port=0 picks a free port)."""
-    world = World(scene, seed=seed, realtime=realtime, deadman_timeout_s=deadman_timeout_s)
+    robot = Robot.build(scene, name=robot_name, seed=seed, realtime=realtime, deadman_timeout_s=deadman_timeout_s)
     server = grpc.server(futures.ThreadPoolExecutor(max_workers=MAX_WORKERS, thread_name_prefix="robot-rpc"))
-    registry = default_registry(world.spec)
-    sequencer = attach_sequencer(world, registry)
-    robot_pb2_grpc.add_RobotServicer_to_server(RobotService(world, registry, robot_name, sequencer), server)
+    robot_pb2_grpc.add_RobotServicer_to_server(RobotService(robot), server)
     health_pool = futures.ThreadPoolExecutor(max_workers=2, thread_name_prefix="robot-health")
     health_servicer = health.HealthServicer(experimental_non_blocking=True, experimental_thread_pool=health_pool)
     health_pb2_grpc.add_HealthServicer_to_server(health_servicer, server)
     reflection.enable_server_reflection((ROBOT_SERVICE_NAME, health.SERVICE_NAME, reflection.SERVICE_NAME), server)
     bound_port = server.add_insecure_port(f"{host}:{port}")
     if bound_port == 0:
-        world.stop()
+        robot.stop()
         raise OSError(f"could not listen on {host}:{port}")
-    world.start()
+    robot.start()
     server.start()
     for service in ("", ROBOT_SERVICE_NAME):
         health_servicer.set(service, health_pb2.HealthCheckResponse.SERVING)
-    return SkillServer(
-        server, bound_port, world, health_servicer, host, robot_name, world.scene.name, health_pool, sequencer
-    )
+    return SkillServer(server, bound_port, robot, health_servicer, host, health_pool)
 
 
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:

@@ -7,8 +7,9 @@ import re
 import secrets
 import threading
 import uuid
+import weakref
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from http.cookiejar import CookieJar
 from pathlib import Path
 from urllib.parse import urlencode, urlsplit
@@ -24,9 +25,9 @@ def _postgres_admin_dsn() -> str:
     return POSTGRES_SERVER_URL.replace("postgresql+psycopg://", "postgresql://", 1)
 
 
-@pytest.fixture
-def postgres_url() -> Iterator[str]:
-    """A new, empty PostgreSQL database for one test, dropped afterwards."""
+@contextmanager
+def postgres_database() -> Iterator[str]:
+    """A new, empty PostgreSQL database, dropped on leaving."""
     import psycopg
 
     if os.environ.get("TELELAB_SKIP_POSTGRES") == "1":
@@ -44,7 +45,17 @@ def postgres_url() -> Iterator[str]:
         admin.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
 
 
-@pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)])
+@pytest.fixture
+def postgres_url() -> Iterator[str]:
+    """A new, empty PostgreSQL database for one test, dropped afterwards."""
+    with postgres_database() as url:
+        yield url
+
+
+DATABASES = ["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)]
+
+
+@pytest.fixture(params=DATABASES)
 def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
     """An empty database URL, once on SQLite and once on PostgreSQL."""
     if request.param == "sqlite":
@@ -52,10 +63,31 @@ def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
     return request.getfixturevalue("postgres_url")
 
 
+@pytest.fixture(scope="module", params=DATABASES)
+def module_database_url(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """An empty database URL shared by one module's tests, once on SQLite and once on PostgreSQL."""
+    if request.param == "sqlite":
+        yield f"sqlite:///{tmp_path_factory.mktemp('db') / 'telelab.sqlite3'}"
+        return
+    with postgres_database() as url:
+        yield url
+
+
+@pytest.fixture
+def engine(database_url: str):
+    """An engine on that database, migrated to the head revision."""
+    from middleware.db import make_engine, upgrade_to_head
+
+    upgrade_to_head(database_url)
+    made = make_engine(database_url)
+    yield made
+    made.dispose()
+
+
 @pytest.fixture(scope="session")
 def skill_server_address() -> Iterator[str]:
     """A real skill server (real-time, default scene) as a child process, shared by the session."""
-    from middleware.lab_runner import SkillServerProcess, wait_until_serving
+    from middleware.robots.processes import SkillServerProcess, wait_until_serving
 
     robot = SkillServerProcess("lab-1", "lab")
     robot.start()
@@ -66,7 +98,7 @@ def skill_server_address() -> Iterator[str]:
         robot.stop()
 
 
-def make_test_app(database_url: str, robots: str, tmp_path: Path):  # type: ignore[no-untyped-def]
+def make_test_app(database_url: str, robots: str, tmp_path: Path):
     """The app on a migrated database with a known student account."""
     from middleware import create_app
     from middleware.auth.services import create_user
@@ -88,7 +120,7 @@ def make_test_app(database_url: str, robots: str, tmp_path: Path):  # type: igno
 
 
 @pytest.fixture
-def app(tmp_path: Path, skill_server_address: str):  # type: ignore[no-untyped-def]
+def app(tmp_path: Path, skill_server_address: str):
     """The middleware on SQLite, wired to the session's skill server."""
     from middleware.access.coordinator import access_coordinator
     from middleware.robots.registry import robot_registry
@@ -103,7 +135,7 @@ def app(tmp_path: Path, skill_server_address: str):  # type: ignore[no-untyped-d
 class LiveServer:
     """The app served on a free loopback port by the same threaded server `telelab web` uses."""
 
-    def __init__(self, app) -> None:  # type: ignore[no-untyped-def]
+    def __init__(self, app) -> None:
         from middleware.serve import make_threaded_server
 
         self._server = make_threaded_server(app, "127.0.0.1", 0)
@@ -139,12 +171,39 @@ def served_lab(robots: str, tmp_path: Path) -> Iterator[LiveServer]:
         robot_registry(application).close()
 
 
+def make_course(app, code: str, members: dict[str, str]) -> int:
+    """A course with the given members ({username: "tutor" | "student"}); its id. Tutors act only on the courses
+    they teach and on those courses' students (middleware/README.md, "Authorization table")."""
+    from middleware.db import session_factory
+    from middleware.models import Course, CourseMembership, User
+
+    with session_factory(app)() as session:
+        course = Course(code=code, title=f"Course {code}")
+        session.add(course)
+        session.flush()
+        users = session.query(User).filter(User.username.in_(members))
+        session.add_all(CourseMembership(course_id=course.id, user_id=u.id, role=members[u.username]) for u in users)
+        session.commit()
+        return course.id
+
+
 @pytest.fixture
-def live_server(app) -> Iterator[LiveServer]:  # type: ignore[no-untyped-def]
+def live_server(app) -> Iterator[LiveServer]:
     """A running web server for the app."""
     server = LiveServer(app)
     yield server
     server.stop()
+
+
+_clients_with_sockets: weakref.WeakSet[LabClient] = weakref.WeakSet()
+
+
+@pytest.fixture(autouse=True)
+def _close_test_sockets() -> Iterator[None]:
+    """Every WebSocket a test opened through a LabClient is closed when the test ends, passed or failed."""
+    yield
+    for client in list(_clients_with_sockets):
+        client.close()
 
 
 class LabClient:
@@ -156,6 +215,14 @@ class LabClient:
         self.base_url = base_url
         self.cookies = CookieJar()
         self._opener = build_opener(HTTPCookieProcessor(self.cookies), _NoRedirect())
+        self._sockets: list = []
+
+    def close(self) -> None:
+        """Closes every WebSocket this client opened, so that a failed test leaves no reader thread behind."""
+        for socket in self._sockets:
+            with suppress(Exception):  # already closed by the server or the test
+                socket.close()
+        self._sockets.clear()
 
     def request(self, method: str, path: str, form: dict[str, str] | None = None,
                 headers: dict[str, str] | None = None) -> tuple[int, dict[str, str], str]:
@@ -188,20 +255,23 @@ class LabClient:
         """The Cookie header a browser would send."""
         return "; ".join(f"{c.name}={c.value}" for c in self.cookies)
 
-    def websocket(self, path: str, origin: str | None = None):  # type: ignore[no-untyped-def]
+    def websocket(self, path: str, origin: str | None = None):
         """A WebSocket to path carrying this client's session cookie."""
         from benchmarks.lab_under_test import WebSocketClient
 
         headers = {"Cookie": self.cookie_header()}
         if origin is not None:
             headers["Origin"] = origin
-        return WebSocketClient.connect(self.base_url.replace("http", "ws", 1) + path, headers=headers)
+        socket = WebSocketClient.connect(self.base_url.replace("http", "ws", 1) + path, headers=headers)
+        self._sockets.append(socket)
+        _clients_with_sockets.add(self)
+        return socket
 
 
 class _NoRedirect(HTTPRedirectHandler):
     """Hands redirects back as answers instead of following them."""
 
-    def redirect_request(self, *_args, **_kwargs):  # type: ignore[no-untyped-def]
+    def redirect_request(self, *_args, **_kwargs):
         return None
 
 
@@ -227,7 +297,7 @@ ARTIFACTS_DIR = Path(__file__).resolve().parent.parent / "test-artifacts"
 
 
 @pytest.fixture(scope="session")
-def chromium():  # type: ignore[no-untyped-def]
+def chromium():
     """Debian's Chromium driven by Playwright (browser downloads do not work here)."""
     from playwright.sync_api import sync_playwright
 
@@ -240,7 +310,7 @@ def chromium():  # type: ignore[no-untyped-def]
 
 
 @pytest.fixture
-def page(chromium, request: pytest.FixtureRequest):  # type: ignore[no-untyped-def]
+def page(chromium, request: pytest.FixtureRequest):
     """A fresh browser tab; its console errors fail the test, and a failing test leaves a screenshot."""
     context = chromium.new_context(viewport={"width": 1280, "height": 800})
     tab = context.new_page()
@@ -255,8 +325,35 @@ def page(chromium, request: pytest.FixtureRequest):  # type: ignore[no-untyped-d
 
 
 @pytest.fixture
-def demo_accounts(app) -> dict[str, str]:  # type: ignore[no-untyped-def]
+def demo_accounts(app) -> dict[str, str]:
     """The demo accounts `telelab up` creates, with their generated passwords."""
     from middleware.lab_runner import ensure_demo_accounts
 
     return {name: password for name, _role, password in ensure_demo_accounts(app)}
+
+
+EXIT_GRACE_S = 60
+_exit_status = {"code": 0}
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    _exit_status["code"] = int(exitstatus)
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_unconfigure(config: pytest.Config) -> None:
+    """A thread left running by a test (a WebSocket reader, a server) must not keep the run from ending:
+    CI would wait out its whole time limit and report nothing. After a grace, name the threads and exit
+    with pytest's own status."""
+    import faulthandler
+    import sys
+
+    def leave() -> None:
+        threading.Event().wait(EXIT_GRACE_S)
+        lingering = [t.name for t in threading.enumerate() if not t.daemon and t is not threading.main_thread()]
+        print(f"\npytest finished but threads kept the process alive after {EXIT_GRACE_S} s: {lingering}",
+              file=sys.stderr, flush=True)
+        faulthandler.dump_traceback(file=sys.stderr, all_threads=True)
+        os._exit(_exit_status["code"])
+
+    threading.Thread(target=leave, name="exit-watchdog", daemon=True).start()

@@ -10,18 +10,20 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 
 
+def imports_in(path: Path) -> set[str]:
+    """The absolute imports of a source file, anywhere in it."""
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+    return names
+
+
 def imported_modules(folder: str) -> dict[str, set[str]]:
     """For each Python file under folder, the top-level-qualified modules it imports."""
-    found: dict[str, set[str]] = {}
-    for path in (ROOT / folder).rglob("*.py"):
-        names: set[str] = set()
-        for node in ast.walk(ast.parse(path.read_text(), str(path))):
-            if isinstance(node, ast.Import):
-                names.update(alias.name for alias in node.names)
-            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-                names.add(node.module)
-        found[str(path.relative_to(ROOT))] = names
-    return found
+    return {str(path.relative_to(ROOT)): imports_in(path) for path in (ROOT / folder).rglob("*.py")}
 
 
 @pytest.mark.parametrize(
@@ -46,3 +48,251 @@ def test_folder_does_not_import(folder: str, forbidden: tuple[str, ...]) -> None
 def test_every_top_level_folder_has_a_readme() -> None:
     for folder in ("client_ui", "middleware", "skill_server", "protos", "migrations", "tests"):
         assert (ROOT / folder / "README.md").is_file(), f"{folder}/README.md is missing"
+
+
+# The shape of the middleware's robot-facing half (issue 13): one command path, areas that never import upward.
+
+PRODUCT_PACKAGES = ("middleware", "skill_server", "protos")
+ROBOT_COMMAND_METHODS = {"drive", "activate_skill", "cancel_goal", "set_controller"}
+REQUEST_STATE = {("flask", "request"), ("flask", "g"), ("flask", "session"), ("flask_login", "current_user")}
+
+
+def import_graph(packages: tuple[str, ...] = PRODUCT_PACKAGES) -> dict[str, set[str]]:
+    """Each module of packages and the product modules it imports, anywhere in the file (`from a import b`
+    counts a.b if that is a module; relative imports resolved), leaving out a module's own packages."""
+    files = {".".join(path.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__"): path
+             for pkg in PRODUCT_PACKAGES for path in (ROOT / pkg).rglob("*.py") if "_pb2" not in path.name}
+
+    def resolve(name: str) -> str | None:
+        while name and name not in files:
+            name = name.rpartition(".")[0]
+        return name if name not in PRODUCT_PACKAGES else None
+
+    graph: dict[str, set[str]] = {}
+    for module, path in files.items():
+        if not module.startswith(packages):
+            continue
+        package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+        targets: list[str] = []
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                targets += [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    parts = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                    base = ".".join(parts + ([base] if base else []))
+                targets += [base] + [f"{base}.{alias.name}" for alias in node.names]
+        resolved = {resolve(target) for target in targets}
+        graph[module] = {r for r in resolved if r and r != module and not module.startswith(r + ".")}
+    return graph
+
+
+def import_circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan's algorithm)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    circles: list[list[str]] = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        for other in graph.get(node, ()):
+            if other not in index:
+                visit(other)
+                low[node] = min(low[node], low[other])
+            elif other in stack:
+                low[node] = min(low[node], index[other])
+        if low[node] == index[node]:
+            component = []
+            while True:
+                member = stack.pop()
+                component.append(member)
+                if member == node:
+                    break
+            if len(component) > 1:
+                circles.append(sorted(component))
+
+    for node in graph:
+        if node not in index:
+            visit(node)
+    return circles
+
+
+def test_no_import_circles_anywhere_in_the_product() -> None:
+    assert import_circles(import_graph()) == []
+
+
+def test_the_circle_check_finds_a_circle() -> None:
+    assert import_circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+@pytest.mark.parametrize(
+    ("folder", "forbidden"),
+    [
+        ("middleware/access", ("middleware.bookings", "middleware.teaching", "middleware.lab")),
+        ("middleware/robots", ("middleware.access", "middleware.teaching", "middleware.lab", "flask_login")),
+    ],
+)
+def test_lower_middleware_layers_do_not_import_upward(folder: str, forbidden: tuple[str, ...]) -> None:
+    offenders = {
+        file: upward for file, names in imported_modules(folder).items()
+        if (upward := sorted(n for n in names if any(n == f or n.startswith(f + ".") for f in forbidden)))
+    }
+    assert not offenders, f"{folder} imports upward: {offenders}"
+
+
+def test_only_the_launcher_command_imports_the_launcher() -> None:
+    importers = {file for file, names in imported_modules("middleware").items() if "middleware.lab_runner" in names}
+    assert importers <= {"middleware/cli.py"}, f"the launcher only composes; imported by {sorted(importers)}"
+
+
+def robot_command_calls(source: str) -> list[str]:
+    """The RobotLink command methods called in source: link.drive(...), self.link.set_controller(...),
+    registry.get(name).activate_skill(...). A link is always named "link" in the middleware, so a receiver
+    whose text mentions it (or one that is itself a call's result) is a link; the command path's own
+    Commander.drive(...) on a "robot" is not."""
+    calls = []
+    for node in ast.walk(ast.parse(source)):
+        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                and node.func.attr in ROBOT_COMMAND_METHODS):
+            receiver = node.func.value
+            if isinstance(receiver, ast.Call) or "link" in ast.unparse(receiver).lower():
+                calls.append(f"{ast.unparse(node.func)} (line {node.lineno})")
+    return calls
+
+
+def test_only_the_command_path_sends_robot_commands() -> None:
+    callers = {str(p.relative_to(ROOT)): calls for p in (ROOT / "middleware").rglob("*.py")
+               if (calls := robot_command_calls(p.read_text()))}
+    assert set(callers) <= {"middleware/access/commands.py"}, (
+        f"every robot command goes through middleware/access/commands.py; also sent from {callers}")
+
+
+def test_the_command_call_check_tells_links_from_the_command_path() -> None:
+    source = ("link.drive(t, 1, 0, 0)\nself.link.set_controller(t)\nregistry.get(n).cancel_goal(t, g)\n"
+              "robot.drive(1, 0.0, 0.0)\ncoordinator.join(n, u)\n")
+    assert [c.split(" ")[0] for c in robot_command_calls(source)] == [
+        "link.drive", "self.link.set_controller", "registry.get(n).cancel_goal"]
+
+
+def test_services_never_read_the_request() -> None:
+    service_files = [p for p in (ROOT / "middleware").rglob("*.py")
+                     if p.name in {"services.py", "round_robin.py", "commands.py", "coordinator.py"}
+                     or p.parent.name == "robots"
+                     or p.name in {"lessons.py", "tours.py", "cues.py", "command_form.py", "practice_robots.py"}]
+    offenders = {}
+    for path in service_files:
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                names = {(node.module, alias.name) for alias in node.names} & REQUEST_STATE
+                if names:
+                    offenders[str(path.relative_to(ROOT))] = sorted(n for _, n in names)
+    assert not offenders, f"services take what they need as arguments, never from the request: {offenders}"
+
+
+# The skill server's layers (issue 13): sim/ at the bottom, the Robot facade between core and adapter.
+
+SKILL_SERVER_VALUE_MODULES = ("skill_server.errors", "skill_server.goals", "skill_server.schema")
+
+
+def test_skill_server_sim_imports_nothing_from_the_layers_above_it() -> None:
+    above = ("skill_server.skills", "skill_server.sequencer", "skill_server.robot", "skill_server.service",
+             "skill_server.server")
+    offenders = {module: sorted(i for i in imported if i.startswith(above))
+                 for module, imported in import_graph(("skill_server.sim",)).items()}
+    offenders = {module: names for module, names in offenders.items() if names}
+    assert not offenders, f"skill_server/sim must not import skills/ or anything built on them: {offenders}"
+
+
+def test_the_servicer_reaches_the_robot_core_only_through_the_facade() -> None:
+    allowed = ("skill_server.robot", "skill_server.service", "protos", *SKILL_SERVER_VALUE_MODULES)
+    offenders = {module: sorted(i for i in imported if not i.startswith(allowed))
+                 for module, imported in import_graph(("skill_server.service",)).items()}
+    offenders = {module: names for module, names in offenders.items() if names}
+    assert not offenders, f"the servicer imports the robot core only through skill_server.robot: {offenders}"
+    internals = {"world", "sequencer", "perception", "track_monitor"}
+    reached = sorted(
+        f"{path.relative_to(ROOT)}:{node.lineno} .{node.attr}"
+        for path in (ROOT / "skill_server" / "service").rglob("*.py")
+        for node in ast.walk(ast.parse(path.read_text(), str(path)))
+        if isinstance(node, ast.Attribute) and node.attr in internals
+    )
+    assert not reached, f"the servicer calls the Robot facade, never the world or sequencer behind it: {reached}"
+
+
+# --- one unit of work, one Refused family (middleware/db.py, middleware/errors.py) --------------------------
+
+# "path::function": why that view must commit or roll back itself. Empty: middleware/db.py's after_commit()
+# covers "commit before something irreversible outside the database"; add an entry only with its reason.
+ROUTE_TRANSACTION_ALLOW_LIST: dict[str, str] = {}
+# Exception classes with a stable code that are not a Refused, and why.
+CODED_EXCEPTIONS_ALLOW_LIST = {
+    "middleware.robots.link.CommandRefused": "the robot's own refusal (no HTTP status); "
+                                             "access.commands.refusal_error() maps it to a Refused",
+}
+
+
+def is_route_file(path: Path) -> bool:
+    """Routes, pages and sockets: the files whose views the request's unit of work wraps."""
+    return path.name in {"routes.py", "pages.py", "sockets.py"} or path.name.endswith("_routes.py")
+
+
+def transaction_calls(source: str) -> list[tuple[str, str, int]]:
+    """(enclosing function, method, line) of every .commit() or .rollback() call in source."""
+    calls = []
+
+    def visit(node: ast.AST, function: str) -> None:
+        for child in ast.iter_child_nodes(node):
+            name = child.name if isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef) else function
+            if (isinstance(child, ast.Call) and isinstance(child.func, ast.Attribute)
+                    and child.func.attr in {"commit", "rollback"}):
+                calls.append((function, child.func.attr, child.lineno))
+            visit(child, name)
+
+    visit(ast.parse(source), "<module>")
+    return calls
+
+
+def test_routes_leave_commit_and_rollback_to_the_unit_of_work() -> None:
+    offenders = [f"{path.relative_to(ROOT)}:{line} {function}() calls .{method}()"
+                 for path in sorted((ROOT / "middleware").rglob("*.py")) if is_route_file(path)
+                 for function, method, line in transaction_calls(path.read_text())
+                 if f"{path.relative_to(ROOT)}::{function}" not in ROUTE_TRANSACTION_ALLOW_LIST]
+    assert not offenders, ("the request's unit of work commits and rolls back (middleware/db.py); use after_commit() "
+                           f"for what must follow the commit, or allow-list the view with a reason: {offenders}")
+
+
+def coded_exception_classes() -> list[str]:
+    """module.Class of every class in middleware that sets a `code` attribute (self.code = ..., or in its body)."""
+    found = []
+    for path in (ROOT / "middleware").rglob("*.py"):
+        module = ".".join(path.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__")
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if not isinstance(node, ast.ClassDef):
+                continue
+            targets = [t for n in ast.walk(node) if isinstance(n, ast.Assign | ast.AnnAssign)
+                       for t in (n.targets if isinstance(n, ast.Assign) else [n.target])]
+            names = {e.attr if isinstance(e, ast.Attribute) else e.id for t in targets
+                     for e in (t.elts if isinstance(t, ast.Tuple) else [t]) if isinstance(e, ast.Attribute | ast.Name)}
+            if "code" in names:
+                found.append(f"{module}.{node.name}")
+    return found
+
+
+def test_every_coded_exception_in_the_middleware_is_a_refused() -> None:
+    import importlib
+
+    from middleware.errors import Refused
+
+    outsiders = []
+    for qualified in coded_exception_classes():
+        module, name = qualified.rsplit(".", 1)
+        cls = getattr(importlib.import_module(module), name)
+        if (isinstance(cls, type) and issubclass(cls, BaseException) and not issubclass(cls, Refused)
+                and qualified not in CODED_EXCEPTIONS_ALLOW_LIST):
+            outsiders.append(qualified)
+    assert "middleware.errors.Refused" in coded_exception_classes()
+    assert not outsiders, ("an error with a stable code subclasses middleware.errors.Refused (status, code, message, "
+                           f"field) so the one handler renders it: {outsiders}")

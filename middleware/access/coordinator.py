@@ -5,17 +5,18 @@ from __future__ import annotations
 import logging
 import threading
 from collections.abc import Callable
-from datetime import UTC, datetime
+from dataclasses import dataclass
+from datetime import UTC, datetime, timedelta
 
 from flask import Flask, current_app
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from middleware.access import round_robin
+from middleware.access.commands import hand_over
 from middleware.access.round_robin import AccessPolicy, QueueState
 from middleware.db import session_factory
 from middleware.models import Course, CourseMembership, RobotControl
-from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.registry import robot_registry
 
 log = logging.getLogger(__name__)
@@ -26,17 +27,24 @@ def _utc_now() -> datetime:
     return datetime.now(UTC)
 
 
-def _bookings_priority() -> Callable[[Session, str, datetime], int | None]:
-    """The bookings rule when that area is installed; no priority otherwise."""
-    try:
-        from middleware.bookings.services import priority_user_id
-    except ImportError:
-        return lambda _session, _robot, _now: None
-    return priority_user_id
+PriorityHook = Callable[[Session, str, datetime], int | None]
+CheckInHook = Callable[[Session, str, int, datetime], object]
 
 
-def policy_for(app: Flask) -> AccessPolicy:
-    """The access policy from app's configuration: grace period, turn length per user, booking priority."""
+@dataclass(frozen=True)
+class AccessHooks:
+    """What other areas add to the rule, handed in by create_app (access/ imports none of them).
+
+    priority_user_id(session, robot, now): a user who goes first now (a booked slot, a live class);
+    check_in(session, robot, user_id, now): called when a user joins a robot's queue (a booking's check-in).
+    """
+
+    priority_user_id: PriorityHook = lambda _session, _robot, _now: None
+    check_in: CheckInHook = lambda _session, _robot, _user_id, _now: None
+
+
+def policy_for(app: Flask, hooks: AccessHooks) -> AccessPolicy:
+    """The access policy from app's configuration and the hooks: grace period, turn length per user, priority."""
 
     def turn_length_s(session: Session, user_id: int) -> float:
         # A student in several courses gets the longest of their courses' turns.
@@ -47,16 +55,15 @@ def policy_for(app: Flask) -> AccessPolicy:
         )
         return float(longest) if longest else float(app.config["DEFAULT_TURN_LENGTH_S"])
 
-    from middleware.tours.services import with_guided_priority  # a live guided class ranks like a booking
-
-    return AccessPolicy(float(app.config["ACCESS_GRACE_S"]), turn_length_s, with_guided_priority(_bookings_priority()))
+    return AccessPolicy(float(app.config["ACCESS_GRACE_S"]), turn_length_s, hooks.priority_user_id)
 
 
 class AccessCoordinator:
     """One per app and process: applies queue operations in their own transactions and keeps robots' tokens."""
 
-    def __init__(self, app: Flask, clock: Callable[[], datetime] = _utc_now) -> None:
+    def __init__(self, app: Flask, hooks: AccessHooks | None = None, clock: Callable[[], datetime] = _utc_now) -> None:
         self.app = app
+        self.hooks = hooks or AccessHooks()
         self.clock = clock
         self._sessions = session_factory(app)
         self._pushed_tokens: dict[str, str | None] = {}
@@ -70,7 +77,7 @@ class AccessCoordinator:
     @property
     def policy(self) -> AccessPolicy:
         """The policy as configured now (tests and admins may change the settings while running)."""
-        return policy_for(self.app)
+        return policy_for(self.app, self.hooks)
 
     def apply(self, operation: Callable[..., QueueState], robot_name: str, *args: object) -> QueueState:
         """Runs one round-robin operation in a transaction of its own, then hands the robot its token."""
@@ -85,18 +92,13 @@ class AccessCoordinator:
     def join(self, robot_name: str, user_id: int) -> QueueState:
         """The user connects to the robot (or reconnects within grace and keeps the seat)."""
         with self._sessions() as session, session.begin():
-            try:
-                from middleware.bookings.services import check_in
-            except ImportError:
-                pass
-            else:
-                check_in(session, robot_name, user_id, self.clock())
+            self.hooks.check_in(session, robot_name, user_id, self.clock())
         return self.apply(round_robin.join, robot_name, user_id)
 
-    def heartbeat(self, robot_name: str, user_id: int) -> bool:
-        """The user is still connected."""
+    def heartbeat(self, robot_name: str, user_id: int, silent_s: float = 0.0) -> bool:
+        """The user is still connected: their client was last heard silent_s ago (the grace counts from then)."""
         with self._sessions() as session, session.begin():
-            return round_robin.heartbeat(session, robot_name, user_id, self.clock())
+            return round_robin.heartbeat(session, robot_name, user_id, self.clock() - timedelta(seconds=silent_s))
 
     def tick(self, robot_name: str) -> QueueState:
         """Brings the robot's queue up to date."""
@@ -140,25 +142,30 @@ class AccessCoordinator:
 
     def sync_token(self, state: QueueState, force: bool = False) -> bool:
         """Makes sure the robot obeys the current controller's token (and only it); False if unreachable."""
-        link = robot_registry(self.app).get(state.robot_name)
+        registry = robot_registry(self.app)
+        link = registry.get(state.robot_name)
         if link is None:
             return False
+        if registry.owner_of(state.robot_name) is not None:
+            return True  # a personal robot obeys its owner's own token, whatever its queue says
         with self._push_lock:
             if not force and self._pushed_tokens.get(state.robot_name, "unset") == state.token:
                 return True
-            try:
-                link.set_controller(state.token or "")
-            except (RobotUnavailable, CommandRefused) as error:
-                log.info("could not hand %s its controller token: %s", state.robot_name, error)
+            if not hand_over(link, state.token or ""):
                 self._pushed_tokens.pop(state.robot_name, None)
                 return False
             self._pushed_tokens[state.robot_name] = state.token
             return True
 
+    def resend_token(self, robot_name: str) -> bool:
+        """Hands the robot its current controller's token again (a restarted skill server forgot it)."""
+        return self.sync_token(self.snapshot(robot_name), force=True)
+
     def start_ticker(self) -> None:
         """Ticks every robot's queue in the background (turn ends, grace periods, faults)."""
         if self._ticker is not None:
             return
+        self._stop.clear()
         self._ticker = threading.Thread(target=self._tick_forever, name="access-ticker", daemon=True)
         self._ticker.start()
 
@@ -167,6 +174,7 @@ class AccessCoordinator:
         self._stop.set()
         if self._ticker is not None:
             self._ticker.join(5)
+            self._ticker = None
 
     def _tick_forever(self) -> None:
         interval_s = float(self.app.config["ACCESS_TICK_S"])
@@ -186,9 +194,11 @@ class AccessCoordinator:
         return online
 
 
-def init_app(app: Flask) -> None:
-    """Creates the coordinator of app; the ticker starts with the first channel that needs it."""
-    app.extensions[_EXTENSION_KEY] = AccessCoordinator(app)
+def init_app(app: Flask, hooks: AccessHooks | None = None) -> AccessCoordinator:
+    """Creates the coordinator of app with the other areas' hooks; the ticker starts with the first channel
+    that needs it."""
+    coordinator = app.extensions[_EXTENSION_KEY] = AccessCoordinator(app, hooks)
+    return coordinator
 
 
 def access_coordinator(app: Flask | None = None) -> AccessCoordinator:

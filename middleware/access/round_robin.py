@@ -14,12 +14,13 @@ from __future__ import annotations
 import secrets
 from collections.abc import Callable
 from dataclasses import dataclass
-from datetime import datetime, timedelta
+from datetime import UTC, datetime, timedelta
+from typing import overload
 
 from sqlalchemy import delete, select, update
 from sqlalchemy.orm import Session
 
-from middleware.locking import lock_robot_control
+from middleware.locking import lock_robot_control, rows_matched
 from middleware.models import QueueEntry, RobotControl
 
 TURN_WARNING_S = 20.0
@@ -61,12 +62,14 @@ class Seat:
     faulted: bool
 
 
+@overload
+def _as_utc(moment: datetime) -> datetime: ...
+@overload
+def _as_utc(moment: datetime | None) -> datetime | None: ...
 def _as_utc(moment: datetime | None) -> datetime | None:
     """SQLite hands back naive datetimes; every stored time is UTC."""
     if moment is None or moment.tzinfo is not None:
         return moment
-    from datetime import UTC
-
     return moment.replace(tzinfo=UTC)
 
 
@@ -113,11 +116,13 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
         _grant(control, priority, now)
 
     if not robot_online:
+        # Nobody loses a turn to a fault: the clock stops and the controller keeps the seat. With nobody in
+        # the seat the flag still matters: it tells those waiting that no turn can start, not "0:00 to wait".
+        control.faulted = True
         if control.controller_id is not None:
-            # Nobody loses a turn to a fault: the clock stops and the controller keeps the seat.
-            control.faulted = True
             control.turn_ends_at = None
     elif control.controller_id is None:
+        control.faulted = False
         if present:
             _grant(control, present[0], now)
     elif control.faulted:
@@ -173,12 +178,9 @@ def join(session: Session, robot_name: str, user_id: int, policy: AccessPolicy, 
 
 def heartbeat(session: Session, robot_name: str, user_id: int, now: datetime) -> bool:
     """Marks the user as still connected; False when they no longer hold a seat."""
-    result = session.execute(
-        update(QueueEntry)
-        .where(QueueEntry.robot_name == robot_name, QueueEntry.user_id == user_id)
-        .values(last_seen_at=now)
-    )
-    return bool(result.rowcount)
+    return bool(rows_matched(session, update(QueueEntry)
+                             .where(QueueEntry.robot_name == robot_name, QueueEntry.user_id == user_id)
+                             .values(last_seen_at=now)))
 
 
 def leave(session: Session, robot_name: str, user_id: int, policy: AccessPolicy, now: datetime,
@@ -216,7 +218,9 @@ def seat_of(state: QueueState, user_id: int, now: datetime, turn_length_s: float
         return Seat(False, False, -1, size, remaining, None, False, state.faulted)
     position = state.waiting_ids.index(user_id) + 1
     wait = None
-    if state.controller_id is None:
+    if state.faulted:
+        pass  # no turn starts until the robot answers, so there is no wait to tell
+    elif state.controller_id is None:
         wait = 0.0
     elif remaining is not None:
         wait = remaining + (position - 1) * turn_length_s

@@ -1,23 +1,57 @@
-"""The queue channel: each connected user's seat, live, and the pass/leave/join actions."""
+"""The queue channel (each connected user's seat, live, and the pass/leave/join actions), the seat a robot
+channel keeps for its user, and the checks every robot channel makes."""
 
 from __future__ import annotations
 
 import json
 import time
 
-from flask import Flask
 from flask_login import current_user
 from sqlalchemy import select
 
 from middleware.access import round_robin
+from middleware.access.commands import robot_commands
 from middleware.access.coordinator import AccessCoordinator, access_coordinator
 from middleware.db import session_factory
-from middleware.lab.sockets import open_robot_channel, send_json, sock
 from middleware.models import User
+from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, refuse, send_json
+from middleware.robots.link import RobotLink
 
 HEARTBEAT_INTERVAL_S = 2.0
 REFRESH_INTERVAL_S = 0.5
 ACTIONS = {"pass": round_robin.pass_turn, "leave": round_robin.leave}
+
+
+def open_robot_channel(ws: WebSocket, robot_name: str) -> RobotLink | None:
+    """The robot's link after the check every robot channel makes (a robot this user may reach; `Channels` made
+    the login and Origin checks), or None once the socket is refused."""
+    link = robot_commands().reachable(robot_name, int(current_user.get_id()))
+    if link is None:
+        refuse(ws, CLOSE_NOT_FOUND, "unknown_robot", f"There is no robot named {robot_name[:64]!r}.", "robot_name")
+    return link
+
+
+class ChannelSeat:
+    """A channel's hold on its user's place in the robot's queue: joined once, then kept with heartbeats that
+    say when the client was last heard, so a client that vanished without closing loses the seat one grace
+    period after it went quiet, however long its socket takes to time out."""
+
+    def __init__(self, robot_name: str, user_id: int) -> None:
+        self.robot_name, self.user_id = robot_name, user_id
+        self._coordinator = access_coordinator()
+        self._heartbeat_at = float("-inf")
+
+    def join(self) -> None:
+        """Connects the user to the robot's queue (the first user gets control at once)."""
+        self._coordinator.start_ticker()
+        self._coordinator.join(self.robot_name, self.user_id)
+
+    def keep(self, ws: WebSocket, *, now: bool = False) -> None:
+        """Tells the queue when ws's client was last heard (at most every HEARTBEAT_INTERVAL_S, unless now)."""
+        at = time.monotonic()
+        if now or at - self._heartbeat_at >= HEARTBEAT_INTERVAL_S:
+            self._coordinator.heartbeat(self.robot_name, self.user_id, ws.silent_s())
+            self._heartbeat_at = at
 
 
 def seat_message(coordinator: AccessCoordinator, robot_name: str, user_id: int) -> dict[str, object]:
@@ -55,42 +89,41 @@ def parse_queue_action(raw: object) -> str:
     return action
 
 
-@sock.route("/ws/robots/<robot_name>/queue")
-def queue_channel(ws, robot_name: str) -> None:  # type: ignore[no-untyped-def]
+def queue_channel(ws: WebSocket, robot_name: str) -> None:
     """Joins the robot's queue and reports the user's seat until the socket closes (the seat outlives it)."""
     if open_robot_channel(ws, robot_name) is None:
         return
     coordinator = access_coordinator()
-    coordinator.start_ticker()
     user_id = int(current_user.get_id())
-    coordinator.join(robot_name, user_id)
+    seat = ChannelSeat(robot_name, user_id)
+    seat.join()
     last_sent: dict[str, object] | None = None
-    last_sent_at = last_heartbeat = 0.0
-    while ws.connected:
-        raw = ws.receive(timeout=REFRESH_INTERVAL_S)
-        if raw is not None:
-            try:
-                action = parse_queue_action(raw)
-            except ValueError as invalid:
-                send_json(ws, {"type": "error", "code": "invalid_field", "message": str(invalid), "field": "type"})
-                continue
-            if action == "join":
-                coordinator.join(robot_name, user_id)
-            else:
-                coordinator.apply(ACTIONS[action], robot_name, user_id)
-            last_sent = None
-        now = time.monotonic()
-        if now - last_heartbeat >= HEARTBEAT_INTERVAL_S:
-            coordinator.heartbeat(robot_name, user_id)
-            last_heartbeat = now
-        message = seat_message(coordinator, robot_name, user_id)
-        if message != last_sent or now - last_sent_at >= 1.0:
-            send_json(ws, message)
-            last_sent, last_sent_at = message, now
+    last_sent_at = 0.0
+    try:
+        while ws.connected:
+            raw = ws.receive(timeout=REFRESH_INTERVAL_S)
+            seat.keep(ws)
+            if raw is not None:
+                try:
+                    action = parse_queue_action(raw)
+                except ValueError as invalid:
+                    send_json(ws, {"type": "error", "code": "invalid_field", "message": str(invalid),
+                                   "field": "type"})
+                    continue
+                if action == "join":
+                    coordinator.join(robot_name, user_id)
+                else:
+                    coordinator.apply(ACTIONS[action], robot_name, user_id)
+                last_sent = None
+            now = time.monotonic()
+            message = seat_message(coordinator, robot_name, user_id)
+            if message != last_sent or now - last_sent_at >= 1.0:
+                send_json(ws, message)
+                last_sent, last_sent_at = message, now
+    finally:
+        seat.keep(ws, now=True)  # a closing frame was heard just now: a reload keeps the whole grace
 
 
-def init_app(app: Flask) -> None:
-    """Creates the coordinator for app (the channel itself is registered with the shared `sock`)."""
-    from middleware.access.coordinator import init_app as init_coordinator
-
-    init_coordinator(app)
+def register(sock: Channels) -> None:
+    """Declares the queue channel."""
+    sock.route("/ws/robots/<robot_name>/queue", endpoint="queue_channel")(queue_channel)

@@ -15,10 +15,12 @@ from datetime import UTC, datetime, timedelta
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
-from middleware.accounts.services import Refused, forbidden
+from middleware.accounts.services import forbidden
 from middleware.auth.schemas import InvalidField, clean_new_password, clean_role, clean_username
 from middleware.auth.services import AccountExists, create_user
 from middleware.courses.services import get_course, is_course_tutor
+from middleware.errors import Refused
+from middleware.locking import rows_matched
 from middleware.models import Course, CourseMembership, Invitation, Role, User
 
 
@@ -98,10 +100,9 @@ def revoke_invitation(session: Session, actor: User, invitation_id: int, now: da
         raise Refused(409, "invitation_not_pending", f"This invitation is {status}; only a pending one can be "
                       "withdrawn.", "invitation_id")
     # Conditional, so a link being accepted at this moment is either used or withdrawn, never both.
-    withdrawn = session.execute(
-        update(Invitation).where(Invitation.id == invitation.id, Invitation.accepted_at.is_(None),
-                                 Invitation.revoked_at.is_(None)).values(revoked_at=now)
-    ).rowcount
+    withdrawn = rows_matched(session, update(Invitation).where(
+        Invitation.id == invitation.id, Invitation.accepted_at.is_(None), Invitation.revoked_at.is_(None))
+        .values(revoked_at=now))
     if withdrawn != 1:
         raise Refused(409, "invitation_not_pending", "This invitation was used a moment ago.", "invitation_id")
     session.refresh(invitation)
@@ -153,11 +154,9 @@ def accept(session: Session, token: str, username: object, password: object, pas
     clean_password = clean_new_password(password)
     if password_again != clean_password:
         raise InvalidField("password_again", "The two passwords differ; type the same password twice.")
-    used = session.execute(
-        update(Invitation).where(Invitation.id == invitation.id, Invitation.accepted_at.is_(None),
-                                 Invitation.revoked_at.is_(None))
-        .values(accepted_at=now)
-    ).rowcount
+    used = rows_matched(session, update(Invitation).where(
+        Invitation.id == invitation.id, Invitation.accepted_at.is_(None), Invitation.revoked_at.is_(None))
+        .values(accepted_at=now))
     if used != 1:
         raise InvitationUnusable("used")
     try:

@@ -12,7 +12,8 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware.accounts.schemas import clean_robot_address, clean_robot_name, clean_robot_title
-from middleware.accounts.services import Refused, require_admin
+from middleware.accounts.services import require_admin
+from middleware.errors import Refused
 from middleware.models import Robot, User
 from middleware.models.accounts import utc_now
 

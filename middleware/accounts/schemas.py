@@ -6,6 +6,8 @@ import re
 from datetime import timedelta
 
 from middleware.auth.schemas import InvalidField
+from middleware.auth.throttle import MAX_ADDRESS_LENGTH, MAX_USERNAME_LENGTH
+from middleware.validation import decimal_int
 
 ROBOT_NAME = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
 ROBOT_ADDRESS = re.compile(r"^[A-Za-z0-9.\-\[\]:]{1,250}:\d{1,5}$")
@@ -16,9 +18,8 @@ MAX_ID = 2**31 - 1
 
 def clean_id(value: object, field: str) -> int:
     """A positive whole number (from JSON or a form field)."""
-    if isinstance(value, str) and value.strip().isdigit():
-        value = int(value.strip())
-    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_ID:
+    value = decimal_int(value, 1, MAX_ID)
+    if value is None:
         raise InvalidField(field, f"{field} must be a positive whole number.")
     return value
 
@@ -67,8 +68,20 @@ def clean_invitation_days(value: object) -> timedelta:
     """How long an invitation link lasts: 1-30 days (default 7)."""
     if value is None or value == "":
         return timedelta(days=INVITATION_DAYS_DEFAULT)
-    if isinstance(value, str) and value.strip().isdigit():
-        value = int(value.strip())
-    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= INVITATION_DAYS_MAX:
+    value = decimal_int(value, 1, INVITATION_DAYS_MAX)
+    if value is None:
         raise InvalidField("days", f"days must be a whole number from 1 to {INVITATION_DAYS_MAX}.")
     return timedelta(days=value)
+
+
+def clean_throttle_key(address: object, username: object) -> tuple[str, str | None]:
+    """A login throttle's key from a form or JSON: an address (required) and, optionally, a username."""
+    if not isinstance(address, str) or not address.strip() or len(address.strip()) > MAX_ADDRESS_LENGTH:
+        raise InvalidField("address", f"address must be the address shown in the list (1 to {MAX_ADDRESS_LENGTH} "
+                                      "characters).")
+    if username is None or username == "":
+        return address.strip(), None
+    if not isinstance(username, str) or len(username) > MAX_USERNAME_LENGTH:
+        raise InvalidField("username", f"username must be text of at most {MAX_USERNAME_LENGTH} characters, or "
+                                       "left out to clear the whole address.")
+    return address.strip(), username

@@ -8,21 +8,17 @@ actor may not; the caller commits.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from datetime import datetime
 
 from sqlalchemy import exists, select
 from sqlalchemy.orm import Session, aliased
 
+from middleware.accounts.schemas import clean_throttle_key
+from middleware.auth import throttle
 from middleware.auth.schemas import InvalidField, clean_role, clean_username
 from middleware.auth.services import AccountExists, create_user, generate_password, hash_password
+from middleware.errors import Refused
 from middleware.models import CourseMembership, Role, User
-
-
-class Refused(Exception):
-    """An action refused: an HTTP-like status, a stable code, a sentence and the field at fault."""
-
-    def __init__(self, status: int, code: str, message: str, field: str | None = None) -> None:
-        super().__init__(message)
-        self.status, self.code, self.message, self.field = status, code, message, field
 
 
 def forbidden(message: str = "You are not allowed to do that.") -> Refused:
@@ -132,3 +128,16 @@ def set_active_by_name(session: Session, username: str, active: bool) -> User:
         raise InvalidField("username", f"There is no account named {username!r}.")
     user.is_active = active
     return user
+
+
+def login_throttles(session: Session, actor: User, now: datetime) -> list[throttle.Throttle]:
+    """The login keys being slowed (admins only)."""
+    require_admin(actor)
+    return throttle.list_throttles(session, now)
+
+
+def clear_login_throttle(session: Session, actor: User, address: object, username: object) -> int:
+    """Forgets the failed logins from an address (of one username, when given); admins only. Returns how many."""
+    require_admin(actor)
+    clean_address, clean_name = clean_throttle_key(address, username)
+    return throttle.clear(session, clean_address, clean_name)

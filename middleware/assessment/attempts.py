@@ -20,12 +20,13 @@ from sqlalchemy import func, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
-from middleware.accounts.services import Refused, forbidden
+from middleware.accounts.services import forbidden
 from middleware.assessment.bank import questions_of
-from middleware.assessment.experiment import MAX_TRACE_SAMPLES, grade_task
 from middleware.assessment.grading import ItemResult, grade_question
 from middleware.assessment.policy import as_utc, get_attempt, get_exam, student_course
-from middleware.locking import lock_user
+from middleware.assessment.trace_grading import MAX_TRACE_SAMPLES, grade_task
+from middleware.errors import Refused
+from middleware.locking import lock_user, rows_matched
 from middleware.models import User
 from middleware.models.assessment import Attempt, Exam
 
@@ -33,7 +34,9 @@ MAX_ANSWER_CHARS = 4000
 
 
 class TimeUp(Refused):
-    """The deadline has passed: the answer is refused, and the attempt was submitted as it stood (commit it)."""
+    """The deadline has passed: the answer is refused, and the attempt was submitted as it stood (that stays)."""
+
+    keeps_changes = True
 
     def __init__(self) -> None:
         super().__init__(409, "time_up", "The time for this attempt is up: it was submitted as it stood at the "
@@ -87,7 +90,7 @@ def settle(session: Session, attempt: Attempt, now: datetime) -> bool:
     if attempt.status != "in_progress" or attempt.deadline_at is None or now <= as_utc(attempt.deadline_at):
         return False
     attempt = _lock_attempt(session, attempt.id)
-    if attempt.status != "in_progress":
+    if attempt.status != "in_progress" or attempt.deadline_at is None:
         return False
     _finalise(session, get_exam(session, attempt.exam_id), attempt, as_utc(attempt.deadline_at), "deadline", None)
     return True
@@ -202,8 +205,8 @@ def submit_attempt(session: Session, actor: User, attempt_id: int, now: datetime
 
 def record_trace(session: Session, attempt_id: int, trace: list[list[float]]) -> bool:
     """Stores the recorder's samples so far in an attempt still in progress (a conditional UPDATE)."""
-    done = session.execute(update(Attempt).where(Attempt.id == attempt_id, Attempt.status == "in_progress")
-                           .values(trace=trace[-MAX_TRACE_SAMPLES:])).rowcount
+    done = rows_matched(session, update(Attempt).where(Attempt.id == attempt_id, Attempt.status == "in_progress")
+                        .values(trace=trace[-MAX_TRACE_SAMPLES:]))
     return bool(done)
 
 

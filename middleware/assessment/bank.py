@@ -8,12 +8,13 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.accounts.services import Refused
 from middleware.assessment.policy import get_exam, may_teach, student_course, teaching_course  # noqa: F401
 from middleware.assessment.schemas import BANK_FORMAT, ExamInput, QuestionInput, parse_bank_file
 from middleware.auth.schemas import InvalidField
+from middleware.errors import Refused
 from middleware.models import User
 from middleware.models.assessment import Attempt, Exam, Question
+from middleware.validation import printable
 
 
 def question_dict(question: Question, with_key: bool = True) -> dict[str, Any]:
@@ -83,7 +84,8 @@ def export_bank(session: Session, actor: User, course_id: int) -> str:
         item = question_dict(question)
         item.pop("id")
         items.append(item)
-    return json.dumps({"format": BANK_FORMAT, "questions": items}, indent=2, ensure_ascii=False)
+    # printable: a lone surrogate stored before the edge refused them would make the file unencodable.
+    return printable(json.dumps({"format": BANK_FORMAT, "questions": items}, indent=2, ensure_ascii=False))
 
 
 def import_bank(session: Session, actor: User, course_id: int, data: bytes) -> list[Question]:

@@ -17,6 +17,8 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from middleware.validation import decimal_int
+
 QUESTION_KINDS = ("single", "multiple", "numeric", "text")
 
 # unit -> (quantity, factor to the quantity's base unit)
@@ -76,8 +78,7 @@ def parse_number(text: object) -> float | None:
 
 
 def _grade_single(spec: dict[str, Any], answer: object) -> tuple[float, str]:
-    if isinstance(answer, str) and answer.strip().lstrip("-").isdigit():
-        answer = int(answer)
+    answer = decimal_int(answer) if isinstance(answer, str) else answer
     if isinstance(answer, bool) or not isinstance(answer, int):
         return 0.0, "The answer is not one of the choices."
     if answer == spec["correct"]:
@@ -90,8 +91,7 @@ def _grade_multiple(spec: dict[str, Any], answer: object) -> tuple[float, str]:
         return 0.0, "The answer is not a set of choices."
     picked: set[int] = set()
     for value in answer:
-        if isinstance(value, str) and value.isdigit():
-            value = int(value)
+        value = decimal_int(value) if isinstance(value, str) else value
         if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < len(spec["choices"]):
             return 0.0, "The answer names a choice that does not exist."
         picked.add(value)

@@ -2,31 +2,43 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 from datetime import UTC
 from typing import Any
 
 from flask import Blueprint, Response, abort, flash, redirect, render_template, request, url_for
+from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy import select
+from sqlalchemy.orm import Session
 
-from middleware.accounts.services import Refused
 from middleware.assessment import attempts, bank, recommendations, review, survey
-from middleware.assessment.attempts import TimeUp, window_state
-from middleware.assessment.routes import controls_robot, finish_recording, server_now, start_recording
-from middleware.assessment.schemas import AGREEMENT, SURVEY_ITEMS, parse_exam, parse_question, parse_survey
+from middleware.assessment.attempts import window_state
+from middleware.assessment.routes import controls_robot, finish_recording, record_after_commit, server_now
+from middleware.assessment.schemas import (
+    AGREEMENT,
+    RUBRIC_ROWS,
+    SURVEY_ITEMS,
+    ExamInput,
+    QuestionInput,
+    form_choice_numbers,
+    form_rubric,
+    parse_exam,
+    parse_question,
+    parse_survey,
+)
+from middleware.assessment.wording import moment_words
 from middleware.auth.schemas import InvalidField
 from middleware.courses.services import list_courses
 from middleware.db import get_session
+from middleware.errors import Refused, flashed, unless_refused
 from middleware.models import Course
+from middleware.validation import decimal_int
 
 blueprint = Blueprint("assessment_pages", __name__)
-CSS = "css/assessment.css"
-
-
-def _refused(error: Refused) -> None:
-    get_session().rollback()
-    abort(error.status if error.status in (403, 404) else 409)
+blueprint.add_app_template_filter(moment_words, "moment")
+CSS = "pages/assessment/assessment.css"
 
 
 def _form_answers() -> dict[str, Any]:
@@ -51,7 +63,7 @@ def _form_answers() -> dict[str, Any]:
 
 @blueprint.get("/assessment")
 @login_required
-def hub():  # type: ignore[no-untyped-def]
+def hub() -> ResponseReturnValue:
     """Students: their tests (open now, upcoming, done) and recommendations; tutors: the courses they assess."""
     dbs, now = get_session(), server_now()
     attempts.settle_due(dbs, now, user_id=current_user.id)
@@ -72,7 +84,6 @@ def hub():  # type: ignore[no-untyped-def]
             entry["recommendations"] = recommendations.recommend(dbs, current_user.id, view.id, now)
             entry["answered_survey"] = survey.has_answered(dbs, current_user.id, view.id)
         courses.append(entry)
-    dbs.commit()
     return render_template("assessment/hub.html", courses=courses, css=CSS, now=now)
 
 
@@ -90,7 +101,7 @@ def _question_form(question: Any) -> dict[str, Any]:
     correct = spec.get("correct")
     return {"kind": question.kind, "prompt": question.prompt, "topics": ", ".join(question.topics),
             "points": f"{question.points:g}", "choices": "\n".join(spec.get("choices", [])),
-            "correct": ", ".join(map(str, correct)) if isinstance(correct, list) else str(correct or 0)
+            "correct": ", ".join(str(i + 1) for i in correct) if isinstance(correct, list) else str((correct or 0) + 1)
             if "choices" in spec else "",
             "value": repr(spec["value"]) if "value" in spec else "",
             "tolerance": repr(spec["tolerance"]) if "tolerance" in spec else "",
@@ -98,7 +109,27 @@ def _question_form(question: Any) -> dict[str, Any]:
             "case_sensitive": "1" if spec.get("case_sensitive") else ""}
 
 
+def _form_question(form: dict[str, Any]) -> QuestionInput:
+    """A question from the bank editor, whose right choices are numbered from 1 (the API's from 0)."""
+    if form.get("kind") in ("single", "multiple"):
+        return parse_question({**form, "correct": form_choice_numbers(form.get("correct"), form.get("choices"))})
+    return parse_question(form)
+
+
 TASK_FIELDS = ("x_m", "y_m", "x1_m", "y1_m", "x2_m", "y2_m", "distance_m", "min_travel_m")
+
+
+def _rubric_rows(bands: list[list[float]]) -> dict[str, str]:
+    """The stored bands as the test editor's rows (share in percent)."""
+    rows = {}
+    for row, (bound, share) in enumerate(bands[:RUBRIC_ROWS]):
+        rows[f"rubric_bound_{row}"], rows[f"rubric_share_{row}"] = f"{bound:g}", f"{share * 100:g}"
+    return rows
+
+
+def _form_exam(form: dict[str, Any]) -> ExamInput:
+    """A test from the test editor, whose rubric comes as rows."""
+    return parse_exam({**form, "rubric": form_rubric(form)})
 
 
 def _exam_form(exam: Any) -> dict[str, Any]:
@@ -112,21 +143,18 @@ def _exam_form(exam: Any) -> dict[str, Any]:
     if task:
         form.update({"task_kind": task["kind"], "task_points": repr(task.get("points", 10)),
                      "task_topics": ", ".join(task.get("topics") or []), "instructions": task.get("instructions", ""),
-                     "rubric": ", ".join(f"{bound!r}:{share!r}" for bound, share in task.get("rubric") or [])})
+                     **_rubric_rows(task.get("rubric") or [])})
         form.update({name: repr(task[name]) for name in TASK_FIELDS if name in task})
     return form
 
 
 def _course_page(course_id: int, status: int = 200, errors: dict[str, str] | None = None,
                  form: dict[str, Any] | None = None, editing: tuple[str, int] | None = None,
-                 error_key: str = ""):  # type: ignore[no-untyped-def]
+                 error_key: str = ""):
     """The tutor's page; editing ("question" | "exam", id) opens that item's edit form (prefilled unless form)."""
     dbs, now = get_session(), server_now()
-    try:
-        course = bank.teaching_course(dbs, current_user, course_id)
-        questions = bank.list_questions(dbs, current_user, course_id)
-    except Refused as refused:
-        _refused(refused)
+    course = bank.teaching_course(dbs, current_user, course_id)
+    questions = bank.list_questions(dbs, current_user, course_id)
     exam_rows = bank.list_exams(dbs, course_id)
     exams = [{**review.exam_dict(e, now), "has_attempts": bank.has_attempts(dbs, e.id)} for e in exam_rows]
     qform: dict[str, Any] = dict(form or {}) if error_key == "question" else {}
@@ -151,38 +179,40 @@ def _course_page(course_id: int, status: int = 200, errors: dict[str, str] | Non
 
 @blueprint.get("/courses/<int:course_id>/assessment")
 @login_required
-def course_page(course_id: int):  # type: ignore[no-untyped-def]
+def course_page(course_id: int) -> ResponseReturnValue:
     """The tutor's bank editor, tests, grades export and survey results for a course; ?question=<id> or ?exam=<id>
     opens that question's or test's edit form."""
     for kind in ("question", "exam"):
-        wanted = request.args.get(kind, "")
-        if wanted.isdigit():
-            return _course_page(course_id, editing=(kind, int(wanted)))
+        wanted = decimal_int(request.args.get(kind), 1)
+        if wanted is not None:
+            return _course_page(course_id, editing=(kind, wanted))
     return _course_page(course_id)
 
 
-def _course_action(course_id: int, action, success: str, error_key: str,  # type: ignore[no-untyped-def]
-                   editing: tuple[str, int] | None = None, keep_form: bool = True):
-    """Runs a form's action; on a refusal, the page again with the message (and the form as sent, if keep_form)."""
-    dbs, form = get_session(), request.form.to_dict()
+def _course_action(course_id: int, action: Callable[[Session, dict[str, Any]], object], success: str,
+                   error_key: str, editing: tuple[str, int] | None = None,
+                   keep_form: bool = True) -> ResponseReturnValue:
+    """Runs a form's action; on a refusal, the page again with the message (and the form as sent, if keep_form;
+    always for an invalid field)."""
+    form: dict[str, Any] = request.form.to_dict()
     if error_key == "exam":
-        form["question_ids"] = request.form.getlist("question_ids")  # type: ignore[assignment]
-    try:
+        form["question_ids"] = request.form.getlist("question_ids")
+
+    def act() -> ResponseReturnValue:
+        dbs = get_session()
         bank.teaching_course(dbs, current_user, course_id)
         action(dbs, form)
-    except Refused as refused:
-        if refused.status in (403, 404):
-            _refused(refused)
-        dbs.rollback()
+        flash(success, "success")
+        return redirect(url_for("assessment_pages.course_page", course_id=course_id), 303)
+
+    def page_again(refused: Refused) -> ResponseReturnValue:
+        if isinstance(refused, InvalidField):
+            return _course_page(course_id, 400, {error_key: f"{refused.field}: {refused.message}"}, form, editing,
+                                error_key)
         return _course_page(course_id, refused.status, {error_key: refused.message}, form if keep_form else None,
                             editing, error_key)
-    except InvalidField as invalid:
-        dbs.rollback()
-        return _course_page(course_id, 400, {error_key: f"{invalid.field}: {invalid.message}"}, form, editing,
-                            error_key)
-    dbs.commit()
-    flash(success, "success")
-    return redirect(url_for("assessment_pages.course_page", course_id=course_id), 303)
+
+    return unless_refused(act, page_again)
 
 
 def _own_question(dbs: Any, course_id: int, question_id: int) -> Any:
@@ -201,20 +231,20 @@ def _own_exam(dbs: Any, course_id: int, exam_id: int) -> Any:
 
 @blueprint.post("/courses/<int:course_id>/assessment/questions")
 @login_required
-def add_question(course_id: int):  # type: ignore[no-untyped-def]
+def add_question(course_id: int) -> ResponseReturnValue:
     """Adds a question from the bank editor's form."""
     return _course_action(course_id, lambda dbs, form: bank.add_question(dbs, current_user, course_id,
-                                                                         parse_question(form)),
+                                                                         _form_question(form)),
                           "Question added to the bank.", "question")
 
 
 @blueprint.post("/courses/<int:course_id>/assessment/questions/<int:question_id>")
 @login_required
-def edit_question(course_id: int, question_id: int):  # type: ignore[no-untyped-def]
+def edit_question(course_id: int, question_id: int) -> ResponseReturnValue:
     """Replaces a question from its edit form (attempts already graded keep their marks)."""
-    def action(dbs, form):  # type: ignore[no-untyped-def]
+    def action(dbs: Session, form: dict[str, Any]) -> None:
         _own_question(dbs, course_id, question_id)
-        bank.update_question(dbs, current_user, question_id, parse_question(form))
+        bank.update_question(dbs, current_user, question_id, _form_question(form))
 
     return _course_action(course_id, action, f"Question #{question_id} saved.", "question",
                           ("question", question_id))
@@ -222,9 +252,9 @@ def edit_question(course_id: int, question_id: int):  # type: ignore[no-untyped-
 
 @blueprint.post("/courses/<int:course_id>/assessment/questions/<int:question_id>/delete")
 @login_required
-def delete_question(course_id: int, question_id: int):  # type: ignore[no-untyped-def]
+def delete_question(course_id: int, question_id: int) -> ResponseReturnValue:
     """Removes a question from the bank (and from the tests nobody has attempted)."""
-    def action(dbs, _form):  # type: ignore[no-untyped-def]
+    def action(dbs: Session, _form: dict[str, Any]) -> None:
         _own_question(dbs, course_id, question_id)
         bank.delete_question(dbs, current_user, question_id)
 
@@ -234,9 +264,9 @@ def delete_question(course_id: int, question_id: int):  # type: ignore[no-untype
 
 @blueprint.post("/courses/<int:course_id>/assessment/bank")
 @login_required
-def import_bank(course_id: int):  # type: ignore[no-untyped-def]
+def import_bank(course_id: int) -> ResponseReturnValue:
     """Imports a bank file (JSON)."""
-    def action(dbs, _form):  # type: ignore[no-untyped-def]
+    def action(dbs: Session, _form: dict[str, Any]) -> None:
         upload = request.files.get("file")
         if upload is None or not upload.filename:
             raise InvalidField("file", "Choose a question bank file (JSON) to import.")
@@ -247,19 +277,19 @@ def import_bank(course_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/courses/<int:course_id>/assessment/exams")
 @login_required
-def create_exam(course_id: int):  # type: ignore[no-untyped-def]
+def create_exam(course_id: int) -> ResponseReturnValue:
     """Creates a quiz or a timed test from the test editor's form."""
     return _course_action(course_id, lambda dbs, form: bank.create_exam(dbs, current_user, course_id,
-                                                                        parse_exam(form)), "Test created.", "exam")
+                                                                        _form_exam(form)), "Test created.", "exam")
 
 
 @blueprint.post("/courses/<int:course_id>/assessment/exams/<int:exam_id>")
 @login_required
-def edit_exam(course_id: int, exam_id: int):  # type: ignore[no-untyped-def]
+def edit_exam(course_id: int, exam_id: int) -> ResponseReturnValue:
     """Changes a test from its edit form (only its title and times once someone has started it)."""
-    def action(dbs, form):  # type: ignore[no-untyped-def]
+    def action(dbs: Session, form: dict[str, Any]) -> None:
         exam = _own_exam(dbs, course_id, exam_id)
-        data = parse_exam(form)
+        data = _form_exam(form)
         if set(data.question_ids) == set(exam.question_ids or []):  # the checkboxes' order is the bank's
             data = replace(data, question_ids=list(exam.question_ids))
         bank.update_exam(dbs, current_user, exam_id, data)
@@ -269,9 +299,9 @@ def edit_exam(course_id: int, exam_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/courses/<int:course_id>/assessment/exams/<int:exam_id>/delete")
 @login_required
-def delete_exam(course_id: int, exam_id: int):  # type: ignore[no-untyped-def]
+def delete_exam(course_id: int, exam_id: int) -> ResponseReturnValue:
     """Deletes a test nobody has attempted; a test with attempts is refused with the reason."""
-    def action(dbs, _form):  # type: ignore[no-untyped-def]
+    def action(dbs: Session, _form: dict[str, Any]) -> None:
         _own_exam(dbs, course_id, exam_id)
         bank.delete_exam(dbs, current_user, exam_id)
 
@@ -280,57 +310,43 @@ def delete_exam(course_id: int, exam_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.get("/assessment/exams/<int:exam_id>")
 @login_required
-def exam_page(exam_id: int):  # type: ignore[no-untyped-def]
+def exam_page(exam_id: int) -> ResponseReturnValue:
     """A student's start page for an exam, or the tutor's list of attempts."""
     dbs, now = get_session(), server_now()
-    try:
-        exam = bank.get_exam(dbs, exam_id)
-        teaches = bank.may_teach(dbs, current_user, exam.course_id)
-        if not teaches:
-            bank.student_course(dbs, current_user, exam.course_id)
-        rows = review.list_attempts(dbs, current_user, exam_id, now) if teaches else None
-        mine = None if teaches else attempts.my_attempts(dbs, current_user.id, exam_id)
-    except Refused as refused:
-        _refused(refused)
-    dbs.commit()
+    exam = bank.get_exam(dbs, exam_id)
+    teaches = bank.may_teach(dbs, current_user, exam.course_id)
+    if not teaches:
+        bank.student_course(dbs, current_user, exam.course_id)
+    rows = review.list_attempts(dbs, current_user, exam_id, now) if teaches else None
+    mine = None if teaches else attempts.my_attempts(dbs, current_user.id, exam_id)
     return render_template("assessment/exam.html", exam=review.exam_dict(exam, now), rows=rows, mine=mine,
                            teaches=teaches, course=dbs.get(Course, exam.course_id), css=CSS)
 
 
 @blueprint.post("/assessment/exams/<int:exam_id>/start")
 @login_required
-def start(exam_id: int):  # type: ignore[no-untyped-def]
+def start(exam_id: int) -> ResponseReturnValue:
     """Starts (or resumes) the student's attempt and opens it."""
-    dbs = get_session()
-    try:
-        bank.get_exam(dbs, exam_id)
+    def begin() -> ResponseReturnValue:
+        dbs = get_session()
         exam = bank.get_exam(dbs, exam_id)
         bank.student_course(dbs, current_user, exam.course_id)
         attempt = attempts.start_attempt(dbs, current_user, exam_id, server_now(), controls_robot)
-    except Refused as refused:
-        if refused.status in (403, 404):
-            _refused(refused)
-        dbs.rollback()
-        flash(refused.message, "error")
-        return redirect(url_for("assessment_pages.exam_page", exam_id=exam_id), 303)
-    dbs.commit()
-    if exam.kind == "experimental" and exam.robot_name:
-        start_recording(attempt.id, exam.robot_name)
-    return redirect(url_for("assessment_pages.attempt_page", attempt_id=attempt.id), 303)
+        record_after_commit(attempt.id, exam)
+        return redirect(url_for("assessment_pages.attempt_page", attempt_id=attempt.id), 303)
+
+    return unless_refused(begin, flashed(url_for("assessment_pages.exam_page", exam_id=exam_id)))
+
 
 
 @blueprint.get("/assessment/attempts/<int:attempt_id>")
 @login_required
-def attempt_page(attempt_id: int):  # type: ignore[no-untyped-def]
+def attempt_page(attempt_id: int) -> ResponseReturnValue:
     """Taking an attempt (its student), the corrected attempt, or the tutor's review."""
     dbs = get_session()
-    try:
-        view = review.attempt_view(dbs, current_user, attempt_id, server_now())
-        exam = bank.get_exam(dbs, view["exam"]["id"])
-        teaches = bank.may_teach(dbs, current_user, exam.course_id)
-    except Refused as refused:
-        _refused(refused)
-    dbs.commit()
+    view = review.attempt_view(dbs, current_user, attempt_id, server_now())
+    exam = bank.get_exam(dbs, view["exam"]["id"])
+    teaches = bank.may_teach(dbs, current_user, exam.course_id)
     owner = attempts.get_attempt(dbs, attempt_id).user_id == current_user.id
     return render_template("assessment/attempt.html", a=view, teaches=teaches, owner=owner, css=CSS,
                            questions={str(q["id"]): q for q in view["questions"]}), 200, {"Cache-Control": "no-store"}
@@ -338,46 +354,35 @@ def attempt_page(attempt_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/assessment/attempts/<int:attempt_id>/submit")
 @login_required
-def submit(attempt_id: int):  # type: ignore[no-untyped-def]
+def submit(attempt_id: int) -> ResponseReturnValue:
     """Submits the attempt with the form's answers (without JavaScript, too)."""
-    dbs = get_session()
-    try:
+    back = url_for("assessment_pages.attempt_page", attempt_id=attempt_id)
+
+    def hand_in() -> ResponseReturnValue:
+        dbs = get_session()
         owner = attempts.get_attempt(dbs, attempt_id)
         trace = finish_recording(attempt_id) if owner.user_id == current_user.id else None
         attempts.submit_attempt(dbs, current_user, attempt_id, server_now(), _form_answers(), trace)
-    except TimeUp as late:
-        dbs.commit()
-        flash(late.message, "warning")
-        return redirect(url_for("assessment_pages.attempt_page", attempt_id=attempt_id), 303)
-    except Refused as refused:
-        if refused.status in (403, 404):
-            _refused(refused)
-        dbs.rollback()
-        flash(refused.message, "error")
-        return redirect(url_for("assessment_pages.attempt_page", attempt_id=attempt_id), 303)
-    dbs.commit()
-    flash("Submitted. Your corrected attempt is below.", "success")
-    return redirect(url_for("assessment_pages.attempt_page", attempt_id=attempt_id), 303)
+        flash("Submitted. Your corrected attempt is below.", "success")
+        return redirect(back, 303)
+
+    return unless_refused(hand_in, flashed(back))
 
 
-def _review_action(attempt_id: int, action, success: str):  # type: ignore[no-untyped-def]
-    dbs = get_session()
-    try:
-        action(dbs, request.form)
-    except Refused as refused:
-        if refused.status in (403, 404):
-            _refused(refused)
-        dbs.rollback()
-        flash(refused.message, "error")
-        return redirect(url_for("assessment_pages.attempt_page", attempt_id=attempt_id), 303)
-    dbs.commit()
-    flash(success, "success")
-    return redirect(url_for("assessment_pages.attempt_page", attempt_id=attempt_id), 303)
+def _review_action(attempt_id: int, action: Callable[[Session, Any], object], success: str) -> ResponseReturnValue:
+    back = url_for("assessment_pages.attempt_page", attempt_id=attempt_id)
+
+    def act() -> ResponseReturnValue:
+        action(get_session(), request.form)
+        flash(success, "success")
+        return redirect(back, 303)
+
+    return unless_refused(act, flashed(back))
 
 
 @blueprint.post("/assessment/attempts/<int:attempt_id>/override")
 @login_required
-def override(attempt_id: int):  # type: ignore[no-untyped-def]
+def override(attempt_id: int) -> ResponseReturnValue:
     """A tutor replaces one item's mark, with a reason."""
     return _review_action(attempt_id, lambda dbs, f: review.override_mark(
         dbs, current_user, attempt_id, f.get("item"), f.get("points"), f.get("reason"), f.get("comment"),
@@ -386,7 +391,7 @@ def override(attempt_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/assessment/attempts/<int:attempt_id>/comment")
 @login_required
-def comment(attempt_id: int):  # type: ignore[no-untyped-def]
+def comment(attempt_id: int) -> ResponseReturnValue:
     """A tutor's comment on the attempt."""
     return _review_action(attempt_id, lambda dbs, f: review.add_comment(
         dbs, current_user, attempt_id, f.get("item"), f.get("comment"), server_now()), "Comment added.")
@@ -394,55 +399,53 @@ def comment(attempt_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.get("/courses/<int:course_id>/grades.csv")
 @login_required
-def grades_csv(course_id: int):  # type: ignore[no-untyped-def]
+def grades_csv(course_id: int) -> ResponseReturnValue:
     """The grades export as a download."""
-    dbs = get_session()
-    try:
-        text = review.grades_csv(dbs, current_user, course_id, server_now())
-    except Refused as refused:
-        _refused(refused)
-    dbs.commit()
+    text = review.grades_csv(get_session(), current_user, course_id, server_now())
     return Response(text, mimetype="text/csv", headers={
         "Content-Disposition": f'attachment; filename="grades-{course_id}.csv"', "Cache-Control": "no-store"})
 
 
+@blueprint.get("/courses/<int:course_id>/grades")
+@login_required
+def gradebook(course_id: int) -> ResponseReturnValue:
+    """The gradebook: every student against every test, with the CSV export beside it."""
+    dbs = get_session()
+    book = review.gradebook(dbs, current_user, course_id, server_now())
+    course = bank.teaching_course(dbs, current_user, course_id)
+    return render_template("assessment/gradebook.html", course=course, book=book, css=CSS)
+
+
 @blueprint.route("/courses/<int:course_id>/survey", methods=["GET", "POST"])
 @login_required
-def survey_page(course_id: int):  # type: ignore[no-untyped-def]
+def survey_page(course_id: int) -> ResponseReturnValue:
     """The system evaluation questionnaire (students of the course, once)."""
-    dbs = get_session()
-    try:
-        course = bank.student_course(dbs, current_user, course_id)
-    except Refused as refused:
-        _refused(refused)
-    errors: dict[str, str] = {}
-    if request.method == "POST":
-        try:
-            ratings, comments = parse_survey(request.form.to_dict())
-            survey.submit_survey(dbs, current_user, course_id, ratings, comments)
-        except InvalidField as invalid:
-            errors[invalid.field] = invalid.message
-        except Refused as refused:
-            errors["form"] = refused.message
-        if not errors:
-            dbs.commit()
-            flash("Thank you: your answers were recorded.", "success")
-            return redirect(url_for("assessment_pages.hub"), 303)
-        dbs.rollback()
-    answered = survey.has_answered(dbs, current_user.id, course_id)
-    return render_template("assessment/survey.html", course=course, items=SURVEY_ITEMS, answers=AGREEMENT,
-                           errors=errors, form=request.form, answered=answered, css=CSS), 400 if errors else 200
+    course = bank.student_course(get_session(), current_user, course_id)
+
+    def page(errors: dict[str, str]) -> ResponseReturnValue:
+        answered = survey.has_answered(get_session(), current_user.id, course_id)
+        return render_template("assessment/survey.html", course=course, items=SURVEY_ITEMS, answers=AGREEMENT,
+                               errors=errors, form=request.form, answered=answered, css=CSS), 400 if errors else 200
+
+    def answer() -> ResponseReturnValue:
+        ratings, comments = parse_survey(request.form.to_dict())
+        survey.submit_survey(get_session(), current_user, course_id, ratings, comments)
+        flash("Thank you: your answers were recorded.", "success")
+        return redirect(url_for("assessment_pages.hub"), 303)
+
+    if request.method != "POST":
+        return page({})
+    return unless_refused(answer, lambda refused: page(
+        {refused.field if isinstance(refused, InvalidField) else "form": refused.message}))
 
 
 @blueprint.get("/courses/<int:course_id>/survey/results")
 @login_required
-def survey_results(course_id: int):  # type: ignore[no-untyped-def]
+def survey_results(course_id: int) -> ResponseReturnValue:
     """The distribution of answers per question as a chart (server-rendered SVG), and the comments."""
     dbs = get_session()
-    try:
-        items, comments = survey.results(dbs, current_user, course_id)
-    except Refused as refused:
-        _refused(refused)
+    results = survey.results(dbs, current_user, course_id)
     course = dbs.scalar(select(Course).where(Course.id == course_id))
-    return render_template("assessment/survey_results.html", course=course, items=items, comments=comments,
-                           answers=AGREEMENT, css=CSS)
+    return render_template("assessment/survey_results.html", course=course, results=results, items=results.items,
+                           comments=results.comments, min_respondents=survey.MIN_RESPONDENTS, answers=AGREEMENT,
+                           css=CSS)

@@ -7,8 +7,9 @@ from datetime import UTC, datetime
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.accounts.services import Refused, forbidden
+from middleware.accounts.services import forbidden
 from middleware.courses.services import get_course, managed_course
+from middleware.errors import Refused
 from middleware.models import Course, CourseMembership, Role, User
 from middleware.models.assessment import Attempt, Exam
 

@@ -91,7 +91,7 @@ def practice_quizzes(session: Session, course_id: int, topics: list[str], now: d
 
 
 def _tagged(rows: list[Tour] | list[Lesson], kind: str, path: str, topics: list[str]) -> list[Recommendation]:
-    out = []
+    out: list[Recommendation] = []
     for row in rows:
         tags = {t.strip() for t in (row.topics or "").split(",")}
         out.extend(Recommendation(kind, row.title, topic, f"/{path}/{row.id}") for topic in topics if topic in tags)

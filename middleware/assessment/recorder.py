@@ -12,8 +12,9 @@ import threading
 import time
 from collections.abc import Callable
 
-from middleware.assessment.experiment import MAX_TRACE_SAMPLES
-from middleware.robots.link import RobotLink
+from middleware.assessment.trace_grading import MAX_TRACE_SAMPLES
+from middleware.robots.link import RobotLink, ServerStream
+from protos.telelab.v1 import robot_pb2
 
 log = logging.getLogger(__name__)
 RATE_HZ = 5.0
@@ -27,7 +28,7 @@ class TraceRecorder:
         self._link, self._flush = link, flush
         self._samples: list[list[float]] = []
         self._lock = threading.Lock()
-        self._stream = None
+        self._stream: ServerStream[robot_pb2.Telemetry] | None = None
         self._stopped = threading.Event()
         self._started = time.monotonic()
         self._thread = threading.Thread(target=self._run, name=f"trace-{link.name}", daemon=True)

@@ -4,19 +4,20 @@ from __future__ import annotations
 
 import csv
 import io
+from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.accounts.services import Refused
 from middleware.assessment.attempts import _items, settle, settle_due
 from middleware.assessment.bank import list_exams, managed_exam, question_dict, questions_of
 from middleware.assessment.policy import as_utc, may_teach, readable_attempt, teaching_course
 from middleware.courses.schemas import csv_safe
+from middleware.errors import Refused
 from middleware.models import CourseMembership, User
-from middleware.models.assessment import Attempt, AttemptReview, Exam
+from middleware.models.assessment import Attempt, AttemptReview, Exam, Question
 
 
 def final_results(attempt: Attempt, reviews: list[AttemptReview]) -> list[dict[str, Any]]:
@@ -39,6 +40,13 @@ def final_score(attempt: Attempt, reviews: list[AttemptReview]) -> float | None:
     return round(sum(float(r["points"]) for r in final_results(attempt, reviews)), 4)
 
 
+def item_labels(questions: list[Question]) -> dict[str, str]:
+    """Each item's name as the attempt shows it: questions by their place in the test, not their bank number."""
+    labels = {str(q.id): f"Question {place}" for place, q in enumerate(questions, start=1)}
+    labels["task"] = "Experimental task"
+    return labels
+
+
 def reviews_of(session: Session, attempt_id: int) -> list[AttemptReview]:
     """The attempt's overrides and comments, oldest first."""
     return list(session.scalars(select(AttemptReview).where(AttemptReview.attempt_id == attempt_id)
@@ -53,6 +61,7 @@ def attempt_view(session: Session, actor: User, attempt_id: int, now: datetime) 
     submitted = attempt.status == "submitted"
     names = dict(session.execute(select(User.id, User.username).where(
         User.id.in_({r.author_id for r in reviews} | {attempt.user_id}))).all())
+    questions = questions_of(session, exam)
     remaining = None
     if not submitted and attempt.deadline_at is not None:
         remaining = max(0.0, (as_utc(attempt.deadline_at) - now).total_seconds())
@@ -63,7 +72,8 @@ def attempt_view(session: Session, actor: User, attempt_id: int, now: datetime) 
         "remaining_s": remaining, "server_now": now.isoformat(),
         "submitted_at": as_utc(attempt.submitted_at).isoformat() if attempt.submitted_at else None,
         "submitted_by": attempt.submitted_by,
-        "questions": [question_dict(q, with_key=False) for q in questions_of(session, exam)],
+        "questions": [question_dict(q, with_key=False) for q in questions],
+        "labels": item_labels(questions),
         "items": sorted(_items(exam)),
         "answers": attempt.answers or {},
         "results": final_results(attempt, reviews) if submitted else None,
@@ -168,8 +178,16 @@ def best_scores(session: Session, course_id: int, now: datetime) -> dict[tuple[i
     return best
 
 
-def grades_csv(session: Session, actor: User, course_id: int, now: datetime) -> str:
-    """One row per student, one column per exam (best final mark out of its maximum), every cell formula-safe."""
+@dataclass(frozen=True)
+class Gradebook:
+    """The course's tests (columns) and, per student, the best final mark at each (None: no submitted attempt)."""
+
+    exams: list[Exam]
+    rows: list[tuple[str, list[float | None]]]
+
+
+def gradebook(session: Session, actor: User, course_id: int, now: datetime) -> Gradebook:
+    """Every student of the course against every test, best final marks (the course's tutors, admins)."""
     teaching_course(session, actor, course_id)
     exams = list_exams(session, course_id)
     students = session.execute(select(User.id, User.username)
@@ -177,10 +195,15 @@ def grades_csv(session: Session, actor: User, course_id: int, now: datetime) -> 
                                .where(CourseMembership.course_id == course_id, CourseMembership.role == "student")
                                .order_by(User.username)).all()
     best = best_scores(session, course_id, now)
+    return Gradebook(exams, [(username, [best.get((user_id, e.id)) for e in exams]) for user_id, username in students])
+
+
+def grades_csv(session: Session, actor: User, course_id: int, now: datetime) -> str:
+    """One row per student, one column per exam (best final mark out of its maximum), every cell formula-safe."""
+    book = gradebook(session, actor, course_id, now)
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\r\n")
-    writer.writerow(["username", *[csv_safe(f"{e.title} ({e.kind})") for e in exams]])
-    for user_id, username in students:
-        writer.writerow([csv_safe(username), *[("" if (user_id, e.id) not in best else f"{best[(user_id, e.id)]:g}")
-                                               for e in exams]])
+    writer.writerow(["username", *[csv_safe(f"{e.title} ({e.kind})") for e in book.exams]])
+    for username, marks in book.rows:
+        writer.writerow([csv_safe(username), *["" if mark is None else f"{mark:g}" for mark in marks]])
     return out.getvalue()

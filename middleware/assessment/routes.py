@@ -7,17 +7,15 @@ from datetime import UTC, datetime
 from typing import Any
 
 from flask import Blueprint, Response, current_app, jsonify, request
+from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy.orm import Session
 
-from middleware.accounts.routes import api_error
-from middleware.accounts.services import Refused
 from middleware.assessment import attempts, bank, recommendations, review, survey
-from middleware.assessment.attempts import TimeUp
 from middleware.assessment.schemas import parse_exam, parse_question, parse_survey
-from middleware.auth.schemas import InvalidField
-from middleware.db import get_session, session_factory
+from middleware.db import after_commit, get_session, session_factory
 from middleware.errors import ApiError
+from middleware.models.assessment import Exam
 
 blueprint = Blueprint("assessment", __name__)
 
@@ -56,18 +54,9 @@ def start_recording(attempt_id: int, robot_name: str) -> None:
 
 
 def run(action: Callable[[Session], Any], status: int = 200) -> tuple[Response, int]:
-    """Runs action in the request's transaction: commit on success, roll back on a refusal (a TimeUp commits)."""
-    dbs = get_session()
-    try:
-        body = action(dbs)
-    except TimeUp as late:
-        dbs.commit()  # the attempt was submitted as it stood at the deadline
-        raise api_error(late) from None
-    except (Refused, InvalidField) as error:
-        dbs.rollback()
-        raise api_error(error) from None
-    dbs.commit()
-    return jsonify(body), status
+    """Runs action in the request's unit of work and answers its result as JSON (a refusal is the error
+    handler's; a TimeUp keeps the attempt submitted as it stood at the deadline)."""
+    return jsonify(action(get_session())), status
 
 
 def json_body() -> dict[str, Any]:
@@ -83,7 +72,7 @@ def json_body() -> dict[str, Any]:
 
 @blueprint.get("/api/courses/<int:course_id>/questions")
 @login_required
-def api_questions(course_id: int):  # type: ignore[no-untyped-def]
+def api_questions(course_id: int) -> ResponseReturnValue:
     """The course's question bank, with keys (its tutors, admins)."""
     return run(lambda dbs: {"questions": [bank.question_dict(q) for q in
                                           bank.list_questions(dbs, current_user, course_id)]})
@@ -91,11 +80,11 @@ def api_questions(course_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/api/courses/<int:course_id>/questions")
 @login_required
-def api_add_question(course_id: int):  # type: ignore[no-untyped-def]
+def api_add_question(course_id: int) -> ResponseReturnValue:
     """{kind, prompt, topics, points, ...kind's fields}: adds a question."""
     data = json_body()
 
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, Any]:
         bank.teaching_course(dbs, current_user, course_id)
         return {"question": bank.question_dict(bank.add_question(dbs, current_user, course_id, parse_question(data)))}
 
@@ -104,11 +93,11 @@ def api_add_question(course_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.put("/api/questions/<int:question_id>")
 @login_required
-def api_update_question(question_id: int):  # type: ignore[no-untyped-def]
+def api_update_question(question_id: int) -> ResponseReturnValue:
     """Replaces a question."""
     data = json_body()
 
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, Any]:
         bank.course_question(dbs, current_user, question_id)
         return {"question": bank.question_dict(bank.update_question(dbs, current_user, question_id,
                                                                     parse_question(data)))}
@@ -118,29 +107,29 @@ def api_update_question(question_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.delete("/api/questions/<int:question_id>")
 @login_required
-def api_delete_question(question_id: int):  # type: ignore[no-untyped-def]
+def api_delete_question(question_id: int) -> ResponseReturnValue:
     """Removes a question from the bank."""
-    return run(lambda dbs: bank.delete_question(dbs, current_user, question_id) or {"deleted": question_id})
+    def action(dbs: Session) -> dict[str, int]:
+        bank.delete_question(dbs, current_user, question_id)
+        return {"deleted": question_id}
+
+    return run(action)
 
 
 @blueprint.get("/api/courses/<int:course_id>/bank.json")
 @login_required
-def api_export_bank(course_id: int):  # type: ignore[no-untyped-def]
+def api_export_bank(course_id: int) -> ResponseReturnValue:
     """The bank as a file to download."""
-    dbs = get_session()
-    try:
-        text = bank.export_bank(dbs, current_user, course_id)
-    except Refused as refused:
-        raise api_error(refused) from None
+    text = bank.export_bank(get_session(), current_user, course_id)
     return Response(text, mimetype="application/json",
                     headers={"Content-Disposition": f'attachment; filename="question-bank-{course_id}.json"'})
 
 
 @blueprint.post("/api/courses/<int:course_id>/bank")
 @login_required
-def api_import_bank(course_id: int):  # type: ignore[no-untyped-def]
+def api_import_bank(course_id: int) -> ResponseReturnValue:
     """A bank file (the upload 'file', or the JSON body): every question is added, or none."""
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, Any]:
         bank.teaching_course(dbs, current_user, course_id)
         upload = request.files.get("file")
         data = upload.read() if upload is not None else request.get_data()
@@ -154,9 +143,9 @@ def api_import_bank(course_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.get("/api/courses/<int:course_id>/exams")
 @login_required
-def api_exams(course_id: int):  # type: ignore[no-untyped-def]
+def api_exams(course_id: int) -> ResponseReturnValue:
     """The course's quizzes and tests (its students and tutors, admins)."""
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, Any]:
         if not bank.may_teach(dbs, current_user, course_id):
             bank.student_course(dbs, current_user, course_id)
         now = server_now()
@@ -167,11 +156,11 @@ def api_exams(course_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/api/courses/<int:course_id>/exams")
 @login_required
-def api_create_exam(course_id: int):  # type: ignore[no-untyped-def]
+def api_create_exam(course_id: int) -> ResponseReturnValue:
     """{title, kind, opens_at, closes_at, duration_s, max_attempts, question_ids, task fields}: a new exam."""
     data = json_body()
 
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, Any]:
         bank.teaching_course(dbs, current_user, course_id)
         exam = bank.create_exam(dbs, current_user, course_id, parse_exam(data))
         return {"exam": review.exam_dict(exam, server_now())}
@@ -181,11 +170,11 @@ def api_create_exam(course_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.put("/api/exams/<int:exam_id>")
 @login_required
-def api_update_exam(exam_id: int):  # type: ignore[no-untyped-def]
+def api_update_exam(exam_id: int) -> ResponseReturnValue:
     """Changes an exam (questions and task frozen once started)."""
     data = json_body()
 
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, Any]:
         bank.managed_exam(dbs, current_user, exam_id)
         return {"exam": review.exam_dict(bank.update_exam(dbs, current_user, exam_id, parse_exam(data)),
                                          server_now())}
@@ -195,9 +184,13 @@ def api_update_exam(exam_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.delete("/api/exams/<int:exam_id>")
 @login_required
-def api_delete_exam(exam_id: int):  # type: ignore[no-untyped-def]
+def api_delete_exam(exam_id: int) -> ResponseReturnValue:
     """Deletes a test nobody has attempted (409 exam_has_attempts otherwise)."""
-    return run(lambda dbs: bank.delete_exam(dbs, current_user, exam_id) or {"deleted": exam_id})
+    def action(dbs: Session) -> dict[str, int]:
+        bank.delete_exam(dbs, current_user, exam_id)
+        return {"deleted": exam_id}
+
+    return run(action)
 
 
 # --- attempts -------------------------------------------------------------------------------------
@@ -205,7 +198,7 @@ def api_delete_exam(exam_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.get("/api/exams/<int:exam_id>/attempts")
 @login_required
-def api_exam_attempts(exam_id: int):  # type: ignore[no-untyped-def]
+def api_exam_attempts(exam_id: int) -> ResponseReturnValue:
     """Every attempt at the exam (its course's tutors, admins)."""
     return run(lambda dbs: {"attempts": review.list_attempts(dbs, current_user, exam_id, server_now())})
 
@@ -213,16 +206,21 @@ def api_exam_attempts(exam_id: int):  # type: ignore[no-untyped-def]
 def start_attempt(dbs: Session, exam_id: int) -> Any:
     """Starts (or resumes) the student's attempt; starts recording for an experimental test."""
     attempt = attempts.start_attempt(dbs, current_user, exam_id, server_now(), controls_robot)
-    exam = bank.get_exam(dbs, exam_id)
-    dbs.commit()
-    if exam.kind == "experimental" and exam.robot_name:
-        start_recording(attempt.id, exam.robot_name)
+    record_after_commit(attempt.id, bank.get_exam(dbs, exam_id))
     return attempt
+
+
+def record_after_commit(attempt_id: int, exam: Exam) -> None:
+    """For an experimental test, starts recording the robot once the attempt is committed (the recorder
+    writes the trace into the attempt's row from a thread of its own)."""
+    robot_name = exam.robot_name
+    if exam.kind == "experimental" and robot_name:
+        after_commit(lambda: start_recording(attempt_id, robot_name))
 
 
 @blueprint.post("/api/exams/<int:exam_id>/attempts")
 @login_required
-def api_start_attempt(exam_id: int):  # type: ignore[no-untyped-def]
+def api_start_attempt(exam_id: int) -> ResponseReturnValue:
     """Starts the student's attempt (or returns the one in progress)."""
     return run(lambda dbs: {"attempt": review.attempt_view(dbs, current_user, start_attempt(dbs, exam_id).id,
                                                            server_now())}, 201)
@@ -230,21 +228,21 @@ def api_start_attempt(exam_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.get("/api/attempts/<int:attempt_id>")
 @login_required
-def api_attempt(attempt_id: int):  # type: ignore[no-untyped-def]
+def api_attempt(attempt_id: int) -> ResponseReturnValue:
     """The attempt: questions, answers, time left by the server's clock; marks and comments once submitted."""
     return run(lambda dbs: {"attempt": review.attempt_view(dbs, current_user, attempt_id, server_now())})
 
 
 @blueprint.patch("/api/attempts/<int:attempt_id>/answers")
 @login_required
-def api_save_answers(attempt_id: int):  # type: ignore[no-untyped-def]
+def api_save_answers(attempt_id: int) -> ResponseReturnValue:
     """{answers: {item: answer}}: saves answers as the student goes (refused after the deadline)."""
     data = json_body()
     answers = data.get("answers")
     if not isinstance(answers, dict):
         raise ApiError(400, "invalid_field", "answers must be an object of item -> answer.", "answers")
 
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, Any]:
         attempt = attempts.save_answers(dbs, current_user, attempt_id, answers, server_now())
         return {"saved": sorted(answers), "answers": attempt.answers}
 
@@ -260,12 +258,12 @@ def finish_recording(attempt_id: int) -> list[list[float]] | None:
 
 @blueprint.post("/api/attempts/<int:attempt_id>/submit")
 @login_required
-def api_submit(attempt_id: int):  # type: ignore[no-untyped-def]
+def api_submit(attempt_id: int) -> ResponseReturnValue:
     """{answers?}: submits the attempt; it is graded at once (quizzes show the correction immediately)."""
     data = request.get_json(silent=True) or {}
     answers = data.get("answers") if isinstance(data, dict) and isinstance(data.get("answers"), dict) else None
 
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, Any]:
         owner = attempts.get_attempt(dbs, attempt_id)
         trace = finish_recording(attempt_id) if owner.user_id == current_user.id else None
         attempts.submit_attempt(dbs, current_user, attempt_id, server_now(), answers, trace)
@@ -276,7 +274,7 @@ def api_submit(attempt_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/api/attempts/<int:attempt_id>/overrides")
 @login_required
-def api_override(attempt_id: int):  # type: ignore[no-untyped-def]
+def api_override(attempt_id: int) -> ResponseReturnValue:
     """{item, points, reason, comment?}: a tutor replaces one item's mark."""
     data = json_body()
     return run(lambda dbs: {"review_id": review.override_mark(
@@ -286,7 +284,7 @@ def api_override(attempt_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/api/attempts/<int:attempt_id>/comments")
 @login_required
-def api_comment(attempt_id: int):  # type: ignore[no-untyped-def]
+def api_comment(attempt_id: int) -> ResponseReturnValue:
     """{comment, item?}: a tutor's comment the student sees with the corrected attempt."""
     data = json_body()
     return run(lambda dbs: {"review_id": review.add_comment(dbs, current_user, attempt_id, data.get("item"),
@@ -298,24 +296,18 @@ def api_comment(attempt_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.get("/api/courses/<int:course_id>/grades.csv")
 @login_required
-def api_grades_csv(course_id: int):  # type: ignore[no-untyped-def]
+def api_grades_csv(course_id: int) -> ResponseReturnValue:
     """Best final mark per student and exam, as CSV (its tutors, admins)."""
-    dbs = get_session()
-    try:
-        text = review.grades_csv(dbs, current_user, course_id, server_now())
-    except Refused as refused:
-        dbs.rollback()
-        raise api_error(refused) from None
-    dbs.commit()
+    text = review.grades_csv(get_session(), current_user, course_id, server_now())
     return Response(text, mimetype="text/csv", headers={
         "Content-Disposition": f'attachment; filename="grades-{course_id}.csv"', "Cache-Control": "no-store"})
 
 
 @blueprint.get("/api/courses/<int:course_id>/recommendations")
 @login_required
-def api_recommendations(course_id: int):  # type: ignore[no-untyped-def]
+def api_recommendations(course_id: int) -> ResponseReturnValue:
     """The student's per-topic results and the activities recommended for weak topics."""
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, Any]:
         bank.student_course(dbs, current_user, course_id)
         scores = recommendations.topic_scores(dbs, current_user.id, course_id)
         return {"topics": [{"topic": s.topic, "points": s.points, "max_points": s.max_points,
@@ -328,11 +320,11 @@ def api_recommendations(course_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/api/courses/<int:course_id>/survey")
 @login_required
-def api_survey(course_id: int):  # type: ignore[no-untyped-def]
+def api_survey(course_id: int) -> ResponseReturnValue:
     """{ratings: {item: 1-5}, comments}: the student's evaluation of the system, once."""
     data = json_body()
 
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, Any]:
         bank.student_course(dbs, current_user, course_id)
         ratings, comments = parse_survey(data)
         survey.submit_survey(dbs, current_user, course_id, ratings, comments)
@@ -343,10 +335,13 @@ def api_survey(course_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.get("/api/courses/<int:course_id>/survey/results")
 @login_required
-def api_survey_results(course_id: int):  # type: ignore[no-untyped-def]
-    """The distribution of answers per question and the comments (its tutors, admins)."""
-    def action(dbs):  # type: ignore[no-untyped-def]
-        items, comments = survey.results(dbs, current_user, course_id)
-        return {"questions": [i.to_dict() for i in items], "comments": comments}
+def api_survey_results(course_id: int) -> ResponseReturnValue:
+    """The distribution of answers per question and the comments (its tutors, admins); empty, with `hidden`,
+    until MIN_RESPONDENTS have answered."""
+    def action(dbs: Session) -> dict[str, Any]:
+        answers = survey.results(dbs, current_user, course_id)
+        return {"respondents": answers.respondents, "min_respondents": survey.MIN_RESPONDENTS,
+                "hidden": answers.hidden, "questions": [i.to_dict() for i in answers.items],
+                "comments": answers.comments}
 
     return run(action)

@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
 
-from middleware.assessment.experiment import TASK_KINDS
 from middleware.assessment.grading import QUESTION_KINDS, UNITS
+from middleware.assessment.trace_grading import TASK_KINDS
 from middleware.auth.schemas import InvalidField
+from middleware.validation import InvalidInput, decimal_int, loads_checked, within_calendar
 
 MAX_BANK_BYTES = 512 * 1024
 MAX_BANK_QUESTIONS = 500
@@ -64,8 +64,7 @@ def _index_list(value: object, count: int, field: str) -> list[int]:
         raise InvalidField(field, f"{field} must name at least one choice by its number (0 is the first).")
     out = []
     for item in value:
-        if isinstance(item, str) and item.isdigit():
-            item = int(item)
+        item = decimal_int(item) if isinstance(item, str) else item
         if isinstance(item, bool) or not isinstance(item, int) or not 0 <= item < count:
             raise InvalidField(field, f"{field} must be choice numbers from 0 to {count - 1}.")
         out.append(item)
@@ -85,6 +84,19 @@ class QuestionInput:
     def to_dict(self) -> dict[str, Any]:
         """The bank file's form of the question."""
         return {"kind": self.kind, "prompt": self.prompt, "topics": self.topics, "points": self.points, **self.spec}
+
+
+def form_choice_numbers(value: object, choices: object) -> list[int]:
+    """The bank editor's right choices, numbered from 1 as the person reads them, as the 0-based list
+    parse_question takes; errors name the field `correct` in the form's own numbering."""
+    count = len(_choices(choices))
+    tokens = [part.strip() for part in str(value or "").split(",") if part.strip()]
+    if not tokens:
+        raise InvalidField("correct", "Give the number of the right choice (1 is the first line).")
+    numbers = [decimal_int(token, 1, count) for token in tokens]
+    if any(number is None for number in numbers):
+        raise InvalidField("correct", f"Right choices are numbers from 1 to {count}, one per right line, e.g. 1, 3.")
+    return [number - 1 for number in numbers if number is not None]
 
 
 def parse_question(data: dict[str, Any]) -> QuestionInput:
@@ -127,9 +139,11 @@ def parse_bank_file(data: bytes) -> list[QuestionInput]:
     if len(data) > MAX_BANK_BYTES:
         raise InvalidField("file", f"The file is larger than {MAX_BANK_BYTES // 1024} KiB.")
     try:
-        document = json.loads(data.decode("utf-8-sig"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        document = loads_checked(data.decode("utf-8-sig"))
+    except (UnicodeDecodeError, ValueError) as error:
         raise InvalidField("file", f"The file is not UTF-8 JSON ({error}).") from None
+    except InvalidInput as refused:
+        raise InvalidField("file", f"The file cannot be imported: {refused.message}") from None
     items = document.get("questions") if isinstance(document, dict) else None
     if not isinstance(items, list):
         raise InvalidField("file", 'The file must be a JSON object with a "questions" list.')
@@ -158,13 +172,37 @@ def parse_moment(value: object, field: str) -> datetime | None:
         moment = datetime.fromisoformat(value.strip().replace("Z", "+00:00"))
     except ValueError:
         raise InvalidField(field, f"{field} must be a date and time such as 2026-05-04T09:00.") from None
+    if not within_calendar(moment):
+        raise InvalidField(field, f"{field} must be a date between the years 1900 and 9000.")
     return moment.replace(tzinfo=UTC) if moment.tzinfo is None else moment.astimezone(UTC)
+
+
+RUBRIC_ROWS = 5
+
+
+def form_rubric(form: dict[str, Any]) -> object:
+    """The test editor's rubric rows ("error up to B m earns S % of the points") as the bands parse_rubric takes;
+    a form without rows (the API's, older pages) keeps its `rubric` as sent. Every bad row is named at once."""
+    if not any(key.startswith("rubric_bound_") for key in form):
+        return form.get("rubric")
+    bands, problems = [], []
+    for row in range(RUBRIC_ROWS):
+        bound, share = (str(form.get(f"rubric_{part}_{row}") or "").strip() for part in ("bound", "share"))
+        if not bound and not share:
+            continue
+        try:
+            bands.append([float(bound), float(share) / 100])
+        except ValueError:
+            problems.append(f"row {row + 1} needs an error bound in metres and a share in percent")
+    if problems:
+        raise InvalidField("rubric", f"Rubric: {'; '.join(problems)}.")
+    return bands or None
 
 
 def parse_rubric(value: object) -> list[list[float]]:
     """Bands [[error_bound_m, fraction], ...]: bounds positive and increasing, fractions 0-1 and decreasing."""
     if value in (None, "", []):
-        from middleware.assessment.experiment import DEFAULT_RUBRIC
+        from middleware.assessment.trace_grading import DEFAULT_RUBRIC
 
         return DEFAULT_RUBRIC
     if isinstance(value, str):
@@ -248,9 +286,8 @@ def parse_exam(data: dict[str, Any]) -> ExamInput:
         raise InvalidField("question_ids", "question_ids must be a list of at most 200 question ids.")
     ids = []
     for value in raw_ids:
-        if isinstance(value, str) and value.isdigit():
-            value = int(value)
-        if isinstance(value, bool) or not isinstance(value, int):
+        value = decimal_int(value, 1)
+        if value is None:
             raise InvalidField("question_ids", "question_ids must be whole numbers.")
         if value not in ids:
             ids.append(value)
@@ -279,9 +316,8 @@ def parse_survey(data: dict[str, Any]) -> tuple[dict[str, int], str]:
     source = data.get("ratings") if isinstance(data.get("ratings"), dict) else data
     for key, _label in SURVEY_ITEMS:
         value = source.get(key)  # type: ignore[union-attr]
-        if isinstance(value, str) and value.isdigit():
-            value = int(value)
-        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 5:
+        value = decimal_int(value, 1, 5)
+        if value is None:
             raise InvalidField(key, "Choose one answer from strongly disagree (1) to strongly agree (5).")
         ratings[key] = value
     return ratings, _text(data.get("comments") or "", "comments", 4000, required=False)

@@ -8,9 +8,9 @@ from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
-from middleware.accounts.services import Refused
 from middleware.assessment.policy import student_course, teaching_course
 from middleware.assessment.schemas import AGREEMENT, SURVEY_ITEMS
+from middleware.errors import Refused
 from middleware.models import User
 from middleware.models.assessment import SurveyResponse
 
@@ -69,9 +69,28 @@ def aggregate(responses: list[dict[str, int]]) -> list[ItemDistribution]:
     return out
 
 
-def results(session: Session, actor: User, course_id: int) -> tuple[list[ItemDistribution], list[str]]:
+MIN_RESPONDENTS = 3  # below this, totals and comments could be told apart as one person's
+
+
+@dataclass(frozen=True)
+class SurveyResults:
+    """The course's answers; the distribution and comments stay hidden until MIN_RESPONDENTS have answered."""
+
+    respondents: int
+    items: list[ItemDistribution]
+    comments: list[str]
+
+    @property
+    def hidden(self) -> bool:
+        """True while too few have answered for the results to stay anonymous."""
+        return self.respondents < MIN_RESPONDENTS
+
+
+def results(session: Session, actor: User, course_id: int) -> SurveyResults:
     """The distribution per question and the free comments (anonymous), for the course's tutors and admins."""
     teaching_course(session, actor, course_id)
     rows = list(session.scalars(select(SurveyResponse).where(SurveyResponse.course_id == course_id)
                                 .order_by(SurveyResponse.id)))
-    return aggregate([r.ratings for r in rows]), [r.comments for r in rows if r.comments]
+    if len(rows) < MIN_RESPONDENTS:
+        return SurveyResults(len(rows), [], [])
+    return SurveyResults(len(rows), aggregate([r.ratings for r in rows]), [r.comments for r in rows if r.comments])

@@ -4,7 +4,8 @@ Flask-Login loads the user for every request; reading the row each time was a th
 own cost. This process keeps a clean detached copy of each recent user and merges it into the request's
 session without SQL (`merge(load=False)`), so the request still gets an ordinary persistent User. Changes made
 through the ORM in this process drop the copy at once; changes made by another web process reach this one
-within MAX_AGE_S (a deactivated account or a new role, at most that late).
+within MAX_AGE_S (a new role, at most that late). Whether the login itself is still open is not this copy's
+question: the user loader asks session_records first, and disabling an account ends its logins there.
 """
 
 from __future__ import annotations
@@ -27,7 +28,9 @@ _lock = threading.Lock()
 
 def load_user(session: Session, user_id: int) -> User | None:
     """The active user user_id in session (from the copy when fresh), or None."""
-    engine = session.get_bind()
+    bind = session.get_bind()
+    engine = bind if isinstance(bind, Engine) else bind.engine
+    user: User | None
     with _lock:
         cached = _copies.get(engine, {}).get(user_id)
     if cached is not None and time.monotonic() - cached[1] <= MAX_AGE_S:
@@ -56,5 +59,5 @@ def _remember(engine: Engine, user: User) -> None:
 
 @event.listens_for(User, "after_update")
 @event.listens_for(User, "after_delete")
-def _row_changed(_mapper, _connection, target: User) -> None:  # type: ignore[no-untyped-def]
+def _row_changed(_mapper, _connection, target: User) -> None:
     forget(target.id)

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
 import time
 from datetime import UTC, datetime
 from urllib.parse import urlsplit
 
 from flask import Blueprint, redirect, render_template, request, session, url_for
+from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required, logout_user
 
 from middleware.auth import sessions
@@ -26,6 +28,13 @@ def renew_session_expiry() -> None:
         session[sessions.RENEWED_AT_KEY] = int(time.time())
 
 
+def wait_in_words(seconds: int) -> str:
+    """'1 second', '40 seconds', '3 minutes' (whole minutes, rounded up, from two minutes on)."""
+    if seconds < 120:
+        return f"{seconds} second{'s' if seconds != 1 else ''}"
+    return f"{math.ceil(seconds / 60)} minutes"
+
+
 def safe_next_url(value: str | None) -> str | None:
     """value when it is a path on this site, else None (no open redirects)."""
     if not value:
@@ -37,40 +46,41 @@ def safe_next_url(value: str | None) -> str | None:
 
 
 @blueprint.get("/login")
-def login():  # type: ignore[no-untyped-def]
+def login() -> ResponseReturnValue:
     """The login form."""
     if current_user.is_authenticated:
         return redirect(url_for("lab.index"))
-    return render_template("login.html", error=None, username="", next_url=safe_next_url(request.args.get("next")))
+    return render_template("auth/login.html", error=None, username="", next_url=safe_next_url(request.args.get("next")))
 
 
 @blueprint.post("/login")
-def login_submit():  # type: ignore[no-untyped-def]
+def login_submit() -> ResponseReturnValue:
     """Checks the credentials; a failure re-shows the form with a sentence saying what went wrong."""
     username = request.form.get("username", "")[:128]
     password = request.form.get("password", "")[:256]
     next_url = safe_next_url(request.form.get("next"))
     if not username.strip() or not password:
         error = "Enter both your username and your password."
-        return render_template("login.html", error=error, username=username, next_url=next_url), 400
-    db_session = get_session()
-    outcome = log_in(db_session, username, password, request.remote_addr or "unknown", datetime.now(UTC))
-    db_session.commit()
-    if outcome.blocked_minutes is not None:
-        minutes = outcome.blocked_minutes
-        error = f"Too many failed attempts; try again in {minutes} minute{'s' if minutes != 1 else ''}."
-        return render_template("login.html", error=error, username=username, next_url=next_url), 429
+        return render_template("auth/login.html", error=error, username=username, next_url=next_url), 400
+    # The attempt is recorded whatever the answer (the throttle counts failures): a 401 is the view's answer,
+    # not an error, so the request's unit of work commits it.
+    outcome = log_in(get_session(), username, password, request.remote_addr or "unknown", datetime.now(UTC))
+    if outcome.blocked_seconds is not None:
+        error = f"Too many failed attempts from here; try again in {wait_in_words(outcome.blocked_seconds)}."
+        return (render_template("auth/login.html", error=error, username=username, next_url=next_url), 429,
+                {"Retry-After": str(outcome.blocked_seconds)})
     user = outcome.user
     if user is None:
-        return render_template("login.html", error=WRONG_CREDENTIALS, username=username, next_url=next_url), 401
+        return render_template("auth/login.html", error=WRONG_CREDENTIALS, username=username, next_url=next_url), 401
     sessions.begin(user)
     return redirect(next_url or url_for("lab.index"))
 
 
 @blueprint.post("/logout")
 @login_required
-def logout():  # type: ignore[no-untyped-def]
-    """Ends the session."""
+def logout() -> ResponseReturnValue:
+    """Ends the session everywhere: the cookie, and any copy of it, opens nothing any more."""
+    sessions.end()
     logout_user()
     session.clear()
     return redirect(url_for("auth.login"))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 
+from middleware.errors import Refused
 from middleware.models import Role
 
 USERNAME_PATTERN = re.compile(r"^[a-z0-9][a-z0-9._-]{1,63}$")
@@ -11,13 +12,14 @@ MIN_PASSWORD_LENGTH = 10
 MAX_PASSWORD_LENGTH = 256
 
 
-class InvalidField(ValueError):
-    """A value refused by validation; field names the input and the message says what is allowed."""
+class InvalidField(Refused, ValueError):
+    """A value refused by validation (400 invalid_field); field names the input and the message says what is
+    allowed."""
+
+    field: str
 
     def __init__(self, field: str, message: str) -> None:
-        super().__init__(message)
-        self.field = field
-        self.message = message
+        super().__init__(400, "invalid_field", message, field)
 
 
 def clean_username(value: object) -> str:

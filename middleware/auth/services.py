@@ -25,8 +25,12 @@ class AccountExists(ValueError):
 
 
 def generate_password() -> str:
-    """A random password that is easy to type from a printout (about 100 bits)."""
-    return "-".join(secrets.token_urlsafe(6) for _ in range(3))
+    """A random password that is easy to type from a printout (about 100 bits), starting with a letter or digit:
+    CSV downloads quote a cell starting with '-' against formula injection, which would change the password."""
+    while True:
+        password = "-".join(secrets.token_urlsafe(6) for _ in range(3))
+        if password[0].isalnum():
+            return password
 
 
 def create_user(session: Session, username: str, role: str | Role, password: str) -> User:
@@ -75,20 +79,23 @@ def authenticate(session: Session, username: str, password: str) -> User | None:
 
 @dataclass(frozen=True)
 class LoginOutcome:
-    """The answer to a login attempt: the user, or why not (blocked_minutes when rate limited)."""
+    """The answer to a login attempt: the user, or why not (blocked_seconds when slowed by the throttle)."""
 
     user: User | None
-    blocked_minutes: int | None = None
+    blocked_seconds: int | None = None
 
 
 def log_in(session: Session, username: str, password: str, address: str, now: datetime) -> LoginOutcome:
-    """Checks a login under the rate limits; a failure is recorded. The caller commits."""
-    blocked = throttle.minutes_blocked(session, username, address, now)
+    """Checks a login under the throttle; a failure is recorded, a success clears this address's failures for the
+    account. The caller commits."""
+    blocked = throttle.seconds_blocked(session, username, address, now)
     if blocked is not None:
         return LoginOutcome(None, blocked)
     user = authenticate(session, username, password)
     if user is None:
         throttle.record_failure(session, username, address, now)
+    else:
+        throttle.record_success(session, username, address)
     return LoginOutcome(user)
 
 

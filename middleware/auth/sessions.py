@@ -1,43 +1,56 @@
-"""What a logged-in session carries besides Flask-Login's fields, and the checks made on it.
+"""The cookie side of a login: what the signed session cookie carries, and the check made on it each request.
 
-A session holds a short digest of the password hash it was opened with: changing or resetting a password
-changes the digest, so every other session of that account ends at its next request (the one that changed
-its own password is given the new digest and stays).
+The cookie holds Flask-Login's fields and the key of a server-side record (session_records.py); a cookie
+whose record has ended (logout, password change or reset, account disabled) or expired is worthless, in
+every worker process and from any client that replays it.
 """
 
 from __future__ import annotations
 
-import hashlib
 import time
+from datetime import UTC, datetime
 
-from flask import session
+from flask import current_app, session
 from flask_login import login_user
 
+from middleware.auth import session_records
+from middleware.auth.session_records import SessionLimits
+from middleware.db import get_session
 from middleware.models import User
 
-PASSWORD_MARK_KEY = "_password_mark"
+LOGIN_KEY = "_login_key"
 RENEWED_AT_KEY = "_renewed_at"
 
 
-def password_mark(user: User) -> str:
-    """A digest of the password hash, too short to help anyone guess the password."""
-    return hashlib.sha256(user.password_hash.encode()).hexdigest()[:16]
+def _limits() -> SessionLimits:
+    return SessionLimits(current_app.config["SESSION_LIFETIME"], current_app.config["SESSION_IDLE_TIMEOUT"])
 
 
 def begin(user: User) -> None:
-    """Logs user in on a fresh, permanent session."""
+    """Logs user in on a fresh, permanent session with a new server-side record."""
     session.clear()  # a fresh session on login, so a planted session id is worthless
     login_user(user)
     session.permanent = True
     session[RENEWED_AT_KEY] = int(time.time())
-    session[PASSWORD_MARK_KEY] = password_mark(user)
+    session[LOGIN_KEY] = session_records.open_session(get_session(), user.id, datetime.now(UTC))
 
 
 def password_changed(user: User) -> None:
-    """This session changed the user's password: it stays open; the others end."""
-    session[PASSWORD_MARK_KEY] = password_mark(user)
+    """This session changed the user's password: every login of the account ended; this one gets a new one."""
+    get_session().flush()  # the password's UPDATE ends the account's logins before the new record exists
+    session[LOGIN_KEY] = session_records.open_session(get_session(), user.id, datetime.now(UTC))
 
 
-def opened_with_current_password(user: User) -> bool:
-    """False when the account's password changed since this session logged in."""
-    return session.get(PASSWORD_MARK_KEY) == password_mark(user)
+def end() -> None:
+    """Ends this session's login everywhere (logout)."""
+    key = session.get(LOGIN_KEY)
+    if isinstance(key, str):
+        session_records.end_session(get_session(), key, datetime.now(UTC))
+
+
+def is_live(user_id: int) -> bool:
+    """True when this request's cookie belongs to an open login of user_id."""
+    key = session.get(LOGIN_KEY)
+    if not isinstance(key, str) or len(key) > 128:
+        return False
+    return session_records.is_open(get_session(), key, user_id, _limits(), datetime.now(UTC))

@@ -7,10 +7,11 @@ from datetime import UTC, date, datetime, time, timedelta
 from urllib.parse import urlencode
 
 from flask import Blueprint, Response, abort, current_app, flash, jsonify, redirect, render_template, request, url_for
+from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
-from middleware.auth.schemas import InvalidField
 from middleware.bookings import ical, services
+from middleware.bookings.availability import viewer_availability
 from middleware.bookings.schemas import (
     MAX_BOOKING,
     SLOT_MINUTES,
@@ -19,19 +20,19 @@ from middleware.bookings.schemas import (
     parse_time_zone,
     parse_week,
 )
-from middleware.bookings.services import BookingRefused
-from middleware.bookings.week import week_days
+from middleware.bookings.week import form_default_start, week_days
 from middleware.db import get_session
-from middleware.errors import ApiError
+from middleware.errors import ApiError, flashed, unless_refused
 from middleware.models import Booking
 from middleware.robots.registry import robot_registry
+from middleware.validation import within_calendar
 
 blueprint = Blueprint("bookings", __name__)
 DURATIONS_MIN = list(range(SLOT_MINUTES, int(MAX_BOOKING.total_seconds() // 60) + 1, SLOT_MINUTES))
 
 
 @blueprint.record_once
-def _configure(state) -> None:  # type: ignore[no-untyped-def]
+def _configure(state) -> None:
     state.app.config.setdefault("BOOKING_GRACE_S", float(os.environ.get("TELELAB_BOOKING_GRACE_S", "600")))
 
 
@@ -40,15 +41,9 @@ def _now() -> datetime:
 
 
 def _require_robot(robot_name: str) -> str:
-    if robot_registry().get(robot_name) is None:
-        raise ApiError(404, "unknown_robot", f"There is no robot named {robot_name!r}.", "robot_name")
+    if robot_name not in robot_registry().names():  # lab robots only: a practice robot is never booked
+        raise ApiError(404, "unknown_robot", f"There is no robot named {robot_name[:64]!r}.", "robot_name")
     return robot_name
-
-
-def _api_error(refused: BookingRefused | InvalidField) -> ApiError:
-    if isinstance(refused, InvalidField):
-        return ApiError(400, "invalid_field", refused.message, refused.field)
-    return ApiError(refused.status, refused.code, refused.message, refused.field)
 
 
 # --- JSON API -----------------------------------------------------------------------------------
@@ -56,7 +51,7 @@ def _api_error(refused: BookingRefused | InvalidField) -> ApiError:
 
 @blueprint.get("/api/bookings")
 @login_required
-def api_my_bookings():  # type: ignore[no-untyped-def]
+def api_my_bookings() -> ResponseReturnValue:
     """The current user's bookings that end in the last 30 days or later."""
     session, now = get_session(), _now()
     views = services.describe(session, current_user, services.user_bookings(session, current_user.id,
@@ -66,51 +61,38 @@ def api_my_bookings():  # type: ignore[no-untyped-def]
 
 @blueprint.post("/api/bookings")
 @login_required
-def api_create_booking():  # type: ignore[no-untyped-def]
+def api_create_booking() -> ResponseReturnValue:
     """Books a slot: {robot_name, starts_at, ends_at | duration_min, kind?, course_id?}."""
     data = request.get_json(silent=True)
     if not isinstance(data, dict):
         raise ApiError(400, "invalid_field", "Send the booking as a JSON object.", "body")
     session, now = get_session(), _now()
-    try:
-        booking_request = parse_booking_request(data)
-        _require_robot(booking_request.robot_name)
-        booking = services.create_booking(session, current_user, booking_request, now)
-    except (BookingRefused, InvalidField) as refused:
-        session.rollback()
-        raise _api_error(refused) from None
-    session.commit()
+    booking_request = parse_booking_request(data)
+    _require_robot(booking_request.robot_name)
+    booking = services.create_booking(session, current_user, booking_request, now)
     return jsonify({"booking": services.describe(session, current_user, [booking], now)[0].to_dict()}), 201
 
 
 @blueprint.delete("/api/bookings/<int:booking_id>")
 @login_required
-def api_cancel_booking(booking_id: int):  # type: ignore[no-untyped-def]
+def api_cancel_booking(booking_id: int) -> ResponseReturnValue:
     """Cancels a booking (the booker, a tutor of its course, or an admin)."""
     session, now = get_session(), _now()
-    try:
-        booking = services.cancel_booking(session, current_user, booking_id, now)
-    except BookingRefused as refused:
-        session.rollback()
-        raise _api_error(refused) from None
-    session.commit()
+    booking = services.cancel_booking(session, current_user, booking_id, now)
     return jsonify({"booking": services.describe(session, current_user, [booking], now)[0].to_dict()})
 
 
 @blueprint.get("/api/robots/<robot_name>/bookings")
 @login_required
-def api_robot_bookings(robot_name: str):  # type: ignore[no-untyped-def]
+def api_robot_bookings(robot_name: str) -> ResponseReturnValue:
     """The robot's bookings between ?from= and ?to= (ISO 8601; default: this ISO week in UTC)."""
     _require_robot(robot_name)
     now = _now()
     start, end = services.iso_week_bounds(now)
-    try:
-        if request.args.get("from"):
-            start = parse_instant(request.args["from"], "from")
-        if request.args.get("to"):
-            end = parse_instant(request.args["to"], "to")
-    except InvalidField as invalid:
-        raise _api_error(invalid) from None
+    if request.args.get("from"):
+        start = parse_instant(request.args["from"], "from")
+    if request.args.get("to"):
+        end = parse_instant(request.args["to"], "to")
     if end <= start or end - start > timedelta(days=62):
         raise ApiError(400, "invalid_field", "to must be after from, at most 62 days later.", "to")
     session = get_session()
@@ -122,19 +104,25 @@ def api_robot_bookings(robot_name: str):  # type: ignore[no-untyped-def]
 # --- pages ----------------------------------------------------------------------------------------
 
 
+MAX_PAGE_ARGUMENT = 64  # a robot name, a date, a time zone name
+
+
 def _page_url(robot_name: str | None, week: str | None, tz: str | None, hours: str | None = None) -> str:
-    args = {k: v for k, v in {"robot": robot_name, "week": week, "tz": tz, "hours": hours}.items() if v}
+    """The week page's address; values that no page would use (a form's hostile text) are left out, so a
+    redirect never carries what the client sent in bulk."""
+    args = {k: v for k, v in {"robot": robot_name, "week": week, "tz": tz, "hours": hours}.items()
+            if v and len(v) <= MAX_PAGE_ARGUMENT}
     return url_for("bookings.page") + ("?" + urlencode(args) if args else "")
 
 
 @blueprint.get("/bookings")
 @login_required
-def page():  # type: ignore[no-untyped-def]
+def page() -> ResponseReturnValue:
     """The week calendar of one robot, with the booking form and the user's own bookings."""
     registry = robot_registry()
     names = registry.names()
     robot_name = request.args.get("robot") or (names[0] if names else None)
-    if robot_name is not None and registry.get(robot_name) is None:
+    if robot_name is not None and robot_name not in names:
         abort(404)
     zone = parse_time_zone(request.args.get("tz"))
     now = _now()
@@ -156,12 +144,15 @@ def page():  # type: ignore[no-untyped-def]
         allowance = {"week_min": minutes, "used_min": services.minutes_booked_in_week(session, current_user.id, now)}
     tz_name = str(zone.key)
     week_iso = monday.isoformat()
+    availability = viewer_availability(days)
     return render_template(
         "bookings/week.html", robots=[(n, registry.addresses[n].title) for n in names], robot_name=robot_name,
-        robot_title=registry.addresses[robot_name].title if robot_name else None, days=days, mine=mine,
+        robot_title=registry.addresses[robot_name].title if robot_name else None, days=availability.days,
+        availability=availability, mine=mine,
         zone=zone, tz_name=tz_name, week=week_iso, all_hours=all_hours, durations=DURATIONS_MIN,
         courses=services.tutored_courses(session, current_user), allowance=allowance,
         times=[f"{h:02d}:{m:02d}" for h in range(24) for m in (0, 30)],
+        suggested_start=form_default_start(monday, zone, now),
         prev_url=_page_url(robot_name, (monday - timedelta(days=7)).isoformat(), tz_name, "all" if all_hours else None),
         next_url=_page_url(robot_name, (monday + timedelta(days=7)).isoformat(), tz_name, "all" if all_hours else None),
         this_week_url=_page_url(robot_name, None, tz_name, "all" if all_hours else None),
@@ -180,12 +171,14 @@ def _form_starts_at(form: dict[str, str]) -> str | None:
         local = datetime.combine(day, time(hour, minute), tzinfo=parse_time_zone(form.get("tz")))
     except ValueError:
         return None
+    if not within_calendar(local):
+        return None
     return local.astimezone(UTC).isoformat()
 
 
 @blueprint.post("/bookings")
 @login_required
-def create_from_form():  # type: ignore[no-untyped-def]
+def create_from_form() -> ResponseReturnValue:
     """The booking form: books, then shows the week again with a sentence saying what happened."""
     form = request.form.to_dict()
     back = _page_url(form.get("robot_name"), form.get("week"), form.get("tz"))
@@ -193,45 +186,38 @@ def create_from_form():  # type: ignore[no-untyped-def]
     if not form["starts_at"]:
         flash("Choose a free slot, or a date and a time, to book.", "error")
         return redirect(back, 303)
-    session, now = get_session(), _now()
-    try:
+
+    def book() -> ResponseReturnValue:
         booking_request = parse_booking_request(form)
         _require_robot(booking_request.robot_name)
-        booking = services.create_booking(session, current_user, booking_request, now)
-    except (BookingRefused, InvalidField) as refused:
-        session.rollback()
-        flash(refused.message, "error")
+        booking = services.create_booking(get_session(), current_user, booking_request, _now())
+        zone = parse_time_zone(form.get("tz"))
+        flash(f"Booked {booking.robot_name} on {booking_request.starts_at.astimezone(zone):%a %d %b, %H:%M}"
+              f"–{booking_request.ends_at.astimezone(zone):%H:%M}.", "success")
         return redirect(back, 303)
-    except ApiError as error:
-        flash(error.message, "error")
-        return redirect(back, 303)
-    session.commit()
-    zone = parse_time_zone(form.get("tz"))
-    flash(f"Booked {booking.robot_name} on {booking_request.starts_at.astimezone(zone):%a %d %b, %H:%M}"
-          f"–{booking_request.ends_at.astimezone(zone):%H:%M}.", "success")
-    return redirect(back, 303)
+
+    # Every refusal is the form's, an unknown robot or someone else's booking too: the week shows the sentence.
+    return unless_refused(book, flashed(back), about_the_page=())
+
 
 
 @blueprint.post("/bookings/<int:booking_id>/cancel")
 @login_required
-def cancel_from_form(booking_id: int):  # type: ignore[no-untyped-def]
+def cancel_from_form(booking_id: int) -> ResponseReturnValue:
     """The cancel button of a booking."""
     back = _page_url(request.form.get("robot_name"), request.form.get("week"), request.form.get("tz"))
-    session = get_session()
-    try:
-        services.cancel_booking(session, current_user, booking_id, _now())
-    except BookingRefused as refused:
-        session.rollback()
-        flash(refused.message, "error")
+
+    def cancel() -> ResponseReturnValue:
+        services.cancel_booking(get_session(), current_user, booking_id, _now())
+        flash("Booking cancelled; the slot is free again.", "success")
         return redirect(back, 303)
-    session.commit()
-    flash("Booking cancelled; the slot is free again.", "success")
-    return redirect(back, 303)
+
+    return unless_refused(cancel, flashed(back), about_the_page=())
 
 
 @blueprint.get("/bookings.ics")
 @login_required
-def ical_export():  # type: ignore[no-untyped-def]
+def ical_export() -> ResponseReturnValue:
     """The user's bookings (and their courses' class sessions) as an iCalendar file."""
     session, now = get_session(), _now()
     since = now - timedelta(days=30)

@@ -9,6 +9,7 @@ from datetime import UTC, date, datetime, time, timedelta
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 from middleware.auth.schemas import InvalidField
+from middleware.validation import decimal_int, within_calendar
 
 SLOT_MINUTES = 30
 MAX_BOOKING = timedelta(hours=4)
@@ -37,6 +38,8 @@ def parse_instant(value: object, field: str) -> datetime:
         raise InvalidField(field, f"{field} must be an ISO 8601 date and time such as 2026-11-23T09:00:00Z.") from None
     if moment.tzinfo is None:
         raise InvalidField(field, f"{field} must say its time zone, e.g. end with 'Z' for UTC.")
+    if not within_calendar(moment):
+        raise InvalidField(field, f"{field} must be a date between the years 1900 and 9000.")
     return moment.astimezone(UTC)
 
 
@@ -44,9 +47,8 @@ def parse_optional_id(value: object, field: str) -> int | None:
     """A positive whole number, or None when absent or empty."""
     if value is None or value == "":
         return None
-    if isinstance(value, str) and value.strip().isdigit():
-        value = int(value.strip())
-    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_ID:
+    value = decimal_int(value, 1, MAX_ID)
+    if value is None:
         raise InvalidField(field, f"{field} must be a positive whole number.")
     return value
 
@@ -101,7 +103,8 @@ def parse_week(value: object, zone: ZoneInfo, now: datetime) -> date:
     day = now.astimezone(zone).date()
     if isinstance(value, str) and value:
         with contextlib.suppress(ValueError):
-            day = date.fromisoformat(value)
+            asked = date.fromisoformat(value)
+            day = asked if within_calendar(asked) else day
     return day - timedelta(days=day.weekday())
 
 

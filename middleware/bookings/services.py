@@ -14,19 +14,16 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from middleware.auth.schemas import InvalidField
-from middleware.bookings.schemas import BookingRequest, check_slot_shape
+from middleware.bookings.schemas import SLOT_MINUTES, BookingRequest, check_slot_shape
+from middleware.errors import Refused
 from middleware.locking import lock_robot_control, lock_user
 from middleware.models import Booking, Course, CourseMembership, User
 
 DEFAULT_GRACE_S = 600.0
 
 
-class BookingRefused(Exception):
-    """A booking action refused: an HTTP-like status, a stable code, a sentence and the field at fault."""
-
-    def __init__(self, status: int, code: str, message: str, field: str | None = None) -> None:
-        super().__init__(message)
-        self.status, self.code, self.message, self.field = status, code, message, field
+class BookingRefused(Refused):
+    """A booking action refused (status, stable code, sentence, field: see middleware.errors.Refused)."""
 
 
 def as_utc(moment: datetime) -> datetime:
@@ -128,11 +125,45 @@ def is_course_tutor(session: Session, user_id: int, course_id: int | None) -> bo
     """True when user_id is a tutor member of the course."""
     if course_id is None:
         return False
-    return session.scalar(
+    return session.execute(
         select(func.count()).select_from(CourseMembership)
         .where(CourseMembership.course_id == course_id, CourseMembership.user_id == user_id,
                CourseMembership.role == "tutor")
-    ) > 0
+    ).scalar_one() > 0
+
+
+@dataclass(frozen=True)
+class Unbookable:
+    """Why a free slot cannot be booked by someone: a short label for the calendar cell, and a sentence."""
+
+    label: str
+    reason: str
+
+
+def unbookable_weeks(session: Session, actor: User, mondays: Iterable[datetime]) -> dict[datetime, Unbookable]:
+    """The ISO weeks (keyed by Monday 00:00 UTC, as `iso_week_bounds` gives) in which actor can book nothing,
+    with the reason: a student in no course, in courses that allow no bookings, or with fewer minutes left that
+    week than one slot. Tutors and admins have no allowance, so the answer is empty for them."""
+    if actor.role != "student":
+        return {}
+    weeks = sorted(set(mondays))
+    allowance, course_id = student_allowance(session, actor.id)
+    if course_id is None:
+        blocked = Unbookable("not in a course", "You are not enrolled in any course, so you cannot book a robot "
+                                                "yet; ask your tutor to enrol you.")
+        return dict.fromkeys(weeks, blocked)
+    if allowance < SLOT_MINUTES:
+        blocked = Unbookable("no allowance", "Your course allows no bookings; ask your tutor if you need one. "
+                                             "You can still use a robot when it is free, in turn with others.")
+        return dict.fromkeys(weeks, blocked)
+    out = {}
+    for monday in weeks:
+        used = minutes_booked_in_week(session, actor.id, monday)
+        if allowance - used < SLOT_MINUTES:
+            out[monday] = Unbookable("no minutes left", f"You have booked all {allowance} minutes your course allows "
+                                     f"in the week of {monday:%d %b}; cancel a booking to free some, or choose "
+                                     "another week.")
+    return out
 
 
 # --- creating and cancelling ------------------------------------------------------------------

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import date, datetime, timedelta
 from zoneinfo import ZoneInfo
 
 from middleware.bookings.schemas import SLOT_MINUTES, local_midnight
-from middleware.bookings.services import BookingView
+from middleware.bookings.services import BookingView, Unbookable, iso_week_bounds
 
 DAY_HOURS = range(7, 22)  # shown unless the whole day is asked for
 
@@ -18,8 +18,9 @@ class Slot:
 
     starts_at: datetime
     label: str  # local HH:MM
-    state: str  # free | mine | taken | past
+    state: str  # free | unavailable (free, but not for this viewer) | mine | taken | past
     booking: BookingView | None
+    unbookable: Unbookable | None = None  # why, when unavailable
 
     @property
     def iso(self) -> str:
@@ -60,3 +61,34 @@ def week_days(monday: date, zone: ZoneInfo, views: list[BookingView], now: datet
             moment += step
         days.append(Day(day, day.strftime("%a %d %b"), day == today, slots))
     return days
+
+
+def slot_weeks(days: list[Day]) -> set[datetime]:
+    """The ISO weeks (Monday 00:00 UTC) the days' free slots fall in: the ones whose allowance matters."""
+    return {iso_week_bounds(slot.starts_at)[0] for day in days for slot in day.slots if slot.state == "free"}
+
+
+def mark_unbookable(days: list[Day], weeks: dict[datetime, Unbookable]) -> list[Day]:
+    """The days with each free slot of a week the viewer cannot book turned 'unavailable', with the reason."""
+    if not weeks:
+        return days
+    marked = []
+    for day in days:
+        slots = []
+        for slot in day.slots:
+            blocked = weeks.get(iso_week_bounds(slot.starts_at)[0]) if slot.state == "free" else None
+            slots.append(replace(slot, state="unavailable", unbookable=blocked) if blocked else slot)
+        marked.append(replace(day, slots=slots))
+    return marked
+
+
+def form_default_start(monday: date, zone: ZoneInfo, now: datetime) -> datetime:
+    """The booking form's suggested start, local: 09:00 on the shown week's Monday, or, when that has passed
+    and the week is still running, the next half hour from now (a suggestion in the past is always refused)."""
+    suggestion = datetime.combine(monday, datetime.min.time(), tzinfo=zone).replace(hour=9)
+    local_now = now.astimezone(zone).replace(second=0, microsecond=0)
+    if local_now < suggestion:
+        return suggestion
+    next_slot = local_now + timedelta(minutes=SLOT_MINUTES - local_now.minute % SLOT_MINUTES)
+    week_end = datetime.combine(monday + timedelta(days=7), datetime.min.time(), tzinfo=zone)
+    return next_slot if next_slot < week_end else suggestion

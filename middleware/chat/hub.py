@@ -37,13 +37,13 @@ class Subscription:
 
     def drain(self) -> list[tuple[str, object]]:
         """The events queued since the last call."""
-        events = []
+        events: list[tuple[str, object]] = []
         while True:
             try:
                 kind, payload = self._events.get_nowait()
             except queue.Empty:
                 return events
-            if kind == "message" and payload["id"] <= self.after_id:  # type: ignore[index]
+            if kind == "message" and payload.id <= self.after_id:  # type: ignore[attr-defined]
                 continue  # already sent with the history
             events.append((kind, payload))
 
@@ -118,7 +118,7 @@ class ChatHub:
         for view in fresh:
             room.last_id = max(room.last_id, view.id)
             for subscriber in subscribers:
-                subscriber.put("message", view.to_dict())
+                subscriber.put("message", view)  # each socket words the author for its viewer
         for message_id in gone:
             room.announced_deletions.add(message_id)
             for subscriber in subscribers:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
@@ -9,6 +10,7 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from middleware.chat.schemas import clean_body
+from middleware.errors import Refused
 from middleware.locking import lock_user
 from middleware.models import ChatMessage, User
 
@@ -18,51 +20,57 @@ HISTORY_LENGTH = 50
 MODERATOR_ROLES = ("tutor", "admin")
 
 
-class ChatRefused(Exception):
-    """A chat action refused: an HTTP-like status, a stable code, a sentence and the field at fault."""
+class ChatRefused(Refused):
+    """A chat action refused (status, stable code, sentence, field: see middleware.errors.Refused)."""
 
-    def __init__(self, status: int, code: str, message: str, field: str | None = None) -> None:
-        super().__init__(message)
-        self.status, self.code, self.message, self.field = status, code, message, field
+
+def public_name(username: str, user_id: int) -> str:
+    """How a student sees another person in chat: initials and the account number ('ada.lovelace' -> 'A.L. #7'),
+    so the room does not hand out login names to guess passwords for."""
+    initials = "".join(f"{part[0].upper()}." for part in re.split(r"[._-]+", username) if part)
+    return f"{initials} #{user_id}"
 
 
 @dataclass(frozen=True)
 class MessageView:
-    """A message as every client sees it; the body is plain text for the client to escape."""
+    """A message; the body is plain text for the client to escape. to_dict words the author for one viewer."""
 
     id: int
     robot_name: str
     body: str
-    author: str
+    author_id: int
+    author_username: str
     author_role: str
     created_at: datetime
 
-    def to_dict(self) -> dict[str, object]:
-        """The JSON form."""
+    def to_dict(self, viewer_id: int, viewer_may_moderate: bool) -> dict[str, object]:
+        """The JSON form for a viewer: tutors and admins (and the author) see the username, others public_name."""
         stamp = self.created_at.replace(tzinfo=UTC) if self.created_at.tzinfo is None else self.created_at
-        return {"id": self.id, "robot_name": self.robot_name, "body": self.body, "author": self.author,
+        named = viewer_may_moderate or viewer_id == self.author_id
+        author = self.author_username if named else public_name(self.author_username, self.author_id)
+        return {"id": self.id, "robot_name": self.robot_name, "body": self.body, "author": author,
                 "author_role": self.author_role, "created_at": stamp.astimezone(UTC).isoformat().replace("+00:00", "Z")}
 
 
-def _views(session: Session, query) -> list[MessageView]:  # type: ignore[no-untyped-def]
+def _views(session: Session, query) -> list[MessageView]:
     rows = session.execute(query.join(User, User.id == ChatMessage.user_id)
                            .add_columns(User.username, User.role)).all()
-    return [MessageView(m.id, m.robot_name, m.body, name, role, m.created_at) for m, name, role in rows]
+    return [MessageView(m.id, m.robot_name, m.body, m.user_id, name, role, m.created_at) for m, name, role in rows]
 
 
 def post_message(session: Session, robot_name: str, user: User, body: object, now: datetime) -> MessageView:
     """Stores a message after validation and the rate limit (5 per 10 s per user, all robots); caller commits."""
     text = clean_body(body)
     lock_user(session, user.id)  # two processes cannot both see "4 so far" and both insert
-    recent = session.scalar(select(func.count()).select_from(ChatMessage)
-                            .where(ChatMessage.user_id == user.id, ChatMessage.created_at > now - RATE_LIMIT_WINDOW))
+    recent = session.execute(select(func.count()).select_from(ChatMessage).where(
+        ChatMessage.user_id == user.id, ChatMessage.created_at > now - RATE_LIMIT_WINDOW)).scalar_one()
     if recent >= RATE_LIMIT_MESSAGES:
         raise ChatRefused(429, "rate_limited", f"You can send {RATE_LIMIT_MESSAGES} messages every "
                           f"{RATE_LIMIT_WINDOW.seconds} seconds; wait a moment and send it again.", "body")
     message = ChatMessage(robot_name=robot_name, user_id=user.id, body=text, created_at=now)
     session.add(message)
     session.flush()
-    return MessageView(message.id, robot_name, text, user.username, user.role, now)
+    return MessageView(message.id, robot_name, text, user.id, user.username, user.role, now)
 
 
 def recent_messages(

@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import base64
+from collections.abc import Callable
+from typing import Any
 
 from flask import Blueprint, Response, flash, jsonify, redirect, render_template, request, url_for
+from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
+from sqlalchemy.orm import Session
 
 from middleware.accounts.invitations import list_invitations
-from middleware.accounts.routes import _now, api_error, page_refusal, refusals_as_pages
-from middleware.accounts.services import Refused, forbidden
+from middleware.accounts.services import forbidden
+from middleware.accounts.web import json_body, now
 from middleware.auth.schemas import InvalidField
 from middleware.courses import services
 from middleware.courses.schemas import (
@@ -19,7 +23,7 @@ from middleware.courses.schemas import (
     report_csv,
 )
 from middleware.db import get_session
-from middleware.errors import ApiError
+from middleware.errors import unless_refused
 from middleware.models import Role
 
 blueprint = Blueprint("courses", __name__)
@@ -30,14 +34,15 @@ def _require_teacher() -> None:
         raise forbidden("Only tutors and admins manage courses.")
 
 
-def _page(template: str, status: int = 200, **context):  # type: ignore[no-untyped-def]
+def _page(template: str, status: int = 200, **context: Any) -> tuple[str, int]:
     return render_template(template, turn_bounds=TURN_LENGTH_S, allowance_bounds=ALLOWANCE_MIN, **context), status
 
 
 # --- pages ----------------------------------------------------------------------------------------
 
 
-def _index(errors: dict[str, str] | None = None, form: dict[str, str] | None = None, status: int = 200):  # type: ignore[no-untyped-def]
+def _index(errors: dict[str, str] | None = None, form: dict[str, str] | None = None,
+           status: int = 200) -> ResponseReturnValue:
     _require_teacher()
     return _page("courses/index.html", status, courses=services.list_courses(get_session(), current_user),
                  errors=errors or {}, form=form or {})
@@ -45,35 +50,31 @@ def _index(errors: dict[str, str] | None = None, form: dict[str, str] | None = N
 
 @blueprint.get("/courses")
 @login_required
-@refusals_as_pages
-def index():  # type: ignore[no-untyped-def]
+def index() -> ResponseReturnValue:
     """The courses the tutor teaches (every course for an admin) and the form to create one."""
     return _index()
 
 
 @blueprint.post("/courses")
 @login_required
-def create():  # type: ignore[no-untyped-def]
+def create() -> ResponseReturnValue:
     """Creates a course and opens it."""
-    dbs, form = get_session(), request.form.to_dict()
-    try:
+    form = request.form.to_dict()
+
+    def create() -> ResponseReturnValue:
         _require_teacher()
         settings = parse_settings({k: form.get(k) for k in ("turn_length_s", "booking_allowance_min")})
-        course = services.create_course(dbs, current_user, form.get("code"), form.get("title"), settings)
-    except Refused as refused:
-        page_refusal(refused)
-        dbs.rollback()
-        return _index({refused.field or "code": refused.message}, form, refused.status)
-    except InvalidField as invalid:
-        dbs.rollback()
-        return _index({invalid.field: invalid.message}, form, 400)
-    dbs.commit()
-    flash(f"Course {course.code} created. Enrol students or invite them below.", "success")
-    return redirect(url_for("courses.detail", course_id=course.id), 303)
+        course = services.create_course(get_session(), current_user, form.get("code"), form.get("title"), settings)
+        flash(f"Course {course.code} created. Enrol students or invite them below.", "success")
+        return redirect(url_for("courses.detail", course_id=course.id), 303)
+
+    return unless_refused(create, lambda refused: _index({refused.field or "code": refused.message}, form,
+                                                         refused.status))
 
 
 def _detail(course_id: int, status: int = 200, errors: dict[str, str] | None = None,
-            form: dict[str, str] | None = None, report: services.EnrolmentReport | None = None):  # type: ignore[no-untyped-def]
+            form: dict[str, str] | None = None,
+            report: services.EnrolmentReport | None = None) -> ResponseReturnValue:
     dbs = get_session()
     course = services.managed_course(dbs, current_user, course_id)
     report_href = None
@@ -83,7 +84,7 @@ def _detail(course_id: int, status: int = 200, errors: dict[str, str] | None = N
     response = _page("courses/detail.html", status, course=services.describe(dbs, current_user, course),
                      members=services.members(dbs, current_user, course_id), errors=errors or {},
                      form=form or {}, report=report, report_href=report_href,
-                     invitations=list_invitations(dbs, current_user, course_id, _now())[:20])
+                     invitations=list_invitations(dbs, current_user, course_id, now())[:20])
     if report is not None:
         return response[0], response[1], {"Cache-Control": "no-store"}
     return response
@@ -91,31 +92,28 @@ def _detail(course_id: int, status: int = 200, errors: dict[str, str] | None = N
 
 @blueprint.get("/courses/<int:course_id>")
 @login_required
-@refusals_as_pages
-def detail(course_id: int):  # type: ignore[no-untyped-def]
+def detail(course_id: int) -> ResponseReturnValue:
     """One course: settings, members, enrolment, CSV upload and invitations (its tutors, admins)."""
     return _detail(course_id)
 
 
-def _course_form(course_id: int, action, success: str):  # type: ignore[no-untyped-def]
-    dbs, form = get_session(), request.form.to_dict()
-    try:
-        action(dbs, form)
-    except Refused as refused:
-        page_refusal(refused)
-        dbs.rollback()
-        return _detail(course_id, refused.status, {refused.field or "form": refused.message}, form)
-    except InvalidField as invalid:
-        dbs.rollback()
-        return _detail(course_id, 400, {invalid.field: invalid.message}, form)
-    dbs.commit()
-    flash(success, "success")
-    return redirect(url_for("courses.detail", course_id=course_id), 303)
+def _course_form(course_id: int, action: Callable[[Session, dict[str, str]], object],
+                 success: str, about_the_page: tuple[int, ...] = (403, 404)) -> ResponseReturnValue:
+    form = request.form.to_dict()
+
+    def act() -> ResponseReturnValue:
+        action(get_session(), form)
+        flash(success, "success")
+        return redirect(url_for("courses.detail", course_id=course_id), 303)
+
+    return unless_refused(act, lambda refused: _detail(course_id, refused.status,
+                                                       {refused.field or "form": refused.message}, form),
+                          about_the_page)
 
 
 @blueprint.post("/courses/<int:course_id>/settings")
 @login_required
-def settings(course_id: int):  # type: ignore[no-untyped-def]
+def settings(course_id: int) -> ResponseReturnValue:
     """Saves the title, turn length and booking allowance."""
     return _course_form(course_id, lambda dbs, form: services.update_settings(
         dbs, current_user, course_id, parse_settings(form)), "Course settings saved.")
@@ -123,16 +121,17 @@ def settings(course_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/courses/<int:course_id>/members")
 @login_required
-def enrol(course_id: int):  # type: ignore[no-untyped-def]
+def enrol(course_id: int) -> ResponseReturnValue:
     """Enrols one existing student by username."""
     name = request.form.get("username", "").strip().lower()
+    # A mistyped username (404) is the form's error; a course that is not there still fails in _detail.
     return _course_form(course_id, lambda dbs, form: services.enrol(dbs, current_user, course_id, form.get("username")),
-                        f"{name} enrolled.")
+                        f"{name} enrolled.", about_the_page=())
 
 
 @blueprint.post("/courses/<int:course_id>/members/<int:user_id>/remove")
 @login_required
-def unenrol(course_id: int, user_id: int):  # type: ignore[no-untyped-def]
+def unenrol(course_id: int, user_id: int) -> ResponseReturnValue:
     """Removes a student from the course."""
     return _course_form(course_id, lambda dbs, _form: services.unenrol(dbs, current_user, course_id, user_id),
                         "Student removed from the course.")
@@ -147,58 +146,41 @@ def _uploaded_bytes() -> bytes:
 
 @blueprint.post("/courses/<int:course_id>/members.csv")
 @login_required
-def enrol_csv(course_id: int):  # type: ignore[no-untyped-def]
+def enrol_csv(course_id: int) -> ResponseReturnValue:
     """Enrols (and creates accounts for) the usernames in an uploaded CSV file; shows the report once."""
+    def enrol() -> ResponseReturnValue:
+        return _detail(course_id, report=_enrol_uploaded_csv(course_id))
+
+    return unless_refused(enrol, lambda refused: _detail(course_id, refused.status, {"file": refused.message}))
+
+
+def _enrol_uploaded_csv(course_id: int) -> services.EnrolmentReport:
     dbs = get_session()
-    try:
-        services.managed_course(dbs, current_user, course_id)  # who may, before what was sent
-        report = services.enrol_from_csv(dbs, current_user, course_id, _uploaded_bytes())
-    except Refused as refused:
-        page_refusal(refused)
-        dbs.rollback()
-        return _detail(course_id, refused.status, {"file": refused.message})
-    except InvalidField as invalid:
-        dbs.rollback()
-        return _detail(course_id, 400, {"file": invalid.message})
-    dbs.commit()
-    return _detail(course_id, report=report)
+    services.managed_course(dbs, current_user, course_id)  # who may, before what was sent
+    return services.enrol_from_csv(dbs, current_user, course_id, _uploaded_bytes())
 
 
 # --- JSON API -----------------------------------------------------------------------------------
 
 
-def _api(action, status: int = 200):  # type: ignore[no-untyped-def]
-    dbs = get_session()
-    try:
-        body = action(dbs)
-    except (Refused, InvalidField) as error:
-        dbs.rollback()
-        raise api_error(error) from None
-    dbs.commit()
-    return jsonify(body), status
-
-
-def _json_body() -> dict[str, object]:
-    data = request.get_json(silent=True)
-    if not isinstance(data, dict):
-        raise ApiError(400, "invalid_field", "Send a JSON object.", "body")
-    return data
+def _api(action: Callable[[Session], object], status: int = 200) -> ResponseReturnValue:
+    return jsonify(action(get_session())), status
 
 
 @blueprint.get("/api/courses")
 @login_required
-def api_courses():  # type: ignore[no-untyped-def]
+def api_courses() -> ResponseReturnValue:
     """The courses the user belongs to (every course for an admin)."""
     return _api(lambda dbs: {"courses": [c.to_dict() for c in services.list_courses(dbs, current_user)]})
 
 
 @blueprint.post("/api/courses")
 @login_required
-def api_create_course():  # type: ignore[no-untyped-def]
+def api_create_course() -> ResponseReturnValue:
     """{code, title, turn_length_s?, booking_allowance_min?}: creates a course (tutors, admins)."""
-    data = _json_body()
+    data = json_body()
 
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, object]:
         parsed = parse_settings({k: data.get(k) for k in ("turn_length_s", "booking_allowance_min")})
         course = services.create_course(dbs, current_user, data.get("code"), data.get("title"), parsed)
         return {"course": services.describe(dbs, current_user, course).to_dict()}
@@ -208,9 +190,9 @@ def api_create_course():  # type: ignore[no-untyped-def]
 
 @blueprint.get("/api/courses/<int:course_id>")
 @login_required
-def api_course(course_id: int):  # type: ignore[no-untyped-def]
+def api_course(course_id: int) -> ResponseReturnValue:
     """A course with its members (its tutors, admins)."""
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, object]:
         course = services.managed_course(dbs, current_user, course_id)
         return {"course": services.describe(dbs, current_user, course).to_dict(),
                 "members": [m.to_dict() for m in services.members(dbs, current_user, course_id)]}
@@ -220,11 +202,11 @@ def api_course(course_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.patch("/api/courses/<int:course_id>")
 @login_required
-def api_update_course(course_id: int):  # type: ignore[no-untyped-def]
+def api_update_course(course_id: int) -> ResponseReturnValue:
     """{title?, turn_length_s?, booking_allowance_min?}: changes a course (its tutors, admins)."""
-    data = _json_body()
+    data = json_body()
 
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, object]:
         services.managed_course(dbs, current_user, course_id)
         course = services.update_settings(dbs, current_user, course_id, parse_settings(data))
         return {"course": services.describe(dbs, current_user, course).to_dict()}
@@ -234,18 +216,18 @@ def api_update_course(course_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/api/courses/<int:course_id>/members")
 @login_required
-def api_enrol(course_id: int):  # type: ignore[no-untyped-def]
+def api_enrol(course_id: int) -> ResponseReturnValue:
     """{username}: enrols an existing student account."""
-    data = _json_body()
+    data = json_body()
     return _api(lambda dbs: {"enrolled": services.enrol(dbs, current_user, course_id, data.get("username")).username},
                 201)
 
 
 @blueprint.delete("/api/courses/<int:course_id>/members/<int:user_id>")
 @login_required
-def api_unenrol(course_id: int, user_id: int):  # type: ignore[no-untyped-def]
+def api_unenrol(course_id: int, user_id: int) -> ResponseReturnValue:
     """Removes a student from the course."""
-    def action(dbs):  # type: ignore[no-untyped-def]
+    def action(dbs: Session) -> dict[str, object]:
         services.unenrol(dbs, current_user, course_id, user_id)
         return {"removed": user_id}
 
@@ -254,16 +236,9 @@ def api_unenrol(course_id: int, user_id: int):  # type: ignore[no-untyped-def]
 
 @blueprint.post("/api/courses/<int:course_id>/members.csv")
 @login_required
-def api_enrol_csv(course_id: int):  # type: ignore[no-untyped-def]
+def api_enrol_csv(course_id: int) -> ResponseReturnValue:
     """A CSV file (multipart field 'file'): the enrolment report as JSON, or as CSV with ?format=csv."""
-    dbs = get_session()
-    try:
-        services.managed_course(dbs, current_user, course_id)  # who may, before what was sent
-        report = services.enrol_from_csv(dbs, current_user, course_id, _uploaded_bytes())
-    except (Refused, InvalidField) as error:
-        dbs.rollback()
-        raise api_error(error) from None
-    dbs.commit()
+    report = _enrol_uploaded_csv(course_id)
     if request.args.get("format") == "csv":
         return Response(report_csv(report.enrolled, report.created, report.refused), mimetype="text/csv",
                         headers={"Content-Disposition": 'attachment; filename="enrolment-report.csv"',

@@ -12,10 +12,11 @@ from dataclasses import dataclass, field
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
-from middleware.accounts.services import Refused, forbidden
+from middleware.accounts.services import forbidden
 from middleware.auth.schemas import InvalidField, clean_username
 from middleware.auth.services import create_user, generate_password
 from middleware.courses.schemas import CourseSettings, clean_code, clean_title, parse_enrolment_csv
+from middleware.errors import Refused
 from middleware.models import Course, CourseMembership, Role, User
 from middleware.models.courses import DEFAULT_BOOKING_ALLOWANCE_MIN, DEFAULT_TURN_LENGTH_S
 
@@ -63,9 +64,9 @@ def get_course(session: Session, course_id: int) -> Course:
 
 def is_course_tutor(session: Session, user_id: int, course_id: int) -> bool:
     """True when user_id is a tutor member of the course."""
-    return session.scalar(select(func.count()).select_from(CourseMembership).where(
+    return session.execute(select(func.count()).select_from(CourseMembership).where(
         CourseMembership.course_id == course_id, CourseMembership.user_id == user_id,
-        CourseMembership.role == "tutor")) > 0
+        CourseMembership.role == "tutor")).scalar_one() > 0
 
 
 def managed_course(session: Session, actor: User, course_id: int) -> Course:

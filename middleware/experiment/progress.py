@@ -1,6 +1,6 @@
 """A trial's run as it happens: whether the robot's finished run counts for the trial, and what to tell the student.
 
-Pure functions over the robot's course run (copied from GetCourseRun by the routes) and the trial; no Flask, no gRPC.
+Pure functions over the robot's track run (copied from GetTrackRun by the routes) and the trial; no Flask, no gRPC.
 The page polls these twice a second, so arrival at A and B and every line contact show while the student drives.
 """
 
@@ -13,8 +13,8 @@ from middleware.models.experiment import Trial
 
 
 @dataclass(frozen=True)
-class CourseRunNow:
-    """The robot's course run as its course monitor reports it now."""
+class TrackRunNow:
+    """The robot's track run as its track monitor reports it now."""
 
     phase: str  # at_start | to_b | to_a | finished
     attempt: int
@@ -37,7 +37,7 @@ def _unix_s(moment: datetime) -> float:
 CLOCK_SLACK_S = 1.0
 
 
-def finished_in_trial(trial: Trial, run: CourseRunNow) -> bool:
+def finished_in_trial(trial: Trial, run: TrackRunNow) -> bool:
     """Whether the robot finished a run that began after the trial did (that run is the trial's result).
 
     A run that was under way when the trial began does not count, even if it ends later: its clock started
@@ -46,27 +46,27 @@ def finished_in_trial(trial: Trial, run: CourseRunNow) -> bool:
     return run.last_attempt > 0 and run.last_started_unix_s >= _unix_s(trial.created_at) - CLOCK_SLACK_S
 
 
-def course_route(trial: Trial) -> str:
-    """The drive the trial's course asks for: "A to B", and back on course A."""
+def track_route(trial: Trial) -> str:
+    """The drive the trial's track asks for: "A to B", and back on track A."""
     return "A to B" + (" and back" if trial.course == "course-A" else "")
 
 
-def _sent_back_to_a(run: CourseRunNow) -> bool:
+def _sent_back_to_a(run: TrackRunNow) -> bool:
     """A line contact put the robot back at A in the middle of an attempt (its clock keeps running)."""
     return run.phase == "at_start" and run.attempt > 0 and run.last_attempt != run.attempt
 
 
-def _attempt_under_way(run: CourseRunNow) -> bool:
+def _attempt_under_way(run: TrackRunNow) -> bool:
     return run.phase in ("to_b", "to_a") or _sent_back_to_a(run)
 
 
-def progress_message(trial: Trial, run: CourseRunNow) -> str:
+def progress_message(trial: Trial, run: TrackRunNow) -> str:
     """One sentence for the student: where the run is and what to do next."""
     if finished_in_trial(trial, run):
         return (f"Finished in {run.last_total_time_s:.1f} s with {run.last_errors} line "
                 f"contact{'' if run.last_errors == 1 else 's'}.")
     if _attempt_under_way(run) and run.started_unix_s < _unix_s(trial.created_at) - CLOCK_SLACK_S:
-        return (f"This run began before your trial, so it will not count: finish it ({course_route(trial)}), return "
+        return (f"This run began before your trial, so it will not count: finish it ({track_route(trial)}), return "
                 "to A (blue) and start again.")
     if run.phase == "to_b":
         contacts = f" {run.errors} line contact{'' if run.errors == 1 else 's'} so far." if run.errors else ""
@@ -76,16 +76,18 @@ def progress_message(trial: Trial, run: CourseRunNow) -> str:
     if _sent_back_to_a(run):
         return "The robot touched a white line and is back at A; the clock keeps running. Drive to B again."
     if run.phase == "finished":
-        return "The robot is still where an earlier run ended: drive it back to A (blue) to begin."
+        return "The last run ended or was given up away from A: drive the robot back to A (blue) to begin."
     return "The robot is at A (blue): drive off to start the clock."
 
 
-def progress_view(trial: Trial, run: CourseRunNow) -> dict[str, object]:
-    """The run for the page: phase, the time and line contacts that matter now, finished or not, the sentence."""
+def progress_view(trial: Trial, run: TrackRunNow) -> dict[str, object]:
+    """The run for the page: phase (the robot's, or return_to_a while it must go back to A), the time and line
+    contacts that matter now, finished or not, the sentence."""
     finished = finished_in_trial(trial, run)
     return {
         "online": True,
-        "phase": "finished" if finished else run.phase,
+        # The robot's "finished" that is not the trial's run (an earlier or given-up one) must not look like success.
+        "phase": "finished" if finished else ("return_to_a" if run.phase == "finished" else run.phase),
         "attempt": run.last_attempt if finished else run.attempt,
         "time_s": round(run.last_total_time_s if finished else run.elapsed_s, 1),
         "errors": run.last_errors if finished else run.errors,

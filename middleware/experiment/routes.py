@@ -3,26 +3,31 @@
 from __future__ import annotations
 
 import json
+import logging
+from collections.abc import Callable
+from typing import TypeVar
 
 from flask import Blueprint, Response, jsonify, render_template, request
+from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy import select
+from sqlalchemy.orm import Session
 
 from middleware.access.coordinator import access_coordinator
-from middleware.accounts.services import Refused
-from middleware.auth.schemas import InvalidField
-from middleware.db import get_session
+from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
 from middleware.experiment import services
-from middleware.experiment.progress import CourseRunNow, course_route, finished_in_trial, progress_view
+from middleware.experiment.progress import TrackRunNow, finished_in_trial, progress_view, track_route
 from middleware.lab.delay import delay_book
 from middleware.models import User, UserPreference
 from middleware.models.accounts import utc_now
-from middleware.models.experiment import Trial
-from middleware.robots.link import RobotLink, RobotUnavailable
+from middleware.models.experiment import TRIAL_OPEN, Trial
+from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
 from middleware.robots.registry import robot_registry
 
 blueprint = Blueprint("experiment", __name__)
+log = logging.getLogger(__name__)
+T = TypeVar("T")
 FEEDBACK_PREFERENCE_KEY = "camera-feedback"
 
 
@@ -30,20 +35,12 @@ def _actor() -> User:
     return get_session().get(User, int(current_user.get_id()))  # type: ignore[return-value]
 
 
-def _run(action):  # type: ignore[no-untyped-def]
-    """Runs a service call, committing on success; refusals become JSON errors naming the field."""
-    session = get_session()
-    try:
-        result = action(session)
-        session.commit()
-        delay_book().forget()  # trials and tutors change delays: this process's viewers see it at once
-        return result
-    except Refused as refused:
-        session.rollback()
-        raise ApiError(refused.status, refused.code, refused.message, refused.field) from None
-    except InvalidField as invalid:
-        session.rollback()
-        raise ApiError(400, "invalid_field", invalid.message, invalid.field) from None
+def _run(action: Callable[[Session], T]) -> T:
+    """Runs a service call in the request's unit of work; once it is committed, this process's viewers see a
+    changed delay at once (trials and tutors change delays)."""
+    result = action(get_session())
+    after_commit(delay_book().forget)
+    return result
 
 
 def _trial_dict(trial: Trial) -> dict[str, object]:
@@ -52,8 +49,8 @@ def _trial_dict(trial: Trial) -> dict[str, object]:
             "errors": trial.errors}
 
 
-def course_robots() -> list[dict[str, str]]:
-    """Online robots whose skill server runs a course scene."""
+def track_robots() -> list[dict[str, str]]:
+    """Online robots whose skill server runs a track scene."""
     registry = robot_registry()
     found = []
     for name in registry.names():
@@ -67,19 +64,38 @@ def course_robots() -> list[dict[str, str]]:
     return found
 
 
-def _course_run_now(link: RobotLink | None) -> CourseRunNow | None:
-    """The robot's course run now; None when the robot is gone or runs no course. RobotUnavailable passes up."""
-    run = link.course_run() if link is not None else None
-    if run is None or not run.is_course:
+def _track_run_now(link: RobotLink | None) -> TrackRunNow | None:
+    """The robot's track run now; None when the robot is gone or runs no track. RobotUnavailable passes up."""
+    run = link.track_run() if link is not None else None
+    if run is None or not run.is_track:
         return None
-    return CourseRunNow(run.phase, run.attempt, run.elapsed_s, run.errors, run.last_attempt, run.last_total_time_s,
+    return TrackRunNow(run.phase, run.attempt, run.elapsed_s, run.errors, run.last_attempt, run.last_total_time_s,
                         run.last_errors, run.last_finished_unix_s, run.started_unix_s, run.last_started_unix_s)
+
+
+def _restart_run_after_commit(session: Session, trial: Trial) -> None:
+    """Once the trial is begun or given up, the robot's attempt under way ends without a result, so the next
+    trial counts from the next departure from A (only when nobody else drives the robot; an offline robot keeps
+    its run, and the page then says a run that began before the trial will not count)."""
+    if not services.may_restart_run(session, _actor(), trial.robot_name):
+        return
+    robot_name = trial.robot_name
+
+    def restart() -> None:
+        link = robot_registry().get(robot_name)
+        try:
+            if link is not None:
+                link.restart_track_run()
+        except (RobotUnavailable, CommandRefused) as error:
+            log.warning("the track run of %s was not restarted: %s", robot_name, error)
+
+    after_commit(restart)
 
 
 def _run_progress(trial: Trial) -> dict[str, object]:
     """The trial's run as the page shows it while the student drives."""
     try:
-        run = _course_run_now(robot_registry().get(trial.robot_name))
+        run = _track_run_now(robot_registry().get(trial.robot_name))
     except RobotUnavailable:
         run = None
     if run is None:
@@ -89,7 +105,7 @@ def _run_progress(trial: Trial) -> dict[str, object]:
     return progress_view(trial, run)
 
 
-def _set_feedback_preference(session, user_id: int, enabled: bool) -> None:  # type: ignore[no-untyped-def]
+def _set_feedback_preference(session: Session, user_id: int, enabled: bool) -> None:
     """The trial's condition becomes the console's motion-preview setting."""
     row = session.scalar(select(UserPreference).where(UserPreference.user_id == user_id,
                                                       UserPreference.key == FEEDBACK_PREFERENCE_KEY))
@@ -102,16 +118,17 @@ def _set_feedback_preference(session, user_id: int, enabled: bool) -> None:  # t
 
 @blueprint.get("/experiment")
 @login_required
-def page():  # type: ignore[no-untyped-def]
+def page() -> ResponseReturnValue:
     """Students run trials; tutors set delays and read the results."""
     return render_template("experiment/experiment.html", is_teacher=current_user.role in ("tutor", "admin"))
 
 
 @blueprint.get("/api/experiment/state")
 @login_required
-def state():  # type: ignore[no-untyped-def]
-    """The student's trial in progress with its run now, their delay, their last recorded trial, and, while no
-    trial is in progress, the robots that run a course (the page polls this at 2 Hz during a trial)."""
+def state() -> ResponseReturnValue:
+    """The student's trial in progress with its run now, their video delay (the trial's, on its robot; else a
+    tutor's), their last recorded trial, and, while no trial is in progress, the robots that run a track (the page
+    polls this at 2 Hz during a trial)."""
     session = get_session()
     actor = _actor()
     trial = services.current_trial(session, actor)
@@ -120,24 +137,27 @@ def state():  # type: ignore[no-untyped-def]
         "trial": _trial_dict(trial) if trial else None,
         "run": _run_progress(trial) if trial else None,
         "last_trial": _trial_dict(last) if last else None,
-        "robots": course_robots() if trial is None else [],
-        "delay_s": services.get_video_delay(session, actor.id),
+        "robots": track_robots() if trial is None else [],
+        "delay_s": trial.delay_s if trial else services.get_video_delay(session, actor.id),
     })
 
 
 @blueprint.post("/api/experiment/trials")
 @login_required
-def start_trial():  # type: ignore[no-untyped-def]
-    """Assigns a random condition on the chosen course robot and applies its delay and feedback setting."""
+def start_trial() -> ResponseReturnValue:
+    """Assigns a random condition on the chosen track robot and applies its delay and feedback setting."""
     body = request.get_json(silent=True) or {}
     robot_name = body.get("robot_name")
-    robots = {r["name"]: r["scene"] for r in course_robots()}
+    robots = {r["name"]: r["scene"] for r in track_robots()}
     if not isinstance(robot_name, str) or robot_name not in robots:
         raise ApiError(400, "invalid_field", "Choose a robot that runs a course scene.", "robot_name")
 
-    def action(session):  # type: ignore[no-untyped-def]
+    def action(session: Session) -> Trial:
+        open_before = services.current_trial(session, _actor())
         trial = services.assign_trial(session, _actor(), robot_name, robots[robot_name])
         _set_feedback_preference(session, trial.user_id, trial.feedback)
+        if open_before is None:
+            _restart_run_after_commit(session, trial)
         return trial
 
     return jsonify({"trial": _trial_dict(_run(action))}), 201
@@ -145,37 +165,43 @@ def start_trial():  # type: ignore[no-untyped-def]
 
 @blueprint.post("/api/experiment/trials/<int:trial_id>/finish")
 @login_required
-def finish(trial_id: int):  # type: ignore[no-untyped-def]
-    """Records the run the robot's course monitor finished after the trial began."""
+def finish(trial_id: int) -> ResponseReturnValue:
+    """Records the run the robot's track monitor finished after the trial began."""
     session = get_session()
     trial = session.get(Trial, trial_id)
     if trial is None or trial.user_id != int(current_user.get_id()):
         raise ApiError(404, "unknown_trial", "There is no such trial of yours.", "trial_id")
-    if trial.status == "assigned" and access_coordinator().controller_token(trial.robot_name, trial.user_id,
+    if trial.status == TRIAL_OPEN and access_coordinator().controller_token(trial.robot_name, trial.user_id,
                                                                             session) is None:
         raise ApiError(403, "not_controller", f"Only the person driving {trial.robot_name} can record its run: take "
                        "your turn in its console and drive the course yourself.")
     try:
-        run = _course_run_now(robot_registry().get(trial.robot_name))
+        run = _track_run_now(robot_registry().get(trial.robot_name))
     except RobotUnavailable as error:
         raise ApiError(503, "robot_offline", f"{error} Try again in a moment.") from None
     if run is None or not finished_in_trial(trial, run):
         raise ApiError(409, "run_not_finished", "The robot has not seen you finish the course since this trial "
-                       f"began. Drive from {course_route(trial)} first.")
+                       f"began. Drive from {track_route(trial)} first.")
     result = services.RunResult(run.last_total_time_s, run.last_errors)
     return jsonify({"trial": _trial_dict(_run(lambda s: services.finish_trial(s, _actor(), trial_id, result)))})
 
 
 @blueprint.post("/api/experiment/trials/<int:trial_id>/abandon")
 @login_required
-def abandon(trial_id: int):  # type: ignore[no-untyped-def]
-    """Gives the trial up; it is not counted."""
-    return jsonify({"trial": _trial_dict(_run(lambda s: services.abandon_trial(s, _actor(), trial_id)))})
+def abandon(trial_id: int) -> ResponseReturnValue:
+    """Gives the trial up; it is not counted, and the robot's run under way ends with it."""
+
+    def action(session: Session) -> Trial:
+        trial = services.abandon_trial(session, _actor(), trial_id)
+        _restart_run_after_commit(session, trial)
+        return trial
+
+    return jsonify({"trial": _trial_dict(_run(action))})
 
 
 @blueprint.put("/api/experiment/delays/<username>")
 @login_required
-def put_delay(username: str):  # type: ignore[no-untyped-def]
+def put_delay(username: str) -> ResponseReturnValue:
     """A tutor sets one user's added video delay: {"delay_s": 0..7}."""
     body = request.get_json(silent=True)
     if not isinstance(body, dict) or "delay_s" not in body:
@@ -189,7 +215,7 @@ def put_delay(username: str):  # type: ignore[no-untyped-def]
 
 @blueprint.get("/api/experiment/results")
 @login_required
-def results():  # type: ignore[no-untyped-def]
+def results() -> ResponseReturnValue:
     """Every completed trial and the means with standard errors per condition (tutors)."""
     rows = _run(lambda s: services.class_trials(s, _actor()))
     summary = services.summarise(trial for trial, _ in rows)
@@ -201,7 +227,7 @@ def results():  # type: ignore[no-untyped-def]
 
 @blueprint.get("/experiment/results.csv")
 @login_required
-def results_csv():  # type: ignore[no-untyped-def]
+def results_csv() -> ResponseReturnValue:
     """The class's trials as CSV."""
     rows = _run(lambda s: services.class_trials(s, _actor()))
     return Response(services.results_csv(rows), mimetype="text/csv",

@@ -15,11 +15,13 @@ from dataclasses import dataclass
 
 from sqlalchemy import select
 
-from middleware.accounts.services import Refused
+from middleware.courses.authority import taught_student_ids, teaches_student
+from middleware.errors import Refused
 from middleware.lab.delay import parse_delay_s
 from middleware.models import Role, User
+from middleware.models.access import RobotControl
 from middleware.models.accounts import utc_now
-from middleware.models.experiment import Trial, VideoDelay
+from middleware.models.experiment import TRIAL_OPEN, Trial, VideoDelay
 
 COURSES = ("course-A", "course-B")
 TRIAL_DELAYS_S = (1.0, 3.0)
@@ -35,13 +37,13 @@ def _require_teacher(actor: User) -> None:
         raise Refused(403, "forbidden", "Only tutors and admins can do that.")
 
 
-def get_video_delay(session, user_id: int) -> float:  # type: ignore[no-untyped-def]
-    """The injected delay of a user, 0 when none."""
+def get_video_delay(session, user_id: int) -> float:
+    """The delay a tutor added to a user's video on every robot, 0 when none."""
     row = session.get(VideoDelay, user_id)
     return float(row.delay_s) if row is not None else 0.0
 
 
-def _store_delay(session, user_id: int, delay_s: float, set_by_id: int | None) -> VideoDelay:  # type: ignore[no-untyped-def]
+def _store_delay(session, user_id: int, delay_s: float, set_by_id: int) -> VideoDelay:
     row = session.get(VideoDelay, user_id)
     if row is None:
         row = VideoDelay(user_id=user_id, delay_s=delay_s, set_by_id=set_by_id, updated_at=utc_now())
@@ -52,25 +54,37 @@ def _store_delay(session, user_id: int, delay_s: float, set_by_id: int | None) -
     return row
 
 
-def set_video_delay(session, actor: User, user_id: object, delay_s: object) -> VideoDelay:  # type: ignore[no-untyped-def]
-    """A tutor or admin sets one user's added video delay (0-7 s); commands are never delayed."""
+def set_video_delay(session, actor: User, user_id: object, delay_s: object) -> VideoDelay:
+    """A tutor sets the added video delay (0-7 s) of a student they teach, an admin anyone's, on every robot;
+    commands are never delayed."""
     _require_teacher(actor)
     delay = parse_delay_s(delay_s)
-    if isinstance(user_id, bool) or not isinstance(user_id, int) or session.get(User, user_id) is None:
+    target = None if isinstance(user_id, bool) or not isinstance(user_id, int) else session.get(User, user_id)
+    if target is None:
         raise Refused(404, "unknown_user", "There is no such account.", "user_id")
-    return _store_delay(session, user_id, delay, actor.id)
+    if not teaches_student(session, actor, target):
+        raise Refused(403, "forbidden", "You can set the delay only of students in the courses you teach.",
+                      "user_id")
+    return _store_delay(session, target.id, delay, actor.id)
 
 
-def current_trial(session, student: User) -> Trial | None:  # type: ignore[no-untyped-def]
+def current_trial(session, student: User) -> Trial | None:
     """The student's trial in progress (assigned, not yet finished), if any."""
-    return session.scalar(select(Trial).where(Trial.user_id == student.id, Trial.status == "assigned")
+    return session.scalar(select(Trial).where(Trial.user_id == student.id, Trial.status == TRIAL_OPEN)
                           .order_by(Trial.id.desc()).limit(1))
 
 
-def last_completed_trial(session, student: User) -> Trial | None:  # type: ignore[no-untyped-def]
+def last_completed_trial(session, student: User) -> Trial | None:
     """The student's most recently recorded trial, if any."""
     return session.scalar(select(Trial).where(Trial.user_id == student.id, Trial.status == "completed")
                           .order_by(Trial.id.desc()).limit(1))
+
+
+def may_restart_run(session, student: User, robot_name: str) -> bool:
+    """Whether the student's trial may end the run under way on the robot: nobody else is driving it (a trial
+    begun or given up must not spoil another student's run)."""
+    control = session.get(RobotControl, robot_name)
+    return control is None or control.controller_id in (None, student.id)
 
 
 def choose_condition(done: Iterable[tuple[str, float, bool]], courses: Sequence[str],
@@ -85,9 +99,10 @@ def choose_condition(done: Iterable[tuple[str, float, bool]], courses: Sequence[
     return rng.choice([c for c in candidates if counts[c] == fewest])
 
 
-def assign_trial(session, student: User, robot_name: str, robot_scene: str,  # type: ignore[no-untyped-def]
+def assign_trial(session, student: User, robot_name: str, robot_scene: str,
                  rng: random.Random | None = None) -> Trial:
-    """Assigns the student a random condition on the robot's course and applies its delay to their video."""
+    """Assigns the student a random condition on the robot's course; its delay is on their video of that robot
+    while the trial is open (the delay book reads open trials)."""
     existing = current_trial(session, student)
     if existing is not None:
         return existing
@@ -97,9 +112,8 @@ def assign_trial(session, student: User, robot_name: str, robot_scene: str,  # t
         select(Trial).where(Trial.user_id == student.id, Trial.status == "completed"))]
     course, delay, feedback = choose_condition(done, [robot_scene], rng or random.SystemRandom())
     trial = Trial(user_id=student.id, robot_name=robot_name, course=course, delay_s=delay, feedback=feedback,
-                  status="assigned", errors=0, created_at=utc_now())
+                  status=TRIAL_OPEN, errors=0, created_at=utc_now())
     session.add(trial)
-    _store_delay(session, student.id, delay, None)
     session.flush()
     return trial
 
@@ -121,35 +135,37 @@ def _check_result(result: RunResult) -> None:
         raise Refused(400, "invalid_field", "errors must be a whole number from 0.", "errors")
 
 
-def finish_trial(session, student: User, trial_id: int, result: RunResult) -> Trial:  # type: ignore[no-untyped-def]
-    """Records a completed run (time and errors as the robot measured them) and removes the added delay."""
+def finish_trial(session, student: User, trial_id: int, result: RunResult) -> Trial:
+    """Records a completed run (time and errors as the robot measured them); the trial's delay ends with it."""
     trial = session.get(Trial, trial_id)
     if trial is None or trial.user_id != student.id:
         raise Refused(404, "unknown_trial", "There is no such trial of yours.", "trial_id")
-    if trial.status != "assigned":
+    if trial.status != TRIAL_OPEN:
         raise Refused(409, "trial_finished", "This trial is already finished.", "trial_id")
     _check_result(result)
     trial.status, trial.total_time_s, trial.errors = "completed", float(result.total_time_s), int(result.errors)
     trial.finished_at = utc_now()
-    _store_delay(session, student.id, 0.0, None)
     return trial
 
 
-def abandon_trial(session, student: User, trial_id: int) -> Trial:  # type: ignore[no-untyped-def]
-    """Gives up a trial in progress (it is not counted) and removes the added delay."""
+def abandon_trial(session, student: User, trial_id: int) -> Trial:
+    """Gives up a trial in progress (it is not counted); the trial's delay ends with it."""
     trial = session.get(Trial, trial_id)
-    if trial is None or trial.user_id != student.id or trial.status != "assigned":
+    if trial is None or trial.user_id != student.id or trial.status != TRIAL_OPEN:
         raise Refused(404, "unknown_trial", "There is no trial of yours in progress with that number.", "trial_id")
     trial.status, trial.finished_at = "abandoned", utc_now()
-    _store_delay(session, student.id, 0.0, None)
     return trial
 
 
-def class_trials(session, actor: User) -> list[tuple[Trial, str]]:  # type: ignore[no-untyped-def]
-    """Every completed trial with its student's username (tutors and admins)."""
+def class_trials(session, actor: User) -> list[tuple[Trial, str]]:
+    """The completed trials of the students actor teaches (every one for an admin), with their usernames."""
     _require_teacher(actor)
-    rows = session.execute(select(Trial, User.username).join(User, User.id == Trial.user_id)
-                           .where(Trial.status == "completed").order_by(Trial.id))
+    query = (select(Trial, User.username).join(User, User.id == Trial.user_id)
+             .where(Trial.status == "completed").order_by(Trial.id))
+    taught = taught_student_ids(actor)
+    if taught is not None:
+        query = query.where(Trial.user_id.in_(taught))
+    rows = session.execute(query)
     return [(trial, username) for trial, username in rows]
 
 

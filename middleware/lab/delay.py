@@ -2,8 +2,12 @@
 
 The thesis added delay with a distant proxy; here the relay does it per viewer. `DelayQueue` is the pure
 part (ordering, bounds); `parse_delay_s` validates a requested delay; `ViewerDelay` follows one viewer's
-delay through the process's `DelayBook`, which reads every user's delay from the database (so every worker
-process applies it) in one query at most every REFRESH_S.
+delay on one robot through the process's `DelayBook`, which reads every delay in force from the database (so
+every worker process applies it) in one query at most every REFRESH_S.
+
+Two kinds of delay are in force: a tutor's (`video_delays`, on every robot the user watches) and an open
+experiment trial's (its own row in `experiment_trials`, on the trial's robot only, for as long as the trial is
+open). On the trial's robot the trial's delay wins: it is the condition being measured.
 """
 
 from __future__ import annotations
@@ -16,15 +20,18 @@ import time
 from collections import deque
 from collections.abc import Callable
 
-from sqlalchemy import select
+from sqlalchemy import String, literal, select, union_all
 
 from middleware.auth.schemas import InvalidField
-from middleware.models.experiment import MAX_INJECTED_DELAY_S, VideoDelay
+from middleware.models.experiment import MAX_INJECTED_DELAY_S, TRIAL_OPEN, Trial, VideoDelay
 
 DEFAULT_MAX_MESSAGES = 600  # 7 s of 20 Hz telemetry or 30 fps video, with room to spare
 DEFAULT_MAX_BYTES = 32 * 1024 * 1024
 REFRESH_S = 1.0
 _BOOK_KEY = "telelab.delay_book"
+
+# (user id, robot name) -> delay [s]; robot name None: a tutor's delay, on every robot.
+Delays = dict[tuple[int, str | None], float]
 
 
 def parse_delay_s(value: object, field: str = "delay_s") -> float:
@@ -125,23 +132,29 @@ class ViewerDelay:
         return value, changed
 
 
+def delay_in_force_s(delays: Delays, user_id: int, robot_name: str) -> float:
+    """user_id's delay on robot_name: an open trial's on that robot, else a tutor's, else 0."""
+    trial_delay = delays.get((user_id, robot_name))
+    return trial_delay if trial_delay is not None else delays.get((user_id, None), 0.0)
+
+
 class DelayBook:
-    """Every user's injected delay in this process, read in one query at most every refresh_s.
+    """Every injected delay in force in this process, read in one query at most every refresh_s.
 
     Each viewer asked the database for its own delay every second: with 100 viewers that was 100 queries a
     second and a fifth of the middleware's time under the capacity load. One shared read costs one query.
     A failed read keeps the last known delays until the next period.
     """
 
-    def __init__(self, load: Callable[[], dict[int, float]], refresh_s: float = REFRESH_S,
+    def __init__(self, load: Callable[[], Delays], refresh_s: float = REFRESH_S,
                  clock: Callable[[], float] = time.monotonic) -> None:
         self._load, self._refresh_s, self._clock = load, refresh_s, clock
-        self._delays: dict[int, float] = {}
+        self._delays: Delays = {}
         self._loaded_at = float("-inf")
         self._lock = threading.Lock()
 
-    def delay_of(self, user_id: int) -> float:
-        """user_id's delay as read at most refresh_s ago (0 when none is set)."""
+    def delay_of(self, user_id: int, robot_name: str) -> float:
+        """user_id's delay on robot_name as read at most refresh_s ago (0 when none is in force)."""
         if self._clock() - self._loaded_at >= self._refresh_s:
             with self._lock:
                 if self._clock() - self._loaded_at >= self._refresh_s:
@@ -149,20 +162,22 @@ class DelayBook:
                         self._delays = self._load()
                     finally:
                         self._loaded_at = self._clock()  # after a failure too: not one retry per viewer
-        return self._delays.get(user_id, 0.0)
+        return delay_in_force_s(self._delays, user_id, robot_name)
 
     def forget(self) -> None:
         """The next read goes to the database (a delay was just changed in this process)."""
         self._loaded_at = float("-inf")
 
 
-def read_all_delays_s(session) -> dict[int, float]:  # type: ignore[no-untyped-def]
-    """Every stored delay, by user id."""
-    return {user_id: float(delay_s) for user_id, delay_s in session.execute(
-        select(VideoDelay.user_id, VideoDelay.delay_s))}
+def read_all_delays_s(session) -> Delays:
+    """Every delay in force: tutors' (robot name None) and open trials' (on their robot)."""
+    tutors = select(VideoDelay.user_id, literal(None, String).label("robot_name"), VideoDelay.delay_s)
+    trials = select(Trial.user_id, Trial.robot_name, Trial.delay_s).where(Trial.status == TRIAL_OPEN)
+    return {(user_id, robot_name): float(delay_s)
+            for user_id, robot_name, delay_s in session.execute(union_all(tutors, trials))}
 
 
-def delay_book(app=None) -> DelayBook:  # type: ignore[no-untyped-def]
+def delay_book(app=None) -> DelayBook:
     """The delay book of app (or of the current app), made on first use."""
     from flask import current_app
 
@@ -173,7 +188,7 @@ def delay_book(app=None) -> DelayBook:  # type: ignore[no-untyped-def]
     if book is None:
         factory = session_factory(app)
 
-        def load() -> dict[int, float]:
+        def load() -> Delays:
             with factory() as session:
                 return read_all_delays_s(session)
 
@@ -181,16 +196,16 @@ def delay_book(app=None) -> DelayBook:  # type: ignore[no-untyped-def]
     return book
 
 
-def viewer_delay() -> ViewerDelay:
-    """The delay of the logged-in viewer of a socket, from the process's delay book."""
+def viewer_delay(robot_name: str) -> ViewerDelay:
+    """The delay of the logged-in viewer of a socket on robot_name, from the process's delay book."""
     from flask_login import current_user
 
     book = delay_book()
     user_id = int(current_user.get_id())
-    return ViewerDelay(lambda: book.delay_of(user_id), refresh_s=0.0)  # the book limits the reads
+    return ViewerDelay(lambda: book.delay_of(user_id, robot_name), refresh_s=0.0)  # the book limits the reads
 
 
-def apply_viewer_delay(ws, delay: ViewerDelay | None, held: DelayQueue, online: bool = True) -> float:  # type: ignore[no-untyped-def]
+def apply_viewer_delay(ws, delay: ViewerDelay | None, held: DelayQueue, online: bool = True) -> float:
     """The viewer's delay now; a change is applied to held and announced on the socket (with the robot's status)."""
     if delay is None:
         return 0.0

@@ -8,13 +8,15 @@ the skill server appears here, and so in the console, with no change to either.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 from middleware.robots.messages import parameter_schema_dict
 from protos.telelab.v1 import robot_pb2
 
-# Skills whose panel is not the generic skill panel: direct control is the drive pad.
-DIRECT_CONTROL_SKILL = "direct_control"
-PERCEPTIVE_HINTS = {"detect_obstacle", "environment_modelling", "localization"}
+# The console's views, each fitting one screen: driving (camera beside the pad), navigating (the map beside the
+# skills, which set their goals on it and show their estimates there), sensing (raw readings), talking.
+# Every descriptor names its view.
+Tab = Literal["drive", "navigate", "sense", "chat"]
 
 
 @dataclass(frozen=True)
@@ -26,10 +28,12 @@ class DynamicRepository:
     title: str
     channel: str | None
     help: str
+    tab: Tab
 
     def describe(self) -> dict[str, object]:
         """The panel descriptor."""
-        return {"id": self.id, "kind": self.kind, "title": self.title, "channel": self.channel, "help": self.help}
+        return {"id": self.id, "kind": self.kind, "title": self.title, "channel": self.channel, "help": self.help,
+                "tab": self.tab}
 
 
 @dataclass(frozen=True)
@@ -47,8 +51,9 @@ class SkillController:
             "title": self.skill.title or self.skill.name.replace("_", " ").capitalize(),
             "channel": f"/ws/robots/{self.robot_name}/goals",
             "help": self.skill.help,
+            "tab": "navigate",
             "skill": self.skill.name,
-            "motor": self.skill.name not in PERCEPTIVE_HINTS,
+            "motor": self.skill.motor,
             "schema": [parameter_schema_dict(p) for p in self.skill.parameters],
         }
 
@@ -62,24 +67,26 @@ def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | Non
     chat_help = ("Your personal practice robot: nobody else reads this chat; notes to yourself."
                  if personal else "Talk with the others connected to this robot.")
     repositories = [
-        DynamicRepository("camera", "camera", "Camera", f"{base}/camera", "The robot's camera, live."),
-        DynamicRepository("queue", "queue", "Turn", f"{base}/queue", turn_help),
+        DynamicRepository("camera", "camera", "Camera", f"{base}/camera", "The robot's camera, live.", "drive"),
         DynamicRepository("drive", "drive", "Drive", f"{base}/drive",
-                          "Direct control: arrow keys, the pad or a gamepad."),
-        DynamicRepository("map", "map", "Lab model", f"{base}/localization",
-                          "The lab seen from above: the robot, its readings, the map; click to set a goal."),
+                          "Direct control: arrow keys, the pad or a gamepad.", "drive"),
+        DynamicRepository("queue", "queue", "Turn", f"{base}/queue", turn_help, "drive"),
         DynamicRepository("odometry", "odometry", "Odometry", f"{base}/telemetry",
-                          "Position, heading and speeds integrated from the wheels."),
-        DynamicRepository("sonar", "sonar", "Sonar", f"{base}/telemetry", "The ring of sonars, nearest echo each."),
-        DynamicRepository("laser", "laser", "Laser", f"{base}/telemetry", "The 180-degree laser scan ahead."),
+                          "Position, heading and speeds integrated from the wheels.", "drive"),
+        DynamicRepository("map", "map", "Lab model", f"{base}/localization",
+                          "The lab seen from above: the robot, its readings, the map; click to set a goal.",
+                          "navigate"),
+        DynamicRepository("sonar", "sonar", "Sonar", f"{base}/telemetry", "The ring of sonars, nearest echo each.",
+                          "sense"),
+        DynamicRepository("laser", "laser", "Laser", f"{base}/telemetry", "The 180-degree laser scan ahead.", "sense"),
     ]
     panels = [r.describe() for r in repositories]
     for skill in skills or []:
-        if skill.name != DIRECT_CONTROL_SKILL:
+        if not skill.direct_drive:  # a direct-drive skill is what the drive pad does: it gets no panel of its own
             panels.append(SkillController(robot_name, skill).describe())
     panels += [
-        DynamicRepository("chat", "chat", "Chat", f"{base}/chat", chat_help).describe(),
+        DynamicRepository("chat", "chat", "Chat", f"{base}/chat", chat_help, "chat").describe(),
         DynamicRepository("response-times", "response-times", "Response times", f"{base}/drive",
-                          "Round trips: browser to middleware, and middleware to the robot.").describe(),
+                          "Round trips: browser to middleware, and middleware to the robot.", "sense").describe(),
     ]
     return panels

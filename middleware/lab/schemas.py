@@ -4,9 +4,13 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass
 
 from middleware.auth.schemas import InvalidField
+
+NAME_PATTERN = re.compile(r"^[a-z][a-z0-9_]{0,63}$")  # skills and their parameters
+GOAL_ID_PATTERN = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 
 MAX_MESSAGE_CHARS = 1024
 MAX_SEQUENCE = 2**53  # the largest integer a browser counts exactly

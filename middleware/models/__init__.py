@@ -5,15 +5,17 @@ from __future__ import annotations
 from middleware.models.access import QueueEntry, RobotControl
 from middleware.models.accounts import Role, User
 from middleware.models.assessment import Attempt, AttemptReview, Exam, Question, SurveyResponse  # noqa: F401
+from middleware.models.auth import LoginSession
 from middleware.models.base import Base
+from middleware.models.bookings import Booking
+from middleware.models.chat import ChatMessage
 from middleware.models.courses import Course, CourseMembership, Invitation, LoginFailure
 from middleware.models.experiment import Trial, VideoDelay  # noqa: F401
 from middleware.models.preferences import UserPreference
 from middleware.models.robots import Robot
-from middleware.models.scheduling import Booking, ChatMessage
 from middleware.models.teaching import GuidedSession, Lesson, Tour  # noqa: F401
 
 __all__ = [
     "Base", "Booking", "ChatMessage", "Course", "CourseMembership", "Invitation", "LoginFailure",
-    "QueueEntry", "Robot", "Role", "RobotControl", "User", "UserPreference",
+    "LoginSession", "QueueEntry", "Robot", "Role", "RobotControl", "User", "UserPreference",
 ]

@@ -11,10 +11,12 @@ from middleware.models.accounts import utc_now
 from middleware.models.base import Base
 
 MAX_INJECTED_DELAY_S = 7.0
+TRIAL_OPEN = "assigned"  # a trial's status until it is recorded or given up
 
 
 class VideoDelay(Base):
-    """An added delay on one user's camera and telemetry, applied by every worker's relay (commands are not delayed)."""
+    """A tutor's added delay on one user's camera and telemetry on every robot, applied by every worker's relay
+    (commands are not delayed). A trial's delay is not stored here: it is the open trial's own, on its robot."""
 
     __tablename__ = "video_delays"
     __table_args__ = (CheckConstraint("delay_s >= 0 AND delay_s <= 7", name="delay_in_range"),)
@@ -26,7 +28,8 @@ class VideoDelay(Base):
 
 
 class Trial(Base):
-    """One run of a course by a student in an assigned condition (course, delay, feedback on/off)."""
+    """One run of a course by a student in an assigned condition (course, delay, feedback on/off); while it is open
+    its delay is on the student's video of its robot, and of no other robot."""
 
     __tablename__ = "experiment_trials"
     __table_args__ = (

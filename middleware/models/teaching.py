@@ -40,6 +40,9 @@ class GuidedSession(Base):
     step_index: Mapped[int] = mapped_column(Integer, default=0)
     # Who has the robot first while the session runs: the tutor, or the student the tutor handed control to.
     control_user_id: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+    # The admin who let this class outrank the queue without a booking; None: only the leader's booked slot does.
+    priority_override_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"),
+                                                                nullable=True)
     version: Mapped[int] = mapped_column(Integer, default=0)
     started_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
     ended_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)

@@ -6,6 +6,7 @@ import json
 import re
 
 from flask import Blueprint, jsonify, request
+from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy import select
 
@@ -34,7 +35,7 @@ def _find(key: str) -> UserPreference | None:
 
 @blueprint.get("/api/me/preferences/<key>")
 @login_required
-def read(key: str):  # type: ignore[no-untyped-def]
+def read(key: str) -> ResponseReturnValue:
     """The stored value, or null."""
     preference = _find(_key(key))
     return jsonify({"value": json.loads(preference.value_json) if preference else None})
@@ -42,7 +43,7 @@ def read(key: str):  # type: ignore[no-untyped-def]
 
 @blueprint.put("/api/me/preferences/<key>")
 @login_required
-def write(key: str):  # type: ignore[no-untyped-def]
+def write(key: str) -> ResponseReturnValue:
     """Stores a JSON value of at most 8 KB."""
     name = _key(key)
     body = request.get_json(silent=True)
@@ -60,6 +61,5 @@ def write(key: str):  # type: ignore[no-untyped-def]
         session.add(UserPreference(user_id=int(current_user.get_id()), key=name, value_json=text))
     else:
         preference.value_json, preference.updated_at = text, utc_now()
-    session.commit()
     return jsonify({"value": body["value"]})
 

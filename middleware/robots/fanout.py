@@ -12,7 +12,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeVar
 
 log = logging.getLogger(__name__)
 
@@ -60,7 +60,7 @@ class FanoutHub(Generic[Packed]):
         self,
         name: str,
         open_stream: Callable[[], Iterator[object]],
-        pack: Callable[[object], Packed],
+        pack: Callable[[Any], Packed],  # takes what open_stream yields
         cancel: Callable[[Iterator[object]], None],
         backoff_s: tuple[float, float] = (0.2, 5.0),
     ) -> None:

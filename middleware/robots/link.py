@@ -6,6 +6,7 @@ import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Protocol, TypeVar
 
 import grpc
 
@@ -21,6 +22,15 @@ CHANNEL_OPTIONS = [
     ("grpc.keepalive_time_ms", 10000),
     ("grpc.keepalive_timeout_ms", 5000),
 ]
+
+Message = TypeVar("Message", covariant=True)
+
+
+class ServerStream(Iterator[Message], Protocol):
+    """A gRPC server stream: iterating it yields the messages; cancel() ends it."""
+
+    def cancel(self) -> bool:
+        """Ends the stream (the iteration then raises grpc.RpcError CANCELLED)."""
 
 
 class RobotUnavailable(Exception):
@@ -112,11 +122,11 @@ class RobotLink:
         """A running goal or one that ended recently."""
         return self._call(self._stub.GetGoal, robot_pb2.GetGoalRequest(goal_id=goal_id))
 
-    def watch_goal(self, goal_id: str) -> Iterator[robot_pb2.GoalUpdate]:
+    def watch_goal(self, goal_id: str) -> ServerStream[robot_pb2.GoalUpdate]:
         """The goal's updates until it ends (a stream of its own: goals have few watchers)."""
         return self._stub.WatchGoal(robot_pb2.WatchGoalRequest(goal_id=goal_id, feedback_rate_hz=5))
 
-    def stream_telemetry(self, rate_hz: float) -> Iterator[robot_pb2.Telemetry]:
+    def stream_telemetry(self, rate_hz: float) -> ServerStream[robot_pb2.Telemetry]:
         """A telemetry stream of its own, ground truth included (for graders; never forwarded to browsers)."""
         return self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=rate_hz))
 
@@ -124,9 +134,15 @@ class RobotLink:
         """The occupancy grid built so far."""
         return self._call(self._stub.GetMap, robot_pb2.GetMapRequest())
 
-    def course_run(self) -> robot_pb2.CourseRun:
-        """The course run now (phase, time, line contacts, last finished attempt); is_course false off a course."""
-        return self._call(self._stub.GetCourseRun, robot_pb2.GetCourseRunRequest())
+    def track_run(self) -> robot_pb2.TrackRun:
+        """The run on the robot's track now (phase, time, line contacts, last finished attempt); is_track false off a
+        track."""
+        return self._call(self._stub.GetTrackRun, robot_pb2.GetTrackRunRequest())
+
+    def restart_track_run(self) -> robot_pb2.TrackRun:
+        """Ends the attempt under way on the robot's track without a result (the next departure from A starts a
+        new one); the run after that."""
+        return self._call(self._stub.RestartTrackRun, robot_pb2.RestartTrackRunRequest())
 
     def is_online(self) -> bool:
         """Whether the skill server answers now."""
@@ -139,6 +155,12 @@ class RobotLink:
     def reserve_sequences(self) -> int:
         """A base above every sequence sent so far; a new driver numbers its commands base+1, base+2..."""
         with self._sequence_lock:
+            return self._highest_sequence
+
+    def next_sequence(self) -> int:
+        """A sequence number above every one sent so far, for a single command (a stop, a cue)."""
+        with self._sequence_lock:
+            self._highest_sequence += 1
             return self._highest_sequence
 
     def set_controller(self, token: str) -> None:
@@ -173,7 +195,7 @@ class RobotLink:
     def _open_telemetry(self) -> Iterator[object]:
         return self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=10))
 
-    def _call(self, method, request):  # type: ignore[no-untyped-def]
+    def _call(self, method, request):
         try:
             return method(request, timeout=self.rpc_timeout_s)
         except grpc.RpcError as error:
@@ -195,12 +217,12 @@ _REFUSAL_CODES = {
 
 
 def _translate(error: grpc.RpcError) -> Exception:
-    code = error.code()  # type: ignore[attr-defined]
-    details = error.details() or ""  # type: ignore[attr-defined]
+    code = error.code()
+    details = error.details() or ""
     if code in _REFUSAL_CODES:
         field = None
         if code == grpc.StatusCode.INVALID_ARGUMENT:
-            trailing = dict(error.trailing_metadata() or ())  # type: ignore[attr-defined]
+            trailing = dict(error.trailing_metadata() or ())
             field = trailing.get("field") or details.split(" ", 1)[0]
         return CommandRefused(_REFUSAL_CODES[code], details, field)
     if code == grpc.StatusCode.DEADLINE_EXCEEDED:

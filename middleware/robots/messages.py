@@ -199,8 +199,9 @@ def pack_localization(update: robot_pb2.LocalizationUpdate) -> tuple[str, str]:
         "odometry_position_error_m": update.odometry_position_error_m,
         "odometry_heading_error_rad": update.odometry_heading_error_rad,
     }
-    compact = {"separators": (",", ":")}
-    return json.dumps({**message, **shown}, **compact), json.dumps({**message, **hidden}, **compact)
+    compact = (",", ":")
+    return (json.dumps({**message, **shown}, separators=compact),
+            json.dumps({**message, **hidden}, separators=compact))
 
 
 def map_dict(grid: robot_pb2.OccupancyGrid) -> dict[str, object]:

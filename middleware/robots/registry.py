@@ -6,10 +6,10 @@ Disabled robots have no link: `get()` answers None (so pages and sockets give 40
 link is closed. Until the table exists (before `telelab db upgrade`), the configuration is used.
 
 Personal robots (the practice robots) are not in the table: names with the personal prefix are resolved
-by the resolver their owner registers (`set_personal`), and only for the logged-in user who owns the robot.
-Every robot path (pages, APIs, channels, the access coordinator) finds its link through `get()`, so this
-one ownership check answers everyone else as if the robot did not exist (404). They are never listed in
-`names()`, and lab robots may not use the prefix.
+by the resolver their manager registers (`set_personal`). The registry is plumbing: it answers for every
+robot and knows nothing of the logged-in user; who may reach a robot is decided by
+`access.commands.RobotCommands.reachable(name, user_id)` (a personal robot: its owner only). Personal
+robots are never listed in `names()`, and lab robots may not use the prefix.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from flask import Flask, current_app, has_request_context
+from flask import Flask, current_app
 from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import Session
 
@@ -35,25 +35,15 @@ log = logging.getLogger(__name__)
 
 @dataclass(frozen=True)
 class PersonalRobot:
-    """A robot that belongs to one user (a practice robot): its link, its title and its owner."""
+    """A robot that belongs to one user (a practice robot): its link, title, owner and the owner's token."""
 
     link: RobotLink
     title: str
     owner_id: int
+    token: str
 
 
 PersonalResolver = Callable[[str], PersonalRobot | None]
-
-
-def current_user_id() -> int | None:
-    """The logged-in user of the current request; None outside a request or for anonymous visitors."""
-    if not has_request_context():
-        return None
-    from flask_login import current_user
-
-    if not current_user.is_authenticated:
-        return None
-    return int(current_user.get_id())
 
 
 class RobotRegistry:
@@ -83,7 +73,7 @@ class RobotRegistry:
         return self._entries
 
     def get(self, name: str) -> RobotLink | None:
-        """The link to the enabled robot called name, if there is one (a personal robot: for its owner only)."""
+        """The link to the enabled robot (or running personal robot) called name, if there is one."""
         if self.is_personal_name(name):
             personal = self.personal(name)
             return None if personal is None else personal.link
@@ -112,19 +102,16 @@ class RobotRegistry:
         """Whether name is in the personal robots' namespace."""
         return self._personal_prefix is not None and name.startswith(self._personal_prefix)
 
-    def personal(self, name: str, user_id: int | None = None) -> PersonalRobot | None:
-        """The personal robot called name if user_id (by default the logged-in user) owns it; None otherwise.
-
-        The ownership check of every robot path: anyone else, anonymous visitors and code outside a
-        request get None, exactly as for a name nobody uses.
-        """
+    def personal(self, name: str) -> PersonalRobot | None:
+        """The running personal robot called name, if there is one."""
         if self._personal_resolver is None or not self.is_personal_name(name):
             return None
-        owner = current_user_id() if user_id is None else user_id
-        if owner is None:
-            return None
-        robot = self._personal_resolver(name)
-        return robot if robot is not None and robot.owner_id == owner else None
+        return self._personal_resolver(name)
+
+    def owner_of(self, name: str) -> int | None:
+        """The owner of the personal robot called name; None for a lab robot (or no robot)."""
+        personal = self.personal(name)
+        return None if personal is None else personal.owner_id
 
     def refresh(self, force: bool = True) -> None:
         """Re-reads the robots table now (force) or when the last read is older than refresh_s."""
@@ -174,7 +161,7 @@ class RobotRegistry:
             link.close()
 
 
-def init_app(app: Flask) -> None:
+def init_app(app: Flask) -> RobotRegistry:
     """Creates the registry for app from its ROBOTS setting and the robots table (seeded here)."""
     from middleware.db import session_factory
 
@@ -182,6 +169,7 @@ def init_app(app: Flask) -> None:
                              float(app.config.get("ROBOTS_REFRESH_S", DEFAULT_REFRESH_S)))
     app.extensions[_EXTENSION_KEY] = registry
     registry.refresh()
+    return registry
 
 
 def robot_registry(app: Flask | None = None) -> RobotRegistry:

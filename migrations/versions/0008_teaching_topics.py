@@ -15,7 +15,7 @@ down_revision = "0007"
 branch_labels = None
 depends_on = None
 
-# The demo content's topics (middleware/tours/demo.py), for databases seeded before this revision.
+# The demo content's topics (middleware/teaching/demo_content.py), for databases seeded before this revision.
 DEMO_TOPICS = {
     ("tours", "direct-control"): "direct control, odometry",
     ("tours", "go-to-goal"): "navigation, path planning",

@@ -1,7 +1,7 @@
-"""The one gRPC adapter, split by concern: the Robot servicer, goal RPCs, and proto <-> domain conversion."""
+"""The one gRPC adapter: the Robot servicer (robot_service.py) and proto <-> domain conversion (convert.py)."""
 
 from __future__ import annotations
 
-from skill_server.service.robot_service import RobotService, SimTimePacer
+from skill_server.service.robot_service import RobotService
 
-__all__ = ["RobotService", "SimTimePacer"]
+__all__ = ["RobotService"]

@@ -1,12 +1,29 @@
-"""Proto <-> domain translation for the Robot service (no rules here, only shapes)."""
+"""Proto <-> domain translation for the Robot service: shapes only, no rules (the one place that does it)."""
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping
+
 from protos.telelab.v1 import robot_pb2
-from skill_server.sim.geometry import Pose2D
-from skill_server.sim.laser import LaserSpec
-from skill_server.sim.snapshots import CameraFrame, RobotSnapshot
-from skill_server.skills.schema import ParameterType, SkillDescription
+from skill_server.errors import InvalidParameter
+from skill_server.goals import EventKind, GoalEvent, GoalFeedback, GoalSnapshot, GoalStatus
+from skill_server.robot import (
+    CameraFrame,
+    DriveAck,
+    GoalUpdate,
+    LaserSpec,
+    LocalizationEstimate,
+    NumberedEvent,
+    Pose2D,
+    PublishedGrid,
+    RobotDescription,
+    RobotSnapshot,
+    SkillEntry,
+    TrackEvent,
+    TrackState,
+)
+from skill_server.schema import ParameterType
 
 _PARAMETER_TYPES = {
     ParameterType.DOUBLE: robot_pb2.PARAMETER_TYPE_DOUBLE,
@@ -15,9 +32,75 @@ _PARAMETER_TYPES = {
     ParameterType.ENUM: robot_pb2.PARAMETER_TYPE_ENUM,
 }
 
+_STATUS = {status: getattr(robot_pb2, f"GOAL_STATUS_{status.name}") for status in GoalStatus}
+_EVENT = {kind: getattr(robot_pb2, f"GOAL_EVENT_KIND_{kind.name}") for kind in EventKind}
+
+
+def rate_from_proto(field: str, requested: float, default: float, maximum: float, unit: str) -> float:
+    """A stream's asked rate: 0 (proto3's unset) means the default; anything else must be in (0, maximum]."""
+    if requested == 0:
+        return default
+    if not math.isfinite(requested) or not 0 < requested <= maximum:
+        raise InvalidParameter(
+            field, f"{field} must be a finite number above 0 and at most {maximum:g} {unit} (0 means {default:g})"
+        )
+    return requested
+
 
 def pose_to_proto(pose: Pose2D) -> robot_pb2.Pose2D:
     return robot_pb2.Pose2D(x_m=pose.x_m, y_m=pose.y_m, theta_rad=pose.theta_rad)
+
+
+def robot_info_to_proto(robot_name: str, info: RobotDescription) -> robot_pb2.RobotInfo:
+    """The robot, its sensors and its scene."""
+    spec = info.spec
+    return robot_pb2.RobotInfo(
+        robot_name=robot_name,
+        scene_name=info.scene_name,
+        wheel_base_m=spec.wheel_base_m,
+        wheel_radius_m=spec.wheel_radius_m,
+        body_radius_m=spec.body_radius_m,
+        max_linear_mps=spec.max_linear_mps,
+        max_angular_radps=spec.max_angular_radps,
+        deadman_timeout_s=info.deadman_timeout_s,
+        camera_hfov_deg=info.camera.hfov_deg,
+        camera_width_px=info.camera.width_px,
+        camera_height_px=info.camera.height_px,
+        sonars=[
+            robot_pb2.SonarGeometry(
+                mount_angle_rad=s.mount_angle_rad,
+                cone_half_angle_rad=s.cone_half_angle_rad,
+                min_range_m=s.min_range_m,
+                max_range_m=s.max_range_m,
+            )
+            for s in info.sonars
+        ],
+        laser=robot_pb2.LaserGeometry(
+            angle_min_rad=info.laser.angle_min_rad,
+            angle_max_rad=info.laser.angle_max_rad,
+            beam_count=info.laser.beam_count,
+            min_range_m=info.laser.min_range_m,
+            max_range_m=info.laser.max_range_m,
+        ),
+        scene_boxes=[
+            robot_pb2.SceneBox(
+                name=b.name,
+                center_x_m=b.center_x_m,
+                center_y_m=b.center_y_m,
+                half_x_m=b.half_x_m,
+                half_y_m=b.half_y_m,
+                yaw_rad=b.yaw_rad,
+            )
+            for b in info.scene_boxes
+        ],
+    )
+
+
+def drive_ack_to_proto(ack: DriveAck) -> robot_pb2.DriveAck:
+    """The sequence in force and the velocities now commanded."""
+    return robot_pb2.DriveAck(
+        applied_sequence=ack.applied_sequence, linear_mps=ack.linear_mps, angular_radps=ack.angular_radps
+    )
 
 
 def telemetry_to_proto(snapshot: RobotSnapshot, laser: LaserSpec) -> robot_pb2.Telemetry:
@@ -55,11 +138,15 @@ def frame_to_proto(frame: CameraFrame) -> robot_pb2.CameraFrame:
     )
 
 
-def skill_to_proto(skill: SkillDescription) -> robot_pb2.SkillDescription:
+def skill_to_proto(entry: SkillEntry) -> robot_pb2.SkillDescription:
+    skill = entry.description
     return robot_pb2.SkillDescription(
         name=skill.name,
         title=skill.title,
         help=skill.help,
+        motor=entry.motor,
+        estimates_pose=entry.estimates_pose,
+        direct_drive=entry.direct_drive,
         parameters=[
             robot_pb2.ParameterSchema(
                 name=p.name,
@@ -74,3 +161,132 @@ def skill_to_proto(skill: SkillDescription) -> robot_pb2.SkillDescription:
             for p in skill.parameters
         ],
     )
+
+
+def parameters_from_proto(values: Mapping[str, robot_pb2.ParameterValue]) -> dict[str, object]:
+    """Plain Python values (float, int, bool, str) from the request's map; an empty value is refused."""
+    plain: dict[str, object] = {}
+    for name, value in values.items():
+        kind = value.WhichOneof("kind")
+        if kind is None:
+            raise InvalidParameter(name, f"{name} has no value")
+        plain[name] = getattr(value, kind)
+    return plain
+
+
+def parameter_to_proto(value: float | int | bool | str) -> robot_pb2.ParameterValue:
+    """One validated value as a ParameterValue."""
+    if isinstance(value, bool):
+        return robot_pb2.ParameterValue(bool_value=value)
+    if isinstance(value, int):
+        return robot_pb2.ParameterValue(int_value=value)
+    if isinstance(value, str):
+        return robot_pb2.ParameterValue(string_value=value)
+    return robot_pb2.ParameterValue(double_value=value)
+
+
+def feedback_to_proto(feedback: GoalFeedback) -> robot_pb2.GoalFeedback:
+    """A goal's feedback."""
+    return robot_pb2.GoalFeedback(
+        sim_time_s=feedback.sim_time_s,
+        state=feedback.state,
+        progress=feedback.progress,
+        distance_error_m=feedback.distance_error_m,
+        heading_error_rad=feedback.heading_error_rad,
+        pose=pose_to_proto(feedback.pose),
+        pose_source=feedback.pose_source,
+        values={name: value for name, value in feedback.values if math.isfinite(value)},
+    )
+
+
+def event_to_proto(index: int, event: GoalEvent) -> robot_pb2.GoalEvent:
+    """One event with its position in the log."""
+    return robot_pb2.GoalEvent(index=index, sim_time_s=event.sim_time_s, kind=_EVENT[event.kind],
+                               message=event.message)
+
+
+def goal_to_proto(goal: GoalSnapshot) -> robot_pb2.GoalState:
+    """A goal's state."""
+    return robot_pb2.GoalState(
+        goal_id=goal.goal_id,
+        skill=goal.skill,
+        motor=goal.motor,
+        status=_STATUS[goal.status],
+        parameters={name: parameter_to_proto(value) for name, value in goal.parameters},
+        accepted_sim_s=goal.accepted_sim_s,
+        ended_sim_s=goal.ended_sim_s or 0.0,
+        error_code=goal.error_code,
+        message=goal.message,
+        feedback=feedback_to_proto(goal.feedback),
+        goal_reached=goal.goal_reached,
+    )
+
+
+def grid_to_proto(grid: PublishedGrid) -> robot_pb2.OccupancyGrid:
+    """The environment model's published grid."""
+    return robot_pb2.OccupancyGrid(
+        resolution_m=grid.resolution_m,
+        origin_x_m=grid.origin_x_m,
+        origin_y_m=grid.origin_y_m,
+        width_cells=grid.width_cells,
+        height_cells=grid.height_cells,
+        cells=grid.cells,
+        scans_integrated=grid.scans_integrated,
+        sim_time_s=grid.sim_time_s,
+    )
+
+
+def localization_to_proto(
+    snapshot: RobotSnapshot, estimate: LocalizationEstimate | None, max_particles: int
+) -> robot_pb2.LocalizationUpdate:
+    """The estimate beside odometry and ground truth, with their errors."""
+    truth, odometry = snapshot.ground_truth, snapshot.odometry.pose
+    update = robot_pb2.LocalizationUpdate(
+        sim_time_s=snapshot.sim_time_s,
+        odometry=pose_to_proto(odometry),
+        ground_truth=pose_to_proto(truth),
+        odometry_position_error_m=truth.distance_to(odometry),
+        odometry_heading_error_rad=abs(math.remainder(odometry.theta_rad - truth.theta_rad, 2 * math.pi)),
+    )
+    if estimate is None:
+        return update
+    pose = estimate.pose
+    update.active = True
+    update.converged = estimate.converged
+    update.estimate.CopyFrom(pose_to_proto(pose))
+    update.std_x_m, update.std_y_m, update.std_theta_rad = estimate.std_x_m, estimate.std_y_m, estimate.std_theta_rad
+    update.position_error_m = truth.distance_to(pose)
+    update.heading_error_rad = abs(math.remainder(pose.theta_rad - truth.theta_rad, 2 * math.pi))
+    update.update_duration_ms = estimate.update_duration_ms
+    for x_m, y_m, theta_rad, weight in estimate.particles[:max_particles]:
+        update.particles.add(x_m=x_m, y_m=y_m, theta_rad=theta_rad, weight=weight)
+    return update
+
+
+def goal_update_to_proto(update: GoalUpdate) -> robot_pb2.GoalUpdate:
+    """One item of a goal's watch: a state, a numbered event or feedback."""
+    if isinstance(update, NumberedEvent):
+        return robot_pb2.GoalUpdate(event=event_to_proto(update.index, update.event))
+    if isinstance(update, GoalFeedback):
+        return robot_pb2.GoalUpdate(feedback=feedback_to_proto(update))
+    return robot_pb2.GoalUpdate(state=goal_to_proto(update))
+
+
+def track_run_to_proto(scene_name: str, state: TrackState | None) -> robot_pb2.TrackRun:
+    """The run now; is_track false (and nothing else) in scenes without a track."""
+    if state is None:
+        return robot_pb2.TrackRun(is_track=False, scene_name=scene_name)
+    return robot_pb2.TrackRun(
+        is_track=True, scene_name=scene_name, phase=state.phase, attempt=state.attempt,
+        elapsed_s=state.elapsed_s, errors=state.errors, last_attempt=state.last_attempt,
+        last_total_time_s=state.last_total_time_s, last_errors=state.last_errors,
+        last_finished_unix_s=state.last_finished_unix_s, started_unix_s=state.started_unix_s,
+        last_started_unix_s=state.last_started_unix_s,
+    )
+
+
+def track_event_to_proto(event: TrackEvent) -> robot_pb2.TrackEvent:
+    """One event of the run."""
+    return robot_pb2.TrackEvent(
+        index=event.index, kind=event.kind, sim_time_s=event.sim_time_s, unix_s=event.unix_s,
+        attempt=event.attempt, elapsed_s=event.elapsed_s, errors=event.errors, message=event.message)

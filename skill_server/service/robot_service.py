@@ -1,168 +1,211 @@
-"""The one gRPC adapter: translates proto <-> domain and maps domain errors to status codes."""
+"""The Robot servicer: each RPC converts its request, calls the Robot facade and converts the answer.
+
+Domain errors become status codes in one place, STATUS_OF_ERROR; a stream ends when its RPC ends (the
+callback sets the stream's stopped event), the shape of grpc's examples/python/cancellation.
+"""
 
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import Any, Literal, TypeVar
 
 import grpc
 
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
-from skill_server.errors import InvalidParameter, MissingControllerToken, NotController, WorldStopped
-from skill_server.sequencer import Sequencer
+from skill_server.errors import (
+    InvalidParameter,
+    MissingControllerToken,
+    NoMap,
+    NotController,
+    NoTrack,
+    ResourceBusy,
+    UnknownGoal,
+    UnknownSkill,
+    WorldStopped,
+)
+from skill_server.robot import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS, Robot
 from skill_server.service import convert
-from skill_server.service.common import SimTimePacer, abort, stream_rate
-from skill_server.service.course_rpcs import CourseRpcs
-from skill_server.service.goal_rpcs import GoalRpcs
-from skill_server.sim.camera import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS
-from skill_server.sim.world import World
-from skill_server.skills.registry import SkillRegistry
 
-DEFAULT_TELEMETRY_HZ = 10.0
-MAX_TELEMETRY_HZ = 50.0
-STREAM_POLL_S = 0.25  # how long a stream waits before re-checking that its client is still there
+DEFAULT_TELEMETRY_HZ, MAX_TELEMETRY_HZ = 10.0, 50.0
+DEFAULT_FEEDBACK_HZ, MAX_FEEDBACK_HZ = 10.0, 50.0
+DEFAULT_LOCALIZATION_HZ, MAX_LOCALIZATION_HZ = 5.0, 20.0
+MAX_STREAMED_PARTICLES = 2000
+
+# The one table from the robot core's errors to status codes; the status message is the error's sentence.
+STATUS_OF_ERROR: list[tuple[type[Exception], grpc.StatusCode]] = [
+    (UnknownSkill, grpc.StatusCode.NOT_FOUND),
+    (UnknownGoal, grpc.StatusCode.NOT_FOUND),
+    (InvalidParameter, grpc.StatusCode.INVALID_ARGUMENT),  # the field also goes as trailing metadata "field"
+    (ResourceBusy, grpc.StatusCode.FAILED_PRECONDITION),
+    (NoMap, grpc.StatusCode.FAILED_PRECONDITION),
+    (NoTrack, grpc.StatusCode.FAILED_PRECONDITION),
+    (MissingControllerToken, grpc.StatusCode.UNAUTHENTICATED),
+    (NotController, grpc.StatusCode.PERMISSION_DENIED),
+    (WorldStopped, grpc.StatusCode.UNAVAILABLE),
+]
+
+T = TypeVar("T")
+P = TypeVar("P")
 
 
+class RobotService(robot_pb2_grpc.RobotServicer):
+    """telelab.v1.Robot over one Robot; holds no robot state of its own."""
 
-class RobotService(GoalRpcs, CourseRpcs, robot_pb2_grpc.RobotServicer):
-    """telelab.v1.Robot over one World and its Sequencer; holds no robot state of its own."""
+    def __init__(self, robot: Robot) -> None:
+        self._robot = robot
+        self._laser = robot.describe().laser
 
-    def __init__(self, world: World, skills: SkillRegistry, robot_name: str, sequencer: Sequencer) -> None:
-        self._world = world
-        self._skills = skills
-        self._robot_name = robot_name
-        self._laser = world.describe().laser
-        self._sequencer = sequencer
+    # ---- the robot and its commands ----------------------------------------------------------------
 
     def GetRobotInfo(
         self, request: robot_pb2.GetRobotInfoRequest, context: grpc.ServicerContext
     ) -> robot_pb2.RobotInfo:
         """Describes the robot, its sensors and its scene."""
-        info = self._world.describe()
-        spec = info.spec
-        return robot_pb2.RobotInfo(
-            robot_name=self._robot_name,
-            scene_name=info.scene_name,
-            wheel_base_m=spec.wheel_base_m,
-            wheel_radius_m=spec.wheel_radius_m,
-            body_radius_m=spec.body_radius_m,
-            max_linear_mps=spec.max_linear_mps,
-            max_angular_radps=spec.max_angular_radps,
-            deadman_timeout_s=info.deadman_timeout_s,
-            camera_hfov_deg=info.camera.hfov_deg,
-            camera_width_px=info.camera.width_px,
-            camera_height_px=info.camera.height_px,
-            sonars=[
-                robot_pb2.SonarGeometry(
-                    mount_angle_rad=s.mount_angle_rad,
-                    cone_half_angle_rad=s.cone_half_angle_rad,
-                    min_range_m=s.min_range_m,
-                    max_range_m=s.max_range_m,
-                )
-                for s in info.sonars
-            ],
-            laser=robot_pb2.LaserGeometry(
-                angle_min_rad=info.laser.angle_min_rad,
-                angle_max_rad=info.laser.angle_max_rad,
-                beam_count=info.laser.beam_count,
-                min_range_m=info.laser.min_range_m,
-                max_range_m=info.laser.max_range_m,
-            ),
-            scene_boxes=[
-                robot_pb2.SceneBox(
-                    name=b.name,
-                    center_x_m=b.center_x_m,
-                    center_y_m=b.center_y_m,
-                    half_x_m=b.half_x_m,
-                    half_y_m=b.half_y_m,
-                    yaw_rad=b.yaw_rad,
-                )
-                for b in info.scene_boxes
-            ],
-        )
+        return convert.robot_info_to_proto(self._robot.name, self._robot.describe())
 
     def ListSkills(
         self, request: robot_pb2.ListSkillsRequest, context: grpc.ServicerContext
     ) -> robot_pb2.ListSkillsResponse:
         """Lists the skills with the schema of their parameters."""
-        return robot_pb2.ListSkillsResponse(skills=[convert.skill_to_proto(s) for s in self._skills.descriptions()])
+        return robot_pb2.ListSkillsResponse(skills=[convert.skill_to_proto(s) for s in self._robot.skills()])
 
     def SetController(
         self, request: robot_pb2.SetControllerRequest, context: grpc.ServicerContext
     ) -> robot_pb2.SetControllerResponse:
         """Names the controller; an empty token revokes control and stops the base."""
-        self._world.set_controller(request.token)
+        with domain_errors(context):
+            self._robot.set_controller(request.token)
         return robot_pb2.SetControllerResponse()
 
     def Drive(self, request: robot_pb2.DriveCommand, context: grpc.ServicerContext) -> robot_pb2.DriveAck:
-        """Sets the wheel velocities if the token is the controller's."""
-        try:
-            ack = self._world.drive(request.token, request.sequence, request.linear_mps, request.angular_radps)
-        except MissingControllerToken as error:
-            abort(context, grpc.StatusCode.UNAUTHENTICATED, str(error))
-        except NotController:
-            abort(
-                context,
-                grpc.StatusCode.PERMISSION_DENIED,
-                "this command's controller token is not the robot's current controller",
-            )
-        except InvalidParameter as error:
-            abort(context, grpc.StatusCode.INVALID_ARGUMENT, error.message)
-        if self._sequencer.motor_goal_running:
-            # The teleoperator takes the wheels back: end the motor goal before answering, so a stop that
-            # was acknowledged has also ended the goal (the loop runs queued commands between ticks).
-            self._world.run_in_loop(lambda: self._sequencer.on_direct_drive(self._world.drive_version))
-        return robot_pb2.DriveAck(
-            applied_sequence=ack.applied_sequence, linear_mps=ack.linear_mps, angular_radps=ack.angular_radps
+        """Sets the wheel velocities if the token is the controller's (a running motor goal is preempted)."""
+        with domain_errors(context):
+            ack = self._robot.drive(request.token, request.sequence, request.linear_mps, request.angular_radps)
+        return convert.drive_ack_to_proto(ack)
+
+    def ActivateSkill(
+        self, request: robot_pb2.ActivateSkillRequest, context: grpc.ServicerContext
+    ) -> robot_pb2.ActivateSkillResponse:
+        """Starts a skill as a goal, or refuses with a status code and a reason."""
+        with domain_errors(context):
+            parameters = convert.parameters_from_proto(request.parameters)
+            activation = self._robot.activate(request.token, request.skill, parameters, request.preempt)
+        return robot_pb2.ActivateSkillResponse(
+            goal=convert.goal_to_proto(activation.goal), preempted_goal_id=activation.preempted_goal_id
         )
+
+    def CancelGoal(self, request: robot_pb2.CancelGoalRequest, context: grpc.ServicerContext) -> robot_pb2.GoalState:
+        """Cancels a goal; answers its state afterwards."""
+        with domain_errors(context):
+            return convert.goal_to_proto(self._robot.cancel(request.token, request.goal_id))
+
+    def GetGoal(self, request: robot_pb2.GetGoalRequest, context: grpc.ServicerContext) -> robot_pb2.GoalState:
+        """The state of one goal."""
+        with domain_errors(context):
+            return convert.goal_to_proto(self._robot.goal(request.goal_id))
+
+    def ListGoals(
+        self, request: robot_pb2.ListGoalsRequest, context: grpc.ServicerContext
+    ) -> robot_pb2.ListGoalsResponse:
+        """Running goals and the ones kept after their end."""
+        return robot_pb2.ListGoalsResponse(goals=[convert.goal_to_proto(goal) for goal in self._robot.goals()])
+
+    def GetMap(self, request: robot_pb2.GetMapRequest, context: grpc.ServicerContext) -> robot_pb2.OccupancyGrid:
+        """The latest environment model; FAILED_PRECONDITION before any mapping."""
+        with domain_errors(context):
+            return convert.grid_to_proto(self._robot.environment_map())
+
+    def GetTrackRun(self, request: robot_pb2.GetTrackRunRequest,
+                    context: grpc.ServicerContext) -> robot_pb2.TrackRun:
+        """The track run now; is_track is false in scenes without a track."""
+        return convert.track_run_to_proto(self._robot.scene_name, self._robot.track_run())
+
+    def RestartTrackRun(self, request: robot_pb2.RestartTrackRunRequest,
+                        context: grpc.ServicerContext) -> robot_pb2.TrackRun:
+        """Ends the attempt under way without a result; the run after that (is_track false off a track)."""
+        with domain_errors(context):
+            return convert.track_run_to_proto(self._robot.scene_name, self._robot.restart_track_run())
+
+    # ---- streams -----------------------------------------------------------------------------------
 
     def StreamTelemetry(
         self, request: robot_pb2.StreamTelemetryRequest, context: grpc.ServicerContext
     ) -> Iterator[robot_pb2.Telemetry]:
         """Odometry, ground truth, sonar and laser at the requested rate of sim time."""
-        rate_hz = stream_rate(context, "rate_hz", request.rate_hz, DEFAULT_TELEMETRY_HZ, MAX_TELEMETRY_HZ, "Hz")
-        cancelled = self._cancellation(context)
-        pacer = SimTimePacer(1.0 / rate_hz)
-        last_tick = -1
-        while context.is_active() and not cancelled.is_set():
-            snapshot = self._world.wait_for_snapshot(last_tick, STREAM_POLL_S, cancelled)
-            if snapshot is None:
-                if not self._world.is_running:
-                    return
-                continue
-            last_tick = snapshot.tick
-            if pacer.due(snapshot.sim_time_s):
-                yield convert.telemetry_to_proto(snapshot, self._laser)
+        return self._stream(context, lambda stopped: self._robot.telemetry(
+            1.0 / convert.rate_from_proto("rate_hz", request.rate_hz, DEFAULT_TELEMETRY_HZ, MAX_TELEMETRY_HZ, "Hz"),
+            stopped,
+        ), lambda snapshot: convert.telemetry_to_proto(snapshot, self._laser))
 
     def StreamCamera(
         self, request: robot_pb2.StreamCameraRequest, context: grpc.ServicerContext
     ) -> Iterator[robot_pb2.CameraFrame]:
         """JPEG frames, rendered only while someone watches and encoded once for all viewers."""
-        max_fps = stream_rate(context, "max_fps", request.max_fps, DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS, "fps")
-        cancelled = self._cancellation(context)
-        pacer = SimTimePacer(1.0 / max_fps)
-        last_sequence = 0
-        try:
-            subscription = self._world.subscribe_camera(max_fps)
-        except WorldStopped:
-            return
-        with subscription:
-            while context.is_active() and not cancelled.is_set():
-                frame = self._world.wait_for_frame(last_sequence, STREAM_POLL_S, cancelled)
-                if frame is None:
-                    if not self._world.is_running:
-                        return
-                    continue
-                last_sequence = frame.frame_sequence
-                if pacer.due(frame.sim_time_s):
-                    yield convert.frame_to_proto(frame)
+        return self._stream(context, lambda stopped: self._robot.camera(
+            convert.rate_from_proto("max_fps", request.max_fps, DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS, "fps"), stopped
+        ), convert.frame_to_proto)
 
-    def _cancellation(self, context: grpc.ServicerContext) -> threading.Event:
-        cancelled = threading.Event()
+    def WatchGoal(
+        self, request: robot_pb2.WatchGoalRequest, context: grpc.ServicerContext
+    ) -> Iterator[robot_pb2.GoalUpdate]:
+        """State, then events as they happen, every later state (executing, canceling, the final one) and
+        feedback at the asked rate."""
+        return self._stream(context, lambda stopped: self._robot.goal_updates(
+            request.goal_id,
+            1.0 / convert.rate_from_proto("feedback_rate_hz", request.feedback_rate_hz, DEFAULT_FEEDBACK_HZ,
+                                          MAX_FEEDBACK_HZ, "Hz"),
+            stopped,
+        ), convert.goal_update_to_proto)
+
+    def StreamLocalization(
+        self, request: robot_pb2.StreamLocalizationRequest, context: grpc.ServicerContext
+    ) -> Iterator[robot_pb2.LocalizationUpdate]:
+        """Estimate, uncertainty, particles, odometry and ground truth at the asked rate of sim time."""
+        particles = min(int(request.max_particles), MAX_STREAMED_PARTICLES)
+        return self._stream(context, lambda stopped: self._robot.localization(
+            1.0 / convert.rate_from_proto("rate_hz", request.rate_hz, DEFAULT_LOCALIZATION_HZ, MAX_LOCALIZATION_HZ,
+                                          "Hz"),
+            stopped,
+        ), lambda item: convert.localization_to_proto(item[0], item[1], particles))
+
+    def StreamTrackEvents(self, request: robot_pb2.StreamTrackEventsRequest,
+                          context: grpc.ServicerContext) -> Iterator[robot_pb2.TrackEvent]:
+        """Every track event after request.after_index, until the client goes (FAILED_PRECONDITION off track)."""
+        return self._stream(context, lambda stopped: self._robot.track_events(int(request.after_index), stopped),
+                            convert.track_event_to_proto)
+
+    def _stream(self, context: grpc.ServicerContext, open_stream: Callable[[threading.Event], Iterator[T]],
+                to_proto: Callable[[T], P]) -> Iterator[P]:
+        """Converts a domain stream item by item; it is told to stop (and woken) when the RPC ends."""
+        stopped = threading.Event()
 
         def on_rpc_done() -> None:
-            cancelled.set()
-            self._world.wake_waiters()
+            stopped.set()
+            self._robot.wake_streams()
 
-        context.add_callback(on_rpc_done)
-        return cancelled
+        if not context.add_callback(on_rpc_done):  # the RPC has already ended
+            stopped.set()
+        with domain_errors(context):
+            for item in open_stream(stopped):
+                yield to_proto(item)
+
+
+class domain_errors:  # noqa: N801 - used as a context manager, reads like a clause
+    """Aborts the RPC with the status code STATUS_OF_ERROR gives a domain error, and the error's sentence."""
+
+    def __init__(self, context: grpc.ServicerContext) -> None:
+        self._context = context
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None, traceback: Any) -> Literal[False]:
+        if error is None:
+            return False
+        for error_type, code in STATUS_OF_ERROR:
+            if isinstance(error, error_type):
+                if isinstance(error, InvalidParameter):
+                    self._context.set_trailing_metadata((("field", error.field),))
+                self._context.abort(code, str(error))
+        return False

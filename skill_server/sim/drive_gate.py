@@ -6,8 +6,19 @@ import threading
 from dataclasses import dataclass
 
 from skill_server.errors import InvalidParameter, MissingControllerToken, NotController
+from skill_server.schema import ParameterSchema, ParameterType
 from skill_server.sim.robot_model import RobotSpec
-from skill_server.skills.direct_control import validate_velocity_command
+
+
+def velocity_parameters(spec: RobotSpec) -> tuple[ParameterSchema, ParameterSchema]:
+    """What a velocity command may ask of the base: Drive commands and the direct_control skill share it."""
+    linear_mps, angular_radps = spec.max_linear_mps, spec.max_angular_radps
+    return (
+        ParameterSchema("linear_mps", ParameterType.DOUBLE, "m/s", -linear_mps, linear_mps, 0.0,
+                        "Forward speed; negative drives backwards."),
+        ParameterSchema("angular_radps", ParameterType.DOUBLE, "rad/s", -angular_radps, angular_radps, 0.0,
+                        "Turn rate; positive turns left (counter-clockwise)."),
+    )
 
 
 @dataclass(frozen=True)
@@ -38,7 +49,7 @@ class DriveGate:
     """
 
     def __init__(self, spec: RobotSpec) -> None:
-        self._spec = spec
+        self._linear, self._angular = velocity_parameters(spec)
         self._lock = threading.Lock()
         self._token = ""
         self._last_sequence: int | None = None
@@ -70,7 +81,7 @@ class DriveGate:
                 raise NotController("this command's controller token is not the robot's current controller")
             if isinstance(sequence, bool) or not isinstance(sequence, int) or sequence < 0:
                 raise InvalidParameter("sequence", "sequence must be a non-negative integer")
-            linear, angular = validate_velocity_command(self._spec, linear_mps, angular_radps)
+            linear, angular = float(self._linear.validate(linear_mps)), float(self._angular.validate(angular_radps))
             if self._last_sequence is None or sequence > self._last_sequence:
                 self._last_sequence = sequence
                 self._target = DriveTarget(self._target.version + 1, sequence, linear, angular, from_command=True)

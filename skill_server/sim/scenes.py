@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from skill_server.errors import UnknownScene
-from skill_server.sim.course_monitor import BorderLine, CourseSpec
 from skill_server.sim.geometry import Pose2D
+from skill_server.sim.track_monitor import BorderLine, TrackSpec
 
 Rgba = tuple[float, float, float, float]
 
@@ -78,7 +78,7 @@ class SceneSpec:
     cylinders: tuple[CylinderObstacle, ...] = ()
     marks: tuple[FloorMark, ...] = ()
     spawn: Pose2D = field(default_factory=Pose2D)
-    course: CourseSpec | None = None  # course scenes: A, B and border lines the course monitor watches
+    track: TrackSpec | None = None  # track scenes: A, B and border lines the track monitor watches
 
     def scene_boxes(self) -> list[SceneBox]:
         """Walls and obstacles as boxes; a cylinder is reported as its bounding square."""
@@ -194,22 +194,22 @@ def _line_mark(line: BorderLine) -> FloorMark:
                      abs(line.x2_m - line.x1_m) / 2 + half, abs(line.y2_m - line.y1_m) / 2 + half, WHITE_LINE)
 
 
-def _point_marks(course: CourseSpec) -> list[FloorMark]:
-    return [FloorMark(course.a_x_m, course.a_y_m, 0.30, 0.30, POINT_A_RGBA),
-            FloorMark(course.b_x_m, course.b_y_m, 0.30, 0.30, POINT_B_RGBA)]
+def _point_marks(track: TrackSpec) -> list[FloorMark]:
+    return [FloorMark(track.a_x_m, track.a_y_m, 0.30, 0.30, POINT_A_RGBA),
+            FloorMark(track.b_x_m, track.b_y_m, 0.30, 0.30, POINT_B_RGBA)]
 
 
-def course_a_scene() -> SceneSpec:
-    """Thesis course A: from A to B (5 m straight ahead) and back to A, as fast as possible."""
+def track_a_scene() -> SceneSpec:
+    """Thesis track A: from A to B (5 m straight ahead) and back to A, as fast as possible."""
     half_x, half_y = 4.0, 2.0
-    course = CourseSpec(a_x_m=-2.5, a_y_m=0.0, b_x_m=2.5, b_y_m=0.0, round_trip=True)
-    marks = [*_grid_marks(half_x, half_y), *_point_marks(course)]
+    track = TrackSpec(a_x_m=-2.5, a_y_m=0.0, b_x_m=2.5, b_y_m=0.0, round_trip=True)
+    marks = [*_grid_marks(half_x, half_y), *_point_marks(track)]
     return SceneSpec(name="course-A", floor_half_x_m=half_x, floor_half_y_m=half_y,
                      boxes=tuple(room_walls(half_x, half_y)), marks=tuple(marks),
-                     spawn=Pose2D(course.a_x_m, course.a_y_m, 0.0), course=course)
+                     spawn=Pose2D(track.a_x_m, track.a_y_m, 0.0), track=track)
 
 
-def course_b_lines(w: float = 0.6) -> tuple[BorderLine, ...]:
+def track_b_lines(w: float = 0.6) -> tuple[BorderLine, ...]:
     """The borders of an S-shaped corridor 2w wide: east 3 m from A, north 3 m, east 3 m to B (A at -3,-1.5)."""
     ox, oy = -3.0, -1.5  # A; the centre line is A -> (0,-1.5) -> (0,1.5) -> B (3,1.5)
     segments = [
@@ -225,20 +225,22 @@ def course_b_lines(w: float = 0.6) -> tuple[BorderLine, ...]:
     return tuple(BorderLine(*segment) for segment in segments)
 
 
-def course_b_scene() -> SceneSpec:
-    """Thesis course B: from A to B along a winding corridor bordered by white lines; a touch restarts the run."""
+def track_b_scene() -> SceneSpec:
+    """Thesis track B: from A to B along a winding corridor bordered by white lines; a touch restarts the run."""
     half_x, half_y = 4.5, 3.0
-    course = CourseSpec(a_x_m=-3.0, a_y_m=-1.5, b_x_m=3.0, b_y_m=1.5, round_trip=False, lines=course_b_lines())
-    marks = [*(_line_mark(line) for line in course.lines), *_point_marks(course)]
+    track = TrackSpec(a_x_m=-3.0, a_y_m=-1.5, b_x_m=3.0, b_y_m=1.5, round_trip=False, lines=track_b_lines())
+    marks = [*(_line_mark(line) for line in track.lines), *_point_marks(track)]
     return SceneSpec(name="course-B", floor_half_x_m=half_x, floor_half_y_m=half_y,
                      floor_rgba=(0.35, 0.37, 0.36, 1.0), boxes=tuple(room_walls(half_x, half_y)), marks=tuple(marks),
-                     spawn=Pose2D(course.a_x_m, course.a_y_m, 0.0), course=course)
+                     spawn=Pose2D(track.a_x_m, track.a_y_m, 0.0), track=track)
 
 
 register_scene("lab", lab_scene)
 register_scene("empty", empty_scene)
-register_scene("course-A", course_a_scene)
-register_scene("course-B", course_b_scene)
+# The track scenes keep the names people configure (`--scene course-A`, the experiment's trials) from before
+# "track" became the word for a driving track.
+register_scene("course-A", track_a_scene)
+register_scene("course-B", track_b_scene)
 
 
 def build_scene(client: Any, spec: SceneSpec, obstacle_collision_group: int) -> list[int]:

@@ -12,22 +12,23 @@ from typing import Any, Protocol, TypeVar
 
 import numpy as np
 import pybullet
-from pybullet_utils import bullet_client
+from pybullet_utils import bullet_client  # type: ignore[import-untyped]
 
 from skill_server.errors import InvalidParameter, WorldStopped
 from skill_server.sim import robot_model
 from skill_server.sim.camera import DEFAULT_CAMERA_FPS, Camera, CameraSpec
-from skill_server.sim.course_monitor import CourseMonitor
 from skill_server.sim.drive_gate import DriveAck, DriveGate
 from skill_server.sim.geometry import Pose2D, yaw_from_quaternion
 from skill_server.sim.laser import Laser, LaserSpec
 from skill_server.sim.odometry import WheelOdometry
+from skill_server.sim.pacing import SimTimePacer
 from skill_server.sim.publication import CameraSubscription, Publication
 from skill_server.sim.raycast import StaticSceneCaster
 from skill_server.sim.robot_model import TELEBOT, RobotSpec, ramp_toward, wheel_speeds_radps
 from skill_server.sim.scenes import build_scene, get_scene
 from skill_server.sim.snapshots import CameraFrame, RobotDescription, RobotSnapshot
 from skill_server.sim.sonar import SonarRing, SonarRingSpec
+from skill_server.sim.track_monitor import TrackMonitor
 
 T = TypeVar("T")
 
@@ -36,8 +37,6 @@ class Autonomy(Protocol):
     """What the loop calls every tick to let skills drive (the sequencer implements it)."""
 
     def on_tick(self, snapshot: RobotSnapshot, dt_s: float) -> tuple[float, float] | None: ...
-
-    def on_direct_drive(self, version: int) -> None: ...
 
     def on_controller_changed(self, version: int) -> None: ...
 
@@ -82,10 +81,11 @@ class World:
         self._camera = Camera(camera or CameraSpec(), spec)
         self._gate = DriveGate(spec)
         self._caster = StaticSceneCaster(self.scene)  # the scene is static: exact hits without pybullet's cost
-        self.course_monitor = CourseMonitor(self.scene.course) if self.scene.course is not None else None
+        self.track_monitor = TrackMonitor(self.scene.track) if self.scene.track is not None else None
         self._commands: queue.SimpleQueue[tuple[Callable[[], Any], Future[Any]]] = queue.SimpleQueue()
         self._command_waiting = threading.Event()  # set when a command is queued, so the loop wakes early
         self._frame_sequence = 0
+        self._frame_pacer = SimTimePacer(1.0)  # its period follows the fastest camera viewer
         self._tick = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -161,6 +161,11 @@ class World:
     def reset(self, seed: int) -> None:
         """Rebuilds the scene and robot, with noise seeded anew; sim time restarts at 0."""
         self._call_in_loop(lambda: self._build(seed))
+
+    def restart_track_run(self) -> bool:
+        """Ends the track's attempt under way without a result (TrackMonitor.restart), in the loop's thread."""
+        monitor = self.track_monitor
+        return monitor is not None and self._call_in_loop(lambda: monitor.restart(self._sim_time_s))
 
     def set_pose(self, pose: Pose2D) -> None:
         """Places the robot at pose (for tests and exercises); odometry restarts there."""
@@ -319,7 +324,7 @@ class World:
         self._last_command_sim_s = 0.0
         self._deadman_armed = False
         self._deadman_stopped = False
-        self._next_frame_sim_s: float | None = None
+        self._frame_pacer.restart()
         self._odometry = WheelOdometry(self.spec, spawn, self._odometry_rng)
         self._apply_wheel_speeds()
         self._read_odometry()
@@ -366,7 +371,7 @@ class World:
         self._tick += 1
         self._read_odometry(dt_s)
         ground_truth = self._ground_truth()
-        if self.course_monitor is not None and self.course_monitor.observe(ground_truth, self._sim_time_s):
+        if self.track_monitor is not None and self.track_monitor.observe(ground_truth, self._sim_time_s):
             self._place_robot(self.scene.spawn)  # a border line touched: the run restarts at A
             ground_truth = self.scene.spawn
         if self._tick % SENSOR_EVERY_TICKS == 0:
@@ -378,14 +383,14 @@ class World:
         target = self._gate.latest()
         if target.version != self._seen_target_version:
             self._seen_target_version = target.version
-            if self._autonomy is not None:
-                if target.from_command:
-                    self._autonomy.on_direct_drive(target.version)
-                else:
-                    self._autonomy.on_controller_changed(target.version)
+            if self._autonomy is not None and not target.from_command:
+                # A direct Drive's effect on skills (it preempts the motor goal) is the Robot facade's rule.
+                self._autonomy.on_controller_changed(target.version)
             self._target_linear_mps, self._target_angular_radps = target.linear_mps, target.angular_radps
             self._applied_sequence = target.sequence
-            self._deadman_armed = target.from_command
+            # A stop leaves nothing for the deadman to stop: arming it would report every key release as a fault.
+            moving = target.linear_mps != 0.0 or target.angular_radps != 0.0
+            self._deadman_armed = target.from_command and moving
             self._deadman_stopped = False
             self._last_command_sim_s = self._sim_time_s
         elif self._deadman_armed and self._sim_time_s - self._last_command_sim_s > self.deadman_timeout_s:
@@ -447,15 +452,11 @@ class World:
     def _maybe_render(self) -> None:
         fps = self._publication.requested_camera_fps
         if fps <= 0:
-            self._next_frame_sim_s = None
+            self._frame_pacer.restart()
             return
-        now_s = self._sim_time_s
-        if self._next_frame_sim_s is not None and now_s + 1e-9 < self._next_frame_sim_s:
-            return
-        period_s = 1.0 / fps
-        behind = self._next_frame_sim_s is None or now_s - self._next_frame_sim_s >= period_s
-        self._next_frame_sim_s = now_s + period_s if behind else self._next_frame_sim_s + period_s
-        self.render_frame()
+        self._frame_pacer.period_s = 1.0 / fps
+        if self._frame_pacer.due(self._sim_time_s):
+            self.render_frame()
 
     def render_frame(self) -> CameraFrame:
         """Renders, encodes and publishes one frame now (loop thread, or tests before start())."""

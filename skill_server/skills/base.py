@@ -74,9 +74,15 @@ class SkillStep:
 
 
 class SkillController:
-    """Base of every skill: ticked by the world loop, never a thread; motor skills drive the wheels."""
+    """Base of every skill: ticked by the world loop, never a thread; motor skills drive the wheels.
 
-    motor: bool = True
+    The class attributes are the skill's traits, published in ListSkills so that clients need not guess them
+    from names.
+    """
+
+    motor: bool = True  # drives the wheels: one motor goal at a time; False for perceptive skills
+    estimates_pose: bool = False  # ticked first; while it runs the others steer by perception.localizer's pose
+    direct_drive: bool = False  # does what Drive commands do; consoles offer the drive pad instead of a panel
 
     def __init__(self) -> None:
         self.last_feedback = GoalFeedback()

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 from skill_server.goals import GoalFeedback
+from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
+from skill_server.sim.drive_gate import velocity_parameters
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.skills.base import Outcome, SkillController, TickInput, feedback_for, succeeded
-from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
 
 DIRECT_CONTROL = "direct_control"
 DIRECT_GOAL_MAX_S = 10.0  # a goal is a short move; steady teleoperation goes through Drive and its deadman
@@ -22,24 +23,7 @@ def direct_control_description(spec: RobotSpec) -> SkillDescription:
             "the velocities for duration_s and then stops."
         ),
         parameters=(
-            ParameterSchema(
-                name="linear_mps",
-                type=ParameterType.DOUBLE,
-                unit="m/s",
-                minimum=-spec.max_linear_mps,
-                maximum=spec.max_linear_mps,
-                default=0.0,
-                help="Forward speed; negative drives backwards.",
-            ),
-            ParameterSchema(
-                name="angular_radps",
-                type=ParameterType.DOUBLE,
-                unit="rad/s",
-                minimum=-spec.max_angular_radps,
-                maximum=spec.max_angular_radps,
-                default=0.0,
-                help="Turn rate; positive turns left (counter-clockwise).",
-            ),
+            *velocity_parameters(spec),
             ParameterSchema(
                 name="duration_s",
                 type=ParameterType.DOUBLE,
@@ -53,17 +37,10 @@ def direct_control_description(spec: RobotSpec) -> SkillDescription:
     )
 
 
-def validate_velocity_command(spec: RobotSpec, linear_mps: object, angular_radps: object) -> tuple[float, float]:
-    """Checks a drive command against the schema; returns (linear_mps, angular_radps) or raises."""
-    description = direct_control_description(spec)
-    linear = description.parameter("linear_mps").validate(linear_mps)
-    angular = description.parameter("angular_radps").validate(angular_radps)
-    assert isinstance(linear, float) and isinstance(angular, float)
-    return linear, angular
-
-
 class DirectControl(SkillController):
     """Holds the given velocities for duration_s, then stops and succeeds."""
+
+    direct_drive = True
 
     def __init__(self, linear_mps: float, angular_radps: float, duration_s: float) -> None:
         super().__init__()

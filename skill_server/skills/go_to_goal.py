@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from skill_server.goals import EventKind, GoalFeedback
+from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.skills.base import (
     Outcome,
@@ -17,8 +18,7 @@ from skill_server.skills.base import (
     succeeded,
 )
 from skill_server.skills.obstacles import ObstacleMap, clearance
-from skill_server.skills.planner import path_is_blocked, plan_path
-from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
+from skill_server.skills.planner import nearest_reachable_point, path_is_blocked, plan_path
 
 GO_TO_GOAL = "go_to_goal"
 LOOKAHEAD_M = 0.35
@@ -70,6 +70,7 @@ class GoToGoal(SkillController):
         self._planned_s = -math.inf
         self._planned_version = -1
         self._trouble_since_s: float | None = None  # goal blocked or no path
+        self._obstacle_xy: tuple[float, float] | None = None  # the seen obstacle the goal lies in, if so
         self._stuck_since_s: float | None = None
         self._closest_m = math.inf
         self._obstacle_announced = False
@@ -123,29 +124,44 @@ class GoToGoal(SkillController):
             return None
         start = (tick.pose.x_m, tick.pose.y_m)
         radius_m = tick.spec.body_radius_m
-        due = tick.sim_time_s - self._planned_s >= REPLAN_PERIOD_S and grid.version != self._planned_version
-        blocked = bool(self._path) and grid.version != self._planned_version and path_is_blocked(
-            grid, self._path, radius_m, start)
+        fresh = grid.version != self._planned_version
+        due = tick.sim_time_s - self._planned_s >= REPLAN_PERIOD_S and fresh
+        blocked = bool(self._path) and fresh and path_is_blocked(grid, self._path, radius_m, start)
         if self._path and not due and not blocked:
             return None
         if blocked and not self._obstacle_announced:
             self._obstacle_announced = True
             self.announce(EventKind.OBSTACLE_DETECTED, "an obstacle lies on the path; planning around it")
-        plan = plan_path(grid, start, self.goal, radius_m)
-        self._planned_s, self._planned_version = tick.sim_time_s, grid.version
-        if plan.found:
-            if blocked:
-                self.announce(EventKind.PATH_REPLANNED, f"new path of {len(plan.waypoints)} waypoints")
-            self._path, self._trouble_since_s, self._state = plan.waypoints, None, "driving"
-            return None
-        self._path = ()
-        if self._trouble_since_s is None:
-            self._trouble_since_s = tick.sim_time_s
-        self._state = "goal_blocked" if plan.goal_blocked else "no_path"
+        if self._path or fresh or self._trouble_since_s is None:  # without a path, plan again on new evidence only
+            plan = plan_path(grid, start, self.goal, radius_m)
+            self._planned_s, self._planned_version = tick.sim_time_s, grid.version
+            if plan.found:
+                if blocked:
+                    self.announce(EventKind.PATH_REPLANNED, f"new path of {len(plan.waypoints)} waypoints")
+                self._path, self._trouble_since_s, self._state = plan.waypoints, None, "driving"
+                return None
+            self._path, self._obstacle_xy = (), plan.obstacle_xy
+            if self._trouble_since_s is None:
+                self._trouble_since_s = tick.sim_time_s
+            self._state = "goal_blocked" if plan.goal_blocked else "no_path"
+        assert self._trouble_since_s is not None
         if tick.sim_time_s - self._trouble_since_s < UNREACHABLE_AFTER_S:
             return None
-        why = "the goal lies inside an obstacle" if plan.goal_blocked else "no path around the obstacles"
-        return aborted("UNREACHABLE", f"{why}; stopped {distance_m:.2f} m from the goal")
+        return aborted("UNREACHABLE", self._unreachable_message(grid, start, radius_m, distance_m))
+
+    def _unreachable_message(self, grid: ObstacleMap, start: tuple[float, float], radius_m: float,
+                             distance_m: float) -> str:
+        """Why the goal cannot be reached, and the nearest point that can (numbers rounded for people)."""
+        if self._state == "goal_blocked" and self._obstacle_xy is not None:
+            why = f"the goal lies inside an obstacle (seen at {_point(self._obstacle_xy)})"
+        else:
+            why = "no path around the obstacles leads to the goal"
+        nearest = nearest_reachable_point(grid, start, self.goal, radius_m)
+        if nearest is not None and math.dist(nearest, start) > 0.05:
+            offer = f"; the nearest point the robot can reach is {_point(nearest)}"
+        else:
+            offer = "; the robot can reach no point nearer to it than where it stands"
+        return f"{why}{offer}, {math.dist(nearest, self.goal) if nearest else distance_m:.2f} m from the goal"
 
     def _steer(self, tick: TickInput, distance_m: float) -> tuple[float, float]:
         pose = tick.pose
@@ -170,3 +186,8 @@ class GoToGoal(SkillController):
         progress = 1.0 - distance_m / self._start_distance_m if self._start_distance_m else 0.0
         return feedback_for(tick, state, progress, distance_m, bearing_error_rad,
                             goal_x_m=self.goal[0], goal_y_m=self.goal[1], waypoints=float(len(self._path)))
+
+
+def _point(xy: tuple[float, float]) -> str:
+    """A point as people write it: (1.05, 0.62), (1.2, -0.4)."""
+    return "(" + ", ".join(f"{round(v, 2):g}" if round(v, 2) != 0 else "0" for v in xy) + ")"

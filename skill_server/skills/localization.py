@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
 from skill_server.errors import NoMap
 from skill_server.goals import EventKind, GoalFeedback
+from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
 from skill_server.sim.geometry import Pose2D, wrap_angle
 from skill_server.skills.base import Outcome, SkillController, TickInput, feedback_for
+from skill_server.skills.perception import LocalizationEstimate, Perception
 from skill_server.skills.scan_matching import compose, distance_field, relative, signed_point_field
-from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
 
 __all__ = ["LOCALIZATION", "Localization", "LocalizationEstimate", "compose", "distance_field", "relative"]
 
@@ -30,22 +31,6 @@ MAP_ERROR_GAIN = 0.5  # reported std per axis includes this times the echoes' re
 MAP_ERROR_LEVER_M = 2.0  # typical beam length [m]: turns the residual into a heading uncertainty
 
 
-@dataclass(frozen=True)
-class LocalizationEstimate:
-    """What the filter believes, published for streams (immutable)."""
-
-    pose: Pose2D
-    std_x_m: float
-    std_y_m: float
-    std_theta_rad: float
-    converged: bool
-    update_duration_ms: float
-    particles: tuple[tuple[float, float, float, float], ...]
-    odometry: Pose2D | None = None  # the odometry reading pose was moved on to (readers extrapolate from it)
-    residual_rms_m: float = 0.0  # RMS distance of the scan's echoes to the map at the estimate
-    particle_std_m: float = 0.0  # the cloud's own spread, hypot(x, y), before the map-mismatch term
-
-
 def localization_description() -> SkillDescription:
     """The schema of localization."""
     return SkillDescription(
@@ -54,7 +39,7 @@ def localization_description() -> SkillDescription:
         help=(
             "Perceptive skill: estimates the robot's pose against the environment model with a particle filter "
             "(sets of poses whose laser readings best match the map), starting from a guess. While it runs, the "
-            "motor skills steer by its estimate instead of raw odometry. Needs a map (environment_modelling)."
+            "motor skills steer by its estimate instead of raw odometry. Needs a map (Environment modelling)."
         ),
         parameters=(
             ParameterSchema("initial_x_m", ParameterType.DOUBLE, "m", -50.0, 50.0, 0.0, "Guess of x."),
@@ -74,11 +59,12 @@ class Localization(SkillController):
     """Monte Carlo localization with a likelihood field; motion noise grows with the odometry increment."""
 
     motor = False
+    estimates_pose = True
 
     def __init__(self, initial_x_m: float, initial_y_m: float, initial_theta_rad: float, initial_spread_m: float,
-                 initial_spread_rad: float, particle_count: int, perception: object, seed: int = 7) -> None:
+                 initial_spread_rad: float, particle_count: int, perception: Perception, seed: int = 7) -> None:
         super().__init__()
-        model = getattr(perception, "environment", None)
+        model = perception.environment
         if model is None or not model.occupied().any():
             raise NoMap("no environment model yet: run environment_modelling first")
         self._perception = perception
@@ -101,7 +87,7 @@ class Localization(SkillController):
         self._std = (initial_spread_m, initial_spread_m, initial_spread_rad)
         self._published: LocalizationEstimate | None = None
         self._beams: tuple[np.ndarray, np.ndarray] | None = None  # the last update's beams (ranges, angles)
-        perception.localizer = self  # type: ignore[attr-defined]
+        perception.localizer = self
 
     def believed_pose(self, odometry: Pose2D) -> Pose2D | None:
         """The estimate moved on by the odometry since it was made; None until converged."""
@@ -131,7 +117,7 @@ class Localization(SkillController):
             # odometry, so it does not trail the robot by up to a scan period (2 cm at 0.3 m/s).
             pose = compose(self._estimate, relative(self._estimate_odometry, odometry))
             self._published = replace(self._published, pose=pose, odometry=odometry)
-            self._perception.published_estimate = self._published  # type: ignore[attr-defined]
+            self._perception.published_estimate = self._published
         std_x, std_y, std_theta = self._std
         return 0.0, 0.0, None, feedback_for(
             tick, "tracking" if self._converged else "converging", 1.0 if self._converged else 0.0,
@@ -142,9 +128,9 @@ class Localization(SkillController):
 
     def stop(self) -> None:
         """The motor skills go back to odometry."""
-        if getattr(self._perception, "localizer", None) is self:
-            self._perception.localizer = None  # type: ignore[attr-defined]
-            self._perception.published_estimate = None  # type: ignore[attr-defined]
+        if self._perception.localizer is self:
+            self._perception.localizer = None
+            self._perception.published_estimate = None
 
     def _predict(self, delta: Pose2D) -> None:
         n = len(self._particles)
@@ -164,14 +150,14 @@ class Localization(SkillController):
                                         or sim_time_s - self._field_s < FIELD_REFRESH_S):
             return
         occupied = self._model.occupied()
-        if not getattr(self._model, "surfaces_on_cell_edges", False) and hasattr(self._model, "surface_points"):
+        if not self._model.surfaces_on_cell_edges:
             # A map from readings: signed distance to the echoes' sub-cell points, negative behind a surface (seen
             # from the free side), so bilinear interpolation puts the zero on the surface, not on cell centres.
             self._field = signed_point_field(self._model, FIELD_CAP_CELLS)
             self._field_version, self._field_s = self._model.version, sim_time_s
             return
         field = distance_field(occupied, FIELD_CAP_CELLS)
-        if getattr(self._model, "surfaces_on_cell_edges", False):
+        if self._model.surfaces_on_cell_edges:
             # Surfaces on cell edges: a signed distance to them (negative inside), zero exactly on the edge once
             # interpolated, so echoes are pulled onto the surface from both sides instead of sinking into walls.
             field = np.where(occupied, 0.5 - distance_field(~occupied, FIELD_CAP_CELLS), field - 0.5)
@@ -262,4 +248,4 @@ class Localization(SkillController):
             tuple(map(tuple, sample.tolist())),  # tolist first: a per-element loop costs 0.3 ms per update
             odometry, residual_m, math.hypot(*self._particle_std(x, y)),
         )
-        self._perception.published_estimate = self._published  # type: ignore[attr-defined]
+        self._perception.published_estimate = self._published

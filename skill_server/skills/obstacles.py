@@ -8,24 +8,50 @@ from dataclasses import dataclass
 import numpy as np
 
 from skill_server.goals import EventKind, GoalFeedback, GoalStatus
+from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
 from skill_server.skills.base import Outcome, SensorLayout, SkillController, TickInput, feedback_for
-from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
 
 DETECT_OBSTACLE = "detect_obstacle"
 GRID_RESOLUTION_M = 0.05
 GRID_HALF_EXTENT_M = 10.0  # covers any room the lab builds around the start
 HITS_TO_OCCUPY = 2  # one stray echo does not make an obstacle
+HITS_CAP = 8  # evidence saturates, so a few looks through a cell clear an echo placed by a pose that has drifted
+CLEAR_RANGE_M = 3.5  # a laser ray is evidence of free space up to this far (the planner looks 2.5 m around)
+CLEAR_STEP_M = 0.05  # spacing of the points sampled along a ray
+VISITED_RADIUS_M = 0.08  # cells this close to where the robot's centre was count as places it has stood
+BODY_CLEAR_MARGIN_M = 0.03  # the body's disk less this is cleared at every scan: nothing can stand inside the robot
+
+
+def disk_offsets(radius_cells: float) -> tuple[np.ndarray, np.ndarray]:
+    """Cell offsets (dx, dy) whose centres lie within radius_cells of the centre cell's."""
+    reach = int(math.floor(radius_cells))
+    dx, dy = np.mgrid[-reach:reach + 1, -reach:reach + 1]
+    inside = dx * dx + dy * dy <= radius_cells * radius_cells
+    return dx[inside], dy[inside]
 
 
 class ObstacleMap:
-    """Hit counts of laser echoes in a world-frame grid, placed at the pose the robot believes."""
+    """Laser evidence in a world-frame grid, placed at the pose the robot believes, with evidence both ways.
+
+    Echoes add to a cell's count (saturating at HITS_CAP); a ray that passes through a cell takes one away, and
+    the robot's own disk is cleared, so echoes placed at a pose that has since drifted, or left by an obstacle seen
+    from afar, fade when the robot looks again. Cells the robot's centre has passed over are remembered as visited.
+    """
 
     def __init__(self, resolution_m: float = GRID_RESOLUTION_M, half_extent_m: float = GRID_HALF_EXTENT_M) -> None:
         self.resolution_m = resolution_m
         self.origin_m = -half_extent_m
         self.size = int(round(2 * half_extent_m / resolution_m))
-        self.hits = np.zeros((self.size, self.size), dtype=np.int16)  # indexed [ix, iy]
+        # One spare element past the grid takes the writes of ray points that are not free (so no masking is needed).
+        self._spare = self.size * self.size
+        self._hits_flat = np.zeros(self._spare + 1, dtype=np.int16)
+        self._seen_free_flat = np.zeros(self._spare + 1, dtype=bool)
+        self.hits = self._hits_flat[:self._spare].reshape(self.size, self.size)  # indexed [ix, iy]
+        self.seen_free = self._seen_free_flat[:self._spare].reshape(self.size, self.size)  # a ray passed through
+        self.visited = np.zeros((self.size, self.size), dtype=bool)
         self.version = 0
+        self._ray_steps_m = np.arange(CLEAR_STEP_M, CLEAR_RANGE_M, CLEAR_STEP_M)
+        self._disks: dict[float, tuple[np.ndarray, np.ndarray]] = {}  # offsets by radius [m]
 
     def cell_of(self, x_m: float, y_m: float) -> tuple[int, int]:
         """Grid indices of a world point (may fall outside the grid)."""
@@ -37,22 +63,51 @@ class ObstacleMap:
         return (self.origin_m + (ix + 0.5) * self.resolution_m, self.origin_m + (iy + 0.5) * self.resolution_m)
 
     def add_scan(self, tick: TickInput) -> None:
-        """Counts the laser's echoes at the believed pose."""
+        """Clears the cells the laser sees through and the robot's own disk, then counts the echoes."""
         ranges_m = np.asarray(tick.laser_ranges_m)
-        angles_rad = tick.sensors.laser_angles_rad
-        echoed = ranges_m < tick.sensors.laser.max_range_m - 1e-6
-        if not echoed.any():
-            return
         pose = tick.pose
-        world_rad = pose.theta_rad + angles_rad[echoed]
-        xs = pose.x_m + ranges_m[echoed] * np.cos(world_rad)
-        ys = pose.y_m + ranges_m[echoed] * np.sin(world_rad)
-        ix = np.floor((xs - self.origin_m) / self.resolution_m).astype(int)
-        iy = np.floor((ys - self.origin_m) / self.resolution_m).astype(int)
+        world_rad = pose.theta_rad + tick.sensors.laser_angles_rad
+        cos, sin = np.cos(world_rad), np.sin(world_rad)
+        echoed = ranges_m < tick.sensors.laser.max_range_m - 1e-6
+        hit_ix, hit_iy = self._cells(pose.x_m + ranges_m[echoed] * cos[echoed],
+                                     pose.y_m + ranges_m[echoed] * sin[echoed])
+        hit_flat = hit_ix * self.size + hit_iy
+        # Free evidence stops a cell short of each echo; a cell with an echo in this scan is not cleared by it.
+        free_m = np.where(echoed, ranges_m - self.resolution_m, CLEAR_RANGE_M)
+        scale = 1.0 / self.resolution_m
+        ix = ((pose.x_m - self.origin_m) * scale + np.outer(cos, self._ray_steps_m * scale)).astype(np.int64)
+        iy = ((pose.y_m - self.origin_m) * scale + np.outer(sin, self._ray_steps_m * scale)).astype(np.int64)
         inside = (ix >= 0) & (ix < self.size) & (iy >= 0) & (iy < self.size)
-        np.add.at(self.hits, (ix[inside], iy[inside]), 1)
-        np.minimum(self.hits, 1000, out=self.hits)
+        free = (self._ray_steps_m[None, :] < free_m[:, None]) & inside
+        free_flat = np.where(free, ix * self.size + iy, self._spare).reshape(-1)
+        kept = self._hits_flat[hit_flat]
+        self._hits_flat[free_flat] = np.maximum(self._hits_flat[free_flat] - 1, 0)
+        self._hits_flat[hit_flat] = kept
+        self._seen_free_flat[free_flat] = True
+        body_ix, body_iy = self._disk_cells(pose.x_m, pose.y_m, tick.spec.body_radius_m - BODY_CLEAR_MARGIN_M)
+        self.hits[body_ix, body_iy] = 0
+        visited_ix, visited_iy = self._disk_cells(pose.x_m, pose.y_m, VISITED_RADIUS_M)
+        self.visited[visited_ix, visited_iy] = True
+        np.add.at(self._hits_flat, hit_flat, 1)
+        self._hits_flat[hit_flat] = np.minimum(self._hits_flat[hit_flat], HITS_CAP)
         self.version += 1
+
+    def _cells(self, xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Grid indices of world points, those outside the grid left out."""
+        ix = np.floor((xs - self.origin_m) / self.resolution_m).astype(np.int64)
+        iy = np.floor((ys - self.origin_m) / self.resolution_m).astype(np.int64)
+        inside = (ix >= 0) & (ix < self.size) & (iy >= 0) & (iy < self.size)
+        return ix[inside], iy[inside]
+
+    def _disk_cells(self, x_m: float, y_m: float, radius_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """Cells whose centres lie within radius_m of the cell holding (x_m, y_m), inside the grid."""
+        offsets = self._disks.get(radius_m)
+        if offsets is None:
+            offsets = self._disks[radius_m] = disk_offsets(radius_m / self.resolution_m)
+        cx, cy = self.cell_of(x_m, y_m)
+        ix, iy = offsets[0] + cx, offsets[1] + cy
+        inside = (ix >= 0) & (ix < self.size) & (iy >= 0) & (iy < self.size)
+        return ix[inside], iy[inside]
 
     def occupied(self) -> np.ndarray:
         """Boolean grid of cells seen as obstacles."""
@@ -61,6 +116,11 @@ class ObstacleMap:
     def occupied_window(self, x0: int, x1: int, y0: int, y1: int) -> np.ndarray:
         """The occupied cells of [x0:x1, y0:y1] only (cheaper than the whole grid)."""
         return self.hits[x0:x1, y0:y1] >= HITS_TO_OCCUPY
+
+    def was_visited(self, x_m: float, y_m: float) -> bool:
+        """Whether the robot's centre has stood within about VISITED_RADIUS_M of this point."""
+        ix, iy = self.cell_of(x_m, y_m)
+        return 0 <= ix < self.size and 0 <= iy < self.size and bool(self.visited[ix, iy])
 
 
 @dataclass(frozen=True)

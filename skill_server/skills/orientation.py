@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from skill_server.goals import EventKind, GoalFeedback
+from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.skills.base import (
     HeadingController,
@@ -16,7 +17,6 @@ from skill_server.skills.base import (
     heading_error,
     succeeded,
 )
-from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
 
 ORIENTATION_CONTROL = "orientation_control"
 SETTLED_RADPS = 0.05  # the turn counts as finished once the base has nearly stopped turning

@@ -7,21 +7,36 @@ from dataclasses import dataclass
 from typing import Any
 
 from skill_server.errors import UnknownSkill
-from skill_server.sim.robot_model import RobotSpec
+from skill_server.schema import SkillDescription
 from skill_server.skills.base import SkillController
-from skill_server.skills.schema import SkillDescription
+from skill_server.skills.perception import Perception
 
 # Builds a controller from validated parameters and the sequencer's shared perception data.
-SkillBuilder = Callable[[dict[str, Any], Any], SkillController]
+SkillBuilder = Callable[[dict[str, Any], Perception], SkillController]
 
 
 @dataclass(frozen=True)
 class SkillEntry:
-    """A skill's schema, whether it drives the wheels, and how to build its controller."""
+    """A skill's schema, its controller class (whose declared traits it publishes) and how to build one."""
 
     description: SkillDescription
-    motor: bool
-    build: SkillBuilder | None
+    skill: type[SkillController]
+    build: SkillBuilder
+
+    @property
+    def motor(self) -> bool:
+        """The skill drives the base (one motor goal at a time)."""
+        return self.skill.motor
+
+    @property
+    def estimates_pose(self) -> bool:
+        """While it runs, the other skills steer by its pose estimate."""
+        return self.skill.estimates_pose
+
+    @property
+    def direct_drive(self) -> bool:
+        """It does what Drive commands do, so consoles offer the drive pad for it."""
+        return self.skill.direct_drive
 
 
 class SkillRegistry:
@@ -30,15 +45,12 @@ class SkillRegistry:
     def __init__(self) -> None:
         self._skills: dict[str, SkillEntry] = {}
 
-    def register(self, description: SkillDescription, build: SkillBuilder | None = None, motor: bool = True) -> None:
-        """Adds a skill; a second skill of the same name is a programming error."""
+    def register(self, description: SkillDescription, skill: type[SkillController],
+                 build: SkillBuilder | None = None) -> None:
+        """Adds a skill built by build (default: skill(**parameters)); a second skill of the same name is an error."""
         if description.name in self._skills:
             raise ValueError(f"skill {description.name!r} is already registered")
-        self._skills[description.name] = SkillEntry(description, motor, build)
-
-    def get(self, name: str) -> SkillDescription:
-        """The skill registered under name (KeyError if none)."""
-        return self._skills[name].description
+        self._skills[description.name] = SkillEntry(description, skill, build or (lambda values, _: skill(**values)))
 
     def entry(self, name: str) -> SkillEntry:
         """The whole entry of a skill, or UnknownSkill naming the known ones."""
@@ -47,15 +59,6 @@ class SkillRegistry:
         except KeyError:
             raise UnknownSkill(name, list(self._skills)) from None
 
-    def descriptions(self) -> list[SkillDescription]:
+    def entries(self) -> list[SkillEntry]:
         """Every registered skill, in registration order."""
-        return [entry.description for entry in self._skills.values()]
-
-
-def default_registry(spec: RobotSpec) -> SkillRegistry:
-    """The skills every Telelab robot offers, with limits taken from its spec."""
-    from skill_server.skills import catalog
-
-    registry = SkillRegistry()
-    catalog.register_all(registry, spec)
-    return registry
+        return list(self._skills.values())

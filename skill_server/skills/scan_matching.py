@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from skill_server.sim.geometry import Pose2D, wrap_angle
+from skill_server.skills.environment_model import EnvironmentModel
 
 MATCH_INLIER_M = 0.12  # endpoints farther than this from the map are new surfaces (or clutter), not residuals
 MATCH_MIN_INLIERS = 25
@@ -82,13 +83,13 @@ class ScanMatcher:
         """Whether the map holds surface points yet."""
         return bool(np.isfinite(self._means[:, :, 0]).any())
 
-    def update(self, model: object) -> None:
+    def update(self, model: EnvironmentModel) -> None:
         """Takes the model's surface points (once per model version)."""
-        version = getattr(model, "version", 0)
+        version = model.version
         if version == self._version:
             return
         self._version = version
-        cells, points, _ = model.surface_points()  # type: ignore[attr-defined]
+        cells, points, _ = model.surface_points()
         self._means.fill(np.nan)
         self._means[cells[:, 0], cells[:, 1]] = points
 
@@ -142,11 +143,11 @@ class ScanMatcher:
         return MatchResult(pose if accepted else guess, inliers, rms, accepted)
 
 
-def signed_point_field(model: object, cap_cells: int) -> np.ndarray:
+def signed_point_field(model: EnvironmentModel, cap_cells: int) -> np.ndarray:
     """Signed distance [m] from every cell centre to the nearest surface point, negative behind the surface (seen
     from the free side), capped; linear across a surface, so bilinear interpolation puts its zero on the surface."""
-    cells, points, normals = model.surface_points()  # type: ignore[attr-defined]
-    size, res, origin = model.size, model.resolution_m, model.origin_m  # type: ignore[attr-defined]
+    cells, points, normals = model.surface_points()
+    size, res, origin = model.size, model.resolution_m, model.origin_m
     best = np.full((size, size), cap_cells * res)
     signed = best.copy()
     for ox in range(-cap_cells, cap_cells + 1):

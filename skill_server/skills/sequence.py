@@ -5,12 +5,12 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from skill_server.goals import EventKind, GoalFeedback, GoalStatus
+from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.skills.base import Outcome, SkillController, TickInput, feedback_for, succeeded
 from skill_server.skills.go_to_goal import COORD_LIMIT_M, GoToGoal
 from skill_server.skills.orientation import OrientationControl
-from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
 
 ROUND_TRIP = "round_trip"
 

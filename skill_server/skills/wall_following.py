@@ -7,10 +7,10 @@ import math
 import numpy as np
 
 from skill_server.goals import EventKind, GoalFeedback, GoalStatus
+from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.skills.base import Outcome, SkillController, TickInput, aborted, feedback_for
 from skill_server.skills.obstacles import clearance
-from skill_server.skills.schema import ParameterSchema, ParameterType, SkillDescription
 
 WALL_FOLLOWING = "wall_following"
 CONE_EDGE_RAD = math.radians(12.5)
@@ -82,10 +82,13 @@ class WallFollowing(SkillController):
             angular = 3.0 * (wanted_alpha - self._alpha_rad)
             linear = speed * max(0.3, math.cos(self._alpha_rad) - 2.0 * abs(error_m))
         angular = max(-1.5, min(1.5, angular))
-        feedback = feedback_for(tick, self._state, 0.0, self._distance_m - self._target_m, self._alpha_rad,
+        # A timed run has a measurable progress (time followed); an open-ended one has none, so it stays 0.
+        elapsed_s = tick.sim_time_s - self._started_s
+        progress = elapsed_s / self._duration_s if self._duration_s > 0 else 0.0
+        feedback = feedback_for(tick, self._state, progress, self._distance_m - self._target_m, self._alpha_rad,
                                 wall_distance_m=self._distance_m, front_m=min(front_m, 9.0))
         outcome = None
-        if self._duration_s > 0 and tick.sim_time_s - self._started_s >= self._duration_s:
+        if self._duration_s > 0 and elapsed_s >= self._duration_s:
             outcome = Outcome(GoalStatus.SUCCEEDED, "", f"followed the contour for {self._duration_s:g} s")
         elif not self._had_wall and tick.sim_time_s - self._started_s > 30.0:
             outcome = aborted("NO_WALL", "no contour within reach on that side after 30 s")

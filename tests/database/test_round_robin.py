@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from datetime import UTC, datetime, timedelta
 
 import pytest
@@ -11,20 +10,11 @@ from sqlalchemy.orm import Session
 
 from middleware.access import round_robin
 from middleware.access.round_robin import AccessPolicy, QueueState
-from middleware.db import make_engine, upgrade_to_head
 from middleware.models import User
 
 T0 = datetime(2026, 11, 21, 9, 0, tzinfo=UTC)
 TURN_S = 120.0
 ROBOT = "lab-1"
-
-
-@pytest.fixture
-def engine(database_url: str) -> Iterator[Engine]:
-    upgrade_to_head(database_url)
-    engine = make_engine(database_url)
-    yield engine
-    engine.dispose()
 
 
 @pytest.fixture
@@ -45,7 +35,7 @@ class Lab:
         self.policy = AccessPolicy(grace_s=15.0, turn_length_s=lambda _s, _u: TURN_S,
                                    priority_user_id=lambda _s, _r, _n: self.priority)
 
-    def run(self, operation, *args: object, at_s: float, online: bool = True) -> QueueState:  # type: ignore[no-untyped-def]
+    def run(self, operation, *args: object, at_s: float, online: bool = True) -> QueueState:
         with Session(self.engine) as session, session.begin():
             return operation(session, ROBOT, *args, self.policy, T0 + timedelta(seconds=at_s), online)
 
@@ -136,6 +126,18 @@ def test_a_fault_during_a_turn_keeps_the_controller_at_the_head(engine: Engine, 
     state = lab.tick(at_s=301, online=True)
     assert state.controller_id == ann and not state.faulted
     assert state.turn_ends_at == T0 + timedelta(seconds=301 + TURN_S), "ann gets a full turn when the robot returns"
+
+
+def test_those_waiting_for_an_offline_robot_are_told_no_turn_can_start(
+        engine: Engine, users: dict[str, int]) -> None:
+    lab = Lab(engine)
+    ann = users["ann"]
+    state = lab.run(round_robin.join, ann, at_s=0, online=False)
+    assert state.controller_id is None and state.faulted
+    seat = round_robin.seat_of(state, ann, T0, TURN_S)
+    assert seat.in_queue and seat.faulted and seat.estimated_wait_s is None, "not 'your turn in 0:00'"
+    state = lab.tick(at_s=1, online=True)
+    assert state.controller_id == ann and not state.faulted
 
 
 def test_passing_early_and_leaving(engine: Engine, users: dict[str, int]) -> None:

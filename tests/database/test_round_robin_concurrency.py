@@ -29,7 +29,7 @@ CLOCK_SPEEDUP = 50.0
 T0 = datetime(2026, 11, 21, 9, 0, tzinfo=UTC)
 
 
-def _worker(database_url: str, user_ids: list[int], seed: int, started: float, results) -> None:  # type: ignore[no-untyped-def]
+def _worker(database_url: str, user_ids: list[int], seed: int, started: float, results) -> None:
     engine = make_engine(database_url)
     policy = AccessPolicy(grace_s=1.0, turn_length_s=lambda _s, _u: 2.0)
     rng = random.Random(seed)

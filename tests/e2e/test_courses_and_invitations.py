@@ -10,7 +10,7 @@ from tests.integration.bookings.conftest import course_people  # noqa: F401
 pytestmark = pytest.mark.e2e
 
 
-def log_in(tab, live_server: LiveServer, username: str) -> None:  # type: ignore[no-untyped-def]
+def log_in(tab, live_server: LiveServer, username: str) -> None:
     tab.goto(f"{live_server.url}/login")
     tab.fill("#username", username)
     tab.fill("#password", STUDENT_PASSWORD)
@@ -18,7 +18,7 @@ def log_in(tab, live_server: LiveServer, username: str) -> None:  # type: ignore
     tab.locator('[data-field="username"]').wait_for()
 
 
-def test_tutor_enrols_a_class_from_csv_and_an_invited_student_joins(chromium, page, live_server: LiveServer,  # type: ignore[no-untyped-def]
+def test_tutor_enrols_a_class_from_csv_and_an_invited_student_joins(chromium, page, live_server: LiveServer,
                                                                      course_people, tmp_path) -> None:  # noqa: F811
     ARTIFACTS_DIR.mkdir(exist_ok=True)
     log_in(page, live_server, "tutor1")
@@ -55,6 +55,11 @@ def test_tutor_enrols_a_class_from_csv_and_an_invited_student_joins(chromium, pa
     page.get_by_role("button", name="Create an invitation link").click()
     link = page.locator("#invitation-link").text_content().strip()
     assert "/join/" in link
+    page.context.grant_permissions(["clipboard-read", "clipboard-write"], origin=live_server.url)
+    page.get_by_role("button", name="Copy the link").click()
+    page.get_by_role("status").filter(has_text="Link copied.").wait_for()
+    assert page.evaluate("navigator.clipboard.readText()") == link
+    page.screenshot(path=str(ARTIFACTS_DIR / "invitation-copied-desktop.png"))
 
     phone_context = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
     phone = phone_context.new_page()

@@ -3,7 +3,8 @@
 A student starts a trial, drives off A with the keys in the robot's console, and watches the experiment page
 follow the run as it happens; the rest of the course is travelled by placing the robot (World.set_pose in the
 in-process skill server) because a real drive along the corridor would take a minute. A tutor then reads the
-plot and downloads the CSV.
+plot and downloads the CSV. Another student gives a trial up mid-course and has the next one recorded after
+driving A -> B -> A on course A, at desktop and phone size.
 """
 
 from __future__ import annotations
@@ -13,13 +14,15 @@ import io
 import json
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from skill_server.server import create_server
 from skill_server.sim.geometry import Pose2D
-from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer, served_lab
+from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer, make_course, served_lab
 from tests.e2e.test_console import log_in
 
 pytestmark = pytest.mark.e2e
@@ -27,32 +30,43 @@ PHONE = {"width": 390, "height": 844}
 DESKTOP = {"width": 1280, "height": 800}
 
 
-@pytest.fixture
-def course_b_robot():  # type: ignore[no-untyped-def]
-    """A real-time course-B skill server in this process, so the test can place the robot on the course."""
-    running = create_server(port=0, scene="course-B", realtime=True, robot_name="course-b")
-    yield running
-    running.stop(grace_s=0.5)
+@contextmanager
+def course_lab(scene: str, robot_name: str, tmp_path: Path) -> Iterator[tuple[Any, LiveServer]]:
+    """A real-time course skill server in this process (so the test can place the robot on the course) and the
+    lab served with it."""
+    running = create_server(port=0, scene=scene, realtime=True, robot_name=robot_name)
+    try:
+        with served_lab(f"{robot_name}=127.0.0.1:{running.port}", tmp_path) as server:
+            yield running, server
+    finally:
+        running.stop(grace_s=0.5)
 
 
 @pytest.fixture
-def experiment_lab(tmp_path: Path, course_b_robot) -> Iterator[LiveServer]:  # type: ignore[no-untyped-def]
-    with served_lab(f"course-b=127.0.0.1:{course_b_robot.port}", tmp_path) as server:
-        yield server
+def course_b_lab(tmp_path: Path) -> Iterator[tuple[Any, LiveServer]]:
+    with course_lab("course-B", "course-b", tmp_path) as lab:
+        make_course(lab[1].app, "EXP", {"tutor1": "tutor", "student1": "student"})  # tutor1 reads its results
+        yield lab
 
 
-def place(robot, x_m: float, y_m: float) -> None:  # type: ignore[no-untyped-def]
+@pytest.fixture
+def course_a_lab(tmp_path: Path) -> Iterator[tuple[Any, LiveServer]]:
+    with course_lab("course-A", "course-a", tmp_path) as lab:
+        yield lab
+
+
+def place(robot, x_m: float, y_m: float) -> None:
     """Puts the robot at (x, y) facing east and lets the world loop (and its course monitor) see it."""
     world = robot.world
     world.set_pose(Pose2D(x_m, y_m, 0.0))
     assert world.wait_for_snapshot(world.snapshot.tick + 5, 5.0) is not None
 
 
-def run_message(page) -> str:  # type: ignore[no-untyped-def]
+def run_message(page) -> str:
     return page.locator('[data-field="run-message"]').text_content() or ""
 
 
-def shoot(page, name: str) -> None:  # type: ignore[no-untyped-def]
+def shoot(page, name: str) -> None:
     """Screenshots the page at desktop and phone width (full page), back at desktop width after."""
     ARTIFACTS_DIR.mkdir(exist_ok=True)
     page.screenshot(path=str(ARTIFACTS_DIR / f"{name}-desktop.png"), full_page=True)
@@ -61,9 +75,10 @@ def shoot(page, name: str) -> None:  # type: ignore[no-untyped-def]
     page.set_viewport_size(DESKTOP)
 
 
-def test_a_student_s_trial_is_followed_live_and_recorded_and_the_tutor_reads_the_plot_and_csv(  # type: ignore[no-untyped-def]
-    page, chromium, experiment_lab: LiveServer, course_b_robot
+def test_a_student_s_trial_is_followed_live_and_recorded_and_the_tutor_reads_the_plot_and_csv(
+    page, chromium, course_b_lab: tuple[Any, LiveServer]
 ) -> None:
+    course_b_robot, experiment_lab = course_b_lab
     log_in(page, experiment_lab, "student1", STUDENT_PASSWORD)
     page.get_by_role("link", name="Experiment").click()
     page.locator("#trial-robot").wait_for()
@@ -141,3 +156,68 @@ def test_a_student_s_trial_is_followed_live_and_recorded_and_the_tutor_reads_the
         assert float(rows[0]["total_time_s"]) == pytest.approx(recorded["total_time_s"], abs=0.001)
     finally:
         tutor_context.close()
+
+
+def drive_off_a(console, page, robot) -> None:
+    """Holds the up arrow in the robot's console until the robot has left A (the robot's true pose), then waits
+    for the experiment page to say a run is under way (wide margins: the machine is shared and loaded)."""
+    console.locator("body").focus()
+    console.keyboard.down("ArrowUp")
+    try:
+        deadline = time.monotonic() + 30
+        while robot.world.snapshot.ground_truth.x_m < -2.0 and time.monotonic() < deadline:
+            time.sleep(0.05)
+    finally:
+        console.keyboard.up("ArrowUp")
+    assert robot.world.snapshot.ground_truth.x_m >= -2.0, "the robot never left A"
+    page.locator('[data-field="run-message"]', has_text="under way").wait_for(timeout=30000)
+
+
+@pytest.mark.parametrize("size", ["desktop", "phone"])
+def test_after_giving_up_a_student_s_next_trial_counts_the_next_run_and_is_recorded(
+    page, course_a_lab: tuple[Any, LiveServer], size: str
+) -> None:
+    course_a_robot, lab = course_a_lab
+    viewport = DESKTOP if size == "desktop" else PHONE
+    page.set_viewport_size(viewport)
+    log_in(page, lab, "student1", STUDENT_PASSWORD)
+    page.goto(f"{lab.url}/experiment")
+    page.get_by_role("button", name="Start a trial").click()
+    page.locator('[data-field="run-message"]', has_text="drive off to start the clock").wait_for()
+    with page.context.expect_page() as opened:
+        page.get_by_role("link", name="Open the robot's console").click()
+    console = opened.value
+    console.set_viewport_size(viewport)
+    console.locator('queue-panel[data-role="controller"]').wait_for()
+
+    # The first trial: off A with the keys, then given up mid-course.
+    drive_off_a(console, page, course_a_robot)
+    page.get_by_role("button", name="Give up this trial").click()
+    page.get_by_role("button", name="Start a trial").click()
+
+    # The next trial: the given-up run is over, so the page asks for A, not for that run to be finished.
+    page.locator('[data-field="run-message"]', has_text="back to A").wait_for(timeout=30000)
+    assert "began before your trial" not in run_message(page)
+    assert page.locator('[data-field="run-time"]').text_content() == "0.0 s"
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS_DIR / f"experiment-after-give-up-{size}.png"), full_page=True)
+
+    # Back to A (placed: a real drive back along 5 m of course takes most of a minute), then A -> B -> A: off A
+    # with the keys and, for the same reason, placed at B and back at A.
+    place(course_a_robot, -2.5, 0.0)
+    page.locator('[data-field="run-message"]', has_text="drive off to start the clock").wait_for(timeout=30000)
+    drive_off_a(console, page, course_a_robot)
+    assert "began before your trial" not in run_message(page)
+    place(course_a_robot, 2.4, 0.0)
+    page.locator('[data-field="run-message"]', has_text="now drive back to A").wait_for(timeout=30000)
+    place(course_a_robot, -2.45, 0.0)
+
+    page.locator('[data-field="last-trial"]').wait_for(timeout=30000)
+    summary = page.locator('[data-field="last-trial"]').text_content() or ""
+    assert "Trial recorded" in summary and "course-A" in summary and "0 line contacts." in summary
+    assert page.get_by_role("button", name="Start the next trial").is_visible()
+    state = json.loads(page.evaluate("fetch('/api/experiment/state').then((r) => r.text())"))
+    assert state["trial"] is None and state["delay_s"] == 0.0
+    assert state["last_trial"]["status"] == "completed" and state["last_trial"]["total_time_s"] > 0
+    page.screenshot(path=str(ARTIFACTS_DIR / f"experiment-next-trial-recorded-{size}.png"), full_page=True)
+    console.close()

@@ -15,7 +15,7 @@ pytestmark = pytest.mark.e2e
 INJECTED_DELAY_S = 2.5
 
 
-def set_delay(app, username: str, delay_s: float) -> None:  # type: ignore[no-untyped-def]
+def set_delay(app, username: str, delay_s: float) -> None:
     """Stores the user's injected delay the way the tutor's API does."""
     from sqlalchemy import select
 
@@ -30,7 +30,7 @@ def set_delay(app, username: str, delay_s: float) -> None:  # type: ignore[no-un
         session.commit()
 
 
-def left_edge_brightness(page) -> float:  # type: ignore[no-untyped-def]
+def left_edge_brightness(page) -> float:
     """Mean brightness of the canvas's leftmost 4 columns (black where the warp knows no pixels)."""
     return page.evaluate("""() => {
         const c = document.querySelector('#camera-canvas');
@@ -41,12 +41,12 @@ def left_edge_brightness(page) -> float:  # type: ignore[no-untyped-def]
     }""")
 
 
-def live_server_preference(page, key: str):  # type: ignore[no-untyped-def]
+def live_server_preference(page, key: str):
     """The logged-in user's saved preference, read through the page's session."""
     return page.evaluate(f"fetch('/api/me/preferences/{key}').then((r) => r.json()).then((a) => a.value)")
 
 
-def canvas_row(page) -> list[int]:  # type: ignore[no-untyped-def]
+def canvas_row(page) -> list[int]:
     """Grey levels of the canvas's middle row."""
     return page.evaluate("""() => {
         const c = document.querySelector('#camera-canvas');
@@ -55,7 +55,7 @@ def canvas_row(page) -> list[int]:  # type: ignore[no-untyped-def]
     }""")
 
 
-def canvas_row_and_shift(page) -> tuple[list[int], float]:  # type: ignore[no-untyped-def]
+def canvas_row_and_shift(page) -> tuple[list[int], float]:
     """The middle row and the shift it was drawn with, read in one task so no redraw comes between them."""
     row, shift = page.evaluate("""() => {
         const c = document.querySelector('#camera-canvas');
@@ -78,12 +78,12 @@ def row_error(a: list[int], b: list[int]) -> float:
     return sum(abs(x - y) for x, y in zip(a, b, strict=True)) / max(1, len(a))
 
 
-def canvas_data(page, name: str) -> float:  # type: ignore[no-untyped-def]
+def canvas_data(page, name: str) -> float:
     value = page.evaluate(f"document.querySelector('#camera-canvas').dataset.{name}")
     return float(value) if value not in (None, "") else float("nan")
 
 
-def test_a_key_press_shifts_the_picture_before_the_delayed_video_shows_the_turn(  # type: ignore[no-untyped-def]
+def test_a_key_press_shifts_the_picture_before_the_delayed_video_shows_the_turn(
     page, live_server: LiveServer, demo_accounts
 ) -> None:
     set_delay(live_server.app, "student", INJECTED_DELAY_S)

@@ -22,7 +22,7 @@ TRACK = """WEBVTT
 """
 
 
-def log_in(tab, live_server: LiveServer, username: str = "student1") -> None:  # type: ignore[no-untyped-def]
+def log_in(tab, live_server: LiveServer, username: str = "student1") -> None:
     tab.goto(f"{live_server.url}/login")
     tab.fill("#username", username)
     tab.fill("#password", STUDENT_PASSWORD)
@@ -34,8 +34,8 @@ def log_in(tab, live_server: LiveServer, username: str = "student1") -> None:  #
 def lesson_id(live_server: LiveServer) -> int:
     """A lesson on a 10 s test-pattern video made by ffmpeg, with two cues."""
     from middleware.db import session_factory
-    from middleware.lessons.cues import parse_cue_track
-    from middleware.lessons.services import LessonDraft, save_lesson, video_dir
+    from middleware.teaching.cues import parse_cue_track
+    from middleware.teaching.lessons import LessonDraft, save_lesson, video_dir
 
     folder = video_dir(live_server.app.instance_path)
     folder.mkdir(parents=True, exist_ok=True)
@@ -49,20 +49,20 @@ def lesson_id(live_server: LiveServer) -> int:
         return lesson.id
 
 
-def _log(page) -> list[str]:  # type: ignore[no-untyped-def]
+def _log(page) -> list[str]:
     """The page's robot log, oldest first, as 'kind: text without the time'."""
     items = page.eval_on_selector_all("[data-slot=log] li", "els => els.map(e => e.dataset.kind + ': ' + "
                                       "e.textContent.split(' · ')[1])")
     return list(reversed(items))
 
 
-def _wait_for(page, text: str, timeout_ms: float = 15000) -> None:  # type: ignore[no-untyped-def]
+def _wait_for(page, text: str, timeout_ms: float = 15000) -> None:
     page.wait_for_function("t => [...document.querySelectorAll('[data-slot=log] li')].some(e => "
                            "e.textContent.includes(t))", arg=text, timeout=timeout_ms)
 
 
-def test_the_video_drives_the_practice_robot_by_the_exact_rule(page, live_server: LiveServer, lesson_id: int) -> None:  # type: ignore[no-untyped-def]
-    from middleware.practice.manager import practice_manager
+def test_the_video_drives_the_practice_robot_by_the_exact_rule(page, live_server: LiveServer, lesson_id: int) -> None:
+    from middleware.teaching.practice_robots import practice_manager
 
     manager = practice_manager(live_server.app)
     manager.cap = 1
@@ -73,6 +73,11 @@ def test_the_video_drives_the_practice_robot_by_the_exact_rule(page, live_server
         page.wait_for_selector("#practice[data-running=true]", timeout=60000)
         page.goto(f"{live_server.url}/lessons/{lesson_id}")
         page.wait_for_selector("#lesson[data-ready=true]")
+        camera = page.get_by_role("region", name="Camera", exact=True)
+        camera.wait_for(timeout=30_000)
+        assert page.get_by_role("region", name="Lab model", exact=True).is_visible()
+        video_box, camera_box = page.locator("video").bounding_box(), camera.bounding_box()
+        assert camera_box["x"] >= video_box["x"] + video_box["width"], "the camera is beside the video"
         video = "document.querySelector('video')"
         page.evaluate(f"{video}.muted = true")
         # play: entering cue 1 sends its command
@@ -137,10 +142,10 @@ def _user_id(live_server: LiveServer, name: str) -> int:
         return session.scalar(select(User.id).where(User.username == name))
 
 
-def test_the_pure_playback_rule(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+def test_the_pure_playback_rule(page, live_server: LiveServer) -> None:
     log_in(page, live_server)
     result = page.evaluate("""async () => {
-      const m = await import('/static/js/lesson-playback.js');
+      const m = await import('/static/pages/teaching/lesson-playback.js');
       const calls = [];
       const p = new m.CuePlayback({ run: (i, why) => calls.push(`run ${i} ${why}`),
                                     stop: (why) => calls.push(`stop ${why}`) });

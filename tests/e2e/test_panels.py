@@ -17,17 +17,20 @@ pytestmark = pytest.mark.e2e
 SKILL_TIMEOUT_MS = 60_000
 
 
-def open_console(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+def open_console(page, live_server: LiveServer, username: str = "student1", robot: str = "lab-1",
+                 *, online: bool = True) -> None:
+    """Logs in and opens the robot's console; for an online robot, waits until the drive socket is open."""
     page.goto(f"{live_server.url}/login")
-    page.fill("#username", "student1")
+    page.fill("#username", username)
     page.fill("#password", STUDENT_PASSWORD)
     page.get_by_role("button", name="Log in").click()
     page.locator('[data-field="username"]').first.wait_for(state="attached")
-    page.goto(f"{live_server.url}/lab/lab-1")
-    page.locator('[data-connection="drive"][data-phase="open"]').wait_for()
+    page.goto(f"{live_server.url}/lab/{robot}")
+    if online:
+        page.locator('[data-connection="drive"][data-phase="open"]').wait_for()
 
 
-def number(page, selector: str) -> float:  # type: ignore[no-untyped-def]
+def number(page, selector: str) -> float:
     text = (page.locator(selector).first.text_content() or "").strip()
     try:
         return float(text)
@@ -35,7 +38,7 @@ def number(page, selector: str) -> float:  # type: ignore[no-untyped-def]
         return float("nan")
 
 
-def wait_for(predicate, timeout_s: float, message: str) -> None:  # type: ignore[no-untyped-def]
+def wait_for(predicate, timeout_s: float, message: str) -> None:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if predicate():
@@ -44,15 +47,15 @@ def wait_for(predicate, timeout_s: float, message: str) -> None:  # type: ignore
     raise AssertionError(message)
 
 
-def descriptors(page) -> list[dict]:  # type: ignore[no-untyped-def]
+def descriptors(page) -> list[dict]:
     return page.evaluate("fetch('/api/robots/lab-1/panels').then((r) => r.json()).then((b) => b.panels)")
 
 
-def odometry(page, field: str) -> float:  # type: ignore[no-untyped-def]
+def odometry(page, field: str) -> float:
     return number(page, f'odometry-panel [data-field="{field}"]')
 
 
-def wait_for_status(page, skill: str, status: str, timeout_ms: float = 30_000) -> None:  # type: ignore[no-untyped-def]
+def wait_for_status(page, skill: str, status: str, timeout_ms: float = 30_000) -> None:
     """Waits for a skill panel to show status; on a timeout says what it shows instead."""
     panel = page.locator(f'skill-panel[data-skill="{skill}"]')
     try:
@@ -62,12 +65,18 @@ def wait_for_status(page, skill: str, status: str, timeout_ms: float = 30_000) -
                              f"reading {' '.join(panel.inner_text().split())!r}") from None
 
 
-def wait_for_control(page) -> None:  # type: ignore[no-untyped-def]
+def show_tab_of(page, panel_id: str) -> None:
+    """Brings into view the console tab that holds the panel (the console shows one tab at a time)."""
+    tab = page.locator(f'section[data-panel-id="{panel_id}"]').get_attribute("data-tab")
+    page.locator(f'[role="tab"][data-tab="{tab}"]').click()
+
+
+def wait_for_control(page) -> None:
     page.locator('queue-panel[data-role="controller"]').wait_for()
     wait_for(lambda: not math.isnan(odometry(page, "x")), 10, "no odometry arrived")
 
 
-def test_every_panel_appears_from_its_descriptor_and_shows_live_data(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+def test_every_panel_appears_from_its_descriptor_and_shows_live_data(page, live_server: LiveServer) -> None:
     open_console(page, live_server)
     panels = descriptors(page)
     kinds = {panel["kind"] for panel in panels}
@@ -76,6 +85,7 @@ def test_every_panel_appears_from_its_descriptor_and_shows_live_data(page, live_
         "(frames) => frames.map((frame) => frame.dataset.panelId)")
     assert order == [panel["id"] for panel in panels], "the panels are not placed in the order the server sent"
     for panel in panels:
+        show_tab_of(page, panel["id"])
         region = page.get_by_role("region", name=panel["title"], exact=True)
         assert region.count() == 1, f"no region named {panel['title']!r}"
         assert region.get_attribute("data-panel-id") == panel["id"]
@@ -85,9 +95,11 @@ def test_every_panel_appears_from_its_descriptor_and_shows_live_data(page, live_
         page.locator(f'skill-panel[data-skill="{skill}"] button[data-action="activate"]').wait_for(state="attached")
 
     wait_for(lambda: not math.isnan(odometry(page, "x")), 10, "odometry shows no numbers")
+    show_tab_of(page, "sonar")
     page.locator('sonar-panel [data-field="sonar-nearest"]').filter(has_text=" m").wait_for()
     page.locator('laser-panel [data-field="laser-nearest"]').filter(has_text=" m").wait_for()
     assert int(page.locator('laser-panel [data-field="laser-hits"]').text_content()) > 0
+    show_tab_of(page, "map")
     page.locator('map-panel [data-field="map-summary"]').filter(has_text="Robot at").wait_for()
     wait_for(lambda: number(page, '[data-field="rtt-client-last"]') >= 0, 15, "no browser round trip measured")
     wait_for(lambda: number(page, '[data-field="rtt-robot-p95"]') >= 0, 15, "no robot round trip measured")
@@ -97,9 +109,10 @@ def test_every_panel_appears_from_its_descriptor_and_shows_live_data(page, live_
     page.screenshot(path=str(ARTIFACTS_DIR / "panels-desktop-viewport.png"))
 
 
-def test_orientation_control_turns_the_robot_and_ends_succeeded(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+def test_orientation_control_turns_the_robot_and_ends_succeeded(page, live_server: LiveServer) -> None:
     open_console(page, live_server)
     wait_for_control(page)
+    show_tab_of(page, "skill-orientation_control")
     panel = page.locator('skill-panel[data-skill="orientation_control"]')
     start = odometry(page, "heading-rad")
     target = math.atan2(math.sin(start + 1.2), math.cos(start + 1.2))
@@ -114,11 +127,12 @@ def test_orientation_control_turns_the_robot_and_ends_succeeded(page, live_serve
     assert panel.locator('[data-event="started"]').count() >= 1 or panel.locator("[data-event]").count() >= 1
 
 
-def test_values_are_checked_in_the_browser_and_the_servers_verdict_shows_next_to_the_field(  # type: ignore[no-untyped-def]
+def test_values_are_checked_in_the_browser_and_the_servers_verdict_shows_next_to_the_field(
     page, live_server: LiveServer
 ) -> None:
     open_console(page, live_server)
     wait_for_control(page)
+    show_tab_of(page, "skill-orientation_control")
     panel = page.locator('skill-panel[data-skill="orientation_control"]')
     heading = panel.locator('input[name="heading_rad"]')
     requests: list[str] = []
@@ -144,12 +158,13 @@ def test_values_are_checked_in_the_browser_and_the_servers_verdict_shows_next_to
     panel.screenshot(path=str(ARTIFACTS_DIR / "skill-panel-field-error.png"))
 
 
-def test_clicking_the_map_sends_the_robot_there_with_go_to_goal(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+def test_clicking_the_map_sends_the_robot_there_with_go_to_goal(page, live_server: LiveServer) -> None:
     open_console(page, live_server)
     wait_for_control(page)
     x0, y0 = odometry(page, "x"), odometry(page, "y")
     candidates = [(0.0, 0.0), (0.8, 0.3), (-0.6, 0.4)]
     goal_x, goal_y = max(candidates, key=lambda c: min(math.hypot(c[0] - x0, c[1] - y0), 0.9))
+    show_tab_of(page, "map")
     canvas = page.locator('map-panel [data-field="map-canvas"]')
     canvas.scroll_into_view_if_needed()
     wait_for(lambda: page.evaluate("document.querySelector('map-panel').cssPointOf(0, 0) !== null"), 5, "map not drawn")
@@ -180,11 +195,12 @@ def test_clicking_the_map_sends_the_robot_there_with_go_to_goal(page, live_serve
     assert go.locator("progress").evaluate("(bar) => bar.value") == pytest.approx(1.0)
 
 
-def test_a_busy_robot_offers_to_preempt_and_deactivating_reports_the_error_left(  # type: ignore[no-untyped-def]
+def test_a_busy_robot_offers_to_preempt_and_deactivating_reports_the_error_left(
     page, live_server: LiveServer
 ) -> None:
     open_console(page, live_server)
     wait_for_control(page)
+    show_tab_of(page, "skill-go_to_goal")
     go = page.locator('skill-panel[data-skill="go_to_goal"]')
     x0, y0 = odometry(page, "x"), odometry(page, "y")
     go.locator('input[name="goal_x_m"]').fill("-3" if x0 > 0 else "3")
@@ -219,9 +235,10 @@ def test_a_busy_robot_offers_to_preempt_and_deactivating_reports_the_error_left(
     assert abs(odometry(page, "x") - x0) < 3.5 and abs(odometry(page, "y") - y0) < 3.5
 
 
-def test_environment_modelling_and_localization_show_on_the_map(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+def test_environment_modelling_and_localization_show_on_the_map(page, live_server: LiveServer) -> None:
     open_console(page, live_server)
     wait_for_control(page)
+    show_tab_of(page, "map")
     modelling = page.locator('skill-panel[data-skill="environment_modelling"]')
     modelling.locator('button[data-action="activate"]').click()
     wait_for_status(page, "environment_modelling", "executing")
@@ -246,7 +263,7 @@ def test_environment_modelling_and_localization_show_on_the_map(page, live_serve
                  'skill-panel[data-skill="environment_modelling"][data-status="succeeded"]').first.wait_for()
 
 
-def test_step_mode_moves_a_short_step_per_press(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+def test_step_mode_moves_a_short_step_per_press(page, live_server: LiveServer) -> None:
     open_console(page, live_server)
     wait_for_control(page)
     page.get_by_role("radio", name="Step").check()
@@ -261,25 +278,27 @@ def test_step_mode_moves_a_short_step_per_press(page, live_server: LiveServer) -
     page.get_by_role("radio", name="Press and hold").check()
 
 
-def test_hidden_moved_and_widened_panels_stay_so_after_a_reload(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+def test_hidden_moved_and_widened_panels_stay_so_after_a_reload(page, live_server: LiveServer) -> None:
     open_console(page, live_server)
 
-    def order() -> list[str]:
-        return page.locator("section.panel-frame[data-panel-id]:visible").evaluate_all(
+    def order() -> list[str]:  # the panels the layout shows, on every tab
+        return page.locator("section.panel-frame[data-panel-id]:not([hidden])").evaluate_all(
             "(frames) => frames.map((frame) => frame.dataset.panelId)")
 
     before = order()
     assert before.index("laser") > before.index("sonar")
 
-    def saved(action) -> None:  # type: ignore[no-untyped-def]
+    def saved(action) -> None:
         with page.expect_response(lambda r: r.url.endswith("/api/me/preferences/console-layout")
                                   and r.request.method == "PUT") as answer:
             action()
         assert answer.value.ok, answer.value.text()
 
+    show_tab_of(page, "sonar")
     saved(lambda: page.get_by_role("button", name="Hide Sonar").click())
     assert page.locator('section[data-panel-id="sonar"]').is_hidden()
     saved(lambda: (page.get_by_role("button", name="Move Laser up").focus(), page.keyboard.press("Enter")))
+    show_tab_of(page, "odometry")
     saved(lambda: page.get_by_role("button", name="Wide Odometry").click())
     after = order()
     expected = [panel for panel in before if panel != "sonar"]
@@ -289,6 +308,7 @@ def test_hidden_moved_and_widened_panels_stay_so_after_a_reload(page, live_serve
 
     page.reload()
     page.locator('[data-connection="drive"][data-phase="open"]').wait_for()
+    show_tab_of(page, "laser")
     page.locator('section[data-panel-id="laser"]').wait_for()
     assert page.locator('section[data-panel-id="sonar"]').is_hidden()
     assert order() == after
@@ -305,8 +325,8 @@ def test_hidden_moved_and_widened_panels_stay_so_after_a_reload(page, live_serve
     assert order() == [panel["id"] for panel in descriptors(page)]
 
 
-def test_a_malformed_descriptor_shows_a_notice_and_the_other_panels_still_work(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
-    def break_one(route) -> None:  # type: ignore[no-untyped-def]
+def test_a_malformed_descriptor_shows_a_notice_and_the_other_panels_still_work(page, live_server: LiveServer) -> None:
+    def break_one(route) -> None:
         answer = route.fetch()
         body = answer.json()
         body["panels"].insert(2, {"id": "hologram", "kind": "hologram", "title": "Hologram"})
@@ -322,18 +342,20 @@ def test_a_malformed_descriptor_shows_a_notice_and_the_other_panels_still_work(p
     texts = " ".join(notices.all_text_contents())
     assert "Hologram" in texts and "hologram" in texts and "Bad skill" in texts
     wait_for(lambda: not math.isnan(odometry(page, "x")), 10, "odometry stopped working next to a broken panel")
+    show_tab_of(page, "sonar")
     page.locator('sonar-panel [data-field="sonar-nearest"]').filter(has_text=" m").wait_for()
     assert page.locator('skill-panel[data-skill="go_to_goal"]').count() == 1
+    show_tab_of(page, "queue")
     page.locator('queue-panel[data-role="controller"]').wait_for()
     page.screenshot(path=str(ARTIFACTS_DIR / "panels-bad-descriptor.png"))
 
 
-def test_an_unreadable_stream_message_leaves_a_notice_not_a_blank_page(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
-    def garble(ws) -> None:  # type: ignore[no-untyped-def]
+def test_an_unreadable_stream_message_leaves_a_notice_not_a_blank_page(page, live_server: LiveServer) -> None:
+    def garble(ws) -> None:
         server = ws.connect_to_server()
         sent = {"n": 0}
 
-        def to_page(message) -> None:  # type: ignore[no-untyped-def]
+        def to_page(message) -> None:
             sent["n"] += 1
             if sent["n"] == 5:
                 ws.send("{not json")
@@ -349,10 +371,11 @@ def test_an_unreadable_stream_message_leaves_a_notice_not_a_blank_page(page, liv
         has_text="could not be read").wait_for()
     time.sleep(0.5)
     wait_for(lambda: not math.isnan(odometry(page, "x")), 10, "odometry stopped after a bad message")
+    show_tab_of(page, "laser")
     page.locator('laser-panel [data-field="laser-nearest"]').filter(has_text=" m").wait_for()
 
 
-def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(  # type: ignore[no-untyped-def]
+def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(
     chromium, live_server: LiveServer
 ) -> None:
     context = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
@@ -368,17 +391,20 @@ def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(  
         assert phone.evaluate("document.documentElement.scrollWidth") <= 390, "the page scrolls sideways"
         ARTIFACTS_DIR.mkdir(exist_ok=True)
         phone.screenshot(path=str(ARTIFACTS_DIR / "panels-phone.png"))
+        show_tab_of(phone, "map")
         phone.locator('section[data-panel-id="map"]').scroll_into_view_if_needed()
         phone.screenshot(path=str(ARTIFACTS_DIR / "panels-phone-map.png"))
         phone.locator('section[data-panel-id="skill-go_to_goal"]').scroll_into_view_if_needed()
         phone.screenshot(path=str(ARTIFACTS_DIR / "panels-phone-skill.png"))
 
         results = phone.evaluate("""async () => {
-          const layout = await import('/static/js/layout.js');
-          const geometry = await import('/static/js/map-geometry.js');
-          const polar = await import('/static/js/polar.js');
-          const stats = await import('/static/js/stats.js');
-          const descriptors = await import('/static/js/panel-descriptors.js');
+          const layout = await import('/static/lib/layout.js');
+          const geometry = await import('/static/lib/map-geometry.js');
+          const polar = await import('/static/lib/polar.js');
+          const stats = await import('/static/lib/stats.js');
+          const descriptors = await import('/static/lib/panel-descriptors.js');
+          const registry = await import('/static/panels/registry.js');
+          const { panels, failed } = await registry.loadPanels();
           let l = layout.normalizeLayout({order: ['b', 'a'], hidden: ['a', 'gone']}, ['a', 'b', 'c']);
           const normalized = l;
           l = layout.layoutReducer(l, {type: 'move', id: 'c', by: -1});
@@ -396,6 +422,8 @@ def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(  
               {name: 'goal_x_m', type: 'double'},
                                                   {name: 'goal_y_m', type: 'double'}]),
             bad: descriptors.checkDescriptor({id: 'x', kind: 'hologram', title: 'X'}).ok,
+            kinds: [...panels.keys()].sort(), failed,
+            schemaless: descriptors.checkDescriptor({id: 's', kind: 'skill', title: 'S', skill: 's'}, {panels}).problem,
           };
         }""")
     finally:
@@ -410,4 +438,9 @@ def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(  
     assert results["p95"] == 100
     assert results["goal"] == {"x": "goal_x_m", "y": "goal_y_m"}
     assert results["bad"] is False
+    # Every panel module registered its kind; the skill kind's own check refuses a skill without a schema.
+    assert results["kinds"] == sorted(["camera", "chat", "drive", "laser", "map", "odometry", "queue",
+                                       "response-times", "skill", "sonar"])
+    assert results["failed"] == []
+    assert results["schemaless"] == "the skill panel has no parameter schema"
     assert not errors, errors

@@ -10,13 +10,13 @@ import pytest
 
 from tests.conftest import LiveServer
 from tests.e2e.test_lessons import log_in
-from tests.e2e.test_panels import odometry, wait_for
+from tests.e2e.test_panels import odometry, show_tab_of, wait_for
 
 pytestmark = pytest.mark.e2e
 
 
-def test_the_owner_opens_the_practice_console_and_its_panels_show_live_data(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
-    from middleware.practice.manager import practice_manager
+def test_the_owner_opens_the_practice_console_and_its_panels_show_live_data(page, live_server: LiveServer) -> None:
+    from middleware.teaching.practice_robots import practice_manager
 
     log_in(page, live_server)
     page.goto(f"{live_server.url}/practice")
@@ -28,14 +28,15 @@ def test_the_owner_opens_the_practice_console_and_its_panels_show_live_data(page
         page.locator('[data-connection="drive"][data-phase="open"]').wait_for(timeout=30_000)
         page.locator('queue-panel[data-role="controller"]').wait_for(timeout=30_000)
         wait_for(lambda: not math.isnan(odometry(page, "x")), 15, "the practice robot's odometry shows no numbers")
+        assert page.get_by_role("region", name="Camera", exact=True).count() == 1
+        show_tab_of(page, "laser")
         page.locator('laser-panel [data-field="laser-nearest"]').filter(has_text=" m").wait_for()
         page.locator('skill-panel[data-skill="go_to_goal"] button[data-action="activate"]').wait_for(state="attached")
-        assert page.get_by_role("region", name="Camera", exact=True).count() == 1
     finally:
         practice_manager(live_server.app).shutdown()
 
 
-def test_a_tutor_uploads_a_video_from_the_lesson_editor(page, live_server: LiveServer, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+def test_a_tutor_uploads_a_video_from_the_lesson_editor(page, live_server: LiveServer, tmp_path: Path) -> None:
     from middleware.auth.services import create_user
     from middleware.db import session_factory
     from tests.conftest import STUDENT_PASSWORD

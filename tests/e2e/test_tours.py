@@ -6,12 +6,12 @@ import time
 
 import pytest
 
-from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer
+from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer, make_course
 
 pytestmark = pytest.mark.e2e
 
 
-def log_in(tab, live_server: LiveServer, username: str) -> None:  # type: ignore[no-untyped-def]
+def log_in(tab, live_server: LiveServer, username: str) -> None:
     tab.goto(f"{live_server.url}/login")
     tab.fill("#username", username)
     tab.fill("#password", STUDENT_PASSWORD)
@@ -19,10 +19,25 @@ def log_in(tab, live_server: LiveServer, username: str) -> None:  # type: ignore
     tab.locator('[data-field="username"]').wait_for()
 
 
-def test_the_step_engine_conditions_pause_and_replay(page, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+def book_class_slot_now(app, course_id: int, tutor: str) -> None:
+    """A class booking of tutor on lab-1 from a minute ago for half an hour."""
+    from datetime import UTC, datetime, timedelta
+
+    from middleware.db import session_factory
+    from middleware.models import Booking, User
+
+    now = datetime.now(UTC)
+    with session_factory(app)() as session:
+        user_id = session.query(User).filter_by(username=tutor).one().id
+        session.add(Booking(robot_name="lab-1", user_id=user_id, course_id=course_id, kind="class",
+                            starts_at=now - timedelta(minutes=1), ends_at=now + timedelta(minutes=30)))
+        session.commit()
+
+
+def test_the_step_engine_conditions_pause_and_replay(page, live_server: LiveServer) -> None:
     log_in(page, live_server, "student1")
     result = page.evaluate("""async () => {
-      const { TourEngine, abortableSleep } = await import('/static/js/tour-engine.js');
+      const { TourEngine, abortableSleep } = await import('/static/pages/teaching/tour-engine.js');
       const seen = [];
       let finishGoal;
       const steps = [
@@ -71,13 +86,13 @@ def test_the_step_engine_conditions_pause_and_replay(page, live_server: LiveServ
     assert seen.count("run 1") == 2 and "stop" in seen  # step 1 ran again after the pause
 
 
-def test_a_live_class_follows_the_tutor_and_control_is_handed_over(chromium, live_server: LiveServer) -> None:  # type: ignore[no-untyped-def]
+def test_a_live_class_follows_the_tutor_and_control_is_handed_over(chromium, live_server: LiveServer) -> None:
     from middleware.access.coordinator import access_coordinator
     from middleware.auth.services import create_user
     from middleware.db import session_factory
     from middleware.models import User
-    from middleware.tours.demo import DEMO_TOURS
-    from middleware.tours.services import save_tour
+    from middleware.teaching.demo_content import DEMO_TOURS
+    from middleware.teaching.tours import save_tour
 
     app = live_server.app
     with session_factory(app)() as session:
@@ -87,6 +102,8 @@ def test_a_live_class_follows_the_tutor_and_control_is_handed_over(chromium, liv
         session.commit()
         tour_id = tour.id
         ids = {u.username: u.id for u in session.query(User).all()}
+    # The class goes before the queue (and can hand the robot to a student) only in its tutor's booked slot.
+    book_class_slot_now(app, make_course(app, "ROB1", {"tutor1": "tutor", "student1": "student"}), "tutor1")
     contexts = [chromium.new_context(viewport=size) for size in
                 ({"width": 1280, "height": 800}, {"width": 1280, "height": 800}, {"width": 390, "height": 844})]
     errors: list[str] = []
@@ -110,11 +127,14 @@ def test_a_live_class_follows_the_tutor_and_control_is_handed_over(chromium, liv
         for student in (first, second):
             student.wait_for_selector("#live[data-step='1']", timeout=5000)
             assert "Go-to-goal plans" in student.text_content("[data-field=step-text]")
+            student.locator("[data-field=step-panel]", has_text="Go to goal").wait_for(timeout=15_000)
         tutor.select_option("[data-field=hand-to]", "student1")
         tutor.get_by_role("button", name="Hand over").click()
         for tab in tabs:
             tab.wait_for_selector("#live[data-controller='student1']", timeout=5000)
         assert first.text_content("[data-field=control]") == "You have control of the robot."
+        pad = first.get_by_role("region", name="Drive", exact=True)
+        assert pad.is_visible() and first.get_by_role("region", name="Camera", exact=True).is_visible()
         deadline = time.monotonic() + 10
         while access_coordinator(app).controller_token("lab-1", ids["student1"]) is None:
             assert time.monotonic() < deadline, "the access rule did not give student1 the robot"
@@ -138,3 +158,128 @@ def test_a_live_class_follows_the_tutor_and_control_is_handed_over(chromium, liv
         for context in contexts:
             context.close()
     assert not errors, errors
+
+
+def test_only_a_tutor_of_the_course_can_start_its_live_class(chromium, live_server: LiveServer) -> None:
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from middleware.models.teaching import GuidedSession
+    from middleware.teaching.demo_content import DEMO_TOURS
+    from middleware.teaching.tours import save_tour
+
+    app = live_server.app
+    with session_factory(app)() as session:
+        for name in ("tutor1", "tutor2", "tutor3"):
+            create_user(session, name, "tutor", STUDENT_PASSWORD)
+        tour_id = save_tour(session, DEMO_TOURS[1], None, None).id
+        session.commit()
+    course_a = make_course(app, "ROB-A", {"tutor1": "tutor", "student1": "student"})
+    make_course(app, "ROB-B", {"tutor2": "tutor"})
+    context = chromium.new_context(viewport={"width": 1280, "height": 800})
+    errors: list[str] = []
+    try:
+        other = context.new_page()
+        other.on("pageerror", lambda error: errors.append(str(error)))
+        log_in(other, live_server, "tutor2")
+        other.goto(f"{live_server.url}/tours/{tour_id}/lead")
+        choices = other.locator("select[name=course_id] option").all_text_contents()
+        assert choices == ["Course ROB-B"]  # neither course A nor "no course"
+        ARTIFACTS_DIR.mkdir(exist_ok=True)
+        other.screenshot(path=str(ARTIFACTS_DIR / "class-lead-other-course-tutor-1280.png"), full_page=True)
+        refused = other.evaluate("""async ([tour, course]) => {
+          const { fetchJson } = await import('/static/lib/transport.js');
+          try {
+            const body = { robot: 'lab-1', course_id: course };
+            await fetchJson(`/api/tours/${tour}/sessions`, { method: 'POST', body });
+            return 'started';
+          } catch (error) { return `${error.status} ${error.message}`; }
+        }""", [tour_id, course_a])
+        assert refused == "403 You can lead classes only for the courses you teach."
+        with session_factory(app)() as session:
+            assert session.query(GuidedSession).count() == 0
+        context.clear_cookies()
+
+        unassigned = context.new_page()  # tutor3 teaches no course yet
+        unassigned.on("pageerror", lambda error: errors.append(str(error)))
+        log_in(unassigned, live_server, "tutor3")
+        unassigned.goto(f"{live_server.url}/tours/{tour_id}/lead")
+        assert "You teach no course yet" in unassigned.text_content("[data-field=no-course]")
+        assert unassigned.get_by_role("button", name="Start the class").count() == 0
+        unassigned.screenshot(path=str(ARTIFACTS_DIR / "class-lead-tutor-of-no-course-1280.png"), full_page=True)
+        context.clear_cookies()
+
+        own = context.new_page()
+        own.on("pageerror", lambda error: errors.append(str(error)))
+        log_in(own, live_server, "tutor1")
+        own.goto(f"{live_server.url}/tours/{tour_id}/lead")
+        assert own.locator("select[name=course_id] option").all_text_contents() == ["Course ROB-A"]
+        own.screenshot(path=str(ARTIFACTS_DIR / "class-lead-own-tutor-1280.png"), full_page=True)
+        own.get_by_role("button", name="Start the class").click()
+        own.wait_for_url("**/tours/sessions/*")
+        own.wait_for_selector("#live[data-step='0']")
+        own.screenshot(path=str(ARTIFACTS_DIR / "class-started-by-own-tutor-1280.png"), full_page=True)
+        with session_factory(app)() as session:
+            started = session.query(GuidedSession).one()
+            assert started.course_id == course_a and started.ended_at is None
+    finally:
+        context.close()
+    assert not errors, errors
+
+
+@pytest.mark.parametrize("size", [{"width": 1280, "height": 800}, {"width": 390, "height": 844}])
+def test_a_tour_shows_the_panels_it_names_by_their_titles(chromium, live_server: LiveServer, size) -> None:
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from middleware.teaching.demo_content import DEMO_TOURS
+    from middleware.teaching.practice_robots import practice_manager
+    from middleware.teaching.tours import save_tour
+
+    with session_factory(live_server.app)() as session:
+        create_user(session, "student2", "student", STUDENT_PASSWORD)
+        tour_id = save_tour(session, DEMO_TOURS[1], None, None).id  # Go to a goal: map, skill-go_to_goal, odometry
+        session.commit()
+    context = chromium.new_context(viewport=size)
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    try:
+        log_in(page, live_server, "student2")
+        page.goto(f"{live_server.url}/tours/{tour_id}")
+        page.get_by_role("button", name="Start the tour").click()
+        page.locator("[data-field=step-panel]", has_text="Lab model").wait_for(timeout=60_000)
+        for title in ("Camera", "Lab model", "Go to goal", "Odometry"):
+            assert page.get_by_role("region", name=title, exact=True).count() == 1, title
+        assert page.get_by_role("region", name="Sonar", exact=True).count() == 0
+        current = page.locator(".panel-frame--current")
+        assert current.get_attribute("data-panel-id") == "map"
+        ARTIFACTS_DIR.mkdir(exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS_DIR / f"tour-panels-{size['width']}.png"), full_page=True)
+        page.locator("[data-field=step-panel]", has_text="Go to goal").wait_for(timeout=15_000)
+        assert page.locator(".panel-frame--current").get_attribute("data-panel-id") == "skill-go_to_goal"
+        assert "max_error_m" not in page.locator("#tour").text_content()
+    finally:
+        context.close()
+        practice_manager(live_server.app).shutdown()
+    assert not errors, errors
+
+
+def test_the_tour_editor_offers_panels_by_their_titles(page, live_server: LiveServer) -> None:
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+
+    with session_factory(live_server.app)() as session:
+        create_user(session, "tutor1", "tutor", STUDENT_PASSWORD)
+        session.commit()
+    log_in(page, live_server, "tutor1")
+    page.goto(f"{live_server.url}/tours/new")
+    panel = page.get_by_label("Panel to look at")
+    options = panel.locator("option").all_text_contents()
+    assert "Lab model" in options and "Go to goal" in options
+    page.get_by_label("Title", exact=True).first.fill("Look around")
+    page.get_by_label("Text").fill("The lab from above.")
+    panel.select_option(label="Lab model")
+    page.get_by_label("Go on when").select_option("manual")
+    page.get_by_role("button", name="Add the step").click()
+    assert '"panel": "map"' in page.locator("[name=steps]").input_value()
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS_DIR / "tour-editor-1280.png"), full_page=True)

@@ -14,7 +14,7 @@ pytestmark = pytest.mark.e2e
 TURN_S = 8
 
 
-def open_console(page, live_server: LiveServer, username: str) -> None:  # type: ignore[no-untyped-def]
+def open_console(page, live_server: LiveServer, username: str) -> None:
     page.goto(f"{live_server.url}/login")
     page.fill("#username", username)
     page.fill("#password", STUDENT_PASSWORD)
@@ -23,12 +23,12 @@ def open_console(page, live_server: LiveServer, username: str) -> None:  # type:
     page.locator('[data-connection="drive"][data-phase="open"]').wait_for()
 
 
-def speed(page) -> float:  # type: ignore[no-untyped-def]
+def speed(page) -> float:
     text = page.locator('#console [data-field="linear"]').text_content() or ""
     return float(text) if text.strip() not in {"", "—"} else 0.0
 
 
-def test_the_turn_passes_between_two_students_and_the_observer_cannot_drive(  # type: ignore[no-untyped-def]
+def test_the_turn_passes_between_two_students_and_the_observer_cannot_drive(
     app, live_server: LiveServer, chromium, page
 ) -> None:
     app.config.update(DEFAULT_TURN_LENGTH_S=TURN_S, ACCESS_TICK_S=0.2)
@@ -45,7 +45,10 @@ def test_the_turn_passes_between_two_students_and_the_observer_cannot_drive(  # 
     try:
         open_console(second, live_server, "student2")
         second.locator('queue-panel[data-role="waiting"]').wait_for()
-        assert "number 1 in line" in second.locator('[data-field="queue-summary"]').text_content()
+        summary = second.locator('[data-field="queue-summary"]').text_content() or ""
+        assert "student1 is driving. You are next." in summary, summary
+        waiting = second.locator('[data-field="queue-size"]').text_content()
+        assert waiting == "1", f"the figure beside 'You are next' counts {waiting} waiting"
         assert second.locator('[data-field="drive-observing"]').is_visible()
         first.locator('#console [data-field="turn-remaining"]').filter(has_text=":").wait_for()
 
@@ -54,11 +57,29 @@ def test_the_turn_passes_between_two_students_and_the_observer_cannot_drive(  # 
         time.sleep(1.0)
         assert abs(speed(first)) < 0.02, "the observer's keys moved the robot"
         second.keyboard.up("ArrowUp")
-        assert "observing" in (second.locator('[data-field="drive-error"]').text_content() or "")
+        second.locator('[data-field="drive-error"]').filter(has_text="observing").wait_for(timeout=10_000)
+
+        # The observer's skill panels are read-only (no Activate pressed only to be refused), and say why.
+        second.get_by_role("tab", name="Navigate").click()
+        go_to_goal = second.locator('skill-panel[data-skill="go_to_goal"]')
+        go_to_goal.locator('[data-field="skill-observing"]').wait_for()
+        assert go_to_goal.locator('button[data-action="activate"]').is_disabled()
+        assert go_to_goal.locator('input[name="goal_x_m"]').is_disabled()
+        second.screenshot(path=str(ARTIFACTS_DIR / "turn-observer-skills-phone.png"))
+        second.get_by_role("tab", name="Drive").click()
+        assert second.locator('[data-field="turn-notice"]').is_hidden()
 
         second.locator('queue-panel[data-role="controller"]').wait_for(timeout=(TURN_S + 5) * 1000)
         first.locator('queue-panel[data-role="waiting"]').wait_for(timeout=5000)
         assert "student2 is driving" in first.locator('[data-field="queue-summary"]').text_content()
+        # The turn starting is announced above every tab; the one whose turn ended gets no such notice.
+        notice = second.locator('[data-field="turn-notice"]')
+        notice.wait_for()
+        assert "your turn" in (notice.text_content() or "")
+        assert first.locator('[data-field="turn-notice"]').is_hidden()
+        second.get_by_role("tab", name="Navigate").click()
+        assert second.locator('skill-panel[data-skill="go_to_goal"] button[data-action="activate"]').is_enabled()
+        second.get_by_role("tab", name="Drive").click()
         ARTIFACTS_DIR.mkdir(exist_ok=True)
         second.screenshot(path=str(ARTIFACTS_DIR / "turn-passed-phone.png"), full_page=True)
         first.screenshot(path=str(ARTIFACTS_DIR / "turn-passed-desktop.png"))

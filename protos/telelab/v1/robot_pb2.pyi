@@ -149,16 +149,22 @@ class ListSkillsResponse(_message.Message):
     def __init__(self, skills: _Optional[_Iterable[_Union[SkillDescription, _Mapping]]] = ...) -> None: ...
 
 class SkillDescription(_message.Message):
-    __slots__ = ("name", "title", "help", "parameters")
+    __slots__ = ("name", "title", "help", "parameters", "motor", "estimates_pose", "direct_drive")
     NAME_FIELD_NUMBER: _ClassVar[int]
     TITLE_FIELD_NUMBER: _ClassVar[int]
     HELP_FIELD_NUMBER: _ClassVar[int]
     PARAMETERS_FIELD_NUMBER: _ClassVar[int]
+    MOTOR_FIELD_NUMBER: _ClassVar[int]
+    ESTIMATES_POSE_FIELD_NUMBER: _ClassVar[int]
+    DIRECT_DRIVE_FIELD_NUMBER: _ClassVar[int]
     name: str
     title: str
     help: str
     parameters: _containers.RepeatedCompositeFieldContainer[ParameterSchema]
-    def __init__(self, name: _Optional[str] = ..., title: _Optional[str] = ..., help: _Optional[str] = ..., parameters: _Optional[_Iterable[_Union[ParameterSchema, _Mapping]]] = ...) -> None: ...
+    motor: bool
+    estimates_pose: bool
+    direct_drive: bool
+    def __init__(self, name: _Optional[str] = ..., title: _Optional[str] = ..., help: _Optional[str] = ..., parameters: _Optional[_Iterable[_Union[ParameterSchema, _Mapping]]] = ..., motor: _Optional[bool] = ..., estimates_pose: _Optional[bool] = ..., direct_drive: _Optional[bool] = ...) -> None: ...
 
 class ParameterSchema(_message.Message):
     __slots__ = ("name", "type", "unit", "minimum", "maximum", "default_value", "help", "choices")
@@ -533,13 +539,13 @@ class LocalizationUpdate(_message.Message):
     particles: _containers.RepeatedCompositeFieldContainer[Particle]
     def __init__(self, sim_time_s: _Optional[float] = ..., active: _Optional[bool] = ..., converged: _Optional[bool] = ..., estimate: _Optional[_Union[Pose2D, _Mapping]] = ..., std_x_m: _Optional[float] = ..., std_y_m: _Optional[float] = ..., std_theta_rad: _Optional[float] = ..., odometry: _Optional[_Union[Pose2D, _Mapping]] = ..., ground_truth: _Optional[_Union[Pose2D, _Mapping]] = ..., position_error_m: _Optional[float] = ..., heading_error_rad: _Optional[float] = ..., odometry_position_error_m: _Optional[float] = ..., odometry_heading_error_rad: _Optional[float] = ..., update_duration_ms: _Optional[float] = ..., particles: _Optional[_Iterable[_Union[Particle, _Mapping]]] = ...) -> None: ...
 
-class GetCourseRunRequest(_message.Message):
+class GetTrackRunRequest(_message.Message):
     __slots__ = ()
     def __init__(self) -> None: ...
 
-class CourseRun(_message.Message):
-    __slots__ = ("is_course", "scene_name", "phase", "attempt", "elapsed_s", "errors", "last_attempt", "last_total_time_s", "last_errors", "last_finished_unix_s", "started_unix_s", "last_started_unix_s")
-    IS_COURSE_FIELD_NUMBER: _ClassVar[int]
+class TrackRun(_message.Message):
+    __slots__ = ("is_track", "scene_name", "phase", "attempt", "elapsed_s", "errors", "last_attempt", "last_total_time_s", "last_errors", "last_finished_unix_s", "started_unix_s", "last_started_unix_s")
+    IS_TRACK_FIELD_NUMBER: _ClassVar[int]
     SCENE_NAME_FIELD_NUMBER: _ClassVar[int]
     PHASE_FIELD_NUMBER: _ClassVar[int]
     ATTEMPT_FIELD_NUMBER: _ClassVar[int]
@@ -551,7 +557,7 @@ class CourseRun(_message.Message):
     LAST_FINISHED_UNIX_S_FIELD_NUMBER: _ClassVar[int]
     STARTED_UNIX_S_FIELD_NUMBER: _ClassVar[int]
     LAST_STARTED_UNIX_S_FIELD_NUMBER: _ClassVar[int]
-    is_course: bool
+    is_track: bool
     scene_name: str
     phase: str
     attempt: int
@@ -563,15 +569,19 @@ class CourseRun(_message.Message):
     last_finished_unix_s: float
     started_unix_s: float
     last_started_unix_s: float
-    def __init__(self, is_course: _Optional[bool] = ..., scene_name: _Optional[str] = ..., phase: _Optional[str] = ..., attempt: _Optional[int] = ..., elapsed_s: _Optional[float] = ..., errors: _Optional[int] = ..., last_attempt: _Optional[int] = ..., last_total_time_s: _Optional[float] = ..., last_errors: _Optional[int] = ..., last_finished_unix_s: _Optional[float] = ..., started_unix_s: _Optional[float] = ..., last_started_unix_s: _Optional[float] = ...) -> None: ...
+    def __init__(self, is_track: _Optional[bool] = ..., scene_name: _Optional[str] = ..., phase: _Optional[str] = ..., attempt: _Optional[int] = ..., elapsed_s: _Optional[float] = ..., errors: _Optional[int] = ..., last_attempt: _Optional[int] = ..., last_total_time_s: _Optional[float] = ..., last_errors: _Optional[int] = ..., last_finished_unix_s: _Optional[float] = ..., started_unix_s: _Optional[float] = ..., last_started_unix_s: _Optional[float] = ...) -> None: ...
 
-class StreamCourseEventsRequest(_message.Message):
+class RestartTrackRunRequest(_message.Message):
+    __slots__ = ()
+    def __init__(self) -> None: ...
+
+class StreamTrackEventsRequest(_message.Message):
     __slots__ = ("after_index",)
     AFTER_INDEX_FIELD_NUMBER: _ClassVar[int]
     after_index: int
     def __init__(self, after_index: _Optional[int] = ...) -> None: ...
 
-class CourseEvent(_message.Message):
+class TrackEvent(_message.Message):
     __slots__ = ("index", "kind", "sim_time_s", "unix_s", "attempt", "elapsed_s", "errors", "message")
     INDEX_FIELD_NUMBER: _ClassVar[int]
     KIND_FIELD_NUMBER: _ClassVar[int]

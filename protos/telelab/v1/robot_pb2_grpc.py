@@ -99,15 +99,20 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamLocalizationRequest.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.LocalizationUpdate.FromString,
                 _registered_method=True)
-        self.GetCourseRun = channel.unary_unary(
-                '/telelab.v1.Robot/GetCourseRun',
-                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetCourseRunRequest.SerializeToString,
-                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CourseRun.FromString,
+        self.GetTrackRun = channel.unary_unary(
+                '/telelab.v1.Robot/GetTrackRun',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetTrackRunRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.TrackRun.FromString,
                 _registered_method=True)
-        self.StreamCourseEvents = channel.unary_stream(
-                '/telelab.v1.Robot/StreamCourseEvents',
-                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamCourseEventsRequest.SerializeToString,
-                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CourseEvent.FromString,
+        self.RestartTrackRun = channel.unary_unary(
+                '/telelab.v1.Robot/RestartTrackRun',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.RestartTrackRunRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.TrackRun.FromString,
+                _registered_method=True)
+        self.StreamTrackEvents = channel.unary_stream(
+                '/telelab.v1.Robot/StreamTrackEvents',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamTrackEventsRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.TrackEvent.FromString,
                 _registered_method=True)
 
 
@@ -207,15 +212,23 @@ class RobotServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
-    def GetCourseRun(self, request, context):
-        """The course run now (course scenes: phase, attempt, elapsed time, errors, last finished attempt).
+    def GetTrackRun(self, request, context):
+        """The track run now (track scenes: phase, attempt, elapsed time, errors, last finished attempt).
         """
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
-    def StreamCourseEvents(self, request, context):
-        """Course events as they happen (started, reached_b, reached_a, line_contact, finished) after after_index.
+    def RestartTrackRun(self, request, context):
+        """Ends the attempt under way without a result (an experiment trial given up or begun): the next departure
+        from A starts a new attempt timed from zero. Returns the run after that. Changes no motion, so no token.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def StreamTrackEvents(self, request, context):
+        """Track events as they happen (started, reached_b, reached_a, line_contact, finished, restarted) after after_index.
         """
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
         context.set_details('Method not implemented!')
@@ -289,15 +302,20 @@ def add_RobotServicer_to_server(servicer, server):
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamLocalizationRequest.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.LocalizationUpdate.SerializeToString,
             ),
-            'GetCourseRun': grpc.unary_unary_rpc_method_handler(
-                    servicer.GetCourseRun,
-                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetCourseRunRequest.FromString,
-                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CourseRun.SerializeToString,
+            'GetTrackRun': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetTrackRun,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetTrackRunRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.TrackRun.SerializeToString,
             ),
-            'StreamCourseEvents': grpc.unary_stream_rpc_method_handler(
-                    servicer.StreamCourseEvents,
-                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamCourseEventsRequest.FromString,
-                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.CourseEvent.SerializeToString,
+            'RestartTrackRun': grpc.unary_unary_rpc_method_handler(
+                    servicer.RestartTrackRun,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.RestartTrackRunRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.TrackRun.SerializeToString,
+            ),
+            'StreamTrackEvents': grpc.unary_stream_rpc_method_handler(
+                    servicer.StreamTrackEvents,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamTrackEventsRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.TrackEvent.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -662,7 +680,7 @@ class Robot:
             _registered_method=True)
 
     @staticmethod
-    def GetCourseRun(request,
+    def GetTrackRun(request,
             target,
             options=(),
             channel_credentials=None,
@@ -675,9 +693,9 @@ class Robot:
         return grpc.experimental.unary_unary(
             request,
             target,
-            '/telelab.v1.Robot/GetCourseRun',
-            protos_dot_telelab_dot_v1_dot_robot__pb2.GetCourseRunRequest.SerializeToString,
-            protos_dot_telelab_dot_v1_dot_robot__pb2.CourseRun.FromString,
+            '/telelab.v1.Robot/GetTrackRun',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GetTrackRunRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.TrackRun.FromString,
             options,
             channel_credentials,
             insecure,
@@ -689,7 +707,34 @@ class Robot:
             _registered_method=True)
 
     @staticmethod
-    def StreamCourseEvents(request,
+    def RestartTrackRun(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/RestartTrackRun',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.RestartTrackRunRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.TrackRun.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def StreamTrackEvents(request,
             target,
             options=(),
             channel_credentials=None,
@@ -702,9 +747,9 @@ class Robot:
         return grpc.experimental.unary_stream(
             request,
             target,
-            '/telelab.v1.Robot/StreamCourseEvents',
-            protos_dot_telelab_dot_v1_dot_robot__pb2.StreamCourseEventsRequest.SerializeToString,
-            protos_dot_telelab_dot_v1_dot_robot__pb2.CourseEvent.FromString,
+            '/telelab.v1.Robot/StreamTrackEvents',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.StreamTrackEventsRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.TrackEvent.FromString,
             options,
             channel_credentials,
             insecure,

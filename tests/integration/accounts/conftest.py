@@ -10,7 +10,7 @@ __all__ = ["api", "client_as", "course_people", "snapshot"]
 
 
 @pytest.fixture
-def snapshot(app):  # type: ignore[no-untyped-def]
+def snapshot(app):
     """A function returning everything an account or course action could change, to compare before/after."""
     from sqlalchemy import select
 

@@ -72,7 +72,7 @@ def _fill(value: object, ids: dict[str, int]) -> object:
     return value
 
 
-def _ids(app, course_people: dict[str, int]) -> dict[str, int]:  # type: ignore[no-untyped-def]
+def _ids(app, course_people: dict[str, int]) -> dict[str, int]:
     from sqlalchemy import select
 
     from middleware.accounts.invitations import create_invitation
@@ -108,14 +108,14 @@ def test_forbidden_pages_and_api_calls_are_refused_and_change_nothing(app, clien
     for method, path, allowed, body in PAGES:
         if who in allowed:
             continue
-        status = _page(client, method, _fill(path, ids), _fill(body, ids), who is not None)  # type: ignore[arg-type]
+        status = _page(client, method, _fill(path, ids), _fill(body, ids), who is not None)
         expected = 302 if who is None else 403
         assert status == expected, f"{who} {method} {path}: {status}"
         checked += 1
     for method, path, allowed, body in APIS:
         if who in allowed:
             continue
-        status, answer = api(client, method, _fill(path, ids), _fill(body, ids))  # type: ignore[arg-type]
+        status, answer = api(client, method, _fill(path, ids), _fill(body, ids))
         expected = 401 if who is None else 403
         assert status == expected, f"{who} {method} {path}: {status} {answer}"
         assert answer["error"]["code"] in ("not_logged_in", "forbidden")
@@ -129,7 +129,7 @@ def test_admins_reach_every_page(client_as, course_people, app) -> None:
     admin = client_as("admin1")
     for method, path, _allowed, _body in PAGES:
         if method == "GET":
-            assert admin.request("GET", _fill(path, ids))[0] == 200, path  # type: ignore[arg-type]
+            assert admin.request("GET", _fill(path, ids))[0] == 200, path
 
 
 def test_unknown_objects_are_404(client_as, course_people) -> None:
@@ -160,14 +160,22 @@ def test_a_disabled_account_is_logged_out_at_its_next_request(client_as, course_
     assert client_as(None).login("student2", "correct-horse-battery") == 401
 
 
-def test_login_is_rate_limited_per_account_over_http(client_as, course_people) -> None:
+def test_login_is_slowed_per_account_and_address_over_http(client_as, course_people, monkeypatch) -> None:
+    from datetime import timedelta
+
+    from middleware.auth import throttle
+
+    # A first delay of a minute, so that a loaded machine cannot outwait it between two requests.
+    monkeypatch.setattr(throttle, "PER_ACCOUNT_AND_ADDRESS",
+                        throttle.DelayRule(3, timedelta(minutes=1), timedelta(minutes=15)))
     client = client_as(None)
-    for _ in range(5):
+    for _ in range(3):
         assert client.login("student2", "wrong-password-x") == 401
     token = client.csrf_token()
-    status, _, body = client.request("POST", "/login", {"username": "student2", "password": "correct-horse-battery",
-                                                        "csrf_token": token})
-    assert status == 429 and "Too many failed attempts; try again in" in body
+    status, headers, body = client.request("POST", "/login", {
+        "username": "student2", "password": "correct-horse-battery", "csrf_token": token})
+    assert status == 429 and "Too many failed attempts from here; try again in" in body
+    assert 1 <= int(headers["Retry-After"]) <= 60
 
 
 def test_own_password_change_through_the_api(client_as, course_people) -> None:

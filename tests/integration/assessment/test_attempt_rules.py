@@ -11,11 +11,11 @@ import pytest
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.accounts.services import Refused
 from middleware.assessment import attempts, bank, recommendations, review
 from middleware.assessment.attempts import TimeUp
 from middleware.assessment.schemas import parse_exam, parse_question
 from middleware.db import make_engine, upgrade_to_head
+from middleware.errors import Refused
 from middleware.models import Course, CourseMembership, User
 from middleware.models.assessment import Attempt
 
@@ -23,7 +23,7 @@ T0 = datetime(2026, 5, 4, 9, 0, tzinfo=UTC)
 
 
 @pytest.fixture
-def world(database_url: str):  # type: ignore[no-untyped-def]
+def world(database_url: str):
     """A course with a tutor, two students, one other tutor; two questions; a session."""
     upgrade_to_head(database_url)
     engine = make_engine(database_url)
@@ -50,7 +50,7 @@ def world(database_url: str):  # type: ignore[no-untyped-def]
     engine.dispose()
 
 
-def _timed(session, tutor, course, questions, duration_s=60):  # type: ignore[no-untyped-def]
+def _timed(session, tutor, course, questions, duration_s=60):
     return bank.create_exam(session, tutor, course.id, parse_exam({
         "title": "Midterm", "kind": "theory", "opens_at": T0.isoformat(),
         "closes_at": (T0 + timedelta(hours=1)).isoformat(), "duration_s": duration_s,

@@ -10,10 +10,10 @@ import time
 from datetime import UTC, datetime, timedelta
 
 from tests.integration.bookings.conftest import api
-from tests.integration.middleware.test_robot_channels import drive_for, receive_json
+from tests.integration.lab.test_robot_channels import drive_for, receive_json
 
 
-def test_a_driven_run_is_recorded_and_graded_at_submission(app, client_as, course_people) -> None:  # type: ignore[no-untyped-def]
+def test_a_driven_run_is_recorded_and_graded_at_submission(app, client_as, course_people) -> None:
     from middleware.assessment import bank
     from middleware.assessment.schemas import parse_exam
     from middleware.db import session_factory

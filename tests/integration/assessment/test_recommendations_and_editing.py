@@ -11,10 +11,10 @@ import pytest
 
 from middleware.assessment import attempts, bank, recommendations
 from middleware.assessment.schemas import parse_exam
-from middleware.lessons.cues import parse_cue_track
-from middleware.lessons.services import LessonDraft, LessonInvalid, check_lesson, save_lesson
 from middleware.models.assessment import Exam, Question
-from middleware.tours.services import TourInvalid, save_tour
+from middleware.teaching.cues import parse_cue_track
+from middleware.teaching.lessons import LessonDraft, LessonInvalid, check_lesson, save_lesson
+from middleware.teaching.tours import TourInvalid, save_tour
 from tests.conftest import LabClient
 from tests.integration.assessment.test_attempt_rules import T0, _timed, world  # noqa: F401
 from tests.integration.bookings.conftest import api
@@ -23,11 +23,11 @@ STEP = {"text": "Look.", "panel": "camera", "condition": {"type": "manual"}}
 CUES = "WEBVTT\n\n00:00:01.000 --> 00:00:02.000\n{\"stop\": true}\n"
 
 
-def _tour(session, title: str, topics: object):  # type: ignore[no-untyped-def]
+def _tour(session, title: str, topics: object):
     return save_tour(session, {"title": title, "topics": topics, "steps": [STEP]}, None, None)
 
 
-def _lesson(session, title: str, topics: str):  # type: ignore[no-untyped-def]
+def _lesson(session, title: str, topics: str):
     cues, errors = parse_cue_track(CUES, None)
     assert not errors
     slug = re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-")
@@ -63,7 +63,7 @@ def test_a_student_weak_in_a_topic_gets_its_quiz_tour_and_lesson_and_not_the_oth
 
 def test_topics_are_checked_on_tours_and_lessons() -> None:
     with pytest.raises(TourInvalid) as tour:
-        save_tour(None, {"title": "T", "topics": ",".join(f"t{i}" for i in range(11)), "steps": [STEP]},  # type: ignore[arg-type]
+        save_tour(None, {"title": "T", "topics": ",".join(f"t{i}" for i in range(11)), "steps": [STEP]},
                   None, None)
     assert tour.value.field == "topics"
     with pytest.raises(LessonInvalid) as lesson:
@@ -78,7 +78,7 @@ def test_topics_are_checked_on_tours_and_lessons() -> None:
 
 
 @pytest.fixture
-def bank_objects(app, course_people) -> dict[str, int]:  # type: ignore[no-untyped-def]
+def bank_objects(app, course_people) -> dict[str, int]:
     """Two questions; a quiz using both; a timed test with student1's submitted attempt; an unattempted test."""
     from middleware.assessment.schemas import parse_question
     from middleware.db import session_factory
@@ -108,11 +108,11 @@ def bank_objects(app, course_people) -> dict[str, int]:  # type: ignore[no-untyp
 
 def _post(client: LabClient, path: str, pairs: list[tuple[str, str]]) -> tuple[int, str]:
     token = client.csrf_token("/account/password")
-    status, _, body = client.request("POST", path, [*pairs, ("csrf_token", token)])  # type: ignore[arg-type]
+    status, _, body = client.request("POST", path, [*pairs, ("csrf_token", token)])
     return status, body
 
 
-def _rows(app, model, **where):  # type: ignore[no-untyped-def]
+def _rows(app, model, **where):
     from sqlalchemy import select
 
     from middleware.db import session_factory
@@ -143,7 +143,8 @@ def test_the_tutor_edits_and_deletes_questions_from_the_page(app, client_as, ban
     status, _, body = tutor.request("GET", f"/courses/{c}/assessment?question={q1}")
     assert status == 200 and f"Edit question #{q1}" in body and "Odometry &lt;drifts&gt;?" in body
     fields = _form_fields(body, "question-form")
-    assert ("choices", "no\nyes") in fields and ("correct", "1") in fields and ("topics", "odometry") in fields
+    # The page numbers choices from 1: "yes", the second line, is choice 2 (stored as index 1).
+    assert ("choices", "no\nyes") in fields and ("correct", "2") in fields and ("topics", "odometry") in fields
     assert ("tolerance", "") in fields and ("value", "") in fields
     edited = [(k, v) for k, v in fields if k not in ("csrf_token", "prompt", "points")]
     status, _ = _post(tutor, f"/courses/{c}/assessment/questions/{q1}",

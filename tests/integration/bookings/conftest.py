@@ -14,7 +14,7 @@ ROLES = {"student1": "student", "student2": "student", "tutor1": "tutor", "tutor
 
 
 @pytest.fixture
-def course_people(app) -> dict[str, int]:  # type: ignore[no-untyped-def]
+def course_people(app) -> dict[str, int]:
     """student1 and student2 in course ROB1 (tutor1), tutor2 tutoring ROB2, and admin1; name -> id."""
     from sqlalchemy import select
 
@@ -36,11 +36,11 @@ def course_people(app) -> dict[str, int]:  # type: ignore[no-untyped-def]
             session.add(CourseMembership(course_id=course_id, user_id=ids[name], role=role))
         session.commit()
         ids["course"], ids["other_course"] = course.id, other.id
-    return ids  # type: ignore[return-value]
+    return ids
 
 
 @pytest.fixture
-def client_as(live_server: LiveServer, course_people) -> Callable[[str | None], LabClient]:  # type: ignore[no-untyped-def]
+def client_as(live_server: LiveServer, course_people) -> Callable[[str | None], LabClient]:
     """A client logged in as the named account (None: anonymous)."""
 
     def make(username: str | None) -> LabClient:

@@ -21,7 +21,7 @@ def slot(offset_h: int = 0, minutes: int = 30, **extra: object) -> dict[str, obj
             **extra}
 
 
-def booking_rows(app) -> list[tuple]:  # type: ignore[no-untyped-def]
+def booking_rows(app) -> list[tuple]:
     from sqlalchemy import select
 
     from middleware.db import session_factory
@@ -32,7 +32,7 @@ def booking_rows(app) -> list[tuple]:  # type: ignore[no-untyped-def]
             select(Booking.id, Booking.user_id, Booking.kind, Booking.cancelled_at).order_by(Booking.id))]
 
 
-def test_a_student_books_lists_and_cancels(client_as, app) -> None:  # type: ignore[no-untyped-def]
+def test_a_student_books_lists_and_cancels(client_as, app) -> None:
     student = client_as("student1")
     status, body = api(student, "POST", "/api/bookings", slot())
     assert status == 201 and body["booking"]["status"] == "booked" and body["booking"]["mine"]
@@ -60,13 +60,13 @@ def test_a_student_books_lists_and_cancels(client_as, app) -> None:  # type: ign
     ({"robot_name": "lab-1", "starts_at": 5, "ends_at": "2031-01-01T10:30:00Z"}, "starts_at"),
     ([1, 2], "body"),
 ])
-def test_bad_booking_requests_name_the_field_and_change_nothing(client_as, app, body, field) -> None:  # type: ignore[no-untyped-def]
+def test_bad_booking_requests_name_the_field_and_change_nothing(client_as, app, body, field) -> None:
     status, answer = api(client_as("admin1"), "POST", "/api/bookings", body)
     assert status in (400, 404) and answer["error"]["field"] == field, answer
     assert booking_rows(app) == []
 
 
-def test_an_overlap_is_refused_with_409_naming_starts_at(client_as, app) -> None:  # type: ignore[no-untyped-def]
+def test_an_overlap_is_refused_with_409_naming_starts_at(client_as, app) -> None:
     assert api(client_as("student1"), "POST", "/api/bookings", slot(0, 60))[0] == 201
     status, body = api(client_as("student2"), "POST", "/api/bookings", slot(0, 30))
     assert status == 409 and body["error"] == {"code": "slot_taken", "field": "starts_at",
@@ -86,7 +86,7 @@ CREATE_CASES = [
 
 
 @pytest.mark.parametrize(("who", "extra", "expected"), CREATE_CASES)
-def test_who_may_book_what(client_as, app, course_people, who, extra, expected) -> None:  # type: ignore[no-untyped-def]
+def test_who_may_book_what(client_as, app, course_people, who, extra, expected) -> None:
     extra = {k: (course_people[v] if k == "course_id" else v) for k, v in extra.items()}
     status, body = api(client_as(who), "POST", "/api/bookings", slot(0, 30, **extra))
     assert status == expected, body
@@ -98,7 +98,7 @@ CANCEL_CASES = [(None, 401), ("student1", 200), ("student2", 403), ("tutor1", 20
 
 
 @pytest.mark.parametrize(("who", "expected"), CANCEL_CASES)
-def test_who_may_cancel_a_students_booking(client_as, app, who, expected) -> None:  # type: ignore[no-untyped-def]
+def test_who_may_cancel_a_students_booking(client_as, app, who, expected) -> None:
     status, body = api(client_as("student1"), "POST", "/api/bookings", slot())
     booking_id = body["booking"]["id"]
     status, body = api(client_as(who), "DELETE", f"/api/bookings/{booking_id}")
@@ -108,33 +108,33 @@ def test_who_may_cancel_a_students_booking(client_as, app, who, expected) -> Non
 
 
 @pytest.mark.parametrize("path", ["/api/bookings", "/api/robots/lab-1/bookings", "/api/robots/lab-1/chat"])
-def test_reading_needs_a_login(client_as, path) -> None:  # type: ignore[no-untyped-def]
+def test_reading_needs_a_login(client_as, path) -> None:
     assert api(client_as(None), "GET", path)[0] == 401
 
 
 @pytest.mark.parametrize("path", ["/bookings", "/bookings.ics"])
-def test_pages_send_anonymous_visitors_to_the_login(client_as, path) -> None:  # type: ignore[no-untyped-def]
+def test_pages_send_anonymous_visitors_to_the_login(client_as, path) -> None:
     status, headers, _ = client_as(None).request("GET", path)
     assert status == 302 and "/login" in headers["Location"]
 
 
-def test_an_unknown_robot_is_404_naming_robot_name(client_as) -> None:  # type: ignore[no-untyped-def]
+def test_an_unknown_robot_is_404_naming_robot_name(client_as) -> None:
     status, body = api(client_as("student1"), "GET", "/api/robots/nope/bookings")
     assert status == 404 and body["error"]["field"] == "robot_name"
 
 
-def test_a_missing_booking_is_404(client_as) -> None:  # type: ignore[no-untyped-def]
+def test_a_missing_booking_is_404(client_as) -> None:
     assert api(client_as("admin1"), "DELETE", "/api/bookings/999")[0] == 404
 
 
-def test_the_allowance_is_enforced_over_http(client_as, app) -> None:  # type: ignore[no-untyped-def]
+def test_the_allowance_is_enforced_over_http(client_as, app) -> None:
     student = client_as("student1")
     assert api(student, "POST", "/api/bookings", slot(0, 120))[0] == 201
     status, body = api(student, "POST", "/api/bookings", slot(3, 30))
     assert status == 409 and body["error"]["code"] == "allowance_exceeded"
 
 
-def test_the_form_books_and_cancels_with_csrf(client_as, app) -> None:  # type: ignore[no-untyped-def]
+def test_the_form_books_and_cancels_with_csrf(client_as, app) -> None:
     student = client_as("student1")
     token = student.csrf_token("/bookings?tz=UTC")
     form = {"csrf_token": token, "robot_name": "lab-1", "tz": "Europe/Madrid", "week": "",
@@ -149,7 +149,7 @@ def test_the_form_books_and_cancels_with_csrf(client_as, app) -> None:  # type: 
     assert len(booking_rows(app)) == 1
 
 
-def test_the_ical_export_lists_my_bookings(client_as) -> None:  # type: ignore[no-untyped-def]
+def test_the_ical_export_lists_my_bookings(client_as) -> None:
     student = client_as("student1")
     api(student, "POST", "/api/bookings", slot(0, 60))
     status, headers, body = student.request("GET", "/bookings.ics")

@@ -23,7 +23,7 @@ def value(raw: object) -> robot_pb2.ParameterValue:
         return robot_pb2.ParameterValue(int_value=raw)
     if isinstance(raw, str):
         return robot_pb2.ParameterValue(string_value=raw)
-    return robot_pb2.ParameterValue(double_value=raw)  # type: ignore[arg-type]
+    return robot_pb2.ParameterValue(double_value=raw)
 
 
 def activate(robot: robot_pb2_grpc.RobotStub, skill: str, preempt: bool = False, token: str = TOKEN,
@@ -72,7 +72,7 @@ def test_two_watchers_see_the_same_events_and_the_final_state(controlled: robot_
     assert kept.status == robot_pb2.GOAL_STATUS_SUCCEEDED
 
 
-def test_a_watcher_that_begins_while_the_goal_is_accepted_sees_it_execute_then_cancel(  # type: ignore[no-untyped-def]
+def test_a_watcher_that_begins_while_the_goal_is_accepted_sees_it_execute_then_cancel(
     fresh_server: SkillServer, controlled: robot_pb2_grpc.RobotStub
 ) -> None:
     """A perceptive goal changes status only on its first tick and when canceled: both must reach the watcher."""

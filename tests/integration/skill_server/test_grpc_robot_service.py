@@ -13,7 +13,8 @@ from grpc_health.v1 import health_pb2, health_pb2_grpc
 from grpc_reflection.v1alpha import reflection_pb2, reflection_pb2_grpc
 
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
-from skill_server.server import SkillServer
+from skill_server.server import SkillServer, create_server
+from skill_server.sim.geometry import Pose2D
 
 DEADLINE_S = 10.0
 TOKEN = "integration-token"
@@ -59,6 +60,21 @@ def test_list_skills_offers_direct_control_with_its_schema(robot: robot_pb2_grpc
     )
     assert (angular.unit, angular.maximum, angular.default_value) == ("rad/s", 1.5, 0.0)
     assert linear.help and direct.title
+
+
+def test_list_skills_publishes_each_skills_declared_traits(robot: robot_pb2_grpc.RobotStub) -> None:
+    skills = robot.ListSkills(robot_pb2.ListSkillsRequest(), timeout=DEADLINE_S).skills
+    traits = {skill.name: (skill.motor, skill.estimates_pose, skill.direct_drive) for skill in skills}
+    assert traits == {
+        "direct_control": (True, False, True),
+        "go_to_goal": (True, False, False),
+        "orientation_control": (True, False, False),
+        "wall_following": (True, False, False),
+        "round_trip": (True, False, False),
+        "detect_obstacle": (False, False, False),
+        "environment_modelling": (False, False, False),
+        "localization": (False, True, False),
+    }
 
 
 def test_one_drive_command_moves_the_robot_until_the_deadman(fresh_server: SkillServer) -> None:
@@ -127,7 +143,7 @@ def test_two_camera_viewers_share_the_same_encoded_frames(robot: robot_pb2_grpc.
 def expect_status(call: object, code: grpc.StatusCode, *words: str) -> None:
     """Asserts a unary call's thunk fails with code and details mentioning every word."""
     with pytest.raises(grpc.RpcError) as failed:
-        call()  # type: ignore[operator]
+        call()
     assert failed.value.code() == code
     for word in words:
         assert word in failed.value.details()
@@ -154,7 +170,7 @@ def test_drive_refusals_map_to_status_codes(fresh_server: SkillServer) -> None:
             (0.0, -2.0, "angular_radps"),
         ]:
             expect_status(
-                lambda linear=linear, angular=angular: drive(  # type: ignore[misc]
+                lambda linear=linear, angular=angular: drive(
                     token=TOKEN, sequence=1, linear_mps=linear, angular_radps=angular
                 ),
                 grpc.StatusCode.INVALID_ARGUMENT,
@@ -179,7 +195,7 @@ def test_drive_refusals_map_to_status_codes(fresh_server: SkillServer) -> None:
 def test_out_of_range_stream_rates_are_refused(
     robot: robot_pb2_grpc.RobotStub, request_stream: object, field: str
 ) -> None:
-    expect_status(lambda: next(request_stream(robot)), grpc.StatusCode.INVALID_ARGUMENT, field)  # type: ignore[operator]
+    expect_status(lambda: next(request_stream(robot)), grpc.StatusCode.INVALID_ARGUMENT, field)
 
 
 def test_cancelling_a_stream_ends_it_on_both_sides(shared_server: SkillServer, robot: robot_pb2_grpc.RobotStub) -> None:
@@ -215,3 +231,22 @@ def test_stopping_the_server_ends_open_streams(fresh_server: SkillServer) -> Non
         stopper.join()
         assert time.monotonic() - started < 3.0
         assert not fresh_server.world.is_running
+
+
+def test_track_events_stream_as_the_robot_runs_and_a_scene_without_a_track_refuses(
+    robot: robot_pb2_grpc.RobotStub,
+) -> None:
+    expect_status(lambda: next(robot.StreamTrackEvents(robot_pb2.StreamTrackEventsRequest(), timeout=DEADLINE_S)),
+                  grpc.StatusCode.FAILED_PRECONDITION, "no track")
+    running = create_server(port=0, scene="course-A", realtime=False, robot_name="track-bot")
+    try:
+        with grpc.insecure_channel(running.address) as channel:
+            track = robot_pb2_grpc.RobotStub(channel)
+            events = track.StreamTrackEvents(robot_pb2.StreamTrackEventsRequest(after_index=0), timeout=DEADLINE_S)
+            running.world.set_pose(Pose2D(-2.0, 0.0, 0.0))  # off A: the run starts
+            started = next(events)
+            assert (started.index, started.kind, started.attempt) == (1, "started", 1)
+            assert track.GetTrackRun(robot_pb2.GetTrackRunRequest(), timeout=DEADLINE_S).phase == "to_b"
+            events.cancel()
+    finally:
+        running.stop(grace_s=0.5)

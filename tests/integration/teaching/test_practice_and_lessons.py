@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from middleware.config import ConfigError
-from middleware.practice.manager import PracticeCapReached, PracticeManager, read_limits
+from middleware.teaching.practice_robots import PracticeCapReached, PracticeManager, read_limits
 
 
 def test_the_cap_refuses_a_second_robot_and_idle_ones_are_stopped() -> None:
@@ -43,7 +43,7 @@ def test_bad_practice_settings_name_the_setting(environ: dict[str, str], name: s
         read_limits(environ)
 
 
-def _api(client, method: str, path: str, body: object | None = None):  # type: ignore[no-untyped-def]
+def _api(client, method: str, path: str, body: object | None = None):
     token = client.csrf_token("/teaching")
     data = None if body is None else json.dumps(body).encode()
     from urllib.request import Request
@@ -54,11 +54,11 @@ def _api(client, method: str, path: str, body: object | None = None):  # type: i
         with client._opener.open(request, timeout=20) as response:
             return response.status, json.loads(response.read())
     except Exception as error:  # noqa: BLE001 - 4xx/5xx are answers here
-        return error.code, json.loads(error.read())  # type: ignore[attr-defined]
+        return error.code, json.loads(error.read())
 
 
 @pytest.fixture
-def tutor_client(live_server, lab_client):  # type: ignore[no-untyped-def]
+def tutor_client(live_server, lab_client):
     from middleware.auth.services import create_user
     from middleware.db import session_factory
 
@@ -69,8 +69,8 @@ def tutor_client(live_server, lab_client):  # type: ignore[no-untyped-def]
     return lab_client
 
 
-def test_cap_reached_over_http_is_a_clear_message(live_server, tutor_client) -> None:  # type: ignore[no-untyped-def]
-    from middleware.practice.manager import practice_manager
+def test_cap_reached_over_http_is_a_clear_message(live_server, tutor_client) -> None:
+    from middleware.teaching.practice_robots import practice_manager
 
     practice_manager(live_server.app).cap = 0
     status, body = _api(tutor_client, "POST", "/api/practice")
@@ -78,8 +78,8 @@ def test_cap_reached_over_http_is_a_clear_message(live_server, tutor_client) -> 
     assert body["error"]["code"] == "practice_cap_reached" and "in use" in body["error"]["message"]
 
 
-def test_a_lesson_is_checked_saved_and_drives_only_the_owners_practice_robot(live_server, tutor_client) -> None:  # type: ignore[no-untyped-def]
-    from middleware.practice.manager import practice_manager
+def test_a_lesson_is_checked_saved_and_drives_only_the_owners_practice_robot(live_server, tutor_client) -> None:
+    from middleware.teaching.practice_robots import practice_manager
 
     folder = Path(live_server.app.instance_path) / "lessons"
     folder.mkdir(parents=True, exist_ok=True)
@@ -130,11 +130,11 @@ def test_ffmpeg_is_available_for_the_demo_video() -> None:
     assert subprocess.run(["ffmpeg", "-version"], capture_output=True).returncode == 0
 
 
-def test_the_demo_tours_are_seeded_once_and_pass_the_real_skill_schemas(app) -> None:  # type: ignore[no-untyped-def]
-    from middleware.practice.control import skill_schemas
+def test_the_demo_tours_are_seeded_once_and_pass_the_real_skill_schemas(app) -> None:
     from middleware.robots.registry import robot_registry
-    from middleware.tours.demo import DEMO_TOURS, seed_demo_content
-    from middleware.tours.services import check_tour
+    from middleware.teaching.demo_content import DEMO_TOURS, seed_demo_content
+    from middleware.teaching.targets import skill_schemas
+    from middleware.teaching.tours import check_tour
 
     schemas = skill_schemas(robot_registry(app).get("lab-1"))
     for tour in DEMO_TOURS:

@@ -13,13 +13,13 @@ from urllib.request import Request
 import pytest
 
 from tests.conftest import LabClient
-from tests.integration.middleware.test_robot_channels import closed_with, receive_json
+from tests.integration.lab.test_robot_channels import closed_with, receive_json
 
 PASSWORD = "correct-horse-battery"
 CHANNELS = ("camera", "telemetry", "drive", "queue", "chat", "localization", "goals/g-1")
 
 
-def _user(app, username: str, role: str = "student") -> None:  # type: ignore[no-untyped-def]
+def _user(app, username: str, role: str = "student") -> None:
     from middleware.auth.services import create_user
     from middleware.db import session_factory
 
@@ -28,7 +28,7 @@ def _user(app, username: str, role: str = "student") -> None:  # type: ignore[no
         session.commit()
 
 
-def _client(live_server, username: str, role: str = "student") -> LabClient:  # type: ignore[no-untyped-def]
+def _client(live_server, username: str, role: str = "student") -> LabClient:
     _user(live_server.app, username, role)
     client = LabClient(live_server.url)
     assert client.login(username, PASSWORD) == 302
@@ -44,7 +44,7 @@ def _api(client: LabClient, method: str, path: str, body: object | None = None) 
         with client._opener.open(request, timeout=20) as response:
             return response.status, json.loads(response.read())
     except Exception as error:  # noqa: BLE001 - 4xx/5xx are answers here
-        return error.code, json.loads(error.read())  # type: ignore[attr-defined]
+        return error.code, json.loads(error.read())
 
 
 def refusal(client: LabClient, path: str) -> tuple[str, int]:
@@ -54,9 +54,9 @@ def refusal(client: LabClient, path: str) -> tuple[str, int]:
 
 
 @pytest.fixture
-def practice(live_server):  # type: ignore[no-untyped-def]
+def practice(live_server):
     """ann's running practice robot, and two clients: ann (its owner) and bob."""
-    from middleware.practice.manager import practice_manager
+    from middleware.teaching.practice_robots import practice_manager
 
     ann, bob = _client(live_server, "ann"), _client(live_server, "bob")
     practice_manager(live_server.app).cap = 2
@@ -68,7 +68,7 @@ def practice(live_server):  # type: ignore[no-untyped-def]
         practice_manager(live_server.app).shutdown()
 
 
-def test_the_owner_has_the_full_console_and_everyone_else_gets_404s(live_server, practice) -> None:  # type: ignore[no-untyped-def]
+def test_the_owner_has_the_full_console_and_everyone_else_gets_404s(live_server, practice) -> None:
     ann, bob = practice
     status, _, page = ann.request("GET", "/lab/practice-ann")
     assert status == 200 and 'data-robot="practice-ann"' in page
@@ -99,11 +99,12 @@ def test_the_owner_has_the_full_console_and_everyone_else_gets_404s(live_server,
     assert refusal(anonymous, "/ws/robots/practice-ann/camera") == ("not_logged_in", 4401)
 
 
-def test_the_owner_takes_control_through_the_queue_and_lessons_keep_working(live_server, practice) -> None:  # type: ignore[no-untyped-def]
+def test_the_owner_commands_their_robot_from_every_source_in_or_out_of_its_queue(live_server, practice) -> None:
     ann, _bob = practice
-    status, error = _api(ann, "POST", "/api/robots/practice-ann/skills/go_to_goal/goals",
-                         {"parameters": {"goal_x_m": 0.3, "goal_y_m": 0.0}})
-    assert status == 403 and error["error"]["code"] == "not_controller"  # not in its queue yet
+    # The owner is the practice robot's only controller: the skill panel works before the console's queue.
+    status, activated = _api(ann, "POST", "/api/robots/practice-ann/skills/go_to_goal/goals",
+                             {"parameters": {"goal_x_m": 0.3, "goal_y_m": 0.0}})
+    assert status == 202, activated
     queue = ann.websocket("/ws/robots/practice-ann/queue")
     deadline = time.monotonic() + 10
     seat = receive_json(queue)
@@ -113,7 +114,7 @@ def test_the_owner_takes_control_through_the_queue_and_lessons_keep_working(live
     status, activated = _api(ann, "POST", "/api/robots/practice-ann/skills/go_to_goal/goals",
                              {"parameters": {"goal_x_m": 0.3, "goal_y_m": 0.0}, "preempt": True})
     assert status == 202, activated
-    # The queue's token was handed to the robot; the practice commands (lessons, tours) use it too.
+    # The skill panel, the pad and the practice commands (lessons, tours) all go under the owner's token.
     status, stopped = _api(ann, "POST", "/api/practice/commands", {"command": {"stop": True}})
     assert status == 202 and stopped["robot"] == "practice-ann"
     queue.send(json.dumps({"type": "leave"}))
@@ -131,7 +132,7 @@ def test_the_owner_takes_control_through_the_queue_and_lessons_keep_working(live
 
 
 def test_practice_names_are_unique_short_and_never_a_username() -> None:
-    from middleware.practice.manager import practice_name
+    from middleware.teaching.practice_robots import practice_name
 
     assert practice_name("ann", 7) == "practice-ann"
     assert practice_name("a.b", 7) == practice_name("x" * 40, 7) == "practice-_7"
@@ -162,15 +163,15 @@ def _upload(client: LabClient, filename: str, content: bytes, path: str = "/api/
         with client._opener.open(request, timeout=30) as response:
             return response.status, dict(response.headers), response.read()
     except Exception as error:  # noqa: BLE001 - 4xx/5xx are answers here
-        return error.code, dict(error.headers), error.read()  # type: ignore[attr-defined]
+        return error.code, dict(error.headers), error.read()
 
 
-def _videos(live_server) -> list[str]:  # type: ignore[no-untyped-def]
+def _videos(live_server) -> list[str]:
     folder = Path(live_server.app.instance_path) / "lessons"
     return sorted(p.name for p in folder.iterdir()) if folder.is_dir() else []
 
 
-def test_a_tutor_uploads_webm_and_mp4_under_generated_names(live_server) -> None:  # type: ignore[no-untyped-def]
+def test_a_tutor_uploads_webm_and_mp4_under_generated_names(live_server) -> None:
     tutor = _client(live_server, "tutor2", "tutor")
     big = WEBM_HEAD + bytes(3 * 1024 * 1024)  # above the app's 2 MB limit for other requests
     status, _, body = _upload(tutor, "../../etc/Evil Clip.webm", big)
@@ -201,7 +202,7 @@ def test_a_tutor_uploads_webm_and_mp4_under_generated_names(live_server) -> None
     ("clip", WEBM_HEAD + b"rest", "invalid_video_type"),
     ("clip.webm", b"", "empty_video"),
 ])
-def test_wrong_types_and_contents_are_refused_naming_the_field(live_server, filename: str, content: bytes,  # type: ignore[no-untyped-def]
+def test_wrong_types_and_contents_are_refused_naming_the_field(live_server, filename: str, content: bytes,
                                                                code: str) -> None:
     tutor = _client(live_server, "tutor3", "tutor")
     status, _, body = _upload(tutor, filename, content)
@@ -211,7 +212,7 @@ def test_wrong_types_and_contents_are_refused_naming_the_field(live_server, file
     assert _videos(live_server) == []
 
 
-def test_too_large_videos_are_refused_while_read_and_before(live_server) -> None:  # type: ignore[no-untyped-def]
+def test_too_large_videos_are_refused_while_read_and_before(live_server) -> None:
     tutor = _client(live_server, "tutor4", "tutor")
     live_server.app.config["LESSON_VIDEO_MAX_BYTES"] = 100_000
     status, _, body = _upload(tutor, "clip.webm", WEBM_HEAD + bytes(150_000))  # within the body allowance
@@ -231,7 +232,7 @@ def test_too_large_videos_are_refused_while_read_and_before(live_server) -> None
     assert _videos(live_server) == []
 
 
-def test_students_and_forged_forms_cannot_upload(live_server, student_client) -> None:  # type: ignore[no-untyped-def]
+def test_students_and_forged_forms_cannot_upload(live_server, student_client) -> None:
     status, _, body = _upload(student_client, "clip.webm", WEBM_HEAD + b"rest")
     assert status == 403 and json.loads(body)["error"]["code"] == "not_tutor"
     tutor = _client(live_server, "tutor5", "tutor")
@@ -240,7 +241,7 @@ def test_students_and_forged_forms_cannot_upload(live_server, student_client) ->
     assert _videos(live_server) == []
 
 
-def _lesson_with_video(app, video_name: str) -> None:  # type: ignore[no-untyped-def]
+def _lesson_with_video(app, video_name: str) -> None:
     from middleware.db import session_factory
     from middleware.models.teaching import Lesson
 
@@ -249,7 +250,7 @@ def _lesson_with_video(app, video_name: str) -> None:  # type: ignore[no-untyped
         session.commit()
 
 
-def test_a_tutor_deletes_a_video_no_lesson_plays_but_never_one_a_lesson_plays(  # type: ignore[no-untyped-def]
+def test_a_tutor_deletes_a_video_no_lesson_plays_but_never_one_a_lesson_plays(
     live_server, student_client
 ) -> None:
     tutor = _client(live_server, "tutor6", "tutor")

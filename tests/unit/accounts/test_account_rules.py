@@ -9,12 +9,12 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session, sessionmaker
 
 from middleware.accounts import invitations, services
-from middleware.accounts.services import Refused
 from middleware.auth import throttle
 from middleware.auth.schemas import InvalidField
 from middleware.auth.services import change_own_password, create_user, log_in
 from middleware.courses import services as courses
 from middleware.courses.schemas import CourseSettings, csv_safe, parse_settings, report_csv
+from middleware.errors import Refused
 from middleware.models import CourseMembership, Invitation, LoginFailure, User
 from tests.unit.bookings.conftest import People
 
@@ -40,7 +40,7 @@ def test_csv_enrols_existing_students_creates_new_ones_and_reports_every_refused
     with factory() as session:
         create_user(session, "loner", "student", PASSWORD)
         create_user(session, "gone", "student", PASSWORD)
-        session.scalar(select(User).where(User.username == "gone")).is_active = False  # type: ignore[union-attr]
+        session.scalar(select(User).where(User.username == "gone")).is_active = False
         session.commit()
         data = ("\ufeffUsername,email\n"
                 "loner,l@example.org\n"      # existing student: enrolled
@@ -222,37 +222,108 @@ def test_an_admin_cannot_disable_or_demote_themself(factory, people: People) -> 
             services.set_active(session, _user(session, people.tutor), people.student, False)
 
 
-# --- login rate limits ---------------------------------------------------------------------------
+# --- login throttle ------------------------------------------------------------------------------
+
+PAIR = throttle.PER_ACCOUNT_AND_ADDRESS
 
 
-def test_five_failures_block_the_account_without_checking_the_password(factory, people: People) -> None:
+def test_the_delay_grows_with_each_failure_and_stops_at_the_maximum() -> None:
+    delays = [PAIR.delay_after(n).total_seconds() for n in range(PAIR.free_failures + 12)]
+    assert delays[:PAIR.free_failures] == [0] * PAIR.free_failures
+    assert delays[PAIR.free_failures:PAIR.free_failures + 4] == [2, 4, 8, 16]
+    assert max(delays) == 900 and delays[-1] == 900
+    assert PAIR.delay_after(10**6) == PAIR.max_delay
+
+
+def test_each_try_after_the_free_ones_waits_twice_as_long_unchecked(factory, people: People) -> None:
     with factory() as session:
         create_user(session, "ada", "student", PASSWORD)
-        for i in range(throttle.MAX_FAILURES_PER_ACCOUNT):
-            assert log_in(session, "ada", "wrong-password!", f"10.0.0.{i}", NOW + timedelta(minutes=i)).user is None
+        moment = NOW
+        for _ in range(PAIR.free_failures):
+            assert log_in(session, "ada", "wrong-password!", "10.0.0.1", moment).user is None
+        waits = []
+        for _ in range(4):
+            blocked = log_in(session, "ada", PASSWORD, "10.0.0.1", moment)  # the right password, refused unread
+            assert blocked.user is None and blocked.blocked_seconds is not None
+            waits.append(blocked.blocked_seconds)
+            moment += timedelta(seconds=blocked.blocked_seconds)
+            assert log_in(session, "ADA ", "wrong-password!", "10.0.0.1", moment).blocked_seconds is None
+        assert waits == [2, 4, 8, 16]
         session.commit()
-        blocked = log_in(session, "ada", PASSWORD, "10.9.9.9", NOW + timedelta(minutes=5))
-        assert blocked.user is None and blocked.blocked_minutes == 10
-        assert log_in(session, "ADA ", PASSWORD, "10.9.9.9", NOW + timedelta(minutes=5)).blocked_minutes == 10
-        # The first failure leaves the window at 15 minutes: the right password works again.
-        assert log_in(session, "ada", PASSWORD, "10.9.9.9", NOW + timedelta(minutes=15, seconds=1)).user is not None
-        # Another account from another address was never blocked.
-        assert log_in(session, "stud", "x", "10.9.9.8", NOW).blocked_minutes is None
+        assert session.scalar(select(func.count()).select_from(LoginFailure)) == PAIR.free_failures + 4
 
 
-def test_twenty_failures_block_the_address_and_a_success_erases_nothing(factory, people: People) -> None:
+def test_an_attacker_elsewhere_never_slows_the_owner_from_their_own_address(factory, people: People) -> None:
     with factory() as session:
         create_user(session, "ada", "student", PASSWORD)
+        for attacker in range(10):
+            for _ in range(8):
+                log_in(session, "ada", "wrong-password!", f"203.0.113.{attacker}", NOW)
         session.commit()
-        for i in range(throttle.MAX_FAILURES_PER_ADDRESS - 1):
+        assert log_in(session, "ada", "wrong-password!", "203.0.113.1", NOW).blocked_seconds is not None
+        assert log_in(session, "ada", PASSWORD, "10.9.9.9", NOW).user is not None
+
+
+def test_an_address_failing_on_many_accounts_is_slowed_for_every_account(factory, people: People) -> None:
+    with factory() as session:
+        create_user(session, "ada", "student", PASSWORD)
+        for i in range(throttle.PER_ADDRESS.free_failures):
             log_in(session, f"user{i}", "wrong-password!", "10.0.0.1", NOW)
-        assert log_in(session, "ada", PASSWORD, "10.0.0.1", NOW).user is not None
-        log_in(session, "someone", "wrong-password!", "10.0.0.1", NOW)
         session.commit()
-        outcome = log_in(session, "ada", PASSWORD, "10.0.0.1", NOW + timedelta(minutes=1))
-        assert outcome.user is None and outcome.blocked_minutes == 14
-        assert log_in(session, "ada", PASSWORD, "10.0.0.2", NOW + timedelta(minutes=1)).user is not None
-        assert session.scalar(select(func.count()).select_from(LoginFailure)) == throttle.MAX_FAILURES_PER_ADDRESS
+        outcome = log_in(session, "ada", PASSWORD, "10.0.0.1", NOW)
+        assert outcome.user is None and outcome.blocked_seconds == 2
+        assert log_in(session, "ada", PASSWORD, "10.0.0.2", NOW).user is not None
+        assert log_in(session, "ada", PASSWORD, "10.0.0.1", NOW + timedelta(seconds=2)).user is not None
+
+
+def test_a_success_clears_the_accounts_failures_from_that_address_only(factory, people: People) -> None:
+    with factory() as session:
+        create_user(session, "ada", "student", PASSWORD)
+        for address in ("10.0.0.1", "10.0.0.2"):
+            for _ in range(2):
+                log_in(session, "ada", "wrong-password!", address, NOW)
+        log_in(session, "bob", "wrong-password!", "10.0.0.1", NOW)
+        assert log_in(session, "ada", PASSWORD, "10.0.0.1", NOW).user is not None
+        session.commit()
+        left = session.execute(select(LoginFailure.username, LoginFailure.address)).all()
+        assert sorted(left) == [("ada", "10.0.0.2"), ("ada", "10.0.0.2"), ("bob", "10.0.0.1")]
+
+
+def test_admins_see_the_throttled_keys_and_clear_them(factory, people: People) -> None:
+    with factory() as session:
+        for _ in range(PAIR.free_failures + 1):  # the last try is refused unread, not counted
+            log_in(session, "ada", "wrong-password!", "10.0.0.1", NOW)
+        for i in range(throttle.PER_ADDRESS.free_failures):
+            log_in(session, f"user{i}", "wrong-password!", "10.0.0.7", NOW)
+        log_in(session, "bob", "wrong-password!", "10.0.0.1", NOW)  # one failure slows nobody: not listed
+        session.commit()
+        admin, student = _user(session, people.admin), _user(session, people.student)
+        listed = services.login_throttles(session, admin, NOW)
+        assert [(t.username, t.address, t.failures) for t in listed] == [
+            ("ada", "10.0.0.1", PAIR.free_failures), (None, "10.0.0.7", throttle.PER_ADDRESS.free_failures)]
+        assert listed[0].blocked_until == NOW + timedelta(seconds=2)
+        assert listed[0].to_dict()["blocked_until"] == "2026-11-23T09:00:02Z"
+        with pytest.raises(Refused) as refused:
+            services.login_throttles(session, student, NOW)
+        assert refused.value.status == 403
+        with pytest.raises(Refused):
+            services.clear_login_throttle(session, student, "10.0.0.1", "ada")
+        assert services.clear_login_throttle(session, admin, "10.0.0.1", "ADA") == PAIR.free_failures
+        assert services.clear_login_throttle(session, admin, "10.0.0.7", None) == throttle.PER_ADDRESS.free_failures
+        assert services.login_throttles(session, admin, NOW) == []
+        assert log_in(session, "ada", "wrong-password!", "10.0.0.1", NOW).blocked_seconds is None
+
+
+@pytest.mark.parametrize(("address", "username", "field"), [
+    (None, "ada", "address"), ("", None, "address"), ("   ", None, "address"), ("x" * 65, None, "address"),
+    (["10.0.0.1"], None, "address"), (7, None, "address"), ("10.0.0.1", 5, "username"),
+    ("10.0.0.1", "a" * 129, "username"), ("10.0.0.1", {"name": "ada"}, "username"),
+])
+def test_clearing_a_throttle_names_the_bad_field(factory, people: People, address, username, field) -> None:
+    with factory() as session:
+        with pytest.raises(InvalidField) as invalid:
+            services.clear_login_throttle(session, _user(session, people.admin), address, username)
+        assert invalid.value.field == field
 
 
 def test_failures_older_than_a_day_are_forgotten(factory: sessionmaker[Session], people: People) -> None:

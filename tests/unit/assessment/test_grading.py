@@ -6,10 +6,10 @@ import math
 
 import pytest
 
-from middleware.assessment.experiment import band_fraction, grade_task
 from middleware.assessment.grading import grade_question
 from middleware.assessment.schemas import parse_bank_file, parse_question
 from middleware.assessment.survey import aggregate
+from middleware.assessment.trace_grading import band_fraction, grade_task
 from middleware.auth.schemas import InvalidField
 
 SINGLE = {"choices": ["a", "b", "c"], "correct": 1}
@@ -113,3 +113,17 @@ def test_survey_answers_are_counted_per_question() -> None:
     first = items[0]
     assert first.key == "objectives_clear" and first.counts == (0, 0, 0, 1, 1) and first.percentages()[4] == 50
     assert len(items) == 7 and items[-1].counts == (0, 0, 0, 1, 0)
+
+
+def test_the_editors_rubric_rows_become_bands_and_every_bad_row_is_named() -> None:
+    from middleware.assessment.schemas import form_rubric
+    from middleware.auth.schemas import InvalidField
+
+    rows = {"rubric_bound_0": "0.1", "rubric_share_0": "100", "rubric_bound_1": " 0.3 ", "rubric_share_1": "50",
+            "rubric_bound_2": "", "rubric_share_2": ""}
+    assert form_rubric(rows) == [[0.1, 1.0], [0.3, 0.5]]
+    assert form_rubric({"rubric": "0.1:1"}) == "0.1:1"  # the API's form is kept as sent
+    with pytest.raises(InvalidField) as refused:
+        form_rubric({**rows, "rubric_share_1": "half", "rubric_bound_3": "0.5"})
+    assert refused.value.field == "rubric"
+    assert "row 2" in refused.value.message and "row 4" in refused.value.message

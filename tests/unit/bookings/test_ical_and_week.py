@@ -22,7 +22,7 @@ def unfold_and_parse(text: str) -> list[tuple[str, str]]:
             unfolded[-1] += line[1:]
         else:
             unfolded.append(line)
-    return [tuple(line.split(":", 1)) for line in unfolded]  # type: ignore[misc]
+    return [tuple(line.split(":", 1)) for line in unfolded]
 
 
 def unescape(value: str) -> str:

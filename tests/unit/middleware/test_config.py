@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from datetime import timedelta
 from pathlib import Path
 
 import pytest
@@ -35,3 +36,24 @@ def test_secret_key_is_generated_once_and_kept(tmp_path: Path) -> None:
     assert (tmp_path / "secret_key").stat().st_mode & 0o077 == 0
     assert from_environment(tmp_path, {"TELELAB_SECRET_KEY": "given"})["SECRET_KEY"] == "given"
     assert str(first["DATABASE_URL"]).startswith("sqlite:///")
+
+
+def test_session_limits_and_proxy_trust_have_sane_defaults(tmp_path: Path) -> None:
+    config = from_environment(tmp_path, {"TELELAB_SECRET_KEY": "k"})
+    assert config["SESSION_LIFETIME"] == timedelta(hours=8)
+    assert config["SESSION_IDLE_TIMEOUT"] == config["PERMANENT_SESSION_LIFETIME"] == timedelta(minutes=120)
+    assert config["TRUSTED_PROXIES"] == 0 and config["SESSION_COOKIE_SECURE"] is False
+    tuned = from_environment(tmp_path, {"TELELAB_SECRET_KEY": "k", "TELELAB_SESSION_HOURS": "2",
+                                        "TELELAB_SESSION_IDLE_MINUTES": "15", "TELELAB_TRUSTED_PROXIES": "1"})
+    assert tuned["SESSION_LIFETIME"] == timedelta(hours=2) and tuned["SESSION_IDLE_TIMEOUT"] == timedelta(minutes=15)
+    assert tuned["TRUSTED_PROXIES"] == 1
+
+
+@pytest.mark.parametrize(("name", "value"), [
+    ("TELELAB_SESSION_HOURS", "0"), ("TELELAB_SESSION_HOURS", "-1"), ("TELELAB_SESSION_HOURS", "nan"),
+    ("TELELAB_SESSION_HOURS", "inf"), ("TELELAB_SESSION_IDLE_MINUTES", "ten"), ("TELELAB_TRUSTED_PROXIES", "-1"),
+    ("TELELAB_TRUSTED_PROXIES", "6"), ("TELELAB_TRUSTED_PROXIES", "one"),
+])
+def test_bad_session_and_proxy_settings_name_the_setting(tmp_path: Path, name: str, value: str) -> None:
+    with pytest.raises(ConfigError, match=name):
+        from_environment(tmp_path, {"TELELAB_SECRET_KEY": "k", name: value})

@@ -11,7 +11,7 @@ from skill_server.sequencer import attach_sequencer
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.world import World
 from skill_server.skills.base import TickInput
-from skill_server.skills.mapping import EnvironmentModel
+from skill_server.skills.environment_model import EnvironmentModel
 from skill_server.skills.scan_matching import ScanMatcher, compose, relative, signed_point_field
 
 
@@ -20,7 +20,7 @@ def _tick_at(world: World, sequencer: object, pose: Pose2D) -> TickInput:
     snapshot = world.snapshot
     return TickInput(snapshot.sim_time_s, 1 / 60, snapshot.odometry, snapshot.sonar_ranges_m,
                      snapshot.laser_ranges_m, True, snapshot.ground_truth, "odometry", world.spec,
-                     sequencer.sensors)  # type: ignore[attr-defined]
+                     sequencer.sensors)
 
 
 def test_the_scan_matcher_pulls_a_wrong_guess_back_onto_the_map() -> None:
@@ -33,7 +33,7 @@ def test_the_scan_matcher_pulls_a_wrong_guess_back_onto_the_map() -> None:
         truth = Pose2D(0.1, 0.05, 0.08)
         tick = _tick_at(world, sequencer, truth)
         ranges = np.asarray(tick.laser_ranges_m)[::2]
-        angles = sequencer.sensors.laser_angles_rad[::2]  # type: ignore[attr-defined]
+        angles = sequencer.sensors.laser_angles_rad[::2]
         seen = ranges < 6.0
         result = matcher.match(Pose2D(0.14, 0.02, 0.1), ranges[seen], angles[seen])
         assert result.accepted and result.inliers > 50

@@ -64,3 +64,11 @@ def test_deadman_timeout_must_be_positive_and_finite() -> None:
     for bad in (0.0, -1.0, float("nan"), float("inf")):
         with pytest.raises(InvalidParameter, match="deadman_timeout_s"):
             World("empty", realtime=False, deadman_timeout_s=bad)
+
+
+def test_a_stop_command_is_not_reported_as_deadman_stopped(world: World) -> None:
+    world.drive(TOKEN, 1, 0.3, 0.0)
+    world.step_for(0.2)
+    world.drive(TOKEN, 2, 0.0, 0.0)  # the pad's stop on a normal key release
+    snapshot = world.step_for(1.5)
+    assert not snapshot.deadman_stopped and snapshot.commanded_linear_mps == 0.0

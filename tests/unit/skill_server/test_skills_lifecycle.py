@@ -10,6 +10,7 @@ from skill_sim_helpers import TOKEN
 
 from skill_server.errors import InvalidParameter, NotController, ResourceBusy, UnknownSkill
 from skill_server.goals import EventKind, GoalSnapshot, GoalStatus
+from skill_server.robot import Robot
 from skill_server.sequencer import Sequencer, attach_sequencer
 from skill_server.sim.world import World
 
@@ -104,10 +105,19 @@ def test_a_direct_drive_command_preempts_the_motor_goal(lab: tuple[World, Sequen
     world, sequencer = lab
     goal = sequencer.activate(TOKEN, "go_to_goal", {"goal_x_m": -3.0}, preempt=False).goal
     world.step_for(1.0)
-    world.drive(TOKEN, 1, 0.0, 0.0)
+    Robot(world, sequencer).drive(TOKEN, 1, 0.0, 0.0)
     world.step_for(0.1)
     final = sequencer.goals.get(goal.goal_id).snapshot()
     assert (final.status, final.error_code) == (GoalStatus.CANCELED, "PREEMPTED")
+
+
+def test_the_drive_that_preempts_a_motor_goal_moves_the_base(lab: tuple[World, Sequencer]) -> None:
+    world, sequencer = lab
+    sequencer.activate(TOKEN, "orientation_control", {"heading_rad": 3.0}, preempt=False)
+    world.step_for(0.2)
+    Robot(world, sequencer).drive(TOKEN, 1, 0.3, 0.0)
+    moving = world.step_for(0.3)  # within the deadman's window: no second command is needed
+    assert moving.commanded_linear_mps > 0.1 and abs(moving.commanded_angular_radps) < 1e-6
 
 
 def test_revoking_control_aborts_the_motor_goal(lab: tuple[World, Sequencer]) -> None:

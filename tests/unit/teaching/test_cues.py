@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from middleware.lessons.cues import MAX_CUES, parse_cue_track, to_webvtt
+from middleware.teaching.cues import MAX_CUES, parse_cue_track, to_webvtt
 
 SKILLS = {
     "go_to_goal": [

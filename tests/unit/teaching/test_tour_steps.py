@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from middleware.tours.demo import DEMO_TOURS
-from middleware.tours.services import TourInvalid, check_tour, parse_step
+from middleware.teaching.demo_content import DEMO_TOURS
+from middleware.teaching.tours import TourInvalid, check_tour, parse_step
 
 SKILLS = {"go_to_goal": [{"name": "goal_x_m", "type": "double", "minimum": -50.0, "maximum": 50.0, "choices": []}]}
 
@@ -45,3 +45,13 @@ def test_a_tour_needs_one_to_fifty_steps(steps: object) -> None:
 def test_the_demo_tours_are_valid_in_form() -> None:
     for tour in DEMO_TOURS:
         check_tour(tour, None)
+
+
+def test_panel_choices_name_the_console_panels_and_skills_by_title_and_keep_ids_in_use() -> None:
+    from middleware.lab.panels import robot_panels
+    from middleware.teaching.tours import panel_choices
+
+    choices = dict(panel_choices(robot_panels("r", None), {"wall_following": [], "go_to_goal": []}, ["old-panel"]))
+    assert choices["map"] == "Lab model" and choices["camera"] == "Camera"
+    assert choices["skill-go_to_goal"] == "Go to goal" and choices["skill-wall_following"] == "Wall following"
+    assert choices["old-panel"] == "old-panel"

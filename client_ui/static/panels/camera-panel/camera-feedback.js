@@ -4,7 +4,7 @@
 
 import {
   CommandLog, cameraModel, edgeFillRects, isWarped, predictedPathPoints, referenceDepthFromScan, warpTransform,
-} from "../../js/feedback-math.js";
+} from "../../lib/feedback-math.js";
 
 const IDLE_EPSILON = 1e-4;
 

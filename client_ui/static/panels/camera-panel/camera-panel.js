@@ -7,13 +7,15 @@
 // Out: `camera-feedback-change` {enabled} when the person turns the motion preview on or off,
 // `camera-feedback-fill-change` {fill} when they choose the fill.
 
-import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
-import { framesInWindow, parseFramePacket } from "../../js/camera-frame.js";
+import { h } from "../../lib/dom.js";
+import { framesInWindow, parseFramePacket } from "../../lib/camera-frame.js";
 import { FILL_MODES, FeedbackLayer } from "./camera-feedback.js";
+import { PanelElement } from "../panel-base.js";
+import { registerPanel } from "../registry.js";
 
 const FPS_WINDOW_MS = 1000;
 
-export class CameraPanel extends HTMLElement {
+export class CameraPanel extends PanelElement {
   #canvas;
   #placeholder;
   #fpsOutput;
@@ -33,46 +35,42 @@ export class CameraPanel extends HTMLElement {
   #fillSelect;
   #delayOutput;
   #injectedBadge;
-  #animation = 0;
 
   connectedCallback() {
-    this.#build();
+    super.connectedCallback();
     clearInterval(this.#statsTimer);
     // Frame rate must fall to 0 when frames stop, so it is refreshed on a clock, not per frame.
     this.#statsTimer = setInterval(() => this.#showStats(), 250);
   }
 
   disconnectedCallback() {
+    super.disconnectedCallback();
     clearInterval(this.#statsTimer);
   }
 
-  // Built on first use rather than in the constructor, which custom elements may not give children.
-  #build() {
-    if (this.#canvas) return;
+  build() {
     this.classList.add("panel");
     this.#canvas = h("canvas", { class: "camera__canvas", width: 320, height: 240, role: "img", id: "camera-canvas" });
     this.#placeholder = h("p", { class: "camera__placeholder", text: "Waiting for video…" });
     this.#fpsOutput = h("span", { "data-field": "fps", text: "0" });
     this.#ageOutput = h("span", { "data-field": "video-age", text: "—" });
     this.#sequenceOutput = h("span", { "data-field": "frame-sequence", text: "—" });
-    this.#messageLine = h("p", { class: "camera__message", "data-field": "camera-message", hidden: true });
+    this.#messageLine = this.messageLine({ class: "camera__message", "data-field": "camera-message" });
     this.#delayOutput = h("span", { "data-field": "video-delay", text: "—" });
     this.#injectedBadge = h("span", { class: "camera__injected", "data-field": "injected-delay", hidden: true });
     this.#feedbackToggle = h("input", { type: "checkbox", id: "camera-feedback-toggle", "data-field": "feedback-toggle" });
     this.#feedbackToggle.checked = this.#feedback.enabled;
     this.#feedbackToggle.addEventListener("change", () => {
       this.feedbackEnabled = this.#feedbackToggle.checked;
-      this.dispatchEvent(new CustomEvent("camera-feedback-change", { bubbles: true,
-        detail: { enabled: this.#feedbackToggle.checked } }));
+      this.emit("camera-feedback-change", { enabled: this.#feedbackToggle.checked });
     });
     this.#fillSelect = h("select", { id: "camera-feedback-fill", "data-field": "feedback-fill" },
       h("option", { value: "edges", text: "continue the picture" }),
-      h("option", { value: "black", text: "black (as the thesis)" }));
+      h("option", { value: "black", text: "black" }));
     this.#fillSelect.value = this.#feedback.fill;
     this.#fillSelect.addEventListener("change", () => {
       this.feedbackFill = this.#fillSelect.value;
-      this.dispatchEvent(new CustomEvent("camera-feedback-fill-change", { bubbles: true,
-        detail: { fill: this.#feedback.fill } }));
+      this.emit("camera-feedback-fill-change", { fill: this.#feedback.fill });
     });
     this.append(
       h("h2", { class: "panel__title", id: "camera-title", text: "Camera" }),
@@ -80,13 +78,16 @@ export class CameraPanel extends HTMLElement {
       h("p", { class: "camera__stats" },
         h("span", {}, this.#fpsOutput, " fps"),
         h("span", {}, "video age ", this.#ageOutput, " ms"),
-        h("span", {}, "frame ", this.#sequenceOutput),
+        h("span", { hidden: true }, "frame ", this.#sequenceOutput), // a number for tests and tools, not people
         h("span", { title: "From sending a command to the first frame that shows it" },
           "video delay ", this.#delayOutput, " s"),
         this.#injectedBadge),
-      h("p", { class: "camera__feedback" },
-        h("label", {}, this.#feedbackToggle, " Motion preview: move the picture at once with my commands"),
-        h("label", { class: "camera__fill" }, "Where the frame shows nothing: ", this.#fillSelect)),
+      // Folded on a phone, where the picture and the drive pad must share one screen.
+      h("details", { class: "camera__options", open: window.matchMedia("(min-width: 760px)").matches },
+        h("summary", { text: "Motion preview" }),
+        h("p", { class: "camera__feedback" },
+          h("label", {}, this.#feedbackToggle, " Move the picture at once with my commands"),
+          h("label", { class: "camera__fill" }, "Where the frame shows nothing: ", this.#fillSelect))),
       this.#messageLine,
     );
     this.#applyLabel();
@@ -99,7 +100,7 @@ export class CameraPanel extends HTMLElement {
 
   /** While the socket is down the last frame stays, dimmed, so nobody mistakes it for live video. */
   set connected(isConnected) {
-    this.#build();
+    this.ensureBuilt();
     this.#stage.classList.toggle("camera__stage--stale", !isConnected);
     if (!isConnected && this.#lastHeader) {
       this.#placeholder.textContent = "Video paused: the camera connection is down.";
@@ -109,7 +110,7 @@ export class CameraPanel extends HTMLElement {
 
   /** One binary message from the camera socket. Only the newest waiting frame is kept. */
   set frame(buffer) {
-    this.#build();
+    this.ensureBuilt();
     if (this.#decoding) {
       this.#pending = buffer;
       return;
@@ -163,7 +164,7 @@ export class CameraPanel extends HTMLElement {
 
   /** A text message from the camera socket: {type: "status"|"error", ...}. */
   set message(message) {
-    this.#build();
+    this.ensureBuilt();
     if (message && "injected_delay_s" in message) this.#showInjectedDelay(Number(message.injected_delay_s));
     if (message?.type === "status" && !("robot_online" in message)) return;
     if (message?.type === "status") {
@@ -184,8 +185,7 @@ export class CameraPanel extends HTMLElement {
   }
 
   #showMessage(text, isProblem) {
-    this.#messageLine.textContent = text;
-    this.#messageLine.hidden = !text;
+    this.showMessage(text);
     this.#messageLine.classList.toggle("camera__message--problem", Boolean(isProblem));
   }
 
@@ -213,13 +213,14 @@ export class CameraPanel extends HTMLElement {
   }
 
   #requestDraw() {
-    if (this.#animation || !this.#bitmap) return;
-    this.#animation = requestAnimationFrame(() => {
-      this.#animation = 0;
-      const moving = this.#feedback.draw(this.#canvas, this.#bitmap, performance.now());
-      // While predicted motion continues the picture keeps moving, frame or no frame.
-      if (moving) this.#requestDraw();
-    });
+    if (this.#bitmap) this.scheduleRender();
+  }
+
+  render() {
+    if (!this.#bitmap) return;
+    const moving = this.#feedback.draw(this.#canvas, this.#bitmap, performance.now());
+    // While predicted motion continues the picture keeps moving, frame or no frame.
+    if (moving) this.scheduleRender();
   }
 
   #draw(bitmap, header) {
@@ -256,7 +257,9 @@ export class CameraPanel extends HTMLElement {
   }
 }
 
-export function register() {
-  adoptStylesheet(new URL("./camera-panel.css", import.meta.url));
-  defineOnce("camera-panel", CameraPanel);
-}
+export const register = registerPanel({
+  kind: "camera", tag: "camera-panel", element: CameraPanel, span: 2,
+  stylesheets: [new URL("./camera-panel.css", import.meta.url)],
+  // The laser scan in the telemetry gives the motion preview the depth of what the camera sees.
+  feeds: [{ service: "camera-stream" }, { robotInfo: "info" }, { socket: "telemetry", messages: { telemetry: "telemetry" } }],
+});

@@ -1,8 +1,11 @@
 // <chat-panel>: the robot's chat room. In: `history` ({messages, can_moderate}), `message` (one message),
 // `deleted` (an id), `error` ({message, field}), `link` ("open" | "connecting" | "closed").
-// Out: "chat-send" (detail {body}) and "chat-delete" (detail {id}). Text reaches the DOM only as text.
+// Out: "chat-send" (detail {body}), "chat-delete" (detail {id}) and "panel-attention" on a new message (the
+// console counts it on the Chat tab while another is shown). Text reaches the DOM only as text.
 
-import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
+import { h } from "../../lib/dom.js";
+import { PanelElement } from "../panel-base.js";
+import { registerPanel } from "../registry.js";
 
 const MAX_CHARS = 500;
 
@@ -13,8 +16,7 @@ export function formatTime(iso) {
   return date.toLocaleTimeString([], { hour: "2-digit", minute: "2-digit" });
 }
 
-export class ChatPanel extends HTMLElement {
-  #built = false;
+export class ChatPanel extends PanelElement {
   #list;
   #input;
   #send;
@@ -23,13 +25,7 @@ export class ChatPanel extends HTMLElement {
   #items = new Map();
   #canModerate = false;
 
-  connectedCallback() {
-    this.#build();
-  }
-
-  #build() {
-    if (this.#built) return;
-    this.#built = true;
+  build() {
     this.classList.add("panel", "chat");
     const titleId = "chat-title";
     this.#list = h("ol", { class: "chat__list", role: "log", "aria-live": "polite", "aria-labelledby": titleId,
@@ -53,7 +49,7 @@ export class ChatPanel extends HTMLElement {
       this.error = { message: "Write something before sending." };
       return;
     }
-    this.dispatchEvent(new CustomEvent("chat-send", { detail: { body }, bubbles: true }));
+    this.emit("chat-send", { body });
     this.#input.value = "";
     this.#errorLine.hidden = true;
   }
@@ -69,7 +65,7 @@ export class ChatPanel extends HTMLElement {
         this.#canModerate && h("button", {
           type: "button", class: "chat__delete", text: "Delete",
           "aria-label": `Delete the message from ${message.author}`,
-          onclick: () => this.dispatchEvent(new CustomEvent("chat-delete", { detail: { id: message.id }, bubbles: true })),
+          onclick: () => this.emit("chat-delete", { id: message.id }),
         })),
       h("p", { class: "chat__body", "data-field": "chat-body", text: message.body }));
     return item;
@@ -86,7 +82,7 @@ export class ChatPanel extends HTMLElement {
   }
 
   set history(value) {
-    this.#build();
+    this.ensureBuilt();
     this.#canModerate = Boolean(value?.can_moderate);
     this.#items.clear();
     this.#list.replaceChildren();
@@ -96,25 +92,28 @@ export class ChatPanel extends HTMLElement {
   }
 
   set message(value) {
-    this.#build();
-    if (value && typeof value.id === "number") this.#append(value);
+    this.ensureBuilt();
+    if (value && typeof value.id === "number") {
+      this.#append(value);
+      this.emit("panel-attention", { reason: "message" });
+    }
   }
 
   set deleted(id) {
-    this.#build();
+    this.ensureBuilt();
     this.#items.get(id)?.remove();
     this.#items.delete(id);
     this.#empty.hidden = this.#items.size > 0;
   }
 
   set error(value) {
-    this.#build();
+    this.ensureBuilt();
     this.#errorLine.textContent = value?.message ?? "";
     this.#errorLine.hidden = !value?.message;
   }
 
   set link(phase) {
-    this.#build();
+    this.ensureBuilt();
     const open = phase === "open";
     this.#input.disabled = !open;
     this.#send.disabled = !open;
@@ -122,7 +121,7 @@ export class ChatPanel extends HTMLElement {
   }
 }
 
-export function register() {
-  adoptStylesheet(new URL("./chat-panel.css", import.meta.url));
-  defineOnce("chat-panel", ChatPanel);
-}
+export const register = registerPanel({
+  kind: "chat", tag: "chat-panel", element: ChatPanel, stylesheets: [new URL("./chat-panel.css", import.meta.url)],
+  feeds: [{ service: "chat" }],
+});

@@ -1,9 +1,11 @@
 // <connection-status>: one line per socket (camera, telemetry, drive): connected, reconnecting in
-// N s, or closed with the reason. In: `loginUrl` (string), `robotName` (string), and
-// `update(name, state)` with a transport Channel state. Out: none.
+// N s, or closed with the reason; and a line for the robot itself, since the sockets reach the lab
+// server even while the robot behind it does not answer. In: `loginUrl` (string), `robotName` (string),
+// `robotOnline` (boolean), and `update(name, state)` with a transport Channel state. Out: none.
 
-import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
-import { CLOSE_CODES } from "../../js/transport.js";
+import { h } from "../../lib/dom.js";
+import { CLOSE_CODES } from "../../lib/transport.js";
+import { elementRegistrar, PanelElement } from "../panel-base.js";
 
 const LABELS = { camera: "Camera", telemetry: "Telemetry", drive: "Drive", queue: "Queue" };
 
@@ -29,8 +31,8 @@ export function describeState(state, { robotName = "the robot", nowMs = Date.now
   }
 }
 
-export class ConnectionStatus extends HTMLElement {
-  #built = false;
+// Not a panel kind (the console puts it above the grid, not in it), but built like one.
+export class ConnectionStatus extends PanelElement {
   #lines = new Map();
   #states = new Map();
   #sessionAlert;
@@ -38,17 +40,14 @@ export class ConnectionStatus extends HTMLElement {
   #tickTimer = 0;
   #robotName = "the robot";
 
-  connectedCallback() {
-    this.#build();
-  }
-
   disconnectedCallback() {
+    super.disconnectedCallback();
     clearInterval(this.#tickTimer);
     this.#tickTimer = 0;
   }
 
   set loginUrl(url) {
-    this.#build();
+    this.ensureBuilt();
     this.#loginLink.href = url;
   }
 
@@ -56,22 +55,30 @@ export class ConnectionStatus extends HTMLElement {
     this.#robotName = String(name);
   }
 
+  /** Whether the robot answers the lab server (the sockets' "connected" says nothing about it). */
+  set robotOnline(online) {
+    this.ensureBuilt();
+    const { line, text } = this.#lines.get("robot");
+    line.dataset.phase = online ? "open" : "closed";
+    text.textContent = online ? "answering" : "not answering: commands wait until it is back";
+  }
+
   /** Show the latest state of the socket called `name`. */
   update(name, state) {
-    this.#build();
+    this.ensureBuilt();
     this.#states.set(name, state);
     this.#render(name);
     if (state.phase === "closed" && state.code === CLOSE_CODES.NOT_LOGGED_IN) this.#sessionAlert.hidden = false;
     this.#syncTicker();
   }
 
-  #build() {
-    if (this.#built) return;
-    this.#built = true;
+  build() {
     this.classList.add("panel", "connection-status");
     const list = h("ul", { class: "connections", role: "list", "aria-label": "Connections" });
-    for (const [name, label] of Object.entries(LABELS)) {
-      const text = h("span", { class: "connection__text", "data-field": `${name}-connection`, text: "not started" });
+    const lines = [...Object.entries(LABELS), ["robot", "Robot"]];
+    for (const [name, label] of lines) {
+      const text = h("span", { class: "connection__text", "data-field": `${name}-connection`,
+        text: name === "robot" ? "checking…" : "not started" });
       const line = h("li", { class: "connection", "data-connection": name, "data-phase": "idle" },
         h("span", { class: "connection__dot", "aria-hidden": "true" }),
         h("span", { class: "connection__name", text: `${label}:` }), " ", text);
@@ -107,7 +114,5 @@ export class ConnectionStatus extends HTMLElement {
   }
 }
 
-export function register() {
-  adoptStylesheet(new URL("./connection-status.css", import.meta.url));
-  defineOnce("connection-status", ConnectionStatus);
-}
+export const register = elementRegistrar("connection-status", ConnectionStatus,
+  [new URL("./connection-status.css", import.meta.url)]);

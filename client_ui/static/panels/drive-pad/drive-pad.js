@@ -7,8 +7,10 @@
 // Out: "drive-command" (detail: {linear_mps, angular_radps}, sent whenever the intent changes),
 //      "drive-stop" (stop now: Stop button, Escape, window blur, hidden tab, page hide).
 
-import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
-import { driveCommand, isStill, KEY_DIRECTIONS, stickCommand, stepCommand } from "../../js/drive-math.js";
+import { h } from "../../lib/dom.js";
+import { driveCommand, isStill, KEY_DIRECTIONS, stickCommand, stepCommand } from "../../lib/drive-math.js";
+import { PanelElement } from "../panel-base.js";
+import { registerPanel } from "../registry.js";
 
 const SVG_NS = "http://www.w3.org/2000/svg";
 const BUTTONS = [
@@ -44,8 +46,7 @@ function focusWantsArrowKeys(element) {
   return false;
 }
 
-export class DrivePad extends HTMLElement {
-  #built = false;
+export class DrivePad extends PanelElement {
   #limits = null;
   #heldKeys = new Map();        // arrow key -> direction
   #heldButtonKeys = new Map();  // "Enter"/" " on a focused pad button -> direction
@@ -58,7 +59,6 @@ export class DrivePad extends HTMLElement {
   #observingNote;
   #ackOutput;
   #appliedOutput;
-  #errorLine;
   #listening = false;
   #mode = "hold";
   #stepTimer = 0;
@@ -70,7 +70,7 @@ export class DrivePad extends HTMLElement {
   #modeNote;
 
   connectedCallback() {
-    this.#build();
+    super.connectedCallback();
     if (this.#listening) return;
     this.#listening = true;
     document.addEventListener("keydown", this.#onDocumentKeyDown);
@@ -83,6 +83,7 @@ export class DrivePad extends HTMLElement {
   }
 
   disconnectedCallback() {
+    super.disconnectedCallback();
     window.removeEventListener("gamepadconnected", this.#onGamepadConnected);
     window.removeEventListener("gamepaddisconnected", this.#onGamepadDisconnected);
     cancelAnimationFrame(this.#gamepadFrame);
@@ -97,14 +98,14 @@ export class DrivePad extends HTMLElement {
 
   set limits(limits) {
     this.#limits = limits ?? null;
-    this.#build();
+    this.ensureBuilt();
     this.#showSpeed();
     this.#emitIfChanged();
   }
 
   /** State of the drive socket: "connecting", "ready" (the server sent its limits) or "closed". */
   set link(state) {
-    this.#build();
+    this.ensureBuilt();
     this.#linkNote.hidden = state === "ready";
     this.#linkNote.textContent = state === "closed"
       ? "Driving is unavailable: the drive connection is closed."
@@ -113,7 +114,7 @@ export class DrivePad extends HTMLElement {
 
   /** True while someone else has control: the pad stays usable but says the robot will not obey. */
   set observing(observing) {
-    this.#build();
+    this.ensureBuilt();
     const wasObserving = this.hasAttribute("data-observing");
     this.toggleAttribute("data-observing", Boolean(observing));
     this.#observingNote.hidden = !observing;
@@ -121,14 +122,14 @@ export class DrivePad extends HTMLElement {
   }
 
   set ack(message) {
-    this.#build();
+    this.ensureBuilt();
     this.#ackOutput.textContent = String(message?.sequence ?? "—");
     this.#appliedOutput.textContent = String(message?.applied_sequence ?? "—");
     this.#setError("");
   }
 
   set error(message) {
-    this.#build();
+    this.ensureBuilt();
     this.#setError(message?.message || (message ? "The robot refused the command." : ""));
   }
 
@@ -143,7 +144,7 @@ export class DrivePad extends HTMLElement {
   }
 
   set mode(mode) {
-    this.#build();
+    this.ensureBuilt();
     this.#mode = mode === "step" ? "step" : "hold";
     for (const radio of this.querySelectorAll('input[name="drive-mode"]')) radio.checked = radio.value === this.#mode;
     this.#modeNote.textContent = this.#mode === "step"
@@ -157,9 +158,7 @@ export class DrivePad extends HTMLElement {
     return this.#slider ? Number(this.#slider.value) / 100 : 0.5;
   }
 
-  #build() {
-    if (this.#built) return;
-    this.#built = true;
+  build() {
     this.classList.add("panel");
 
     const pad = h("div", { class: "pad", role: "group", "aria-label": "Drive controls", oncontextmenu: (e) => e.preventDefault() });
@@ -189,7 +188,6 @@ export class DrivePad extends HTMLElement {
     });
     this.#ackOutput = h("span", { "data-field": "ack-sequence", text: "—" });
     this.#appliedOutput = h("span", { "data-field": "applied-sequence", text: "—" });
-    this.#errorLine = h("p", { class: "drive__error", "data-field": "drive-error", role: "alert", hidden: true });
 
     this.append(
       h("h2", { class: "panel__title", id: "drive-title", text: "Drive" }),
@@ -213,7 +211,7 @@ export class DrivePad extends HTMLElement {
       this.#gamepadNote = h("p", { class: "drive__note", "data-field": "gamepad", hidden: true }),
       h("p", { class: "drive__acks" },
         "Last acknowledged command ", this.#ackOutput, " · applied ", this.#appliedOutput),
-      this.#errorLine,
+      this.messageLine({ class: "drive__error", "data-field": "drive-error", role: "alert" }),
     );
     this.#showSpeed();
   }
@@ -306,7 +304,7 @@ export class DrivePad extends HTMLElement {
     this.#heldPointers.clear();
     this.#showActive();
     this.#lastEmitted = { linear_mps: 0, angular_radps: 0 };
-    this.dispatchEvent(new CustomEvent("drive-stop", { bubbles: true }));
+    this.emit("drive-stop", null);
   }
 
   #changed() {
@@ -324,12 +322,12 @@ export class DrivePad extends HTMLElement {
     }
     this.toggleAttribute("data-stepping", true);
     this.#lastEmitted = step.command;
-    this.dispatchEvent(new CustomEvent("drive-command", { bubbles: true, detail: step.command }));
+    this.emit("drive-command", step.command);
     this.#stepTimer = setTimeout(() => {
       this.#stepTimer = 0;
       this.removeAttribute("data-stepping");
       this.#lastEmitted = { linear_mps: 0, angular_radps: 0 };
-      this.dispatchEvent(new CustomEvent("drive-command", { bubbles: true, detail: this.#lastEmitted }));
+      this.emit("drive-command", this.#lastEmitted);
     }, step.duration_ms);
   }
 
@@ -370,7 +368,7 @@ export class DrivePad extends HTMLElement {
     const last = this.#lastEmitted;
     if (command.linear_mps === last.linear_mps && command.angular_radps === last.angular_radps) return;
     this.#lastEmitted = command;
-    this.dispatchEvent(new CustomEvent("drive-command", { bubbles: true, detail: command }));
+    this.emit("drive-command", command);
   }
 
   #isStill(command) {
@@ -398,13 +396,11 @@ export class DrivePad extends HTMLElement {
   }
 
   #setError(text) {
-    if (this.#errorLine.textContent === text && this.#errorLine.hidden === !text) return;
-    this.#errorLine.textContent = text;
-    this.#errorLine.hidden = !text;
+    this.showMessage(text);
   }
 }
 
-export function register() {
-  adoptStylesheet(new URL("./drive-pad.css", import.meta.url));
-  defineOnce("drive-pad", DrivePad);
-}
+export const register = registerPanel({
+  kind: "drive", tag: "drive-pad", element: DrivePad, stylesheets: [new URL("./drive-pad.css", import.meta.url)],
+  feeds: [{ service: "drive" }, { robotInfo: "limits", fields: ["max_linear_mps", "max_angular_radps"] }],
+});

@@ -1,21 +1,49 @@
-// <map-panel>: the lab model in 2D. Scene boxes, the robot (odometry pose, localized pose, ground truth
-// when the server sends it), laser hits and sonar cones, the occupancy grid, localization particles and
-// the go-to-goal target. Click, tap or keyboard (arrows move a cursor, Enter sets it) picks a target.
+// <map-panel>: the lab model in 2D. The floor plan is in true coordinates, so each pose is drawn in its
+// own labelled style with a trail: odometry (drifts), the localized estimate (while localization runs)
+// and the true pose (only when the server sends it, i.e. where the teaching mode allows). The gap
+// between odometry and the best other pose is drawn as the drift. Laser hits and sonar cones are placed
+// by the robot's best belief (the estimate, else odometry), and the legend names which; it lists only
+// what is drawn. Click, tap or keyboard (arrows move a cursor, Enter sets it) picks a target; "Go there"
+// asks for a go-to-goal to it.
 // In: `info` (robot info: scene_boxes, sonars, laser, body_radius_m), `telemetry`, `localization`,
 //     `grid` (the map answer or null), `goalFeedback` (go-to-goal feedback, for its goal and values),
-//     `target` ([x_m, y_m] or null), `note` (a sentence about the map's data).
-// Out: "map-target" (detail {x_m, y_m}).
+//     `target` ([x_m, y_m] or null), `note` (a sentence about the map's data), `canGo` (a goal skill exists),
+//     `observing` (someone else has the turn: "Go there" is off).
+// Out: "map-target" and "map-go" (detail {x_m, y_m}).
 
-import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
+import { h } from "../../lib/dom.js";
 import {
-  boxCorners, canvasToWorld, fitView, laserHits, moveCursor, sceneBounds, sonarCone, worldToCanvas, worldTransform,
-} from "../../js/map-geometry.js";
-import { isEcho } from "../../js/polar.js";
+  boxCorners, canvasToWorld, extendTrail, fitView, laserHits, moveCursor, poseDistance, sceneBounds, sonarCone,
+  worldToCanvas, worldTransform,
+} from "../../lib/map-geometry.js";
+import { isEcho } from "../../lib/polar.js";
+import { PanelElement } from "../panel-base.js";
+import { registerPanel } from "../registry.js";
 
 const CURSOR_STEP_M = 0.1;
 const COLOURS = {
   box: "#5b6778", odometry: "#1d5fc4", localized: "#7a3bb8", truth: "#17703a", laser: "#d1390f",
   sonar: "rgb(194 106 0 / 7%)", particle: "rgb(122 59 184 / 55%)", target: "#b1261b", cursor: "#c26a00",
+  drift: "#2b2f36",
+};
+const POSE_STYLES = {
+  odometry: { colour: COLOURS.odometry, label: "odometry", dash: [], filled: true },
+  localized: { colour: COLOURS.localized, label: "estimate", dash: [6, 4], filled: false },
+  truth: { colour: COLOURS.truth, label: "true", dash: [2, 3], filled: false },
+};
+// The legend's entries: [colour, text, swatch shape]; render() lists those it drew.
+const LEGEND = {
+  odometry: [COLOURS.odometry, "odometry pose (from the wheels; it drifts)", "robot"],
+  localized: [COLOURS.localized, "localized estimate", "robot-dashed"],
+  truth: [COLOURS.truth, "true pose", "robot-dotted"],
+  trail: ["#7b8494", "trail of where it has been", "line"],
+  drift: [COLOURS.drift, "drift of odometry", "line-dashed"],
+  "laser-odometry": [COLOURS.laser, "laser hits, placed by the odometry pose", "dot"],
+  "laser-localized": [COLOURS.laser, "laser hits, placed by the localized estimate", "dot"],
+  sonar: ["#c26a00", "sonar cones", "cone"],
+  particles: [COLOURS.particle, "localization particles", "dot"],
+  target: [COLOURS.target, "target", "cross"],
+  grid: ["#444", "occupancy map", "cell"],
 };
 
 function fixed(value, decimals = 2) {
@@ -57,12 +85,10 @@ export function gridImage(grid) {
   return canvas;
 }
 
-export class MapPanel extends HTMLElement {
-  #built = false;
+export class MapPanel extends PanelElement {
   #canvas;
   #summary;
   #cursorLine;
-  #noteLine;
   #info = null;
   #telemetry = null;
   #localization = null;
@@ -72,42 +98,60 @@ export class MapPanel extends HTMLElement {
   #target = null;
   #cursor = null;
   #bounds = sceneBounds([]);
+  #trails = { odometry: [], localized: [], truth: [] };
+  #legend;
+  #legendKeys = "";
+  #go;
+  #observing = false;
   #view = null;
-  #frame = 0;
   #resizeObserver = null;
 
   connectedCallback() {
-    this.#build();
-    this.#resizeObserver ??= new ResizeObserver(() => this.#redraw());
+    super.connectedCallback();
+    this.#resizeObserver ??= new ResizeObserver(() => this.scheduleRender());
     this.#resizeObserver.observe(this.#canvas);
   }
 
   disconnectedCallback() {
+    super.disconnectedCallback();
     this.#resizeObserver?.disconnect();
-    cancelAnimationFrame(this.#frame);
-    this.#frame = 0;
   }
 
   set info(info) {
-    this.#build();
+    this.ensureBuilt();
     this.#info = info ?? null;
     this.#bounds = sceneBounds(Array.isArray(info?.scene_boxes) ? info.scene_boxes : []);
-    this.#redraw();
+    this.scheduleRender();
   }
 
   set telemetry(message) {
     this.#telemetry = message;
-    this.#redraw();
+    this.#extendTrails();
+    this.scheduleRender();
   }
 
   set localization(message) {
     this.#localization = message?.type === "localization" ? message : null;
-    this.#redraw();
+    this.#extendTrails();
+    this.scheduleRender();
+  }
+
+  set observing(observing) {
+    this.ensureBuilt();
+    this.#observing = Boolean(observing);
+    this.#go.disabled = this.#observing || !this.#target;
+    this.#go.title = this.#observing ? "Going there waits for your turn" : "Start go-to-goal to the target picked on the map";
+  }
+
+  /** Whether the robot has a goal skill that "Go there" can start. */
+  set canGo(available) {
+    this.ensureBuilt();
+    this.#go.hidden = !available;
   }
 
   /** The occupancy grid answer, or null when there is no map yet. */
   set grid(grid) {
-    this.#build();
+    this.ensureBuilt();
     if (!grid) {
       this.#grid = null;
       this.#gridCanvas = null;
@@ -115,28 +159,27 @@ export class MapPanel extends HTMLElement {
       this.#gridCanvas = gridImage(grid); // may throw on a malformed map; the console shows a notice
       this.#grid = grid;
     }
-    this.#redraw();
+    this.scheduleRender();
   }
 
   set goalFeedback(feedback) {
     this.#feedback = feedback ?? null;
-    this.#redraw();
+    this.scheduleRender();
   }
 
   set target(target) {
+    this.ensureBuilt();
     this.#target = Array.isArray(target) ? target : null;
-    this.#redraw();
+    this.#go.disabled = this.#observing || !this.#target;
+    this.scheduleRender();
   }
 
+  /** A sentence about the map itself (none yet, could not be loaded), or "" to clear it. */
   set note(text) {
-    this.#build();
-    this.#noteLine.textContent = text || "";
-    this.#noteLine.hidden = !text;
+    this.showMessage(text);
   }
 
-  #build() {
-    if (this.#built) return;
-    this.#built = true;
+  build() {
     this.classList.add("panel", "map");
     this.#canvas = h("canvas", {
       class: "map__canvas", width: 480, height: 360, tabindex: "0", role: "application",
@@ -147,28 +190,44 @@ export class MapPanel extends HTMLElement {
     });
     this.#canvas.addEventListener("click", (event) => this.#onClick(event));
     this.#canvas.addEventListener("keydown", (event) => this.#onKey(event));
-    this.#canvas.addEventListener("focus", () => this.#redraw());
-    this.#canvas.addEventListener("blur", () => this.#redraw());
+    this.#canvas.addEventListener("focus", () => this.scheduleRender());
+    this.#canvas.addEventListener("blur", () => this.scheduleRender());
     this.#summary = h("p", { class: "map__summary", id: "map-summary", "data-field": "map-summary", text: "Waiting for the robot…" });
     this.#cursorLine = h("p", { class: "map__cursor", "aria-live": "polite", "data-field": "map-cursor" });
-    this.#noteLine = h("p", { class: "map__note muted", "data-field": "map-note", hidden: true });
-    const key = (colour, text, shape = "line") => {
-      const swatch = h("span", { class: `map__swatch map__swatch--${shape}`, "aria-hidden": "true" });
-      swatch.style.setProperty("--swatch", colour); // CSSOM, not a style attribute: the CSP allows it
-      return h("li", {}, swatch, text);
-    };
+    this.#go = h("button", {
+      type: "button", class: "button button--primary map__go", "data-action": "go-there", disabled: true, hidden: true,
+      text: "Go there", title: "Start go-to-goal to the target picked on the map",
+      onclick: () => this.#target && this.emit("map-go", { x_m: this.#target[0], y_m: this.#target[1] }),
+    });
+    this.#legend = h("ul", { class: "map__legend", "aria-label": "Map legend", "data-field": "map-legend" });
     this.append(
       h("h2", { class: "panel__title", text: "Lab model" }),
       h("div", { class: "map__stage" }, this.#canvas),
+      h("div", { class: "map__actions" }, this.#cursorLine, this.#go),
       this.#summary,
-      this.#cursorLine,
-      this.#noteLine,
-      h("ul", { class: "map__legend", "aria-label": "Map legend" },
-        key(COLOURS.odometry, "odometry pose", "robot"), key(COLOURS.localized, "localized pose", "robot"),
-        key(COLOURS.truth, "ground truth", "robot"), key(COLOURS.laser, "laser hits", "dot"),
-        key("#c26a00", "sonar cones", "cone"), key(COLOURS.target, "target", "cross"),
-        key("#444", "occupancy map", "cell")),
+      this.messageLine({ class: "map__note muted", "data-field": "map-note" }),
+      this.#legend,
     );
+  }
+
+  #extendTrails() {
+    const poses = this.#poses();
+    for (const frame of Object.keys(this.#trails)) {
+      this.#trails[frame] = poses[frame] ? extendTrail(this.#trails[frame], poses[frame]) : [];
+    }
+  }
+
+  /** Lists exactly the layers the last render drew (rebuilt only when that set changes). */
+  #showLegend(layers) {
+    const keys = layers.join(" ");
+    if (keys === this.#legendKeys) return;
+    this.#legendKeys = keys;
+    this.#legend.replaceChildren(...layers.map((layer) => {
+      const [colour, text, shape] = LEGEND[layer];
+      const swatch = h("span", { class: `map__swatch map__swatch--${shape}`, "aria-hidden": "true" });
+      swatch.style.setProperty("--swatch", colour); // CSSOM, not a style attribute: the CSP allows it
+      return h("li", { "data-layer": layer }, swatch, text);
+    }));
   }
 
   #poses() {
@@ -181,20 +240,13 @@ export class MapPanel extends HTMLElement {
     };
   }
 
-  #redraw() {
-    if (this.#frame || !this.#canvas) return;
-    this.#frame = requestAnimationFrame(() => {
-      this.#frame = 0;
-      this.#draw();
-    });
-  }
-
-  #draw() {
+  render() {
     const canvas = this.#canvas;
     const ratio = window.devicePixelRatio || 1;
+    // The CSS box decides the shape (a fixed ratio, capped by the window's height); the drawing fits into it.
     const cssWidth = canvas.clientWidth || 480;
     const width = Math.round(cssWidth * ratio);
-    const height = Math.round(width * 0.72);
+    const height = Math.round((canvas.clientHeight || cssWidth * 0.72) * ratio);
     if (canvas.width !== width || canvas.height !== height) {
       canvas.width = width;
       canvas.height = height;
@@ -208,7 +260,9 @@ export class MapPanel extends HTMLElement {
     ctx.setTransform(...worldTransform(view));
     const px = 1 / view.scale; // one device pixel in metres
 
+    const drawn = new Set();
     if (this.#gridCanvas && this.#grid) {
+      drawn.add("grid");
       ctx.imageSmoothingEnabled = false;
       const res = Number(this.#grid.resolution_m);
       ctx.drawImage(this.#gridCanvas, Number(this.#grid.origin_x_m), Number(this.#grid.origin_y_m),
@@ -223,21 +277,46 @@ export class MapPanel extends HTMLElement {
     const poses = this.#poses();
     // Readings are drawn where the robot believes it is: the localized pose once localization runs.
     const sensorPose = poses.localized ?? poses.odometry;
-    if (sensorPose) this.#drawSensors(ctx, sensorPose, px);
+    if (sensorPose) {
+      for (const layer of this.#drawSensors(ctx, sensorPose, px)) {
+        drawn.add(layer === "laser" ? `laser-${poses.localized ? "localized" : "odometry"}` : layer);
+      }
+    }
     for (const particle of (this.#localization?.particles ?? []).slice(0, 3000)) {
       if (!Array.isArray(particle)) continue;
+      drawn.add("particles");
       ctx.fillStyle = COLOURS.particle;
       ctx.fillRect(particle[0] - 1.5 * px, particle[1] - 1.5 * px, 3 * px, 3 * px);
     }
     const radius = Number(this.#info?.body_radius_m) || 0.2;
-    if (poses.truth) this.#drawRobot(ctx, poses.truth, radius, COLOURS.truth, px, true);
-    if (poses.localized) this.#drawRobot(ctx, poses.localized, radius, COLOURS.localized, px, true);
-    if (poses.odometry) this.#drawRobot(ctx, poses.odometry, radius, COLOURS.odometry, px, false);
+    const frames = ["truth", "localized", "odometry"].filter((frame) => poses[frame]);
+    for (const frame of frames) {
+      if (this.#drawTrail(ctx, this.#trails[frame], POSE_STYLES[frame], px)) drawn.add("trail");
+    }
+    const reference = poses.truth ?? poses.localized;
+    if (poses.odometry && reference) {
+      drawn.add("drift");
+      ctx.strokeStyle = COLOURS.drift;
+      ctx.lineWidth = 1.5 * px;
+      ctx.setLineDash([4 * px, 3 * px]);
+      ctx.beginPath();
+      ctx.moveTo(poses.odometry.x_m, poses.odometry.y_m);
+      ctx.lineTo(reference.x_m, reference.y_m);
+      ctx.stroke();
+      ctx.setLineDash([]);
+    }
+    for (const frame of frames) {
+      drawn.add(frame);
+      this.#drawRobot(ctx, poses[frame], radius, POSE_STYLES[frame], px);
+    }
 
     const values = this.#feedback?.values ?? {};
     const goal = this.#target ?? (Number.isFinite(values.goal_x_m) && Number.isFinite(values.goal_y_m)
       ? [values.goal_x_m, values.goal_y_m] : null);
-    if (goal) this.#cross(ctx, goal, COLOURS.target, 7 * px, 2.5 * px);
+    if (goal) {
+      drawn.add("target");
+      this.#cross(ctx, goal, COLOURS.target, 7 * px, 2.5 * px);
+    }
     if (Number.isFinite(values.obstacle_x_m) && Number.isFinite(values.obstacle_y_m)) {
       ctx.strokeStyle = COLOURS.target;
       ctx.lineWidth = 2 * px;
@@ -248,7 +327,38 @@ export class MapPanel extends HTMLElement {
     if (this.#cursor && document.activeElement === this.#canvas) {
       this.#cross(ctx, this.#cursor, COLOURS.cursor, 9 * px, 2 * px);
     }
+    this.#labelPoses(ctx, view, poses, frames, radius);
+    this.#showLegend(Object.keys(LEGEND).filter((layer) => drawn.has(layer)));
     this.#summarize(poses, goal);
+  }
+
+  /** Each pose's name beside its glyph, so the frames are told apart without the legend. */
+  #labelPoses(ctx, view, poses, frames, radius) {
+    const ratio = this.#view.ratio;
+    ctx.setTransform(1, 0, 0, 1, 0, 0);
+    ctx.font = `${Math.round(11 * ratio)}px system-ui, sans-serif`;
+    ctx.textBaseline = "middle";
+    frames.forEach((frame, index) => {
+      const [x, y] = worldToCanvas(view, poses[frame].x_m, poses[frame].y_m);
+      ctx.fillStyle = POSE_STYLES[frame].colour;
+      // Stacked labels: the poses are often within a few pixels of each other.
+      const row = index - (frames.length - 1) / 2;
+      ctx.fillText(POSE_STYLES[frame].label, x + radius * view.scale + 6 * ratio, y + row * 13 * ratio);
+    });
+  }
+
+  #drawTrail(ctx, trail, style, px) {
+    if (trail.length < 2) return false;
+    ctx.strokeStyle = style.colour;
+    ctx.globalAlpha = 0.55;
+    ctx.lineWidth = 1.5 * px;
+    ctx.setLineDash(style.dash.map((length) => length * px));
+    ctx.beginPath();
+    trail.forEach(([x, y], index) => (index ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
+    ctx.stroke();
+    ctx.setLineDash([]);
+    ctx.globalAlpha = 1;
+    return true;
   }
 
   #drawGridLines(ctx, px) {
@@ -261,31 +371,36 @@ export class MapPanel extends HTMLElement {
     ctx.stroke();
   }
 
+  /** Draws the sonar cones and laser hits that have echoes; returns the layers drawn ("sonar", "laser"). */
   #drawSensors(ctx, pose, px) {
+    const layers = [];
     const sonars = Array.isArray(this.#info?.sonars) ? this.#info.sonars : [];
     const ranges = this.#telemetry?.sonar?.ranges_m ?? [];
     ctx.fillStyle = COLOURS.sonar;
     sonars.forEach((sonar, index) => {
       const range = ranges[index];
       if (!isEcho(range, Number(sonar.max_range_m) || Infinity)) return;
+      if (!layers.includes("sonar")) layers.push("sonar");
       this.#polygon(ctx, sonarCone(pose, sonar, range));
       ctx.fill();
     });
-    const laser = this.#telemetry?.laser;
+    const hits = laserHits(pose, this.#telemetry?.laser, Number(this.#info?.laser?.max_range_m) || Infinity);
+    if (hits.length) layers.push("laser");
     ctx.fillStyle = COLOURS.laser;
-    for (const [x, y] of laserHits(pose, laser, Number(this.#info?.laser?.max_range_m) || Infinity)) {
-      ctx.fillRect(x - 1.5 * px, y - 1.5 * px, 3 * px, 3 * px);
-    }
+    for (const [x, y] of hits) ctx.fillRect(x - 1.5 * px, y - 1.5 * px, 3 * px, 3 * px);
+    return layers;
   }
 
-  #drawRobot(ctx, pose, radius, colour, px, outline) {
+  #drawRobot(ctx, pose, radius, style, px) {
     ctx.lineWidth = 2.5 * px;
-    ctx.strokeStyle = colour;
-    ctx.fillStyle = outline ? "transparent" : `${colour}40`;
+    ctx.strokeStyle = style.colour;
+    ctx.fillStyle = `${style.colour}40`;
+    ctx.setLineDash(style.dash.map((length) => length * px));
     ctx.beginPath();
     ctx.arc(pose.x_m, pose.y_m, radius, 0, 2 * Math.PI);
-    if (!outline) ctx.fill();
+    if (style.filled) ctx.fill();
     ctx.stroke();
+    ctx.setLineDash([]);
     ctx.beginPath();
     ctx.moveTo(pose.x_m, pose.y_m);
     ctx.lineTo(pose.x_m + Math.cos(pose.theta_rad) * radius * 1.4, pose.y_m + Math.sin(pose.theta_rad) * radius * 1.4);
@@ -314,11 +429,15 @@ export class MapPanel extends HTMLElement {
     if (poses.localized) {
       parts.push(`localized at (${fixed(poses.localized.x_m)}, ${fixed(poses.localized.y_m)}) m`
         + `${loc.converged ? ", converged" : ", converging"}`
-        + (Number.isFinite(loc.position_error_m) ? `, error ${fixed(loc.position_error_m, 3)} m` : "")
-        + (Number.isFinite(loc.odometry_position_error_m) ? ` (odometry ${fixed(loc.odometry_position_error_m, 3)} m)` : ""));
+        + (Number.isFinite(loc.position_error_m) ? `, ${fixed(loc.position_error_m, 2)} m from the true pose` : ""));
+    }
+    if (poses.odometry && poses.truth) {
+      parts.push(`odometry has drifted ${fixed(poseDistance(poses.odometry, poses.truth))} m from the true pose`);
+    } else if (poses.odometry && poses.localized) {
+      parts.push(`odometry is ${fixed(poseDistance(poses.odometry, poses.localized))} m from the estimate`);
     }
     if (goal) parts.push(`target (${fixed(goal[0])}, ${fixed(goal[1])}) m`);
-    parts.push(this.#grid ? `map of ${this.#grid.scans_integrated ?? 0} scans` : "no map yet");
+    if (this.#grid) parts.push(`map of ${this.#grid.scans_integrated ?? 0} scans`); // else the note says why not
     const text = parts.length ? `${parts.join("; ")}.` : "Waiting for the robot…";
     if (this.#summary.textContent !== text) this.#summary.textContent = text;
   }
@@ -328,8 +447,8 @@ export class MapPanel extends HTMLElement {
     this.#cursorLine.textContent = `Target set to (${fixed(x_m)}, ${fixed(y_m)}) m.`;
     this.dataset.targetX = fixed(x_m);
     this.dataset.targetY = fixed(y_m);
-    this.dispatchEvent(new CustomEvent("map-target", { bubbles: true, detail: { x_m, y_m } }));
-    this.#redraw();
+    this.emit("map-target", { x_m, y_m });
+    this.scheduleRender();
   }
 
   #onClick(event) {
@@ -352,7 +471,7 @@ export class MapPanel extends HTMLElement {
       const [dx, dy] = moves[event.key];
       this.#cursor = moveCursor(start, dx * step, dy * step, this.#bounds);
       this.#cursorLine.textContent = `Cursor at (${fixed(this.#cursor[0])}, ${fixed(this.#cursor[1])}) m; Enter sets the target.`;
-      this.#redraw();
+      this.scheduleRender();
     } else if (event.key === "Enter" && this.#cursor) {
       event.preventDefault();
       this.#emitTarget(...this.#cursor);
@@ -368,7 +487,13 @@ export class MapPanel extends HTMLElement {
   }
 }
 
-export function register() {
-  adoptStylesheet(new URL("./map-panel.css", import.meta.url));
-  defineOnce("map-panel", MapPanel);
-}
+export const register = registerPanel({
+  kind: "map", tag: "map-panel", element: MapPanel, span: 2, stylesheets: [new URL("./map-panel.css", import.meta.url)],
+  feeds: [
+    { socket: "telemetry", messages: { telemetry: "telemetry" } },
+    { socket: "localization", messages: { localization: "localization" } },
+    { robotInfo: "info" },
+    { service: "map-grid" },
+    { service: "goal-target" },
+  ],
+});

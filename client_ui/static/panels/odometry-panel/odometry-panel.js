@@ -3,7 +3,9 @@
 // Out: none. Each number sits alone in a [data-field] element so tests and people can read it.
 // A small time plot shows the last 30 s of speed and turn rate (redrawn at most 5 times a second).
 
-import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
+import { h } from "../../lib/dom.js";
+import { PanelElement } from "../panel-base.js";
+import { registerPanel } from "../registry.js";
 
 const DEG_PER_RAD = 180 / Math.PI;
 const PLOT_WINDOW_S = 30;
@@ -37,23 +39,22 @@ const ROWS = [
   { label: "Turn rate", field: "angular", unit: "rad/s", extra: { field: "angular-deg", unit: "°/s" } },
 ];
 
-export class OdometryPanel extends HTMLElement {
+export class OdometryPanel extends PanelElement {
   #fields = new Map();
   #deadmanNote;
-  #messageLine;
-  #built = false;
   #plot;
   #history = [];
   #plotTimer = 0;
   #limits = { max_linear_mps: 0.5, max_angular_radps: 1.5 };
 
   connectedCallback() {
-    this.#build();
+    super.connectedCallback();
     clearInterval(this.#plotTimer);
     this.#plotTimer = setInterval(() => this.#drawPlot(), PLOT_REDRAW_MS);
   }
 
   disconnectedCallback() {
+    super.disconnectedCallback();
     clearInterval(this.#plotTimer);
   }
 
@@ -62,9 +63,7 @@ export class OdometryPanel extends HTMLElement {
     if (limits?.max_linear_mps > 0 && limits?.max_angular_radps > 0) this.#limits = limits;
   }
 
-  #build() {
-    if (this.#built) return;
-    this.#built = true;
+  build() {
     this.classList.add("panel");
     const field = (name) => {
       const element = h("span", { class: "odometry__value", "data-field": name, text: "—" });
@@ -82,12 +81,11 @@ export class OdometryPanel extends HTMLElement {
       class: "odometry__note", "data-field": "deadman", hidden: true,
       text: "Stopped by the safety deadman: no drive commands arrived in time.",
     });
-    this.#messageLine = h("p", { class: "odometry__message", "data-field": "telemetry-message", hidden: true });
     this.append(
       h("h2", { class: "panel__title", text: "Odometry" }),
       list,
       this.#deadmanNote,
-      this.#messageLine,
+      this.messageLine({ class: "odometry__message", "data-field": "telemetry-message" }),
       h("figure", { class: "odometry__plot" },
         this.#plot = h("canvas", { width: 320, height: 110, role: "img", "data-field": "odometry-plot",
           "aria-label": "Speed and turn rate over the last 30 seconds" }),
@@ -102,7 +100,7 @@ export class OdometryPanel extends HTMLElement {
 
   /** A telemetry message from the server. */
   set telemetry(message) {
-    this.#build();
+    this.ensureBuilt();
     const odometry = message?.odometry ?? {};
     const pose = odometry.pose ?? {};
     const set = (name, text) => { this.#fields.get(name).textContent = text; };
@@ -124,7 +122,7 @@ export class OdometryPanel extends HTMLElement {
       this.#history.push({ t_s, linear, angular });
       if (this.#history.length > 2000) this.#history = trimHistory(this.#history, t_s);
     }
-    this.#messageLine.hidden = true;
+    this.showMessage("");
   }
 
   #drawPlot() {
@@ -167,14 +165,15 @@ export class OdometryPanel extends HTMLElement {
 
   /** A text status/error message from the telemetry socket. */
   set message(message) {
-    this.#build();
-    const text = message?.message || (message?.type === "status" && !message.robot_online ? "The robot is offline." : "");
-    this.#messageLine.textContent = text;
-    this.#messageLine.hidden = !text;
+    this.showMessage(message?.message || (message?.type === "status" && !message.robot_online ? "The robot is offline." : ""));
   }
 }
 
-export function register() {
-  adoptStylesheet(new URL("./odometry-panel.css", import.meta.url));
-  defineOnce("odometry-panel", OdometryPanel);
-}
+export const register = registerPanel({
+  kind: "odometry", tag: "odometry-panel", element: OdometryPanel,
+  stylesheets: [new URL("./odometry-panel.css", import.meta.url)],
+  feeds: [
+    { socket: "telemetry", messages: { telemetry: "telemetry", status: "message", error: "message" } },
+    { robotInfo: "limits", fields: ["max_linear_mps", "max_angular_radps"] },
+  ],
+});

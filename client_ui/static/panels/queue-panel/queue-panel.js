@@ -5,7 +5,9 @@
 // Out: "queue-action" CustomEvent with detail {type: "pass" | "leave" | "join"}.
 // The server decides everything shown here; this panel only words it.
 
-import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
+import { h } from "../../lib/dom.js";
+import { PanelElement } from "../panel-base.js";
+import { registerPanel } from "../registry.js";
 
 /** "1:05" from seconds; "—" when unknown. */
 export function formatDuration(seconds) {
@@ -14,7 +16,12 @@ export function formatDuration(seconds) {
   return `${Math.floor(total / 60)}:${String(total % 60).padStart(2, "0")}`;
 }
 
-/** The sentence that says where the user stands. */
+/** How many wait for a turn (the queue's size counts the driver too). */
+export function waitingCount(seat) {
+  return Math.max(0, Number(seat.queue_size) - (seat.controller ? 1 : 0));
+}
+
+/** The sentence that says where the user stands, in the same terms as the "Waiting" figure beside it. */
 export function describeSeat(seat) {
   if (!seat) return "Joining the queue…";
   if (seat.faulted) return "The robot is not answering. Your place is kept; the turn clock is stopped.";
@@ -24,7 +31,9 @@ export function describeSeat(seat) {
       : "You have control. Others are waiting: your turn ends when the countdown does.";
   }
   const who = seat.controller ? `${seat.controller} is driving.` : "Nobody is driving.";
-  return `${who} You are number ${seat.position} in line.`;
+  const waiting = waitingCount(seat);
+  if (seat.position === 1) return `${who} You are next${waiting > 1 ? ` of the ${waiting} waiting` : ""}.`;
+  return `${who} You are number ${seat.position} of the ${waiting} waiting.`;
 }
 
 const SLOT_FORMAT = new Intl.DateTimeFormat(undefined, { weekday: "short", day: "numeric", month: "short",
@@ -48,32 +57,25 @@ export function describeBooking(booking, nowMs) {
   return `${when} · ${whose}${starts <= nowMs ? " · now" : ""}`;
 }
 
-export class QueuePanel extends HTMLElement {
-  #built = false;
+export class QueuePanel extends PanelElement {
   #fields = {};
   #buttons = {};
   #bookingList;
   #bookingSection;
   #bookLink;
 
-  connectedCallback() {
-    this.#build();
-  }
-
-  #build() {
-    if (this.#built) return;
-    this.#built = true;
+  build() {
     this.classList.add("panel");
     const field = (name, text = "—") => (this.#fields[name] = h("span", { "data-field": name, text }));
     const button = (type, label, help) => (this.#buttons[type] = h("button", {
       type: "button", class: "button", "data-queue-action": type, title: help, text: label,
-      onclick: () => this.dispatchEvent(new CustomEvent("queue-action", { detail: { type }, bubbles: true })),
+      onclick: () => this.emit("queue-action", { type }),
     }));
     this.append(
       h("h2", { class: "panel__title", text: "Turn" }),
       h("p", { class: "queue__summary", "aria-live": "polite" }, field("queue-summary", "Joining the queue…")),
       h("dl", { class: "queue__figures" },
-        h("div", {}, h("dt", { text: "In line" }), h("dd", {}, field("queue-size"))),
+        h("div", {}, h("dt", { text: "Waiting" }), h("dd", {}, field("queue-size"))),
         h("div", { class: "queue__countdown" }, h("dt", { text: "Turn ends in" }), h("dd", {}, field("turn-remaining"))),
         h("div", { class: "queue__wait" }, h("dt", { text: "Your turn in about" }), h("dd", {}, field("estimated-wait")))),
       h("p", { class: "queue__warning", role: "alert", "data-field": "turn-warning", hidden: true,
@@ -82,7 +84,7 @@ export class QueuePanel extends HTMLElement {
         button("pass", "Pass the turn", "Give control to the next person now; you go to the end of the line"),
         button("leave", "Leave the queue", "Stop waiting; you keep watching"),
         button("join", "Join the queue", "Take a place at the end of the line")),
-      h("p", { class: "queue__message", "data-field": "queue-message", hidden: true }),
+      this.messageLine({ class: "queue__message", "data-field": "queue-message" }),
       this.#bookingSection = h("section", { class: "queue__bookings", "aria-label": "Bookings of this robot",
         hidden: true },
       h("h3", { class: "queue__bookings-title", text: "Next bookings" }),
@@ -93,13 +95,13 @@ export class QueuePanel extends HTMLElement {
   }
 
   set robotName(name) {
-    this.#build();
+    this.ensureBuilt();
     this.#bookLink.href = `/bookings?robot=${encodeURIComponent(String(name))}`;
   }
 
   /** The robot's bookings; null hides the list (they could not be read). */
   set bookings(bookings) {
-    this.#build();
+    this.ensureBuilt();
     this.#bookingSection.hidden = bookings === null || bookings === undefined;
     const now = Date.now();
     const upcoming = upcomingBookings(bookings, now);
@@ -110,13 +112,14 @@ export class QueuePanel extends HTMLElement {
 
   /** The seat message from the server. */
   set seat(seat) {
-    this.#build();
+    this.ensureBuilt();
     this.dataset.role = !seat ? "joining" : seat.is_controller ? "controller" : seat.in_queue ? "waiting" : "watching";
     this.#fields["queue-summary"].textContent = describeSeat(seat);
-    this.#fields["queue-size"].textContent = seat ? String(seat.queue_size) : "—";
-    this.#fields["turn-remaining"].textContent = seat?.turn_remaining_s == null ? "no limit"
-      : formatDuration(seat.turn_remaining_s);
-    this.#fields["estimated-wait"].textContent = formatDuration(seat?.estimated_wait_s);
+    this.#fields["queue-size"].textContent = seat ? String(waitingCount(seat)) : "—";
+    // A robot that does not answer stops the clock, so no countdown or wait would be true.
+    this.#fields["turn-remaining"].textContent = seat?.faulted ? "stopped" : seat?.turn_remaining_s == null
+      ? "no limit" : formatDuration(seat.turn_remaining_s);
+    this.#fields["estimated-wait"].textContent = seat?.faulted ? "—" : formatDuration(seat?.estimated_wait_s);
     this.querySelector('[data-field="turn-warning"]').hidden = !seat?.warning;
     this.#buttons.pass.hidden = !(seat?.is_controller && seat.queue_size > 1);
     this.#buttons.leave.hidden = !seat?.in_queue;
@@ -127,14 +130,12 @@ export class QueuePanel extends HTMLElement {
 
   /** A status or error from the queue socket. */
   set message(message) {
-    this.#build();
-    const line = this.#fields["queue-message"] ?? this.querySelector('[data-field="queue-message"]');
-    line.textContent = message?.message ?? "";
-    line.hidden = !message?.message || message.type === "status" && message.robot_online !== false;
+    // A status says something worth a line only when the robot went offline.
+    this.showMessage(message?.type === "status" && message.robot_online !== false ? "" : message?.message ?? "");
   }
 }
 
-export function register() {
-  adoptStylesheet(new URL("./queue-panel.css", import.meta.url));
-  defineOnce("queue-panel", QueuePanel);
-}
+export const register = registerPanel({
+  kind: "queue", tag: "queue-panel", element: QueuePanel, stylesheets: [new URL("./queue-panel.css", import.meta.url)],
+  feeds: [{ service: "queue" }],
+});

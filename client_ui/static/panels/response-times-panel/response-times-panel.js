@@ -3,8 +3,10 @@
 // round trip the middleware reports). Live values, a sparkline of the last samples, mean and p95.
 // In: `sample` ({client_ms, robot_ms}), `unavailable` (a sentence, or "" when pings work). Out: none.
 
-import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
-import { summarize } from "../../js/stats.js";
+import { h } from "../../lib/dom.js";
+import { summarize } from "../../lib/stats.js";
+import { PanelElement } from "../panel-base.js";
+import { registerPanel } from "../registry.js";
 
 const WINDOW = 50;
 const LEGS = [
@@ -22,21 +24,15 @@ function ms(value) {
   return Number.isFinite(value) ? value.toFixed(1) : "—";
 }
 
-export class ResponseTimesPanel extends HTMLElement {
-  #built = false;
+export class ResponseTimesPanel extends PanelElement {
   #series = { client: [], robot: [] };
   #cells = {};
   #canvas;
   #note;
-  #frame = 0;
-
-  connectedCallback() {
-    this.#build();
-  }
 
   /** One measurement; both legs in milliseconds. */
   set sample(sample) {
-    this.#build();
+    this.ensureBuilt();
     for (const { key } of LEGS) {
       const value = Number(sample?.[`${key}_ms`]);
       if (!Number.isFinite(value) || value < 0) continue;
@@ -44,18 +40,16 @@ export class ResponseTimesPanel extends HTMLElement {
       if (this.#series[key].length > WINDOW) this.#series[key].shift();
     }
     this.#note.hidden = true;
-    this.#schedule();
+    this.scheduleRender();
   }
 
   set unavailable(text) {
-    this.#build();
+    this.ensureBuilt();
     this.#note.textContent = text || "";
     this.#note.hidden = !text;
   }
 
-  #build() {
-    if (this.#built) return;
-    this.#built = true;
+  build() {
     this.classList.add("panel", "rtt");
     const cell = (key, stat) => (this.#cells[`${key}-${stat}`] = h("td", { "data-field": `rtt-${key}-${stat}`, text: "—" }));
     this.#canvas = h("canvas", { class: "rtt__spark", width: 300, height: 60, role: "img",
@@ -77,15 +71,7 @@ export class ResponseTimesPanel extends HTMLElement {
     );
   }
 
-  #schedule() {
-    if (this.#frame) return;
-    this.#frame = requestAnimationFrame(() => {
-      this.#frame = 0;
-      this.#render();
-    });
-  }
-
-  #render() {
+  render() {
     for (const { key } of LEGS) {
       const summary = summarize(this.#series[key], WINDOW);
       this.#cells[`${key}-last`].textContent = ms(summary.last);
@@ -115,7 +101,8 @@ export class ResponseTimesPanel extends HTMLElement {
   }
 }
 
-export function register() {
-  adoptStylesheet(new URL("./response-times-panel.css", import.meta.url));
-  defineOnce("response-times-panel", ResponseTimesPanel);
-}
+export const register = registerPanel({
+  kind: "response-times", tag: "response-times-panel", element: ResponseTimesPanel,
+  stylesheets: [new URL("./response-times-panel.css", import.meta.url)],
+  feeds: [{ service: "pings" }],
+});

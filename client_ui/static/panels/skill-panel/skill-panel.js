@@ -1,11 +1,14 @@
 // <skill-panel>: the visual proxy of one skill controller, generated from the skill's parameter schema.
 // In: `descriptor` ({skill, title, motor, schema: [param]}), `goal` (goal object), `goalEvent`
 //     ({kind, message, sim_time_s}), `feedback` (feedback object), `error` ({code, message, field} or null),
-//     `parameters` ({name: value}: fill fields, e.g. from a click on the map).
+//     `parameters` ({name: value}: fill fields, e.g. from a click on the map), `observing` (true while
+//     someone else has the turn: the panel is read-only, so nobody presses Activate only to be refused).
 // Out: "skill-activate" (detail {skill, parameters, preempt}), "skill-cancel" (detail {skill, goal_id}).
 // The browser's constraint validation gives early hints; the server's verdict is shown next to the field.
 
-import { adoptStylesheet, defineOnce, h } from "../../js/dom.js";
+import { h } from "../../lib/dom.js";
+import { PanelElement } from "../panel-base.js";
+import { registerPanel } from "../registry.js";
 
 const ACTIVE = new Set(["accepted", "executing", "canceling"]);
 const MAX_EVENTS = 30;
@@ -31,6 +34,11 @@ export function readValue(parameter, input) {
   return input.value;
 }
 
+/** A skill's state word for people: "goal_blocked" -> "goal blocked". */
+export function stateWords(state) {
+  return String(state).replaceAll("_", " ");
+}
+
 /** A limit for people: 3.141592653589793 -> "3.142". */
 export function shortNumber(value) {
   return String(Number(Number(value).toPrecision(4)));
@@ -41,10 +49,30 @@ function fixed(value, decimals) {
   return Number.isFinite(number) ? number.toFixed(decimals) : "—";
 }
 
+const PARAMETER_TYPES = new Set(["double", "int", "bool", "enum", "string"]);
+
+function checkParameter(parameter, index) {
+  if (parameter === null || typeof parameter !== "object" || Array.isArray(parameter)) return `parameter ${index + 1} is not an object`;
+  if (typeof parameter.name !== "string" || !parameter.name) return `parameter ${index + 1} has no name`;
+  if (!PARAMETER_TYPES.has(parameter.type)) return `parameter ${parameter.name} has an unknown type`;
+  if (parameter.type === "enum" && !Array.isArray(parameter.choices)) return `parameter ${parameter.name} has no choices`;
+  return "";
+}
+
+/** What is wrong with a skill descriptor for this panel (in words), or "" when the panel can be generated. */
+export function checkSkillDescriptor(descriptor) {
+  if (typeof descriptor.skill !== "string" || !descriptor.skill) return "the skill panel names no skill";
+  if (!Array.isArray(descriptor.schema)) return "the skill panel has no parameter schema";
+  for (const [index, parameter] of descriptor.schema.entries()) {
+    const problem = checkParameter(parameter, index);
+    if (problem) return problem;
+  }
+  return "";
+}
+
 let panelCount = 0;
 
-export class SkillPanel extends HTMLElement {
-  #built = false;
+export class SkillPanel extends PanelElement {
   #descriptor = null;
   #uid = `skill-${(panelCount += 1)}`;
   #form;
@@ -58,17 +86,12 @@ export class SkillPanel extends HTMLElement {
   #fields = {};
   #events;
   #result;
+  #observingNote;
   #goal = null;
-
-  connectedCallback() {
-    this.#build();
-  }
 
   set descriptor(descriptor) {
     this.#descriptor = descriptor;
-    this.#built = false;
-    this.replaceChildren();
-    this.#build();
+    this.rebuild();
   }
 
   get descriptor() {
@@ -77,7 +100,7 @@ export class SkillPanel extends HTMLElement {
 
   /** Fill some fields (for instance a goal picked on the map) without activating. */
   set parameters(values) {
-    this.#build();
+    this.ensureBuilt();
     for (const [name, value] of Object.entries(values ?? {})) {
       const entry = this.#inputs.get(name);
       if (!entry) continue;
@@ -87,9 +110,20 @@ export class SkillPanel extends HTMLElement {
     }
   }
 
+  /** Read-only while someone else has the turn (the server refuses an observer's goals anyway). */
+  set observing(observing) {
+    this.ensureBuilt();
+    if (!this.#form) return;
+    this.toggleAttribute("data-observing", Boolean(observing));
+    this.#observingNote.hidden = !observing;
+    for (const control of this.#form.querySelectorAll("input, select, button")) {
+      control.disabled = Boolean(observing) || (control === this.#cancel && !ACTIVE.has(this.#goal?.status));
+    }
+  }
+
   /** The goal as the server reports it; drives the buttons and the result line. */
   set goal(goal) {
-    this.#build();
+    this.ensureBuilt();
     if (!goal || typeof goal !== "object" || typeof goal.status !== "string") return;
     const isNewGoal = goal.goal_id !== this.#goal?.goal_id;
     this.#goal = goal;
@@ -102,7 +136,7 @@ export class SkillPanel extends HTMLElement {
     if (goal.feedback) this.feedback = goal.feedback;
     if (!active) {
       const reached = goal.goal_reached ? " The goal was reached." : "";
-      const code = goal.error_code ? ` (${goal.error_code})` : "";
+      const code = goal.error_code ? ` (${stateWords(goal.error_code).toLowerCase()})` : "";
       this.#result.textContent = `${STATUS_WORDS[goal.status] ?? goal.status}${code}: ${goal.message || "no details."}${reached}`;
       this.#result.dataset.outcome = goal.status;
       this.#result.hidden = false;
@@ -113,20 +147,20 @@ export class SkillPanel extends HTMLElement {
   }
 
   set goalEvent(event) {
-    this.#build();
+    this.ensureBuilt();
     if (!event || typeof event.kind !== "string") return;
     const time = Number.isFinite(Number(event.sim_time_s)) ? `${Number(event.sim_time_s).toFixed(1)} s · ` : "";
-    this.#events.prepend(h("li", { "data-event": event.kind }, `${time}${event.kind.replaceAll("_", " ")}`,
+    this.#events.prepend(h("li", { "data-event": event.kind }, `${time}${stateWords(event.kind)}`,
       event.message ? `: ${event.message}` : ""));
     while (this.#events.children.length > MAX_EVENTS) this.#events.lastElementChild.remove();
   }
 
   set feedback(feedback) {
-    this.#build();
+    this.ensureBuilt();
     if (!feedback || typeof feedback !== "object") return;
     const progress = Number(feedback.progress);
     if (Number.isFinite(progress)) this.#progress.value = Math.min(1, Math.max(0, progress));
-    this.#fields.state.textContent = typeof feedback.state === "string" ? feedback.state : "—";
+    this.#fields.state.textContent = typeof feedback.state === "string" ? stateWords(feedback.state) : "—";
     this.#fields.distance.textContent = fixed(feedback.distance_error_m, 3);
     this.#fields.heading.textContent = fixed(Number(feedback.heading_error_rad) * DEG_PER_RAD, 1);
     const pose = feedback.pose ?? {};
@@ -136,7 +170,7 @@ export class SkillPanel extends HTMLElement {
 
   /** A refusal of the last activation or cancel: shown next to its field, or above the buttons. */
   set error(error) {
-    this.#build();
+    this.ensureBuilt();
     for (const entry of this.#inputs.values()) this.#clearFieldError(entry);
     this.#preempt.hidden = true;
     if (!error) {
@@ -163,9 +197,8 @@ export class SkillPanel extends HTMLElement {
     entry.input.removeAttribute("aria-invalid");
   }
 
-  #build() {
-    if (this.#built || !this.#descriptor) return;
-    this.#built = true;
+  build() {
+    if (!this.#descriptor) return false; // the panel is generated from its descriptor
     const descriptor = this.#descriptor;
     this.classList.add("panel", "skill");
     this.dataset.skill = descriptor.skill;
@@ -179,7 +212,10 @@ export class SkillPanel extends HTMLElement {
       text: "Preempt it", title: "Stop the skill that is driving and start this one",
       onclick: (event) => this.#submit(event, true) });
     this.#formError = h("p", { class: "skill__error", role: "alert", "data-field": "skill-error", hidden: true });
-    this.#form.append(this.#formError, h("div", { class: "skill__actions" }, this.#activate, this.#cancel, this.#preempt));
+    this.#observingNote = h("p", { class: "skill__observing", "data-field": "skill-observing", hidden: true,
+      text: "You are watching: skills start during your turn." });
+    this.#form.append(this.#formError, this.#observingNote,
+      h("div", { class: "skill__actions" }, this.#activate, this.#cancel, this.#preempt));
 
     const field = (name) => (this.#fields[name] = h("span", { "data-field": `skill-${name}`, text: "—" }));
     this.#status = h("span", { class: "skill__status", "data-field": "skill-status", text: "Idle" });
@@ -251,18 +287,16 @@ export class SkillPanel extends HTMLElement {
     }
     this.error = null;
     this.#result.hidden = true;
-    this.dispatchEvent(new CustomEvent("skill-activate", { bubbles: true,
-      detail: { skill: this.#descriptor.skill, parameters, preempt } }));
+    this.emit("skill-activate", { skill: this.#descriptor.skill, parameters, preempt });
   }
 
   #emitCancel() {
     if (!this.#goal) return;
-    this.dispatchEvent(new CustomEvent("skill-cancel", { bubbles: true,
-      detail: { skill: this.#descriptor.skill, goal_id: this.#goal.goal_id } }));
+    this.emit("skill-cancel", { skill: this.#descriptor.skill, goal_id: this.#goal.goal_id });
   }
 }
 
-export function register() {
-  adoptStylesheet(new URL("./skill-panel.css", import.meta.url));
-  defineOnce("skill-panel", SkillPanel);
-}
+export const register = registerPanel({
+  kind: "skill", tag: "skill-panel", element: SkillPanel, stylesheets: [new URL("./skill-panel.css", import.meta.url)],
+  feeds: [{ service: "skill-goals" }], check: checkSkillDescriptor,
+});

@@ -1,0 +1,180 @@
+// The one place that talks to the server: JSON over fetch, and WebSockets that reconnect.
+// Everything the server says is data to show; nothing here decides what the user may do.
+
+/** Close codes after which trying again cannot help. */
+export const CLOSE_CODES = Object.freeze({
+  NOT_LOGGED_IN: 4401,
+  NOT_ALLOWED: 4403,
+  UNKNOWN_ROBOT: 4404,
+});
+const FINAL_CLOSE_CODES = new Set(Object.values(CLOSE_CODES));
+const NORMAL_CLOSURE = 1000;
+
+/**
+ * An error answer from the JSON API: `{"error": {"code", "message", "field"}}`; `payload` is the whole body
+ * (some answers add to it, e.g. a lesson's errors by line); status 0 means the server could not be reached.
+ */
+export class ApiError extends Error {
+  constructor(status, code, message, field = null, payload = null) {
+    super(message);
+    this.name = "ApiError";
+    this.status = status;
+    this.code = code;
+    this.field = field;
+    this.payload = payload;
+  }
+}
+
+function csrfToken() {
+  return document.querySelector('meta[name="csrf-token"]')?.content ?? "";
+}
+
+/** Fetch JSON from the same origin; resolves to the body, rejects with ApiError. */
+export async function fetchJson(url, { method = "GET", body, signal } = {}) {
+  const headers = { Accept: "application/json" };
+  if (body !== undefined) headers["Content-Type"] = "application/json";
+  if (method !== "GET" && method !== "HEAD") headers["X-CSRFToken"] = csrfToken();
+
+  let response;
+  try {
+    response = await fetch(url, {
+      method,
+      headers,
+      body: body === undefined ? undefined : JSON.stringify(body),
+      credentials: "same-origin",
+      signal,
+    });
+  } catch (networkError) {
+    if (networkError.name === "AbortError") throw networkError;
+    throw new ApiError(0, "network", "The lab server cannot be reached. Check your connection and try again.");
+  }
+
+  const payload = await response.json().catch(() => null);
+  if (!response.ok) {
+    const error = payload?.error;
+    throw new ApiError(
+      response.status,
+      error?.code ?? "http_" + response.status,
+      error?.message ?? `The server answered ${response.status} ${response.statusText}.`,
+      error?.field ?? null,
+      payload,
+    );
+  }
+  return payload;
+}
+
+/** ws:// or wss:// URL for a same-origin path, matching how the page was loaded. */
+export function socketUrl(path) {
+  const scheme = location.protocol === "https:" ? "wss:" : "ws:";
+  return `${scheme}//${location.host}${path}`;
+}
+
+/** Delay before reconnect attempt `attempt` (0-based): exponential, capped, with jitter. */
+export function backoffDelayMs(attempt, { baseMs = 500, capMs = 15000, random = Math.random } = {}) {
+  const ceiling = Math.min(capMs, baseMs * 2 ** attempt);
+  // Jitter keeps a room full of consoles from reconnecting in lock-step after a server restart.
+  return Math.round(ceiling * (0.5 + random() * 0.5));
+}
+
+/**
+ * A WebSocket that reconnects with backoff until closed or refused for good.
+ *
+ * Events: "statechange" (detail: the state object), "open" (a fresh socket is ready; re-subscribe
+ * here), "message" (detail: string or ArrayBuffer).
+ * State: { phase: "connecting"|"open"|"reconnecting"|"closed", code, reason, retryAt, attempt }.
+ */
+export class Channel extends EventTarget {
+  #url;
+  #socket = null;
+  #attempt = 0;
+  #retryTimer = 0;
+  #stableTimer = 0;
+  #stopped = false;
+  #state = { phase: "connecting", code: null, reason: "", retryAt: null, attempt: 0 };
+
+  constructor(path, { binary = false, stableAfterMs = 3000 } = {}) {
+    super();
+    this.#url = socketUrl(path);
+    this.binary = binary;
+    this.stableAfterMs = stableAfterMs;
+    this.#connect();
+  }
+
+  get state() {
+    return this.#state;
+  }
+
+  get isOpen() {
+    return this.#socket?.readyState === WebSocket.OPEN;
+  }
+
+  /** Send a JSON-serialisable value; returns false when the socket is not open. */
+  sendJson(value) {
+    if (!this.isOpen) return false;
+    this.#socket.send(JSON.stringify(value));
+    return true;
+  }
+
+  /** Close for good (no reconnect). */
+  close(reason = "closed by the page") {
+    this.#stopped = true;
+    clearTimeout(this.#retryTimer);
+    clearTimeout(this.#stableTimer);
+    if (this.#socket && this.#socket.readyState <= WebSocket.OPEN) this.#socket.close(NORMAL_CLOSURE, reason);
+    this.#setState({ phase: "closed", code: NORMAL_CLOSURE, reason, retryAt: null });
+  }
+
+  /** Skip the remaining backoff wait, e.g. when the browser comes back online. */
+  retryNow() {
+    if (this.#state.phase !== "reconnecting") return;
+    clearTimeout(this.#retryTimer);
+    this.#connect();
+  }
+
+  #setState(changes) {
+    this.#state = { ...this.#state, ...changes, attempt: this.#attempt };
+    this.dispatchEvent(new CustomEvent("statechange", { detail: this.#state }));
+  }
+
+  #connect() {
+    this.#setState({ phase: "connecting", retryAt: null });
+    const socket = new WebSocket(this.#url);
+    if (this.binary) socket.binaryType = "arraybuffer";
+    this.#socket = socket;
+
+    socket.addEventListener("open", () => {
+      // A server that accepts and then drops us at once must not earn a fast retry loop,
+      // so the backoff resets only once the socket has stayed up for a while.
+      this.#stableTimer = setTimeout(() => { this.#attempt = 0; }, this.stableAfterMs);
+      this.#setState({ phase: "open", code: null, reason: "" });
+      this.dispatchEvent(new Event("open"));
+    });
+    socket.addEventListener("message", (event) => {
+      this.dispatchEvent(new CustomEvent("message", { detail: event.data }));
+    });
+    socket.addEventListener("close", (event) => {
+      clearTimeout(this.#stableTimer);
+      if (this.#socket !== socket || this.#stopped) return;
+      this.#socket = null;
+      if (FINAL_CLOSE_CODES.has(event.code)) {
+        this.#stopped = true;
+        this.#setState({ phase: "closed", code: event.code, reason: event.reason, retryAt: null });
+        return;
+      }
+      const delayMs = backoffDelayMs(this.#attempt);
+      this.#attempt += 1;
+      this.#setState({ phase: "reconnecting", code: event.code, reason: event.reason, retryAt: Date.now() + delayMs });
+      this.#retryTimer = setTimeout(() => this.#connect(), delayMs);
+    });
+  }
+}
+
+/** Parse a text frame as JSON; returns null (not throws) for anything that is not an object. */
+export function parseJsonMessage(text) {
+  try {
+    const value = JSON.parse(text);
+    return value !== null && typeof value === "object" ? value : null;
+  } catch {
+    return null;
+  }
+}

@@ -1,0 +1,381 @@
+// Wiring of placed panels to their data, by the feeds each panel module declared when it registered
+// (static/panels/registry.js): a socket's messages by type to properties, the robot's description to a
+// property, or a named service below (an exchange that is more than a read: sessions, requests, polling).
+// Sockets are shared by path (one telemetry socket feeds odometry, sonar, laser, map and camera). An
+// unreadable message or a panel that throws on one leaves a notice in that panel's frame.
+
+import { ApiError, Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
+import { DriveSession } from "../../lib/drive-session.js";
+import { connectChat } from "./chat-session.js";
+import { goalParameterNames } from "../../lib/panel-descriptors.js";
+import { bindFeedback } from "./feedback-wiring.js";
+import { playTurnTone } from "./turn-tone.js";
+
+const FINAL_GOAL_STATES = new Set(["succeeded", "canceled", "aborted"]);
+const MAP_POLL_MS = 2000;
+const PING_EVERY_MS = 1000;
+const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
+const BOOKINGS_REFRESH_MS = 60 * 1000;
+
+function isStatusOrError(message) {
+  return message?.type === "status" || message?.type === "error";
+}
+
+export class ConsoleWiring {
+  #root;
+  #robotName;
+  #robotPath;
+  #status;
+  #layout;
+  #channels = new Map();        // path -> Channel
+  #textListeners = new Map();   // path -> [{id, onMessage}]
+  #infoListeners = [];
+  #drive = null;                // {channel, session}
+  #drivePads = [];
+  #skills = [];                 // [{descriptor, panel, goalChannel, goalNames}]
+  #maps = [];
+  #cameras = [];                // camera panels: the feedback layer follows the drive session
+  #starters = [];
+  #lastSeat = null;
+
+  constructor({ root, robotName, robotPath, status, layout }) {
+    this.#root = root;
+    this.#robotName = robotName;
+    this.#robotPath = robotPath;
+    this.#status = status;
+    this.#layout = layout;
+    window.addEventListener("online", () => this.#channels.forEach((channel) => channel.retryNow()));
+  }
+
+  /** The services a feed may name: `{service: name}` -> what connects the panel. */
+  #services = {
+    "camera-stream": (descriptor, panel) => this.#cameraStream(descriptor, panel),
+    "map-grid": (descriptor, panel) => this.#mapGrid(descriptor, panel),
+    "goal-target": (descriptor, panel) => this.#goalTarget(panel),
+    drive: (descriptor, panel) => this.#drivePad(descriptor, panel),
+    "skill-goals": (descriptor, panel) => this.#skill(descriptor, panel),
+    queue: (descriptor, panel) => this.#queue(descriptor, panel),
+    chat: (descriptor, panel) => connectChat(this.#robotPath, panel),
+    pings: (descriptor, panel) => this.#pings(descriptor, panel),
+  };
+
+  /** Connect one placed panel to the feeds its module declared. */
+  wire(descriptor, panel, feeds) {
+    for (const feed of feeds) {
+      if (feed.socket) this.#socketFeed(descriptor, panel, feed);
+      else if (feed.robotInfo) this.#infoFeed(descriptor, panel, feed);
+      else if (this.#services[feed.service]) this.#services[feed.service](descriptor, panel);
+      else throw new Error(`its feed ${JSON.stringify(feed)} is not one this console offers`);
+    }
+  }
+
+  /** Start what needs every panel placed first: the robot's description and the clocks. */
+  startAll() {
+    this.#loadRobot();
+    for (const start of this.#starters) start();
+  }
+
+  // --- shared plumbing -------------------------------------------------------------------------------
+
+  #guard(id, action) {
+    try {
+      action();
+    } catch (error) {
+      console.warn(`panel ${id} ignored a message:`, error);
+      this.#layout.notify(id, `Ignored a message this panel could not show (${error.message}).`);
+    }
+  }
+
+  #channel(path, { binary = false } = {}) {
+    if (this.#channels.has(path)) return this.#channels.get(path);
+    const channel = new Channel(path, { binary });
+    const name = path.split("/").pop();
+    this.#channels.set(path, channel);
+    this.#status.update(name, channel.state);
+    channel.addEventListener("statechange", ({ detail }) => this.#status.update(name, detail));
+    if (!binary) {
+      this.#textListeners.set(path, []);
+      channel.addEventListener("message", ({ detail }) => {
+        const message = parseJsonMessage(detail);
+        if (message?.type === "status" && typeof message.robot_online === "boolean") this.#showOnline(message.robot_online);
+        for (const listener of this.#textListeners.get(path)) {
+          if (!message) this.#layout.notify(listener.id, "Ignored a message that could not be read.");
+          else this.#guard(listener.id, () => listener.onMessage(message));
+        }
+      });
+    }
+    return channel;
+  }
+
+  /** Text messages of the socket at path, parsed, for panel id. */
+  #listen(path, id, onMessage) {
+    const channel = this.#channel(path);
+    this.#textListeners.get(path).push({ id, onMessage });
+    return channel;
+  }
+
+  #onInfo(listener) {
+    this.#infoListeners.push(listener);
+  }
+
+  #showOnline(online) {
+    const badge = this.#root.querySelector("#robot-online");
+    badge.textContent = online ? "Online" : "Offline";
+    badge.classList.toggle("badge--online", online);
+    badge.classList.toggle("badge--offline", !online);
+    this.#status.robotOnline = online;
+  }
+
+  async #loadRobot() {
+    try {
+      const robot = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}`);
+      this.#showOnline(Boolean(robot.online));
+      if (robot.info) for (const listener of this.#infoListeners) listener(robot.info);
+    } catch (error) {
+      const line = this.#root.querySelector("#console-error");
+      line.textContent = error instanceof ApiError ? error.message : "The robot's description could not be loaded.";
+      line.hidden = false;
+    }
+  }
+
+  // --- declared feeds --------------------------------------------------------------------------------
+
+  /** {socket, messages}: the descriptor's channel if it is that socket, else the robot's socket of that name. */
+  #socketFeed(descriptor, panel, { socket, messages }) {
+    const path = descriptor.channel?.endsWith(`/${socket}`) ? descriptor.channel : `${this.#robotPath}/${socket}`;
+    this.#listen(path, descriptor.id, (message) => {
+      const property = Object.hasOwn(messages, message.type) ? messages[message.type] : null;
+      if (property) panel[property] = message;
+    });
+  }
+
+  /** {robotInfo, fields?}: the robot's description (or only those fields of it) once it is loaded. */
+  #infoFeed(descriptor, panel, { robotInfo, fields }) {
+    this.#onInfo((info) => this.#guard(descriptor.id, () => {
+      panel[robotInfo] = fields ? Object.fromEntries(fields.map((field) => [field, info[field]])) : info;
+    }));
+  }
+
+  // --- services --------------------------------------------------------------------------------------
+
+  #cameraStream(descriptor, panel) {
+    panel.robotName = this.#robotName;
+    this.#cameras.push(panel);
+    bindFeedback(panel);
+    const camera = this.#channel(descriptor.channel ?? `${this.#robotPath}/camera`, { binary: true });
+    camera.addEventListener("statechange", ({ detail }) => { panel.connected = detail.phase === "open"; });
+    camera.addEventListener("message", ({ detail }) => {
+      if (detail instanceof ArrayBuffer) {
+        panel.frame = detail;
+        return;
+      }
+      const message = parseJsonMessage(detail);
+      if (!message) this.#layout.notify(descriptor.id, "Ignored a message that could not be read.");
+      else if (isStatusOrError(message)) this.#guard(descriptor.id, () => { panel.message = message; });
+      if (message?.type === "status" && typeof message.robot_online === "boolean") this.#showOnline(message.robot_online);
+    });
+  }
+
+  /** A map picks targets for the skills with goal x/y parameters and shows their goals' feedback. */
+  #goalTarget(panel) {
+    this.#maps.push(panel);
+    panel.addEventListener("map-target", ({ detail }) => this.#routeTarget(panel, detail));
+    panel.addEventListener("map-go", ({ detail }) => this.#goThere(panel, detail));
+    this.#starters.push(() => { panel.canGo = this.#skills.some((entry) => entry.goalNames); });
+  }
+
+  /** The occupancy grid, polled while the panel is shown. */
+  #mapGrid(descriptor, panel) {
+    let lastCells = null;
+    let visible = true;
+    const frame = this.#layout.frameOf(descriptor.id);
+    new IntersectionObserver((entries) => { visible = entries.some((e) => e.isIntersecting); }).observe(frame);
+    const poll = async () => {
+      if (!visible || !this.#layout.isShown(descriptor.id) || document.visibilityState !== "visible") return;
+      try {
+        const answer = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/map`);
+        const grid = answer?.map ?? null;
+        panel.note = grid ? "" : String(answer?.message ?? "");
+        if (grid?.cells_b64 === lastCells) return;
+        lastCells = grid?.cells_b64;
+        this.#guard(descriptor.id, () => { panel.grid = grid; });
+      } catch (error) {
+        lastCells = null;
+        panel.grid = null;
+        panel.note = `The map could not be loaded: ${error.message}`;
+      }
+    };
+    this.#starters.push(() => {
+      poll();
+      setInterval(poll, MAP_POLL_MS);
+    });
+  }
+
+  /** A target picked on the map goes to the first skill whose schema has goal x/y parameters. */
+  #routeTarget(mapPanel, { x_m, y_m }) {
+    const skill = this.#skills.find((entry) => entry.goalNames);
+    if (!skill) return;
+    skill.panel.parameters = { [skill.goalNames.x]: x_m, [skill.goalNames.y]: y_m };
+    mapPanel.target = [x_m, y_m];
+  }
+
+  /** "Go there": the map's target as a goal of the first goal skill, through the skill API like its Activate. */
+  #goThere(mapPanel, { x_m, y_m }) {
+    const skill = this.#skills.find((entry) => entry.goalNames);
+    if (!skill) return;
+    this.#routeTarget(mapPanel, { x_m, y_m });
+    const parameters = { [skill.goalNames.x]: x_m, [skill.goalNames.y]: y_m };
+    this.#activate(skill, { skill: skill.descriptor.skill, parameters, preempt: true });
+  }
+
+  #ensureDrive(path) {
+    if (this.#drive) return this.#drive;
+    const channel = this.#channel(path);
+    const session = new DriveSession(channel);
+    this.#drive = { channel, session };
+    session.addEventListener("ready", ({ detail }) => this.#cameras.forEach((camera) => { camera.driveReady = detail; }));
+    session.addEventListener("sent", ({ detail }) => this.#cameras.forEach((camera) => { camera.driveSent = detail; }));
+    return this.#drive;
+  }
+
+  #drivePad(descriptor, pad) {
+    this.#drivePads.push(pad);
+    pad.link = "connecting";
+    const { channel, session } = this.#ensureDrive(descriptor.channel ?? `${this.#robotPath}/drive`);
+    session.addEventListener("ready", ({ detail }) => {
+      pad.limits = { max_linear_mps: detail.max_linear_mps, max_angular_radps: detail.max_angular_radps };
+      pad.link = "ready";
+    });
+    session.addEventListener("ack", ({ detail }) => { pad.ack = detail; });
+    session.addEventListener("error", ({ detail }) => { pad.error = detail; });
+    session.addEventListener("status", ({ detail }) => { if (detail.message) pad.error = detail; });
+    channel.addEventListener("statechange", ({ detail }) => {
+      if (detail.phase !== "open") pad.link = detail.phase === "closed" ? "closed" : "connecting";
+    });
+    pad.addEventListener("drive-command", ({ detail }) => session.setCommand(detail));
+    pad.addEventListener("drive-stop", () => session.stop());
+  }
+
+  #queue(descriptor, panel) {
+    const queue = this.#listen(descriptor.channel ?? `${this.#robotPath}/queue`, descriptor.id, (message) => {
+      if (message.type === "queue") {
+        panel.seat = message;
+        this.#noticeTurn(message);
+        for (const pad of this.#drivePads) pad.observing = !message.is_controller;
+        for (const { panel: skill } of this.#skills) skill.observing = !message.is_controller;
+        for (const map of this.#maps) map.observing = !message.is_controller;
+      } else if (isStatusOrError(message)) {
+        panel.message = message;
+      }
+    });
+    panel.addEventListener("queue-action", ({ detail }) => queue.sendJson({ type: detail.type }));
+    panel.robotName = this.#robotName;
+    const loadBookings = () => {
+      const from = new Date();
+      const to = new Date(from.getTime() + BOOKINGS_AHEAD_MS);
+      const query = `from=${encodeURIComponent(from.toISOString())}&to=${encodeURIComponent(to.toISOString())}`;
+      fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/bookings?${query}`)
+        .then((answer) => { panel.bookings = answer.bookings; })
+        .catch(() => { panel.bookings = null; }); // e.g. a practice robot, which takes no bookings
+    };
+    loadBookings();
+    setInterval(loadBookings, BOOKINGS_REFRESH_MS);
+  }
+
+  /** The turn starting after a wait is announced above every tab, with a flash and a short tone. */
+  #noticeTurn(seat) {
+    const waited = this.#lastSeat?.in_queue && !this.#lastSeat.is_controller;
+    this.#lastSeat = seat;
+    const notice = this.#root.querySelector("#turn-notice");
+    if (!seat.is_controller) {
+      notice.hidden = true;
+      return;
+    }
+    if (!waited) return;
+    notice.hidden = false;
+    notice.classList.remove("turn-notice--flash");
+    void notice.offsetWidth; // restarts the flash animation
+    notice.classList.add("turn-notice--flash");
+    playTurnTone();
+  }
+
+  #pings(descriptor, panel) {
+    const { session } = this.#ensureDrive(`${this.#robotPath}/drive`);
+    let supported = true;
+    session.addEventListener("pong", ({ detail }) => {
+      supported = true;
+      panel.sample = { client_ms: detail.client_ms, robot_ms: detail.robot_ms };
+    });
+    session.addEventListener("ping-unsupported", () => {
+      supported = false;
+      panel.unavailable = "This lab server does not answer pings, so response times cannot be measured.";
+    });
+    this.#starters.push(() => setInterval(() => {
+      if (supported && this.#layout.isShown(descriptor.id) && document.visibilityState === "visible") session.ping();
+    }, PING_EVERY_MS));
+  }
+
+  #skill(descriptor, panel) {
+    panel.descriptor = descriptor;
+    const entry = { descriptor, panel, goalChannel: null, goalNames: goalParameterNames(descriptor.schema) };
+    this.#skills.push(entry);
+    const base = `/api/robots/${encodeURIComponent(this.#robotName)}`;
+    panel.addEventListener("skill-activate", ({ detail }) => this.#activate(entry, detail));
+    panel.addEventListener("skill-cancel", async ({ detail }) => {
+      try {
+        const answer = await fetchJson(`${base}/goals/${encodeURIComponent(detail.goal_id)}`, { method: "DELETE" });
+        this.#guard(descriptor.id, () => { panel.goal = answer.goal; });
+      } catch (error) {
+        panel.error = { code: error.code ?? "network", message: error.message, field: null };
+      }
+    });
+  }
+
+  async #activate(entry, { skill, parameters, preempt }) {
+    const base = `/api/robots/${encodeURIComponent(this.#robotName)}`;
+    try {
+      const answer = await fetchJson(`${base}/skills/${encodeURIComponent(skill)}/goals`, {
+        method: "POST", body: { parameters, preempt: Boolean(preempt) } });
+      this.#followGoal(entry, answer.goal);
+    } catch (error) {
+      entry.panel.error = { code: error.code ?? "network", message: error.message, field: error.field ?? null };
+    }
+  }
+
+  /** Show a goal and follow it on its socket until it ends. */
+  #followGoal(entry, goal) {
+    const { descriptor, panel } = entry;
+    this.#guard(descriptor.id, () => { panel.goal = goal; });
+    entry.goalChannel?.close("a newer goal replaced it");
+    if (!goal?.goal_id || FINAL_GOAL_STATES.has(goal.status)) return;
+    const channel = new Channel(`${this.#robotPath}/goals/${encodeURIComponent(goal.goal_id)}`);
+    entry.goalChannel = channel;
+    channel.addEventListener("message", ({ detail }) => {
+      const message = parseJsonMessage(detail);
+      if (!message) {
+        this.#layout.notify(descriptor.id, "Ignored a goal message that could not be read.");
+        return;
+      }
+      this.#guard(descriptor.id, () => {
+        if (message.type === "goal" && message.goal) {
+          panel.goal = message.goal;
+          if (message.goal.feedback) this.#shareFeedback(entry, message.goal.feedback);
+          if (FINAL_GOAL_STATES.has(message.goal.status)) channel.close("the goal ended");
+        } else if (message.type === "goal_event") {
+          panel.goalEvent = message;
+        } else if (message.type === "goal_feedback") {
+          panel.feedback = message.feedback;
+          this.#shareFeedback(entry, message.feedback);
+        } else if (message.type === "error") {
+          panel.error = { code: message.code, message: message.message, field: null };
+        }
+      });
+    });
+  }
+
+  /** Go-to-goal style feedback also shows on the map (its goal and any obstacle values). */
+  #shareFeedback(entry, feedback) {
+    if (!entry.goalNames) return;
+    for (const map of this.#maps) map.goalFeedback = feedback;
+  }
+}

@@ -1,0 +1,25 @@
+// Connects a camera panel's feedback layer to the person's saved choice (on by default); the robot's
+// description and the drive session's messages reach the panel through the console wiring.
+
+import { fetchJson } from "../../lib/transport.js";
+
+export const FEEDBACK_PREFERENCE = "/api/me/preferences/camera-feedback";
+export const FILL_PREFERENCE = "/api/me/preferences/camera-feedback-fill";
+
+function save(url, value) {
+  fetchJson(url, { method: "PUT", body: { value } }).catch((error) => {
+    console.warn("the motion preview choice was not saved:", error.message);
+  });
+}
+
+/** Loads and saves this user's "motion preview" choices (on/off, fill). */
+export function bindFeedback(panel) {
+  fetchJson(FEEDBACK_PREFERENCE)
+    .then((answer) => { if (typeof answer?.value === "boolean") panel.feedbackEnabled = answer.value; })
+    .catch(() => {}); // no saved choice: the layer stays on
+  fetchJson(FILL_PREFERENCE)
+    .then((answer) => { if (typeof answer?.value === "string") panel.feedbackFill = answer.value; })
+    .catch(() => {}); // no saved choice: the edges are continued
+  panel.addEventListener("camera-feedback-change", ({ detail }) => save(FEEDBACK_PREFERENCE, Boolean(detail.enabled)));
+  panel.addEventListener("camera-feedback-fill-change", ({ detail }) => save(FILL_PREFERENCE, String(detail.fill)));
+}

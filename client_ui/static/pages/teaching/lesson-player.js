@@ -1,0 +1,146 @@
+// The lesson page: a video, its metadata cue track, and the robot it drives. The browser's cue events
+// (oncuechange) and media events decide when to send; the commands themselves stay on the server, which
+// runs the stored command of a cue by its number. Latencies are measured from the event's own timestamp.
+import { fetchJson } from "../../lib/transport.js";
+import { CuePlayback, cueIndexOf, summarize } from "./lesson-playback.js";
+import { showLessonRobot } from "./lesson-robot.js";
+
+const root = document.getElementById("lesson");
+const video = root.querySelector("video");
+const trackElement = video.querySelector("track");
+const targetSelect = root.querySelector("[data-field=target]");
+const statusLine = root.querySelector("[data-field=status]");
+const logList = root.querySelector("[data-slot=log]");
+const lessonId = Number(root.dataset.lessonId);
+const MAX_LOG = 60;
+const MAX_HOLD_S = 10;
+
+const series = { cueToAck: [], middlewareToAck: [], pauseDetect: [], pauseToAck: [] };
+let cues = [];
+let renewTimer = null;
+let lastEventStamp = 0;
+
+function log(text, kind = "info") {
+  const item = document.createElement("li");
+  item.className = `lesson-log__item lesson-log__item--${kind}`;
+  item.textContent = `${video.currentTime.toFixed(2)} s · ${text}`;
+  item.dataset.kind = kind;
+  logList.prepend(item);
+  while (logList.children.length > MAX_LOG) logList.lastElementChild.remove();
+}
+
+function showStatus(text, isError = false) {
+  statusLine.textContent = text;
+  statusLine.classList.toggle("lesson__status--error", isError);
+}
+
+function formatMs(value) {
+  return value === null ? "–" : `${value.toFixed(1)} ms`;
+}
+
+function renderLatency() {
+  for (const [name, values] of Object.entries(series)) {
+    const stats = summarize(values);
+    const cell = root.querySelector(`[data-latency="${name}"]`);
+    if (cell) cell.textContent = stats.count ? `${formatMs(stats.mean)} (n=${stats.count})` : "–";
+  }
+}
+
+function activeIndex() {
+  const active = trackElement.track.activeCues;
+  return active && active.length ? cueIndexOf(active[0].id) : null;
+}
+
+function clearRenewal() {
+  if (renewTimer !== null) clearTimeout(renewTimer);
+  renewTimer = null;
+}
+
+async function run(index, why) {
+  const eventStamp = lastEventStamp || performance.now();
+  const cue = cues.find((c) => c.index === index);
+  const remaining = cue ? cue.end_s - video.currentTime : MAX_HOLD_S;
+  const holdS = Math.min(MAX_HOLD_S, Math.max(0.1, remaining));
+  clearRenewal();
+  log(`cue ${index} (${why}) → ${describe(cue)}`, "run");
+  try {
+    const answer = await fetchJson(`/api/lessons/${lessonId}/cues/${index}/run`, {
+      method: "POST", body: { target: targetSelect.value, hold_s: Number(holdS.toFixed(3)) },
+    });
+    const total = performance.now() - eventStamp;
+    series.cueToAck.push(total);
+    series.middlewareToAck.push(answer.middleware_to_ack_ms);
+    renderLatency();
+    const goal = answer.goal ? `goal ${answer.goal.status}` : "applied";
+    log(`cue ${index} acknowledged: ${goal} in ${total.toFixed(1)} ms`, "ack");
+    root.dataset.lastGoal = answer.goal ? answer.goal.goal_id : "";
+    // A drive longer than direct_control's 10 s is renewed while its cue still runs.
+    if (cue && "drive" in cue.command && remaining > MAX_HOLD_S && playback.running === index) {
+      renewTimer = setTimeout(() => { if (playback.running === index) { playback.running = null; playback.cueChange(index); } },
+        (MAX_HOLD_S - 0.5) * 1000);
+    }
+    showStatus(`The robot runs cue ${index}.`);
+  } catch (error) {
+    log(`cue ${index} refused: ${error.message}`, "error");
+    showStatus(error.message, true);
+  }
+}
+
+async function stop(why) {
+  const eventStamp = lastEventStamp || performance.now();
+  series.pauseDetect.push(performance.now() - eventStamp);
+  clearRenewal();
+  log(`stop (${why})`, "stop");
+  try {
+    await fetchJson("/api/lessons/stop", { method: "POST", body: { target: targetSelect.value } });
+    if (why !== "cue-exit") series.pauseToAck.push(performance.now() - eventStamp);
+    renderLatency();
+    log(`stop (${why}) acknowledged`, "ack");
+    showStatus(why === "end" ? "The lesson has ended; the robot stopped." : "The robot stopped.");
+  } catch (error) {
+    log(`stop refused: ${error.message}`, "error");
+    showStatus(error.message, true);
+  }
+}
+
+function describe(cue) {
+  if (!cue) return "?";
+  const command = cue.command;
+  if ("skill" in command) return command.skill.replaceAll("_", " ");
+  if ("drive" in command) return `drive ${command.drive.linear_mps} m/s, ${command.drive.angular_radps} rad/s`;
+  return "stop";
+}
+
+const playback = new CuePlayback({ run, stop });
+
+function on(target, type, handler) {
+  target.addEventListener(type, (event) => {
+    lastEventStamp = event.timeStamp;  // same clock as performance.now()
+    handler(event);
+  });
+}
+
+async function start() {
+  try {
+    const lesson = await fetchJson(`/api/lessons/${lessonId}`);
+    cues = lesson.cues;
+  } catch (error) {
+    showStatus(error.message, true);
+    return;
+  }
+  const track = trackElement.track;
+  track.mode = "hidden";  // cue events fire, nothing is drawn over the video
+  on(track, "cuechange", () => playback.cueChange(activeIndex()));
+  on(video, "play", () => playback.play());
+  on(video, "playing", () => playback.play());
+  on(video, "pause", () => { if (!video.ended) playback.pause(); });
+  on(video, "seeking", () => playback.seekStart());
+  on(video, "seeked", () => playback.seekEnd(video.paused, activeIndex()));
+  on(video, "waiting", () => playback.buffering());
+  on(video, "ended", () => playback.ended());
+  root.dataset.ready = "true";
+  showStatus("Press play: the robot follows the video.");
+}
+
+showLessonRobot(root.querySelector("[data-slot=robot-panels]"), targetSelect, video);
+start();

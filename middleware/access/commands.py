@@ -1,0 +1,230 @@
+"""The one path from a user to a robot command, whatever its source (drive pad, skill panel, lesson cue,
+tour step, practice robot, demo recorder).
+
+It owns the controller token (the known-token fast path, a database re-read when the robot refuses it,
+re-sending it to a robot that restarted and forgot it), sequence numbering, the deadman-friendly held
+drive, and the one map from a robot's refusal to the error a person or API client sees. Nothing else in
+the middleware calls a RobotLink command method (drive, activate_skill, cancel_goal, set_controller):
+tests/test_architecture.py checks it.
+
+The stale-token rule, the same for every source: a command goes out under the token this process last
+knew; if the robot refuses it as not the controller's, the token is read again from its source (the
+database for a lab robot); a different token means the turn moved on (retry with it, or refuse the user
+as an observer), the same token means the robot forgot it (re-send it, then retry once).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from typing import Protocol, TypeVar
+
+from flask import Flask, current_app
+
+from middleware.errors import ApiError
+from middleware.robots.link import CommandRefused, DriveResult, RobotLink, RobotUnavailable
+from middleware.robots.registry import RobotRegistry
+from protos.telelab.v1 import robot_pb2
+
+T = TypeVar("T")
+log = logging.getLogger(__name__)
+_EXTENSION_KEY = "telelab.commands"
+
+MAX_DRIVE_HOLD_S = 10.0  # direct_control's own limit; a longer hold is renewed by its sender
+MIN_DRIVE_HOLD_S = 0.1
+STALE_TOKEN_CODES = frozenset({"not_controller", "unauthenticated"})
+STATUS_OF_REFUSAL = {"invalid_field": 400, "not_found": 404, "not_controller": 403, "unauthenticated": 403,
+                     "not_possible_now": 409}
+NOT_CONTROLLER_MESSAGE = "You are observing: someone else has control. Wait for your turn."
+
+
+def refusal_error(error: CommandRefused | RobotUnavailable, not_found_code: str = "unknown_skill") -> ApiError:
+    """The error a person or API client sees for a robot's refusal or absence (the one map)."""
+    if isinstance(error, RobotUnavailable):
+        return ApiError(503, "robot_offline", f"{error} Try again in a moment.")
+    if error.code == "not_possible_now":
+        return ApiError(409, "busy", error.message, error.field)
+    if error.code in STALE_TOKEN_CODES:
+        return ApiError(403, "not_controller", NOT_CONTROLLER_MESSAGE, error.field if isinstance(error, NotController)
+                        else None)
+    code = not_found_code if error.code == "not_found" else error.code
+    return ApiError(STATUS_OF_REFUSAL.get(error.code, 400), code, error.message, error.field)
+
+
+class NotController(CommandRefused):
+    """The user does not control the robot now (they observe, or the turn moved on)."""
+
+    def __init__(self, field: str | None = None) -> None:
+        super().__init__("not_controller", NOT_CONTROLLER_MESSAGE, field)
+
+
+class TokenSource(Protocol):
+    """Where the token a user commands a robot under comes from."""
+
+    def token(self, fresh: bool) -> str | None:
+        """The user's token (fresh: re-read from the authority), or None when they do not control the robot."""
+
+    def resend(self, token: str) -> bool:
+        """Hands the robot token again (it restarted and forgot it); False if that failed."""
+
+
+class Seats(Protocol):
+    """The access coordinator as the command path sees it: who holds each robot's seat, and its token."""
+
+    def controller_token(self, robot_name: str, user_id: int) -> str | None:
+        """user_id's token if they control the robot now (read from the database)."""
+
+    def known_controller_token(self, robot_name: str, user_id: int) -> str | None:
+        """controller_token, without a read when this process knows user_id controls the robot."""
+
+    def resend_token(self, robot_name: str) -> bool:
+        """Hands the robot its current controller's token again."""
+
+
+class SeatTokens:
+    """A shared robot's token: the user's round-robin seat, as the access coordinator keeps it."""
+
+    def __init__(self, coordinator: Seats, robot_name: str, user_id: int) -> None:
+        self._coordinator, self._robot_name, self._user_id = coordinator, robot_name, user_id
+
+    def token(self, fresh: bool) -> str | None:
+        """The known token (no database read) unless fresh; a "no" is always read from the database."""
+        read = self._coordinator.controller_token if fresh else self._coordinator.known_controller_token
+        return read(self._robot_name, self._user_id)
+
+    def resend(self, token: str) -> bool:
+        """Re-sends the current controller's token to the robot."""
+        return self._coordinator.resend_token(self._robot_name)
+
+
+class OwnerToken:
+    """A robot with one controller for its whole life (a practice robot, the demo recorder's robot)."""
+
+    def __init__(self, link: RobotLink, token: Callable[[], str]) -> None:
+        self._link, self._token = link, token
+
+    def token(self, fresh: bool) -> str | None:
+        """The owner's token."""
+        return self._token() or None
+
+    def resend(self, token: str) -> bool:
+        """Hands the robot the owner's token again."""
+        return hand_over(self._link, token)
+
+
+def hand_over(link: RobotLink, token: str) -> bool:
+    """Tells the robot whose commands to obey (an empty token revokes control); False if it did not answer."""
+    try:
+        link.set_controller(token)
+    except (RobotUnavailable, CommandRefused) as error:
+        log.info("could not hand %s its controller token: %s", link.name, error)
+        return False
+    return True
+
+
+class Commander:
+    """One user's commands to one robot, under the token its source gives, with the stale-token rule.
+
+    field names the robot in the request that asked (a refusal as an observer names it).
+    """
+
+    def __init__(self, link: RobotLink, tokens: TokenSource, field: str | None = None) -> None:
+        self.link, self._tokens, self._field = link, tokens, field
+
+    @property
+    def robot_name(self) -> str:
+        """The robot's name."""
+        return self.link.name
+
+    def is_controller(self) -> bool:
+        """Whether the user controls the robot now (the known token; a "no" is read from the source)."""
+        return self._tokens.token(fresh=False) is not None
+
+    def drive(self, sequence: int, linear_mps: float, angular_radps: float) -> DriveResult:
+        """A direct drive command (the robot's deadman stops the base when they stop coming)."""
+        return self._as_controller(lambda token: self.link.drive(token, sequence, linear_mps, angular_radps))
+
+    def stop(self) -> DriveResult:
+        """A zero drive, which preempts any motor goal at once."""
+        return self.drive(self.link.next_sequence(), 0.0, 0.0)
+
+    def activate(self, skill: str, parameters: dict[str, object], preempt: bool) -> robot_pb2.GoalState:
+        """Starts a skill as a goal."""
+        return self._as_controller(lambda token: self.link.activate_skill(token, skill, parameters, preempt))
+
+    def hold_drive(self, linear_mps: float, angular_radps: float, hold_s: float) -> robot_pb2.GoalState:
+        """A drive held for hold_s (0.1 to 10 s) as a direct_control goal: it stops by itself if its sender goes."""
+        hold = min(MAX_DRIVE_HOLD_S, max(MIN_DRIVE_HOLD_S, hold_s))
+        return self.activate("direct_control", {"linear_mps": linear_mps, "angular_radps": angular_radps,
+                                                "duration_s": round(hold, 3)}, preempt=True)
+
+    def cancel(self, goal_id: str) -> robot_pb2.GoalState:
+        """Cancels a goal; its message reports the error left."""
+        return self._as_controller(lambda token: self.link.cancel_goal(token, goal_id))
+
+    def goal_state(self, goal_id: str) -> robot_pb2.GoalState:
+        """A goal's state (reading needs no control)."""
+        return self.link.get_goal(goal_id)
+
+    def _as_controller(self, call: Callable[[str], T]) -> T:
+        token = self._tokens.token(fresh=False)
+        if token is None:
+            raise NotController(self._field)
+        try:
+            return call(token)
+        except CommandRefused as refused:
+            if refused.code not in STALE_TOKEN_CODES:
+                raise
+            fresh = self._tokens.token(fresh=True)
+            if fresh is None:
+                raise NotController(self._field) from None
+            if fresh == token and not self._tokens.resend(fresh):
+                raise
+        return call(fresh)
+
+
+class RobotCommands:
+    """Finds the robots a user may reach and gives their commands the right token source."""
+
+    def __init__(self, registry: RobotRegistry, coordinator: Seats) -> None:
+        self._registry, self._coordinator = registry, coordinator
+
+    def reachable(self, robot_name: str, user_id: int | None) -> RobotLink | None:
+        """The robot's link if user_id may see it: any lab robot, a personal robot for its owner only."""
+        link = self._registry.get(robot_name)
+        if link is None:
+            return None
+        owner_id = self._registry.owner_of(robot_name)
+        return link if owner_id is None or owner_id == user_id else None
+
+    def require(self, robot_name: str, user_id: int | None, field: str = "robot_name") -> RobotLink:
+        """reachable(), or a 404 naming field (a robot of someone else's is answered like a missing one)."""
+        link = self.reachable(robot_name, user_id)
+        if link is None:
+            raise ApiError(404, "unknown_robot", f"There is no robot named {robot_name[:64]!r}.", field)
+        return link
+
+    def for_user(self, robot_name: str, user_id: int, field: str = "robot_name") -> Commander:
+        """The user's commands to the robot (a 404 if they may not see it)."""
+        link = self.require(robot_name, user_id, field)
+        personal = self._registry.personal(robot_name)
+        if personal is not None:
+            return Commander(link, OwnerToken(link, lambda: personal.token), field)
+        return Commander(link, SeatTokens(self._coordinator, robot_name, user_id), field)
+
+
+def owned_robot(link: RobotLink, token: str) -> Commander:
+    """Commands to a robot this process owns outright (the demo recorder's), after handing it token."""
+    if not hand_over(link, token):
+        raise RobotUnavailable(f"{link.name} did not take its controller token.")
+    return Commander(link, OwnerToken(link, lambda: token))
+
+
+def init_app(app: Flask, registry: RobotRegistry, coordinator: Seats) -> None:
+    """Creates app's command path over its registry and access coordinator."""
+    app.extensions[_EXTENSION_KEY] = RobotCommands(registry, coordinator)
+
+
+def robot_commands(app: Flask | None = None) -> RobotCommands:
+    """The command path of app (or of the current app)."""
+    return (app or current_app).extensions[_EXTENSION_KEY]

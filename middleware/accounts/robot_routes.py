@@ -1,0 +1,101 @@
+"""The robots table (admins): add robots, change their title, address or enabled flag; whether each answers."""
+
+from __future__ import annotations
+
+from flask import flash, jsonify, redirect, render_template, request, url_for
+from flask.typing import ResponseReturnValue
+from flask_login import current_user, login_required
+
+from middleware.accounts import robot_admin
+from middleware.accounts.schemas import clean_flag, clean_id
+from middleware.accounts.web import blueprint, json_body
+from middleware.db import after_commit, get_session
+from middleware.errors import flashed, unless_refused
+from middleware.robots.registry import robot_registry
+
+
+def _refresh_robots_after_commit() -> None:
+    """The registry reads the robots table in a session of its own: only once the change is committed."""
+    after_commit(robot_registry().refresh)
+
+
+def _robots_page(errors: dict[str, str] | None = None, form: dict[str, str] | None = None,
+                 status: int = 200) -> ResponseReturnValue:
+    registry = robot_registry()
+    views = robot_admin.list_robots(get_session(), current_user)
+    links = {v.name: registry.get(v.name) for v in views}
+    online = {v.name: bool(v.enabled and (link := links[v.name]) is not None and link.is_online()) for v in views}
+    return render_template("accounts/robots.html", robots=views, online=online, errors=errors or {},
+                           form=form or {}), status
+
+
+@blueprint.get("/admin/robots")
+@login_required
+def robots_page() -> ResponseReturnValue:
+    """The robots table with whether each answers, and forms to add and change robots (admins)."""
+    return _robots_page()
+
+
+@blueprint.post("/admin/robots")
+@login_required
+def robots_add() -> ResponseReturnValue:
+    """Adds a robot."""
+    form = request.form.to_dict()
+
+    def add() -> ResponseReturnValue:
+        robot = robot_admin.add_robot(get_session(), current_user, form.get("name"), form.get("title"),
+                                      form.get("address"))
+        _refresh_robots_after_commit()
+        flash(f"Robot {robot.name} added.", "success")
+        return redirect(url_for("accounts.robots_page"), 303)
+
+    return unless_refused(add, lambda refused: _robots_page({refused.field or "name": refused.message}, form,
+                                                            refused.status))
+
+
+@blueprint.post("/admin/robots/<int:robot_id>")
+@login_required
+def robots_update(robot_id: int) -> ResponseReturnValue:
+    """Changes a robot's title, address or enabled flag (only the fields sent)."""
+    form = request.form
+
+    def update() -> ResponseReturnValue:
+        robot = robot_admin.update_robot(
+            get_session(), current_user, robot_id, title=form.get("title"), address=form.get("address"),
+            enabled=clean_flag(form["enabled"], "enabled") if "enabled" in form else None)
+        _refresh_robots_after_commit()
+        flash(f"Robot {robot.name} saved ({'enabled' if robot.enabled else 'disabled'}).", "success")
+        return redirect(url_for("accounts.robots_page"), 303)
+
+    return unless_refused(update, flashed(url_for("accounts.robots_page")))
+
+
+@blueprint.get("/api/admin/robots")
+@login_required
+def api_robots() -> ResponseReturnValue:
+    """Every robot in the table (admins)."""
+    return jsonify({"robots": [r.to_dict() for r in robot_admin.list_robots(get_session(), current_user)]})
+
+
+@blueprint.post("/api/admin/robots")
+@login_required
+def api_add_robot() -> ResponseReturnValue:
+    """{name, title?, address}: adds a robot (admins)."""
+    data = json_body()
+    robot = robot_admin.add_robot(get_session(), current_user, data.get("name"), data.get("title"), data.get("address"))
+    _refresh_robots_after_commit()
+    return jsonify({"robot": robot_admin.RobotView(robot.id, robot.name, robot.title, robot.address,
+                                                   robot.enabled).to_dict()}), 201
+
+
+@blueprint.patch("/api/admin/robots/<int:robot_id>")
+@login_required
+def api_update_robot(robot_id: int) -> ResponseReturnValue:
+    """{title?, address?, enabled?}: changes a robot (admins)."""
+    data = json_body()
+    robot = robot_admin.update_robot(
+        get_session(), current_user, clean_id(robot_id, "robot_id"), title=data.get("title"),
+        address=data.get("address"), enabled=clean_flag(data["enabled"], "enabled") if "enabled" in data else None)
+    _refresh_robots_after_commit()
+    return jsonify({"robot": robot_admin.RobotView(robot.id, robot.name, robot.title, robot.address,
+                                                   robot.enabled).to_dict()})

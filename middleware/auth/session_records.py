@@ -1,0 +1,107 @@
+"""Server-side login sessions: opening, checking and ending them (the cookie side is sessions.py).
+
+The cookie carries a random key; the `login_sessions` row, found by the key's SHA-256, says whether the
+login is still open. Every worker reads the same rows, so logout, a password change or reset and disabling
+an account end the login in every process. A process keeps each verdict at most RECHECK_S (so a request
+usually costs no read) and drops it at once when it ends a session itself. No request state in here.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import secrets
+import threading
+import time
+from dataclasses import dataclass
+from datetime import UTC, datetime, timedelta
+
+from sqlalchemy import Connection, event, inspect, select, update
+from sqlalchemy.orm import Session
+
+from middleware.models import LoginSession, User
+
+RECHECK_S = 1.0
+# last_seen_at is written at most this often per session (a write per request would serialise SQLite).
+TOUCH_EVERY = timedelta(minutes=1)
+
+# key hash -> (user id, monotonic time of the check); only open sessions are kept.
+_verdicts: dict[str, tuple[int, float]] = {}
+_lock = threading.Lock()
+
+
+@dataclass(frozen=True)
+class SessionLimits:
+    """How long a login lasts: at most `lifetime` after it began, and `idle` after its last request."""
+
+    lifetime: timedelta
+    idle: timedelta
+
+
+def _key_hash(key: str) -> str:
+    return hashlib.sha256(key.encode()).hexdigest()
+
+
+def _as_utc(moment: datetime) -> datetime:
+    return moment.replace(tzinfo=UTC) if moment.tzinfo is None else moment.astimezone(UTC)
+
+
+def open_session(session: Session, user_id: int, now: datetime) -> str:
+    """Records a new login of user_id and returns the key its cookie carries; the caller commits."""
+    key = secrets.token_urlsafe(32)
+    session.add(LoginSession(key_hash=_key_hash(key), user_id=user_id, created_at=now, last_seen_at=now))
+    session.flush()
+    return key
+
+
+def is_open(session: Session, key: str, user_id: int, limits: SessionLimits, now: datetime) -> bool:
+    """True when key is user_id's login, not ended, not past its lifetime nor its idle timeout."""
+    digest = _key_hash(key)
+    with _lock:
+        verdict = _verdicts.get(digest)
+    if verdict is not None and verdict[0] == user_id and time.monotonic() - verdict[1] <= RECHECK_S:
+        return True
+    row = session.scalar(select(LoginSession).where(LoginSession.key_hash == digest))
+    if row is None or row.user_id != user_id or row.ended_at is not None:
+        return _forget(digest)
+    last_seen = _as_utc(row.last_seen_at)
+    if now >= _as_utc(row.created_at) + limits.lifetime or now >= last_seen + limits.idle:
+        return _forget(digest)
+    if now - last_seen >= TOUCH_EVERY:
+        row.last_seen_at = now
+    with _lock:
+        _verdicts[digest] = (user_id, time.monotonic())
+    return True
+
+
+def end_session(session: Session, key: str, now: datetime) -> None:
+    """Ends the login whose cookie carries key (logout); the caller commits."""
+    digest = _key_hash(key)
+    _forget(digest)
+    session.execute(update(LoginSession).where(LoginSession.key_hash == digest, LoginSession.ended_at.is_(None))
+                    .values(ended_at=now))
+
+
+def end_all_sessions(connection: Connection | Session, user_id: int, now: datetime) -> None:
+    """Ends every open login of user_id; the caller commits."""
+    with _lock:
+        for digest in [d for d, (owner, _) in _verdicts.items() if owner == user_id]:
+            del _verdicts[digest]
+    connection.execute(update(LoginSession)
+                       .where(LoginSession.user_id == user_id, LoginSession.ended_at.is_(None))
+                       .values(ended_at=now))
+
+
+def _forget(digest: str) -> bool:
+    with _lock:
+        _verdicts.pop(digest, None)
+    return False
+
+
+@event.listens_for(User, "after_update")
+def _credentials_changed(_mapper, connection: Connection, target: User) -> None:
+    """A new password (own change, reset, CLI) or a disabled account ends the account's logins, whichever
+    code path made the change; a session that changed its own password is given a fresh one (sessions.py)."""
+    state = inspect(target)
+    disabled = state.attrs.is_active.history.has_changes() and not target.is_active
+    if disabled or state.attrs.password_hash.history.has_changes():
+        end_all_sessions(connection, target.id, datetime.now(UTC))

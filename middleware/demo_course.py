@@ -1,0 +1,112 @@
+"""The demo course `telelab up` seeds, so every journey can be walked at once on a fresh lab.
+
+"Mobile robotics (demo)": taught by the demo `tutor`, with the demo `student` enrolled, a weekly booking
+allowance and a turn length; a small question bank; an open practice quiz, a timed theoretical test and an
+experimental test on lab-1, both open now for a long window; and the course's lab survey (every course has
+one). Everything goes through the courses and assessment services, so the seed obeys the same validation
+as a tutor's forms.
+
+The course's code marks the seed as done: a start that finds the course changes nothing, so what the tutor
+has since changed (a student removed, a test edited or deleted) is never undone, and nothing is duplicated.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import UTC, datetime, timedelta
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from middleware.assessment import bank
+from middleware.assessment.schemas import parse_exam, parse_question
+from middleware.auth.services import find_user
+from middleware.courses import services as courses
+from middleware.courses.schemas import CourseSettings
+from middleware.models import Course, Role
+
+DEMO_COURSE_CODE = "DEMO-ROBOTICS"
+DEMO_COURSE_TITLE = "Mobile robotics (demo)"
+DEMO_ALLOWANCE_MIN = 120  # per week: four 30-minute slots
+DEMO_TURN_LENGTH_S = 300
+DEMO_ROBOT = "lab-1"
+OPEN_FOR = timedelta(days=365)  # the timed tests stay open long enough for any demo
+
+# Facts of the simulated robot (skill_server/sim): 16 sonars, a 181-beam laser over 180 degrees up to 8 m.
+DEMO_QUESTIONS: list[dict[str, Any]] = [
+    {"kind": "single", "prompt": "Why does the odometry estimate drift away from the robot's true pose?",
+     "choices": ["The wheels slip and their measured turns carry small errors that add up",
+                 "The laser is too slow", "The camera is not calibrated"], "correct": 0,
+     "topics": ["odometry"]},
+    {"kind": "numeric", "prompt": "How many sonars ring the lab robot?", "value": 16, "tolerance": 0,
+     "topics": ["sensors", "sonar"]},
+    {"kind": "numeric", "prompt": "What is the laser's maximum range?", "value": 8, "tolerance": 0.5, "unit": "m",
+     "topics": ["laser", "sensors"]},
+    {"kind": "multiple", "prompt": "Which sensors measure distances to obstacles?",
+     "choices": ["Sonar", "Laser", "Wheel encoders", "Camera (alone)"], "correct": [0, 1],
+     "topics": ["sensors"]},
+    {"kind": "single", "prompt": "Localization compares the laser's scan with what, to estimate the pose?",
+     "choices": ["The lab's map", "The sonar ring", "The previous video frame"], "correct": 0,
+     "topics": ["laser", "localization"]},
+    {"kind": "text", "prompt": "Which skill keeps a set distance to a wall (two words)?",
+     "accepted": ["wall following", "wall-following", "wall_following"], "topics": ["wall following"]},
+]
+QUIZ_QUESTIONS = (0, 1, 3)  # indices into DEMO_QUESTIONS
+TIMED_QUESTIONS = (0, 2, 4, 5)
+QUIZ_TITLE = "Practice quiz: sensors and odometry"
+TIMED_TITLE = "Timed test: mobile robotics basics"
+EXPERIMENTAL_TITLE = "Experimental test: reach the orange tile"
+
+
+@dataclass(frozen=True)
+class DemoCourse:
+    """What seeding found or made: the course's id, and the items added (empty when it existed already)."""
+
+    course_id: int | None
+    added: list[str]
+
+
+def seed_demo_course(session: Session, now: datetime | None = None) -> DemoCourse:
+    """Creates the demo course and its tests when the course does not exist; the caller commits.
+
+    Needs the demo `tutor` (the course's tutor, and the actor of every service call); without it nothing is
+    seeded. The demo `student` is enrolled when the account exists.
+    """
+    existing = session.scalar(select(Course.id).where(Course.code == DEMO_COURSE_CODE))
+    if existing is not None:
+        return DemoCourse(existing, [])
+    tutor = find_user(session, "tutor")
+    if tutor is None or tutor.role != Role.TUTOR:
+        return DemoCourse(None, [])
+    now = now or datetime.now(UTC)
+    course = courses.create_course(session, tutor, DEMO_COURSE_CODE, DEMO_COURSE_TITLE, CourseSettings(
+        turn_length_s=DEMO_TURN_LENGTH_S, booking_allowance_min=DEMO_ALLOWANCE_MIN))
+    added = [f"course {DEMO_COURSE_TITLE} ({DEMO_ALLOWANCE_MIN} min of bookings a week)"]
+    student = find_user(session, "student")
+    if student is not None and student.role == Role.STUDENT and student.is_active:
+        courses.enrol(session, tutor, course.id, student.username)
+        added.append("the demo student enrolled")
+    ids = [bank.add_question(session, tutor, course.id, parse_question(q)).id for q in DEMO_QUESTIONS]
+    added.append(f"{len(ids)} questions")
+    for label, data in _demo_exams(ids, now):
+        bank.create_exam(session, tutor, course.id, parse_exam(data))
+        added.append(label)
+    added.append("the lab survey")
+    return DemoCourse(course.id, added)
+
+
+def _demo_exams(ids: list[int], now: datetime) -> list[tuple[str, dict[str, Any]]]:
+    """(what the banner calls it, the test as the editor's form sends it): a practice quiz, then a timed test
+    and an experimental test open from just before now for OPEN_FOR."""
+    window = {"opens_at": (now - timedelta(minutes=5)).isoformat(), "closes_at": (now + OPEN_FOR).isoformat()}
+    quiz = {"title": QUIZ_TITLE, "kind": "quiz", "question_ids": [ids[i] for i in QUIZ_QUESTIONS]}
+    timed = {"title": TIMED_TITLE, "kind": "theory", **window, "duration_s": 900, "max_attempts": 3,
+             "question_ids": [ids[i] for i in TIMED_QUESTIONS]}
+    experimental = {
+        "title": EXPERIMENTAL_TITLE, "kind": "experimental", **window, "duration_s": 600, "max_attempts": 3,
+        "robot_name": DEMO_ROBOT, "task_kind": "reach_point", "x_m": 1.5, "y_m": 1.5, "task_points": 10,
+        "task_topics": ["navigation"],
+        "instructions": f"Take control of {DEMO_ROBOT} and bring it to the orange tile at (1.5, 1.5) m, by driving "
+                        "or with go-to-goal, then submit. The mark is the robot's true distance to it."}
+    return [("practice quiz", quiz), ("timed test", timed), (f"experimental test on {DEMO_ROBOT}", experimental)]

@@ -1,0 +1,38 @@
+"""The Flask extensions every area shares, created unbound and bound in create_app: CSRF protection and
+the login manager (how a session's user is loaded, and what an anonymous visitor is told)."""
+
+from __future__ import annotations
+
+from flask import redirect, request, url_for
+from flask.typing import ResponseReturnValue
+from flask_login import LoginManager
+from flask_wtf.csrf import CSRFProtect
+
+from middleware import db
+from middleware.auth import identity, sessions
+from middleware.errors import ApiError
+from middleware.models import User
+from middleware.validation import decimal_int
+
+csrf = CSRFProtect()
+login_manager = LoginManager()
+login_manager.login_view = "auth.login"
+login_manager.login_message = "Log in to open the lab."
+login_manager.session_protection = "strong"
+
+
+@login_manager.user_loader
+def _load_user(user_id: str) -> User | None:
+    number = decimal_int(user_id, 1)
+    if number is None:
+        return None
+    if not sessions.is_live(number):  # the login was ended or expired, in whichever process
+        return None
+    return identity.load_user(db.get_session(), number)
+
+
+@login_manager.unauthorized_handler
+def _unauthorized() -> ResponseReturnValue:
+    if request.path.startswith("/api/"):
+        raise ApiError(401, "not_logged_in", "Log in first; your session may have ended.")
+    return redirect(url_for("auth.login", next=request.full_path.rstrip("?")))

@@ -1,1 +1,0 @@
-"""Personal practice robots: one simulated robot (its own skill server process) per learner who asks."""

@@ -1,0 +1,60 @@
+"""Who may change tours and lessons and run live classes: courses/authority.py's rules, worded for teaching.
+
+A live class belongs to its course: only a tutor of that course (or an admin) starts one, and only its
+leader, a tutor of its course or an admin steps, hands over (to a student of the course) or ends it.
+Starting a class on a robot ends the class running there, so that needs the right to end it too. Only an
+admin may start a class with no course, or with the override that lets it outrank the queue without a
+booking (tours.with_guided_priority).
+"""
+
+from __future__ import annotations
+
+from sqlalchemy.orm import Session
+
+from middleware.assessment.policy import is_student_of
+from middleware.courses.authority import shares_authorship, teaches_course
+from middleware.errors import Refused
+from middleware.models import Role, User
+from middleware.models.teaching import GuidedSession
+
+
+def require_author_rights(session: Session, actor: User, author_id: int | None, kind: str) -> None:
+    """Refuses (403) unless actor may change this tour or lesson (kind names it in the sentence)."""
+    if not shares_authorship(session, actor, author_id):
+        raise Refused(403, "forbidden", f"You can change only the {kind}s you or another tutor of your courses "
+                                        f"wrote; save a copy under a new title instead.")
+
+
+def may_run_class(session: Session, actor: User, live: GuidedSession) -> bool:
+    """The class's leader, a tutor of its course, or an admin."""
+    return live.tutor_id == actor.id or teaches_course(session, actor, live.course_id)
+
+
+def require_class_rights(session: Session, actor: User, live: GuidedSession) -> None:
+    """Refuses (403) anyone who may not step, hand over or end this class."""
+    if not may_run_class(session, actor, live):
+        raise Refused(403, "not_tutor", "Only the tutors of this class's course can do that.")
+
+
+def require_class_member(session: Session, live: GuidedSession, user: User) -> None:
+    """Refuses (403) handing a course's class robot to anyone but a student of that course (a class with no
+    course, an admin's, may hand it to anyone)."""
+    if live.course_id is not None and not is_student_of(session, user.id, live.course_id):
+        raise Refused(403, "forbidden", f"{user.username} is not a student of this class's course, so the robot "
+                                        "cannot be handed to them.", "user")
+
+
+def check_class_start(session: Session, actor: User, course_id: int | None, override: bool,
+                      running: GuidedSession | None) -> None:
+    """Refuses a class start actor may not make: a course they do not teach, no course or an override (admins
+    only), or a robot where a class they may not end is running (409)."""
+    if course_id is None and actor.role != Role.ADMIN:
+        raise Refused(403, "forbidden", "Choose a course you teach: a class is led for one course.", "course_id")
+    if course_id is not None and not teaches_course(session, actor, course_id):
+        raise Refused(403, "forbidden", "You can lead classes only for the courses you teach.", "course_id")
+    if override and actor.role != Role.ADMIN:
+        raise Refused(403, "forbidden", "Only an admin can let a class go before the queue without a booking; "
+                                        "book a class slot on the robot instead.", "override")
+    if running is not None and not may_run_class(session, actor, running):
+        raise Refused(409, "class_running", "Another course's class is running on this robot; choose another "
+                                            "robot or wait until that class ends.", "robot")

@@ -1,0 +1,262 @@
+"""Lesson pages and API: list, play, edit (tutors), the cue track, the video, and running cues."""
+
+from __future__ import annotations
+
+import time
+
+from flask import (
+    Blueprint,
+    Response,
+    current_app,
+    flash,
+    jsonify,
+    redirect,
+    render_template,
+    request,
+    send_from_directory,
+    url_for,
+)
+from flask.typing import ResponseReturnValue
+from flask_login import current_user, login_required
+from werkzeug.exceptions import RequestEntityTooLarge
+
+from middleware.db import get_session
+from middleware.errors import ApiError, flashed, unless_refused
+from middleware.extensions import csrf
+from middleware.models import User
+from middleware.models.teaching import Lesson
+from middleware.teaching.authority import require_author_rights
+from middleware.teaching.command_form import RobotCommand
+from middleware.teaching.cues import parse_cue_track
+from middleware.teaching.lesson_uploads import (
+    DEFAULT_MAX_VIDEO_BYTES,
+    MULTIPART_OVERHEAD,
+    UploadRefused,
+    store_video,
+    too_large_message,
+)
+from middleware.teaching.lessons import (
+    available_videos,
+    check_lesson,
+    delete_unused_video,
+    lesson_dict,
+    save_lesson,
+    stored_cues,
+    unused_videos,
+    video_dir,
+)
+from middleware.teaching.targets import execute, reference_skills, resolve_target
+
+blueprint = Blueprint("lessons", __name__)
+PAPER_FIGURES = {"cue_to_robot_ms": [652.88, 543.94], "pause_detection_ms": 15.4}
+
+
+def _user_id() -> int:
+    return int(current_user.get_id())
+
+
+def _require_tutor() -> None:
+    if current_user.role not in ("tutor", "admin"):
+        raise ApiError(403, "not_tutor", "Only tutors write lessons.")
+
+
+def _editable_lesson(lesson_id: int | None) -> Lesson | None:
+    """The lesson to overwrite (None for a new one), when the user may change it."""
+    if lesson_id is None:
+        return None
+    lesson = _lesson(lesson_id)
+    session = get_session()
+    require_author_rights(session, session.get(User, _user_id()), lesson.author_id, "lesson")  # type: ignore[arg-type]
+    return lesson
+
+
+def _lesson(lesson_id: int) -> Lesson:
+    lesson = get_session().get(Lesson, lesson_id)
+    if lesson is None:
+        raise ApiError(404, "unknown_lesson", "There is no such lesson.", "lesson_id")
+    return lesson
+
+
+@blueprint.get("/lessons")
+@login_required
+def index() -> ResponseReturnValue:
+    """Every lesson."""
+    lessons = get_session().query(Lesson).order_by(Lesson.title).all()
+    return render_template("teaching/lessons.html", lessons=lessons)
+
+
+@blueprint.get("/lessons/<int:lesson_id>")
+@login_required
+def play(lesson_id: int) -> ResponseReturnValue:
+    """The lesson player."""
+    from middleware.robots.registry import robot_registry
+
+    return render_template("teaching/lesson.html", lesson=_lesson(lesson_id), paper=PAPER_FIGURES,
+                           lab_robots=robot_registry().names())
+
+
+@blueprint.get("/lessons/new")
+@blueprint.get("/lessons/<int:lesson_id>/edit")
+@login_required
+def edit(lesson_id: int | None = None) -> ResponseReturnValue:
+    """The lesson editor (tutors)."""
+    _require_tutor()
+    lesson = _editable_lesson(lesson_id)
+    return render_template("teaching/lesson_edit.html", lesson=lesson,
+                           videos=available_videos(current_app.instance_path),
+                           unused_videos=unused_videos(get_session(), current_app.instance_path),
+                           uploaded_video=request.args.get("video"),
+                           max_video_mb=_max_video_bytes() // (1024 * 1024))
+
+
+def _max_video_bytes() -> int:
+    return int(current_app.config.get("LESSON_VIDEO_MAX_BYTES", DEFAULT_MAX_VIDEO_BYTES))
+
+
+def _receive_video() -> str:
+    """Checks the request (tutor, size, CSRF) and stores its "video" file; its new name or UploadRefused."""
+    limit = _max_video_bytes()
+    if request.content_length is not None and request.content_length > limit + MULTIPART_OVERHEAD:
+        raise UploadRefused(413, "video_too_large", too_large_message(limit))  # refused before reading it
+    # The app reads at most MAX_CONTENT_LENGTH (2 MB) of any request; this route alone takes a video,
+    # so the limit is raised here, for this request, only after the login and the tutor role were checked.
+    request.max_content_length = limit + MULTIPART_OVERHEAD
+    try:
+        csrf.protect()  # exempt from the automatic check, which would read the body under the 2 MB limit
+        upload = request.files.get("video")
+    except RequestEntityTooLarge:
+        raise UploadRefused(413, "video_too_large", too_large_message(limit)) from None
+    if upload is None or not upload.filename:
+        raise UploadRefused(400, "missing_video", "video: choose a .webm or .mp4 file to upload.")
+    try:
+        return store_video(current_app.instance_path, upload.filename, upload.stream, limit)
+    finally:
+        upload.close()
+
+
+@blueprint.post("/lessons/videos")
+@blueprint.post("/api/lessons/videos", endpoint="upload_video_api")
+@csrf.exempt
+@login_required
+def upload_video() -> ResponseReturnValue:
+    """Uploads a lesson video (tutors; multipart field "video", with the CSRF token).
+
+    The API answers {"video_name"} or an error naming the field; the editor's form is sent back to the
+    editor, with the new video chosen, or with the error.
+    """
+    api = request.path.startswith("/api/")
+    _require_tutor()
+    lesson_id = request.args.get("lesson", type=int)
+    back = url_for("lessons.edit", lesson_id=lesson_id) if lesson_id else url_for("lessons.edit")
+
+    def upload() -> ResponseReturnValue:
+        name = _receive_video()
+        if api:
+            return jsonify({"video_name": name, "videos": available_videos(current_app.instance_path)}), 201
+        flash(f"Uploaded as {name}; it is chosen below as the lesson's video.", "success")
+        return redirect(f"{back}?video={name}", 303)
+
+    return upload() if api else unless_refused(upload, flashed(back), about_the_page=())
+
+
+
+@blueprint.post("/lessons/videos/<name>/delete")
+@blueprint.delete("/api/lessons/videos/<name>", endpoint="delete_video_api")
+@login_required
+def delete_video(name: str) -> ResponseReturnValue:
+    """Deletes an uploaded video no lesson plays (tutors). The editor's button comes back to the editor."""
+    api = request.path.startswith("/api/")
+    _require_tutor()
+    lesson_id = request.args.get("lesson", type=int)
+    back = url_for("lessons.edit", lesson_id=lesson_id) if lesson_id else url_for("lessons.edit")
+
+    def delete() -> ResponseReturnValue:
+        delete_unused_video(get_session(), current_app.instance_path, name)
+        if api:
+            return jsonify({"deleted": name, "videos": available_videos(current_app.instance_path)})
+        flash(f"Deleted {name}.", "success")
+        return redirect(back, 303)
+
+    return delete() if api else unless_refused(delete, flashed(back), about_the_page=())
+
+
+@blueprint.get("/lessons/<int:lesson_id>/cues.vtt")
+@login_required
+def cue_track(lesson_id: int) -> ResponseReturnValue:
+    """The canonical WebVTT cue track (commands only, written by the server)."""
+    return Response(_lesson(lesson_id).cues_vtt, mimetype="text/vtt")
+
+
+@blueprint.get("/lessons/<int:lesson_id>/video")
+@login_required
+def video(lesson_id: int) -> ResponseReturnValue:
+    """The lesson's video file (range requests supported, so seeking works)."""
+    lesson = _lesson(lesson_id)
+    return send_from_directory(video_dir(current_app.instance_path), lesson.video_name, conditional=True)
+
+
+@blueprint.get("/api/lessons/<int:lesson_id>")
+@login_required
+def lesson_api(lesson_id: int) -> ResponseReturnValue:
+    """A lesson with its cues."""
+    return jsonify(lesson_dict(_lesson(lesson_id)))
+
+
+@blueprint.post("/api/lessons/check")
+@login_required
+def check() -> ResponseReturnValue:
+    """Checks a cue track without saving: {"cues": text} -> the cues and every error by line."""
+    _require_tutor()
+    body = request.get_json(silent=True)
+    if not isinstance(body, dict):
+        raise ApiError(400, "invalid_field", 'Send a JSON object: {"cues": "WEBVTT ..."}.', "body")
+    cues, errors = parse_cue_track(body.get("cues"), reference_skills(_user_id()))
+    return jsonify({"cues": [c.to_dict() for c in cues], "errors": [e.to_dict() for e in errors]})
+
+
+@blueprint.post("/api/lessons")
+@blueprint.put("/api/lessons/<int:lesson_id>")
+@login_required
+def save(lesson_id: int | None = None) -> ResponseReturnValue:
+    """Creates or updates a lesson after checking every cue against the robot's skills."""
+    _require_tutor()
+    lesson = _editable_lesson(lesson_id)
+    draft = check_lesson(request.get_json(silent=True), reference_skills(_user_id()),
+                         available_videos(current_app.instance_path))
+    lesson = save_lesson(get_session(), draft, _user_id(), lesson)
+    return jsonify(lesson_dict(lesson)), 200 if lesson_id is not None else 201
+
+
+def _run_body() -> tuple[dict[str, object], float]:
+    body = request.get_json(silent=True)
+    if not isinstance(body, dict):
+        raise ApiError(400, "invalid_field", 'Send a JSON object: {"target": "practice"}.', "body")
+    hold_s = body.get("hold_s", 10.0)
+    if isinstance(hold_s, bool) or not isinstance(hold_s, int | float) or not 0.1 <= hold_s <= 10:
+        raise ApiError(400, "invalid_field", "hold_s must be a number of seconds from 0.1 to 10.", "hold_s")
+    return body, float(hold_s)
+
+
+@blueprint.post("/api/lessons/<int:lesson_id>/cues/<int:index>/run")
+@login_required
+def run_cue(lesson_id: int, index: int) -> ResponseReturnValue:
+    """Sends the stored command of cue `index` (never a command from the page) to the learner's target."""
+    received_at = time.perf_counter()
+    received_unix_ms = time.time() * 1000
+    body, hold_s = _run_body()
+    cues = stored_cues(_lesson(lesson_id))
+    if not 1 <= index <= len(cues):
+        raise ApiError(404, "unknown_cue", "The lesson has no such cue.", "index")
+    result = execute(resolve_target(body.get("target"), _user_id()), cues[index - 1].command, received_at, hold_s)
+    return jsonify({**result, "cue": index, "received_unix_ms": round(received_unix_ms, 3)}), 202
+
+
+@blueprint.post("/api/lessons/stop")
+@login_required
+def stop() -> ResponseReturnValue:
+    """Stops the learner's target at once (pause, seek, buffering, end)."""
+    received_at = time.perf_counter()
+    received_unix_ms = time.time() * 1000
+    body, _hold_s = _run_body()
+    result = execute(resolve_target(body.get("target"), _user_id()), RobotCommand("stop"), received_at)
+    return jsonify({**result, "received_unix_ms": round(received_unix_ms, 3)})

@@ -1,0 +1,175 @@
+"""Lessons: checking and saving them, finding their videos, and the skill schema used to check cues."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from middleware.errors import Refused
+from middleware.models.accounts import utc_now
+from middleware.models.teaching import Lesson
+from middleware.teaching.command_form import SkillSchemas
+from middleware.teaching.cues import Cue, CueError, parse_cue_track, to_webvtt
+
+VIDEO_NAME = re.compile(r"^[a-z0-9][a-z0-9_-]{0,100}\.(webm|mp4)$")
+SLUG = re.compile(r"^[a-z0-9][a-z0-9-]{0,63}$")
+MAX_TITLE = 120
+MAX_SUMMARY = 500
+MAX_TOPICS, MAX_TOPIC = 10, 60
+
+
+def normalise_topics(value: object) -> str:
+    """Topics ("Sensors, odometry" or a list) as stored on tours and lessons: "odometry, sensors" (lower case,
+    sorted, no repeats); ValueError names the problem. Recommendations match them to question topics."""
+    if value is None:
+        return ""
+    if isinstance(value, str):
+        value = value.split(",")
+    if not isinstance(value, list) or not all(isinstance(t, str) for t in value):
+        raise ValueError("topics must be text: names separated by commas.")
+    topics = sorted({" ".join(t.split()).lower() for t in value} - {""})
+    if len(topics) > MAX_TOPICS or any(len(t) > MAX_TOPIC for t in topics):
+        raise ValueError(f"topics: at most {MAX_TOPICS} names of at most {MAX_TOPIC} characters each.")
+    return ", ".join(topics)
+
+
+def topic_list(text: str | None) -> list[str]:
+    """The stored topics as a list."""
+    return [t for t in (part.strip() for part in (text or "").split(",")) if t]
+
+
+class LessonInvalid(Refused):
+    """A lesson that cannot be saved (400 invalid_lesson): errors name the field, and the line for cue errors;
+    the first one is the refusal's message and field, and the JSON lists them all."""
+
+    def __init__(self, errors: list[CueError]) -> None:
+        first = errors[0] if errors else CueError(0, "body", "The lesson is not valid.")
+        where = f" (line {first.line})" if first.line else ""
+        super().__init__(400, "invalid_lesson", first.message + where, first.field)
+        self.errors = errors
+
+    def to_dict(self) -> dict[str, object]:
+        """The error, and every error by line."""
+        return {**super().to_dict(), "errors": [e.to_dict() for e in self.errors]}
+
+
+@dataclass(frozen=True)
+class LessonDraft:
+    """A checked lesson, ready to store."""
+
+    slug: str
+    title: str
+    summary: str
+    video_name: str
+    cues: list[Cue]
+    topics: str = ""
+
+
+def video_dir(instance_path: str) -> Path:
+    """The folder of lesson videos (in the instance folder, never in the code tree)."""
+    return Path(instance_path) / "lessons"
+
+
+def available_videos(instance_path: str) -> list[str]:
+    """The video files a lesson may use."""
+    folder = video_dir(instance_path)
+    if not folder.is_dir():
+        return []
+    return sorted(p.name for p in folder.iterdir() if p.is_file() and VIDEO_NAME.fullmatch(p.name))
+
+
+class VideoNotDeletable(Refused):
+    """A video that cannot be deleted: the status, a stable code and a sentence naming the video."""
+
+    def __init__(self, status: int, code: str, message: str) -> None:
+        super().__init__(status, code, message, "video_name")
+
+
+def unused_videos(session: Session, instance_path: str) -> list[str]:
+    """The lesson videos no lesson plays (an upload never chosen, or one a lesson stopped using)."""
+    used = set(session.scalars(select(Lesson.video_name)))
+    return [name for name in available_videos(instance_path) if name not in used]
+
+
+def delete_unused_video(session: Session, instance_path: str, name: str) -> None:
+    """Deletes a lesson video that no lesson plays; VideoNotDeletable otherwise, and nothing changes."""
+    if not VIDEO_NAME.fullmatch(name) or not (video_dir(instance_path) / name).is_file():
+        raise VideoNotDeletable(404, "unknown_video", "There is no lesson video by that name.")
+    users = session.scalars(select(Lesson.title).where(Lesson.video_name == name).order_by(Lesson.title)).all()
+    if users:
+        raise VideoNotDeletable(409, "video_in_use", f"{name} is the video of {', '.join(users)}: "
+                                "give that lesson another video first.")
+    (video_dir(instance_path) / name).unlink(missing_ok=True)
+
+
+def _text(data: dict[str, object], name: str, limit: int, required: bool = True) -> str:
+    value = data.get(name, "")
+    if not isinstance(value, str):
+        raise LessonInvalid([CueError(0, name, f"{name} must be text.")])
+    value = value.strip()
+    if required and not value:
+        raise LessonInvalid([CueError(0, name, f"Give the lesson a {name}.")])
+    if len(value) > limit:
+        raise LessonInvalid([CueError(0, name, f"{name} has at most {limit} characters.")])
+    return value
+
+
+def check_lesson(data: object, skills: SkillSchemas, videos: list[str]) -> LessonDraft:
+    """A checked lesson from the editor's JSON: title, summary, slug, topics, video_name, cues (WebVTT or SRT)."""
+    if not isinstance(data, dict):
+        raise LessonInvalid([CueError(0, "body", "Send a JSON object with title, video_name and cues.")])
+    title = _text(data, "title", MAX_TITLE)
+    summary = _text(data, "summary", MAX_SUMMARY, required=False)
+    slug = data.get("slug") or re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-")[:64] or "lesson"
+    if not isinstance(slug, str) or not SLUG.fullmatch(slug):
+        raise LessonInvalid([CueError(0, "slug", "slug may use lower-case letters, digits and '-' (at most 64).")])
+    video = data.get("video_name")
+    if not isinstance(video, str) or video not in videos:
+        choices = ", ".join(videos) or "none yet: put a .webm or .mp4 file in the instance's lessons folder"
+        raise LessonInvalid([CueError(0, "video_name", f"Choose one of the lesson videos ({choices}).")])
+    try:
+        topics = normalise_topics(data.get("topics"))
+    except ValueError as error:
+        raise LessonInvalid([CueError(0, "topics", str(error))]) from None
+    cues, errors = parse_cue_track(data.get("cues"), skills)
+    if errors:
+        raise LessonInvalid(errors)
+    return LessonDraft(slug, title, summary, video, cues, topics)
+
+
+def save_lesson(session: Session, draft: LessonDraft, author_id: int | None, lesson: Lesson | None = None) -> Lesson:
+    """Creates or updates a lesson from a checked draft; the caller commits."""
+    clash = session.scalar(select(Lesson).where(Lesson.slug == draft.slug))
+    if clash is not None and clash is not lesson:
+        raise LessonInvalid([CueError(0, "slug", f"Another lesson is called {draft.slug!r} already.")])
+    if lesson is None:
+        lesson = Lesson(author_id=author_id)
+        session.add(lesson)
+    lesson.slug, lesson.title, lesson.summary, lesson.topics = draft.slug, draft.title, draft.summary, draft.topics
+    lesson.video_name, lesson.cues_vtt = draft.video_name, to_webvtt(draft.cues)
+    lesson.updated_at = utc_now()
+    session.flush()
+    return lesson
+
+
+def stored_cues(lesson: Lesson) -> list[Cue]:
+    """The cues of a stored lesson (its track was checked on save; re-read without a schema)."""
+    cues, errors = parse_cue_track(lesson.cues_vtt, None)
+    if errors:  # only if the row was edited by hand
+        raise LessonInvalid(errors)
+    return cues
+
+
+def lesson_dict(lesson: Lesson, with_cues: bool = True) -> dict[str, object]:
+    """JSON-ready form of a lesson."""
+    data: dict[str, object] = {"id": lesson.id, "slug": lesson.slug, "title": lesson.title,
+                               "summary": lesson.summary, "video_name": lesson.video_name,
+                               "topics": topic_list(lesson.topics)}
+    if with_cues:
+        data["cues"] = [c.to_dict() for c in stored_cues(lesson)]
+        data["cues_vtt"] = lesson.cues_vtt
+    return data

@@ -1,0 +1,104 @@
+"""Practice robot pages and API: start, stop, status, commands, goals, and the camera channel."""
+
+from __future__ import annotations
+
+import re
+import time
+
+from flask import Blueprint, jsonify, render_template, request, url_for
+from flask.typing import ResponseReturnValue
+from flask_login import current_user, login_required
+
+from middleware.access.commands import refusal_error
+from middleware.errors import ApiError
+from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, refuse, relay_stream
+from middleware.robots.link import RobotUnavailable
+from middleware.teaching.command_form import parse_command
+from middleware.teaching.practice_robots import practice_manager, practice_name
+from middleware.teaching.targets import PRACTICE_TARGET, execute, goal_state, resolve_target, skill_schemas
+
+blueprint = Blueprint("practice", __name__)
+GOAL_ID = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
+
+
+def _user_id() -> int:
+    return int(current_user.get_id())
+
+
+def status_dict(user_id: int) -> dict[str, object]:
+    """The user's practice robot (or none) and how many slots are taken."""
+    manager = practice_manager()
+    robot = manager.get(user_id)
+    return {"running": robot is not None, "name": robot.name if robot else None,
+            "console_url": url_for("lab.console", robot_name=robot.name) if robot else None,
+            "in_use": manager.count(), "cap": manager.cap, "idle_stop_s": manager.idle_s}
+
+
+@blueprint.get("/practice")
+@login_required
+def page() -> ResponseReturnValue:
+    """The practice robot page, with the link to its full console."""
+    name = practice_name(current_user.username, _user_id())
+    return render_template("teaching/practice.html", console_url=url_for("lab.console", robot_name=name))
+
+
+@blueprint.get("/api/practice")
+@login_required
+def status() -> ResponseReturnValue:
+    """Whether the user's practice robot runs."""
+    return jsonify(status_dict(_user_id()))
+
+
+@blueprint.post("/api/practice")
+@login_required
+def start() -> ResponseReturnValue:
+    """Starts the user's practice robot (or answers the running one)."""
+    practice_manager().start(_user_id(), current_user.username)
+    return jsonify(status_dict(_user_id())), 201
+
+
+@blueprint.delete("/api/practice")
+@login_required
+def stop() -> ResponseReturnValue:
+    """Stops the user's practice robot."""
+    stopped = practice_manager().stop(_user_id())
+    return jsonify({**status_dict(_user_id()), "stopped": stopped})
+
+
+@blueprint.post("/api/practice/commands")
+@login_required
+def command() -> ResponseReturnValue:
+    """Runs one declarative command on the practice robot: {"command": {...}}."""
+    received_at = time.perf_counter()
+    body = request.get_json(silent=True)
+    if not isinstance(body, dict):
+        raise ApiError(400, "invalid_field", 'Send a JSON object: {"command": {...}}.', "body")
+    target = resolve_target(PRACTICE_TARGET, _user_id())
+    try:
+        schemas = skill_schemas(target.link)
+    except RobotUnavailable as error:
+        raise refusal_error(error) from None
+    return jsonify(execute(target, parse_command(body.get("command"), schemas), received_at)), 202
+
+
+@blueprint.get("/api/robots/<target_name>/command-goals/<goal_id>")
+@login_required
+def goal(target_name: str, goal_id: str) -> ResponseReturnValue:
+    """A goal of the practice robot ("practice") or of a lab robot the user controls."""
+    if not GOAL_ID.fullmatch(goal_id):
+        raise ApiError(404, "unknown_goal", "There is no goal with that id.", "goal_id")
+    return jsonify({"goal": goal_state(resolve_target(target_name, _user_id()), goal_id)})
+
+
+def camera_channel(ws: WebSocket) -> None:
+    """The camera of the user's own practice robot."""
+    robot = practice_manager().get(_user_id())
+    if robot is None:
+        refuse(ws, CLOSE_NOT_FOUND, "no_practice_robot", "Start your practice robot first.")
+        return
+    relay_stream(ws, robot.link.camera)
+
+
+def register(sock: Channels) -> None:
+    """Declares the practice camera channel."""
+    sock.route("/ws/practice/camera", endpoint="practice_camera_channel")(camera_channel)

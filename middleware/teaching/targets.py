@@ -1,0 +1,84 @@
+"""Running a declarative command (lesson cue, tour step) on a robot the user may command, with its timings.
+
+A target is the user's practice robot or a lab robot; every command goes through access/commands.py.
+"""
+
+from __future__ import annotations
+
+import time
+
+from middleware.access.commands import MAX_DRIVE_HOLD_S, Commander, refusal_error, robot_commands
+from middleware.errors import ApiError
+from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
+from middleware.robots.messages import goal_dict, parameter_schema_dict
+from middleware.robots.registry import robot_registry
+from middleware.teaching.command_form import RobotCommand
+from middleware.teaching.practice_robots import practice_manager
+
+PRACTICE_TARGET = "practice"
+
+
+def skill_schemas(link: RobotLink) -> dict[str, list[dict[str, object]]]:
+    """The robot's skills and their parameter schemas, as command_form.parse_command takes them."""
+    return {s.name: [parameter_schema_dict(p) for p in s.parameters] for s in link.skills()}
+
+
+def resolve_target(target: object, user_id: int) -> Commander:
+    """The user's commands to their practice robot ("practice") or to a lab robot; an ApiError naming target
+    otherwise. Whether they control the robot is the command path's question, asked when a command goes."""
+    if target == PRACTICE_TARGET:
+        robot = practice_manager().get(user_id)
+        if robot is None:
+            raise ApiError(409, "no_practice_robot", "Start your practice robot first.", "target")
+        target = robot.name
+    if not isinstance(target, str) or not 0 < len(target) <= 64:
+        raise ApiError(400, "invalid_field", 'target must be "practice" or a lab robot\'s name.', "target")
+    return robot_commands().for_user(target, user_id, field="target")
+
+
+def execute(robot: Commander, command: RobotCommand, received_at: float,
+            hold_s: float = MAX_DRIVE_HOLD_S) -> dict[str, object]:
+    """Sends command; the answer has the goal (if any) and the middleware-to-ack time in ms.
+
+    A drive becomes a held drive (a direct_control goal of at most 10 s), so it stops by itself if the page
+    goes away; a stop is a zero drive, which preempts any motor goal at once.
+    """
+    goal: dict[str, object] | None = None
+    applied: int | None = None
+    try:
+        if command.kind == "stop":
+            applied = robot.stop().applied_sequence
+        elif command.kind == "drive":
+            goal = goal_dict(robot.hold_drive(command.linear_mps, command.angular_radps, hold_s))
+        else:
+            goal = goal_dict(robot.activate(command.skill, dict(command.parameters), preempt=True))
+        acked_at = time.perf_counter()
+    except (CommandRefused, RobotUnavailable) as error:
+        raise refusal_error(error) from None
+    return {"robot": robot.robot_name, "command": command.to_dict(), "goal": goal, "applied_sequence": applied,
+            "middleware_to_ack_ms": round((acked_at - received_at) * 1000, 3),
+            "acked_unix_ms": round(time.time() * 1000, 3)}
+
+
+def goal_state(robot: Commander, goal_id: str) -> dict[str, object]:
+    """A goal's state on the robot."""
+    try:
+        return goal_dict(robot.goal_state(goal_id))
+    except (CommandRefused, RobotUnavailable) as error:
+        raise refusal_error(error, not_found_code="unknown_goal") from None
+
+
+def reference_skills(user_id: int | None = None) -> dict[str, list[dict[str, object]]]:
+    """The skill schemas to check lessons and tours against: the user's practice robot, else any lab robot."""
+    links: list[RobotLink] = []
+    if user_id is not None and (robot := practice_manager().get(user_id)) is not None:
+        links.append(robot.link)
+    registry = robot_registry()
+    links += [link for name in registry.names() if (link := registry.get(name)) is not None]
+    for link in links:
+        try:
+            return skill_schemas(link)
+        except RobotUnavailable:
+            continue
+    raise ApiError(503, "no_robot_to_check", "No robot answers now, so the skills cannot be checked. "
+                                             "Start your practice robot or try again in a moment.")

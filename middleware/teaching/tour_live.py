@@ -1,0 +1,87 @@
+"""Live guided sessions: the state every page shows, and the channel that pushes it when the tutor acts.
+
+A change wakes this process's sockets at once; every socket also re-reads the session's version from the
+database each second, so a change made in another worker process arrives too (a little later).
+"""
+
+from __future__ import annotations
+
+import threading
+
+from flask_login import current_user
+from sqlalchemy.orm import Session
+
+from middleware.db import get_session
+from middleware.models import User
+from middleware.models.teaching import GuidedSession, Tour
+from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, refuse, send_json
+from middleware.teaching.tours import tour_steps
+
+_changed = threading.Condition()
+_versions: dict[int, int] = {}
+_present: dict[int, dict[int, str]] = {}  # session id -> user id -> name, of this process's sockets
+RECHECK_S = 1.0
+
+
+def notify(session_id: int) -> None:
+    """Wakes the sockets of session_id."""
+    with _changed:
+        _versions[session_id] = _versions.get(session_id, 0) + 1
+        _changed.notify_all()
+
+
+def state(session: Session, live: GuidedSession) -> dict[str, object]:
+    """What every page of the class shows."""
+    tour = session.get(Tour, live.tour_id)
+    steps = tour_steps(tour) if tour is not None else []
+    controller = session.get(User, live.control_user_id) if live.control_user_id else None
+    tutor = session.get(User, live.tutor_id)
+    step = steps[live.step_index].to_dict() if 0 <= live.step_index < len(steps) else None
+    return {
+        "type": "state", "id": live.id, "tour_id": live.tour_id, "robot": live.robot_name,
+        "tutor": tutor.username if tutor else None, "step_index": live.step_index, "step_count": len(steps),
+        "step": step, "controller": controller.username if controller else None,
+        "ended": live.ended_at is not None, "version": live.version,
+        "participants": sorted(set(_present.get(live.id, {}).values())),
+    }
+
+
+def session_channel(ws: WebSocket, session_id: int) -> None:
+    """Pushes the class's state whenever it changes, until the socket closes."""
+    user_id, username = int(current_user.get_id()), current_user.username
+    db = get_session()
+    if db.get(GuidedSession, session_id) is None:
+        refuse(ws, CLOSE_NOT_FOUND, "unknown_session", "There is no such class.")
+        return
+    _present.setdefault(session_id, {})[user_id] = username
+    notify(session_id)  # the tutor's list of participants changes
+    sent: tuple[int, tuple[object, ...]] | None = None
+    seen_local = -1
+    try:
+        while ws.connected:
+            db.expire_all()
+            live = db.get(GuidedSession, session_id)
+            if live is None:
+                break
+            current = state(db, live)
+            participants = current["participants"]
+            signature = (live.version, tuple(participants) if isinstance(participants, list) else ())
+            if signature != sent:
+                send_json(ws, current)
+                sent = signature
+            db.rollback()  # end the read transaction; a socket lives long
+            with _changed:
+                if _versions.get(session_id, 0) == seen_local:
+                    _changed.wait(RECHECK_S)
+                seen_local = _versions.get(session_id, 0)
+            while ws.receive(timeout=0) is not None:
+                pass
+    finally:
+        _present.get(session_id, {}).pop(user_id, None)
+        notify(session_id)
+        db.close()
+
+
+def register(sock: Channels) -> None:
+    """Declares the class channel."""
+    sock.route("/ws/tour-sessions/<int:session_id>", endpoint="tour_session_channel")(session_channel)

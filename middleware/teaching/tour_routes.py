@@ -1,0 +1,262 @@
+"""Tour pages and API: the teaching hub, the fully guided player, the editor, and live guided sessions."""
+
+from __future__ import annotations
+
+import time
+
+from flask import Blueprint, current_app, jsonify, render_template, request
+from flask.typing import ResponseReturnValue
+from flask_login import current_user, login_required
+from sqlalchemy import select
+
+from middleware.accounts.schemas import clean_optional_id
+from middleware.bookings.services import tutored_courses
+from middleware.db import after_commit, get_session
+from middleware.errors import ApiError
+from middleware.models import User
+from middleware.models.teaching import GuidedSession, Lesson, Tour
+from middleware.teaching import tour_live as live
+from middleware.teaching.authority import (
+    check_class_start,
+    may_run_class,
+    require_author_rights,
+    require_class_member,
+    require_class_rights,
+)
+from middleware.teaching.targets import execute, reference_skills, resolve_target
+from middleware.teaching.tours import (
+    TourInvalid,
+    active_session,
+    end_session,
+    go_to_step,
+    hand_control,
+    panel_choices,
+    save_tour,
+    start_session,
+    tour_dict,
+    tour_steps,
+)
+
+blueprint = Blueprint("tours", __name__)
+
+
+def _user_id() -> int:
+    return int(current_user.get_id())
+
+
+def _actor() -> User:
+    return get_session().get(User, _user_id())  # type: ignore[return-value]
+
+
+def _require_tutor() -> None:
+    if current_user.role not in ("tutor", "admin"):
+        raise ApiError(403, "not_tutor", "Only tutors write and lead tours.")
+
+
+def _tour(tour_id: int) -> Tour:
+    tour = get_session().get(Tour, tour_id)
+    if tour is None:
+        raise ApiError(404, "unknown_tour", "There is no such tour.", "tour_id")
+    return tour
+
+
+def _live(session_id: int) -> GuidedSession:
+    found = get_session().get(GuidedSession, session_id)
+    if found is None:
+        raise ApiError(404, "unknown_session", "There is no such class.", "session_id")
+    return found
+
+
+@blueprint.get("/teaching")
+@login_required
+def hub() -> ResponseReturnValue:
+    """Tours, lessons, practice robot and the free console."""
+    from middleware.robots.registry import robot_registry
+
+    session = get_session()
+    return render_template(
+        "teaching/hub.html", tours=session.scalars(select(Tour).order_by(Tour.title)).all(),
+        lessons=session.scalars(select(Lesson).order_by(Lesson.title)).all(),
+        sessions=session.scalars(select(GuidedSession).where(GuidedSession.ended_at.is_(None))).all(),
+        lab_robots=robot_registry().names())
+
+
+@blueprint.get("/tours/<int:tour_id>")
+@login_required
+def play(tour_id: int) -> ResponseReturnValue:
+    """The fully guided player, on the learner's practice robot."""
+    return render_template("teaching/tour.html", tour=_tour(tour_id))
+
+
+@blueprint.get("/tours/new")
+@blueprint.get("/tours/<int:tour_id>/edit")
+@login_required
+def edit(tour_id: int | None = None) -> ResponseReturnValue:
+    """The tour editor (tutors)."""
+    _require_tutor()
+    tour = _tour(tour_id) if tour_id is not None else None
+    if tour is not None:
+        require_author_rights(get_session(), _actor(), tour.author_id, "tour")
+    return render_template("teaching/tour_edit.html", tour=tour, tour_data=tour_dict(tour) if tour else None,
+                           panels=_panel_choices([step.panel for step in tour_steps(tour)] if tour else []))
+
+
+def _panel_choices(in_use: list[str]) -> list[tuple[str, str]]:
+    """The panels a step may name, with their titles; without a robot to ask, the console's fixed panels."""
+    from middleware.lab.panels import robot_panels
+
+    try:
+        skills = reference_skills(_user_id())
+    except ApiError:
+        skills = {}
+    return panel_choices(robot_panels("tour", None), skills, in_use)
+
+
+@blueprint.get("/api/tours/<int:tour_id>")
+@login_required
+def tour_api(tour_id: int) -> ResponseReturnValue:
+    """A tour with its steps."""
+    return jsonify(tour_dict(_tour(tour_id)))
+
+
+@blueprint.post("/api/tours")
+@blueprint.put("/api/tours/<int:tour_id>")
+@login_required
+def save(tour_id: int | None = None) -> ResponseReturnValue:
+    """Creates or updates a tour; steps' skills and parameters are checked against the robot's schemas."""
+    _require_tutor()
+    tour = _tour(tour_id) if tour_id is not None else None
+    if tour is not None:
+        require_author_rights(get_session(), _actor(), tour.author_id, "tour")
+    tour = save_tour(get_session(), request.get_json(silent=True), reference_skills(_user_id()), _user_id(), tour)
+    return jsonify(tour_dict(tour)), 200 if tour_id is not None else 201
+
+
+@blueprint.post("/api/tours/<int:tour_id>/steps/<int:index>/run")
+@login_required
+def run_step(tour_id: int, index: int) -> ResponseReturnValue:
+    """Runs the stored command of step index on the learner's target (practice robot or a robot they control)."""
+    received_at = time.perf_counter()
+    body = request.get_json(silent=True)
+    if not isinstance(body, dict):
+        raise ApiError(400, "invalid_field", 'Send a JSON object: {"target": "practice"}.', "body")
+    steps = tour_steps(_tour(tour_id))
+    if not 0 <= index < len(steps):
+        raise ApiError(404, "unknown_step", "The tour has no such step.", "index")
+    command = steps[index].command
+    if command is None:
+        raise ApiError(409, "no_command", "This step runs nothing on the robot.", "index")
+    return jsonify(execute(resolve_target(body.get("target"), _user_id()), command, received_at)), 202
+
+
+# --- live guided sessions ----------------------------------------------------------------------
+
+
+@blueprint.get("/tours/<int:tour_id>/lead")
+@login_required
+def start_page(tour_id: int) -> ResponseReturnValue:
+    """The tutor chooses a lab robot and one of the courses they teach, and starts the class."""
+    from middleware.robots.registry import robot_registry
+
+    _require_tutor()
+    actor = _actor()
+    return render_template("teaching/tour_lead.html", tour=_tour(tour_id), robots=robot_registry().names(),
+                           courses=tutored_courses(get_session(), actor), may_lead_without_course=actor.role == "admin")
+
+
+@blueprint.post("/api/tours/<int:tour_id>/sessions")
+@login_required
+def start_live(tour_id: int) -> ResponseReturnValue:
+    """Starts a live class: {"robot": name, "course_id": id|null, "override": false} (teaching/authority.py says
+    who may)."""
+    from middleware.access.coordinator import access_coordinator
+    from middleware.models import Course
+    from middleware.robots.registry import robot_registry
+
+    _require_tutor()
+    tour = _tour(tour_id)
+    body = request.get_json(silent=True)
+    if not isinstance(body, dict):
+        raise ApiError(400, "invalid_field", 'Send a JSON object: {"robot": "lab-1"}.', "body")
+    robot = body.get("robot")
+    if not isinstance(robot, str) or robot not in robot_registry().names():
+        raise ApiError(400, "invalid_field", "Choose one of the lab robots.", "robot")
+    course_id = clean_optional_id(body.get("course_id"), "course_id")
+    session = get_session()
+    if course_id is not None and session.get(Course, course_id) is None:
+        raise ApiError(400, "invalid_field", "course_id must be one of the courses, or null.", "course_id")
+    override = body.get("override", False)
+    if not isinstance(override, bool):
+        raise ApiError(400, "invalid_field", "override must be true or false.", "override")
+    actor = _actor()
+    check_class_start(session, actor, course_id, override, active_session(session, robot))
+    created = start_session(session, tour, robot, actor.id, course_id, access_coordinator().now(),
+                            actor.id if override else None)
+    after_commit(lambda: live.notify(created.id))  # the class's sockets read it in sessions of their own
+    return jsonify(live.state(session, created)), 201
+
+
+@blueprint.get("/tours/sessions/<int:session_id>")
+@login_required
+def session_page(session_id: int) -> ResponseReturnValue:
+    """The live class page: the tutor leads, students follow."""
+    found = _live(session_id)
+    return render_template("teaching/tour_live.html", live=found, tour=_tour(found.tour_id),
+                           is_tutor=may_run_class(get_session(), _actor(), found))
+
+
+@blueprint.get("/api/tour-sessions/<int:session_id>")
+@login_required
+def session_api(session_id: int) -> ResponseReturnValue:
+    """The class's state."""
+    return jsonify(live.state(get_session(), _live(session_id)))
+
+
+@blueprint.post("/api/tour-sessions/<int:session_id>")
+@login_required
+def session_action(session_id: int) -> ResponseReturnValue:
+    """The tutor's actions: {"action": "step", "index": n} | {"action": "control", "user": name|null} | end."""
+    from middleware.access.coordinator import access_coordinator
+
+    session = get_session()
+    found = _live(session_id)
+    require_class_rights(session, _actor(), found)
+    if found.ended_at is not None:
+        raise ApiError(409, "session_ended", "This class has ended.")
+    body = request.get_json(silent=True)
+    body = body if isinstance(body, dict) else {}
+    action = body.get("action")
+    if action == "step":
+        index = body.get("index")
+        if isinstance(index, bool) or not isinstance(index, int):
+            raise TourInvalid("index", "index must be a whole number.")
+        go_to_step(found, index, len(tour_steps(_tour(found.tour_id))))
+    elif action == "control":
+        name = body.get("user")
+        user_id = None
+        if name is not None:
+            user = session.scalar(select(User).where(User.username == name)) if isinstance(name, str) else None
+            if user is None:
+                raise TourInvalid("user", "user must be the name of someone in the class, or null.")
+            require_class_member(session, found, user)
+            user_id = user.id
+        hand_control(found, user_id)
+    elif action == "end":
+        end_session(found, access_coordinator().now())
+    else:
+        raise TourInvalid("action", 'action must be "step", "control" or "end".')
+    after_commit(lambda: _class_changed(found.id, found.robot_name, handover=action in ("control", "end")))
+    return jsonify(live.state(session, found))
+
+
+def _class_changed(session_id: int, robot_name: str, handover: bool) -> None:
+    """Once the change is committed: the robot changes hands now (not at the next tick), and the class's
+    sockets are woken (they read it in sessions of their own)."""
+    if handover:
+        from middleware.access.coordinator import access_coordinator
+
+        try:
+            access_coordinator().tick(robot_name)
+        except Exception:  # noqa: BLE001 - the ticker applies it shortly anyway
+            current_app.logger.info("immediate tick after a class change failed", exc_info=True)
+    live.notify(session_id)

@@ -1,0 +1,165 @@
+"""The edge's one validation layer: what any request may carry before a view reads it, and text made safe to show.
+
+- Path ids: every `<int:...>` rule takes only ids the tables' id columns can hold (32 bits); larger ones are
+  404, like an unknown id (the database would otherwise raise on them: SQLite past int64, PostgreSQL past
+  int32).
+- JSON bodies: nested at most MAX_JSON_DEPTH levels; integers within int64; numbers finite; text that UTF-8
+  and the databases can hold (no lone surrogate, no NUL). Anything else is a 400 naming the field, whatever
+  the view would have done with it, so no view can store it.
+- Query strings, urlencoded forms and path arguments: the same text rule.
+- Numeric strings and dates: `decimal_int()` (ASCII digits only, bounded; never `str.isdigit()`, which
+  accepts '²') and `within_calendar()` (years 1900-9000: a week, a time zone or an ISO week away still has a date)
+  for the areas' schemas.
+- Showing stored text: what is already stored and cannot be encoded (a lone surrogate kept in a JSON column
+  before this layer existed) is shown with U+FFFD in its place by the response's encoding, never a 500.
+  Templates escape as always; a view that builds a `Response` itself uses `printable()`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from datetime import date, datetime
+from typing import Any
+
+from flask import Flask, Response, request
+from flask.json.provider import DefaultJSONProvider
+from werkzeug.routing import IntegerConverter, ValidationError
+
+from middleware.errors import Refused
+
+INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
+MAX_ROW_ID = 2**31 - 1  # the tables' ids are INTEGER: 32 bits on PostgreSQL, which refuses a larger operand
+MAX_JSON_DEPTH = 32
+# Years far enough from 1 and 9999 that a week, a time zone or an ISO week computed from a date never leaves
+# the calendar Python can represent.
+EARLIEST, LATEST = date(1900, 1, 1), date(9000, 12, 31)
+_DECIMAL = re.compile(r"[+-]?[0-9]{1,19}")
+_UNSTORABLE = re.compile(r"[\x00\ud800-\udfff]")
+_PLACEHOLDER = "\ufffd"
+
+
+class InvalidInput(Refused):
+    """Input no view may receive (400 invalid_field), naming the field."""
+
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(400, "invalid_field", message, field)
+
+
+class BoundedIntConverter(IntegerConverter):
+    """`<int:...>` limited to what the id columns hold: a larger id matches no rule (404), like an unknown one."""
+
+    def to_python(self, value: str) -> int:
+        if len(value) > 19 or not value.isascii():
+            raise ValidationError()
+        number = int(value)
+        if number > MAX_ROW_ID:
+            raise ValidationError()
+        return number
+
+
+def unstorable(text: str) -> bool:
+    """Whether text holds a character UTF-8 cannot encode (a lone surrogate) or PostgreSQL cannot store (NUL)."""
+    return _UNSTORABLE.search(text) is not None
+
+
+def printable(text: str) -> str:
+    """text with every unstorable character replaced by U+FFFD, for showing what is already stored."""
+    return _UNSTORABLE.sub(_PLACEHOLDER, text) if unstorable(text) else text
+
+
+def decimal_int(value: object, low: int = INT64_MIN, high: int = INT64_MAX) -> int | None:
+    """The whole number written in value (ASCII digits, optional sign, surrounding spaces) if low <= it <= high,
+    else None. An int passes through under the same bounds; booleans and other types are None."""
+    if isinstance(value, str):
+        text = value.strip()
+        value = int(text) if _DECIMAL.fullmatch(text) else None
+    if isinstance(value, bool) or not isinstance(value, int):
+        return None
+    return value if low <= value <= high else None
+
+
+def within_calendar(moment: date | datetime) -> bool:
+    """Whether moment is far enough from the calendar's edges for the arithmetic the lab does on dates."""
+    day = moment.date() if isinstance(moment, datetime) else moment  # a zone's offset is far less than the margin
+    return EARLIEST <= day <= LATEST
+
+
+def check_json(value: Any) -> None:
+    """Refuses (InvalidInput naming the field) a decoded JSON value a view must never receive."""
+    pending: list[tuple[Any, str, int]] = [(value, "body", 0)]
+    while pending:
+        item, field, depth = pending.pop()
+        if depth > MAX_JSON_DEPTH:
+            raise InvalidInput(field, f"The JSON is nested more than {MAX_JSON_DEPTH} levels deep.")
+        if isinstance(item, str):
+            if unstorable(item):
+                raise InvalidInput(field, f"{field} holds a character that cannot be stored (a lone surrogate or NUL).")
+        elif isinstance(item, bool) or item is None:
+            continue
+        elif isinstance(item, int):
+            if not INT64_MIN <= item <= INT64_MAX:
+                raise InvalidInput(field, f"{field} is too large a number.")
+        elif isinstance(item, float):
+            if not math.isfinite(item):
+                raise InvalidInput(field, f"{field} must be a finite number.")
+        elif isinstance(item, dict):
+            for key, inner in item.items():
+                name = key if field == "body" else f"{field}.{key}"
+                if unstorable(key):
+                    raise InvalidInput(field, f"A name in {field} holds a character that cannot be stored.")
+                pending.append((inner, name, depth + 1))
+        elif isinstance(item, list):
+            pending.extend((inner, f"{field}[{index}]", depth + 1) for index, inner in enumerate(item))
+
+
+def loads_checked(data: str | bytes) -> Any:
+    """json.loads, then check_json; nesting too deep for the parser is refused the same way. A ValueError is
+    raised for text that is not JSON (as json.loads does)."""
+    try:
+        value = json.loads(data)
+    except RecursionError:
+        raise InvalidInput("body", f"The JSON is nested more than {MAX_JSON_DEPTH} levels deep.") from None
+    check_json(value)
+    return value
+
+
+class CheckedJSONProvider(DefaultJSONProvider):
+    """The app's JSON: request bodies (get_json) are read by loads_checked, so no view receives what it refuses."""
+
+    def loads(self, s: str | bytes, **kwargs: Any) -> Any:
+        return loads_checked(s)
+
+
+class TolerantResponse(Response):
+    """The response class: a text body (a rendered page, JSON, a download) shows an unencodable character
+    as U+FFFD instead of failing to encode."""
+
+    def set_data(self, value: bytes | str) -> None:
+        if isinstance(value, str):
+            value = printable(value).encode()
+        super().set_data(value)
+
+
+def _check_request_text() -> None:
+    """Query strings, urlencoded forms and path arguments: text only that can be stored."""
+    sources = [request.args]
+    if request.mimetype == "application/x-www-form-urlencoded":
+        sources.append(request.form)  # multipart forms are read by their views (uploads raise the size limit)
+    for source in sources:
+        for name, value in source.items(multi=True):
+            if unstorable(name) or unstorable(value):
+                field = printable(name)
+                raise InvalidInput(field, f"{field} holds a character that cannot be stored (a NUL).")
+    for name, value in (request.view_args or {}).items():
+        if isinstance(value, str) and unstorable(value):
+            raise InvalidInput(name, f"{name} holds a character that cannot be stored (a NUL).")
+
+
+def init_app(app: Flask) -> None:
+    """Installs the layer on app; call it before any rule is added (the int converter binds then)."""
+    app.url_map.converters["int"] = BoundedIntConverter
+    app.json = CheckedJSONProvider(app)
+    app.response_class = TolerantResponse
+    app.before_request(_check_request_text)

@@ -1,0 +1,286 @@
+"""The robot as its adapters see it: one facade over the world, the sequencer and the hand-off to the loop.
+
+The gRPC servicer reaches the robot core only through `Robot`. Rules that span the world and the skills live
+here, once: a direct Drive takes the wheels back from the running motor goal before it is acknowledged.
+Streams are plain iterators of domain objects, paced in sim time, that end when the caller sets its `stopped`
+event (and calls `wake_streams()`), when the world stops, or when what they follow ends.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
+from typing import TypeVar
+
+from skill_server.errors import NoMap, NoTrack, UnknownGoal, WorldStopped
+from skill_server.goals import Goal, GoalEvent, GoalFeedback, GoalSnapshot, GoalStatus
+from skill_server.sequencer import Activation, Sequencer, attach_sequencer
+from skill_server.sim.camera import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS
+from skill_server.sim.drive_gate import DriveAck
+from skill_server.sim.geometry import Pose2D
+from skill_server.sim.laser import LaserSpec
+from skill_server.sim.pacing import SimTimePacer
+from skill_server.sim.snapshots import CameraFrame, RobotDescription, RobotSnapshot
+from skill_server.sim.track_monitor import TrackEvent, TrackMonitor, TrackState
+from skill_server.sim.world import World
+from skill_server.skills.catalog import default_registry
+from skill_server.skills.environment_model import PublishedGrid
+from skill_server.skills.perception import LocalizationEstimate
+from skill_server.skills.registry import SkillEntry, SkillRegistry
+
+# The value types adapters convert come from here too, so that they import nothing from sim/ or skills/.
+__all__ = [
+    "DEFAULT_CAMERA_FPS", "MAX_CAMERA_FPS", "Activation", "CameraFrame", "DriveAck", "GoalUpdate", "LaserSpec",
+    "LocalizationEstimate", "NumberedEvent", "Pose2D", "PublishedGrid", "Robot", "RobotDescription", "RobotSnapshot",
+    "SkillEntry", "TrackEvent", "TrackState",
+]
+
+Published = TypeVar("Published", RobotSnapshot, CameraFrame)
+
+POLL_S = 0.25  # how long a stream waits before re-checking that its caller still wants it
+
+
+@dataclass(frozen=True)
+class NumberedEvent:
+    """A goal's event with its position in the goal's log."""
+
+    index: int
+    event: GoalEvent
+
+
+GoalUpdate = GoalSnapshot | NumberedEvent | GoalFeedback
+
+
+class Robot:
+    """One simulated robot: its description, commands, goals, maps and streams."""
+
+    def __init__(self, world: World, sequencer: Sequencer, name: str = "lab-1") -> None:
+        self.world = world
+        self.sequencer = sequencer
+        self.name = name
+
+    @classmethod
+    def build(
+        cls,
+        scene: str = "lab",
+        *,
+        name: str = "lab-1",
+        seed: int = 0,
+        realtime: bool = True,
+        deadman_timeout_s: float = 0.4,
+        registry: SkillRegistry | None = None,
+    ) -> Robot:
+        """A robot in scene with every catalogued skill (or registry's), not started yet."""
+        world = World(scene, seed=seed, realtime=realtime, deadman_timeout_s=deadman_timeout_s)
+        return cls(world, attach_sequencer(world, registry or default_registry(world.spec)), name)
+
+    # ---- lifecycle -------------------------------------------------------------------------------
+
+    def start(self) -> None:
+        """Starts the world's loop."""
+        self.world.start()
+
+    def stop(self) -> None:
+        """Stops the loop and wakes every stream and goal watcher for good."""
+        self.world.stop()
+        self.sequencer.goals.close()
+
+    @property
+    def is_running(self) -> bool:
+        """True while the world's loop runs."""
+        return self.world.is_running
+
+    # ---- description -----------------------------------------------------------------------------
+
+    def describe(self) -> RobotDescription:
+        """The robot's figures, sensors and scene."""
+        return self.world.describe()
+
+    @property
+    def scene_name(self) -> str:
+        """The name of the scene the robot is in."""
+        return self.world.scene.name
+
+    def skills(self) -> list[SkillEntry]:
+        """The skills offered with their schemas and traits, in the order panels should appear."""
+        return self.sequencer.registry.entries()
+
+    # ---- commands --------------------------------------------------------------------------------
+
+    def set_controller(self, token: str) -> None:
+        """Names the controller; an empty token revokes control and stops the base (the motor goal aborts)."""
+        self.world.set_controller(token)
+
+    def drive(self, token: str, sequence: int, linear_mps: object, angular_radps: object) -> DriveAck:
+        """Sets the base's velocities for the controller; a direct drive preempts the running motor goal."""
+        if self.sequencer.motor_goal_running:
+            # Submitted in the loop between ticks: no tick sees the new target while the goal still drives,
+            # and the goal has ended when the command is acknowledged.
+            return self.world.run_in_loop(lambda: self._drive_over_motor_goal(token, sequence, linear_mps,
+                                                                              angular_radps))
+        ack = self.world.drive(token, sequence, linear_mps, angular_radps)
+        if self.sequencer.motor_goal_running:  # a goal was activated while this command was on its way
+            self.world.run_in_loop(self._take_wheels_back)
+        return ack
+
+    def activate(self, token: str, skill: str, parameters: Mapping[str, object], preempt: bool) -> Activation:
+        """Starts a skill as a goal, or raises (unknown skill, invalid parameter, no control, busy)."""
+        self.sequencer.validate(skill, parameters)  # refuse bad input without waiting for the loop
+        return self.world.run_in_loop(lambda: self.sequencer.activate(token, skill, parameters, preempt))
+
+    def cancel(self, token: str, goal_id: str) -> GoalSnapshot:
+        """Cancels a goal; its state afterwards."""
+        return self.world.run_in_loop(lambda: self.sequencer.cancel(token, goal_id))
+
+    def _drive_over_motor_goal(self, token: str, sequence: int, linear_mps: object,
+                               angular_radps: object) -> DriveAck:
+        ack = self.world.drive(token, sequence, linear_mps, angular_radps)
+        self._take_wheels_back()
+        return ack
+
+    def _take_wheels_back(self) -> None:
+        self.sequencer.preempt_motor_goal_for_drive(self.world.drive_version)
+
+    # ---- goals and perception --------------------------------------------------------------------
+
+    def goal(self, goal_id: str) -> GoalSnapshot:
+        """The state of one goal, live or kept after its end."""
+        return self._goal(goal_id).snapshot()
+
+    def goals(self) -> list[GoalSnapshot]:
+        """Running goals and the ones kept after their end, oldest first."""
+        return [goal.snapshot() for goal in self.sequencer.goals.all()]
+
+    def environment_map(self) -> PublishedGrid:
+        """The latest environment model (a PublishedGrid); NoMap before any mapping."""
+        grid = self.sequencer.perception.published_map
+        if grid is None:
+            raise NoMap("no environment model yet: activate environment_modelling and drive the robot around")
+        return grid
+
+    def track_run(self) -> TrackState | None:
+        """The run on the scene's track now; None in scenes without a track."""
+        monitor = self.world.track_monitor
+        return None if monitor is None else monitor.state()
+
+    def restart_track_run(self) -> TrackState | None:
+        """Ends the attempt under way without a result, so the next departure from A starts a new one; the run
+        after that (None in scenes without a track)."""
+        self.world.restart_track_run()
+        return self.track_run()
+
+    def _goal(self, goal_id: str) -> Goal:
+        goal = self.sequencer.goals.get(goal_id)
+        if goal is None:
+            raise UnknownGoal(f"no goal {goal_id!r} (never issued, or finished too long ago)")
+        return goal
+
+    # ---- streams ---------------------------------------------------------------------------------
+
+    def wake_streams(self) -> None:
+        """Wakes every stream blocked in a wait, so one whose caller set its stopped event ends at once."""
+        self.world.wake_waiters()
+        self.sequencer.goals.wake()
+
+    def telemetry(self, period_s: float, stopped: threading.Event) -> Iterator[RobotSnapshot]:
+        """Snapshots, at most one per period_s of sim time."""
+        pacer = SimTimePacer(period_s)
+        for snapshot in self._snapshots(stopped):
+            if pacer.due(snapshot.sim_time_s):
+                yield snapshot
+
+    def camera(self, max_fps: float, stopped: threading.Event) -> Iterator[CameraFrame]:
+        """Frames, rendered only while someone watches (the loop renders for the fastest watcher)."""
+        pacer = SimTimePacer(1.0 / max_fps)
+        try:
+            subscription = self.world.subscribe_camera(max_fps)
+        except WorldStopped:
+            return
+        with subscription:
+            for frame in self._published(self.world.wait_for_frame, lambda f: f.frame_sequence, stopped):
+                if pacer.due(frame.sim_time_s):
+                    yield frame
+
+    def localization(
+        self, period_s: float, stopped: threading.Event
+    ) -> Iterator[tuple[RobotSnapshot, LocalizationEstimate | None]]:
+        """(snapshot, the localization estimate or None), at most one per period_s of sim time."""
+        pacer = SimTimePacer(period_s)
+        for snapshot in self._snapshots(stopped):
+            if pacer.due(snapshot.sim_time_s):
+                yield snapshot, self.sequencer.perception.published_estimate
+
+    def goal_updates(self, goal_id: str, feedback_period_s: float, stopped: threading.Event) -> Iterator[GoalUpdate]:
+        """The goal's state, then its events as they happen, every later state and feedback at most once per
+        feedback_period_s of sim time, until the final state (UnknownGoal at once for an unknown id)."""
+        goal = self._goal(goal_id)
+        return self._goal_updates(goal, feedback_period_s, stopped)
+
+    def track_events(self, after_index: int, stopped: threading.Event) -> Iterator[TrackEvent]:
+        """Every track event numbered above after_index, as they happen (NoTrack at once off a track)."""
+        monitor = self.world.track_monitor
+        if monitor is None:
+            raise NoTrack(f"the scene {self.scene_name} has no track")
+        return self._track_events(monitor, after_index, stopped)
+
+    def _snapshots(self, stopped: threading.Event) -> Iterator[RobotSnapshot]:
+        return self._published(self.world.wait_for_snapshot, lambda snapshot: snapshot.tick, stopped)
+
+    def _published(
+        self,
+        wait_for: Callable[[int, float, threading.Event], Published | None],
+        number_of: Callable[[Published], int],
+        stopped: threading.Event,
+    ) -> Iterator[Published]:
+        """Each newer item the loop publishes (snapshots, frames), until stopped or the world stops."""
+        last = -1
+        while not stopped.is_set():
+            item = wait_for(last, POLL_S, stopped)
+            if item is None:
+                if not self.world.is_running:
+                    return
+                continue
+            last = number_of(item)
+            yield item
+
+    def _goal_updates(self, goal: Goal, feedback_period_s: float, stopped: threading.Event) -> Iterator[GoalUpdate]:
+        book = self.sequencer.goals
+        pacer = SimTimePacer(feedback_period_s)
+        first = goal.snapshot()
+        yield first
+        events_sent, feedback_seen, status_sent = 0, first.feedback_version, first.status
+        while not stopped.is_set() and not book.closed:
+            for event in goal.events_since(events_sent):
+                yield NumberedEvent(events_sent, event)
+                events_sent += 1
+            snapshot = goal.snapshot()
+            if snapshot.event_count > events_sent:
+                continue
+            if snapshot.status != status_sent:
+                # A watcher that began while the goal was only accepted must still see it start executing.
+                status_sent = snapshot.status
+                yield snapshot
+            if snapshot.status.is_terminal:
+                return
+            if snapshot.feedback_version != feedback_seen:
+                feedback_seen = snapshot.feedback_version
+                if pacer.due(snapshot.feedback.sim_time_s):
+                    yield snapshot.feedback
+            seen = feedback_seen
+
+            def changed(goal: Goal = goal, seen: int = seen, sent: int = events_sent,
+                        status: GoalStatus = status_sent) -> bool:
+                return stopped.is_set() or goal.feedback_version != seen or len(goal.events) > sent or (
+                    goal.status != status)
+
+            book.wait(POLL_S, changed)
+
+    def _track_events(
+        self, monitor: TrackMonitor, after_index: int, stopped: threading.Event
+    ) -> Iterator[TrackEvent]:
+        seen = after_index
+        while not stopped.is_set() and self.world.is_running:
+            for event in monitor.events_after(seen, POLL_S):
+                seen = event.index
+                yield event

@@ -1,0 +1,113 @@
+"""Fan-out: one upstream stream, packed once per message, latest wins for a slow viewer."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+
+from middleware.robots.fanout import FanoutHub
+
+
+class Upstream:
+    """A stand-in for the robot's gRPC stream (the real one is exercised in the integration tests)."""
+
+    def __init__(self) -> None:
+        self.opened = 0
+        self.cancelled = threading.Event()
+        self.packs = 0
+
+    def open(self) -> Iterator[object]:
+        self.opened += 1
+        return self._messages()
+
+    def _messages(self) -> Iterator[object]:
+        n = 0
+        while not self.cancelled.is_set():
+            n += 1
+            yield n
+            time.sleep(0.005)
+
+    def pack(self, item: object) -> object:
+        self.packs += 1
+        return ("packed", item)
+
+    def cancel(self, _stream: object) -> None:
+        self.cancelled.set()
+
+
+def test_every_viewer_shares_one_upstream_and_one_pack_per_message() -> None:
+    upstream = Upstream()
+    hub = FanoutHub("t", upstream.open, upstream.pack, upstream.cancel)
+    viewers = [hub.subscribe() for _ in range(20)]
+    received = [[v.next_message(2.0) for _ in range(5)] for v in viewers]
+    assert upstream.opened == 1
+    assert all(all(m is not None for m in messages) for messages in received)
+    assert upstream.packs == hub.messages_packed
+    for viewer in viewers:
+        viewer.close()
+    assert upstream.cancelled.wait(2.0), "the last viewer leaving cancels the upstream stream"
+    hub.close()
+
+
+def test_a_slow_viewer_gets_the_newest_message_and_no_backlog() -> None:
+    upstream = Upstream()
+    hub = FanoutHub("t", upstream.open, upstream.pack, upstream.cancel)
+    viewer = hub.subscribe()
+    first = viewer.next_message(2.0)
+    time.sleep(0.2)  # meanwhile dozens of messages arrive
+    newest = viewer.next_message(2.0)
+    assert first is not None and newest is not None
+    assert newest[1] - first[1] > 5, "the slow viewer skipped to the newest message"
+    following = viewer.next_message(2.0)
+    assert following is not None and following[1] > newest[1]
+    viewer.close()
+    hub.close()
+
+
+def test_a_failing_upstream_reports_offline_and_reconnects() -> None:
+    attempts = []
+
+    def flaky() -> Iterator[object]:
+        attempts.append(time.monotonic())
+        if len(attempts) < 3:
+            raise ConnectionError("robot down")
+        yield "hello"
+        while True:
+            time.sleep(0.01)
+            yield "again"
+
+    hub = FanoutHub("t", flaky, lambda item: item, lambda _s: None, backoff_s=(0.01, 0.05))
+    viewer = hub.subscribe()
+    assert viewer.next_message(3.0) in {"hello", "again"}
+    assert len(attempts) == 3
+    statuses = viewer.status_change()
+    assert statuses is not None and statuses.online
+    viewer.close()
+    hub.close()
+
+
+class GoneViewer:
+    """A viewer socket whose peer has vanished: writing to it fails as a closed tab's does."""
+
+    connected = True
+    sends = 0
+
+    def send(self, _message: object) -> None:
+        self.sends += 1
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def receive(self, timeout: float = 0) -> None:
+        return None
+
+
+def test_a_viewer_gone_mid_send_ends_its_stream_quietly_and_releases_the_upstream() -> None:
+    from middleware.realtime import relay_stream
+
+    upstream = Upstream()
+    hub = FanoutHub("t", upstream.open, upstream.pack, upstream.cancel)
+    viewer = GoneViewer()
+    relay_stream(viewer, hub)  # returns instead of raising (Flask would log it as a server error)
+    assert viewer.sends == 1
+    assert upstream.cancelled.wait(2.0), "its subscription was closed"
+    hub.close()
