@@ -36,6 +36,7 @@ CLOSE_NOT_LOGGED_IN = 4401
 CLOSE_FORBIDDEN = 4403
 CLOSE_NOT_FOUND = 4404
 CLOSE_TRY_AGAIN_LATER = 1013
+CLOSE_GOING_AWAY = 1001
 # A client over its inbound limits (RFC 6455's "policy violation"); it may reconnect, with its backoff.
 CLOSE_TOO_MANY_MESSAGES = 1008
 STREAM_POLL_S = 0.5
@@ -322,7 +323,8 @@ def relay_stream(ws: WebSocket, hub: FanoutHub, choose: Callable[[Any], Any] | N
     subscription = hub.subscribe()
     held = DelayQueue(0.0)
     try:
-        while ws.connected:
+        # A closed hub returns at once: looping on it would spin a core until the viewer leaves.
+        while ws.connected and not hub.closed:
             status = subscription.status_change()
             if status is not None:
                 send_json(ws, {"type": "status", "robot_online": status.online, "message": status.message})
@@ -339,6 +341,8 @@ def relay_stream(ws: WebSocket, hub: FanoutHub, choose: Callable[[Any], Any] | N
                 ws.send(due)
             while ws.receive(timeout=0) is not None:
                 pass  # nothing is expected from viewers; drop it so it cannot pile up
+        if hub.closed:
+            ws.close(CLOSE_GOING_AWAY, "The lab is shutting down; reload the page in a moment.")
     except (ConnectionClosed, OSError):
         pass  # the viewer went (a closed tab mid-send): the end of this stream, not an error to log
     finally:

@@ -107,6 +107,12 @@ class FanoutHub(Generic[Packed]):
         with self._lock:
             return len(self._subscribers)
 
+    @property
+    def closed(self) -> bool:
+        """Whether the hub was closed (the application is shutting down)."""
+        with self._lock:
+            return self._closed
+
     def wait_newer(self, seen_version: int, timeout_s: float) -> tuple[Packed | None, int]:
         """The latest message if newer than seen_version (waiting up to timeout_s), and its version."""
         deadline = time.monotonic() + timeout_s

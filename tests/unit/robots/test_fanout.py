@@ -111,3 +111,39 @@ def test_a_viewer_gone_mid_send_ends_its_stream_quietly_and_releases_the_upstrea
     assert viewer.sends == 1
     assert upstream.cancelled.wait(2.0), "its subscription was closed"
     hub.close()
+
+
+class StayingViewer:
+    """A viewer whose tab stays open: it accepts every frame and never closes."""
+
+    connected = True
+
+    def __init__(self) -> None:
+        self.sends = 0
+        self.closed_with: int | None = None
+
+    def send(self, _data: object) -> None:
+        self.sends += 1
+
+    def receive(self, timeout: float = 0) -> None:
+        return None
+
+    def close(self, reason: int | None = None, _message: str | None = None) -> None:
+        self.closed_with, self.connected = reason, False
+
+
+def test_closing_the_hub_ends_an_open_viewer_s_stream_instead_of_spinning() -> None:
+    from middleware.realtime import CLOSE_GOING_AWAY, relay_stream
+
+    upstream = Upstream()
+    hub = FanoutHub("t", upstream.open, upstream.pack, upstream.cancel)
+    viewer = StayingViewer()
+    relay = threading.Thread(target=relay_stream, args=(viewer, hub), daemon=True)
+    relay.start()
+    deadline = time.monotonic() + 2.0
+    while viewer.sends == 0 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    hub.close()  # the application shuts down while the tab is still open
+    relay.join(2.0)
+    assert not relay.is_alive(), "the stream kept looping on a closed hub (a core spent until the tab closes)"
+    assert viewer.closed_with == CLOSE_GOING_AWAY
