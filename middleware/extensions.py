@@ -31,6 +31,12 @@ def _load_user(user_id: str) -> User | None:
     return identity.load_user(db.get_session(), number)
 
 
+def login_still_open(user_id: int) -> bool:
+    """Whether this request's login (its cookie, read when the request began) still holds for user_id: asked
+    again by long-lived sockets."""
+    return _load_user(str(user_id)) is not None
+
+
 @login_manager.unauthorized_handler
 def _unauthorized() -> ResponseReturnValue:
     if request.path.startswith("/api/"):

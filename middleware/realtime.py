@@ -44,6 +44,9 @@ CLOSE_HANDSHAKE_WAIT_S = 1.0
 # A live client answers each ping, so it is heard at least this often; one that does not answer by the next
 # ping is closed (simple_websocket's rule), and a seat counts its grace from when its client was last heard.
 PING_INTERVAL_S = 5.0
+# A socket outlives the request that opened it: its login is checked again this often, so a logout, a password
+# change or a disabled account closes it (CLOSE_NOT_LOGGED_IN) within this time, in every worker.
+LOGIN_RECHECK_S = 5.0
 MAX_MESSAGE_BYTES = 4096
 # Channels take a person's actions (a click, a chat line) and pings; the drive channel declares more.
 DEFAULT_MESSAGES_PER_S = 10
@@ -109,6 +112,8 @@ class ChannelSocket(Server):
         self.inbound = InboundQueue(messages_per_s)
         self.heard_at = time.monotonic()
         self.on_overflow: Callable[[], None] = lambda: None  # called once, by the reader thread
+        self.login_still_open: Callable[[], bool] = lambda: True  # asked by the handler's thread
+        self._login_checked_at = time.monotonic()
         self._closing_since: float | None = None
         super().__init__(environ, **options)
 
@@ -147,9 +152,21 @@ class ChannelSocket(Server):
         if self.inbound.overflow is not None:
             raise ConnectionClosed(CLOSE_TOO_MANY_MESSAGES, self.inbound.overflow)
 
+    def _raise_if_logged_out(self) -> None:
+        if time.monotonic() - self._login_checked_at < LOGIN_RECHECK_S:
+            return
+        self._login_checked_at = time.monotonic()
+        if not self.login_still_open():
+            message = "Your session has ended. Log in again."
+            with contextlib.suppress(ConnectionClosed, LocalProtocolError, OSError):
+                send_json(self, {"type": "error", "code": "not_logged_in", "message": message, "field": None})
+                super().close(CLOSE_NOT_LOGGED_IN, message)
+            raise ConnectionClosed(CLOSE_NOT_LOGGED_IN, message)
+
     def receive(self, timeout: float | None = None) -> str | bytes | None:
         """The next message (None after timeout s); ConnectionClosed once closed and nothing is left."""
         self._raise_if_overflowed()
+        self._raise_if_logged_out()
         while self.connected and not self.inbound:
             if not self.event.wait(timeout=timeout):
                 return None
@@ -163,6 +180,7 @@ class ChannelSocket(Server):
     def send(self, data: str | bytes) -> None:
         """Sends data; ConnectionClosed once the socket is closing."""
         self._raise_if_overflowed()
+        self._raise_if_logged_out()
         try:
             super().send(data)
         except LocalProtocolError:  # the reader thread closed it meanwhile
@@ -216,8 +234,10 @@ class Channels(Sock):
     """flask-sock's extension, with every channel opened one way: a ChannelSocket, then `open_channel`'s checks
     (logged in, same Origin), and only then the area's handler. A channel cannot skip them."""
 
-    def __init__(self, app: Flask | None = None) -> None:
+    def __init__(self, app: Flask | None = None, login_still_open: Callable[[int], bool] = lambda _user_id: True
+                 ) -> None:
         self.floods = FloodMemory()
+        self.login_still_open = login_still_open
         super().__init__(app)
 
     def route(self, path: str, bp: Any = None, *, messages_per_s: int = DEFAULT_MESSAGES_PER_S,
@@ -227,11 +247,15 @@ class Channels(Sock):
         def decorator(handler: Callable[..., None]) -> None:
             @wraps(handler)
             def channel(*args: Any, **values: Any) -> Response:
+                # No permessage-deflate: a 4 kB compressed frame inflates to megabytes before any size check
+                # sees it, and what we send (JSON, JPEG) gains little from it.
+                request.environ.pop("HTTP_SEC_WEBSOCKET_EXTENSIONS", None)
                 ws = ChannelSocket(request.environ, messages_per_s, **current_app.config["SOCK_SERVER_OPTIONS"])
                 with contextlib.suppress(ConnectionClosed):
                     if open_channel(ws):
                         user_id = int(current_user.get_id())
                         ws.on_overflow = lambda: self.floods.remember(path, user_id)
+                        ws.login_still_open = lambda: self._still_open(user_id)
                         if ws.inbound.overflow is not None:  # it flooded during the checks
                             ws.on_overflow()
                         handler(ws, *args, **values)
@@ -243,6 +267,12 @@ class Channels(Sock):
             (bp or self.app).route(path, websocket=True, **kwargs)(channel)
 
         return decorator
+
+    def _still_open(self, user_id: int) -> bool:
+        try:
+            return self.login_still_open(user_id)
+        finally:
+            get_session().close()  # the socket lives on; the check's database connection goes back
 
     def refuse_while_cooling_down(self) -> None:
         """ApiError 429 for a user closed for flooding this channel lately: refused before the handshake, a
@@ -259,12 +289,14 @@ class Channels(Sock):
 ChannelDeclarations = Callable[[Channels], None]
 
 
-def init_app(app: Flask, channels: Iterable[ChannelDeclarations]) -> Channels:
+def init_app(app: Flask, channels: Iterable[ChannelDeclarations],
+             login_still_open: Callable[[int], bool] = lambda _user_id: True) -> Channels:
     """Binds the WebSocket extension to app and declares each area's channels on it; incoming messages are
-    small and few, and idle sockets are pinged."""
+    small and few, and idle sockets are pinged. login_still_open(user_id) says whether the login that opened
+    a socket still holds (asked every LOGIN_RECHECK_S)."""
     app.config.setdefault("SOCK_SERVER_OPTIONS", {"ping_interval": PING_INTERVAL_S,
                                                   "max_message_size": MAX_MESSAGE_BYTES})
-    sock = Channels(app)
+    sock = Channels(app, login_still_open)
     for declare in channels:
         declare(sock)
 

@@ -181,3 +181,17 @@ def test_the_session_cookie_is_secure_whenever_the_request_came_over_https(
     session_factory(app).kw["bind"].dispose()
     cookie = response.headers["Set-Cookie"]  # the CSRF token lives in the session
     assert ("; Secure" in cookie) is secure
+
+
+def test_sockets_opened_before_logout_are_closed_after_it(student_client: LabClient) -> None:
+    from middleware.realtime import CLOSE_NOT_LOGGED_IN, LOGIN_RECHECK_S
+    from tests.integration.lab.test_robot_channels import closed_with
+
+    paths = [f"/ws/robots/lab-1/{channel}" for channel in ("chat", "queue", "drive", "telemetry", "camera")]
+    sockets = {path: student_client.websocket(path) for path in paths}
+    time.sleep(0.5)
+    assert all(ws.connected for ws in sockets.values())
+    token = student_client.csrf_token("/account/password")
+    assert student_client.request("POST", "/logout", {"csrf_token": token})[0] == 302
+    for path, ws in sockets.items():
+        assert closed_with(ws, LOGIN_RECHECK_S + 5.0) == CLOSE_NOT_LOGGED_IN, path
