@@ -1,7 +1,8 @@
 """Who may change tours and lessons and run live classes: courses/authority.py's rules, worded for teaching.
 
 A live class belongs to its course: only a tutor of that course (or an admin) starts one, and only its
-leader, a tutor of its course or an admin steps, hands over (to a student of the course) or ends it.
+leader, a tutor of its course or an admin steps, hands over (to a student of the course) or ends it; only
+they and the course's students follow it (its participants' names are on its page).
 Starting a class on a robot ends the class running there, so that needs the right to end it too. Only an
 admin may start a class with no course, or with the override that lets it outrank the queue without a
 booking (tours.with_guided_priority).
@@ -28,6 +29,19 @@ def require_author_rights(session: Session, actor: User, author_id: int | None, 
 def may_run_class(session: Session, actor: User, live: GuidedSession) -> bool:
     """The class's leader, a tutor of its course, or an admin."""
     return live.tutor_id == actor.id or teaches_course(session, actor, live.course_id)
+
+
+def may_follow_class(session: Session, user: User, live: GuidedSession) -> bool:
+    """Who may follow a class (its page, its state, its channel): whoever may run it and the students of its
+    course; an admin's class with no course, anyone logged in."""
+    return (live.course_id is None or may_run_class(session, user, live)
+            or is_student_of(session, user.id, live.course_id))
+
+
+def require_class_follower(session: Session, user: User, live: GuidedSession) -> None:
+    """Refuses (403) anyone who may not follow this class."""
+    if not may_follow_class(session, user, live):
+        raise Refused(403, "not_in_course", "This class is for the students of another course.", "session_id")
 
 
 def require_class_rights(session: Session, actor: User, live: GuidedSession) -> None:

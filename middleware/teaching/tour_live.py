@@ -14,7 +14,8 @@ from sqlalchemy.orm import Session
 from middleware.db import get_session
 from middleware.models import User
 from middleware.models.teaching import GuidedSession, Tour
-from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, refuse, send_json
+from middleware.realtime import CLOSE_FORBIDDEN, CLOSE_NOT_FOUND, Channels, WebSocket, refuse, send_json
+from middleware.teaching.authority import may_follow_class
 from middleware.teaching.tours import tour_steps
 
 _changed = threading.Condition()
@@ -50,8 +51,14 @@ def session_channel(ws: WebSocket, session_id: int) -> None:
     """Pushes the class's state whenever it changes, until the socket closes."""
     user_id, username = int(current_user.get_id()), current_user.username
     db = get_session()
-    if db.get(GuidedSession, session_id) is None:
+    found = db.get(GuidedSession, session_id)
+    if found is None:
         refuse(ws, CLOSE_NOT_FOUND, "unknown_session", "There is no such class.")
+        return
+    follower = db.get(User, user_id)
+    if follower is None or not may_follow_class(db, follower, found):
+        refuse(ws, CLOSE_FORBIDDEN, "not_in_course", "This class is for the students of another course.",
+               "session_id")
         return
     _present.setdefault(session_id, {})[user_id] = username
     notify(session_id)  # the tutor's list of participants changes

@@ -20,6 +20,7 @@ from middleware.teaching.authority import (
     check_class_start,
     may_run_class,
     require_author_rights,
+    require_class_follower,
     require_class_member,
     require_class_rights,
 )
@@ -201,6 +202,7 @@ def start_live(tour_id: int) -> ResponseReturnValue:
 def session_page(session_id: int) -> ResponseReturnValue:
     """The live class page: the tutor leads, students follow."""
     found = _live(session_id)
+    require_class_follower(get_session(), _actor(), found)
     return render_template("teaching/tour_live.html", live=found, tour=_tour(found.tour_id),
                            is_tutor=may_run_class(get_session(), _actor(), found))
 
@@ -209,7 +211,9 @@ def session_page(session_id: int) -> ResponseReturnValue:
 @login_required
 def session_api(session_id: int) -> ResponseReturnValue:
     """The class's state."""
-    return jsonify(live.state(get_session(), _live(session_id)))
+    found = _live(session_id)
+    require_class_follower(get_session(), _actor(), found)
+    return jsonify(live.state(get_session(), found))
 
 
 @blueprint.post("/api/tour-sessions/<int:session_id>")

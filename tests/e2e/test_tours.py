@@ -98,12 +98,14 @@ def test_a_live_class_follows_the_tutor_and_control_is_handed_over(chromium, liv
     with session_factory(app)() as session:
         create_user(session, "tutor1", "tutor", STUDENT_PASSWORD)
         create_user(session, "student2", "student", STUDENT_PASSWORD)
+        create_user(session, "outsider", "student", STUDENT_PASSWORD)
         tour = save_tour(session, DEMO_TOURS[1], None, None)
         session.commit()
         tour_id = tour.id
         ids = {u.username: u.id for u in session.query(User).all()}
     # The class goes before the queue (and can hand the robot to a student) only in its tutor's booked slot.
-    book_class_slot_now(app, make_course(app, "ROB1", {"tutor1": "tutor", "student1": "student"}), "tutor1")
+    book_class_slot_now(app, make_course(app, "ROB1", {"tutor1": "tutor", "student1": "student",
+                                                       "student2": "student"}), "tutor1")
     contexts = [chromium.new_context(viewport=size) for size in
                 ({"width": 1280, "height": 800}, {"width": 1280, "height": 800}, {"width": 390, "height": 844})]
     errors: list[str] = []
@@ -122,6 +124,15 @@ def test_a_live_class_follows_the_tutor_and_control_is_handed_over(chromium, liv
         for student in (first, second):
             student.goto(live_server.url + session_path)
             student.wait_for_selector("#live[data-step='0']")
+        outsider = contexts[2].browser.new_context(viewport={"width": 390, "height": 844})  # type: ignore[union-attr]
+        contexts.append(outsider)
+        stranger = outsider.new_page()
+        log_in(stranger, live_server, "outsider")
+        stranger.goto(live_server.url + session_path)
+        stranger.get_by_text("This class is for the students of another course.").wait_for()
+        assert stranger.locator("#live").count() == 0
+        ARTIFACTS_DIR.mkdir(exist_ok=True)
+        stranger.screenshot(path=str(ARTIFACTS_DIR / "tour-live-outsider-390.png"))
         tutor.locator("[data-field=participants]", has_text="student2").wait_for()
         tutor.get_by_role("button", name="Next step").click()
         for student in (first, second):

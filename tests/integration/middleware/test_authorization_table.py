@@ -132,6 +132,18 @@ def see_class_controls(lab: Lab, client: LabClient, _actor: str | None) -> tuple
     return status, 'data-tutor="true"' in text
 
 
+def follow_class_page(lab: Lab, client: LabClient, _actor: str | None) -> tuple[int, bool]:
+    running = lab.running_class("course_a", "lead_a")
+    status, _, text = client.request("GET", f"/tours/sessions/{running}")
+    return status, status == 200 and f'data-session-id="{running}"' in text
+
+
+def read_class_state(lab: Lab, client: LabClient, _actor: str | None) -> tuple[int, bool]:
+    running = lab.running_class("course_a", "lead_a")
+    status, text = call(client, "GET", f"/api/tour-sessions/{running}")
+    return status, status == 200 and json.loads(text).get("id") == running
+
+
 def set_delay_of(target: str):
     def run(lab: Lab, client: LabClient, actor: str | None) -> tuple[int, bool]:
         with lab.session() as session, session.begin():
@@ -196,7 +208,11 @@ ROWS: dict[str, tuple[Callable[[Lab, LabClient, str | None], tuple[int, bool]], 
                      lambda live, lab: live.control_user_id == lab.ids["tut_b"]),
         ("no 401", "no 403", "no 403", "no 403", "no 403")),
     "See the tutor's controls on course A's class page": (
-        see_class_controls, ("no 302", "no 200", "yes 200", "no 200", "yes 200")),
+        see_class_controls, ("no 302", "no 200", "yes 200", "no 403", "yes 200")),
+    "Follow course A's class (its page)": (
+        follow_class_page, ("no 302", "yes 200", "yes 200", "no 403", "yes 200")),
+    "Read course A's class state (JSON)": (
+        read_class_state, ("no 401", "yes 200", "yes 200", "no 403", "yes 200")),
     "See course A on the lead-a-class page": (
         open_page("/tours/{tour}/lead", 'value="{course_a}"'), ("no 302", "no 403", "yes 200", "no 200", "yes 200")),
     "Set the video delay of a student of course A": (
@@ -312,3 +328,18 @@ def readme_table() -> dict[str, tuple[str, ...]]:
 
 def test_the_readme_states_the_table_this_test_checks() -> None:
     assert readme_table() == {action: cells for action, (_run, cells) in ROWS.items()}
+
+
+def test_a_class_channel_lets_in_only_those_who_may_follow_the_class(lab: Lab) -> None:
+    from tests.integration.lab.test_robot_channels import closed_with, receive_json
+
+    running = lab.running_class("course_a", "lead_a")
+    for actor, allowed in (("stu_a", True), ("tut_a", True), ("adm", True), ("tut_b", False)):
+        ws = lab.client(actor).websocket(f"/ws/tour-sessions/{running}")
+        first = receive_json(ws)
+        if allowed:
+            assert first["type"] == "state" and first["id"] == running, actor
+            ws.close()
+        else:
+            assert first["code"] == "not_in_course" and first["field"] == "session_id", actor
+            assert closed_with(ws) == 4403, actor

@@ -25,9 +25,9 @@ from tests.integration.lab.test_robot_channels import closed_with, receive_json
 
 FLOOD_S = 5.0
 FLOOD_RATE_PER_S = 5000
-# What the flood may add to another user's p99. The aim is 100 ms; this shared two-core machine's own p99
-# swings from 30 to 500 ms between runs, so the margin is wide. Unbounded, a flood's backlog took 90 s.
-P99_ADDED_LIMIT_S = 0.250
+# Another user's p99 during a flood (the bound). Unbounded, a flood's backlog took 90 s; bounded, the
+# other user's p99 measured 4.5-5.1 ms beside 4.8-5.5 ms without the flood.
+P99_LIMIT_S = 0.100
 BACKLOG_LIMIT_S = 2.0
 MEMORY_WAIT_S = 60.0
 FLOODERS = ("flooder-chat", "flooder-queue", "flooder-drive", "flooder-big", "flooder-fast")
@@ -191,7 +191,7 @@ def test_a_flooding_client_is_closed_and_leaves_the_others_served(web_process: W
     assert any(close.startswith("1008 ") for close in tally["closes"]), tally
     assert {close.split(" ")[0] for close in tally["closes"]} <= {"1008", "handshake", "1005"}, tally
     assert {close for close in tally["closes"] if close.startswith("handshake")} <= {"handshake 429"}, tally
-    assert p99 < quiet_p99 + P99_ADDED_LIMIT_S  # the machine's own p99, measured just before, is the floor
+    assert p99 < P99_LIMIT_S  # the machine's own p99 without the flood, printed beside it, is the floor
     assert backlog_s < BACKLOG_LIMIT_S
     assert rss <= baseline_rss * 1.10
 
