@@ -10,11 +10,12 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
-from sqlalchemy import func, select
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware.auth.schemas import InvalidField
 from middleware.bookings.schemas import SLOT_MINUTES, BookingRequest, check_slot_shape
+from middleware.courses.services import is_course_tutor
 from middleware.errors import Refused
 from middleware.locking import lock_robot_control, lock_user
 from middleware.models import Booking, Course, CourseMembership, User
@@ -119,17 +120,6 @@ def minutes_booked_in_week(session: Session, user_id: int, moment: datetime) -> 
                               Booking.cancelled_at.is_(None), Booking.starts_at >= start, Booking.starts_at < end)
     )
     return sum(int((as_utc(b.ends_at) - as_utc(b.starts_at)).total_seconds() // 60) for b in bookings)
-
-
-def is_course_tutor(session: Session, user_id: int, course_id: int | None) -> bool:
-    """True when user_id is a tutor member of the course."""
-    if course_id is None:
-        return False
-    return session.execute(
-        select(func.count()).select_from(CourseMembership)
-        .where(CourseMembership.course_id == course_id, CourseMembership.user_id == user_id,
-               CourseMembership.role == "tutor")
-    ).scalar_one() > 0
 
 
 @dataclass(frozen=True)

@@ -62,8 +62,10 @@ def get_course(session: Session, course_id: int) -> Course:
     return course
 
 
-def is_course_tutor(session: Session, user_id: int, course_id: int) -> bool:
-    """True when user_id is a tutor member of the course."""
+def is_course_tutor(session: Session, user_id: int, course_id: int | None) -> bool:
+    """True when user_id is a tutor member of the course (never for no course)."""
+    if course_id is None:
+        return False
     return session.execute(select(func.count()).select_from(CourseMembership).where(
         CourseMembership.course_id == course_id, CourseMembership.user_id == user_id,
         CourseMembership.role == "tutor")).scalar_one() > 0
