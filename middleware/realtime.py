@@ -50,6 +50,9 @@ LOGIN_RECHECK_S = 5.0
 MAX_MESSAGE_BYTES = 4096
 # Channels take a person's actions (a click, a chat line) and pings; the drive channel declares more.
 DEFAULT_MESSAGES_PER_S = 10
+# Open sockets per user in one process: a console tab holds about eight, so a few tabs fit; each socket costs
+# a thread, so a script opening thousands is refused (429) before the handshake.
+MAX_SOCKETS_PER_USER = 40
 # How long a user closed for flooding a channel is refused on it: reconnecting buys no fresh allowance.
 FLOOD_COOL_DOWN_S = 10.0
 
@@ -215,6 +218,31 @@ class FloodMemory:
         return max(0.0, self._until.get((channel, user_id), 0.0) - time.monotonic())
 
 
+class SocketCount:
+    """How many sockets each user has open in this process."""
+
+    def __init__(self) -> None:
+        self._open: dict[int, int] = {}
+        self._lock = threading.Lock()
+
+    def open(self, user_id: int) -> bool:
+        """Counts a new socket of user_id; False (nothing counted) when they are at MAX_SOCKETS_PER_USER."""
+        with self._lock:
+            if self._open.get(user_id, 0) >= MAX_SOCKETS_PER_USER:
+                return False
+            self._open[user_id] = self._open.get(user_id, 0) + 1
+            return True
+
+    def close(self, user_id: int) -> None:
+        """A socket of user_id ended."""
+        with self._lock:
+            left = self._open.get(user_id, 0) - 1
+            if left > 0:
+                self._open[user_id] = left
+            else:
+                self._open.pop(user_id, None)
+
+
 class _ChannelEnded(Response):
     """What the WSGI server gets once a channel's handler returned, per server (as flask-sock answers)."""
 
@@ -237,6 +265,7 @@ class Channels(Sock):
     def __init__(self, app: Flask | None = None, login_still_open: Callable[[int], bool] = lambda _user_id: True
                  ) -> None:
         self.floods = FloodMemory()
+        self.sockets = SocketCount()
         self.login_still_open = login_still_open
         super().__init__(app)
 
@@ -250,17 +279,25 @@ class Channels(Sock):
                 # No permessage-deflate: a 4 kB compressed frame inflates to megabytes before any size check
                 # sees it, and what we send (JSON, JPEG) gains little from it.
                 request.environ.pop("HTTP_SEC_WEBSOCKET_EXTENSIONS", None)
-                ws = ChannelSocket(request.environ, messages_per_s, **current_app.config["SOCK_SERVER_OPTIONS"])
-                with contextlib.suppress(ConnectionClosed):
-                    if open_channel(ws):
-                        user_id = int(current_user.get_id())
-                        ws.on_overflow = lambda: self.floods.remember(path, user_id)
-                        ws.login_still_open = lambda: self._still_open(user_id)
-                        if ws.inbound.overflow is not None:  # it flooded during the checks
-                            ws.on_overflow()
-                        handler(ws, *args, **values)
-                with contextlib.suppress(ConnectionClosed, LocalProtocolError, OSError):
-                    ws.close()
+                counted = int(current_user.get_id()) if current_user.is_authenticated else None
+                if counted is not None and not self.sockets.open(counted):
+                    raise ApiError(429, "too_many_sockets", f"You have {MAX_SOCKETS_PER_USER} connections open "
+                                                            "already; close some of your lab tabs.")
+                try:
+                    ws = ChannelSocket(request.environ, messages_per_s, **current_app.config["SOCK_SERVER_OPTIONS"])
+                    with contextlib.suppress(ConnectionClosed):
+                        if open_channel(ws):
+                            user_id = int(current_user.get_id())
+                            ws.on_overflow = lambda: self.floods.remember(path, user_id)
+                            ws.login_still_open = lambda: self._still_open(user_id)
+                            if ws.inbound.overflow is not None:  # it flooded during the checks
+                                ws.on_overflow()
+                            handler(ws, *args, **values)
+                    with contextlib.suppress(ConnectionClosed, LocalProtocolError, OSError):
+                        ws.close()
+                finally:
+                    if counted is not None:
+                        self.sockets.close(counted)
                 request.environ[WEBSOCKET_ENDED] = True
                 return _ChannelEnded(ws.mode)
 
