@@ -393,6 +393,68 @@ def go_to_goal_free_points_scenario(quick: bool, rows: list[Row], localized: boo
     return mean_speed(speeds)
 
 
+WRONG_GUESS_SEEDS = tuple(range(20))
+WRONG_GUESS_OFF_M, WRONG_GUESS_OFF_DEG = 0.25, 20.0  # an estimate this far from the truth is wrong
+
+
+@dataclass
+class WrongGuessRun:
+    """One seed of the wrong-guess scenario."""
+
+    false_claim: bool = False  # claimed convergence on a pose WRONG_GUESS_OFF away from the truth
+    found_truth: bool = False  # claimed convergence on the true pose
+    claims: int = 0  # samples claiming convergence
+    covered: int = 0  # of those, samples whose position error is within 2 reported std
+    speed: tuple[float, float] = (0.0, 0.0)
+
+
+def localize_from_wrong_guess(seed: int, drive_s: float) -> WrongGuessRun:
+    """Wall following for drive_s, then localization from the default guess (0, 0, 0) while turning 10 s."""
+    bench, run = Bench(seed=seed), WrongGuessRun()
+    bench.activate("environment_modelling", use_floor_plan=True, restart=True)
+    bench.world.step_for(0.2)
+    bench.run(bench.activate("wall_following", side="left", distance_m=0.5, speed_mps=0.3, duration_s=drive_s),
+              drive_s + 5.0)
+    bench.activate("localization")
+
+    def sample(snapshot: RobotSnapshot) -> None:
+        estimate = bench.sequencer.perception.published_estimate
+        if estimate is None or not estimate.converged:
+            return
+        truth = snapshot.ground_truth
+        error_m = truth.distance_to(estimate.pose)
+        error_deg = abs(math.degrees(math.remainder(truth.theta_rad - estimate.pose.theta_rad, 2 * math.pi)))
+        run.claims += 1
+        run.covered += error_m <= 2.0 * math.hypot(estimate.std_x_m, estimate.std_y_m)
+        if error_m > WRONG_GUESS_OFF_M or error_deg > WRONG_GUESS_OFF_DEG:
+            run.false_claim = True
+        else:
+            run.found_truth = True
+
+    bench.run(bench.activate("direct_control", linear_mps=0.0, angular_radps=0.6, duration_s=10.0), 11.0, sample)
+    run.speed = bench.speed_factor
+    return run
+
+
+def localization_wrong_guess_scenario(quick: bool, rows: list[Row]) -> tuple[float, float]:
+    """After 2 minutes of wall following, localization from the default guess (0, 0, 0) while turning in place:
+    how often it claims convergence on a wrong pose (must be never), how often it finds the true one, and whether
+    the reported std covers the error while it claims convergence. Over 20 seeds (3 when quick)."""
+    scenario = "localization (wrong guess after driving)"
+    seeds = WRONG_GUESS_SEEDS[:3] if quick else WRONG_GUESS_SEEDS
+    runs = [localize_from_wrong_guess(seed, 20.0 if quick else 120.0) for seed in seeds]
+    false_claims = sum(run.false_claim for run in runs)
+    found = 100.0 * sum(run.found_truth and not run.false_claim for run in runs) / len(runs)
+    claims = sum(run.claims for run in runs)
+    rows.append(Row(scenario, f"claimed converged on a wrong pose [runs of {len(runs)}]", float(false_claims), "0",
+                    None if quick else false_claims == 0))
+    rows.append(Row(scenario, f"converged on the true pose [% of {len(runs)}]", found, ">= 95",
+                    None if quick else found >= 95))
+    rows.append(Row(scenario, "error within 2 std while claiming convergence [% of samples]",
+                    100.0 * sum(run.covered for run in runs) / claims if claims else 100.0, ">= 80", None))
+    return (float(np.mean([run.speed[0] for run in runs])), float(np.mean([run.speed[1] for run in runs])))
+
+
 def readings_only_localization_scenario(quick: bool, rows: list[Row]) -> tuple[float, float]:
     """The localization scenario on a map built from readings alone (no floor plan)."""
     return localization_scenario(quick, rows, readings_only=True)
@@ -442,6 +504,7 @@ def main(argv: list[str] | None = None) -> int:
     for name, scenario in [("go_to_goal", go_to_goal_scenario), ("wall_following", wall_following_scenario),
                            ("round_trip", round_trip_scenario), ("localization", localization_scenario),
                            ("localization (readings-only map)", readings_only_localization_scenario),
+                           ("localization (wrong guess after driving)", localization_wrong_guess_scenario),
                            ("round_trip (near obstacles, odometry)", round_trip_near_obstacles_scenario),
                            ("round_trip (near obstacles, localized)", localized_round_trip_near_obstacles_scenario),
                            ("go_to_goal (free points, odometry)", go_to_goal_free_points_scenario),

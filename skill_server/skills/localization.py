@@ -27,6 +27,12 @@ FIELD_CAP_CELLS = 12
 CONVERGED_STD_M, CONVERGED_STD_RAD = 0.06, 0.05
 FIELD_REFRESH_S = 2.0
 UPDATE_MIN_M, UPDATE_MIN_RAD = 0.03, 0.03  # motion between two updates once converged
+# "Converged" needs evidence, not only a tight cloud: a cloud can collapse onto a wrong pose (a guess far off, a
+# heading 45-145 degrees wrong) where few echoes meet the map. At the first collapse onto a wrong pose 3-42 % of
+# the echoes lay within 3 sigma of the map's surfaces; onto the true pose, 100 %.
+CONVERGED_MIN_FIT = 0.8
+# A converged estimate is given up when its fit stays below this for LOST_AFTER_UPDATES updates in a row.
+LOST_FIT, LOST_AFTER_UPDATES = 0.5, 5
 MAP_ERROR_GAIN = 0.5  # reported std per axis includes this times the echoes' residual RMS (map mismatch)
 MAP_ERROR_LEVER_M = 2.0  # typical beam length [m]: turns the residual into a heading uncertainty
 
@@ -84,6 +90,7 @@ class Localization(SkillController):
         self._estimate = Pose2D(initial_x_m, initial_y_m, initial_theta_rad)
         self._estimate_odometry: Pose2D | None = None  # odometry reading when the estimate was made
         self._converged = False
+        self._poor_fits = 0  # updates in a row whose fit was below LOST_FIT
         self._std = (initial_spread_m, initial_spread_m, initial_spread_rad)
         self._published: LocalizationEstimate | None = None
         self._beams: tuple[np.ndarray, np.ndarray] | None = None  # the last update's beams (ranges, angles)
@@ -201,16 +208,17 @@ class Localization(SkillController):
         return ((1 - ax) * ((1 - ay) * field[ix, iy] + ay * field[ix, iy + 1])
                 + ax * ((1 - ay) * field[ix + 1, iy] + ay * field[ix + 1, iy + 1]))
 
-    def _residual_rms(self, pose: Pose2D) -> float:
-        """RMS distance [m] to the map of the last scan's echoes placed at pose (outliers, beyond 3 sigma, left out:
-        the random-echo floor explains them)."""
+    def _fit(self, pose: Pose2D) -> tuple[float, float]:
+        """How the last scan's echoes placed at pose meet the map: the RMS distance [m] of those within 3 sigma of
+        a surface (the others are explained by the random-echo floor) and the fraction of echoes that are."""
         if self._beams is None or self._field is None:
-            return 0.0
+            return 0.0, 0.0
         ranges_m, angles = self._beams
         world = pose.theta_rad + angles
         gaps = self._field_at(pose.x_m + ranges_m * np.cos(world), pose.y_m + ranges_m * np.sin(world))
         inliers = gaps[np.abs(gaps) < 3.0 * HIT_SIGMA_M]
-        return float(np.sqrt(np.mean(inliers**2))) if inliers.size else 3.0 * HIT_SIGMA_M
+        rms = float(np.sqrt(np.mean(inliers**2))) if inliers.size else 3.0 * HIT_SIGMA_M
+        return rms, inliers.size / max(1, gaps.size)
 
     def _particle_std(self, x: float, y: float) -> tuple[float, float]:
         w, p = self._weights, self._particles
@@ -231,14 +239,18 @@ class Localization(SkillController):
         std_y = math.sqrt(float(np.sum(w * (p[:, 1] - y) ** 2)))
         std_theta = math.sqrt(float(np.sum(w * np.angle(np.exp(1j * (p[:, 2] - theta))) ** 2)))
         self._estimate, self._estimate_odometry = Pose2D(x, y, wrap_angle(theta)), odometry
-        converged = max(std_x, std_y) < CONVERGED_STD_M and std_theta < CONVERGED_STD_RAD
+        residual_m, fit = self._fit(self._estimate)
+        self._poor_fits = self._poor_fits + 1 if fit < LOST_FIT else 0
+        tight = max(std_x, std_y) < CONVERGED_STD_M and std_theta < CONVERGED_STD_RAD
+        converged = tight and fit >= CONVERGED_MIN_FIT
         if converged and not self._converged:
-            self.announce(EventKind.CONVERGED, f"converged at ({x:.2f}, {y:.2f}) m, std {max(std_x, std_y):.3f} m")
-        self._converged = converged or (self._converged and max(std_x, std_y) < 2 * CONVERGED_STD_M)
+            self.announce(EventKind.CONVERGED, f"converged at ({x:.2f}, {y:.2f}) m, std {max(std_x, std_y):.3f} m, "
+                                               f"{fit:.0%} of the echoes on the map")
+        self._converged = converged or (self._converged and max(std_x, std_y) < 2 * CONVERGED_STD_M
+                                        and self._poor_fits < LOST_AFTER_UPDATES)
         # The cloud's spread only measures how well poses are told apart by this map; it says nothing about the map
         # being wrong (a missed or moved object, surfaces off by part of a cell), which shifts every particle alike.
         # The echoes' residual at the estimate measures that mismatch, and is added as a correlated error term.
-        residual_m = self._residual_rms(self._estimate)
         std_x, std_y = math.hypot(std_x, MAP_ERROR_GAIN * residual_m), math.hypot(std_y, MAP_ERROR_GAIN * residual_m)
         std_theta = math.hypot(std_theta, MAP_ERROR_GAIN * residual_m / MAP_ERROR_LEVER_M)
         self._std = (std_x, std_y, std_theta)
