@@ -247,12 +247,25 @@ def test_environment_modelling_and_localization_show_on_the_map(page, live_serve
     page.locator('section[data-panel-id="map"]').scroll_into_view_if_needed()  # the map is fetched while seen
     summary = page.locator('map-panel [data-field="map-summary"]')
     summary.filter(has_text=re.compile(r"map of [1-9]\d* scans")).wait_for(timeout=20_000)
+    page.evaluate("document.activeElement.blur()")
+    for key, hold_ms in (("ArrowLeft", 800), ("ArrowUp", 1500)):  # drive off the spawn first, as students do
+        page.keyboard.down(key)
+        page.wait_for_timeout(hold_ms)
+        page.keyboard.up(key)
+    wait_for(lambda: abs(odometry(page, "linear")) < 0.01, 5, "the robot did not stop")
     x, y = odometry(page, "x"), odometry(page, "y")
-    heading = odometry(page, "heading-rad")
+    assert math.hypot(x, y) > 0.1, "the robot did not leave the spawn, so a guess of (0, 0) would pass"
     localization = page.locator('skill-panel[data-skill="localization"]')
-    localization.locator('input[name="initial_x_m"]').fill(f"{x:.2f}")
-    localization.locator('input[name="initial_y_m"]').fill(f"{y:.2f}")
-    localization.locator('input[name="initial_theta_rad"]').fill(f"{heading:.2f}")
+    guess_x, guess_y = (localization.locator(f'input[name="initial_{axis}_m"]') for axis in ("x", "y"))
+    # The guess is filled with where the robot believes it is, not (0, 0, 0).
+    wait_for(lambda: abs(float(guess_x.input_value() or "nan") - x) < 0.05, 5, "the guess is not the robot's pose")
+    assert abs(float(guess_y.input_value()) - y) < 0.05
+    guess_x.fill("1.5")  # a person's own guess stays while the robot's pose updates
+    page.wait_for_timeout(500)
+    assert guess_x.input_value() == "1.5"
+    localization.get_by_role("button", name="Use the current pose").click()
+    assert abs(float(guess_x.input_value()) - x) < 0.05
+    localization.screenshot(path=str(ARTIFACTS_DIR / "localization-guess-filled.png"))
     localization.locator('button[data-action="activate"]').click()
     wait_for_status(page, "localization", "executing")
     summary.filter(has_text="localized at").wait_for(timeout=15_000)

@@ -47,6 +47,9 @@ export function checkPanelList(answer, panels) {
   });
 }
 
+/** The parameters of a pose guess, kept filled from the robot's current pose (localization's initial guess). */
+export const GUESS_FIELDS = Object.freeze({ x: "initial_x_m", y: "initial_y_m", theta: "initial_theta_rad" });
+
 /** The skill whose schema has goal x/y parameters (names ending in x_m and y_m), preferring "goal_" names. */
 export function goalParameterNames(schema) {
   if (!Array.isArray(schema)) return null;

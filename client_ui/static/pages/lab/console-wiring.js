@@ -7,7 +7,7 @@
 import { ApiError, Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
 import { DriveSession } from "../../lib/drive-session.js";
 import { connectChat } from "./chat-session.js";
-import { goalParameterNames } from "../../lib/panel-descriptors.js";
+import { GUESS_FIELDS, goalParameterNames } from "../../lib/panel-descriptors.js";
 import { bindFeedback } from "./feedback-wiring.js";
 import { playTurnTone } from "./turn-tone.js";
 
@@ -317,6 +317,7 @@ export class ConsoleWiring {
 
   #skill(descriptor, panel) {
     panel.descriptor = descriptor;
+    if (descriptor.schema?.some((parameter) => parameter.name === GUESS_FIELDS.x)) this.#followPose(descriptor, panel);
     const entry = { descriptor, panel, goalChannel: null, goalNames: goalParameterNames(descriptor.schema) };
     this.#skills.push(entry);
     const base = `/api/robots/${encodeURIComponent(this.#robotName)}`;
@@ -327,6 +328,19 @@ export class ConsoleWiring {
         this.#guard(descriptor.id, () => { panel.goal = answer.goal; });
       } catch (error) {
         panel.error = { code: error.code ?? "network", message: error.message, field: null };
+      }
+    });
+  }
+
+  /** Keeps a pose-guess skill's panel told the robot's best pose: the converged estimate, else odometry. */
+  #followPose(descriptor, panel) {
+    let estimate = null;
+    this.#listen(`${this.#robotPath}/telemetry`, descriptor.id, (message) => {
+      if (message.type === "localization") {
+        estimate = message.active && message.converged ? message.estimate : null;
+        if (estimate) panel.currentPose = estimate;
+      } else if (message.type === "telemetry" && !estimate && message.odometry?.pose) {
+        panel.currentPose = message.odometry.pose;
       }
     });
   }

@@ -2,11 +2,13 @@
 // In: `descriptor` ({skill, title, motor, schema: [param]}), `goal` (goal object), `goalEvent`
 //     ({kind, message, sim_time_s}), `feedback` (feedback object), `error` ({code, message, field} or null),
 //     `parameters` ({name: value}: fill fields, e.g. from a click on the map), `observing` (true while
-//     someone else has the turn: the panel is read-only, so nobody presses Activate only to be refused).
+//     someone else has the turn: the panel is read-only, so nobody presses Activate only to be refused),
+//     `currentPose` ({x_m, y_m, theta_rad}: keeps a pose guess, initial_*, filled until the person types one).
 // Out: "skill-activate" (detail {skill, parameters, preempt}), "skill-cancel" (detail {skill, goal_id}).
 // The browser's constraint validation gives early hints; the server's verdict is shown next to the field.
 
 import { h } from "../../lib/dom.js";
+import { GUESS_FIELDS } from "../../lib/panel-descriptors.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
 
@@ -88,6 +90,8 @@ export class SkillPanel extends PanelElement {
   #result;
   #observingNote;
   #goal = null;
+  #currentPose = null;
+  #guessEdited = false;
 
   set descriptor(descriptor) {
     this.#descriptor = descriptor;
@@ -108,6 +112,20 @@ export class SkillPanel extends PanelElement {
       else entry.input.value = typeof value === "number" ? String(Math.round(value * 100) / 100) : String(value);
       this.#clearFieldError(entry);
     }
+  }
+
+  /** The robot's best pose now ({x_m, y_m, theta_rad}: the localized estimate, else odometry). A skill that takes
+   * a pose guess (initial_x_m, initial_y_m, initial_theta_rad) keeps its guess filled from it until the person
+   * types their own; "Use the current pose" fills it again. */
+  set currentPose(pose) {
+    this.#currentPose = pose;
+    if (!this.#guessEdited) this.#fillGuess();
+  }
+
+  #fillGuess() {
+    const pose = this.#currentPose;
+    if (!pose || !this.#inputs.has(GUESS_FIELDS.x)) return;
+    this.parameters = { [GUESS_FIELDS.x]: pose.x_m, [GUESS_FIELDS.y]: pose.y_m, [GUESS_FIELDS.theta]: pose.theta_rad };
   }
 
   /** Read-only while someone else has the turn (the server refuses an observer's goals anyway). */
@@ -214,6 +232,15 @@ export class SkillPanel extends PanelElement {
     this.#formError = h("p", { class: "skill__error", role: "alert", "data-field": "skill-error", hidden: true });
     this.#observingNote = h("p", { class: "skill__observing", "data-field": "skill-observing", hidden: true,
       text: "You are watching: skills start during your turn." });
+    if (this.#inputs.has(GUESS_FIELDS.x)) {
+      for (const name of Object.values(GUESS_FIELDS)) {
+        this.#inputs.get(name)?.input.addEventListener("input", () => { this.#guessEdited = true; });
+      }
+      this.#form.append(h("button", { type: "button", class: "button button--secondary button--small",
+        "data-action": "use-current-pose", text: "Use the current pose",
+        title: "Fill the guess with where the robot believes it is now",
+        onclick: () => { this.#guessEdited = false; this.#fillGuess(); } }));
+    }
     this.#form.append(this.#formError, this.#observingNote,
       h("div", { class: "skill__actions" }, this.#activate, this.#cancel, this.#preempt));
 
