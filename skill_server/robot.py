@@ -133,6 +133,10 @@ class Robot:
         """Cancels a goal; its state afterwards."""
         return self.world.run_in_loop(lambda: self.sequencer.cancel(token, goal_id))
 
+    def clear_map(self, token: str) -> list[str]:
+        """Forgets the environment model for the controller; the ids of the mapping and localization goals ended."""
+        return self.world.run_in_loop(lambda: self.sequencer.clear_map(token))
+
     def _drive_over_motor_goal(self, token: str, sequence: int, linear_mps: object,
                                angular_radps: object) -> DriveAck:
         ack = self.world.drive(token, sequence, linear_mps, angular_radps)

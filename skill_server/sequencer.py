@@ -104,6 +104,18 @@ class Sequencer:
             self._end(running, GoalStatus.CANCELED, "CANCELED", "canceled by the controller", EventKind.CANCELED)
         return goal.snapshot()
 
+    def clear_map(self, token: str) -> list[str]:
+        """Forgets the environment model; the goals built on it (mapping, localization) end as CANCELED. Their ids."""
+        self._check_token(token)
+        ended = []
+        for running in [held for held in self._perceptive.values() if held[1].uses_map]:
+            self._end(running, GoalStatus.CANCELED, "MAP_CLEARED", "the map was cleared", EventKind.CANCELED)
+            ended.append(running[0].goal_id)
+        perception = self.perception
+        perception.environment, perception.published_map = None, None
+        perception.localizer, perception.published_estimate = None, None
+        return ended
+
     # ---- hooks the world calls (loop thread) -------------------------------------------------------
 
     @property

@@ -4,7 +4,8 @@ tour step, practice robot, demo recorder).
 It owns the controller token (the known-token fast path, a database re-read when the robot refuses it,
 re-sending it to a robot that restarted and forgot it), sequence numbering, the deadman-friendly held
 drive, and the one map from a robot's refusal to the error a person or API client sees. Nothing else in
-the middleware calls a RobotLink command method (drive, activate_skill, cancel_goal, set_controller):
+the middleware calls a RobotLink command method (drive, activate_skill, cancel_goal, clear_map,
+set_controller):
 tests/test_architecture.py checks it.
 
 The stale-token rule, the same for every source: a command goes out under the token this process last
@@ -161,6 +162,10 @@ class Commander:
     def cancel(self, goal_id: str) -> robot_pb2.GoalState:
         """Cancels a goal; its message reports the error left."""
         return self._as_controller(lambda token: self.link.cancel_goal(token, goal_id))
+
+    def clear_map(self) -> list[str]:
+        """Forgets the robot's map (for everyone after); the ids of the mapping and localization goals it ended."""
+        return self._as_controller(self.link.clear_map)
 
     def goal_state(self, goal_id: str) -> robot_pb2.GoalState:
         """A goal's state (reading needs no control)."""

@@ -109,6 +109,19 @@ def cancel(robot_name: str, goal_id: str) -> ResponseReturnValue:
     return jsonify({"goal": goal_dict(state)})
 
 
+@blueprint.delete("/api/robots/<robot_name>/map")
+@login_required
+def clear_map(robot_name: str) -> ResponseReturnValue:
+    """Forgets the robot's map, for the controller: a map gone wrong would otherwise mislead every later user."""
+    robot = robot_commands().for_user(robot_name, _user_id())
+    try:
+        ended = robot.clear_map()
+    except (CommandRefused, RobotUnavailable) as error:
+        raise refusal_error(error) from None
+    return jsonify({"map": None, "ended_goal_ids": ended,
+                    "message": "The map was cleared. Activate Environment modelling to build a new one."})
+
+
 @blueprint.get("/api/robots/<robot_name>/map")
 @login_required
 def occupancy_map(robot_name: str) -> ResponseReturnValue:

@@ -118,6 +118,11 @@ class RobotLink:
         """Cancels a goal; the answer says the error left."""
         return self._call(self._stub.CancelGoal, robot_pb2.CancelGoalRequest(token=token, goal_id=goal_id))
 
+    def clear_map(self, token: str) -> list[str]:
+        """Forgets the robot's environment model; the ids of the mapping and localization goals that ended."""
+        answer = self._call(self._stub.ClearMap, robot_pb2.ClearMapRequest(token=token))
+        return list(answer.ended_goal_ids)
+
     def get_goal(self, goal_id: str) -> robot_pb2.GoalState:
         """A running goal or one that ended recently."""
         return self._call(self._stub.GetGoal, robot_pb2.GetGoalRequest(goal_id=goal_id))

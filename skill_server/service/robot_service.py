@@ -116,6 +116,12 @@ class RobotService(robot_pb2_grpc.RobotServicer):
         with domain_errors(context):
             return convert.grid_to_proto(self._robot.environment_map())
 
+    def ClearMap(self, request: robot_pb2.ClearMapRequest,
+                 context: grpc.ServicerContext) -> robot_pb2.ClearMapResponse:
+        """Forgets the environment model (the controller's); the goals built on it end."""
+        with domain_errors(context):
+            return robot_pb2.ClearMapResponse(ended_goal_ids=self._robot.clear_map(request.token))
+
     def GetTrackRun(self, request: robot_pb2.GetTrackRunRequest,
                     context: grpc.ServicerContext) -> robot_pb2.TrackRun:
         """The track run now; is_track is false in scenes without a track."""

@@ -83,6 +83,7 @@ class SkillController:
     motor: bool = True  # drives the wheels: one motor goal at a time; False for perceptive skills
     estimates_pose: bool = False  # ticked first; while it runs the others steer by perception.localizer's pose
     direct_drive: bool = False  # does what Drive commands do; consoles offer the drive pad instead of a panel
+    uses_map: bool = False  # builds or reads the environment model: clearing the map ends it
 
     def __init__(self) -> None:
         self.last_feedback = GoalFeedback()

@@ -66,6 +66,7 @@ class Localization(SkillController):
 
     motor = False
     estimates_pose = True
+    uses_map = True
 
     def __init__(self, initial_x_m: float, initial_y_m: float, initial_theta_rad: float, initial_spread_m: float,
                  initial_spread_rad: float, particle_count: int, perception: Perception, seed: int = 7) -> None:

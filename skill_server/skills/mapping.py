@@ -51,6 +51,7 @@ class EnvironmentModelling(SkillController):
     """Integrates scans when the robot has moved enough that a scan adds something."""
 
     motor = False
+    uses_map = True
 
     def __init__(self, use_sonar: bool, restart: bool, duration_s: float, perception: Perception,
                  use_floor_plan: bool = False, align_scans: bool = True) -> None:

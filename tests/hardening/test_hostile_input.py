@@ -104,6 +104,7 @@ ROUTES = (
     "GET /api/robots/<robot_name>/goals/<goal_id>",
     "DELETE /api/robots/<robot_name>/goals/<goal_id>",
     "GET /api/robots/<robot_name>/map",
+    "DELETE /api/robots/<robot_name>/map",
     "GET /api/robots/<robot_name>/panels",
     "POST /api/robots/<robot_name>/skills/<skill>/goals",
     "GET /api/robots/<target_name>/command-goals/<goal_id>",

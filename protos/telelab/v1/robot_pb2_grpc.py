@@ -94,6 +94,11 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetMapRequest.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.OccupancyGrid.FromString,
                 _registered_method=True)
+        self.ClearMap = channel.unary_unary(
+                '/telelab.v1.Robot/ClearMap',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapResponse.FromString,
+                _registered_method=True)
         self.StreamLocalization = channel.unary_stream(
                 '/telelab.v1.Robot/StreamLocalization',
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamLocalizationRequest.SerializeToString,
@@ -205,9 +210,16 @@ class RobotServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
-    def StreamLocalization(self, request, context):
+    def ClearMap(self, request, context):
         """Localization estimate with its uncertainty and particles, beside odometry and ground truth.
+        Forgets the environment model (and ends the skills built on it: mapping, localization); the controller's.
         """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def StreamLocalization(self, request, context):
+        """Missing associated documentation comment in .proto file."""
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
@@ -296,6 +308,11 @@ def add_RobotServicer_to_server(servicer, server):
                     servicer.GetMap,
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetMapRequest.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.OccupancyGrid.SerializeToString,
+            ),
+            'ClearMap': grpc.unary_unary_rpc_method_handler(
+                    servicer.ClearMap,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapResponse.SerializeToString,
             ),
             'StreamLocalization': grpc.unary_stream_rpc_method_handler(
                     servicer.StreamLocalization,
@@ -642,6 +659,33 @@ class Robot:
             '/telelab.v1.Robot/GetMap',
             protos_dot_telelab_dot_v1_dot_robot__pb2.GetMapRequest.SerializeToString,
             protos_dot_telelab_dot_v1_dot_robot__pb2.OccupancyGrid.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def ClearMap(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/ClearMap',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapResponse.FromString,
             options,
             channel_credentials,
             insecure,

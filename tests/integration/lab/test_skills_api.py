@@ -105,6 +105,22 @@ def test_the_map_answers_no_map_yet_with_a_sentence_not_a_404(student_client: La
         assert {"resolution_m", "width_cells", "height_cells", "cells_b64"} <= set(body["map"])
 
 
+def test_only_the_controller_clears_the_map_and_then_there_is_none(student_client: LabClient) -> None:
+    status, body = api(student_client, "DELETE", "/api/robots/lab-1/map")
+    assert status == 403 and body["error"]["code"] == "not_controller", body
+    queue = take_control(student_client)
+    status, body = api(student_client, "POST", "/api/robots/lab-1/skills/environment_modelling/goals",
+                       {"parameters": {"use_floor_plan": True}, "preempt": True})
+    assert status == 202, body
+    time.sleep(1.5)  # the map is published once a second
+    assert api(student_client, "GET", "/api/robots/lab-1/map")[1]["map"] is not None
+    status, body = api(student_client, "DELETE", "/api/robots/lab-1/map")
+    assert status == 200 and "cleared" in body["message"], body
+    status, body = api(student_client, "GET", "/api/robots/lab-1/map")
+    assert body["map"] is None and "No map yet" in body["message"]
+    queue.close()
+
+
 def test_cancelling_reports_the_error_left(student_client: LabClient) -> None:
     queue = take_control(student_client)
     status, body = api(student_client, "POST", "/api/robots/lab-1/skills/go_to_goal/goals",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 
 import grpc
 import pytest
@@ -182,3 +183,22 @@ def test_mapping_then_get_map_returns_an_occupancy_grid(controlled: robot_pb2_gr
     update = next(u for u in stream if u.active)
     stream.cancel()
     assert 0 < len(update.particles) <= 50 and update.std_x_m > 0
+
+
+def test_clearing_the_map_ends_mapping_and_localization_and_only_the_controller_may(
+        controlled: robot_pb2_grpc.RobotStub) -> None:
+    mapping = activate(controlled, "environment_modelling", use_floor_plan=True).goal
+    time.sleep(0.5)
+    localization = activate(controlled, "localization", initial_spread_m=0.05).goal
+    with pytest.raises(grpc.RpcError) as refused:
+        controlled.ClearMap(robot_pb2.ClearMapRequest(token="someone-else"), timeout=DEADLINE_S)
+    assert refused.value.code() == grpc.StatusCode.PERMISSION_DENIED
+    assert controlled.GetMap(robot_pb2.GetMapRequest(), timeout=DEADLINE_S).width_cells > 0
+    cleared = controlled.ClearMap(robot_pb2.ClearMapRequest(token=TOKEN), timeout=DEADLINE_S)
+    assert set(cleared.ended_goal_ids) == {mapping.goal_id, localization.goal_id}
+    for goal in (mapping, localization):
+        state = controlled.GetGoal(robot_pb2.GetGoalRequest(goal_id=goal.goal_id), timeout=DEADLINE_S)
+        assert state.status == robot_pb2.GOAL_STATUS_CANCELED
+    with pytest.raises(grpc.RpcError) as no_map:
+        controlled.GetMap(robot_pb2.GetMapRequest(), timeout=DEADLINE_S)
+    assert no_map.value.code() == grpc.StatusCode.FAILED_PRECONDITION

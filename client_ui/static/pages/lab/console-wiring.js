@@ -181,6 +181,7 @@ export class ConsoleWiring {
     this.#maps.push(panel);
     panel.addEventListener("map-target", ({ detail }) => this.#routeTarget(panel, detail));
     panel.addEventListener("map-go", ({ detail }) => this.#goThere(panel, detail));
+    panel.addEventListener("map-clear", () => this.#clearMap(panel));
     this.#starters.push(() => { panel.canGo = this.#skills.some((entry) => entry.goalNames); });
   }
 
@@ -209,6 +210,17 @@ export class ConsoleWiring {
       poll();
       setInterval(poll, MAP_POLL_MS);
     });
+  }
+
+  /** Forgets the robot's map (the controller's command); the next poll shows "No map yet". */
+  async #clearMap(mapPanel) {
+    try {
+      const answer = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/map`, { method: "DELETE" });
+      mapPanel.grid = null;
+      mapPanel.note = String(answer?.message ?? "");
+    } catch (error) {
+      mapPanel.note = `The map was not cleared: ${error.message}`;
+    }
   }
 
   /** A target picked on the map goes to the first skill whose schema has goal x/y parameters. */

@@ -9,7 +9,8 @@
 //     `grid` (the map answer or null), `goalFeedback` (go-to-goal feedback, for its goal and values),
 //     `target` ([x_m, y_m] or null), `note` (a sentence about the map's data), `canGo` (a goal skill exists),
 //     `observing` (someone else has the turn: "Go there" is off).
-// Out: "map-target" and "map-go" (detail {x_m, y_m}).
+// Out: "map-target" and "map-go" (detail {x_m, y_m}), "map-clear" (the controller asked to forget the map, after
+//      confirming: it is the robot's map for everyone after).
 
 import { h } from "../../lib/dom.js";
 import {
@@ -102,6 +103,7 @@ export class MapPanel extends PanelElement {
   #legend;
   #legendKeys = "";
   #go;
+  #clear;
   #observing = false;
   #view = null;
   #resizeObserver = null;
@@ -140,6 +142,7 @@ export class MapPanel extends PanelElement {
     this.ensureBuilt();
     this.#observing = Boolean(observing);
     this.#go.disabled = this.#observing || !this.#target;
+    this.#clear.disabled = this.#observing;
     this.#go.title = this.#observing ? "Going there waits for your turn" : "Start go-to-goal to the target picked on the map";
   }
 
@@ -152,6 +155,7 @@ export class MapPanel extends PanelElement {
   /** The occupancy grid answer, or null when there is no map yet. */
   set grid(grid) {
     this.ensureBuilt();
+    this.#clear.hidden = !grid;
     if (!grid) {
       this.#grid = null;
       this.#gridCanvas = null;
@@ -199,11 +203,20 @@ export class MapPanel extends PanelElement {
       text: "Go there", title: "Start go-to-goal to the target picked on the map",
       onclick: () => this.#target && this.emit("map-go", { x_m: this.#target[0], y_m: this.#target[1] }),
     });
+    this.#clear = h("button", {
+      type: "button", class: "button button--secondary map__clear", "data-action": "clear-map", hidden: true,
+      text: "Clear the map", title: "Forget this robot's map (for everyone) and start a new one",
+      onclick: () => {
+        if (window.confirm("Clear this robot's map? Everyone using the robot after you starts from no map.")) {
+          this.emit("map-clear", {});
+        }
+      },
+    });
     this.#legend = h("ul", { class: "map__legend", "aria-label": "Map legend", "data-field": "map-legend" });
     this.append(
       h("h2", { class: "panel__title", text: "Lab model" }),
       h("div", { class: "map__stage" }, this.#canvas),
-      h("div", { class: "map__actions" }, this.#cursorLine, this.#go),
+      h("div", { class: "map__actions" }, this.#cursorLine, this.#go, this.#clear),
       this.#summary,
       this.messageLine({ class: "map__note muted", "data-field": "map-note" }),
       this.#legend,
