@@ -13,6 +13,7 @@ def test_quick_benchmark_prints_a_table_and_writes_json(tmp_path: Path, capsys: 
     report = json.loads((tmp_path / "skills.json").read_text())
     scenarios = {row["scenario"] for row in report["rows"]}
     assert report["quick"] and scenarios == {"go_to_goal", "wall_following", "round_trip", "localization",
+                                             "localization (wrong guess after driving)",
                                              "round_trip (near obstacles, odometry)",
                                              "go_to_goal (free points, odometry)"}
     assert all(row["passed"] is None for row in report["rows"])
