@@ -35,6 +35,7 @@ from middleware.preferences import routes as preferences_routes
 from middleware.robots import registry
 from middleware.teaching import lesson_routes, practice_robots, practice_routes, tour_live, tour_routes
 from middleware.teaching.tours import with_guided_priority
+from middleware.wording import moment_words
 
 CLIENT_UI_DIR = Path(__file__).resolve().parent.parent / "client_ui"
 
@@ -51,6 +52,7 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
         app.config.update(config)
 
     validation.init_app(app)
+    app.add_template_filter(moment_words, "moment")
     db.init_app(app)
     auth_cookies.init_app(app)
     csrf.init_app(app)

@@ -28,7 +28,6 @@ from middleware.assessment.schemas import (
     parse_question,
     parse_survey,
 )
-from middleware.assessment.wording import moment_words
 from middleware.auth.schemas import InvalidField
 from middleware.courses.services import list_courses
 from middleware.db import get_session
@@ -37,7 +36,6 @@ from middleware.models import Course
 from middleware.validation import decimal_int
 
 blueprint = Blueprint("assessment_pages", __name__)
-blueprint.add_app_template_filter(moment_words, "moment")
 CSS = "pages/assessment/assessment.css"
 
 

@@ -1,4 +1,4 @@
-"""How the assessment pages write moments: "Mon 23 Nov 2026, 21:10 UTC", never raw ISO 8601."""
+"""How pages write moments: "Mon 23 Nov 2026, 21:10 UTC", never raw ISO 8601 (the `moment` template filter)."""
 
 from __future__ import annotations
 
