@@ -134,8 +134,23 @@ class Robot:
         return self.world.run_in_loop(lambda: self.sequencer.cancel(token, goal_id))
 
     def clear_map(self, token: str) -> list[str]:
-        """Forgets the environment model for the controller; the ids of the mapping and localization goals ended."""
+        """Forgets the environment model (supervisory); the ids of the mapping and localization goals ended."""
         return self.world.run_in_loop(lambda: self.sequencer.clear_map(token))
+
+    def return_to_dock(self, token: str) -> tuple[list[str], Pose2D]:
+        """Carries the robot to its scene's spawn pose (supervisory): every goal ends, odometry restarts there.
+
+        The ids of the goals that were running, and the dock.
+        """
+        dock = self.world.scene.spawn
+
+        def carry() -> list[str]:
+            self.sequencer.check_supervisory_token(token)
+            ended = self.sequencer.running_goal_ids()
+            self.world.set_pose(dock)
+            return ended
+
+        return self.world.run_in_loop(carry), dock
 
     def _drive_over_motor_goal(self, token: str, sequence: int, linear_mps: object,
                                angular_radps: object) -> DriveAck:

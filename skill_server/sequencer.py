@@ -105,8 +105,11 @@ class Sequencer:
         return goal.snapshot()
 
     def clear_map(self, token: str) -> list[str]:
-        """Forgets the environment model; the goals built on it (mapping, localization) end as CANCELED. Their ids."""
-        self._check_token(token)
+        """Forgets the environment model; the goals built on it (mapping, localization) end as CANCELED. Their ids.
+
+        Supervisory: token is the controller's, or empty while nobody has control (see check_supervisory_token).
+        """
+        self.check_supervisory_token(token)
         ended = []
         for running in [held for held in self._perceptive.values() if held[1].uses_map]:
             self._end(running, GoalStatus.CANCELED, "MAP_CLEARED", "the map was cleared", EventKind.CANCELED)
@@ -249,6 +252,17 @@ class Sequencer:
         if self._motor is not None and self._motor[0].goal_id == goal_id:
             return self._motor
         return next((r for r in self._perceptive.values() if r[0].goal_id == goal_id), None)
+
+    def running_goal_ids(self) -> list[str]:
+        """The ids of the goals running now, the motor goal first."""
+        return [goal.goal_id for goal, _ in [*([self._motor] if self._motor else []), *self._perceptive.values()]]
+
+    def check_supervisory_token(self, token: str) -> None:
+        """Supervisory actions (clearing the map, the return to the dock) take the controller's token, so they
+        cannot cut into a turn they were not asked in, or an empty one while nobody has control: the
+        middleware, which decides who may supervise, then acts for a tutor without taking anyone's turn."""
+        if token != self._controller_token():
+            raise NotController("this request's token is not the robot's current controller's")
 
     def _check_token(self, token: str) -> None:
         if not token:

@@ -5,8 +5,11 @@ It owns the controller token (the known-token fast path, a database re-read when
 re-sending it to a robot that restarted and forgot it), sequence numbering, the deadman-friendly held
 drive, and the one map from a robot's refusal to the error a person or API client sees. Nothing else in
 the middleware calls a RobotLink command method (drive, activate_skill, cancel_goal, clear_map,
-set_controller):
-tests/test_architecture.py checks it.
+return_to_dock, set_controller): tests/test_architecture.py checks it.
+
+Supervisory actions (clearing the map, the return to the dock) are the controller's, or a tutor's or an
+admin's at any time: those go out under whatever token the robot obeys now ("" while nobody has control),
+so a tutor acts without taking anyone's turn.
 
 The stale-token rule, the same for every source: a command goes out under the token this process last
 knew; if the robot refuses it as not the controller's, the token is read again from its source (the
@@ -81,6 +84,9 @@ class Seats(Protocol):
     def resend_token(self, robot_name: str) -> bool:
         """Hands the robot its current controller's token again."""
 
+    def current_token(self, robot_name: str) -> str:
+        """The token the robot obeys now, whoever holds it ("" while nobody does)."""
+
 
 class SeatTokens:
     """A shared robot's token: the user's round-robin seat, as the access coordinator keeps it."""
@@ -92,6 +98,21 @@ class SeatTokens:
         """The known token (no database read) unless fresh; a "no" is always read from the database."""
         read = self._coordinator.controller_token if fresh else self._coordinator.known_controller_token
         return read(self._robot_name, self._user_id)
+
+    def resend(self, token: str) -> bool:
+        """Re-sends the current controller's token to the robot."""
+        return self._coordinator.resend_token(self._robot_name)
+
+
+class SupervisorTokens:
+    """A supervisor's (tutor's, admin's) token for supervisory actions: whatever token the robot obeys now."""
+
+    def __init__(self, coordinator: Seats, robot_name: str) -> None:
+        self._coordinator, self._robot_name = coordinator, robot_name
+
+    def token(self, fresh: bool) -> str | None:
+        """The current controller's token, or "" while nobody has control (always read: supervision is rare)."""
+        return self._coordinator.current_token(self._robot_name)
 
     def resend(self, token: str) -> bool:
         """Re-sends the current controller's token to the robot."""
@@ -167,6 +188,10 @@ class Commander:
         """Forgets the robot's map (for everyone after); the ids of the mapping and localization goals it ended."""
         return self._as_controller(self.link.clear_map)
 
+    def return_to_dock(self) -> robot_pb2.ReturnToDockResponse:
+        """Carries the robot to its dock: every goal ends, odometry restarts at the dock."""
+        return self._as_controller(self.link.return_to_dock)
+
     def goal_state(self, goal_id: str) -> robot_pb2.GoalState:
         """A goal's state (reading needs no control)."""
         return self.link.get_goal(goal_id)
@@ -216,6 +241,16 @@ class RobotCommands:
         if personal is not None:
             return Commander(link, OwnerToken(link, lambda: personal.token), field)
         return Commander(link, SeatTokens(self._coordinator, robot_name, user_id), field)
+
+
+    def for_supervision(self, robot_name: str, user_id: int, supervisor: bool,
+                        field: str = "robot_name") -> Commander:
+        """The user's supervisory actions on the robot: as its controller, or, for a supervisor (a tutor or an
+        admin) on a lab robot, under the robot's current token. Anyone else is refused as an observer."""
+        commander = self.for_user(robot_name, user_id, field)
+        if not supervisor or self._registry.personal(robot_name) is not None or commander.is_controller():
+            return commander
+        return Commander(commander.link, SupervisorTokens(self._coordinator, robot_name), field)
 
 
 def owned_robot(link: RobotLink, token: str) -> Commander:

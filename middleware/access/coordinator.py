@@ -119,6 +119,13 @@ class AccessCoordinator:
         self._known_controllers[robot_name] = (control.controller_id, control.token) if control else (None, None)
         return control.token if control is not None and control.controller_id == user_id else None
 
+    def current_token(self, robot_name: str) -> str:
+        """The token the robot obeys now, whoever holds it; "" while nobody has control (for supervisory actions,
+        which must not take anyone's turn)."""
+        with self._sessions() as session:
+            control = session.get(RobotControl, robot_name, populate_existing=True)
+            return (control.token or "") if control is not None and control.controller_id is not None else ""
+
     def known_controller_token(self, robot_name: str, user_id: int, session: Session | None = None) -> str | None:
         """controller_token without a database read when this process already knows user_id controls the robot.
 

@@ -9,6 +9,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
+from middleware.lab.skills import SUPERVISOR_ROLES
 from middleware.robots.link import RobotUnavailable
 from middleware.robots.messages import robot_info_dict
 from middleware.robots.registry import robot_registry
@@ -44,7 +45,8 @@ def console(robot_name: str) -> ResponseReturnValue:
     if robot_commands().reachable(robot_name, int(current_user.get_id())) is None:
         abort(404)
     title = robot_registry().title(robot_name) or robot_name
-    return render_template("lab/console.html", robot_name=robot_name, robot_title=title)
+    return render_template("lab/console.html", robot_name=robot_name, robot_title=title,
+                           supervisor=current_user.role in SUPERVISOR_ROLES)
 
 
 # Pages poll this; one gRPC call per second per robot answers them all, and "online" lags by at most that.

@@ -8,10 +8,11 @@ from flask import Blueprint, jsonify, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
-from middleware.access.commands import refusal_error, robot_commands
+from middleware.access.commands import Commander, refusal_error, robot_commands
 from middleware.errors import ApiError
 from middleware.lab.panels import robot_panels
 from middleware.lab.schemas import GOAL_ID_PATTERN, NAME_PATTERN
+from middleware.models import Role
 from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.messages import goal_dict, map_dict
 from middleware.robots.registry import robot_registry
@@ -20,6 +21,7 @@ blueprint = Blueprint("skills", __name__)
 
 MAX_PARAMETERS = 32
 MAX_TEXT_VALUE = 64
+SUPERVISOR_ROLES = (Role.TUTOR, Role.ADMIN)
 
 
 def _user_id() -> int:
@@ -109,17 +111,37 @@ def cancel(robot_name: str, goal_id: str) -> ResponseReturnValue:
     return jsonify({"goal": goal_dict(state)})
 
 
+def _supervision(robot_name: str) -> Commander:
+    """The user's supervisory actions on the robot (the controller's, or a tutor's or an admin's at any time)."""
+    return robot_commands().for_supervision(robot_name, _user_id(), current_user.role in SUPERVISOR_ROLES)
+
+
 @blueprint.delete("/api/robots/<robot_name>/map")
 @login_required
 def clear_map(robot_name: str) -> ResponseReturnValue:
-    """Forgets the robot's map, for the controller: a map gone wrong would otherwise mislead every later user."""
-    robot = robot_commands().for_user(robot_name, _user_id())
+    """Forgets the robot's map (supervisory): a map gone wrong would otherwise mislead every later user."""
+    robot = _supervision(robot_name)
     try:
         ended = robot.clear_map()
     except (CommandRefused, RobotUnavailable) as error:
         raise refusal_error(error) from None
     return jsonify({"map": None, "ended_goal_ids": ended,
                     "message": "The map was cleared. Activate Environment modelling to build a new one."})
+
+
+@blueprint.post("/api/robots/<robot_name>/dock")
+@login_required
+def return_to_dock(robot_name: str) -> ResponseReturnValue:
+    """Carries the robot back to its dock (supervisory): the way out of a drifted pose or a robot stuck on a wall."""
+    robot = _supervision(robot_name)
+    try:
+        answer = robot.return_to_dock()
+    except (CommandRefused, RobotUnavailable) as error:
+        raise refusal_error(error) from None
+    dock = answer.dock
+    return jsonify({"ended_goal_ids": list(answer.ended_goal_ids),
+                    "dock": {"x_m": dock.x_m, "y_m": dock.y_m, "theta_rad": dock.theta_rad},
+                    "message": "The robot is back at its dock; its odometry restarts there. The map was kept."})
 
 
 @blueprint.get("/api/robots/<robot_name>/map")

@@ -123,6 +123,10 @@ class RobotLink:
         answer = self._call(self._stub.ClearMap, robot_pb2.ClearMapRequest(token=token))
         return list(answer.ended_goal_ids)
 
+    def return_to_dock(self, token: str) -> robot_pb2.ReturnToDockResponse:
+        """Carries the robot to its dock; the goals that ended and the dock's pose."""
+        return self._call(self._stub.ReturnToDock, robot_pb2.ReturnToDockRequest(token=token))
+
     def get_goal(self, goal_id: str) -> robot_pb2.GoalState:
         """A running goal or one that ended recently."""
         return self._call(self._stub.GetGoal, robot_pb2.GetGoalRequest(goal_id=goal_id))

@@ -118,9 +118,16 @@ class RobotService(robot_pb2_grpc.RobotServicer):
 
     def ClearMap(self, request: robot_pb2.ClearMapRequest,
                  context: grpc.ServicerContext) -> robot_pb2.ClearMapResponse:
-        """Forgets the environment model (the controller's); the goals built on it end."""
+        """Forgets the environment model (supervisory); the goals built on it end."""
         with domain_errors(context):
             return robot_pb2.ClearMapResponse(ended_goal_ids=self._robot.clear_map(request.token))
+
+    def ReturnToDock(self, request: robot_pb2.ReturnToDockRequest,
+                     context: grpc.ServicerContext) -> robot_pb2.ReturnToDockResponse:
+        """Carries the robot to its dock (supervisory); every goal ends, odometry restarts there."""
+        with domain_errors(context):
+            ended, dock = self._robot.return_to_dock(request.token)
+            return robot_pb2.ReturnToDockResponse(ended_goal_ids=ended, dock=convert.pose_to_proto(dock))
 
     def GetTrackRun(self, request: robot_pb2.GetTrackRunRequest,
                     context: grpc.ServicerContext) -> robot_pb2.TrackRun:

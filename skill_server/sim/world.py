@@ -168,7 +168,7 @@ class World:
         return monitor is not None and self._call_in_loop(lambda: monitor.restart(self._sim_time_s))
 
     def set_pose(self, pose: Pose2D) -> None:
-        """Places the robot at pose (for tests and exercises); odometry restarts there."""
+        """Places the robot at pose (for tests, exercises and the return to the dock); odometry restarts there."""
         self._call_in_loop(lambda: self._place_robot(pose))
 
     def step_for(self, duration_s: float) -> RobotSnapshot:
@@ -264,8 +264,8 @@ class World:
     def _call_in_loop(self, action: Callable[[], T]) -> T:
         if self._closed:
             raise WorldStopped("the world was stopped")
-        if self._thread is None:
-            return action()
+        if self._thread is None or threading.current_thread() is self._thread:
+            return action()  # before start(), or an action already in the loop asking for another
         future: Future[T] = Future()
         self._commands.put((action, future))
         self._command_waiting.set()

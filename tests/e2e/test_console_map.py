@@ -20,6 +20,15 @@ def legend_layers(page) -> set[str]:
         "(items) => items.map((item) => item.dataset.layer)"))
 
 
+def create_tutor(live_server: LiveServer, username: str) -> None:
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+
+    with session_factory(live_server.app)() as session:
+        create_user(session, username, "tutor", STUDENT_PASSWORD)
+        session.commit()
+
+
 def drive_forward(page, seconds: float) -> None:
     page.evaluate("document.activeElement.blur()")
     page.keyboard.down("ArrowUp")
@@ -62,12 +71,7 @@ def test_a_student_sees_odometry_and_its_trail_never_the_truth_and_goes_where_th
 
 
 def test_a_tutor_sees_the_true_pose_and_the_drift_of_odometry(page, live_server: LiveServer) -> None:
-    from middleware.auth.services import create_user
-    from middleware.db import session_factory
-
-    with session_factory(live_server.app)() as session:
-        create_user(session, "tutor1", "tutor", STUDENT_PASSWORD)
-        session.commit()
+    create_tutor(live_server, "tutor1")
     open_console(page, live_server, "tutor1")
     wait_for_control(page)
     page.get_by_role("tab", name="Navigate").click()
@@ -79,3 +83,36 @@ def test_a_tutor_sees_the_true_pose_and_the_drift_of_odometry(page, live_server:
     page.locator('map-panel [data-field="map-summary"]').filter(
         has_text=re.compile(r"odometry has drifted \d+\.\d\d m from the true pose")).wait_for()
     page.locator('section[data-panel-id="map"]').screenshot(path=str(ARTIFACTS_DIR / "map-tutor-truth-drift.png"))
+
+
+def test_a_tutor_on_a_phone_docks_a_drifted_robot_without_taking_the_student_s_turn(
+        page, chromium, live_server: LiveServer) -> None:
+    create_tutor(live_server, "dock-tutor")
+    open_console(page, live_server, "student1")
+    wait_for_control(page)
+    page.get_by_role("tab", name="Navigate").click()
+    drive_forward(page, 1.5)
+    wait_for(lambda: math.hypot(odometry(page, "x"), odometry(page, "y")) > 0.15, 5, "the robot did not drive")
+    student_dock = page.locator('map-panel button[data-action="dock"]')
+    assert student_dock.is_enabled(), "the controller may dock the robot"
+
+    phone = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
+    tutor = phone.new_page()
+    try:
+        open_console(tutor, live_server, "dock-tutor")
+        tutor.locator('queue-panel[data-role="waiting"], queue-panel[data-role="watching"]').wait_for(state="attached")
+        tutor.get_by_role("tab", name="Navigate").click()
+        dock = tutor.locator('map-panel button[data-action="dock"]')
+        dock.scroll_into_view_if_needed()
+        assert dock.is_enabled(), "a tutor may dock the robot while observing"
+        assert tutor.locator('map-panel button[data-action="go-there"]').is_disabled()
+        tutor.once("dialog", lambda dialog: dialog.accept())
+        dock.click()
+        note = tutor.locator('map-panel [data-field="map-note"]').filter(has_text="back at its dock")
+        note.wait_for()
+        tutor.locator('section[data-panel-id="map"]').screenshot(path=str(ARTIFACTS_DIR / "map-tutor-docked-390.png"))
+    finally:
+        phone.close()
+    wait_for(lambda: math.hypot(odometry(page, "x"), odometry(page, "y")) < 0.02, 5,
+             "the student's odometry did not restart at the dock")
+    page.locator('queue-panel[data-role="controller"]').wait_for(state="attached", timeout=1_000)

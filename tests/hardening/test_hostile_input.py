@@ -105,6 +105,7 @@ ROUTES = (
     "DELETE /api/robots/<robot_name>/goals/<goal_id>",
     "GET /api/robots/<robot_name>/map",
     "DELETE /api/robots/<robot_name>/map",
+    "POST /api/robots/<robot_name>/dock",
     "GET /api/robots/<robot_name>/panels",
     "POST /api/robots/<robot_name>/skills/<skill>/goals",
     "GET /api/robots/<target_name>/command-goals/<goal_id>",

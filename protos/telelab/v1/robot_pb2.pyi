@@ -477,6 +477,20 @@ class ClearMapResponse(_message.Message):
     ended_goal_ids: _containers.RepeatedScalarFieldContainer[str]
     def __init__(self, ended_goal_ids: _Optional[_Iterable[str]] = ...) -> None: ...
 
+class ReturnToDockRequest(_message.Message):
+    __slots__ = ("token",)
+    TOKEN_FIELD_NUMBER: _ClassVar[int]
+    token: str
+    def __init__(self, token: _Optional[str] = ...) -> None: ...
+
+class ReturnToDockResponse(_message.Message):
+    __slots__ = ("ended_goal_ids", "dock")
+    ENDED_GOAL_IDS_FIELD_NUMBER: _ClassVar[int]
+    DOCK_FIELD_NUMBER: _ClassVar[int]
+    ended_goal_ids: _containers.RepeatedScalarFieldContainer[str]
+    dock: Pose2D
+    def __init__(self, ended_goal_ids: _Optional[_Iterable[str]] = ..., dock: _Optional[_Union[Pose2D, _Mapping]] = ...) -> None: ...
+
 class OccupancyGrid(_message.Message):
     __slots__ = ("resolution_m", "origin_x_m", "origin_y_m", "width_cells", "height_cells", "cells", "scans_integrated", "sim_time_s")
     RESOLUTION_M_FIELD_NUMBER: _ClassVar[int]

@@ -99,6 +99,11 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapRequest.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapResponse.FromString,
                 _registered_method=True)
+        self.ReturnToDock = channel.unary_unary(
+                '/telelab.v1.Robot/ReturnToDock',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockResponse.FromString,
+                _registered_method=True)
         self.StreamLocalization = channel.unary_stream(
                 '/telelab.v1.Robot/StreamLocalization',
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamLocalizationRequest.SerializeToString,
@@ -211,15 +216,24 @@ class RobotServicer:
         raise NotImplementedError('Method not implemented!')
 
     def ClearMap(self, request, context):
-        """Localization estimate with its uncertainty and particles, beside odometry and ground truth.
-        Forgets the environment model (and ends the skills built on it: mapping, localization); the controller's.
+        """Forgets the environment model (and ends the skills built on it: mapping, localization). A supervisory
+        action: the token is the current controller's, or empty while nobody has control.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def ReturnToDock(self, request, context):
+        """Carries the robot back to its dock (the scene's spawn pose): every goal ends, odometry restarts there,
+        the map is kept. Supervisory, like ClearMap.
         """
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
     def StreamLocalization(self, request, context):
-        """Missing associated documentation comment in .proto file."""
+        """Localization estimate with its uncertainty and particles, beside odometry and ground truth.
+        """
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
@@ -313,6 +327,11 @@ def add_RobotServicer_to_server(servicer, server):
                     servicer.ClearMap,
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapRequest.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapResponse.SerializeToString,
+            ),
+            'ReturnToDock': grpc.unary_unary_rpc_method_handler(
+                    servicer.ReturnToDock,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockResponse.SerializeToString,
             ),
             'StreamLocalization': grpc.unary_stream_rpc_method_handler(
                     servicer.StreamLocalization,
@@ -686,6 +705,33 @@ class Robot:
             '/telelab.v1.Robot/ClearMap',
             protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapRequest.SerializeToString,
             protos_dot_telelab_dot_v1_dot_robot__pb2.ClearMapResponse.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def ReturnToDock(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/ReturnToDock',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockResponse.FromString,
             options,
             channel_credentials,
             insecure,

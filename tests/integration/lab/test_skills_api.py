@@ -105,7 +105,7 @@ def test_the_map_answers_no_map_yet_with_a_sentence_not_a_404(student_client: La
         assert {"resolution_m", "width_cells", "height_cells", "cells_b64"} <= set(body["map"])
 
 
-def test_only_the_controller_clears_the_map_and_then_there_is_none(student_client: LabClient) -> None:
+def test_only_the_controller_or_a_tutor_clears_the_map_and_then_there_is_none(student_client: LabClient) -> None:
     status, body = api(student_client, "DELETE", "/api/robots/lab-1/map")
     assert status == 403 and body["error"]["code"] == "not_controller", body
     queue = take_control(student_client)
@@ -119,6 +119,48 @@ def test_only_the_controller_clears_the_map_and_then_there_is_none(student_clien
     status, body = api(student_client, "GET", "/api/robots/lab-1/map")
     assert body["map"] is None and "No map yet" in body["message"]
     queue.close()
+
+
+def tutor(live_server, name: str) -> LabClient:
+    """A client logged in as a new tutor."""
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+
+    with session_factory(live_server.app)() as session:
+        create_user(session, name, "tutor", "correct-horse-battery")
+        session.commit()
+    client = LabClient(live_server.url)
+    assert client.login(name, "correct-horse-battery") == 302
+    return client
+
+
+def test_a_tutor_clears_the_map_and_docks_the_robot_without_taking_the_student_s_turn(
+        live_server, student_client: LabClient) -> None:
+    queue = take_control(student_client)
+    status, body = api(student_client, "POST", "/api/robots/lab-1/skills/environment_modelling/goals",
+                       {"parameters": {"use_floor_plan": True}, "preempt": True})
+    assert status == 202, body
+    status, body = api(student_client, "POST", "/api/robots/lab-1/skills/go_to_goal/goals",
+                       {"parameters": {"goal_x_m": 1.0, "goal_y_m": 0.8}, "preempt": True})
+    assert status == 202, body
+    time.sleep(1.5)
+    teacher = tutor(live_server, "dock-tutor")
+    status, body = api(teacher, "POST", "/api/robots/lab-1/dock")
+    assert status == 200 and "back at its dock" in body["message"], body
+    assert len(body["ended_goal_ids"]) == 2, "the student's goals ended"
+    status, body = api(teacher, "DELETE", "/api/robots/lab-1/map")
+    assert status == 200 and "cleared" in body["message"], body
+    status, body = api(student_client, "GET", "/api/robots/lab-1/map")
+    assert body["map"] is None
+    status, body = api(student_client, "POST", "/api/robots/lab-1/skills/go_to_goal/goals",
+                       {"parameters": {"goal_x_m": 0.5, "goal_y_m": 0.0}, "preempt": True})
+    assert status == 202, "the student still has the turn after the tutor's actions"
+    queue.close()
+
+
+def test_an_observing_student_may_not_dock_the_robot(live_server, student_client: LabClient) -> None:
+    status, body = api(student_client, "POST", "/api/robots/lab-1/dock")
+    assert status == 403 and body["error"]["code"] == "not_controller", body
 
 
 def test_cancelling_reports_the_error_left(student_client: LabClient) -> None:

@@ -202,3 +202,41 @@ def test_clearing_the_map_ends_mapping_and_localization_and_only_the_controller_
     with pytest.raises(grpc.RpcError) as no_map:
         controlled.GetMap(robot_pb2.GetMapRequest(), timeout=DEADLINE_S)
     assert no_map.value.code() == grpc.StatusCode.FAILED_PRECONDITION
+
+
+def newest_telemetry(robot: robot_pb2_grpc.RobotStub) -> robot_pb2.Telemetry:
+    """One telemetry message from a fresh stream."""
+    stream = robot.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=20), timeout=DEADLINE_S)
+    message = next(iter(stream))
+    stream.cancel()
+    return message
+
+
+def test_the_return_to_the_dock_ends_every_goal_and_restarts_odometry_at_the_spawn(
+        controlled: robot_pb2_grpc.RobotStub) -> None:
+    activate(controlled, "direct_control", linear_mps=0.2, angular_radps=0.2, duration_s=10.0)
+    time.sleep(1.0)
+    driven = newest_telemetry(controlled)
+    assert math.hypot(driven.ground_truth.x_m, driven.ground_truth.y_m) > 0.1
+    mapping = activate(controlled, "environment_modelling", use_floor_plan=True).goal
+    going = activate(controlled, "go_to_goal", preempt=True, goal_x_m=-1.5, goal_y_m=1.0).goal
+    with pytest.raises(grpc.RpcError) as refused:
+        controlled.ReturnToDock(robot_pb2.ReturnToDockRequest(token=""), timeout=DEADLINE_S)
+    assert refused.value.code() == grpc.StatusCode.PERMISSION_DENIED, "an empty token while someone controls"
+    docked = controlled.ReturnToDock(robot_pb2.ReturnToDockRequest(token=TOKEN), timeout=DEADLINE_S)
+    assert set(docked.ended_goal_ids) == {mapping.goal_id, going.goal_id}
+    after = newest_telemetry(controlled)
+    for pose in (after.ground_truth, after.odometry.pose):
+        assert math.hypot(pose.x_m - docked.dock.x_m, pose.y_m - docked.dock.y_m) < 0.02
+    state = controlled.GetGoal(robot_pb2.GetGoalRequest(goal_id=mapping.goal_id), timeout=DEADLINE_S)
+    assert state.status == robot_pb2.GOAL_STATUS_ABORTED
+
+
+def test_supervisory_actions_take_an_empty_token_only_while_nobody_has_control(
+        controlled: robot_pb2_grpc.RobotStub) -> None:
+    controlled.SetController(robot_pb2.SetControllerRequest(token=""), timeout=DEADLINE_S)
+    assert controlled.ReturnToDock(robot_pb2.ReturnToDockRequest(token=""), timeout=DEADLINE_S).dock.x_m == 0.0
+    controlled.ClearMap(robot_pb2.ClearMapRequest(token=""), timeout=DEADLINE_S)
+    with pytest.raises(grpc.RpcError) as refused:
+        controlled.ClearMap(robot_pb2.ClearMapRequest(token="a-guess"), timeout=DEADLINE_S)
+    assert refused.value.code() == grpc.StatusCode.PERMISSION_DENIED

@@ -182,6 +182,8 @@ export class ConsoleWiring {
     panel.addEventListener("map-target", ({ detail }) => this.#routeTarget(panel, detail));
     panel.addEventListener("map-go", ({ detail }) => this.#goThere(panel, detail));
     panel.addEventListener("map-clear", () => this.#clearMap(panel));
+    panel.addEventListener("map-dock", () => this.#returnToDock(panel));
+    panel.supervising = this.#root.dataset.supervisor !== undefined;
     this.#starters.push(() => { panel.canGo = this.#skills.some((entry) => entry.goalNames); });
   }
 
@@ -220,6 +222,16 @@ export class ConsoleWiring {
       mapPanel.note = String(answer?.message ?? "");
     } catch (error) {
       mapPanel.note = `The map was not cleared: ${error.message}`;
+    }
+  }
+
+  async #returnToDock(mapPanel) {
+    try {
+      const answer = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/dock`, { method: "POST" });
+      mapPanel.resetTrails();
+      mapPanel.note = String(answer?.message ?? "");
+    } catch (error) {
+      mapPanel.note = `The robot was not moved: ${error.message}`;
     }
   }
 

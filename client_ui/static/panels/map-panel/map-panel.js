@@ -8,9 +8,10 @@
 // In: `info` (robot info: scene_boxes, sonars, laser, body_radius_m), `telemetry`, `localization`,
 //     `grid` (the map answer or null), `goalFeedback` (go-to-goal feedback, for its goal and values),
 //     `target` ([x_m, y_m] or null), `note` (a sentence about the map's data), `canGo` (a goal skill exists),
-//     `observing` (someone else has the turn: "Go there" is off).
-// Out: "map-target" and "map-go" (detail {x_m, y_m}), "map-clear" (the controller asked to forget the map, after
-//      confirming: it is the robot's map for everyone after).
+//     `observing` (someone else has the turn: "Go there" is off), `supervising` (a tutor or an admin: clearing the
+//     map and the return to the dock stay on while observing).
+// Out: "map-target" and "map-go" (detail {x_m, y_m}), "map-clear" (forget the map, after confirming: it is the
+//      robot's map for everyone after), "map-dock" (carry the robot back to its dock, after confirming).
 
 import { h } from "../../lib/dom.js";
 import {
@@ -104,7 +105,9 @@ export class MapPanel extends PanelElement {
   #legendKeys = "";
   #go;
   #clear;
+  #dock;
   #observing = false;
+  #supervising = false;
   #view = null;
   #resizeObserver = null;
 
@@ -142,8 +145,29 @@ export class MapPanel extends PanelElement {
     this.ensureBuilt();
     this.#observing = Boolean(observing);
     this.#go.disabled = this.#observing || !this.#target;
-    this.#clear.disabled = this.#observing;
+    this.#updateSupervision();
     this.#go.title = this.#observing ? "Going there waits for your turn" : "Start go-to-goal to the target picked on the map";
+  }
+
+  /** Whether the user may clear the map and dock the robot while observing (a tutor or an admin). */
+  set supervising(supervising) {
+    this.ensureBuilt();
+    this.#supervising = Boolean(supervising);
+    this.#updateSupervision();
+  }
+
+  /** Forgets the trails (the robot was carried elsewhere: a line to its new place would be a lie). */
+  resetTrails() {
+    this.#trails = { odometry: [], localized: [], truth: [] };
+    this.scheduleRender();
+  }
+
+  #updateSupervision() {
+    const off = this.#observing && !this.#supervising;
+    for (const button of [this.#clear, this.#dock]) {
+      button.disabled = off;
+      button.title = off ? "This waits for your turn (or a tutor)" : button.dataset.title;
+    }
   }
 
   /** Whether the robot has a goal skill that "Go there" can start. */
@@ -205,18 +229,29 @@ export class MapPanel extends PanelElement {
     });
     this.#clear = h("button", {
       type: "button", class: "button button--secondary map__clear", "data-action": "clear-map", hidden: true,
-      text: "Clear the map", title: "Forget this robot's map (for everyone) and start a new one",
+      text: "Clear the map", "data-title": "Forget this robot's map (for everyone) and start a new one",
       onclick: () => {
         if (window.confirm("Clear this robot's map? Everyone using the robot after you starts from no map.")) {
           this.emit("map-clear", {});
         }
       },
     });
+    this.#dock = h("button", {
+      type: "button", class: "button button--secondary map__dock", "data-action": "dock",
+      text: "Return to the dock",
+      "data-title": "Carry the robot back to its dock: its skills stop and its odometry restarts there",
+      onclick: () => {
+        if (window.confirm("Carry the robot back to its dock? Its running skills stop; the map is kept.")) {
+          this.emit("map-dock", {});
+        }
+      },
+    });
+    this.#updateSupervision();
     this.#legend = h("ul", { class: "map__legend", "aria-label": "Map legend", "data-field": "map-legend" });
     this.append(
       h("h2", { class: "panel__title", text: "Lab model" }),
       h("div", { class: "map__stage" }, this.#canvas),
-      h("div", { class: "map__actions" }, this.#cursorLine, this.#go, this.#clear),
+      h("div", { class: "map__actions" }, this.#cursorLine, this.#go, this.#clear, this.#dock),
       this.#summary,
       this.messageLine({ class: "map__note muted", "data-field": "map-note" }),
       this.#legend,
