@@ -26,14 +26,14 @@ from skill_server.sim.track_monitor import TrackEvent, TrackMonitor, TrackState
 from skill_server.sim.world import World
 from skill_server.skills.catalog import default_registry
 from skill_server.skills.environment_model import PublishedGrid
-from skill_server.skills.perception import LocalizationEstimate
+from skill_server.skills.perception import LocalizationEstimate, NavigationPose
 from skill_server.skills.registry import SkillEntry, SkillRegistry
 
 # The value types adapters convert come from here too, so that they import nothing from sim/ or skills/.
 __all__ = [
     "DEFAULT_CAMERA_FPS", "MAX_CAMERA_FPS", "Activation", "CameraFrame", "DriveAck", "GoalUpdate", "LaserSpec",
-    "LocalizationEstimate", "NumberedEvent", "Pose2D", "PublishedGrid", "Robot", "RobotDescription", "RobotSnapshot",
-    "SkillEntry", "TrackEvent", "TrackState",
+    "LocalizationEstimate", "NavigationPose", "NumberedEvent", "Pose2D", "PublishedGrid", "Robot",
+    "RobotDescription", "RobotSnapshot", "SkillEntry", "TrackEvent", "TrackState",
 ]
 
 Published = TypeVar("Published", RobotSnapshot, CameraFrame)
@@ -223,12 +223,14 @@ class Robot:
 
     def localization(
         self, period_s: float, stopped: threading.Event
-    ) -> Iterator[tuple[RobotSnapshot, LocalizationEstimate | None]]:
-        """(snapshot, the localization estimate or None), at most one per period_s of sim time."""
+    ) -> Iterator[tuple[RobotSnapshot, LocalizationEstimate | None, NavigationPose | None]]:
+        """(snapshot, the localization estimate or None, the pose the skills steer by), at most one per period_s of
+        sim time."""
         pacer = SimTimePacer(period_s)
+        perception = self.sequencer.perception
         for snapshot in self._snapshots(stopped):
             if pacer.due(snapshot.sim_time_s):
-                yield snapshot, self.sequencer.perception.published_estimate
+                yield snapshot, perception.published_estimate, perception.navigation
 
     def goal_updates(self, goal_id: str, feedback_period_s: float, stopped: threading.Event) -> Iterator[GoalUpdate]:
         """The goal's state, then its events as they happen, every later state and feedback at most once per

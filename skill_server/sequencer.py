@@ -7,14 +7,15 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
-from skill_server.errors import MissingControllerToken, NotController, ResourceBusy, UnknownGoal
+from skill_server.errors import MissingControllerToken, NoMap, NotController, ResourceBusy, UnknownGoal
 from skill_server.goals import EventKind, Goal, GoalBook, GoalSnapshot, GoalStatus
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.sim.snapshots import RobotSnapshot
 from skill_server.skills.base import SensorLayout, SkillController, TickInput
 from skill_server.skills.catalog import default_registry
 from skill_server.skills.obstacles import ObstacleMap
-from skill_server.skills.perception import Perception
+from skill_server.skills.perception import NavigationPose, Perception
+from skill_server.skills.pose_tracking import POSE_SOURCE, PoseTracker
 from skill_server.skills.registry import SkillRegistry
 
 FEEDBACK_PERIOD_S = 0.1  # feedback reaches the goal records at 10 Hz of sim time; events go at once
@@ -58,6 +59,8 @@ class Sequencer:
         self._last_laser: tuple[float, ...] | None = None
         self._sim_time_s = 0.0
         self._last_feedback_s: dict[str, float] = {}
+        self._tracker: PoseTracker | None = None  # built at the first tick once the floor plan is known
+        self._tracker_built = False
 
     # ---- requests (loop thread) ------------------------------------------------------------------
 
@@ -144,6 +147,8 @@ class Sequencer:
         for running in [*([self._motor] if self._motor else []), *self._perceptive.values()]:
             self._end(running, GoalStatus.ABORTED, "RESET", f"the world was {reason}", EventKind.FAILED)
         self.perception.obstacles = ObstacleMap()
+        if self._tracker is not None:
+            self._tracker.restart()  # the robot was placed: its pose is known again
         self._last_laser = None
         self._stop_wheels = False
 
@@ -166,11 +171,15 @@ class Sequencer:
             obstacles=self.perception.obstacles,
         )
         # Pose estimators first, so the others (and the obstacle grid) use the pose they believe.
+        tracker = self._pose_tracker()
+        if tracker is not None:
+            tracker.update(tick)
         perceptive = list(self._perceptive.values())
         for running in perceptive:
             if running[1].estimates_pose:
                 self._step(running, tick)
         tick = self._with_believed_pose(tick)
+        self.perception.navigation = NavigationPose(tick.pose, tick.pose_source)
         for running in perceptive:
             if not running[1].estimates_pose:
                 self._step(running, tick)
@@ -187,14 +196,26 @@ class Sequencer:
 
     # ---- internals ---------------------------------------------------------------------------------
 
+    def _pose_tracker(self) -> PoseTracker | None:
+        if not self._tracker_built and self.perception.floor_plan is not None:
+            self._tracker_built = True
+            try:
+                self._tracker = PoseTracker(self.perception.floor_plan)
+            except NoMap:
+                self._tracker = None  # a floor plan with nothing to see: odometry it is
+        return self._tracker
+
     def _with_believed_pose(self, tick: TickInput) -> TickInput:
+        """The best pose the robot has: the localization skill's (a person runs it), else the navigation stack's
+        own tracking against the floor plan, else odometry."""
         localizer = self.perception.localizer
-        if localizer is None:
-            return tick
-        pose = localizer.believed_pose(tick.odometry.pose)
-        if pose is None:
-            return tick
-        return replace(tick, pose=pose, pose_source="localization")
+        pose = None if localizer is None else localizer.believed_pose(tick.odometry.pose)
+        if pose is not None:
+            return replace(tick, pose=pose, pose_source="localization")
+        pose = None if self._tracker is None else self._tracker.believed_pose(tick.odometry.pose)
+        if pose is not None:
+            return replace(tick, pose=pose, pose_source=POSE_SOURCE)
+        return tick
 
     def _step(self, running: tuple[Goal, SkillController], tick: TickInput) -> tuple[float, float] | None:
         goal, controller = running

@@ -187,6 +187,8 @@ def pack_localization(update: robot_pb2.LocalizationUpdate) -> tuple[str, str]:
         "std_y_m": update.std_y_m,
         "std_theta_rad": update.std_theta_rad,
         "odometry": pose_dict(update.odometry),
+        "navigation": ({"pose": pose_dict(update.navigation_pose), "source": update.navigation_source}
+                       if update.navigation_source else None),
         "update_duration_ms": update.update_duration_ms,
         "particles": [[round(p.x_m, 3), round(p.y_m, 3), round(p.theta_rad, 3), p.weight] for p in update.particles],
     }

@@ -14,6 +14,7 @@ from skill_server.robot import (
     GoalUpdate,
     LaserSpec,
     LocalizationEstimate,
+    NavigationPose,
     NumberedEvent,
     Pose2D,
     PublishedGrid,
@@ -237,9 +238,10 @@ def grid_to_proto(grid: PublishedGrid) -> robot_pb2.OccupancyGrid:
 
 
 def localization_to_proto(
-    snapshot: RobotSnapshot, estimate: LocalizationEstimate | None, max_particles: int
+    snapshot: RobotSnapshot, estimate: LocalizationEstimate | None, navigation: NavigationPose | None = None,
+    max_particles: int = 0,
 ) -> robot_pb2.LocalizationUpdate:
-    """The estimate beside odometry and ground truth, with their errors."""
+    """The estimate beside odometry and ground truth, with their errors, and the pose the skills steer by."""
     truth, odometry = snapshot.ground_truth, snapshot.odometry.pose
     update = robot_pb2.LocalizationUpdate(
         sim_time_s=snapshot.sim_time_s,
@@ -248,6 +250,9 @@ def localization_to_proto(
         odometry_position_error_m=truth.distance_to(odometry),
         odometry_heading_error_rad=abs(math.remainder(odometry.theta_rad - truth.theta_rad, 2 * math.pi)),
     )
+    if navigation is not None:
+        update.navigation_pose.CopyFrom(pose_to_proto(navigation.pose))
+        update.navigation_source = navigation.source
     if estimate is None:
         return update
     pose = estimate.pose

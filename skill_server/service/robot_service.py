@@ -180,7 +180,7 @@ class RobotService(robot_pb2_grpc.RobotServicer):
             1.0 / convert.rate_from_proto("rate_hz", request.rate_hz, DEFAULT_LOCALIZATION_HZ, MAX_LOCALIZATION_HZ,
                                           "Hz"),
             stopped,
-        ), lambda item: convert.localization_to_proto(item[0], item[1], particles))
+        ), lambda item: convert.localization_to_proto(*item, max_particles=particles))
 
     def StreamTrackEvents(self, request: robot_pb2.StreamTrackEventsRequest,
                           context: grpc.ServicerContext) -> Iterator[robot_pb2.TrackEvent]:

@@ -104,6 +104,17 @@ class Localization(SkillController):
         return compose(self._estimate, relative(self._estimate_odometry, odometry))
 
     def control(self, tick: TickInput) -> tuple[float, float, Outcome | None, GoalFeedback]:
+        """Tracks (see track) and reports the estimate as feedback."""
+        self.track(tick)
+        std_x, std_y, std_theta = self._std
+        return 0.0, 0.0, None, feedback_for(
+            tick, "tracking" if self._converged else "converging", 1.0 if self._converged else 0.0,
+            math.hypot(std_x, std_y), std_theta, std_x_m=std_x, std_y_m=std_y, std_theta_rad=std_theta,
+            estimate_x_m=self._estimate.x_m, estimate_y_m=self._estimate.y_m,
+            estimate_theta_rad=self._estimate.theta_rad,
+        )
+
+    def track(self, tick: TickInput) -> None:
         """Predict with odometry, weigh by the scan, resample when the weights degenerate."""
         odometry = tick.odometry.pose
         if self._last_odometry is None:
@@ -126,13 +137,6 @@ class Localization(SkillController):
             pose = compose(self._estimate, relative(self._estimate_odometry, odometry))
             self._published = replace(self._published, pose=pose, odometry=odometry)
             self._perception.published_estimate = self._published
-        std_x, std_y, std_theta = self._std
-        return 0.0, 0.0, None, feedback_for(
-            tick, "tracking" if self._converged else "converging", 1.0 if self._converged else 0.0,
-            math.hypot(std_x, std_y), std_theta, std_x_m=std_x, std_y_m=std_y, std_theta_rad=std_theta,
-            estimate_x_m=self._estimate.x_m, estimate_y_m=self._estimate.y_m,
-            estimate_theta_rad=self._estimate.theta_rad,
-        )
 
     def stop(self) -> None:
         """The motor skills go back to odometry."""

@@ -27,6 +27,15 @@ class LocalizationEstimate:
     particle_std_m: float = 0.0  # the cloud's own spread, hypot(x, y), before the map-mismatch term
 
 
+@dataclass(frozen=True)
+class NavigationPose:
+    """The pose the skills steer by at the last tick and where it came from ("localization", "map tracking",
+    "odometry"), published for streams (immutable)."""
+
+    pose: Pose2D
+    source: str
+
+
 class PoseEstimator(Protocol):
     """A running skill that estimates the robot's pose (localization)."""
 
@@ -44,4 +53,5 @@ class Perception:
         self.localizer: PoseEstimator | None = None  # the running pose estimator, if any
         self.published_map: PublishedGrid | None = None  # the latest immutable grid, for GetMap
         self.published_estimate: LocalizationEstimate | None = None  # the latest immutable estimate, for streams
+        self.navigation: NavigationPose | None = None  # the pose the skills steer by, for streams
         self.floor_plan: SceneSpec | None = None  # the lab as built, which mapping may start from

@@ -47,10 +47,12 @@ def test_a_student_sees_odometry_and_its_trail_never_the_truth_and_goes_where_th
     drive_forward(page, 1.5)
     page.locator('map-panel [data-layer="trail"]').wait_for()
     layers = legend_layers(page)
-    assert {"odometry", "trail", "laser-odometry"} <= layers, layers
-    undrawn = {"truth", "localized", "drift", "particles", "grid"}
+    # The robot tracks its pose against the floor plan; the skills steer by it, and the map says so.
+    assert {"odometry", "tracked", "trail", "laser-tracked", "drift"} <= layers, layers
+    undrawn = {"truth", "localized", "particles", "grid"}
     assert not layers & undrawn, f"the legend lists layers that are not drawn: {layers}"
-    assert "true pose" not in (page.locator('map-panel [data-field="map-summary"]').text_content() or "")
+    summary = page.locator('map-panel [data-field="map-summary"]').text_content() or ""
+    assert "true pose" not in summary and "tracked against the floor plan" in summary, summary
 
     # Pick a point 0.6 m behind the robot on the map, then "Go there".
     x0, y0, heading = odometry(page, "x"), odometry(page, "y"), odometry(page, "heading-rad")

@@ -532,7 +532,7 @@ class Particle(_message.Message):
     def __init__(self, x_m: _Optional[float] = ..., y_m: _Optional[float] = ..., theta_rad: _Optional[float] = ..., weight: _Optional[float] = ...) -> None: ...
 
 class LocalizationUpdate(_message.Message):
-    __slots__ = ("sim_time_s", "active", "converged", "estimate", "std_x_m", "std_y_m", "std_theta_rad", "odometry", "ground_truth", "position_error_m", "heading_error_rad", "odometry_position_error_m", "odometry_heading_error_rad", "update_duration_ms", "particles")
+    __slots__ = ("sim_time_s", "active", "converged", "estimate", "std_x_m", "std_y_m", "std_theta_rad", "odometry", "ground_truth", "position_error_m", "heading_error_rad", "odometry_position_error_m", "odometry_heading_error_rad", "update_duration_ms", "particles", "navigation_pose", "navigation_source")
     SIM_TIME_S_FIELD_NUMBER: _ClassVar[int]
     ACTIVE_FIELD_NUMBER: _ClassVar[int]
     CONVERGED_FIELD_NUMBER: _ClassVar[int]
@@ -548,6 +548,8 @@ class LocalizationUpdate(_message.Message):
     ODOMETRY_HEADING_ERROR_RAD_FIELD_NUMBER: _ClassVar[int]
     UPDATE_DURATION_MS_FIELD_NUMBER: _ClassVar[int]
     PARTICLES_FIELD_NUMBER: _ClassVar[int]
+    NAVIGATION_POSE_FIELD_NUMBER: _ClassVar[int]
+    NAVIGATION_SOURCE_FIELD_NUMBER: _ClassVar[int]
     sim_time_s: float
     active: bool
     converged: bool
@@ -563,7 +565,9 @@ class LocalizationUpdate(_message.Message):
     odometry_heading_error_rad: float
     update_duration_ms: float
     particles: _containers.RepeatedCompositeFieldContainer[Particle]
-    def __init__(self, sim_time_s: _Optional[float] = ..., active: _Optional[bool] = ..., converged: _Optional[bool] = ..., estimate: _Optional[_Union[Pose2D, _Mapping]] = ..., std_x_m: _Optional[float] = ..., std_y_m: _Optional[float] = ..., std_theta_rad: _Optional[float] = ..., odometry: _Optional[_Union[Pose2D, _Mapping]] = ..., ground_truth: _Optional[_Union[Pose2D, _Mapping]] = ..., position_error_m: _Optional[float] = ..., heading_error_rad: _Optional[float] = ..., odometry_position_error_m: _Optional[float] = ..., odometry_heading_error_rad: _Optional[float] = ..., update_duration_ms: _Optional[float] = ..., particles: _Optional[_Iterable[_Union[Particle, _Mapping]]] = ...) -> None: ...
+    navigation_pose: Pose2D
+    navigation_source: str
+    def __init__(self, sim_time_s: _Optional[float] = ..., active: _Optional[bool] = ..., converged: _Optional[bool] = ..., estimate: _Optional[_Union[Pose2D, _Mapping]] = ..., std_x_m: _Optional[float] = ..., std_y_m: _Optional[float] = ..., std_theta_rad: _Optional[float] = ..., odometry: _Optional[_Union[Pose2D, _Mapping]] = ..., ground_truth: _Optional[_Union[Pose2D, _Mapping]] = ..., position_error_m: _Optional[float] = ..., heading_error_rad: _Optional[float] = ..., odometry_position_error_m: _Optional[float] = ..., odometry_heading_error_rad: _Optional[float] = ..., update_duration_ms: _Optional[float] = ..., particles: _Optional[_Iterable[_Union[Particle, _Mapping]]] = ..., navigation_pose: _Optional[_Union[Pose2D, _Mapping]] = ..., navigation_source: _Optional[str] = ...) -> None: ...
 
 class GetTrackRunRequest(_message.Message):
     __slots__ = ()

@@ -1,8 +1,9 @@
 // <map-panel>: the lab model in 2D. The floor plan is in true coordinates, so each pose is drawn in its
-// own labelled style with a trail: odometry (drifts), the localized estimate (while localization runs)
-// and the true pose (only when the server sends it, i.e. where the teaching mode allows). The gap
-// between odometry and the best other pose is drawn as the drift. Laser hits and sonar cones are placed
-// by the robot's best belief (the estimate, else odometry), and the legend names which; it lists only
+// own labelled style with a trail: odometry (drifts), the localized estimate (while localization runs),
+// else the pose the skills steer by when the robot tracks it against the floor plan, and the true pose (only
+// when the server sends it, i.e. where the teaching mode allows). The gap between odometry and the best other
+// pose is drawn as the drift. Laser hits and sonar cones are placed by the robot's best belief (the estimate,
+// else the tracked pose, else odometry), and the legend names which; it lists only
 // what is drawn. Click, tap or keyboard (arrows move a cursor, Enter sets it) picks a target; "Go there"
 // asks for a go-to-goal to it.
 // In: `info` (robot info: scene_boxes, sonars, laser, body_radius_m), `telemetry`, `localization`,
@@ -31,17 +32,20 @@ const COLOURS = {
 const POSE_STYLES = {
   odometry: { colour: COLOURS.odometry, label: "odometry", dash: [], filled: true },
   localized: { colour: COLOURS.localized, label: "estimate", dash: [6, 4], filled: false },
+  tracked: { colour: COLOURS.localized, label: "tracked", dash: [6, 4], filled: false },
   truth: { colour: COLOURS.truth, label: "true", dash: [2, 3], filled: false },
 };
 // The legend's entries: [colour, text, swatch shape]; render() lists those it drew.
 const LEGEND = {
   odometry: [COLOURS.odometry, "odometry pose (from the wheels; it drifts)", "robot"],
   localized: [COLOURS.localized, "localized estimate", "robot-dashed"],
+  tracked: [COLOURS.localized, "tracked pose the skills steer by (laser against the floor plan)", "robot-dashed"],
   truth: [COLOURS.truth, "true pose", "robot-dotted"],
   trail: ["#7b8494", "trail of where it has been", "line"],
   drift: [COLOURS.drift, "drift of odometry", "line-dashed"],
   "laser-odometry": [COLOURS.laser, "laser hits, placed by the odometry pose", "dot"],
   "laser-localized": [COLOURS.laser, "laser hits, placed by the localized estimate", "dot"],
+  "laser-tracked": [COLOURS.laser, "laser hits, placed by the tracked pose", "dot"],
   sonar: ["#c26a00", "sonar cones", "cone"],
   particles: [COLOURS.particle, "localization particles", "dot"],
   target: [COLOURS.target, "target", "cross"],
@@ -100,7 +104,7 @@ export class MapPanel extends PanelElement {
   #target = null;
   #cursor = null;
   #bounds = sceneBounds([]);
-  #trails = { odometry: [], localized: [], truth: [] };
+  #trails = { odometry: [], localized: [], tracked: [], truth: [] };
   #legend;
   #legendKeys = "";
   #go;
@@ -158,7 +162,7 @@ export class MapPanel extends PanelElement {
 
   /** Forgets the trails (the robot was carried elsewhere: a line to its new place would be a lie). */
   resetTrails() {
-    this.#trails = { odometry: [], localized: [], truth: [] };
+    this.#trails = { odometry: [], localized: [], tracked: [], truth: [] };
     this.scheduleRender();
   }
 
@@ -281,9 +285,14 @@ export class MapPanel extends PanelElement {
   #poses() {
     const odometry = this.#telemetry?.odometry?.pose;
     const loc = this.#localization;
+    const localized = loc?.active && isPose(loc.estimate) ? loc.estimate : null;
+    // Without the localization skill, the navigation stack's own tracking against the floor plan (if it has one).
+    const navigation = loc?.navigation;
+    const tracked = !localized && navigation?.source === "map tracking" && isPose(navigation.pose) ? navigation.pose : null;
     return {
       odometry: isPose(odometry) ? odometry : isPose(loc?.odometry) ? loc.odometry : null,
-      localized: loc?.active && isPose(loc.estimate) ? loc.estimate : null,
+      localized,
+      tracked,
       truth: isPose(loc?.ground_truth) ? loc.ground_truth : null,
     };
   }
@@ -323,11 +332,12 @@ export class MapPanel extends PanelElement {
       ctx.fill();
     }
     const poses = this.#poses();
-    // Readings are drawn where the robot believes it is: the localized pose once localization runs.
-    const sensorPose = poses.localized ?? poses.odometry;
-    if (sensorPose) {
-      for (const layer of this.#drawSensors(ctx, sensorPose, px)) {
-        drawn.add(layer === "laser" ? `laser-${poses.localized ? "localized" : "odometry"}` : layer);
+    // Readings are drawn where the robot believes it is: the localized pose once localization runs, else the
+    // tracked one, else odometry.
+    const believed = ["localized", "tracked", "odometry"].find((frame) => poses[frame]);
+    if (believed) {
+      for (const layer of this.#drawSensors(ctx, poses[believed], px)) {
+        drawn.add(layer === "laser" ? `laser-${believed}` : layer);
       }
     }
     for (const particle of (this.#localization?.particles ?? []).slice(0, 3000)) {
@@ -337,11 +347,11 @@ export class MapPanel extends PanelElement {
       ctx.fillRect(particle[0] - 1.5 * px, particle[1] - 1.5 * px, 3 * px, 3 * px);
     }
     const radius = Number(this.#info?.body_radius_m) || 0.2;
-    const frames = ["truth", "localized", "odometry"].filter((frame) => poses[frame]);
+    const frames = ["truth", "localized", "tracked", "odometry"].filter((frame) => poses[frame]);
     for (const frame of frames) {
       if (this.#drawTrail(ctx, this.#trails[frame], POSE_STYLES[frame], px)) drawn.add("trail");
     }
-    const reference = poses.truth ?? poses.localized;
+    const reference = poses.truth ?? poses.localized ?? poses.tracked;
     if (poses.odometry && reference) {
       drawn.add("drift");
       ctx.strokeStyle = COLOURS.drift;
@@ -479,10 +489,15 @@ export class MapPanel extends PanelElement {
         + `${loc.converged ? ", converged" : ", converging"}`
         + (Number.isFinite(loc.position_error_m) ? `, ${fixed(loc.position_error_m, 2)} m from the true pose` : ""));
     }
+    if (poses.tracked) {
+      parts.push(`the skills steer by (${fixed(poses.tracked.x_m)}, ${fixed(poses.tracked.y_m)}) m, tracked against `
+        + "the floor plan");
+    }
     if (poses.odometry && poses.truth) {
       parts.push(`odometry has drifted ${fixed(poseDistance(poses.odometry, poses.truth))} m from the true pose`);
-    } else if (poses.odometry && poses.localized) {
-      parts.push(`odometry is ${fixed(poseDistance(poses.odometry, poses.localized))} m from the estimate`);
+    } else if (poses.odometry && (poses.localized ?? poses.tracked)) {
+      const other = poses.localized ? "estimate" : "tracked pose";
+      parts.push(`odometry is ${fixed(poseDistance(poses.odometry, poses.localized ?? poses.tracked))} m from the ${other}`);
     }
     if (goal) parts.push(`target (${fixed(goal[0])}, ${fixed(goal[1])}) m`);
     if (this.#grid) parts.push(`map of ${this.#grid.scans_integrated ?? 0} scans`); // else the note says why not
