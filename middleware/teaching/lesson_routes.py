@@ -45,7 +45,7 @@ from middleware.teaching.lessons import (
     unused_videos,
     video_dir,
 )
-from middleware.teaching.targets import execute, reference_skills, resolve_target
+from middleware.teaching.targets import authoring_catalog, execute, reference_skills, resolve_target
 
 blueprint = Blueprint("lessons", __name__)
 PAPER_FIGURES = {"cue_to_robot_ms": [652.88, 543.94], "pause_detection_ms": 15.4}
@@ -105,7 +105,7 @@ def edit(lesson_id: int | None = None) -> ResponseReturnValue:
     return render_template("teaching/lesson_edit.html", lesson=lesson,
                            videos=available_videos(current_app.instance_path),
                            unused_videos=unused_videos(get_session(), current_app.instance_path),
-                           uploaded_video=request.args.get("video"),
+                           uploaded_video=request.args.get("video"), skills=authoring_catalog(_user_id()),
                            max_video_mb=_max_video_bytes() // (1024 * 1024))
 
 
@@ -185,6 +185,16 @@ def delete_video(name: str) -> ResponseReturnValue:
 def cue_track(lesson_id: int) -> ResponseReturnValue:
     """The canonical WebVTT cue track (commands only, written by the server)."""
     return Response(_lesson(lesson_id).cues_vtt, mimetype="text/vtt")
+
+
+@blueprint.get("/lessons/videos/<name>")
+@login_required
+def preview_video(name: str) -> ResponseReturnValue:
+    """A video of the lessons folder by name, for the editor's preview (tutors)."""
+    _require_tutor()
+    if name not in available_videos(current_app.instance_path):
+        raise ApiError(404, "unknown_video", "There is no video by that name in the lessons folder.", "name")
+    return send_from_directory(video_dir(current_app.instance_path), name, conditional=True)
 
 
 @blueprint.get("/lessons/<int:lesson_id>/video")

@@ -68,8 +68,9 @@ def goal_state(robot: Commander, goal_id: str) -> dict[str, object]:
         raise refusal_error(error, not_found_code="unknown_goal") from None
 
 
-def reference_skills(user_id: int | None = None) -> dict[str, list[dict[str, object]]]:
-    """The skill schemas to check lessons and tours against: the user's practice robot, else any lab robot."""
+def reference_catalog(user_id: int | None = None) -> list[dict[str, object]]:
+    """The skills lessons and tours are written for, with titles and parameter schemas, for the authoring forms:
+    the user's practice robot's, else any lab robot's."""
     links: list[RobotLink] = []
     if user_id is not None and (robot := practice_manager().get(user_id)) is not None:
         links.append(robot.link)
@@ -77,8 +78,22 @@ def reference_skills(user_id: int | None = None) -> dict[str, list[dict[str, obj
     links += [link for name in registry.names() if (link := registry.get(name)) is not None]
     for link in links:
         try:
-            return skill_schemas(link)
+            return [{"name": s.name, "title": s.title, "help": s.help, "direct_drive": s.direct_drive,
+                     "parameters": [parameter_schema_dict(p) for p in s.parameters]} for s in link.skills()]
         except RobotUnavailable:
             continue
     raise ApiError(503, "no_robot_to_check", "No robot answers now, so the skills cannot be checked. "
                                              "Start your practice robot or try again in a moment.")
+
+
+def authoring_catalog(user_id: int | None = None) -> list[dict[str, object]] | None:
+    """reference_catalog for an editor page, or None when no robot answers (the page says so)."""
+    try:
+        return reference_catalog(user_id)
+    except ApiError:
+        return None
+
+
+def reference_skills(user_id: int | None = None) -> dict[str, list[dict[str, object]]]:
+    """The skill schemas to check lessons and tours against (see reference_catalog)."""
+    return {str(entry["name"]): entry["parameters"] for entry in reference_catalog(user_id)}  # type: ignore[misc]

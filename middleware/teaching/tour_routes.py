@@ -24,7 +24,7 @@ from middleware.teaching.authority import (
     require_class_member,
     require_class_rights,
 )
-from middleware.teaching.targets import execute, reference_skills, resolve_target
+from middleware.teaching.targets import authoring_catalog, execute, reference_skills, resolve_target
 from middleware.teaching.tours import (
     TourInvalid,
     active_session,
@@ -99,6 +99,7 @@ def edit(tour_id: int | None = None) -> ResponseReturnValue:
     if tour is not None:
         require_author_rights(get_session(), _actor(), tour.author_id, "tour")
     return render_template("teaching/tour_edit.html", tour=tour, tour_data=tour_dict(tour) if tour else None,
+                           skills=authoring_catalog(_user_id()),
                            panels=_panel_choices([step.panel for step in tour_steps(tour)] if tour else []))
 
 

@@ -168,3 +168,43 @@ def test_the_pure_playback_rule(page, live_server: LiveServer) -> None:
                                "stop seeking", "run 2 play", "stop buffering", "run 2 play", "stop seeking",
                                "stop end"]
     assert result["at"] == [None, 1, 12, None]
+
+
+def test_a_tutor_adds_a_cue_where_the_preview_is_paused_and_reads_the_cues_in_words(
+        page, live_server: LiveServer, lesson_id: int) -> None:
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from middleware.models import Lesson
+
+    with session_factory(live_server.app)() as session:
+        tutor = create_user(session, "cue-tutor", "tutor", STUDENT_PASSWORD)
+        session.flush()
+        session.get(Lesson, lesson_id).author_id = tutor.id
+        session.commit()
+    log_in(page, live_server, "cue-tutor")
+    page.goto(f"{live_server.url}/lessons/{lesson_id}/edit")
+    cues = page.locator('[data-slot="cue-list"] li')
+    cues.nth(1).wait_for()
+    assert "0:01.0–0:03.0 Drive at 0.1 m/s, turning 0 rad/s" in cues.nth(0).inner_text()
+    assert "Go to goal: goal x 0.3 m, goal y 0 m, speed 0.1 m/s" in cues.nth(1).inner_text()
+    preview = page.locator('[data-field="preview"]')
+    page.wait_for_function("v => v.readyState >= 1", arg=preview.element_handle())
+    preview.evaluate("v => { v.currentTime = 8.5; }")  # as dragging the video's slider does
+    page.locator('[data-field="cue-start"]').filter(has_text="0:08.5").wait_for()
+    page.get_by_label("Lasts (seconds)").fill("1")
+    page.get_by_label("What the robot does").select_option("stop")
+    page.get_by_role("button", name="Add the cue").click()
+    cues.nth(2).wait_for()
+    assert "0:08.5–0:09.5 Stop the robot" in cues.nth(2).inner_text()
+    assert "00:00:08.500 --> 00:00:09.500\n{\"stop\":true}" in page.locator("[name=cues]").input_value()
+    page.get_by_role("button", name="Play the video from cue 2").click()
+    page.wait_for_function("v => v.currentTime >= 5 && v.currentTime < 6", arg=preview.element_handle())
+    page.get_by_role("button", name="Remove cue 1").click()
+    page.locator('[data-field="result"]').filter(has_text="2 cue(s), all valid.").wait_for()
+    page.get_by_role("button", name="Save", exact=True).click()
+    page.locator('[data-field="result"]').filter(has_text="Saved.").wait_for()
+    page.reload()
+    assert "0:08.5–0:09.5 Stop the robot" in page.locator('[data-slot="cue-list"] li').nth(1).inner_text()
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    page.set_viewport_size({"width": 390, "height": 844})
+    page.screenshot(path=str(ARTIFACTS_DIR / "lesson-editor-cues-390.png"), full_page=True)

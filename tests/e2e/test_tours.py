@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import time
 
 import pytest
@@ -292,5 +293,27 @@ def test_the_tour_editor_offers_panels_by_their_titles(page, live_server: LiveSe
     page.get_by_label("Go on when").select_option("manual")
     page.get_by_role("button", name="Add the step").click()
     assert '"panel": "map"' in page.locator("[name=steps]").input_value()
+    # The second step runs a skill, built from its schema's fields instead of typed JSON.
+    page.get_by_label("Step title").fill("Drive to the door")
+    page.get_by_label("Text").fill("Watch the planned path.")
+    panel.select_option(label="Lab model")
+    page.get_by_label("What the robot does").select_option("skill")
+    page.get_by_label("Skill", exact=True).select_option(label="Go to goal")
+    page.get_by_label("Goal x").fill("1")
+    page.get_by_label("Goal y").fill("0.5")
+    page.get_by_label("Go on when").select_option("skill_finished")
+    page.get_by_role("button", name="Add the step").click()
+    steps = page.locator('[data-slot="step-list"] li')
+    assert steps.count() == 2
+    second = steps.nth(1).inner_text()
+    assert "Drive to the door" in second and "look at Lab model" in second, second
+    assert "Go to goal: goal x 1 m, goal y 0.5 m" in second and "goes on when the skill finishes" in second, second
+    page.get_by_role("button", name="Move step 2 up").click()
+    assert "Drive to the door" in steps.nth(0).inner_text()
+    page.get_by_role("button", name="Save").click()
+    page.wait_for_url(re.compile(r"/tours/\d+/edit$"))  # a new tour opens in its own editor once saved
+    assert page.locator('[data-slot="step-list"] li').count() == 2
     ARTIFACTS_DIR.mkdir(exist_ok=True)
     page.screenshot(path=str(ARTIFACTS_DIR / "tour-editor-1280.png"), full_page=True)
+    page.set_viewport_size({"width": 390, "height": 844})
+    page.screenshot(path=str(ARTIFACTS_DIR / "tour-editor-390.png"), full_page=True)

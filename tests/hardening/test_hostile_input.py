@@ -164,6 +164,7 @@ ROUTES = (
     "GET /lessons/<int:lesson_id>/cues.vtt",
     "GET /lessons/<int:lesson_id>/edit",
     "GET /lessons/<int:lesson_id>/video",
+    "GET /lessons/videos/<name>",
     "GET /lessons/new",
     "POST /lessons/videos",
     "POST /lessons/videos/<name>/delete",

@@ -1,17 +1,65 @@
-// The lesson editor: checks the cue track on the server and lists every error by line; saves.
+// The lesson editor: a preview of the chosen video, the cues listed in words with "Play from here", and "Add a
+// cue here" at the video's position with a command built from the robot's skill schemas. The WebVTT track stays
+// editable; the server checks it (every error by line) and saves it.
+import { h } from "../../lib/dom.js";
+import { CommandBuilder, authoringSkills, describeCommand } from "../../lib/command-builder.js";
 import { ApiError, fetchJson } from "../../lib/transport.js";
 
 const form = document.getElementById("lesson-form");
 const errorList = form.querySelector("[data-slot=errors]");
 const result = form.querySelector("[data-field=result]");
+const cuesField = form.querySelector("[name=cues]");
+const videoChoice = form.querySelector("[name=video_name]");
+const preview = form.querySelector("[data-field=preview]");
+const previewNote = form.querySelector("[data-field=preview-note]");
+const cueList = form.querySelector("[data-slot=cue-list]");
+const cueStart = form.querySelector("[data-field=cue-start]");
+const skills = authoringSkills();
+const trackDetails = form.querySelector("[data-field=track-details]");
+const command = new CommandBuilder(form.querySelector("[data-slot=cue-command]"), skills, { legend: "Command" });
+let checked = { cues: [], errors: [] };
+
+/** 75.25 -> "1:15.3", for people. */
+function clock(seconds) {
+  const whole = Math.max(0, Number(seconds) || 0);
+  const minutes = Math.floor(whole / 60);
+  return `${minutes}:${(whole - minutes * 60).toFixed(1).padStart(4, "0")}`;
+}
+
+/** 75.25 -> "00:01:15.250", WebVTT's form. */
+function timestamp(seconds) {
+  const ms = Math.round(Math.max(0, seconds) * 1000);
+  const part = (value, width = 2) => String(value).padStart(width, "0");
+  return `${part(Math.floor(ms / 3_600_000))}:${part(Math.floor(ms / 60_000) % 60)}:${part(Math.floor(ms / 1000) % 60)}.${part(ms % 1000, 3)}`;
+}
+
+function trackOf(cues) {
+  const blocks = [...cues].sort((a, b) => a.start_s - b.start_s)
+    .map((cue) => `${timestamp(cue.start_s)} --> ${timestamp(cue.end_s)}\n${JSON.stringify(cue.command)}`);
+  return `WEBVTT\n\n${blocks.join("\n\n")}\n`;
+}
 
 function showErrors(errors) {
+  if (errors.some((error) => error.line)) trackDetails.open = true; // the lines named are in the track
   errorList.replaceChildren(...errors.map((error) => {
-    const item = document.createElement("li");
     const where = error.line ? `Line ${error.line}` : "Lesson";
-    item.textContent = `${where} (${error.field}): ${error.message}`;
-    return item;
+    return h("li", { text: `${where} (${error.field}): ${error.message}` });
   }));
+}
+
+function showCues() {
+  if (!checked.cues.length) {
+    cueList.replaceChildren(h("li", { class: "muted", text: "No cues yet: play the video, pause, and add one below." }));
+    return;
+  }
+  cueList.replaceChildren(...checked.cues.map((cue, index) => h("li", { class: "authoring-list__item", "data-cue": String(index) },
+    h("p", {}, h("strong", { text: `${clock(cue.start_s)}–${clock(cue.end_s)}` }), ` ${describeCommand(cue.command, skills)}`),
+    h("div", { class: "authoring-list__actions" },
+      h("button", { type: "button", class: "button teaching-quiet", text: "Play from here",
+        "aria-label": `Play the video from cue ${index + 1}`, onclick: () => playFrom(cue.start_s) }),
+      h("button", { type: "button", class: "button teaching-quiet", text: "Remove",
+        "aria-label": `Remove cue ${index + 1}`, onclick: () => removeCue(index) })),
+  )));
 }
 
 function values() {
@@ -20,16 +68,75 @@ function values() {
     video_name: data.get("video_name"), cues: data.get("cues") };
 }
 
-form.querySelector("[data-action=check]").addEventListener("click", async () => {
+/** Asks the server what the track holds; lists its cues and every error. */
+async function check() {
   result.textContent = "Checking…";
   try {
-    const answer = await fetchJson("/api/lessons/check", { method: "POST", body: { cues: values().cues } });
-    showErrors(answer.errors);
-    result.textContent = answer.errors.length ? `${answer.errors.length} problem(s).` : `${answer.cues.length} cue(s), all valid.`;
+    checked = await fetchJson("/api/lessons/check", { method: "POST", body: { cues: cuesField.value } });
+    showErrors(checked.errors);
+    showCues();
+    result.textContent = checked.errors.length ? `${checked.errors.length} problem(s).` : `${checked.cues.length} cue(s), all valid.`;
   } catch (error) {
     result.textContent = error.message;
   }
+}
+
+function playFrom(seconds) {
+  if (!preview.getAttribute("src")) return;
+  preview.currentTime = seconds;
+  preview.play().catch(() => {}); // a browser that refuses autoplay still shows the frame
+}
+
+async function removeCue(index) {
+  if (checked.errors.length) {
+    result.textContent = "Fix the problems listed first: the track cannot be rewritten while it has errors.";
+    return;
+  }
+  cuesField.value = trackOf(checked.cues.filter((_, i) => i !== index));
+  await check();
+}
+
+form.querySelector("[data-action=add-cue]").addEventListener("click", async () => {
+  const duration = form.querySelector("[name=cue_duration]");
+  if (!duration.checkValidity() || duration.value === "") {
+    result.textContent = "Lasts: enter between 0.5 and 600 seconds.";
+    duration.focus();
+    return;
+  }
+  let built;
+  try {
+    built = command.value();
+  } catch (error) {
+    result.textContent = error.message;
+    return;
+  }
+  const start = Math.round((preview.currentTime || 0) * 10) / 10;
+  const cue = { start_s: start, end_s: start + Number(duration.value), command: built };
+  await check();
+  if (checked.errors.length) {
+    cuesField.value = `${cuesField.value.trimEnd()}\n\n${timestamp(cue.start_s)} --> ${timestamp(cue.end_s)}\n${JSON.stringify(built)}\n`;
+  } else {
+    cuesField.value = trackOf([...checked.cues, cue]);
+  }
+  await check();
 });
+
+function followVideoChoice() {
+  const name = videoChoice.value;
+  if (!name) {
+    preview.removeAttribute("src");
+    previewNote.textContent = "Upload or choose a video to preview it here.";
+    return;
+  }
+  preview.src = `/lessons/videos/${encodeURIComponent(name)}`;
+  previewNote.textContent = `Previewing ${name}.`;
+}
+
+videoChoice.addEventListener("change", followVideoChoice);
+preview.addEventListener("timeupdate", () => { cueStart.textContent = clock(preview.currentTime); });
+preview.addEventListener("seeked", () => { cueStart.textContent = clock(preview.currentTime); });
+preview.addEventListener("error", () => { previewNote.textContent = "This video cannot be played in this browser."; });
+form.querySelector("[data-action=check]").addEventListener("click", check);
 
 form.addEventListener("submit", async (event) => {
   event.preventDefault();
@@ -50,3 +157,6 @@ form.addEventListener("submit", async (event) => {
     result.textContent = payload.error?.message ?? "Not saved.";
   }
 });
+
+followVideoChoice();
+check();

@@ -9,6 +9,7 @@
 
 import { h } from "../../lib/dom.js";
 import { GUESS_FIELDS } from "../../lib/panel-descriptors.js";
+import { parameterLabel, readValue, shortNumber } from "../../lib/parameters.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
 
@@ -20,30 +21,9 @@ const STATUS_WORDS = {
   canceled: "Canceled", aborted: "Aborted",
 };
 
-/** "goal_x_m" -> "Goal x"; the unit is shown apart. */
-export function parameterLabel(name) {
-  const words = String(name).replace(/_(m|mps|rad|radps|s|deg|ms)$/, "").split("_").filter(Boolean);
-  const text = words.join(" ");
-  return text ? text[0].toUpperCase() + text.slice(1) : String(name);
-}
-
-/** The value an input holds, typed by the parameter's schema; undefined when empty. */
-export function readValue(parameter, input) {
-  if (parameter.type === "bool") return input.checked;
-  if (input.value === "") return undefined;
-  if (parameter.type === "double") return Number(input.value);
-  if (parameter.type === "int") return Number.parseInt(input.value, 10);
-  return input.value;
-}
-
 /** A skill's state word for people: "goal_blocked" -> "goal blocked". */
 export function stateWords(state) {
   return String(state).replaceAll("_", " ");
-}
-
-/** A limit for people: 3.141592653589793 -> "3.142". */
-export function shortNumber(value) {
-  return String(Number(Number(value).toPrecision(4)));
 }
 
 function fixed(value, decimals) {

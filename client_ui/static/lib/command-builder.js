@@ -1,0 +1,155 @@
+// A robot command built from fields instead of typed JSON, for the lesson and tour editors: run a skill (its
+// parameters generated from the skill's schema, with units, ranges and help), drive, stop, or (where a command
+// is optional) none. The server checks the command again when the lesson or tour is saved.
+
+import { h } from "./dom.js";
+import { parameterLabel, readValue, shortNumber } from "./parameters.js";
+
+const MAX_LINEAR_MPS = 0.5;
+const MAX_ANGULAR_RADPS = 1.5;
+let nextId = 0;
+
+/** The skills an authoring page was given (`<script type="application/json" id="authoring-skills">`), or []. */
+export function authoringSkills(doc = document) {
+  try {
+    const skills = JSON.parse(doc.getElementById("authoring-skills")?.textContent ?? "null");
+    return Array.isArray(skills) ? skills.filter((s) => s && typeof s.name === "string") : [];
+  } catch {
+    return [];
+  }
+}
+
+/** A command in words: {"skill": "go_to_goal", ...} -> "Go to goal: goal x 1 m, goal y 0.5 m". */
+export function describeCommand(command, skills = []) {
+  if (!command || typeof command !== "object") return "No command";
+  if (command.stop === true) return "Stop the robot";
+  if (command.drive) {
+    const { linear_mps: linear = 0, angular_radps: angular = 0 } = command.drive;
+    return `Drive at ${shortNumber(linear)} m/s, turning ${shortNumber(angular)} rad/s`;
+  }
+  const skill = skills.find((s) => s.name === command.skill);
+  const schema = new Map((skill?.parameters ?? []).map((p) => [p.name, p]));
+  const values = Object.entries(command.parameters ?? {}).map(([name, value]) => {
+    const unit = schema.get(name)?.unit;
+    return `${parameterLabel(name).toLowerCase()} ${typeof value === "number" ? shortNumber(value) : value}${unit ? ` ${unit}` : ""}`;
+  });
+  return `${skill?.title ?? parameterLabel(String(command.skill))}${values.length ? `: ${values.join(", ")}` : ""}`;
+}
+
+export class CommandBuilder {
+  #skills;
+  #kind;
+  #skillSelect;
+  #skillHelp;
+  #parameterBox;
+  #drive;
+  #skillPart;
+  #inputs = new Map();
+  #id = `command-${++nextId}`;
+
+  /** Fills container with the fields; optional adds "No command". */
+  constructor(container, skills, { optional = false, legend = "Command" } = {}) {
+    this.#skills = skills.filter((skill) => !skill.direct_drive); // "Drive" is that skill, in fewer words
+    const choices = [
+      ...(optional ? [["none", "No command"]] : []),
+      ...(this.#skills.length ? [["skill", "Run a skill"]] : []),
+      ["drive", "Drive"], ["stop", "Stop the robot"],
+    ];
+    this.#kind = h("select", { id: `${this.#id}-kind`, "data-field": "command-kind" },
+      choices.map(([value, text]) => h("option", { value, text })));
+    this.#skillSelect = h("select", { id: `${this.#id}-skill`, "data-field": "command-skill" },
+      this.#skills.map((skill) => h("option", { value: skill.name, text: skill.title || parameterLabel(skill.name) })));
+    this.#skillHelp = h("p", { class: "muted small", "data-field": "command-skill-help" });
+    this.#parameterBox = h("div", { class: "command-builder__parameters" });
+    const number = (name, max, value, unit) => h("label", {}, `${parameterLabel(name)} [${unit}]`,
+      h("input", { name, type: "number", step: "any", min: String(-max), max: String(max), value: String(value),
+        inputmode: "decimal", "data-drive": name }));
+    this.#drive = h("div", { class: "command-builder__drive", hidden: true },
+      number("linear_mps", MAX_LINEAR_MPS, 0.2, "m/s"), number("angular_radps", MAX_ANGULAR_RADPS, 0, "rad/s"),
+      h("p", { class: "muted small", text: `Speeds up to ${MAX_LINEAR_MPS} m/s and ${MAX_ANGULAR_RADPS} rad/s; the `
+        + "robot drives until the cue or step ends." }));
+    const skillPart = h("div", { class: "command-builder__skill" },
+      h("label", { for: this.#skillSelect.id, text: "Skill" }), this.#skillSelect, this.#skillHelp, this.#parameterBox);
+    container.append(h("fieldset", { class: "command-builder" },
+      h("legend", { text: legend }),
+      h("label", { for: this.#kind.id, text: "What the robot does" }), this.#kind,
+      skillPart, this.#drive));
+    this.#kind.addEventListener("change", () => this.#show());
+    this.#skillSelect.addEventListener("change", () => this.#buildParameters());
+    this.#skillPart = skillPart;
+    this.#buildParameters();
+    this.#show();
+  }
+
+  /** The command as the server takes it, or null for "No command"; throws an Error naming the field. */
+  value() {
+    const kind = this.#kind.value;
+    if (kind === "none") return null;
+    if (kind === "stop") return { stop: true };
+    if (kind === "drive") {
+      const drive = {};
+      for (const input of this.#drive.querySelectorAll("input")) {
+        if (!input.checkValidity() || input.value === "") throw this.#invalid(input, parameterLabel(input.name));
+        drive[input.name] = Number(input.value);
+      }
+      return { drive };
+    }
+    const parameters = {};
+    for (const [name, { parameter, input }] of this.#inputs) {
+      if (!input.checkValidity()) throw this.#invalid(input, parameterLabel(name));
+      const value = readValue(parameter, input);
+      if (value !== undefined) parameters[name] = value;
+    }
+    return { skill: this.#skillSelect.value, parameters };
+  }
+
+  #invalid(input, label) {
+    input.focus();
+    const range = input.min && input.max ? ` between ${input.min} and ${input.max}` : "";
+    return new Error(`${label}: enter a number${range}.`);
+  }
+
+  #show() {
+    const kind = this.#kind.value;
+    this.#skillPart.hidden = kind !== "skill";
+    this.#drive.hidden = kind !== "drive";
+  }
+
+  #buildParameters() {
+    const skill = this.#skills.find((s) => s.name === this.#skillSelect.value);
+    this.#skillHelp.textContent = skill?.help ?? "";
+    this.#inputs.clear();
+    this.#parameterBox.replaceChildren(...(skill?.parameters ?? []).map((parameter) => this.#field(parameter)));
+  }
+
+  #field(parameter) {
+    const id = `${this.#id}-${parameter.name}`;
+    const attrs = { id, name: parameter.name, "data-parameter": parameter.name };
+    let input;
+    if (parameter.type === "bool") {
+      input = h("input", { ...attrs, type: "checkbox", checked: Boolean(parameter.default) });
+    } else if (parameter.type === "enum") {
+      input = h("select", attrs, (parameter.choices ?? []).map((choice) =>
+        h("option", { value: String(choice), selected: choice === parameter.default, text: String(choice) })));
+    } else if (parameter.type === "string") {
+      input = h("input", { ...attrs, type: "text", value: parameter.default ?? "" });
+    } else {
+      const limited = Number.isFinite(parameter.minimum) && Number.isFinite(parameter.maximum)
+        && (parameter.minimum || parameter.maximum);
+      input = h("input", {
+        ...attrs, type: "number", step: parameter.type === "int" ? "1" : "any", required: true,
+        inputmode: parameter.type === "int" ? "numeric" : "decimal",
+        min: limited ? String(parameter.minimum) : null, max: limited ? String(parameter.maximum) : null,
+        value: parameter.default === undefined || parameter.default === null ? "" : String(parameter.default),
+      });
+    }
+    this.#inputs.set(parameter.name, { parameter, input });
+    const numeric = parameter.type === "double" || parameter.type === "int";
+    const range = numeric && Number.isFinite(parameter.minimum) && Number.isFinite(parameter.maximum)
+      && (parameter.minimum || parameter.maximum) ? ` (${shortNumber(parameter.minimum)} to ${shortNumber(parameter.maximum)})` : "";
+    return h("div", { class: "command-builder__field" },
+      h("label", { for: id }, parameterLabel(parameter.name), parameter.unit ? ` [${parameter.unit}]` : ""),
+      input,
+      h("p", { class: "muted small", text: `${parameter.help ?? ""}${range}` }));
+  }
+}

@@ -1,0 +1,23 @@
+// Skill parameters for people, shared by the skill panels and the authoring forms: labels, typed values, limits.
+
+/** "goal_x_m" -> "Goal x"; the unit is shown apart. */
+export function parameterLabel(name) {
+  const words = String(name).replace(/_(m|mps|rad|radps|s|deg|ms)$/, "").split("_").filter(Boolean);
+  const text = words.join(" ");
+  return text ? text[0].toUpperCase() + text.slice(1) : String(name);
+}
+
+/** The value an input holds, typed by the parameter's schema; undefined when empty. */
+export function readValue(parameter, input) {
+  if (parameter.type === "bool") return input.checked;
+  if (input.value === "") return undefined;
+  if (parameter.type === "double") return Number(input.value);
+  if (parameter.type === "int") return Number.parseInt(input.value, 10);
+  return input.value;
+}
+
+/** A limit for people: 3.141592653589793 -> "3.142". */
+export function shortNumber(value) {
+  return String(Number(Number(value).toPrecision(4)));
+}
+
