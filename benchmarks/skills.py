@@ -356,10 +356,11 @@ def round_trip_near_obstacles_scenario(quick: bool, rows: list[Row], localized: 
     """Round trips from where wall following left the robot, next to an obstacle, graded by the true pose.
 
     Each start is a pose beside an obstacle; the robot follows it for a while (the obstacle grid fills in as
-    odometry drifts), then a round trip goes to a free point and back. Odometry alone is how a newcomer drives
-    today; with localization running against the floor plan's map, navigation uses the best pose the robot has.
+    odometry drifts), then a round trip goes to a free point and back. "tracked": as a newcomer drives, with the
+    navigation stack's own pose tracking against the floor plan; "localized": the localization skill runs too,
+    on a map built from the floor plan and readings.
     """
-    scenario = f"round_trip (near obstacles, {'localized' if localized else 'odometry'})"
+    scenario = f"round_trip (near obstacles, {'localized' if localized else 'tracked'})"
     trials: list[Trial] = []
     speeds: list[tuple[float, float]] = []
     for seed, bench in seeded_benches(ROUND_TRIP_SEEDS[:1] if quick else ROUND_TRIP_SEEDS, localized, speeds):
@@ -380,7 +381,7 @@ def round_trip_near_obstacles_scenario(quick: bool, rows: list[Row], localized: 
 
 def go_to_goal_free_points_scenario(quick: bool, rows: list[Row], localized: bool = False) -> tuple[float, float]:
     """Go-to-goal to random free points (true clearance >= radius + 0.1 m), one after another as clicks come."""
-    scenario = f"go_to_goal (free points, {'localized' if localized else 'odometry'})"
+    scenario = f"go_to_goal (free points, {'localized' if localized else 'tracked'})"
     trials: list[Trial] = []
     speeds: list[tuple[float, float]] = []
     for seed, bench in seeded_benches(FREE_POINT_SEEDS[:1] if quick else FREE_POINT_SEEDS, localized, speeds):
@@ -498,16 +499,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="smoke mode: few goals, short drives, no grading")
     parser.add_argument("--output", type=Path, default=Path("bench-results"), help="folder for skills.json")
     parser.add_argument("--only", action="append", metavar="SCENARIO",
-                        help="run only this scenario (repeatable), e.g. 'go_to_goal (free points, odometry)'")
+                        help="run only this scenario (repeatable), e.g. 'go_to_goal (free points, tracked)'")
     args = parser.parse_args(argv)
     rows: list[Row] = []
     for name, scenario in [("go_to_goal", go_to_goal_scenario), ("wall_following", wall_following_scenario),
                            ("round_trip", round_trip_scenario), ("localization", localization_scenario),
                            ("localization (readings-only map)", readings_only_localization_scenario),
                            ("localization (wrong guess after driving)", localization_wrong_guess_scenario),
-                           ("round_trip (near obstacles, odometry)", round_trip_near_obstacles_scenario),
+                           ("round_trip (near obstacles, tracked)", round_trip_near_obstacles_scenario),
                            ("round_trip (near obstacles, localized)", localized_round_trip_near_obstacles_scenario),
-                           ("go_to_goal (free points, odometry)", go_to_goal_free_points_scenario),
+                           ("go_to_goal (free points, tracked)", go_to_goal_free_points_scenario),
                            ("go_to_goal (free points, localized)", localized_go_to_goal_free_points_scenario)]:
         if args.only and name not in args.only:
             continue

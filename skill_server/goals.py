@@ -35,7 +35,7 @@ class EventKind(enum.Enum):
     """Things a skill announces to its watchers."""
 
     STARTED = "started"
-    STEP_STARTED = "step_started"  # a complex skill moved on to its next simple skill
+    STEP_STARTED = "step_started"  # moved on to its next step (a complex skill's next simple skill, a search)
     OBSTACLE_DETECTED = "obstacle_detected"
     PATH_REPLANNED = "path_replanned"
     CONVERGED = "converged"

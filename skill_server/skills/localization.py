@@ -13,6 +13,7 @@ from skill_server.goals import EventKind, GoalFeedback
 from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
 from skill_server.sim.geometry import Pose2D, wrap_angle
 from skill_server.skills.base import Outcome, SkillController, TickInput, feedback_for
+from skill_server.skills.global_search import FieldLookup, Panorama, search
 from skill_server.skills.perception import LocalizationEstimate, Perception
 from skill_server.skills.scan_matching import compose, distance_field, relative, signed_point_field
 
@@ -33,6 +34,12 @@ UPDATE_MIN_M, UPDATE_MIN_RAD = 0.03, 0.03  # motion between two updates once con
 CONVERGED_MIN_FIT = 0.8
 # A converged estimate is given up when its fit stays below this for LOST_AFTER_UPDATES updates in a row.
 LOST_FIT, LOST_AFTER_UPDATES = 0.5, 5
+# A guess that does not lead to convergence within this many updates is given up for a search of the whole map
+# (skills/global_search.py) with the scans gathered since the start; the filter keeps running beside it.
+SEARCH_AFTER_UPDATES = 20
+SEARCH_AGAIN_RAD, SEARCH_AGAIN_M = math.radians(120.0), 0.5  # more sweep or travel before searching again
+FOUND_SPREAD_M, FOUND_SPREAD_RAD = 0.15, 0.1
+PANORAMA_BEAM_STEP = 3
 MAP_ERROR_GAIN = 0.5  # reported std per axis includes this times the echoes' residual RMS (map mismatch)
 MAP_ERROR_LEVER_M = 2.0  # typical beam length [m]: turns the residual into a heading uncertainty
 
@@ -45,7 +52,8 @@ def localization_description() -> SkillDescription:
         help=(
             "Perceptive skill: estimates the robot's pose against the environment model with a particle filter "
             "(sets of poses whose laser readings best match the map), starting from a guess. While it runs, the "
-            "motor skills steer by its estimate instead of raw odometry. Needs a map (Environment modelling)."
+            "motor skills steer by its estimate instead of raw odometry. Needs a map (Environment modelling). If "
+            "the guess is wrong or unknown, it searches the whole map with the scans of a turn or a short drive."
         ),
         parameters=(
             ParameterSchema("initial_x_m", ParameterType.DOUBLE, "m", -50.0, 50.0, 0.0, "Guess of x."),
@@ -95,6 +103,10 @@ class Localization(SkillController):
         self._std = (initial_spread_m, initial_spread_m, initial_spread_rad)
         self._published: LocalizationEstimate | None = None
         self._beams: tuple[np.ndarray, np.ndarray] | None = None  # the last update's beams (ranges, angles)
+        self._panorama = Panorama()  # the scans since the estimate was last trusted, for a whole-map search
+        self._unconverged_updates = 0
+        self._searching = False
+        self._searched_at = (0.0, 0.0)  # the panorama's sweep and travel at the last search
         perception.localizer = self
 
     def believed_pose(self, odometry: Pose2D) -> Pose2D | None:
@@ -107,8 +119,9 @@ class Localization(SkillController):
         """Tracks (see track) and reports the estimate as feedback."""
         self.track(tick)
         std_x, std_y, std_theta = self._std
+        state = "tracking" if self._converged else "searching" if self._searching else "converging"
         return 0.0, 0.0, None, feedback_for(
-            tick, "tracking" if self._converged else "converging", 1.0 if self._converged else 0.0,
+            tick, state, 1.0 if self._converged else 0.0,
             math.hypot(std_x, std_y), std_theta, std_x_m=std_x, std_y_m=std_y, std_theta_rad=std_theta,
             estimate_x_m=self._estimate.x_m, estimate_y_m=self._estimate.y_m,
             estimate_theta_rad=self._estimate.theta_rad,
@@ -131,6 +144,7 @@ class Localization(SkillController):
             self._refresh_field(tick.sim_time_s)
             self._weigh(tick)
             self._summarise(odometry, (time.perf_counter() - started) * 1000.0)
+            self._search_if_lost(tick)
         elif self._published is not None and self._estimate_odometry is not None:
             # Between updates (every tick, not only on scans) readers get the estimate moved on by the latest
             # odometry, so it does not trail the robot by up to a scan period (2 cm at 0.3 m/s).
@@ -143,6 +157,46 @@ class Localization(SkillController):
         if self._perception.localizer is self:
             self._perception.localizer = None
             self._perception.published_estimate = None
+
+    def _search_if_lost(self, tick: TickInput) -> None:
+        """Gathers the scans while the estimate is not trusted; searches the whole map once the guess failed and
+        they see enough of the lab, and restarts the cloud at the one place that clearly fits."""
+        if self._converged:
+            self._unconverged_updates, self._searching, self._panorama = 0, False, Panorama()
+            return
+        if self._beams is not None:
+            ranges_m = np.asarray(tick.laser_ranges_m)[::PANORAMA_BEAM_STEP]
+            angles = tick.sensors.laser_angles_rad[::PANORAMA_BEAM_STEP]
+            echoed = ranges_m < tick.sensors.laser.max_range_m - 1e-6
+            self._panorama.add(tick.odometry.pose, ranges_m[echoed], angles[echoed])
+        self._unconverged_updates += 1
+        if not self._searching and self._unconverged_updates >= SEARCH_AFTER_UPDATES:
+            self._searching = True
+            self.announce(EventKind.STEP_STARTED, "the guess does not fit the map: searching the whole map; turn the "
+                                                  "robot on the spot or drive it a little")
+        panorama = self._panorama
+        swept, travelled = self._searched_at
+        if not (self._searching and panorama.ready and self._field is not None
+                and (swept == 0.0 or panorama.swept_rad - swept >= SEARCH_AGAIN_RAD
+                     or panorama.travelled_m - travelled >= SEARCH_AGAIN_M)):
+            return
+        self._searched_at = (panorama.swept_rad, panorama.travelled_m)
+        lookup = FieldLookup(self._field, self._model.origin_m, self._model.resolution_m)
+        found = search(lookup, self._model.log_odds < 0, panorama.points())
+        if found.anchor_pose is None:
+            self.announce(EventKind.STEP_STARTED, f"{found.places} places of the map fit the scans so far; keep "
+                                                  "turning or drive a little further")
+            return
+        pose = panorama.pose_now(found.anchor_pose, tick.odometry.pose)
+        n = len(self._particles)
+        self._particles = np.column_stack([
+            self._rng.normal(pose.x_m, FOUND_SPREAD_M, n), self._rng.normal(pose.y_m, FOUND_SPREAD_M, n),
+            self._rng.normal(pose.theta_rad, FOUND_SPREAD_RAD, n)])
+        self._weights = np.full(n, 1.0 / n)
+        self._searching, self._unconverged_updates, self._panorama = False, 0, Panorama()
+        self._searched_at = (0.0, 0.0)
+        self.announce(EventKind.STEP_STARTED, f"the scans fit one place, ({pose.x_m:.2f}, {pose.y_m:.2f}) m, "
+                                              f"{found.inliers:.0%} of them on the map: checking it")
 
     def _predict(self, delta: Pose2D) -> None:
         n = len(self._particles)

@@ -14,6 +14,6 @@ def test_quick_benchmark_prints_a_table_and_writes_json(tmp_path: Path, capsys: 
     scenarios = {row["scenario"] for row in report["rows"]}
     assert report["quick"] and scenarios == {"go_to_goal", "wall_following", "round_trip", "localization",
                                              "localization (wrong guess after driving)",
-                                             "round_trip (near obstacles, odometry)",
-                                             "go_to_goal (free points, odometry)"}
+                                             "round_trip (near obstacles, tracked)",
+                                             "go_to_goal (free points, tracked)"}
     assert all(row["passed"] is None for row in report["rows"])

@@ -356,12 +356,14 @@ export class ConsoleWiring {
     });
   }
 
-  /** Keeps a pose-guess skill's panel told the robot's best pose: the converged estimate, else odometry. */
+  /** Keeps a pose-guess skill's panel told the robot's best pose: the converged estimate, else the pose tracked
+   *  against the floor plan, else odometry. */
   #followPose(descriptor, panel) {
     let estimate = null;
     this.#listen(`${this.#robotPath}/telemetry`, descriptor.id, (message) => {
       if (message.type === "localization") {
-        estimate = message.active && message.converged ? message.estimate : null;
+        const tracked = message.navigation?.source === "map tracking" ? message.navigation.pose : null;
+        estimate = (message.active && message.converged ? message.estimate : null) ?? tracked;
         if (estimate) panel.currentPose = estimate;
       } else if (message.type === "telemetry" && !estimate && message.odometry?.pose) {
         panel.currentPose = message.odometry.pose;
