@@ -39,6 +39,15 @@ MAX_SCANS = 240
 
 
 @dataclass(frozen=True)
+class Region:
+    """Where a guess says the robot is: within radius_m of centre, heading within spread_rad of centre's."""
+
+    centre: Pose2D
+    radius_m: float
+    spread_rad: float
+
+
+@dataclass(frozen=True)
 class SearchResult:
     """The answer of one search: the anchor's pose on the map if one place clearly fits, and how many fit."""
 
@@ -144,13 +153,20 @@ def _distinct(a: Pose2D, b: Pose2D) -> bool:
     return math.hypot(a.x_m - b.x_m, a.y_m - b.y_m) > DISTINCT_M or turn > DISTINCT_RAD
 
 
-def search(lookup: FieldLookup, known_free: np.ndarray, points: np.ndarray) -> SearchResult:
-    """Where the panorama's anchor is on the map, if one place clearly fits best."""
+def search(lookup: FieldLookup, known_free: np.ndarray, points: np.ndarray,
+           region: Region | None = None) -> SearchResult:
+    """Where the panorama's anchor is on the map (within region, if given), if one place clearly fits best."""
     positions = lookup.free_positions(known_free, COARSE_STEP_M)
-    if len(points) < 20 or len(positions) == 0:
+    headings = np.arange(-math.pi, math.pi, COARSE_STEP_RAD)
+    if region is not None:
+        centre = region.centre
+        positions = positions[np.hypot(positions[:, 0] - centre.x_m, positions[:, 1] - centre.y_m) <= region.radius_m]
+        turns = np.abs(np.remainder(headings - centre.theta_rad + math.pi, 2 * math.pi) - math.pi)
+        headings = headings[turns <= region.spread_rad]
+    if len(points) < 20 or len(positions) == 0 or len(headings) == 0:
         return SearchResult(None, 0.0, 0)
     candidates: list[tuple[float, Pose2D]] = []
-    for theta in np.arange(-math.pi, math.pi, COARSE_STEP_RAD):
+    for theta in headings:
         scores = _scores(lookup, points, positions, float(theta), COARSE_SIGMA_M)
         for i in np.argsort(scores)[-3:]:
             candidates.append((float(scores[i]), Pose2D(float(positions[i, 0]), float(positions[i, 1]), float(theta))))
