@@ -462,3 +462,38 @@ def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(
     assert results["failed"] == []
     assert results["schemaless"] == "the skill panel has no parameter schema"
     assert not errors, errors
+
+
+def test_a_wrong_guess_is_given_up_and_turning_finds_the_pose(page, live_server: LiveServer) -> None:
+    open_console(page, live_server)
+    wait_for_control(page)
+    show_tab_of(page, "map")
+    modelling = page.locator('skill-panel[data-skill="environment_modelling"]')
+    modelling.locator('button[data-action="activate"]').click()
+    wait_for_status(page, "environment_modelling", "executing")
+    page.evaluate("document.activeElement.blur()")
+    page.keyboard.down("ArrowUp")
+    page.wait_for_timeout(1200)
+    page.keyboard.up("ArrowUp")
+    wait_for(lambda: abs(odometry(page, "linear")) < 0.01, 5, "the robot did not stop")
+    localization = page.locator('skill-panel[data-skill="localization"]')
+    for axis, value in (("x", "-3"), ("y", "2")):  # a guess far from where the robot is
+        localization.locator(f'input[name="initial_{axis}_m"]').fill(value)
+    localization.locator('button[data-action="activate"]').click()
+    latest = localization.locator('[data-field="skill-latest"]')
+    latest.filter(has_text="searching the whole map").wait_for(timeout=15_000)
+    assert "turn the robot on the spot" in latest.text_content()
+    summary = page.locator('map-panel [data-field="map-summary"]')
+    page.evaluate("document.activeElement.blur()")
+    page.keyboard.down("ArrowLeft")  # turn on the spot, as the panel asks
+    try:
+        summary.filter(has_text=re.compile(r"localized at .*, converged")).wait_for(timeout=30_000)
+    finally:
+        page.keyboard.up("ArrowLeft")
+    found = re.search(r"localized at \((-?\d+\.\d+), (-?\d+\.\d+)\) m", summary.text_content() or "")
+    assert found, summary.text_content()
+    x, y = float(found[1]), float(found[2])
+    assert math.hypot(x - odometry(page, "x"), y - odometry(page, "y")) < 0.3, "localized far from the robot"
+    events = localization.locator('[data-field="skill-events"]').text_content() or ""
+    assert "the scans fit one place" in events, events
+    localization.screenshot(path=str(ARTIFACTS_DIR / "localization-wrong-guess-found.png"))

@@ -68,6 +68,7 @@ export class SkillPanel extends PanelElement {
   #fields = {};
   #events;
   #result;
+  #latest;
   #observingNote;
   #goal = null;
   #currentPose = null;
@@ -125,7 +126,10 @@ export class SkillPanel extends PanelElement {
     if (!goal || typeof goal !== "object" || typeof goal.status !== "string") return;
     const isNewGoal = goal.goal_id !== this.#goal?.goal_id;
     this.#goal = goal;
-    if (isNewGoal) this.#events.replaceChildren();
+    if (isNewGoal) {
+      this.#events.replaceChildren();
+      this.#latest.hidden = true;
+    }
     this.dataset.status = goal.status;
     this.dataset.goalId = String(goal.goal_id ?? "");
     this.#status.textContent = STATUS_WORDS[goal.status] ?? goal.status;
@@ -150,6 +154,10 @@ export class SkillPanel extends PanelElement {
     const time = Number.isFinite(Number(event.sim_time_s)) ? `${Number(event.sim_time_s).toFixed(1)} s · ` : "";
     this.#events.prepend(h("li", { "data-event": event.kind }, `${time}${stateWords(event.kind)}`,
       event.message ? `: ${event.message}` : ""));
+    if (event.message) { // the newest news stays in sight: what a skill asks of the person is in its events
+      this.#latest.textContent = `Latest: ${event.message}`;
+      this.#latest.hidden = false;
+    }
     while (this.#events.children.length > MAX_EVENTS) this.#events.lastElementChild.remove();
   }
 
@@ -229,6 +237,7 @@ export class SkillPanel extends PanelElement {
     this.#progress = h("progress", { max: "1", value: "0", "aria-label": `${descriptor.title} progress` });
     this.#events = h("ol", { class: "skill__events", "aria-label": `${descriptor.title} events`, "data-field": "skill-events" });
     this.#result = h("p", { class: "skill__result", role: "status", "data-field": "skill-result", hidden: true });
+    this.#latest = h("p", { class: "skill__latest", "data-field": "skill-latest", hidden: true });
     this.append(
       h("h2", { class: "panel__title", text: descriptor.title }),
       h("p", { class: "skill__kind muted",
@@ -242,7 +251,7 @@ export class SkillPanel extends PanelElement {
           h("div", {}, h("dt", { text: "Distance error" }), h("dd", {}, field("distance"), " m")),
           h("div", {}, h("dt", { text: "Heading error" }), h("dd", {}, field("heading"), "°")),
           h("div", {}, h("dt", { text: "Pose" }), h("dd", {}, field("pose")))),
-        this.#result),
+        this.#latest, this.#result),
       h("details", { class: "skill__log" }, h("summary", { text: "Events" }), this.#events),
     );
   }
