@@ -13,8 +13,9 @@ from skill_server.goals import EventKind, GoalFeedback
 from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
 from skill_server.sim.geometry import Pose2D, wrap_angle
 from skill_server.skills.base import Outcome, SkillController, TickInput, feedback_for
-from skill_server.skills.global_search import FieldLookup, Panorama, Region, search
+from skill_server.skills.global_search import FieldLookup
 from skill_server.skills.perception import LocalizationEstimate, Perception
+from skill_server.skills.relocalization import Relocalizer
 from skill_server.skills.scan_matching import compose, distance_field, relative, signed_point_field
 
 __all__ = ["LOCALIZATION", "Localization", "LocalizationEstimate", "compose", "distance_field", "relative"]
@@ -34,14 +35,7 @@ UPDATE_MIN_M, UPDATE_MIN_RAD = 0.03, 0.03  # motion between two updates once con
 CONVERGED_MIN_FIT = 0.8
 # A converged estimate is given up when its fit stays below this for LOST_AFTER_UPDATES updates in a row.
 LOST_FIT, LOST_AFTER_UPDATES = 0.5, 5
-# A guess that does not lead to convergence within this many updates is given up for a search of the whole map
-# (skills/global_search.py) with the scans gathered since the start; the filter keeps running beside it.
-SEARCH_AFTER_UPDATES = 20
-SEARCH_AGAIN_RAD, SEARCH_AGAIN_M = math.radians(120.0), 0.5  # more sweep or travel before searching again
-FOUND_SPREAD_M, FOUND_SPREAD_RAD = 0.15, 0.1
-REGION_MAX_M = 2.0  # the places near a guess that must not fit as well as the estimate
-CONFIRM_M, CONFIRM_RAD = 0.15, math.radians(8.0)  # the search's best place must be the estimate's
-PANORAMA_BEAM_STEP = 3
+FOUND_SPREAD_M, FOUND_SPREAD_RAD = 0.15, 0.1  # the cloud restarts this wide at a place the search found
 MAP_ERROR_GAIN = 0.5  # reported std per axis includes this times the echoes' residual RMS (map mismatch)
 MAP_ERROR_LEVER_M = 2.0  # typical beam length [m]: turns the residual into a heading uncertainty
 
@@ -105,14 +99,7 @@ class Localization(SkillController):
         self._std = (initial_spread_m, initial_spread_m, initial_spread_rad)
         self._published: LocalizationEstimate | None = None
         self._beams: tuple[np.ndarray, np.ndarray] | None = None  # the last update's beams (ranges, angles)
-        self._panorama = Panorama()  # the scans since the estimate was last trusted, for a whole-map search
-        self._unconverged_updates = 0
-        self._searching = False
-        self._searched_at = (0.0, 0.0)  # the panorama's sweep and travel at the last search
-        self._confirmed = False  # the estimate was checked against the places near it (or found by a search)
-        self._confirm_at: tuple[float, float] | None = None  # the panorama's sweep and travel at the last check
-        self._region_m = min(REGION_MAX_M, 3.0 * initial_spread_m)
-        self._region_rad = min(math.pi, 3.0 * initial_spread_rad)
+        self._relocalizer = Relocalizer(initial_spread_m, initial_spread_rad)  # the evidence while not trusted
         perception.localizer = self
 
     def believed_pose(self, odometry: Pose2D) -> Pose2D | None:
@@ -125,7 +112,7 @@ class Localization(SkillController):
         """Tracks (see track) and reports the estimate as feedback."""
         self.track(tick)
         std_x, std_y, std_theta = self._std
-        state = "tracking" if self._converged else "searching" if self._searching else "converging"
+        state = "tracking" if self._converged else "searching" if self._relocalizer.searching else "converging"
         return 0.0, 0.0, None, feedback_for(
             tick, state, 1.0 if self._converged else 0.0,
             math.hypot(std_x, std_y), std_theta, std_x_m=std_x, std_y_m=std_y, std_theta_rad=std_theta,
@@ -149,9 +136,11 @@ class Localization(SkillController):
             self._last_odometry = odometry
             self._refresh_field(tick.sim_time_s)
             self._weigh(tick)
-            self._gather(tick)
+            if not self._converged and self._beams is not None:
+                self._relocalizer.gather(odometry, np.asarray(tick.laser_ranges_m), tick.sensors.laser_angles_rad,
+                                         tick.sensors.laser.max_range_m)
             self._summarise(odometry, (time.perf_counter() - started) * 1000.0)
-            self._search_if_lost(tick)
+            self._relocalize(tick)
         elif self._published is not None and self._estimate_odometry is not None:
             # Between updates (every tick, not only on scans) readers get the estimate moved on by the latest
             # odometry, so it does not trail the robot by up to a scan period (2 cm at 0.3 m/s).
@@ -165,76 +154,25 @@ class Localization(SkillController):
             self._perception.localizer = None
             self._perception.published_estimate = None
 
-    def _gather(self, tick: TickInput) -> None:
-        """Adds the scan to the panorama while the estimate is not trusted."""
-        if self._converged or self._beams is None:
-            return
-        ranges_m = np.asarray(tick.laser_ranges_m)[::PANORAMA_BEAM_STEP]
-        angles = tick.sensors.laser_angles_rad[::PANORAMA_BEAM_STEP]
-        echoed = ranges_m < tick.sensors.laser.max_range_m - 1e-6
-        self._panorama.add(tick.odometry.pose, ranges_m[echoed], angles[echoed])
-
     def _lookup(self) -> FieldLookup:
         assert self._field is not None
         return FieldLookup(self._field, self._model.origin_m, self._model.resolution_m)
 
-    def _clear_near(self, estimate: Pose2D, odometry: Pose2D) -> bool:
-        """Whether the scans since the estimate was last trusted fit the estimate and no other place near it
-        (within 3 initial spreads): a tight cloud that fits 84 % of one scan's echoes was 0.6 m off on a map built
-        from readings, where a truer place also fitted. Checked once per SEARCH_AGAIN of motion while it fails."""
-        panorama = self._panorama
-        if self._confirmed or panorama.anchor is None:
-            return True
-        moved = (panorama.swept_rad, panorama.travelled_m)
-        if self._confirm_at is not None and (moved[0] - self._confirm_at[0] < SEARCH_AGAIN_RAD
-                                             and moved[1] - self._confirm_at[1] < SEARCH_AGAIN_M):
-            return False
-        self._confirm_at = moved
-        anchor_estimate = compose(estimate, relative(odometry, panorama.anchor))
-        found = search(self._lookup(), self._model.log_odds < 0, panorama.points(),
-                       Region(anchor_estimate, self._region_m, self._region_rad))
-        if found.anchor_pose is None or not (
-                found.anchor_pose.distance_to(anchor_estimate) <= CONFIRM_M
-                and abs(math.remainder(found.anchor_pose.theta_rad - anchor_estimate.theta_rad, 2 * math.pi))
-                <= CONFIRM_RAD):
-            return False
-        self._confirmed = True
-        return True
-
-    def _search_if_lost(self, tick: TickInput) -> None:
-        """Gathers the scans while the estimate is not trusted; searches the whole map once the guess failed and
-        they see enough of the lab, and restarts the cloud at the one place that clearly fits."""
+    def _relocalize(self, tick: TickInput) -> None:
+        """While the estimate is not trusted: gathers the scans and, once the guess has failed, searches the whole
+        map; the cloud restarts at a place found."""
         if self._converged:
-            self._unconverged_updates, self._searching, self._panorama = 0, False, Panorama()
+            self._relocalizer.trusted()
             return
-        self._unconverged_updates += 1
-        if not self._searching and self._unconverged_updates >= SEARCH_AFTER_UPDATES:
-            self._searching = True
-            self.announce(EventKind.STEP_STARTED, "the guess does not fit the map: searching the whole map; turn the "
-                                                  "robot on the spot or drive it a little")
-        panorama = self._panorama
-        swept, travelled = self._searched_at
-        if not (self._searching and panorama.ready and self._field is not None
-                and (swept == 0.0 or panorama.swept_rad - swept >= SEARCH_AGAIN_RAD
-                     or panorama.travelled_m - travelled >= SEARCH_AGAIN_M)):
-            return
-        self._searched_at = (panorama.swept_rad, panorama.travelled_m)
-        found = search(self._lookup(), self._model.log_odds < 0, panorama.points())
-        if found.anchor_pose is None:
-            self.announce(EventKind.STEP_STARTED, f"{found.places} places of the map fit the scans so far; keep "
-                                                  "turning or drive a little further")
-            return
-        pose = panorama.pose_now(found.anchor_pose, tick.odometry.pose)
-        n = len(self._particles)
-        self._particles = np.column_stack([
-            self._rng.normal(pose.x_m, FOUND_SPREAD_M, n), self._rng.normal(pose.y_m, FOUND_SPREAD_M, n),
-            self._rng.normal(pose.theta_rad, FOUND_SPREAD_RAD, n)])
-        self._weights = np.full(n, 1.0 / n)
-        self._searching, self._unconverged_updates, self._panorama = False, 0, Panorama()
-        self._searched_at = (0.0, 0.0)
-        self._confirmed = True  # the whole map was searched: no other place fits
-        self.announce(EventKind.STEP_STARTED, f"the scans fit one place, ({pose.x_m:.2f}, {pose.y_m:.2f}) m, "
-                                              f"{found.inliers:.0%} of them on the map: checking it")
+        step = self._relocalizer.after_update(self._lookup(), self._model.log_odds < 0, tick.odometry.pose)
+        if step.announcement:
+            self.announce(EventKind.STEP_STARTED, step.announcement)
+        if step.found is not None:
+            pose, n = step.found, len(self._particles)
+            self._particles = np.column_stack([
+                self._rng.normal(pose.x_m, FOUND_SPREAD_M, n), self._rng.normal(pose.y_m, FOUND_SPREAD_M, n),
+                self._rng.normal(pose.theta_rad, FOUND_SPREAD_RAD, n)])
+            self._weights = np.full(n, 1.0 / n)
 
     def _predict(self, delta: Pose2D) -> None:
         n = len(self._particles)
@@ -341,7 +279,8 @@ class Localization(SkillController):
         tight = max(std_x, std_y) < CONVERGED_STD_M and std_theta < CONVERGED_STD_RAD
         converged = tight and fit >= CONVERGED_MIN_FIT
         if converged and not self._converged:
-            converged = self._clear_near(Pose2D(x, y, wrap_angle(theta)), odometry)
+            converged = self._relocalizer.confirms(self._lookup(), self._model.log_odds < 0,
+                                                   Pose2D(x, y, wrap_angle(theta)), odometry)
         if converged and not self._converged:
             self.announce(EventKind.CONVERGED, f"converged at ({x:.2f}, {y:.2f}) m, std {max(std_x, std_y):.3f} m, "
                                                f"{fit:.0%} of the echoes on the map")
@@ -349,7 +288,7 @@ class Localization(SkillController):
         self._converged = converged or (self._converged and max(std_x, std_y) < 2 * CONVERGED_STD_M
                                         and self._poor_fits < LOST_AFTER_UPDATES)
         if was_converged and not self._converged:
-            self._confirmed, self._confirm_at = False, None  # lost: a new estimate is checked again
+            self._relocalizer.lost()
         # The cloud's spread only measures how well poses are told apart by this map; it says nothing about the map
         # being wrong (a missed or moved object, surfaces off by part of a cell), which shifts every particle alike.
         # The echoes' residual at the estimate measures that mismatch, and is added as a correlated error term.
