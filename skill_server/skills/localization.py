@@ -73,8 +73,10 @@ class Localization(SkillController):
     uses_map = True
 
     def __init__(self, initial_x_m: float, initial_y_m: float, initial_theta_rad: float, initial_spread_m: float,
-                 initial_spread_rad: float, particle_count: int, perception: Perception, seed: int = 7) -> None:
+                 initial_spread_rad: float, particle_count: int, perception: Perception, seed: int = 7,
+                 publish: bool = True) -> None:
         super().__init__()
+        self._publish = publish  # False: nobody watches (the pose tracking), so no estimate is built for streams
         model = perception.environment
         if model is None or not model.occupied().any():
             raise NoMap("no environment model yet: run environment_modelling first")
@@ -141,7 +143,7 @@ class Localization(SkillController):
                                          tick.sensors.laser.max_range_m)
             self._summarise(odometry, (time.perf_counter() - started) * 1000.0)
             self._relocalize(tick)
-        elif self._published is not None and self._estimate_odometry is not None:
+        elif self._publish and self._published is not None and self._estimate_odometry is not None:
             # Between updates (every tick, not only on scans) readers get the estimate moved on by the latest
             # odometry, so it does not trail the robot by up to a scan period (2 cm at 0.3 m/s).
             pose = compose(self._estimate, relative(self._estimate_odometry, odometry))
@@ -295,6 +297,8 @@ class Localization(SkillController):
         std_x, std_y = math.hypot(std_x, MAP_ERROR_GAIN * residual_m), math.hypot(std_y, MAP_ERROR_GAIN * residual_m)
         std_theta = math.hypot(std_theta, MAP_ERROR_GAIN * residual_m / MAP_ERROR_LEVER_M)
         self._std = (std_x, std_y, std_theta)
+        if not self._publish:
+            return
         sample = np.column_stack([p[:: max(1, len(p) // 200)], w[:: max(1, len(p) // 200)]])
         self._published = LocalizationEstimate(
             self._estimate, std_x, std_y, std_theta, self._converged, duration_ms,

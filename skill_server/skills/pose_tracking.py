@@ -42,7 +42,7 @@ class PoseTracker:
             own = Perception()
             own.environment = self._model
             self._filter = Localization(start.x_m, start.y_m, start.theta_rad, START_SPREAD_M, START_SPREAD_RAD,
-                                        TRACKER_PARTICLES, own, self._seed)
+                                        TRACKER_PARTICLES, own, self._seed, publish=False)
         self._filter.track(tick)
 
     def believed_pose(self, odometry: Pose2D) -> Pose2D | None:
