@@ -139,9 +139,10 @@ def record_run(run_dir: Path, label: str, results_dir: Path = RESULTS_DIR, machi
         "source": f"recorded from {run_dir} by `python -m benchmarks.report --record`" + _commit_note(),
         "notes": list(notes),
         "benchmarks": {name: {
-            "quick": False, "partial": False, "rows": [normalize_row(row) for row in report["rows"]],
+            "quick": False, "partial": bool(report.get("partial")),
+            "rows": [normalize_row(row) for row in report["rows"]],
             "context": {key: value for key, value in report.items()
-                        if key == "config" or (key not in ("rows", "quick")
+                        if key == "config" or (key not in ("rows", "quick", "partial")
                                                and isinstance(value, str | int | float | None))},
         } for name, report in reports.items()},
     }

@@ -524,7 +524,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{row.scenario:<40}{row.figure:<48}{row.measured:>10.3f}  {row.target:<10}{result}")
     args.output.mkdir(parents=True, exist_ok=True)
     (args.output / "skills.json").write_text(json.dumps(
-        {"quick": args.quick, "rows": [asdict(row) for row in rows]}, indent=2))
+        {"quick": args.quick, "partial": bool(args.only), "rows": [asdict(row) for row in rows]}, indent=2))
     return 0
 
 
