@@ -91,7 +91,7 @@ class Sequencer:
             self._motor_since_version = self._drive_version()
         else:
             self._perceptive[skill] = (goal, controller)
-        goal.announce(self._sim_time_s, EventKind.STARTED, f"{skill} started")
+        goal.announce(self._sim_time_s, EventKind.STARTED, f"{entry.description.title} started")
         return Activation(goal.snapshot(), preempted)
 
     def cancel(self, token: str, goal_id: str) -> GoalSnapshot:
@@ -195,6 +195,10 @@ class Sequencer:
         return None
 
     # ---- internals ---------------------------------------------------------------------------------
+
+    def start_pose_tracking(self) -> None:
+        """Builds the pose tracking against the floor plan now (else at the first tick)."""
+        self._pose_tracker()
 
     def _pose_tracker(self) -> PoseTracker | None:
         if not self._tracker_built and self.perception.floor_plan is not None:
@@ -304,5 +308,6 @@ def attach_sequencer(world: Any, registry: SkillRegistry | None = None, goals: G
     sequencer = Sequencer(info.spec, sensors, registry or default_registry(info.spec), goals or GoalBook(),
                           lambda: world.controller_token, lambda: world.drive_version)
     sequencer.perception.floor_plan = getattr(world, "scene", None)
+    sequencer.start_pose_tracking()  # before the loop runs: building it takes about 40 ms
     world.attach_autonomy(sequencer)
     return sequencer

@@ -74,7 +74,7 @@ class Localization(SkillController):
 
     def __init__(self, initial_x_m: float, initial_y_m: float, initial_theta_rad: float, initial_spread_m: float,
                  initial_spread_rad: float, particle_count: int, perception: Perception, seed: int = 7,
-                 publish: bool = True) -> None:
+                 publish: bool = True, field: np.ndarray | None = None) -> None:
         super().__init__()
         self._publish = publish  # False: nobody watches (the pose tracking), so no estimate is built for streams
         model = perception.environment
@@ -90,8 +90,8 @@ class Localization(SkillController):
             self._rng.normal(initial_theta_rad, initial_spread_rad, n),
         ])
         self._weights = np.full(n, 1.0 / n)
-        self._field: np.ndarray | None = None
-        self._field_version = -1
+        self._field: np.ndarray | None = field  # a field computed for this model already (the pose tracking's)
+        self._field_version = model.version if field is not None else -1
         self._field_s = -math.inf
         self._last_odometry: Pose2D | None = None
         self._estimate = Pose2D(initial_x_m, initial_y_m, initial_theta_rad)
@@ -155,6 +155,13 @@ class Localization(SkillController):
         if self._perception.localizer is self:
             self._perception.localizer = None
             self._perception.published_estimate = None
+
+    @property
+    def field(self) -> np.ndarray:
+        """The likelihood field of the map (distance to the surfaces), computed now if it was not yet."""
+        self._refresh_field(0.0)
+        assert self._field is not None
+        return self._field
 
     def _lookup(self) -> FieldLookup:
         assert self._field is not None

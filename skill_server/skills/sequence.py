@@ -96,9 +96,10 @@ def round_trip(goal_x_m: float, goal_y_m: float, speed_mps: float, max_error_m: 
                heading_tolerance_rad: float, timeout_s: float) -> StepSequence:
     """Go-to-goal out, go-to-goal back, orientation control to the start heading."""
     return StepSequence([
-        ("go_to_goal", lambda start: GoToGoal(goal_x_m, goal_y_m, speed_mps, max_error_m, timeout_s)),
-        ("return", lambda start: GoToGoal(start.x_m, start.y_m, speed_mps, max_error_m, timeout_s)),
-        ("orientation_control",
+        # Step names are read by people in the console's events ("step 2/3: back to the start").
+        ("out to the goal", lambda start: GoToGoal(goal_x_m, goal_y_m, speed_mps, max_error_m, timeout_s)),
+        ("back to the start", lambda start: GoToGoal(start.x_m, start.y_m, speed_mps, max_error_m, timeout_s)),
+        ("turning to the start heading",
          lambda start: OrientationControl(start.theta_rad, heading_tolerance_rad, 1.0, min(timeout_s, 60.0))),
     ])
 

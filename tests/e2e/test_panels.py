@@ -497,3 +497,7 @@ def test_a_wrong_guess_is_given_up_and_turning_finds_the_pose(page, live_server:
     events = localization.locator('[data-field="skill-events"]').text_content() or ""
     assert "the scans fit one place" in events, events
     localization.screenshot(path=str(ARTIFACTS_DIR / "localization-wrong-guess-found.png"))
+    page.locator('section[data-panel-id="map"]').scroll_into_view_if_needed()  # the map is fetched while seen
+    page.once("dialog", lambda dialog: dialog.accept())  # the robot is shared with the next tests: leave no map
+    page.get_by_role("button", name="Clear the map").click()
+    page.locator('skill-panel[data-skill="localization"][data-status="canceled"]').wait_for()

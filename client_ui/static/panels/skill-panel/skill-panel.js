@@ -154,7 +154,7 @@ export class SkillPanel extends PanelElement {
     const time = Number.isFinite(Number(event.sim_time_s)) ? `${Number(event.sim_time_s).toFixed(1)} s · ` : "";
     this.#events.prepend(h("li", { "data-event": event.kind }, `${time}${stateWords(event.kind)}`,
       event.message ? `: ${event.message}` : ""));
-    if (event.message) { // the newest news stays in sight: what a skill asks of the person is in its events
+    if (event.message && event.kind !== "started") { // the newest news stays in sight (the status says it started)
       this.#latest.textContent = `Latest: ${event.message}`;
       this.#latest.hidden = false;
     }
