@@ -28,6 +28,7 @@ from middleware.courses import routes as courses_routes
 from middleware.errors import register_error_handlers
 from middleware.experiment import routes as experiment_routes
 from middleware.extensions import csrf, login_manager, login_still_open
+from middleware.farm import setup as farm_setup
 from middleware.lab import routes as lab_routes
 from middleware.lab import skills as lab_skills
 from middleware.lab import sockets as lab_sockets
@@ -90,7 +91,7 @@ def _compose_robot_access(app: Flask) -> None:
     robots = registry.init_app(app)
     priority = with_guided_priority(bookings_services.priority_user_id)
     coordinator = access_coordinator.init_app(app, AccessHooks(priority, bookings_services.check_in))
-    practice_robots.init_app(app, robots)
+    practice_robots.init_app(app, robots, farm_setup.init_app(app))
     commands.init_app(app, robots, coordinator)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 import threading
@@ -86,9 +87,16 @@ def create_server(
     deadman_timeout_s: float = 0.4,
     robot_name: str = "lab-1",
     host: str = "127.0.0.1",
+    controller_token: str = "",
 ) -> SkillServer:
-    """Builds the world and the gRPC server, starts both, and returns them (port=0 picks a free port)."""
+    """Builds the world and the gRPC server, starts both, and returns them (port=0 picks a free port).
+
+    controller_token names the controller from the start: a robot restarted by its farm keeps obeying its
+    owner without anyone handing the token over again.
+    """
     robot = Robot.build(scene, name=robot_name, seed=seed, realtime=realtime, deadman_timeout_s=deadman_timeout_s)
+    if controller_token:
+        robot.set_controller(controller_token)
     server = grpc.server(futures.ThreadPoolExecutor(max_workers=MAX_WORKERS, thread_name_prefix="robot-rpc"))
     robot_pb2_grpc.add_RobotServicer_to_server(RobotService(robot), server)
     health_pool = futures.ThreadPoolExecutor(max_workers=2, thread_name_prefix="robot-health")
@@ -116,7 +124,13 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--fast", action="store_true", help="step as fast as possible instead of in real time")
     parser.add_argument("--deadman-s", type=float, default=0.4, help="deadman timeout in sim seconds (default 0.4)")
     parser.add_argument("--name", default="lab-1", help="robot name (default lab-1)")
+    parser.add_argument("--parent-pid", type=int, default=0,
+                        help="stop when this process is no longer the parent (a farm's actor that died)")
     return parser.parse_args(argv)
+
+
+# Read from the environment, not the command line, so other users of the host cannot read it off `ps`.
+CONTROLLER_TOKEN_VARIABLE = "TELELAB_CONTROLLER_TOKEN"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -131,6 +145,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             deadman_timeout_s=args.deadman_s,
             robot_name=args.name,
             host=args.host,
+            controller_token=os.environ.get(CONTROLLER_TOKEN_VARIABLE, ""),
         )
     except (RobotError, OSError) as error:
         print(f"skill server: {error}", file=sys.stderr, flush=True)
@@ -147,6 +162,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         flush=True,
     )
     while not stop_requested.wait(0.5):
-        pass
+        if args.parent_pid and os.getppid() != args.parent_pid:
+            break
     running.stop()
     return 0

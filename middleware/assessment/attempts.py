@@ -23,11 +23,12 @@ from sqlalchemy.orm import Session
 from middleware.accounts.services import forbidden
 from middleware.assessment.bank import questions_of
 from middleware.assessment.grading import ItemResult, grade_question
-from middleware.assessment.policy import as_utc, get_attempt, get_exam, student_course
+from middleware.assessment.policy import get_attempt, get_exam, student_course
 from middleware.assessment.trace_grading import MAX_TRACE_SAMPLES, grade_task
 from middleware.errors import Refused
 from middleware.locking import lock_user, rows_matched
 from middleware.models import User
+from middleware.models.accounts import as_utc
 from middleware.models.assessment import Attempt, Exam
 
 MAX_ANSWER_CHARS = 4000

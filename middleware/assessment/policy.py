@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from datetime import UTC, datetime
-
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -12,11 +10,6 @@ from middleware.courses.services import get_course, managed_course
 from middleware.errors import Refused
 from middleware.models import Course, CourseMembership, Role, User
 from middleware.models.assessment import Attempt, Exam
-
-
-def as_utc(moment: datetime) -> datetime:
-    """moment as an aware UTC datetime (SQLite hands back naive ones)."""
-    return moment.replace(tzinfo=UTC) if moment.tzinfo is None else moment.astimezone(UTC)
 
 
 def teaching_course(session: Session, actor: User, course_id: int) -> Course:

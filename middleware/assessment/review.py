@@ -13,10 +13,11 @@ from sqlalchemy.orm import Session
 
 from middleware.assessment.attempts import _items, settle, settle_due
 from middleware.assessment.bank import list_exams, managed_exam, question_dict, questions_of
-from middleware.assessment.policy import as_utc, may_teach, readable_attempt, teaching_course
+from middleware.assessment.policy import may_teach, readable_attempt, teaching_course
 from middleware.courses.schemas import csv_safe
 from middleware.errors import Refused
 from middleware.models import CourseMembership, User
+from middleware.models.accounts import as_utc
 from middleware.models.assessment import Attempt, AttemptReview, Exam, Question
 
 

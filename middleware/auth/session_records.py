@@ -19,6 +19,7 @@ from sqlalchemy import Connection, event, inspect, select, update
 from sqlalchemy.orm import Session
 
 from middleware.models import LoginSession, User
+from middleware.models.accounts import as_utc
 
 RECHECK_S = 1.0
 # last_seen_at is written at most this often per session (a write per request would serialise SQLite).
@@ -41,9 +42,6 @@ def _key_hash(key: str) -> str:
     return hashlib.sha256(key.encode()).hexdigest()
 
 
-def _as_utc(moment: datetime) -> datetime:
-    return moment.replace(tzinfo=UTC) if moment.tzinfo is None else moment.astimezone(UTC)
-
 
 def open_session(session: Session, user_id: int, now: datetime) -> str:
     """Records a new login of user_id and returns the key its cookie carries; the caller commits."""
@@ -63,8 +61,8 @@ def is_open(session: Session, key: str, user_id: int, limits: SessionLimits, now
     row = session.scalar(select(LoginSession).where(LoginSession.key_hash == digest))
     if row is None or row.user_id != user_id or row.ended_at is not None:
         return _forget(digest)
-    last_seen = _as_utc(row.last_seen_at)
-    if now >= _as_utc(row.created_at) + limits.lifetime or now >= last_seen + limits.idle:
+    last_seen = as_utc(row.last_seen_at)
+    if now >= as_utc(row.created_at) + limits.lifetime or now >= last_seen + limits.idle:
         return _forget(digest)
     if now - last_seen >= TOUCH_EVERY:
         row.last_seen_at = now

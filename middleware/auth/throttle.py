@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from datetime import UTC, datetime, timedelta
+from datetime import datetime, timedelta
 
 from sqlalchemy import ColumnElement, and_, delete, func, select
 from sqlalchemy.orm import Session
 
 from middleware.models import LoginFailure
+from middleware.models.accounts import as_utc
 
 WINDOW = timedelta(hours=1)
 KEEP_FAILURES = timedelta(days=1)
@@ -63,9 +64,6 @@ class Throttle:
                 "last_failure_at": stamp(self.last_failure_at), "blocked_until": stamp(self.blocked_until)}
 
 
-def _as_utc(moment: datetime) -> datetime:
-    return moment.replace(tzinfo=UTC) if moment.tzinfo is None else moment.astimezone(UTC)
-
 
 def normalise_username(username: str) -> str:
     """The form a username is counted under (so 'Ada ' and 'ada' share one count)."""
@@ -78,7 +76,7 @@ def normalise_address(address: str) -> str:
 
 
 def _blocked_until(failures: int, last: datetime, rule: DelayRule, now: datetime) -> datetime | None:
-    until = _as_utc(last) + rule.delay_after(failures)
+    until = as_utc(last) + rule.delay_after(failures)
     return until if until > now else None
 
 
@@ -122,11 +120,11 @@ def list_throttles(session: Session, now: datetime) -> list[Throttle]:
     addresses = session.execute(
         select(LoginFailure.address, func.count(), func.max(LoginFailure.at)).where(recent)
         .group_by(LoginFailure.address).having(func.count() >= PER_ADDRESS.free_failures)).all()
-    throttles = [Throttle(name, place, count, _as_utc(last),
+    throttles = [Throttle(name, place, count, as_utc(last),
                           _blocked_until(count, last, PER_ACCOUNT_AND_ADDRESS, now))
                  for name, place, count, last in pairs]
     throttles.sort(key=lambda t: (-t.failures, t.username or "", t.address))
-    by_address = [Throttle(None, place, count, _as_utc(last), _blocked_until(count, last, PER_ADDRESS, now))
+    by_address = [Throttle(None, place, count, as_utc(last), _blocked_until(count, last, PER_ADDRESS, now))
                   for place, count, last in addresses]
     return throttles + sorted(by_address, key=lambda t: (-t.failures, t.address))
 

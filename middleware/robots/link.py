@@ -84,6 +84,7 @@ class RobotLink:
         self.localization = FanoutHub(f"{name}-localization", self._open_localization, pack_localization,
                                       _cancel_call)
         self._skills: list[robot_pb2.SkillDescription] | None = None
+        self.unreachable_since: float | None = None  # monotonic time of the first failed call in a row
 
     def info(self, refresh: bool = False, max_age_s: float | None = None) -> robot_pb2.RobotInfo:
         """The robot's description (cached once fetched; asked again when refresh, or older than max_age_s)."""
@@ -206,14 +207,19 @@ class RobotLink:
 
     def _call(self, method, request):
         try:
-            return method(request, timeout=self.rpc_timeout_s)
+            reply = method(request, timeout=self.rpc_timeout_s)
         except grpc.RpcError as error:
-            raise _translate(error) from None
+            translated = _translate(error)
+            if isinstance(translated, RobotUnavailable) and self.unreachable_since is None:
+                self.unreachable_since = time.monotonic()
+            raise translated from None
         except ValueError:
             if not self._closed:
                 raise
             # A handler still running while the app shuts down, such as a driver's parting stop.
             raise RobotUnavailable(f"The link to {self.name} is closed.") from None
+        self.unreachable_since = None
+        return reply
 
 
 _REFUSAL_CODES = {

@@ -6,6 +6,7 @@ middleware starts a skill server.
 
 from __future__ import annotations
 
+import os
 import re
 import signal
 import subprocess
@@ -20,6 +21,7 @@ from grpc_health.v1 import health_pb2, health_pb2_grpc
 LISTENING_LINE = re.compile(r"listening on (?P<address>\S+:\d+)")
 START_TIMEOUT_S = 60.0
 RESTART_PAUSE_S = 1.0
+CONTROLLER_TOKEN_VARIABLE = "TELELAB_CONTROLLER_TOKEN"  # skill_server/server.py reads it
 
 
 class SkillServerStartError(RuntimeError):
@@ -38,6 +40,9 @@ class SkillServerProcess:
     scene: str
     restart: bool = True
     echo: bool = True
+    controller_token: str = ""  # obeyed from the start, and again after a restart
+    host: str = "127.0.0.1"  # the address it listens on
+    exit_with_parent: bool = False  # the server stops when this process dies (a farm actor killed)
     address: str = ""
     process: subprocess.Popen[str] | None = None
     stopping: bool = False
@@ -47,10 +52,13 @@ class SkillServerProcess:
     def start(self, port: int = 0) -> None:
         """Starts the process and waits for the line that gives its address."""
         command = [sys.executable, "-m", "skill_server", "--port", str(port), "--name", self.name,
-                   "--scene", self.scene]
+                   "--scene", self.scene, "--host", self.host]
+        if self.exit_with_parent:
+            command += ["--parent-pid", str(os.getpid())]
         # A new session: Ctrl-C reaches only the parent, which then stops the children in order.
+        environment = {**os.environ, CONTROLLER_TOKEN_VARIABLE: self.controller_token}
         self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                        start_new_session=True)
+                                        start_new_session=True, env=environment)
         deadline = time.monotonic() + START_TIMEOUT_S
         assert self.process.stdout is not None
         while time.monotonic() < deadline:

@@ -1,8 +1,9 @@
-"""Starts, tracks and stops the personal practice robots of this process.
+"""Starts, finds and stops the learners' practice robots: simulated robots on the farm, one per user.
 
-One PracticeManager per app and process: the robots it starts are children of this process and their
-owners' tokens live in its memory. A deployment with several worker processes would need the robots'
-addresses and tokens in the database (or one process owning the robots); `telelab up` runs one process.
+Each practice robot is a row of personal_robots (name, owner, the owner's controller token, address) and a
+robot on the farm (middleware/farm). Any web worker finds a practice robot by name through the table and
+reaches it through its own link, so the robots do not belong to the process that started them. The token is
+given to the robot when it starts and again by the farm after a restart, so nobody else can ever control it.
 
 The robot registry resolves `practice-...` names through the manager for their owners only, so a practice
 robot opens in the lab console (/lab/<name>) with every panel, and every robot page, API and channel
@@ -20,33 +21,40 @@ import time
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
+from datetime import datetime, timedelta
 
 from flask import Flask, current_app
+from sqlalchemy import delete, func, select
+from sqlalchemy.exc import DBAPIError, IntegrityError
+from sqlalchemy.orm import Session
 
-from middleware.access.commands import hand_over
 from middleware.config import ConfigError
 from middleware.errors import Refused
+from middleware.farm.base import FarmFull, FarmUnavailable, RobotFarm, RobotSpec
+from middleware.models.accounts import as_utc, utc_now
+from middleware.models.farm import PersonalRobotRecord
 from middleware.robots.link import RobotLink
-from middleware.robots.processes import SkillServerProcess, SkillServerStartError
 from middleware.robots.registry import PersonalRobot, RobotRegistry
 
 log = logging.getLogger(__name__)
 _EXTENSION_KEY = "telelab.practice"
-DEFAULT_CAP = 4
 DEFAULT_IDLE_S = 900.0
 PRACTICE_PREFIX = "practice-"
 PLAIN_USERNAME = re.compile(r"^[a-z0-9][a-z0-9_-]{0,22}$")  # fits the 32-character robot names as it is
+TOUCH_EVERY_S = 20.0  # a use is written to the table at most this often per robot and process
+STARTING_FOR_AT_MOST_S = 300.0  # a row without an address older than this is a start that never finished
+REFIND_AFTER_S = 1.0  # a robot unreachable this long is looked up on the farm again (it may have moved)
 
 
 class PracticeCapReached(Refused):
-    """Every practice slot is taken (429); the message says how many and what to do."""
+    """Every practice slot the lab allows is taken (429); the message says how many and what to do."""
 
     def __init__(self, message: str) -> None:
         super().__init__(429, "practice_cap_reached", message)
 
 
 class PracticeStartFailed(Refused):
-    """The practice robot's skill server did not start, or is starting already (503)."""
+    """The practice robot did not start, or is starting already (503)."""
 
     def __init__(self, message: str) -> None:
         super().__init__(503, "practice_start_failed", message)
@@ -57,23 +65,15 @@ def watched(link: RobotLink) -> bool:
     return any(hub.viewer_count > 0 for hub in (link.camera, link.telemetry, link.localization))
 
 
-@dataclass
+@dataclass(frozen=True)
 class PracticeRobot:
-    """One learner's robot: the process, the link, the owner's controller token (for the robot's whole life:
-    nobody else can ever control it) and the last use."""
+    """One learner's running robot: its name, owner, this process's link to it and the owner's token."""
 
     name: str
     owner_id: int
-    process: SkillServerProcess
+    username: str
     link: RobotLink
     token: str
-    started_at: float
-    last_used_at: float
-    username: str = ""
-
-    def touch(self, now: float) -> None:
-        """Records a use, which keeps the robot from being stopped as idle."""
-        self.last_used_at = now
 
 
 def practice_name(username: str, owner_id: int) -> str:
@@ -87,53 +87,52 @@ def practice_name(username: str, owner_id: int) -> str:
     return f"{PRACTICE_PREFIX}_{owner_id}"
 
 
-def read_limits(environ: dict[str, str] | None = None) -> tuple[int, float]:
-    """TELELAB_PRACTICE_CAP and TELELAB_PRACTICE_IDLE_S, checked; the errors name the setting."""
+def read_limits(environ: dict[str, str] | None = None) -> tuple[int | None, float]:
+    """TELELAB_PRACTICE_CAP (optional: none means as many as the farm holds) and TELELAB_PRACTICE_IDLE_S."""
     env = os.environ if environ is None else environ
-    raw_cap, raw_idle = env.get("TELELAB_PRACTICE_CAP", str(DEFAULT_CAP)), env.get("TELELAB_PRACTICE_IDLE_S",
-                                                                                   str(DEFAULT_IDLE_S))
-    try:
-        cap = int(raw_cap)
-    except ValueError:
-        raise ConfigError(f"TELELAB_PRACTICE_CAP must be a whole number, not {raw_cap!r}.") from None
+    raw_cap, raw_idle = env.get("TELELAB_PRACTICE_CAP", ""), env.get("TELELAB_PRACTICE_IDLE_S", str(DEFAULT_IDLE_S))
+    cap = None
+    if raw_cap.strip():
+        try:
+            cap = int(raw_cap)
+        except ValueError:
+            raise ConfigError(f"TELELAB_PRACTICE_CAP must be a whole number, not {raw_cap!r}.") from None
+        if not 0 <= cap <= 10_000:
+            raise ConfigError("TELELAB_PRACTICE_CAP must be between 0 and 10000.")
     try:
         idle_s = float(raw_idle)
     except ValueError:
         raise ConfigError(f"TELELAB_PRACTICE_IDLE_S must be a number of seconds, not {raw_idle!r}.") from None
-    if not 0 <= cap <= 64:
-        raise ConfigError("TELELAB_PRACTICE_CAP must be between 0 and 64.")
     if not 5 <= idle_s <= 86400:
         raise ConfigError("TELELAB_PRACTICE_IDLE_S must be between 5 and 86400 seconds.")
     return cap, idle_s
 
 
 class PracticeManager:
-    """The practice robots of this process: at most `cap` at once, each stopped after `idle_s` unused."""
+    """The lab's practice robots: as many as the farm holds (or `cap`), each stopped after `idle_s` unused."""
 
-    def __init__(self, cap: int, idle_s: float, rpc_timeout_s: float = 1.0, scene: str = "lab",
-                 clock: Callable[[], float] = time.monotonic) -> None:
-        self.cap, self.idle_s, self.scene = cap, idle_s, scene
+    def __init__(self, farm: RobotFarm, sessions: Callable[[], Session], idle_s: float, cap: int | None = None,
+                 rpc_timeout_s: float = 1.0, scene: str = "lab", clock: Callable[[], datetime] = utc_now) -> None:
+        self.farm, self.cap, self.idle_s, self.scene = farm, cap, idle_s, scene
+        self._sessions = sessions
         self._rpc_timeout_s = rpc_timeout_s
         self._clock = clock
-        self._robots: dict[int, PracticeRobot] = {}
-        self._starting: set[int] = set()
+        self._links: dict[str, RobotLink] = {}
+        self._touched_at: dict[str, float] = {}
+        self._refound_at: dict[str, float] = {}
         self._lock = threading.Lock()
         self._stop = threading.Event()
-        self._reaper: threading.Thread | None = None
+        self._keeper: threading.Thread | None = None
 
     def get(self, owner_id: int) -> PracticeRobot | None:
         """owner_id's running practice robot, if any (and counts as a use)."""
-        robot = self._robots.get(owner_id)
-        if robot is not None:
-            robot.touch(self._clock())
-        return robot
+        return self._running(PersonalRobotRecord.owner_id == owner_id)
 
     def by_name(self, name: str) -> PracticeRobot | None:
         """The running practice robot called name, whoever owns it (the caller checks the owner)."""
-        robot = next((r for r in list(self._robots.values()) if r.name == name), None)
-        if robot is not None:
-            robot.touch(self._clock())
-        return robot
+        if not name.startswith(PRACTICE_PREFIX):
+            return None
+        return self._running(PersonalRobotRecord.name == name)
 
     def personal_robot(self, name: str) -> PersonalRobot | None:
         """The registry's view of the practice robot called name (its resolver)."""
@@ -143,118 +142,230 @@ class PracticeManager:
         return PersonalRobot(robot.link, f"Practice robot of {robot.username}", robot.owner_id, robot.token)
 
     def count(self) -> int:
-        """How many practice robots run or are starting now."""
-        with self._lock:
-            return len(self._robots) + len(self._starting)
+        """How many practice robots run or are starting now, in the whole lab."""
+        with self._sessions() as session:
+            return session.scalar(select(func.count()).select_from(PersonalRobotRecord)) or 0
+
+    def limit(self) -> int:
+        """How many practice robots may run at once: the cap if set, else what the farm holds."""
+        capacity = self.farm.capacity().robots
+        return capacity if self.cap is None else min(self.cap, capacity)
 
     def start(self, owner_id: int, username: str) -> PracticeRobot:
-        """owner_id's practice robot, started now if not running; PracticeCapReached when every slot is taken."""
-        with self._lock:
-            existing = self._robots.get(owner_id)
-            if existing is not None:
-                existing.touch(self._clock())
-                return existing
-            if owner_id in self._starting:
-                raise PracticeStartFailed("Your practice robot is starting already; wait a few seconds.")
-            if len(self._robots) + len(self._starting) >= self.cap:
-                raise PracticeCapReached(
-                    f"All {self.cap} practice robots are in use. Try again in a few minutes, "
-                    "or watch a lab robot in the meantime.")
-            self._starting.add(owner_id)
+        """owner_id's practice robot, started now if not running; refused when the lab or the farm is full."""
+        running = self.get(owner_id)
+        if running is not None:
+            return running
         name = practice_name(username, owner_id)
-        process = SkillServerProcess(name, self.scene)
+        token = secrets.token_urlsafe(32)
+        self._claim(name, owner_id, username, token)
         try:
-            process.serve()
-            link = RobotLink(name, process.address, self._rpc_timeout_s)
-            token = secrets.token_urlsafe(32)
-            if not hand_over(link, token):
-                link.close()
-                raise SkillServerStartError(f"{name} did not take its controller token.")
-        except SkillServerStartError as error:
-            process.stop()
-            with self._lock:
-                self._starting.discard(owner_id)
-            log.warning("practice robot %s did not start: %s", name, error)
+            robot = self.farm.start(RobotSpec(name, self.scene, token))
+        except (FarmFull, FarmUnavailable) as error:
+            self._release(name)
+            log.warning("practice robot %s did not start: %s", name, error.message)
+            if isinstance(error, FarmFull):
+                raise PracticeCapReached(error.message) from None
             raise PracticeStartFailed("Your practice robot did not start. Try again in a moment.") from None
-        now = self._clock()
-        robot = PracticeRobot(name, owner_id, process, link, token, now, now, username=username)
-        with self._lock:
-            self._starting.discard(owner_id)
-            self._robots[owner_id] = robot
-        self.start_reaper()
-        return robot
+        except BaseException:
+            self._release(name)
+            raise
+        with self._sessions() as session:
+            record = session.get(PersonalRobotRecord, name)
+            if record is None:  # stopped by another request while it started
+                self.farm.stop(name)
+                raise PracticeStartFailed("Your practice robot was stopped while it started. Start it again.")
+            record.address = robot.address
+            session.commit()
+        self.start_keeper()
+        started = self.get(owner_id)
+        if started is None:
+            raise PracticeStartFailed("Your practice robot was stopped while it started. Start it again.")
+        return started
 
     def stop(self, owner_id: int) -> bool:
         """Stops owner_id's practice robot; False when there was none."""
-        with self._lock:
-            robot = self._robots.pop(owner_id, None)
-        if robot is None:
-            return False
-        robot.link.close()
-        robot.process.stop()
+        with self._sessions() as session:
+            record = session.scalar(select(PersonalRobotRecord).where(PersonalRobotRecord.owner_id == owner_id))
+            if record is None:
+                return False
+            name = record.name
+            session.delete(record)
+            session.commit()
+        self._forget(name)
+        self.farm.stop(name)
         return True
 
     def stop_idle(self) -> list[str]:
         """Stops every robot unused for idle_s (a console watching it counts as a use); returns their names."""
-        now = self._clock()
-        with self._lock:
-            robots = list(self._robots.values())
-        for robot in robots:
-            if watched(robot.link):
-                robot.touch(now)
-        with self._lock:
-            idle = [r for r in self._robots.values() if now - r.last_used_at >= self.idle_s]
-        for robot in idle:
-            log.info("stopping idle practice robot %s", robot.name)
-            self.stop(robot.owner_id)
-        return [r.name for r in idle]
+        for name, link in list(self._links.items()):
+            if watched(link):
+                self._touch(name, force=True)
+        cutoff = self._clock() - timedelta(seconds=self.idle_s)
+        with self._sessions() as session:
+            idle = session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.owner_id).where(
+                PersonalRobotRecord.last_used_at <= cutoff, PersonalRobotRecord.address != "")).all()
+        for name, owner_id in idle:
+            log.info("stopping idle practice robot %s", name)
+            self.stop(owner_id)
+        return [name for name, _ in idle]
 
     def shutdown(self) -> None:
-        """Stops the reaper and every practice robot (application shutdown)."""
-        self._stop.set()
-        for owner_id in list(self._robots):
+        """Stops every practice robot of the lab and the keeper (tests, and `telelab up` ending the lab)."""
+        self.close()
+        with self._sessions() as session:
+            owners = session.scalars(select(PersonalRobotRecord.owner_id)).all()
+        for owner_id in owners:
             self.stop(owner_id)
-        if self._reaper is not None:
-            self._reaper.join(5)
 
-    def start_reaper(self) -> None:
-        """Checks for idle robots in the background."""
+    def close(self) -> None:
+        """This process lets go: the keeper stops and the links close; the robots run on for other workers."""
+        self._stop.set()
+        if self._keeper is not None and self._keeper is not threading.current_thread():
+            self._keeper.join(5)
+        for name in list(self._links):
+            self._forget(name)
+
+    def start_keeper(self) -> None:
+        """Stops idle robots in the background."""
         with self._lock:
-            if self._reaper is not None or self._stop.is_set():
+            if self._keeper is not None or self._stop.is_set():
                 return
-            self._reaper = threading.Thread(target=self._reap_forever, name="practice-reaper", daemon=True)
-            self._reaper.start()
+            self._keeper = threading.Thread(target=self._keep_forever, name="practice-keeper", daemon=True)
+            self._keeper.start()
 
-    def _reap_forever(self) -> None:
+    def forget_lost(self) -> list[str]:
+        """Removes the rows of robots the farm no longer runs (the local farm's robots end with their process;
+        a start that never finished); returns their names."""
+        stale_start = self._clock() - timedelta(seconds=STARTING_FOR_AT_MOST_S)
+        with self._sessions() as session:
+            records = session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.address,
+                                             PersonalRobotRecord.started_at)).all()
+        lost = [name for name, address, started_at in records
+                if (address and self.farm.find(name) is None)
+                or (not address and as_utc(started_at) < stale_start)]
+        for name in lost:
+            self._release(name)
+        return lost
+
+    def _running(self, where) -> PracticeRobot | None:
+        with self._sessions() as session:
+            record = session.scalar(select(PersonalRobotRecord).where(where))
+            if record is None or not record.address:
+                return None
+            name, owner_id, username, token, address = (record.name, record.owner_id, record.owner_name,
+                                                         record.token, record.address)
+        link = self._link(name, address)
+        if link.unreachable_since is not None and time.monotonic() - link.unreachable_since >= REFIND_AFTER_S:
+            link = self._refind(name, link)
+        self._touch(name)
+        return PracticeRobot(name, owner_id, username, link, token)
+
+    def _link(self, name: str, address: str) -> RobotLink:
+        with self._lock:
+            link = self._links.get(name)
+            if link is not None and link.address == address:
+                return link
+            self._links[name] = RobotLink(name, address, self._rpc_timeout_s)
+        if link is not None:
+            link.close()
+        return self._links[name]
+
+    def _refind(self, name: str, link: RobotLink) -> RobotLink:
+        """Asks the farm where a robot that stopped answering is now (a restart may have moved it)."""
+        now = time.monotonic()
+        if now - self._refound_at.get(name, -1e9) < REFIND_AFTER_S:
+            return link
+        self._refound_at[name] = now
+        try:
+            robot = self.farm.find(name)
+        except FarmUnavailable:
+            return link
+        if robot is None or robot.address == link.address:
+            return link
+        with self._sessions() as session:
+            record = session.get(PersonalRobotRecord, name)
+            if record is not None:
+                record.address = robot.address
+                session.commit()
+        return self._link(name, robot.address)
+
+    def _touch(self, name: str, force: bool = False) -> None:
+        now = time.monotonic()
+        if not force and now - self._touched_at.get(name, -1e9) < TOUCH_EVERY_S:
+            return
+        self._touched_at[name] = now
+        with self._sessions() as session:
+            record = session.get(PersonalRobotRecord, name)
+            if record is not None:
+                record.last_used_at = self._clock()
+                session.commit()
+
+    def _claim(self, name: str, owner_id: int, username: str, token: str) -> None:
+        """Writes the row that claims the name for owner_id, across workers; refuses when the lab is full."""
+        limit = self.limit()
+        if self.count() >= limit:
+            raise PracticeCapReached(f"All {limit} practice robots are in use. Try again in a few minutes, "
+                                     "or watch a lab robot in the meantime.")
+        now = self._clock()
+        with self._sessions() as session:
+            session.add(PersonalRobotRecord(name=name, owner_id=owner_id, owner_name=username, scene=self.scene,
+                                            token=token, address="", backend=self.farm.backend, started_at=now,
+                                            last_used_at=now))
+            try:
+                session.commit()
+            except IntegrityError:
+                raise PracticeStartFailed("Your practice robot is starting already; wait a few seconds.") from None
+
+    def _release(self, name: str) -> None:
+        with self._sessions() as session:
+            session.execute(delete(PersonalRobotRecord).where(PersonalRobotRecord.name == name))
+            session.commit()
+
+    def _forget(self, name: str) -> None:
+        with self._lock:
+            link = self._links.pop(name, None)
+        self._touched_at.pop(name, None)
+        if link is not None:
+            link.close()
+
+    def _keep_forever(self) -> None:
         interval_s = min(10.0, max(0.5, self.idle_s / 4))
         while not self._stop.wait(interval_s):
             try:
                 self.stop_idle()
-            except Exception:  # noqa: BLE001 - one failed stop must not end the reaper
+            except Exception:  # noqa: BLE001 - one failed stop must not end the keeper
                 log.exception("stopping idle practice robots failed")
 
 
 _managers: weakref.WeakSet[PracticeManager] = weakref.WeakSet()
 
 
-def _stop_all_at_exit() -> None:
+def _close_all_at_exit() -> None:
     for manager in _managers:
-        manager.shutdown()
+        manager.close()
 
 
-def init_app(app: Flask, registry: RobotRegistry) -> None:
-    """Creates app's manager from TELELAB_PRACTICE_CAP / TELELAB_PRACTICE_IDLE_S (or PRACTICE_* in config)."""
+def init_app(app: Flask, registry: RobotRegistry, farm: RobotFarm) -> None:
+    """Creates app's manager over farm, from TELELAB_PRACTICE_CAP / TELELAB_PRACTICE_IDLE_S (or PRACTICE_*)."""
     import atexit
 
+    from middleware.db import session_factory
+
     cap, idle_s = read_limits()
-    manager = PracticeManager(int(app.config.get("PRACTICE_CAP", cap)),
-                              float(app.config.get("PRACTICE_IDLE_S", idle_s)),
-                              float(app.config["ROBOT_RPC_TIMEOUT_S"]))
+    cap = app.config.get("PRACTICE_CAP", cap)
+    manager = PracticeManager(farm, session_factory(app), float(app.config.get("PRACTICE_IDLE_S", idle_s)),
+                              None if cap is None else int(cap), float(app.config["ROBOT_RPC_TIMEOUT_S"]))
     app.extensions[_EXTENSION_KEY] = manager
     registry.set_personal(PRACTICE_PREFIX, manager.personal_robot)
     if not _managers:
-        atexit.register(_stop_all_at_exit)  # practice robots are children: never leave them behind
+        atexit.register(_close_all_at_exit)
     _managers.add(manager)
+    try:
+        manager.forget_lost()
+    except (FarmUnavailable, DBAPIError) as error:  # no table yet (before `telelab db upgrade`), or farm away
+        log.info("practice robots not checked at start: %s", error.__class__.__name__)
+    manager.start_keeper()
 
 
 def practice_manager(app: Flask | None = None) -> PracticeManager:

@@ -31,7 +31,7 @@ def status_dict(user_id: int) -> dict[str, object]:
     robot = manager.get(user_id)
     return {"running": robot is not None, "name": robot.name if robot else None,
             "console_url": url_for("lab.console", robot_name=robot.name) if robot else None,
-            "in_use": manager.count(), "cap": manager.cap, "idle_stop_s": manager.idle_s}
+            "in_use": manager.count(), "cap": manager.limit(), "idle_stop_s": manager.idle_s}
 
 
 @blueprint.get("/practice")

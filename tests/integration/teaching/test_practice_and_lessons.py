@@ -4,37 +4,108 @@ from __future__ import annotations
 
 import json
 import subprocess
+from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
 import pytest
 
 from middleware.config import ConfigError
+from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.teaching.practice_robots import PracticeCapReached, PracticeManager, read_limits
 
 
-def test_the_cap_refuses_a_second_robot_and_idle_ones_are_stopped() -> None:
-    now = [0.0]
-    manager = PracticeManager(cap=1, idle_s=60, clock=lambda: now[0])
+def _users(engine, *names: str) -> list[int]:
+    from sqlalchemy.orm import sessionmaker
+
+    from middleware.auth.services import create_user
+
+    with sessionmaker(engine)() as session:
+        ids = [create_user(session, name, "student", "correct-horse-battery").id for name in names]
+        session.commit()
+    return ids
+
+
+@pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
+def test_the_cap_refuses_a_second_robot_and_idle_ones_are_stopped(engine) -> None:
+    from sqlalchemy.orm import sessionmaker
+
+    from middleware.farm.local import LocalProcessFarm
+
+    ann, bob = _users(engine, "ann", "bob")
+    now = [datetime(2026, 11, 25, 9, 0, tzinfo=UTC)]
+    farm = LocalProcessFarm()
+    manager = PracticeManager(farm, sessionmaker(engine), idle_s=60, cap=1, clock=lambda: now[0])
     try:
-        robot = manager.start(1, "ann")
+        robot = manager.start(ann, "ann")
         assert robot.name == "practice-ann" and manager.count() == 1
-        assert manager.start(1, "ann") is robot  # asking again answers the running one
+        assert manager.start(ann, "ann").link is robot.link  # asking again answers the running one
         with pytest.raises(PracticeCapReached, match="All 1 practice robots are in use"):
-            manager.start(2, "bob")
+            manager.start(bob, "bob")
         assert robot.link.is_online()
-        now[0] = 30.0
+        now[0] += timedelta(seconds=30)
         assert manager.stop_idle() == []
-        now[0] = 61.0
+        now[0] += timedelta(seconds=31)
         assert manager.stop_idle() == ["practice-ann"]
-        assert robot.process.process is not None and robot.process.process.poll() is not None
+        assert farm.find("practice-ann") is None and not robot.link.is_online()
         assert manager.count() == 0
     finally:
         manager.shutdown()
+        farm.close()
+
+
+@pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
+def test_a_practice_robot_killed_is_restarted_and_obeys_its_owner_again(engine) -> None:
+    import os
+    import signal
+    import time
+
+    from sqlalchemy.orm import sessionmaker
+
+    from middleware.farm.local import LocalProcessFarm
+
+    (ann,) = _users(engine, "ann")
+    farm = LocalProcessFarm()
+    manager = PracticeManager(farm, sessionmaker(engine), idle_s=600)
+    try:
+        robot = manager.start(ann, "ann")
+        assert robot.link.drive(robot.token, 1, 0.1, 0.0).applied_sequence == 1
+        os.kill(farm._processes["practice-ann"].process.pid, signal.SIGKILL)
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            again = manager.get(ann)
+            try:
+                assert again is not None
+                if again.link.drive(again.token, 2, 0.1, 0.0).applied_sequence == 2:
+                    break
+            except RobotUnavailable:
+                time.sleep(0.3)
+        else:
+            pytest.fail("the restarted robot did not obey its owner's token within 30 s")
+        assert farm.find("practice-ann").restarted
+        with pytest.raises(CommandRefused):
+            again.link.drive("someone-else", 3, 0.1, 0.0)
+    finally:
+        manager.shutdown()
+        farm.close()
+
+
+@pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
+def test_a_full_farm_is_a_clear_refusal_and_nothing_is_left_claimed(engine) -> None:
+    from sqlalchemy.orm import sessionmaker
+
+    from middleware.farm.local import LocalProcessFarm
+
+    (ann,) = _users(engine, "ann")
+    manager = PracticeManager(LocalProcessFarm(capacity=0), sessionmaker(engine), idle_s=600)
+    with pytest.raises(PracticeCapReached, match="All 0 practice robots are in use"):
+        manager.start(ann, "ann")
+    assert manager.count() == 0
 
 
 @pytest.mark.parametrize(("environ", "name"), [
     ({"TELELAB_PRACTICE_CAP": "many"}, "TELELAB_PRACTICE_CAP"),
     ({"TELELAB_PRACTICE_CAP": "-1"}, "TELELAB_PRACTICE_CAP"),
+    ({"TELELAB_PRACTICE_CAP": "10001"}, "TELELAB_PRACTICE_CAP"),
     ({"TELELAB_PRACTICE_IDLE_S": "soon"}, "TELELAB_PRACTICE_IDLE_S"),
     ({"TELELAB_PRACTICE_IDLE_S": "1"}, "TELELAB_PRACTICE_IDLE_S"),
 ])

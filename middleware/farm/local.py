@@ -1,0 +1,84 @@
+"""The local farm: each robot a child process of this process, as many as this host's capacity.
+
+The embedded default for `make run`. Its robots are children of one process, so this farm serves one web
+process; a lab with several web workers or hosts uses the Ray farm.
+"""
+
+from __future__ import annotations
+
+import threading
+
+from middleware.farm.base import Capacity, FarmFull, FarmRobot, FarmUnavailable, RobotSpec
+from middleware.farm.costs import available_memory_mb, host_cores, robots_per_host
+from middleware.farm.load import CpuMeter, resident_mb
+from middleware.robots.processes import SkillServerProcess, SkillServerStartError
+
+HOST = "localhost"
+
+
+class LocalProcessFarm:
+    """Robots as child processes, restarted when they die; refuses beyond the capacity measured at start."""
+
+    backend = "local"
+
+    def __init__(self, capacity: int | None = None) -> None:
+        self._capacity = robots_per_host(host_cores(), available_memory_mb()) if capacity is None else capacity
+        self._processes: dict[str, SkillServerProcess] = {}
+        self._starting: set[str] = set()
+        self._lock = threading.Lock()
+        self._meter = CpuMeter()
+
+    def start(self, spec: RobotSpec) -> FarmRobot:
+        with self._lock:
+            running = self._processes.get(spec.name)
+            if running is not None:
+                return self._describe(running)
+            if spec.name in self._starting:
+                raise FarmUnavailable(f"{spec.name} is starting already; wait a few seconds.")
+            if len(self._processes) + len(self._starting) >= self._capacity:
+                raise FarmFull(f"This host runs as many simulated robots as it can ({self._capacity}). "
+                               "Try again when a robot is stopped, or add a host to the lab's Ray farm.")
+            self._starting.add(spec.name)
+        process = SkillServerProcess(spec.name, spec.scene, echo=False, controller_token=spec.controller_token)
+        try:
+            process.serve()
+        except SkillServerStartError as error:
+            process.stop()
+            raise FarmUnavailable(f"{spec.name} did not start: {error}") from None
+        finally:
+            with self._lock:
+                self._starting.discard(spec.name)
+        with self._lock:
+            self._processes[spec.name] = process
+        return self._describe(process)
+
+    def find(self, name: str) -> FarmRobot | None:
+        process = self._processes.get(name)
+        return None if process is None else self._describe(process)
+
+    def stop(self, name: str) -> bool:
+        with self._lock:
+            process = self._processes.pop(name, None)
+        if process is None:
+            return False
+        process.stop()
+        return True
+
+    def robots(self) -> list[FarmRobot]:
+        return [self._describe(process) for process in list(self._processes.values())]
+
+    def capacity(self) -> Capacity:
+        with self._lock:
+            running = len(self._processes) + len(self._starting)
+        return Capacity(self._capacity, running, hosts=1)
+
+    def close(self) -> None:
+        for name in list(self._processes):
+            self.stop(name)
+
+    def _describe(self, process: SkillServerProcess) -> FarmRobot:
+        pid = process.process.pid if process.process is not None else None
+        return FarmRobot(process.name, process.scene, process.address, HOST, self.backend, node=HOST,
+                         restarted=process.restarts > 0,
+                         cpu_share=None if pid is None else self._meter.share(pid),
+                         memory_mb=None if pid is None else resident_mb(pid))
