@@ -1,0 +1,180 @@
+"""The Ray farm against a real local Ray cluster: a head and a second worker node, both on 127.0.0.1.
+
+Ray's own `ray.cluster_utils.Cluster` starts the two nodes (separate raylets, one GCS) in this machine;
+robots are real skill servers in real actors, and two real web processes share the farm and the database.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from middleware.farm.ray_farm import prepare_for
+
+prepare_for("127.0.0.1:0")  # before Ray is imported: keep the nodes on loopback
+
+from ray.cluster_utils import Cluster  # noqa: E402
+
+from middleware.farm.base import FarmUnavailable, RobotSpec  # noqa: E402
+from middleware.farm.ray_farm import ACTOR_PREFIX, NAMESPACE, RayFarm  # noqa: E402
+from middleware.robots.link import CommandRefused, RobotLink  # noqa: E402
+from tests.conftest import STUDENT_PASSWORD, LabClient  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def cluster() -> Iterator[Cluster]:
+    """A head node and a worker node, each with 2 CPUs, bound to 127.0.0.1."""
+    made = Cluster(initialize_head=True, head_node_args={
+        "num_cpus": 2, "node_ip_address": "127.0.0.1", "include_dashboard": False})
+    made.add_node(num_cpus=2, node_ip_address="127.0.0.1")
+    made.wait_for_nodes()
+    yield made
+    import ray
+
+    ray.shutdown()
+    made.shutdown()
+
+
+@pytest.fixture
+def farm(cluster: Cluster) -> Iterator[RayFarm]:
+    made = RayFarm(cluster.address)
+    yield made
+    for robot in made.robots():
+        made.stop(robot.name)
+
+
+def _drives(address: str, token: str, sequence: int) -> bool:
+    link = RobotLink("probe", address, rpc_timeout_s=2.0)
+    try:
+        return link.drive(token, sequence, 0.1, 0.0).applied_sequence == sequence
+    finally:
+        link.close()
+
+
+def test_robots_spread_over_both_nodes_and_obey_only_their_token(farm: RayFarm) -> None:
+    robots = [farm.start(RobotSpec(f"spread-{i}", "empty", f"token-{i}")) for i in range(4)]
+    assert len({robot.node for robot in robots}) == 2
+    assert all(robot.host == "127.0.0.1" and robot.address.startswith("127.0.0.1:") for robot in robots)
+    assert _drives(robots[0].address, "token-0", 1)
+    with pytest.raises(CommandRefused):
+        _drives(robots[0].address, "token-1", 2)
+    assert farm.start(RobotSpec("spread-0", "empty", "token-0")).address == robots[0].address  # the running one
+    capacity = farm.capacity()
+    assert capacity.hosts == 2 and capacity.running == 4 and capacity.robots > 4
+    assert sorted(robot.name for robot in farm.robots()) == [f"spread-{i}" for i in range(4)]
+    assert farm.stop("spread-3") and farm.find("spread-3") is None and not farm.stop("spread-3")
+
+
+def test_a_killed_robot_actor_is_restarted_and_obeys_its_controller_again(farm: RayFarm) -> None:
+    import ray
+
+    robot = farm.start(RobotSpec("phoenix", "empty", "owner-token"))
+    assert _drives(robot.address, "owner-token", 1)
+    ray.kill(ray.get_actor(ACTOR_PREFIX + "phoenix", namespace=NAMESPACE), no_restart=False)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        again = farm.find("phoenix")
+        if again is not None and again.restarted:
+            break
+        time.sleep(0.2)
+    else:
+        pytest.fail("the robot's actor was not restarted within 60 s")
+    assert _drives(again.address, "owner-token", 2)
+    with pytest.raises(CommandRefused):
+        _drives(again.address, "someone-else", 3)
+
+
+def test_an_unreachable_farm_is_a_clear_error() -> None:
+    with socket.socket() as unused:
+        unused.bind(("127.0.0.1", 0))
+        port = unused.getsockname()[1]
+    with pytest.raises(FarmUnavailable, match=f"127.0.0.1:{port} cannot be reached"):
+        RayFarm(f"127.0.0.1:{port}").start(RobotSpec("nowhere", "empty"))
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def _web_process(port: int, environment: dict[str, str], log: Path) -> subprocess.Popen[bytes]:
+    with log.open("wb") as output:  # the child keeps its own copy of the descriptor
+        return subprocess.Popen([sys.executable, "-m", "middleware.cli", "web", "--port", str(port)],
+                                env=environment, stdout=output, stderr=subprocess.STDOUT)
+
+
+def _wait_for(url_client: LabClient, process: subprocess.Popen[bytes], log: Path) -> None:
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        assert process.poll() is None, log.read_text()
+        try:
+            if url_client.request("GET", "/login")[0] == 200:
+                return
+        except OSError:
+            time.sleep(0.3)
+    pytest.fail("a web process did not serve within 60 s:\n" + log.read_text())
+
+
+def _json(client: LabClient, method: str, path: str, body: object | None = None) -> tuple[int, dict]:
+    headers = {"Content-Type": "application/json", "Accept": "application/json",
+               "X-CSRFToken": client.csrf_token("/teaching")}
+    from urllib.request import Request
+
+    request = Request(client.base_url + path, method=method, headers=headers,
+                      data=None if body is None else json.dumps(body).encode())
+    try:
+        with client._opener.open(request, timeout=120) as response:
+            return response.status, json.loads(response.read())
+    except Exception as error:  # noqa: BLE001 - 4xx/5xx are answers here
+        if not hasattr(error, "code"):
+            raise
+        return error.code, json.loads(error.read())
+
+
+def test_two_web_processes_find_and_drive_the_same_farm_robot(cluster: Cluster, tmp_path: Path) -> None:
+    from sqlalchemy.orm import sessionmaker
+
+    from middleware.auth.services import create_user
+    from middleware.db import make_engine, upgrade_to_head
+
+    database_url = f"sqlite:///{tmp_path / 'lab.sqlite3'}"
+    upgrade_to_head(database_url)
+    engine = make_engine(database_url)
+    with sessionmaker(engine)() as session:
+        create_user(session, "student1", "student", STUDENT_PASSWORD)
+        session.commit()
+    engine.dispose()
+    environment = {**os.environ, "TELELAB_DATABASE_URL": database_url, "TELELAB_SECRET_KEY": "same-for-both",
+                   "TELELAB_FARM": "ray", "TELELAB_RAY_ADDRESS": cluster.address, "TELELAB_ROBOTS": ""}
+    ports = [_free_port(), _free_port()]
+    logs = [tmp_path / f"web-{i}.log" for i in range(2)]
+    processes = [_web_process(port, environment, log) for port, log in zip(ports, logs, strict=True)]
+    clients = [LabClient(f"http://127.0.0.1:{port}") for port in ports]
+    try:
+        for client, process, log in zip(clients, processes, logs, strict=True):
+            _wait_for(client, process, log)
+            assert client.login() == 302
+        status, started = _json(clients[0], "POST", "/api/practice")
+        assert status == 201 and started["name"] == "practice-student1", started
+        status, seen = _json(clients[1], "GET", "/api/practice")
+        assert status == 200 and seen["running"] and seen["name"] == "practice-student1"
+        for client in clients:
+            status, ran = _json(client, "POST", "/api/practice/commands", {"command": {"stop": True}})
+            assert status == 202 and ran["robot"] == "practice-student1", ran
+        status, stopped = _json(clients[1], "DELETE", "/api/practice")
+        assert status == 200 and stopped["stopped"]
+        status, seen = _json(clients[0], "GET", "/api/practice")
+        assert status == 200 and not seen["running"]
+    finally:
+        for process in processes:
+            process.terminate()
+            process.wait(20)
