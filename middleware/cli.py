@@ -8,6 +8,7 @@ import sys
 from collections.abc import Sequence
 
 from middleware.auth.schemas import InvalidField
+from middleware.errors import Refused
 
 
 def _app(**overrides: object):
@@ -121,7 +122,48 @@ def cmd_up(args: argparse.Namespace) -> int:
     from middleware.lab_runner import run_lab
 
     return run_lab(host=args.host, port=args.port, robot_count=args.robots, scene=args.scene,
-                   course_robots=args.course_robots)
+                   course_robots=args.course_robots, farm=args.farm)
+
+
+def _farm_and_app():
+    from middleware.farm.setup import robot_farm
+
+    app = _app()
+    return robot_farm(app), app
+
+
+def cmd_farm_status(_args: argparse.Namespace) -> int:
+    """Prints the farm's hosts, capacity and robots with their load."""
+    from middleware.db import session_factory
+    from middleware.farm.report import status_lines
+
+    farm, app = _farm_and_app()
+    print("\n".join(status_lines(farm, session_factory(app))))
+    return 0
+
+
+def cmd_farm_stop(args: argparse.Namespace) -> int:
+    """Stops one robot of the farm (a practice robot's owner sees it stopped)."""
+    from middleware.teaching.practice_robots import practice_manager
+
+    farm, app = _farm_and_app()
+    if practice_manager(app).stop_named(args.name) or farm.stop(args.name):
+        print(f"stopped {args.name}")
+        return 0
+    print(f"error: the farm runs no robot called {args.name}", file=sys.stderr)
+    return 1
+
+
+def cmd_farm_drain(args: argparse.Namespace) -> int:
+    """Moves every robot off a Ray node and keeps new ones off it."""
+    farm, _app_ = _farm_and_app()
+    drain = getattr(farm, "drain", None)
+    if drain is None:
+        print("error: only the Ray farm has hosts to drain (TELELAB_FARM=ray)", file=sys.stderr)
+        return 1
+    moved = drain(args.node)
+    print(f"drained {args.node}: moved {', '.join(moved) if moved else 'no robot'}")
+    return 0
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
@@ -151,6 +193,9 @@ def build_parser() -> argparse.ArgumentParser:
     up.add_argument("--scene", default="lab", help="scene of the simulated robots (default lab)")
     up.add_argument("--no-course-robots", dest="course_robots", action="store_false",
                     help="do not start the experiment's robots course-a and course-b")
+    up.add_argument("--farm", choices=["local", "ray"], default=None,
+                    help="where practice robots run: child processes (local, the default) or a Ray cluster; "
+                         "ray starts one on 127.0.0.1 unless TELELAB_RAY_ADDRESS names one")
     up.set_defaults(handler=cmd_up)
 
     web = commands.add_parser("web", help="serve the middleware only (robots from TELELAB_ROBOTS)")
@@ -186,6 +231,17 @@ def build_parser() -> argparse.ArgumentParser:
     enable.add_argument("name")
     enable.set_defaults(handler=cmd_users_set_active, active=True)
 
+    farm = commands.add_parser("farm", help="the robot farm: status, stop a robot, drain a host")
+    farm_commands = farm.add_subparsers(dest="farm_command", required=True)
+    farm_commands.add_parser("status", help="hosts, capacity, robots and their load").set_defaults(
+        handler=cmd_farm_status)
+    stop = farm_commands.add_parser("stop", help="stop one robot")
+    stop.add_argument("name")
+    stop.set_defaults(handler=cmd_farm_stop)
+    drain = farm_commands.add_parser("drain", help="move every robot off a Ray node (its id from status)")
+    drain.add_argument("node")
+    drain.set_defaults(handler=cmd_farm_drain)
+
     bench = commands.add_parser("bench", help="measure response times, streaming and capacity")
     bench.add_argument("--quick", action="store_true", help="a short smoke run that asserts no timings")
     bench.add_argument("--output", default="bench-results", help="folder for the JSON and histograms")
@@ -202,6 +258,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args.handler(args))
+    except Refused as refusal:  # the farm unreachable, a node unknown: the sentence, not a traceback
+        print(f"error: {refusal.message}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         return 130
 

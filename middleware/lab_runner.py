@@ -73,7 +73,23 @@ def lab_robots(robot_count: int, scene: str, course_robots: bool = True) -> list
     return robots
 
 
-def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: bool = True) -> int:
+def choose_farm(farm: str | None) -> None:
+    """Sets TELELAB_FARM for the app; for a Ray farm with no TELELAB_RAY_ADDRESS, starts a local cluster."""
+    if farm is None:
+        return
+    os.environ["TELELAB_FARM"] = farm
+    if farm == "ray" and not os.environ.get("TELELAB_RAY_ADDRESS"):
+        from middleware.farm.ray_farm import start_local_cluster
+
+        try:
+            os.environ["TELELAB_RAY_ADDRESS"] = start_local_cluster()
+        except ImportError:
+            raise SkillServerStartError("The Ray farm needs Ray: pip install 'telelab[ray]'.") from None
+        print(f"robot farm: a local Ray cluster at {os.environ['TELELAB_RAY_ADDRESS']}", flush=True)
+
+
+def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: bool = True,
+            farm: str | None = None) -> int:
     """Starts skill servers, migrates the database, creates demo accounts, and serves until Ctrl-C or SIGTERM."""
     from middleware import create_app
     from middleware.db import upgrade_to_head
@@ -82,6 +98,7 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
     robots = lab_robots(robot_count, scene, course_robots)
     stop_on_termination_signals()
     try:
+        choose_farm(farm)
         for robot in robots:
             robot.serve()
             print(f"robot {robot.name}: skill server at {robot.address} (scene {robot.scene})", flush=True)

@@ -15,7 +15,7 @@ import logging
 import os
 import socket
 import threading
-from typing import Any
+from typing import Any, cast
 
 from middleware.farm.base import Capacity, FarmFull, FarmRobot, FarmUnavailable, RobotSpec
 from middleware.farm.costs import HEADLESS_ROBOT_CPU_SHARE, ROBOT_MEMORY_MB, robots_per_host
@@ -165,6 +165,26 @@ class RayFarm:
         return [{"host": node["NodeManagerAddress"], "cpus": node["Resources"].get("CPU", 0.0),
                  "node_id": node["NodeID"]} for node in self._ray().nodes() if node.get("Alive")]
 
+    def drain(self, node: str) -> list[str]:
+        """Takes node out of placement and moves its robots to the other nodes (Ray restarts each elsewhere);
+        the names of the robots moved. FarmUnavailable when the cluster refuses (an unknown node)."""
+        ray = self._ray()
+        from ray.core.generated import autoscaler_pb2
+
+        known = {entry["node_id"] for entry in self.nodes()}
+        if node not in known:
+            raise FarmUnavailable(f"The farm has no live node {node!r}; `telelab farm status` lists them.")
+        # The GCS call behind Ray's own `ray drain-node`: the node takes no new actors from now on.
+        accepted, why = ray._raylet.GcsClient(address=self.address).drain_node(
+            node, autoscaler_pb2.DrainNodeReason.Value("DRAIN_NODE_REASON_PREEMPTION"),  # type: ignore[attr-defined]
+            "telelab farm drain", 0)
+        if not accepted:
+            raise FarmUnavailable(f"The cluster did not drain {node}: {why}")
+        moved = [robot.name for robot in self.robots() if robot.node == node]
+        for name in moved:
+            ray.kill(ray.get_actor(ACTOR_PREFIX + name, namespace=NAMESPACE), no_restart=False)
+        return moved
+
     def close(self) -> None:
         with self._lock:
             if self._connected_pid == os.getpid():
@@ -191,7 +211,10 @@ class RayFarm:
                 return ray
             _check_reachable(self.address)
             prepare_for(self.address)
-            import ray
+            try:
+                import ray
+            except ImportError:
+                raise FarmUnavailable("This web host has no Ray; install it with pip install 'telelab[ray]'.") from None
 
             try:
                 ray.init(address=self.address, namespace=NAMESPACE, log_to_driver=False,
@@ -202,6 +225,19 @@ class RayFarm:
             self._actor_class = ray.remote(RobotActor)
             self._connected_pid = os.getpid()
             return ray
+
+
+def start_local_cluster() -> str:
+    """Starts a one-machine Ray cluster owned by this process, bound to 127.0.0.1; its head's address.
+
+    `telelab up --farm ray` uses it; a lab of several hosts starts its head with `ray start --head` instead.
+    """
+    prepare_for("127.0.0.1:0")
+    import ray
+
+    context = ray.init(_node_ip_address="127.0.0.1", include_dashboard=False, namespace=NAMESPACE,
+                       log_to_driver=False, logging_level=logging.WARNING)
+    return cast(Any, context).address_info["gcs_address"]  # a RayContext, typed as its base
 
 
 def _check_reachable(address: str) -> None:

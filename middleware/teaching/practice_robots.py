@@ -196,6 +196,12 @@ class PracticeManager:
         self.farm.stop(name)
         return True
 
+    def stop_named(self, name: str) -> bool:
+        """Stops the practice robot called name (an operator's `telelab farm stop`); False when there is none."""
+        with self._sessions() as session:
+            owner_id = session.scalar(select(PersonalRobotRecord.owner_id).where(PersonalRobotRecord.name == name))
+        return owner_id is not None and self.stop(owner_id)
+
     def stop_idle(self) -> list[str]:
         """Stops every robot unused for idle_s (a console watching it counts as a use); returns their names."""
         for name, link in list(self._links.items()):

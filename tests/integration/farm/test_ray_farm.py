@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import socket
 import subprocess
 import sys
@@ -92,6 +93,33 @@ def test_a_killed_robot_actor_is_restarted_and_obeys_its_controller_again(farm: 
         _drives(again.address, "someone-else", 3)
 
 
+def test_draining_a_node_moves_its_robots_to_the_other(cluster: Cluster) -> None:
+    """Runs on its own node, added and drained here, so the other tests keep both of theirs."""
+    spare = cluster.add_node(num_cpus=2, node_ip_address="127.0.0.1", resources={"spare": 1})
+    cluster.wait_for_nodes()
+    farm = RayFarm(cluster.address)
+    try:
+        robots = [farm.start(RobotSpec(f"drain-{i}", "empty", f"token-{i}")) for i in range(6)]
+        on_spare = [robot.name for robot in robots if robot.node == spare.node_id]
+        assert on_spare, "SPREAD placed no robot on the third node"
+        assert sorted(farm.drain(spare.node_id)) == sorted(on_spare)
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            now = {robot.name: robot for robot in farm.robots()}
+            if len(now) == 6 and all(robot.node != spare.node_id for robot in now.values()):
+                break
+            time.sleep(0.3)
+        else:
+            pytest.fail("the drained node's robots did not move within 60 s")
+        assert all(_drives(now[name].address, f"token-{name[-1]}", 1) for name in on_spare)
+        with pytest.raises(FarmUnavailable, match="no live node"):
+            farm.drain("0" * 56)
+    finally:
+        for robot in farm.robots():
+            farm.stop(robot.name)
+        cluster.remove_node(spare)
+
+
 def test_an_unreachable_farm_is_a_clear_error() -> None:
     with socket.socket() as unused:
         unused.bind(("127.0.0.1", 0))
@@ -140,6 +168,13 @@ def _json(client: LabClient, method: str, path: str, body: object | None = None)
         return error.code, json.loads(error.read())
 
 
+def _telelab(environment: dict[str, str], *args: str, code: int = 0) -> str:
+    done = subprocess.run([sys.executable, "-m", "middleware.cli", *args], env=environment, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == code, done.stdout + done.stderr
+    return done.stdout + done.stderr
+
+
 def test_two_web_processes_find_and_drive_the_same_farm_robot(cluster: Cluster, tmp_path: Path) -> None:
     from sqlalchemy.orm import sessionmaker
 
@@ -170,10 +205,14 @@ def test_two_web_processes_find_and_drive_the_same_farm_robot(cluster: Cluster, 
         for client in clients:
             status, ran = _json(client, "POST", "/api/practice/commands", {"command": {"stop": True}})
             assert status == 202 and ran["robot"] == "practice-student1", ran
-        status, stopped = _json(clients[1], "DELETE", "/api/practice")
-        assert status == 200 and stopped["stopped"]
+        status_report = _telelab(environment, "farm", "status")
+        assert "farm: ray, 2 host(s)" in status_report and re.search(r"practice-student1 +student1 +127\.0\.0\.1",
+                                                                       status_report), status_report
+        assert "stopped practice-student1" in _telelab(environment, "farm", "stop", "practice-student1")
         status, seen = _json(clients[0], "GET", "/api/practice")
         assert status == 200 and not seen["running"]
+        assert "no robot called practice-student1" in _telelab(environment, "farm", "stop", "practice-student1",
+                                                               code=1)
     finally:
         for process in processes:
             process.terminate()
