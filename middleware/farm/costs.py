@@ -10,10 +10,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-# Measured on the 2-core development machine (benchmarks/records/2026-11-25-s7-robot-farm): 32 headless robots
-# held a real-time factor of 1.0 at 6-7 % of a core and 91 MB each. The share is rounded up.
-HEADLESS_ROBOT_CPU_SHARE = 0.07
+# Measured by benchmarks/farm.py on the 2-core development machine (its record in benchmarks/results/): an idle
+# headless robot used 4.6-4.8 % of a core and 96 MB (its skill server), 238 MB as a Ray actor with it. Rounded up.
+HEADLESS_ROBOT_CPU_SHARE = 0.05
 ROBOT_MEMORY_MB = 100
+RAY_ROBOT_MEMORY_MB = 250
 # Left to the web tier, the database and the operating system on a host that also runs robots.
 HOST_RESERVE_CPU_SHARE = 0.2
 HOST_RESERVE_MEMORY_FRACTION = 0.2

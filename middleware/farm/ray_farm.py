@@ -18,7 +18,7 @@ import threading
 from typing import Any, cast
 
 from middleware.farm.base import Capacity, FarmFull, FarmRobot, FarmUnavailable, RobotSpec
-from middleware.farm.costs import HEADLESS_ROBOT_CPU_SHARE, ROBOT_MEMORY_MB, robots_per_host
+from middleware.farm.costs import HEADLESS_ROBOT_CPU_SHARE, RAY_ROBOT_MEMORY_MB, robots_per_host
 from middleware.farm.load import CpuMeter, cpu_seconds, resident_mb
 from middleware.robots.processes import SkillServerProcess, SkillServerStartError
 
@@ -105,7 +105,7 @@ class RayFarm:
                            f"({capacity.robots}). Try again when a robot is stopped, or add a robot host.")
         actor = self._actor_class.options(
             name=ACTOR_PREFIX + spec.name, namespace=NAMESPACE, lifetime="detached", max_restarts=-1,
-            num_cpus=HEADLESS_ROBOT_CPU_SHARE, memory=ROBOT_MEMORY_MB * 2**20, scheduling_strategy="SPREAD",
+            num_cpus=HEADLESS_ROBOT_CPU_SHARE, memory=RAY_ROBOT_MEMORY_MB * 2**20, scheduling_strategy="SPREAD",
             get_if_exists=True,
         ).remote(spec.name, spec.scene, spec.controller_token)
         try:
@@ -157,7 +157,7 @@ class RayFarm:
         nodes = [node for node in ray.nodes() if node.get("Alive")]
         # Ray's "memory" resource is what it lets tasks use already (the host's reserve is taken out).
         robots = sum(min(robots_per_host(node["Resources"].get("CPU", 0.0), float("inf")),
-                         int(node["Resources"].get("memory", 0.0) / 2**20 / ROBOT_MEMORY_MB)) for node in nodes)
+                         int(node["Resources"].get("memory", 0.0) / 2**20 / RAY_ROBOT_MEMORY_MB)) for node in nodes)
         return Capacity(robots, len(self._names()), hosts=len(nodes))
 
     def nodes(self) -> list[dict[str, Any]]:

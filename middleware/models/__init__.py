@@ -11,7 +11,7 @@ from middleware.models.bookings import Booking
 from middleware.models.chat import ChatMessage
 from middleware.models.courses import Course, CourseMembership, Invitation, LoginFailure
 from middleware.models.experiment import Trial, VideoDelay  # noqa: F401
-from middleware.models.farm import PersonalRobotRecord  # noqa: F401
+from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord  # noqa: F401
 from middleware.models.preferences import UserPreference
 from middleware.models.robots import Robot
 from middleware.models.teaching import GuidedSession, Lesson, Tour  # noqa: F401

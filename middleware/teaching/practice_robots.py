@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 
 from flask import Flask, current_app
-from sqlalchemy import delete, func, select
+from sqlalchemy import delete, func, or_, select
 from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.orm import Session
 
@@ -32,7 +32,7 @@ from middleware.config import ConfigError
 from middleware.errors import Refused
 from middleware.farm.base import FarmFull, FarmUnavailable, RobotFarm, RobotSpec
 from middleware.models.accounts import as_utc, utc_now
-from middleware.models.farm import PersonalRobotRecord
+from middleware.models.farm import ClassSession, PersonalRobotRecord
 from middleware.robots.link import RobotLink
 from middleware.robots.registry import PersonalRobot, RobotRegistry
 
@@ -151,14 +151,19 @@ class PracticeManager:
         capacity = self.farm.capacity().robots
         return capacity if self.cap is None else min(self.cap, capacity)
 
-    def start(self, owner_id: int, username: str) -> PracticeRobot:
-        """owner_id's practice robot, started now if not running; refused when the lab or the farm is full."""
+    def start(self, owner_id: int, username: str, class_session_id: int | None = None) -> PracticeRobot:
+        """owner_id's practice robot, started now if not running; refused when the lab or the farm is full.
+
+        class_session_id: the robot is the student's in that class session (kept while it is open).
+        """
         running = self.get(owner_id)
         if running is not None:
+            if class_session_id is not None:
+                self._join_class(running.name, class_session_id)
             return running
         name = practice_name(username, owner_id)
         token = secrets.token_urlsafe(32)
-        self._claim(name, owner_id, username, token)
+        self._claim(name, owner_id, username, token, class_session_id)
         try:
             robot = self.farm.start(RobotSpec(name, self.scene, token))
         except (FarmFull, FarmUnavailable) as error:
@@ -203,14 +208,18 @@ class PracticeManager:
         return owner_id is not None and self.stop(owner_id)
 
     def stop_idle(self) -> list[str]:
-        """Stops every robot unused for idle_s (a console watching it counts as a use); returns their names."""
+        """Stops every robot unused for idle_s (a console watching it counts as a use; a robot of an open class
+        session is never idle); returns their names."""
         for name, link in list(self._links.items()):
             if watched(link):
                 self._touch(name, force=True)
         cutoff = self._clock() - timedelta(seconds=self.idle_s)
         with self._sessions() as session:
+            in_open_class = select(ClassSession.id).where(ClassSession.ended_at.is_(None))
             idle = session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.owner_id).where(
-                PersonalRobotRecord.last_used_at <= cutoff, PersonalRobotRecord.address != "")).all()
+                PersonalRobotRecord.last_used_at <= cutoff, PersonalRobotRecord.address != "",
+                or_(PersonalRobotRecord.class_session_id.is_(None),
+                    PersonalRobotRecord.class_session_id.not_in(in_open_class)))).all()
         for name, owner_id in idle:
             log.info("stopping idle practice robot %s", name)
             self.stop(owner_id)
@@ -307,7 +316,14 @@ class PracticeManager:
                 record.last_used_at = self._clock()
                 session.commit()
 
-    def _claim(self, name: str, owner_id: int, username: str, token: str) -> None:
+    def _join_class(self, name: str, class_session_id: int) -> None:
+        with self._sessions() as session:
+            record = session.get(PersonalRobotRecord, name)
+            if record is not None:
+                record.class_session_id = class_session_id
+                session.commit()
+
+    def _claim(self, name: str, owner_id: int, username: str, token: str, class_session_id: int | None) -> None:
         """Writes the row that claims the name for owner_id, across workers; refuses when the lab is full."""
         limit = self.limit()
         if self.count() >= limit:
@@ -317,7 +333,7 @@ class PracticeManager:
         with self._sessions() as session:
             session.add(PersonalRobotRecord(name=name, owner_id=owner_id, owner_name=username, scene=self.scene,
                                             token=token, address="", backend=self.farm.backend, started_at=now,
-                                            last_used_at=now))
+                                            last_used_at=now, class_session_id=class_session_id))
             try:
                 session.commit()
             except IntegrityError:

@@ -1,0 +1,165 @@
+"""The robot farm: how fast a class's robots start, what each costs, and the Ray farm's overhead.
+
+Run `python -m benchmarks.farm [--quick] [--output DIR]`: prints a table, writes DIR/farm.json.
+
+For each backend (local child processes; Ray, as a one-machine cluster on 127.0.0.1 started here), the
+same steps:
+- one robot started alone: the floor of every start figure;
+- a class start: N robots of the lab scene requested at once (one thread per student, as N students pressing
+  "Start" together) -> the time until each one answers SERVING (p50, max), for N = 10, 20, 30;
+- with the N robots running headless and nobody commanding them, over a 10 s window: each robot's real-time
+  factor (simulated seconds per wall second, read from its telemetry), its CPU share (its processes' CPU time,
+  /proc) and resident memory. Targets: real-time factor >= 0.95 for every robot while the farm admits them;
+  CPU share per robot <= the share Ray placement declares (middleware/farm/costs.py).
+The Ray rows are then divided by the local ones (start time, memory per robot): the farm's overhead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import threading
+import time
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import grpc
+
+from benchmarks.report import Measurement, print_table, write_json
+from middleware.farm.base import RobotFarm, RobotSpec
+from middleware.farm.costs import HEADLESS_ROBOT_CPU_SHARE, host_cores
+from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
+
+SCENE = "lab"
+WINDOW_S = 10.0
+SETTLE_S = 5.0
+
+
+def sim_clock(address: str) -> tuple[float, float]:
+    """(simulated seconds, wall seconds) of the robot now, from the first message of its telemetry."""
+    with grpc.insecure_channel(address) as channel:
+        stream = robot_pb2_grpc.RobotStub(channel).StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=1),
+                                                                   timeout=10)
+        message = next(iter(stream))
+        stream.cancel()
+    return message.sim_time_s, time.monotonic()
+
+
+def start_class(farm: RobotFarm, prefix: str, count: int) -> list[float]:
+    """Starts count robots at once; the seconds each took to serve."""
+    barrier = threading.Barrier(count)
+
+    def one(index: int) -> float:
+        barrier.wait()
+        started = time.monotonic()
+        farm.start(RobotSpec(f"{prefix}-{index}", SCENE, f"token-{index}"))
+        return time.monotonic() - started
+
+    with ThreadPoolExecutor(count) as pool:
+        return list(pool.map(one, range(count)))
+
+
+def measure_running(farm: RobotFarm, names: list[str]) -> dict[str, list[float]]:
+    """Real-time factor, CPU share and memory of each running robot over WINDOW_S."""
+    time.sleep(SETTLE_S)
+    addresses = {robot.name: robot.address for robot in farm.robots() if robot.name in names}
+    before = {name: sim_clock(address) for name, address in addresses.items()}
+    farm.robots()  # the first look of the CPU meters
+    time.sleep(WINDOW_S)
+    robots = [robot for robot in farm.robots() if robot.name in names]
+    after = {name: sim_clock(address) for name, address in addresses.items()}
+    factors = [(after[n][0] - before[n][0]) / (after[n][1] - before[n][1]) for n in addresses]
+    return {"real_time_factor": factors,
+            "cpu_share": [r.cpu_share for r in robots if r.cpu_share is not None],
+            "memory_mb": [r.memory_mb for r in robots if r.memory_mb is not None]}
+
+
+def measure_backend(backend: str, make: Callable[[], RobotFarm], counts: list[int], quick: bool
+                    ) -> tuple[list[Measurement], dict[str, Any]]:
+    farm = make()
+    rows: list[Measurement] = []
+    detail: dict[str, Any] = {}
+    try:
+        started = time.monotonic()
+        farm.start(RobotSpec(f"{backend}-alone", SCENE))
+        alone_s = time.monotonic() - started
+        farm.stop(f"{backend}-alone")
+        rows.append(Measurement(f"farm start ({backend})", "one robot alone", alone_s, "s", "-"))
+        for count in counts:
+            prefix = f"{backend}-{count}"
+            durations = start_class(farm, prefix, count)
+            running = measure_running(farm, [f"{prefix}-{i}" for i in range(count)])
+            for robot in farm.robots():
+                farm.stop(robot.name)
+            scenario = f"class of {count} ({backend})"
+            worst_factor = min(running["real_time_factor"])
+            share = statistics.mean(running["cpu_share"])
+            rows += [
+                Measurement(scenario, "start until SERVING p50", statistics.median(durations), "s", "-", alone_s),
+                Measurement(scenario, "start until SERVING max", max(durations), "s", "-", alone_s),
+                Measurement(scenario, "real-time factor, slowest robot", worst_factor, "x", ">= 0.95", 1.0,
+                            None if quick else worst_factor >= 0.95),
+                Measurement(scenario, "CPU share per idle robot, mean", share, "core", f"<= {HEADLESS_ROBOT_CPU_SHARE}",
+                            HEADLESS_ROBOT_CPU_SHARE, None if quick else share <= HEADLESS_ROBOT_CPU_SHARE),
+                Measurement(scenario, "memory per robot, mean", statistics.mean(running["memory_mb"]), "MB", "-"),
+            ]
+            detail[scenario] = {"start_s": durations, **running}
+    finally:
+        for robot in farm.robots():
+            farm.stop(robot.name)
+        farm.close()
+    return rows, detail
+
+
+def overhead_rows(rows: list[Measurement], counts: list[int]) -> list[Measurement]:
+    """Ray's figures divided by the local farm's, for the same class size."""
+    def figure(scenario: str, name: str) -> float | None:
+        return next((r.measured for r in rows if r.scenario == scenario and r.figure == name), None)
+
+    ratios = []
+    for count in counts:
+        for name in ("start until SERVING max", "memory per robot, mean"):
+            ray_value, local_value = figure(f"class of {count} (ray)", name), figure(f"class of {count} (local)", name)
+            if ray_value is not None and local_value:
+                ratios.append(Measurement(f"Ray overhead, class of {count}", name + " ray/local",
+                                          ray_value / local_value, "x", "-", 1.0))
+    return ratios
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.farm", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="a short smoke run that grades nothing")
+    parser.add_argument("--output", type=Path, default=Path("bench-results"))
+    parser.add_argument("--backends", default="local,ray", help="comma-separated: local, ray")
+    args = parser.parse_args(argv)
+    counts = [2] if args.quick else [10, 20, 30]
+    began = time.monotonic()
+    rows: list[Measurement] = []
+    detail: dict[str, Any] = {}
+    backends = [name.strip() for name in args.backends.split(",") if name.strip()]
+    if "local" in backends:
+        from middleware.farm.local import LocalProcessFarm
+
+        made, more = measure_backend("local", lambda: LocalProcessFarm(capacity=max(counts)), counts, args.quick)
+        rows += made
+        detail.update(more)
+    if "ray" in backends:
+        from middleware.farm.ray_farm import RayFarm, start_local_cluster
+
+        address = start_local_cluster()
+        made, more = measure_backend("ray", lambda: RayFarm(address), counts, args.quick)
+        rows += made + overhead_rows(rows + made, counts)
+        detail.update(more)
+    print_table(f"robot farm on {host_cores()} cores: class start, cost per robot, Ray's overhead", rows)
+    elapsed = time.monotonic() - began
+    print(f"\n({'quick' if args.quick else 'full'} run, {elapsed:.0f} s)")
+    write_json(args.output / "farm.json", rows, {"quick": args.quick, "elapsed_s": elapsed, "counts": counts,
+                                                 "scene": SCENE, "window_s": WINDOW_S, "detail": detail})
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,70 @@
+// The tutor's class session page: start it, follow every student's robot as it starts, end it.
+import { fetchJson } from "../../lib/transport.js";
+
+const root = document.getElementById("class-session");
+const api = `/api/courses/${root.dataset.courseId}/class-session`;
+const summary = root.querySelector("[data-field=summary]");
+const errorLine = root.querySelector("[data-field=error]");
+const startButton = root.querySelector("[data-action=start]");
+const endButton = root.querySelector("[data-action=end]");
+const table = root.querySelector("table");
+const rows = table.querySelector("tbody");
+const STATE_WORDS = { starting: "starting…", ready: "ready", failed: "did not start", stopped: "stopped" };
+let timer = null;
+
+function seatRow(seat) {
+  const row = document.createElement("tr");
+  row.dataset.state = seat.state;
+  for (const [label, text] of [["Student", seat.username], ["Robot", seat.robot],
+    ["State", STATE_WORDS[seat.state] + (seat.message ? `: ${seat.message}` : "")]]) {
+    const cell = document.createElement("td");
+    cell.dataset.label = label;
+    cell.textContent = text;
+    row.append(cell);
+  }
+  return row;
+}
+
+function render(state) {
+  root.dataset.open = String(state.open);
+  startButton.hidden = state.open;
+  endButton.hidden = !state.open;
+  table.hidden = !state.open;
+  rows.replaceChildren(...state.seats.map(seatRow));
+  const { starting, ready, failed } = state.counts;
+  summary.textContent = state.open
+    ? `Class session open: ${ready} of ${state.seats.length} robots ready`
+      + (starting ? `, ${starting} starting` : "") + (failed ? `, ${failed} did not start` : "") + "."
+    : "No class session is open for this course.";
+  clearTimeout(timer);
+  if (state.open) timer = setTimeout(refresh, starting ? 1000 : 5000);
+}
+
+function showError(error) {
+  errorLine.textContent = error.message;
+  errorLine.hidden = false;
+}
+
+async function refresh() {
+  try { render(await fetchJson(api)); } catch (error) { showError(error); }
+}
+
+async function act(method) {
+  startButton.disabled = endButton.disabled = true;
+  errorLine.hidden = true;
+  summary.textContent = method === "POST" ? "Starting every student's robot…" : "Stopping every robot…";
+  try {
+    render(await fetchJson(api, { method }));
+  } catch (error) {
+    showError(error);
+    await refresh();
+  } finally {
+    startButton.disabled = endButton.disabled = false;
+  }
+}
+
+startButton.addEventListener("click", () => act("POST"));
+endButton.addEventListener("click", () => {
+  if (window.confirm("End the class session? Every student's robot stops.")) act("DELETE");
+});
+refresh();

@@ -1,0 +1,92 @@
+"""Class session pages and API: a tutor starts and ends one for a course; each student opens their robot."""
+
+from __future__ import annotations
+
+from flask import Blueprint, current_app, jsonify, render_template, url_for
+from flask.typing import ResponseReturnValue
+from flask_login import current_user, login_required
+
+from middleware.courses.services import get_course
+from middleware.db import after_commit, get_session, session_factory
+from middleware.models import User
+from middleware.teaching import class_sessions
+from middleware.teaching.practice_robots import practice_manager, practice_name
+
+blueprint = Blueprint("classes", __name__)
+
+
+def _actor() -> User:
+    return get_session().get(User, int(current_user.get_id()))  # type: ignore[return-value]
+
+
+def _session_dict(course_id: int) -> dict[str, object]:
+    opened, seats = class_sessions.seats(get_session(), _actor(), course_id)
+    counts = {state: sum(1 for seat in seats if seat.state == state) for state in ("starting", "ready", "failed")}
+    return {"course_id": course_id, "open": opened is not None,
+            "started_at": opened.started_at.isoformat() if opened else None,
+            "seats": [seat.to_dict() for seat in seats], "counts": counts}
+
+
+@blueprint.get("/courses/<int:course_id>/class")
+@login_required
+def tutor_page(course_id: int) -> ResponseReturnValue:
+    """The tutor's class session page: start, everyone's robot, end."""
+    class_sessions.seats(get_session(), _actor(), course_id)  # 404 or 403 before the page
+    return render_template("teaching/class_tutor.html", course=get_course(get_session(), course_id))
+
+
+@blueprint.get("/api/courses/<int:course_id>/class-session")
+@login_required
+def status(course_id: int) -> ResponseReturnValue:
+    """The open session and every seat's robot state."""
+    return jsonify(_session_dict(course_id))
+
+
+@blueprint.post("/api/courses/<int:course_id>/class-session")
+@login_required
+def start(course_id: int) -> ResponseReturnValue:
+    """Opens a class session and starts every student's robot in the background."""
+    session, manager = get_session(), practice_manager()
+    opened = class_sessions.start_session(session, _actor(), course_id, manager)  # FarmUnavailable: nothing kept
+    sessions, opened_id = session_factory(current_app), opened.id
+    after_commit(lambda: class_sessions.prestart_robots(sessions, manager, opened_id))
+    return jsonify(_session_dict(course_id)), 201
+
+
+@blueprint.delete("/api/courses/<int:course_id>/class-session")
+@login_required
+def end(course_id: int) -> ResponseReturnValue:
+    """Ends the open session: every student's robot is stopped."""
+    owners, manager = class_sessions.end_session(get_session(), _actor(), course_id), practice_manager()
+
+    def stop_robots() -> None:
+        for owner_id in owners:
+            manager.stop(owner_id)
+
+    after_commit(stop_robots)
+    return jsonify(_session_dict(course_id))
+
+
+def _my_seat_dict() -> dict[str, object]:
+    found = class_sessions.my_seat(get_session(), _actor())
+    if found is None:
+        return {"open": False}
+    course, seat = found
+    name = practice_name(current_user.username, seat.user_id)
+    return {"open": True, "course": {"id": course.id, "code": course.code, "title": course.title},
+            "state": seat.state, "message": seat.message, "robot": name,
+            "console_url": url_for("lab.console", robot_name=name) if seat.state == "ready" else None}
+
+
+@blueprint.get("/class")
+@login_required
+def student_page() -> ResponseReturnValue:
+    """The student's class session page: their own robot, and the way to its console."""
+    return render_template("teaching/class_student.html")
+
+
+@blueprint.get("/api/class-session")
+@login_required
+def my_seat() -> ResponseReturnValue:
+    """The open class session the user has a seat in, and their robot's state."""
+    return jsonify(_my_seat_dict())

@@ -1,0 +1,161 @@
+"""Class sessions: a tutor opens the lab for a course, and every enrolled student gets a robot of their own.
+
+Starting a session writes it and one seat per student, then starts every student's practice robot on the
+farm at once (in the background, a few at a time), so that the first student to open the class page waits
+no longer than the last. A seat records how its robot's start went (starting, ready, failed with the reason),
+so every worker shows the same page. Robots of an open session are not stopped as idle; ending the session
+stops them. What students did stays in the database: ending stops robots, it deletes nothing.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+from sqlalchemy import select, update
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from middleware.courses.services import get_course, managed_course
+from middleware.errors import Refused
+from middleware.models import Course, CourseMembership, User
+from middleware.models.accounts import utc_now
+from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord
+from middleware.teaching.practice_robots import PracticeManager, practice_name
+
+STARTS_AT_ONCE = 8  # robots started in parallel: enough to fill a host's cores, few enough to share them
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class SeatView:
+    """A student's seat as the tutor's page shows it."""
+
+    user_id: int
+    username: str
+    state: str
+    message: str
+    robot: str
+
+    def to_dict(self) -> dict[str, object]:
+        """The seat as JSON."""
+        return {"user_id": self.user_id, "username": self.username, "state": self.state, "message": self.message,
+                "robot": self.robot}
+
+
+def open_session(session: Session, course_id: int) -> ClassSession | None:
+    """The course's open class session, if there is one."""
+    return session.scalar(select(ClassSession).where(ClassSession.course_id == course_id,
+                                                     ClassSession.ended_at.is_(None)))
+
+
+def start_session(session: Session, actor: User, course_id: int, manager: PracticeManager) -> ClassSession:
+    """Opens a class session for the course (its tutors and admins only) with a seat per enrolled student.
+
+    Refused when one is open already (409), when the course has no student (409), when the farm cannot hold
+    one robot per student beside those running (409), or cannot be reached (503); nothing is written then.
+    """
+    course = managed_course(session, actor, course_id)
+    if open_session(session, course.id) is not None:
+        raise Refused(409, "class_session_open", "A class session is open for this course already; end it first.")
+    students = _students(session, course)
+    if not students:
+        raise Refused(409, "no_students", "The course has no enrolled student yet; enrol the class first.")
+    free = manager.limit() - manager.count()
+    running = set(session.scalars(select(PersonalRobotRecord.owner_id).where(
+        PersonalRobotRecord.owner_id.in_([user.id for user in students]))))
+    needed = len(students) - len(running)
+    if needed > free:
+        raise Refused(409, "farm_full", f"The robot farm can start {max(free, 0)} more robots now and the class "
+                                        f"needs {needed}. Ask an administrator to add a robot host, or try again "
+                                        "when other classes have ended.")
+    opened = ClassSession(course_id=course.id, started_by_id=actor.id)
+    session.add(opened)
+    try:
+        session.flush()
+    except IntegrityError:  # another tutor opened it at the same moment
+        session.rollback()
+        raise Refused(409, "class_session_open", "A class session is open for this course already.") from None
+    session.add_all(ClassSeat(session_id=opened.id, user_id=user.id) for user in students)
+    session.flush()
+    return opened
+
+
+def prestart_robots(sessions: Callable[[], Session], manager: PracticeManager, class_session_id: int) -> None:
+    """Starts every seat's robot in the background, a few at a time, recording each outcome on its seat."""
+    with sessions() as session:
+        seats = session.execute(select(ClassSeat.user_id, User.username).join(User, User.id == ClassSeat.user_id)
+                                .where(ClassSeat.session_id == class_session_id)).all()
+
+    def start_one(user_id: int, username: str) -> None:
+        try:
+            manager.start(user_id, username, class_session_id=class_session_id)
+            state, message = "ready", ""
+        except Refused as refusal:
+            state, message = "failed", refusal.message
+        except Exception:  # noqa: BLE001 - one student's robot must not stop the others'
+            log.exception("class session %s: the robot of %s did not start", class_session_id, username)
+            state, message = "failed", "The robot did not start; the tutor can start the session again."
+        _set_seat(sessions, class_session_id, user_id, state, message)
+
+    def start_all() -> None:
+        with ThreadPoolExecutor(STARTS_AT_ONCE, thread_name_prefix=f"class-{class_session_id}") as pool:
+            for user_id, username in seats:
+                pool.submit(start_one, user_id, username)
+
+    threading.Thread(target=start_all, name=f"class-{class_session_id}-start", daemon=True).start()
+
+
+def end_session(session: Session, actor: User, course_id: int) -> list[int]:
+    """Ends the course's open session and marks its seats stopped; the owners whose robots the caller stops once
+    this is committed."""
+    course = managed_course(session, actor, course_id)
+    opened = open_session(session, course.id)
+    if opened is None:
+        raise Refused(409, "no_class_session", "No class session is open for this course.")
+    opened.ended_at = utc_now()
+    owners = session.scalars(select(PersonalRobotRecord.owner_id).where(
+        PersonalRobotRecord.class_session_id == opened.id)).all()
+    session.execute(update(ClassSeat).where(ClassSeat.session_id == opened.id)
+                    .values(state="stopped", message="", updated_at=utc_now()))
+    return list(owners)
+
+
+def seats(session: Session, actor: User, course_id: int) -> tuple[ClassSession | None, list[SeatView]]:
+    """The course's open session and its seats, for its tutors and admins."""
+    course = managed_course(session, actor, course_id)
+    opened = open_session(session, course.id)
+    if opened is None:
+        return None, []
+    rows = session.execute(select(ClassSeat, User.username).join(User, User.id == ClassSeat.user_id)
+                           .where(ClassSeat.session_id == opened.id).order_by(User.username)).all()
+    return opened, [SeatView(seat.user_id, username, seat.state, seat.message, practice_name(username, seat.user_id))
+                    for seat, username in rows]
+
+
+def my_seat(session: Session, actor: User) -> tuple[Course, ClassSeat] | None:
+    """The open class session the user has a seat in (the most recent), with its course."""
+    row = session.execute(select(ClassSeat, ClassSession.course_id).join(ClassSession)
+                          .where(ClassSeat.user_id == actor.id, ClassSession.ended_at.is_(None))
+                          .order_by(ClassSession.started_at.desc())).first()
+    if row is None:
+        return None
+    seat, course_id = row
+    return get_course(session, course_id), seat
+
+
+def _students(session: Session, course: Course) -> list[User]:
+    return list(session.scalars(select(User).join(CourseMembership, CourseMembership.user_id == User.id).where(
+        CourseMembership.course_id == course.id, CourseMembership.role == "student", User.is_active.is_(True))
+        .order_by(User.username)))
+
+
+def _set_seat(sessions: Callable[[], Session], class_session_id: int, user_id: int, state: str, message: str) -> None:
+    with sessions() as session:
+        session.execute(update(ClassSeat).where(ClassSeat.session_id == class_session_id, ClassSeat.user_id == user_id,
+                                                ClassSeat.state == "starting")
+                        .values(state=state, message=message[:300], updated_at=utc_now()))
+        session.commit()
