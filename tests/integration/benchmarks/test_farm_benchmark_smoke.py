@@ -1,0 +1,25 @@
+"""The farm benchmark runs end to end in quick mode on both backends (a smoke check: it asserts no timings)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def test_quick_farm_benchmark_starts_a_class_on_both_backends_and_grades_nothing(tmp_path: Path) -> None:
+    result = subprocess.run([sys.executable, "-m", "benchmarks.farm", "--quick", "--output", str(tmp_path)],
+                            capture_output=True, text=True, timeout=300, check=False, cwd=ROOT)
+    assert result.returncode == 0, result.stderr[-3000:]
+    report = json.loads((tmp_path / "farm.json").read_text())
+    figures = {(row["scenario"], row["figure"]): row for row in report["rows"]}
+    for backend in ("local", "ray"):
+        assert figures[(f"farm start ({backend})", "one robot alone")]["measured"] > 0
+        for figure in ("start until SERVING p50", "start until SERVING max", "real-time factor, slowest robot",
+                       "CPU share per idle robot, mean", "memory per robot, mean"):
+            assert figures[(f"class of 2 ({backend})", figure)]["measured"] > 0, (backend, figure)
+    assert ("Ray overhead, class of 2", "start until SERVING max ray/local") in figures
+    assert all(row["passed"] is None for row in report["rows"]), "quick mode grades nothing"
