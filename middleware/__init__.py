@@ -15,6 +15,7 @@ from middleware.access import commands
 from middleware.access import coordinator as access_coordinator
 from middleware.access import sockets as access_sockets
 from middleware.access.coordinator import AccessHooks
+from middleware.access.graded_runs import with_graded_run_priority
 from middleware.accounts import routes as accounts_routes
 from middleware.assessment import pages as assessment_pages
 from middleware.assessment import routes as assessment_routes
@@ -86,10 +87,10 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
 
 
 def _compose_robot_access(app: Flask) -> None:
-    """The robots, the access rule with the hooks bookings and live classes add to it, the practice robots,
+    """The robots, the access rule with the hooks graded runs, bookings and live classes add to it, the practice robots,
     and the one command path over them (the areas themselves never import one another for these)."""
     robots = registry.init_app(app)
-    priority = with_guided_priority(bookings_services.priority_user_id)
+    priority = with_graded_run_priority(with_guided_priority(bookings_services.priority_user_id))
     coordinator = access_coordinator.init_app(app, AccessHooks(priority, bookings_services.check_in))
     practice_robots.init_app(app, robots, farm_setup.init_app(app))
     commands.init_app(app, robots, coordinator)

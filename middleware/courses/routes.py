@@ -63,7 +63,8 @@ def create() -> ResponseReturnValue:
 
     def create() -> ResponseReturnValue:
         _require_teacher()
-        settings = parse_settings({k: form.get(k) for k in ("turn_length_s", "booking_allowance_min")})
+        settings = parse_settings({k: form.get(k) for k in ("turn_length_s", "booking_allowance_min",
+                                                         "graded_run_hold_min")})
         course = services.create_course(get_session(), current_user, form.get("code"), form.get("title"), settings)
         flash(f"Course {course.code} created. Enrol students or invite them below.", "success")
         return redirect(url_for("courses.detail", course_id=course.id), 303)
@@ -114,7 +115,7 @@ def _course_form(course_id: int, action: Callable[[Session, dict[str, str]], obj
 @blueprint.post("/courses/<int:course_id>/settings")
 @login_required
 def settings(course_id: int) -> ResponseReturnValue:
-    """Saves the title, turn length and booking allowance."""
+    """Saves the title, turn length, booking allowance and graded run hold."""
     return _course_form(course_id, lambda dbs, form: services.update_settings(
         dbs, current_user, course_id, parse_settings(form)), "Course settings saved.")
 
@@ -177,11 +178,12 @@ def api_courses() -> ResponseReturnValue:
 @blueprint.post("/api/courses")
 @login_required
 def api_create_course() -> ResponseReturnValue:
-    """{code, title, turn_length_s?, booking_allowance_min?}: creates a course (tutors, admins)."""
+    """{code, title, turn_length_s?, booking_allowance_min?, graded_run_hold_min?}: creates a course."""
     data = json_body()
 
     def action(dbs: Session) -> dict[str, object]:
-        parsed = parse_settings({k: data.get(k) for k in ("turn_length_s", "booking_allowance_min")})
+        parsed = parse_settings({k: data.get(k) for k in ("turn_length_s", "booking_allowance_min",
+                                                           "graded_run_hold_min")})
         course = services.create_course(dbs, current_user, data.get("code"), data.get("title"), parsed)
         return {"course": services.describe(dbs, current_user, course).to_dict()}
 

@@ -13,6 +13,7 @@ from middleware.auth.schemas import InvalidField
 COURSE_CODE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,31}$")
 TURN_LENGTH_S = (10, 3600)
 ALLOWANCE_MIN = (0, 10080)
+GRADED_RUN_HOLD_MIN = (5, 240)
 MAX_CSV_ROWS = 500
 FORMULA_PREFIXES = ("=", "+", "-", "@", "\t", "\r")
 
@@ -48,6 +49,7 @@ class CourseSettings:
     title: str | None = None
     turn_length_s: int | None = None
     booking_allowance_min: int | None = None
+    graded_run_hold_min: int | None = None
 
 
 def parse_settings(data: Mapping[str, object]) -> CourseSettings:
@@ -59,6 +61,9 @@ def parse_settings(data: Mapping[str, object]) -> CourseSettings:
         booking_allowance_min=(clean_whole(data["booking_allowance_min"], "booking_allowance_min",
                                            ALLOWANCE_MIN, "minutes per week")
                                if data.get("booking_allowance_min") not in (None, "") else None),
+        graded_run_hold_min=(clean_whole(data["graded_run_hold_min"], "graded_run_hold_min", GRADED_RUN_HOLD_MIN,
+                                         "minutes")
+                             if data.get("graded_run_hold_min") not in (None, "") else None),
     )
 
 

@@ -18,7 +18,11 @@ from middleware.auth.services import create_user, generate_password
 from middleware.courses.schemas import CourseSettings, clean_code, clean_title, parse_enrolment_csv
 from middleware.errors import Refused
 from middleware.models import Course, CourseMembership, Role, User
-from middleware.models.courses import DEFAULT_BOOKING_ALLOWANCE_MIN, DEFAULT_TURN_LENGTH_S
+from middleware.models.courses import (
+    DEFAULT_BOOKING_ALLOWANCE_MIN,
+    DEFAULT_GRADED_RUN_HOLD_MIN,
+    DEFAULT_TURN_LENGTH_S,
+)
 
 
 @dataclass(frozen=True)
@@ -30,13 +34,15 @@ class CourseView:
     title: str
     turn_length_s: int
     booking_allowance_min: int
+    graded_run_hold_min: int
     students: int
     my_role: str | None  # the viewer's membership role, None for an admin who is not a member
 
     def to_dict(self) -> dict[str, object]:
         """The JSON form."""
         return {"id": self.id, "code": self.code, "title": self.title, "turn_length_s": self.turn_length_s,
-                "booking_allowance_min": self.booking_allowance_min, "students": self.students,
+                "booking_allowance_min": self.booking_allowance_min,
+                "graded_run_hold_min": self.graded_run_hold_min, "students": self.students,
                 "my_role": self.my_role}
 
 
@@ -87,7 +93,8 @@ def _views(session: Session, courses: list[Course], actor: User) -> list[CourseV
         .group_by(CourseMembership.course_id)).all()) if ids else {}
     roles = dict(session.execute(select(CourseMembership.course_id, CourseMembership.role).where(
         CourseMembership.course_id.in_(ids), CourseMembership.user_id == actor.id)).all()) if ids else {}
-    return [CourseView(c.id, c.code, c.title, c.turn_length_s, c.booking_allowance_min, counts.get(c.id, 0),
+    return [CourseView(c.id, c.code, c.title, c.turn_length_s, c.booking_allowance_min, c.graded_run_hold_min,
+                       counts.get(c.id, 0),
                        roles.get(c.id)) for c in courses]
 
 
@@ -113,7 +120,8 @@ def create_course(session: Session, actor: User, code: object, title: object, se
     course = Course(code=clean, title=clean_title(title),
                     turn_length_s=settings.turn_length_s or DEFAULT_TURN_LENGTH_S,
                     booking_allowance_min=(DEFAULT_BOOKING_ALLOWANCE_MIN if settings.booking_allowance_min is None
-                                           else settings.booking_allowance_min))
+                                           else settings.booking_allowance_min),
+                    graded_run_hold_min=settings.graded_run_hold_min or DEFAULT_GRADED_RUN_HOLD_MIN)
     if session.scalar(select(Course.id).where(Course.code == clean)) is not None:
         raise Refused(409, "course_exists", f"A course with code {clean} exists already; choose another code.", "code")
     session.add(course)
@@ -125,7 +133,7 @@ def create_course(session: Session, actor: User, code: object, title: object, se
 
 
 def update_settings(session: Session, actor: User, course_id: int, settings: CourseSettings) -> Course:
-    """Changes a course's title, turn length or booking allowance (its tutors, admins)."""
+    """Changes a course's title, turn length, booking allowance or graded run hold (its tutors, admins)."""
     course = managed_course(session, actor, course_id)
     if settings.title is not None:
         course.title = settings.title
@@ -133,6 +141,8 @@ def update_settings(session: Session, actor: User, course_id: int, settings: Cou
         course.turn_length_s = settings.turn_length_s
     if settings.booking_allowance_min is not None:
         course.booking_allowance_min = settings.booking_allowance_min
+    if settings.graded_run_hold_min is not None:
+        course.graded_run_hold_min = settings.graded_run_hold_min
     return course
 
 

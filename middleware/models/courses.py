@@ -12,15 +12,18 @@ from middleware.models.base import Base
 
 DEFAULT_TURN_LENGTH_S = 120
 DEFAULT_BOOKING_ALLOWANCE_MIN = 120
+DEFAULT_GRADED_RUN_HOLD_MIN = 30
 
 
 class Course(Base):
-    """A course: its tutors set the turn length on shared robots and each student's booking allowance."""
+    """A course: its tutors set the turn length on shared robots, each student's booking allowance, and how long a
+    graded run (an experimental test's attempt, a trial) may keep a shared robot."""
 
     __tablename__ = "courses"
     __table_args__ = (
         CheckConstraint("turn_length_s BETWEEN 10 AND 3600", name="turn_length_range"),
         CheckConstraint("booking_allowance_min BETWEEN 0 AND 10080", name="allowance_range"),
+        CheckConstraint("graded_run_hold_min BETWEEN 5 AND 240", name="graded_run_hold_range"),
     )
 
     id: Mapped[int] = mapped_column(primary_key=True)
@@ -28,6 +31,9 @@ class Course(Base):
     title: Mapped[str] = mapped_column(String(200))
     turn_length_s: Mapped[int] = mapped_column(default=DEFAULT_TURN_LENGTH_S)
     booking_allowance_min: Mapped[int] = mapped_column(default=DEFAULT_BOOKING_ALLOWANCE_MIN)  # per week
+    # The longest a graded attempt or an experiment trial keeps a shared robot past the turn length.
+    graded_run_hold_min: Mapped[int] = mapped_column(default=DEFAULT_GRADED_RUN_HOLD_MIN,
+                                                     server_default=str(DEFAULT_GRADED_RUN_HOLD_MIN))
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
 
 

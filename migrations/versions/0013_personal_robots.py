@@ -1,4 +1,5 @@
-"""personal robots and class sessions: the robots the farm runs for users, recorded so every web worker finds them
+"""personal robots and class sessions: the robots the farm runs for users, recorded so every web worker finds them;
+and each course's longest hold of a shared robot by a graded run
 
 Revision ID: 0013
 Revises: 0012
@@ -17,6 +18,9 @@ depends_on = None
 
 
 def upgrade() -> None:
+    with op.batch_alter_table("courses") as batch:
+        batch.add_column(sa.Column("graded_run_hold_min", sa.Integer(), nullable=False, server_default="30"))
+        batch.create_check_constraint("graded_run_hold_range", "graded_run_hold_min BETWEEN 5 AND 240")
     op.create_table(
         "class_sessions",
         sa.Column("id", sa.Integer(), nullable=False),
@@ -75,3 +79,6 @@ def downgrade() -> None:
     op.drop_table("personal_robots")
     op.drop_table("class_seats")
     op.drop_table("class_sessions")
+    with op.batch_alter_table("courses") as batch:
+        batch.drop_constraint("ck_courses_graded_run_hold_range", type_="check")
+        batch.drop_column("graded_run_hold_min")

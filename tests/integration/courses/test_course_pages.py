@@ -37,7 +37,12 @@ def test_course_fields_out_of_range_are_shown_next_to_the_field(client_as, cours
     assert re.search(r'data-error-for="turn_length_s">turn_length_s must be a whole number of seconds from 10', page)
     status, answer = api(tutor, "PATCH", f"/api/courses/{course_people['course']}", {"booking_allowance_min": 10081})
     assert status == 400 and answer["error"]["field"] == "booking_allowance_min"
+    for hold in (4, 241, "soon", 2.5):
+        status, answer = api(tutor, "PATCH", f"/api/courses/{course_people['course']}", {"graded_run_hold_min": hold})
+        assert status == 400 and answer["error"]["field"] == "graded_run_hold_min", hold
     assert snapshot() == before
+    status, answer = api(tutor, "PATCH", f"/api/courses/{course_people['course']}", {"graded_run_hold_min": 45})
+    assert status == 200 and answer["course"]["graded_run_hold_min"] == 45, answer
 
 
 def test_csv_upload_shows_the_report_once_with_a_download(client_as, course_people) -> None:
