@@ -129,6 +129,10 @@ class Sequencer:
         """Whether a motor goal holds the wheels (read from other threads as a hint only)."""
         return self._motor is not None
 
+    def at_rest(self) -> bool:
+        """No goal runs and no stop is owed to the wheels (the world may park its loop)."""
+        return self._motor is None and not self._perceptive and not self._stop_wheels
+
     def preempt_motor_goal_for_drive(self, version: int) -> None:
         """Ends the motor goal as PREEMPTED if it began before drive target version (the Robot facade decides when)."""
         if self._motor is not None and version > self._motor_since_version:

@@ -42,6 +42,10 @@ class Autonomy(Protocol):
 
     def on_reset(self, reason: str) -> None: ...
 
+    def at_rest(self) -> bool:
+        """No goal runs: nothing but a command can make the robot move."""
+        ...
+
 PHYSICS_DT_S = 1.0 / 240.0
 PHYSICS_STEPS_PER_TICK = 4  # control at 60 Hz
 SENSOR_EVERY_TICKS = 3  # sonar and laser at 20 Hz
@@ -50,6 +54,12 @@ OBSTACLE_GROUP = 0x1
 ROBOT_GROUP = 0x10  # range sensors cast with a mask that leaves the robot out, so it never sees itself
 SENSOR_RAY_MASK = 0x0F
 MAX_REALTIME_LAG_S = 0.25  # beyond this the loop stops trying to catch up with the wall clock
+# A robot nobody commands or watches, standing still with no goal, parks: its loop stops stepping the physics and
+# publishes fresh sensor readings at 4 Hz, sim time following the wall clock, until a command or a viewer wakes it.
+PARK_AFTER_S = 1.0
+PARKED_PERIOD_S = 0.25
+REST_SPEED_MPS = 1e-3
+REST_TURN_RADPS = 1e-2
 
 
 class World:
@@ -90,6 +100,8 @@ class World:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._closed = False
+        self._rest_since_s: float | None = None
+        self.parked = False  # read by tests and benchmarks
         self._publication = Publication()
         self._autonomy: Autonomy | None = None
         # Built in the caller's thread before the loop exists; from start() on only the loop touches it.
@@ -153,10 +165,13 @@ class World:
     def set_controller(self, token: str) -> None:
         """Names the only token whose drive commands are obeyed; "" revokes control and stops the base."""
         self._gate.set_controller(token)
+        self._command_waiting.set()
 
     def drive(self, token: str, sequence: int, linear_mps: object, angular_radps: object) -> DriveAck:
         """Sets the base's target velocities if token, values and sequence allow (see DriveGate.submit)."""
-        return self._gate.submit(token, sequence, linear_mps, angular_radps)
+        ack = self._gate.submit(token, sequence, linear_mps, angular_radps)
+        self._command_waiting.set()  # a parked loop wakes at once
+        return ack
 
     def reset(self, seed: int) -> None:
         """Rebuilds the scene and robot, with noise seeded anew; sim time restarts at 0."""
@@ -181,7 +196,9 @@ class World:
 
     def subscribe_camera(self, max_fps: float = DEFAULT_CAMERA_FPS) -> CameraSubscription:
         """Asks the loop to render; it renders at the highest fps any subscriber asked for (cap 30)."""
-        return self._publication.subscribe_camera(max_fps)
+        subscription = self._publication.subscribe_camera(max_fps)
+        self._command_waiting.set()  # a parked loop wakes to render
+        return subscription
 
     @property
     def camera_subscriber_count(self) -> int:
@@ -241,11 +258,57 @@ class World:
             if not self.realtime:
                 time.sleep(0)  # let gRPC threads take the GIL between ticks
                 continue
+            if self._rested_long_enough():
+                self._stay_parked()
+                wall_origin_s, sim_origin_s = time.monotonic(), self._sim_time_s
+                continue
             lag_s = time.monotonic() - (wall_origin_s + self._sim_time_s - sim_origin_s)
             if lag_s < 0:
                 self._serve_commands_for(-lag_s)
             elif lag_s > MAX_REALTIME_LAG_S:
                 wall_origin_s, sim_origin_s = time.monotonic(), self._sim_time_s
+
+    def _rested_long_enough(self) -> bool:
+        if not self._at_rest():
+            self._rest_since_s = None
+            return False
+        if self._rest_since_s is None:
+            self._rest_since_s = self._sim_time_s
+        return self._sim_time_s - self._rest_since_s >= PARK_AFTER_S
+
+    def _at_rest(self) -> bool:
+        """Nothing but a command can change the world: no drive target or motion, no goal, no camera viewer."""
+        if (self._gate.latest().version != self._seen_target_version or self._deadman_armed
+                or self._target_linear_mps or self._target_angular_radps or self._linear_mps or self._angular_radps
+                or self._publication.requested_camera_fps > 0
+                or (self._autonomy is not None and not self._autonomy.at_rest())):
+            return False
+        linear, angular = self._client.getBaseVelocity(self._robot)
+        return math.hypot(linear[0], linear[1]) < REST_SPEED_MPS and abs(angular[2]) < REST_TURN_RADPS
+
+    def _stay_parked(self) -> None:
+        """Publishes fresh sensor readings every PARKED_PERIOD_S without stepping the physics, sim time following
+        the wall clock, until something can move the robot again (a command wakes the loop at once)."""
+        self.parked = True
+        last_wall_s = time.monotonic()
+        try:
+            while not self._stop.is_set():
+                if self._command_waiting.wait(PARKED_PERIOD_S):
+                    self._command_waiting.clear()
+                    self._run_pending_commands()
+                ticks = int((time.monotonic() - last_wall_s) / self.tick_dt_s)
+                if ticks:
+                    last_wall_s += ticks * self.tick_dt_s
+                    self._sim_time_s += ticks * self.tick_dt_s
+                    self._tick += ticks
+                    ground_truth = self._ground_truth()
+                    self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(ground_truth)
+                    self._publish_snapshot(ground_truth)
+                if not self._at_rest():
+                    self._rest_since_s = None
+                    return
+        finally:
+            self.parked = False
 
     def _serve_commands_for(self, duration_s: float) -> None:
         """Waits until the next tick is due, running commands as they arrive rather than at the tick.

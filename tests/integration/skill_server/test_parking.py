@@ -1,0 +1,72 @@
+"""A real-time robot nobody commands or watches parks (no physics steps, sensors still published, sim time
+following the wall clock) and wakes at once for a drive, a camera viewer or a skill."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+
+import pytest
+
+from skill_server.server import SkillServer, create_server
+from skill_server.sim.world import PARK_AFTER_S
+
+TOKEN = "owner"
+
+
+@pytest.fixture
+def server() -> Iterator[SkillServer]:
+    running = create_server(port=0, scene="lab", controller_token=TOKEN)
+    yield running
+    running.stop()
+
+
+def _within(seconds: float, condition: Callable[[], bool]) -> float:
+    started = time.monotonic()
+    while time.monotonic() - started < seconds:
+        if condition():
+            return time.monotonic() - started
+        time.sleep(0.001)
+    pytest.fail(f"not within {seconds} s")
+
+
+def test_an_idle_robot_parks_and_keeps_publishing_with_sim_time_following_the_wall(server: SkillServer) -> None:
+    world = server.world
+    _within(PARK_AFTER_S + 2.0, lambda: world.parked)
+    before, wall_before = world.snapshot, time.monotonic()
+    time.sleep(1.5)
+    after, wall_after = world.snapshot, time.monotonic()
+    assert world.parked and after.tick > before.tick
+    assert abs((after.sim_time_s - before.sim_time_s) - (wall_after - wall_before)) < 0.4
+    assert after.odometry.pose == before.odometry.pose  # nothing moved
+    assert after.laser_ranges_m != before.laser_ranges_m  # fresh readings (their noise), not a frozen snapshot
+
+
+def test_a_drive_wakes_a_parked_robot_at_once_and_it_parks_again_once_stopped(server: SkillServer) -> None:
+    world = server.world
+    _within(PARK_AFTER_S + 2.0, lambda: world.parked)
+    start = world.snapshot.odometry.pose
+    world.drive(TOKEN, 1, 0.3, 0.0)
+    assert _within(0.2, lambda: not world.parked) < 0.2
+    _within(0.2, lambda: world.snapshot.odometry.linear_mps > 0.01)
+    for sequence in range(2, 6):  # held as the console does, under the deadman
+        time.sleep(0.1)
+        world.drive(TOKEN, sequence, 0.3, 0.0)
+    world.drive(TOKEN, 6, 0.0, 0.0)
+    _within(PARK_AFTER_S + 2.0, lambda: world.parked)
+    assert world.snapshot.odometry.pose.x_m - start.x_m > 0.05
+
+
+def test_a_camera_viewer_or_a_running_skill_keeps_the_robot_awake(server: SkillServer) -> None:
+    world = server.world
+    _within(PARK_AFTER_S + 2.0, lambda: world.parked)
+    subscription = world.subscribe_camera(5)
+    _within(0.2, lambda: not world.parked)
+    first = world.latest_frame
+    _within(1.0, lambda: world.latest_frame is not None and world.latest_frame is not first)
+    subscription.close()
+    _within(PARK_AFTER_S + 2.0, lambda: world.parked)
+    server.robot.activate(TOKEN, "environment_modelling", {}, preempt=False)
+    _within(0.2, lambda: not world.parked)
+    time.sleep(PARK_AFTER_S + 0.5)
+    assert not world.parked  # a perceptive skill runs: the robot stays awake
