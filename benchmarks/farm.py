@@ -124,7 +124,7 @@ def wake_time_s(address: str, token: str) -> float:
     """A parked robot: seconds from a drive command to its telemetry showing it move."""
     with grpc.insecure_channel(address) as channel:
         stub = robot_pb2_grpc.RobotStub(channel)
-        stream = stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=60), timeout=10)
+        stream = stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=50), timeout=10)
         messages = iter(stream)
         next(messages)
         sent = time.monotonic()

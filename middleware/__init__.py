@@ -35,7 +35,15 @@ from middleware.lab import skills as lab_skills
 from middleware.lab import sockets as lab_sockets
 from middleware.preferences import routes as preferences_routes
 from middleware.robots import registry
-from middleware.teaching import class_routes, lesson_routes, practice_robots, practice_routes, tour_live, tour_routes
+from middleware.teaching import (
+    class_routes,
+    farm_routes,
+    lesson_routes,
+    practice_robots,
+    practice_routes,
+    tour_live,
+    tour_routes,
+)
 from middleware.teaching.tours import with_guided_priority
 from middleware.wording import moment_words
 
@@ -102,7 +110,7 @@ def _register_areas(app: Flask) -> None:
                       bookings_routes.blueprint, chat_routes.blueprint, accounts_routes.blueprint,
                       courses_routes.blueprint, experiment_routes.blueprint, assessment_routes.blueprint,
                       assessment_pages.blueprint, practice_routes.blueprint, lesson_routes.blueprint,
-                      tour_routes.blueprint, class_routes.blueprint):
+                      tour_routes.blueprint, class_routes.blueprint, farm_routes.blueprint):
         app.register_blueprint(blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
                             practice_routes.register, tour_live.register], login_still_open)

@@ -10,9 +10,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-# Measured by benchmarks/farm.py on the 2-core development machine (its record in benchmarks/results/): an idle
-# headless robot used 4.6-4.8 % of a core and 96 MB (its skill server), 238 MB as a Ray actor with it. Rounded up.
-HEADLESS_ROBOT_CPU_SHARE = 0.05
+# Measured by benchmarks/farm.py on the 2-core development machine (its records in benchmarks/results/): a headless
+# robot being driven used 5.0-5.9 % of a core and 96 MB (its skill server), 239 MB as a Ray actor with it; parked
+# (nobody using it) 0.3-0.9 %. The farm plans for robots in use; rounded up.
+HEADLESS_ROBOT_CPU_SHARE = 0.06
 ROBOT_MEMORY_MB = 100
 RAY_ROBOT_MEMORY_MB = 250
 # Left to the web tier, the database and the operating system on a host that also runs robots.
@@ -33,8 +34,11 @@ def available_memory_mb(meminfo: Path = Path("/proc/meminfo")) -> float:
     raise OSError("MemAvailable is missing from /proc/meminfo")
 
 
-def robots_per_host(cores: float, memory_mb: float) -> int:
-    """How many headless robots a host of cores and memory_mb runs at real time, with its reserve left."""
-    by_cpu = (cores * (1 - HOST_RESERVE_CPU_SHARE)) / HEADLESS_ROBOT_CPU_SHARE
-    by_memory = memory_mb * (1 - HOST_RESERVE_MEMORY_FRACTION) / ROBOT_MEMORY_MB
+def robots_per_host(cores: float, memory_mb: float, reserve: bool = True) -> int:
+    """How many headless robots in use a host of cores and memory_mb runs at real time, with its reserve left
+    for the web tier (not on a Ray robot host, whose CPUs the operator declares to Ray)."""
+    usable_cores = cores * (1 - HOST_RESERVE_CPU_SHARE) if reserve else cores
+    usable_mb = memory_mb * (1 - HOST_RESERVE_MEMORY_FRACTION) if reserve else memory_mb
+    by_cpu = usable_cores / HEADLESS_ROBOT_CPU_SHARE
+    by_memory = usable_mb / ROBOT_MEMORY_MB
     return max(0, int(min(by_cpu, by_memory)))

@@ -155,8 +155,9 @@ class RayFarm:
     def capacity(self) -> Capacity:
         ray = self._ray()
         nodes = [node for node in ray.nodes() if node.get("Alive")]
-        # Ray's "memory" resource is what it lets tasks use already (the host's reserve is taken out).
-        robots = sum(min(robots_per_host(node["Resources"].get("CPU", 0.0), float("inf")),
+        # A node's CPUs and "memory" resource are what Ray may give actors already (the operator's and Ray's own
+        # reserve are taken out).
+        robots = sum(min(robots_per_host(node["Resources"].get("CPU", 0.0), float("inf"), reserve=False),
                          int(node["Resources"].get("memory", 0.0) / 2**20 / RAY_ROBOT_MEMORY_MB)) for node in nodes)
         return Capacity(robots, len(self._names()), hosts=len(nodes))
 

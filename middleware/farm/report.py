@@ -1,38 +1,53 @@
-"""`telelab farm ...`: the farm's robots, hosts and load as a table, and the operator's actions on it."""
+"""The farm's state for people: capacity, hosts and every robot with its owner and load (the admin page, the
+API and `telelab farm status`), read from the farm and the personal robots' table."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.farm.base import FarmRobot, RobotFarm
+from middleware.farm.base import RobotFarm
 from middleware.models.farm import PersonalRobotRecord
+
+
+def farm_status(farm: RobotFarm, sessions: Callable[[], Session]) -> dict[str, Any]:
+    """{backend, capacity: {robots, running, free, hosts}, hosts: [...], robots: [...]} of the farm now."""
+    with sessions() as session:
+        owners = dict(session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.owner_name)).all())
+    capacity = farm.capacity()
+    robots = sorted(farm.robots(), key=lambda robot: robot.name)
+    nodes = getattr(farm, "nodes", None)
+    hosts = nodes() if nodes else [{"host": "localhost", "cpus": None, "node_id": "localhost"}]
+    return {
+        "backend": farm.backend,
+        "capacity": {"robots": capacity.robots, "running": capacity.running, "free": capacity.free,
+                     "hosts": capacity.hosts},
+        "hosts": [{**host, "robots": sum(1 for robot in robots if robot.node == host["node_id"])} for host in hosts],
+        "robots": [{"name": robot.name, "owner": owners.get(robot.name), "scene": robot.scene, "host": robot.host,
+                    "node": robot.node, "address": robot.address, "restarted": robot.restarted,
+                    "cpu_share": robot.cpu_share, "memory_mb": robot.memory_mb} for robot in robots],
+    }
 
 
 def status_lines(farm: RobotFarm, sessions: Callable[[], Session]) -> list[str]:
     """The farm's capacity, its hosts, and one line per robot with its owner, host and load."""
-    with sessions() as session:
-        owners = dict(session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.owner_name)).all())
-    capacity = farm.capacity()
-    robots = farm.robots()
-    lines = [f"farm: {farm.backend}, {capacity.hosts} host(s), {capacity.running} of {capacity.robots} robots "
-             f"running ({capacity.free} free)"]
-    nodes = getattr(farm, "nodes", None)
-    for node in nodes() if nodes else []:
-        count = sum(1 for robot in robots if robot.node == node["node_id"])
-        lines.append(f"  host {node['host']} node {node['node_id'][:12]}: {node['cpus']:g} CPUs, {count} robot(s)")
+    status = farm_status(farm, sessions)
+    capacity = status["capacity"]
+    lines = [f"farm: {status['backend']}, {capacity['hosts']} host(s), {capacity['running']} of {capacity['robots']} "
+             f"robots running ({capacity['free']} free)"]
+    for host in status["hosts"]:
+        cpus = "" if host["cpus"] is None else f"{host['cpus']:g} CPUs, "
+        lines.append(f"  host {host['host']} node {host['node_id'][:12]}: {cpus}{host['robots']} robot(s)")
     lines.append(f"{'robot':24} {'owner':16} {'host':16} {'node':12} {'cpu':>6} {'memory':>8}  address")
-    lines += [_robot_line(robot, owners.get(robot.name, "-")) for robot in sorted(robots, key=lambda r: r.name)]
-    if not robots:
+    for robot in status["robots"]:
+        cpu = "-" if robot["cpu_share"] is None else f"{robot['cpu_share'] * 100:.0f}%"
+        memory = "-" if robot["memory_mb"] is None else f"{robot['memory_mb']:.0f}MB"
+        restarted = "  (restarted)" if robot["restarted"] else ""
+        lines.append(f"{robot['name']:24} {robot['owner'] or '-':16} {robot['host']:16} {robot['node'][:12]:12} "
+                     f"{cpu:>6} {memory:>8}  {robot['address']}{restarted}")
+    if not status["robots"]:
         lines.append("  (no robot runs on the farm)")
     return lines
-
-
-def _robot_line(robot: FarmRobot, owner: str) -> str:
-    cpu = "-" if robot.cpu_share is None else f"{robot.cpu_share * 100:.0f}%"
-    memory = "-" if robot.memory_mb is None else f"{robot.memory_mb:.0f}MB"
-    restarted = "  (restarted)" if robot.restarted else ""
-    return (f"{robot.name:24} {owner:16} {robot.host:16} {robot.node[:12]:12} {cpu:>6} {memory:>8}  "
-            f"{robot.address}{restarted}")
