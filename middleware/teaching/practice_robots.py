@@ -270,6 +270,7 @@ class PracticeManager:
                 return None
             name, owner_id, username, token, address = (record.name, record.owner_id, record.owner_name,
                                                          record.token, record.address)
+        self.start_keeper()  # this process reaps idle robots once it serves one (a worker that never does, does not)
         link = self._link(name, address)
         if link.unreachable_since is not None and time.monotonic() - link.unreachable_since >= REFIND_AFTER_S:
             link = self._refind(name, link)
@@ -385,9 +386,10 @@ def init_app(app: Flask, registry: RobotRegistry, farm: RobotFarm) -> None:
     _managers.add(manager)
     try:
         manager.forget_lost()
+        if manager.count():  # robots left running by an earlier process (the Ray farm's): reap them when idle
+            manager.start_keeper()
     except (FarmUnavailable, DBAPIError) as error:  # no table yet (before `telelab db upgrade`), or farm away
         log.info("practice robots not checked at start: %s", error.__class__.__name__)
-    manager.start_keeper()
 
 
 def practice_manager(app: Flask | None = None) -> PracticeManager:
