@@ -147,6 +147,10 @@ def cmd_farm_stop(args: argparse.Namespace) -> int:
     from middleware.teaching.practice_robots import practice_manager
 
     farm, app = _farm_and_app()
+    if farm.backend == "local":
+        print("error: with the local farm, robots are children of the web server; stop them on its page "
+              "/admin/farm (or use the Ray farm, TELELAB_FARM=ray)", file=sys.stderr)
+        return 1
     if practice_manager(app).stop_named(args.name) or farm.stop(args.name):
         print(f"stopped {args.name}")
         return 0

@@ -75,7 +75,8 @@ class RobotFarm(Protocol):
     backend: str
 
     def start(self, spec: RobotSpec) -> FarmRobot:
-        """Starts the robot (or answers it if it runs already) and waits until it serves; FarmFull when full."""
+        """Starts the robot and waits until it serves; FarmFull when full. One of that name that runs already is
+        answered if it obeys the same controller token, and replaced otherwise."""
 
     def find(self, name: str) -> FarmRobot | None:
         """The running robot called name, from any process."""

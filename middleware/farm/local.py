@@ -31,14 +31,18 @@ class LocalProcessFarm:
     def start(self, spec: RobotSpec) -> FarmRobot:
         with self._lock:
             running = self._processes.get(spec.name)
-            if running is not None:
+            if running is not None and running.controller_token == spec.controller_token:
                 return self._describe(running)
+            if running is not None:  # its owner lost track of it (its record was removed): a fresh one replaces it
+                del self._processes[spec.name]
             if spec.name in self._starting:
                 raise FarmUnavailable(f"{spec.name} is starting already; wait a few seconds.")
             if len(self._processes) + len(self._starting) >= self._capacity:
                 raise FarmFull(f"This host runs as many simulated robots as it can ({self._capacity}). "
                                "Try again when a robot is stopped, or add a host to the lab's Ray farm.")
             self._starting.add(spec.name)
+        if running is not None:
+            running.stop()
         process = SkillServerProcess(spec.name, spec.scene, echo=False, controller_token=spec.controller_token)
         try:
             process.serve()

@@ -77,6 +77,10 @@ class RobotActor:
                 "cpu_share": None if None in shares else sum(s for s in shares if s is not None),
                 "memory_mb": sum(memory), "cpu_s": sum(cpu_seconds(pid) or 0.0 for pid in pids)}
 
+    def obeys(self, controller_token: str) -> bool:
+        """Whether the robot was started for this controller token."""
+        return self._server.controller_token == controller_token
+
     def stop(self) -> None:
         """Stops the skill server (the farm then kills the actor without a restart)."""
         self._stopping = True
@@ -98,7 +102,10 @@ class RayFarm:
         ray = self._ray()
         existing = self.find(spec.name)
         if existing is not None:
-            return existing
+            actor = ray.get_actor(ACTOR_PREFIX + spec.name, namespace=NAMESPACE)
+            if ray.get(actor.obeys.remote(spec.controller_token), timeout=CALL_TIMEOUT_S):
+                return existing
+            self.stop(spec.name)  # its owner lost track of it (its record was removed): a fresh one replaces it
         capacity = self.capacity()
         if capacity.free <= 0:
             raise FarmFull(f"The lab's Ray farm runs as many simulated robots as its {capacity.hosts} host(s) can "

@@ -14,9 +14,12 @@ from middleware.models.farm import PersonalRobotRecord
 
 
 def farm_status(farm: RobotFarm, sessions: Callable[[], Session]) -> dict[str, Any]:
-    """{backend, capacity: {robots, running, free, hosts}, hosts: [...], robots: [...]} of the farm now."""
+    """{backend, capacity: {robots, running, free, hosts}, hosts: [...], robots: [...]} of the farm now; a robot
+    recorded but run by another process's local farm is listed with elsewhere=True and no load."""
     with sessions() as session:
-        owners = dict(session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.owner_name)).all())
+        records = session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.owner_name,
+                                         PersonalRobotRecord.scene, PersonalRobotRecord.address)).all()
+    owners = {name: owner for name, owner, _scene, _address in records}
     capacity = farm.capacity()
     robots = sorted(farm.robots(), key=lambda robot: robot.name)
     nodes = getattr(farm, "nodes", None)
@@ -28,7 +31,12 @@ def farm_status(farm: RobotFarm, sessions: Callable[[], Session]) -> dict[str, A
         "hosts": [{**host, "robots": sum(1 for robot in robots if robot.node == host["node_id"])} for host in hosts],
         "robots": [{"name": robot.name, "owner": owners.get(robot.name), "scene": robot.scene, "host": robot.host,
                     "node": robot.node, "address": robot.address, "restarted": robot.restarted,
-                    "cpu_share": robot.cpu_share, "memory_mb": robot.memory_mb} for robot in robots],
+                    "cpu_share": robot.cpu_share, "memory_mb": robot.memory_mb, "elsewhere": False}
+                   for robot in robots]
+        # Recorded robots this process's farm does not run: the local farm's robots of another web process.
+        + [{"name": name, "owner": owner, "scene": scene, "host": "another process", "node": "", "address": address,
+            "restarted": False, "cpu_share": None, "memory_mb": None, "elsewhere": True}
+           for name, owner, scene, address in sorted(records) if address and name not in {r.name for r in robots}],
     }
 
 

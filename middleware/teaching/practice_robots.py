@@ -250,14 +250,17 @@ class PracticeManager:
             self._keeper.start()
 
     def forget_lost(self) -> list[str]:
-        """Removes the rows of robots the farm no longer runs (the local farm's robots end with their process;
-        a start that never finished); returns their names."""
+        """Removes the rows of robots that run nowhere (the local farm's robots end with their process; a start
+        that never finished); returns their names.
+
+        A robot this process's farm does not know may belong to another process (the web server, while a
+        `telelab` command runs): it is lost only if it does not answer at its address either."""
         stale_start = self._clock() - timedelta(seconds=STARTING_FOR_AT_MOST_S)
         with self._sessions() as session:
             records = session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.address,
                                              PersonalRobotRecord.started_at)).all()
         lost = [name for name, address, started_at in records
-                if (address and self.farm.find(name) is None)
+                if (address and self.farm.find(name) is None and not _answers(name, address))
                 or (not address and as_utc(started_at) < stale_start)]
         for name in lost:
             self._release(name)
@@ -359,6 +362,14 @@ class PracticeManager:
                 self.stop_idle()
             except Exception:  # noqa: BLE001 - one failed stop must not end the keeper
                 log.exception("stopping idle practice robots failed")
+
+
+def _answers(name: str, address: str) -> bool:
+    link = RobotLink(name, address, rpc_timeout_s=1.0)
+    try:
+        return link.is_online()
+    finally:
+        link.close()
 
 
 _managers: weakref.WeakSet[PracticeManager] = weakref.WeakSet()

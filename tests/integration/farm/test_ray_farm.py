@@ -72,6 +72,10 @@ def test_robots_spread_over_both_nodes_and_obey_only_their_token(farm: RayFarm) 
     assert capacity.hosts == 2 and capacity.running == 4 and capacity.robots > 4
     assert sorted(robot.name for robot in farm.robots()) == [f"spread-{i}" for i in range(4)]
     assert farm.stop("spread-3") and farm.find("spread-3") is None and not farm.stop("spread-3")
+    replaced = farm.start(RobotSpec("spread-2", "empty", "a-new-owner"))  # the old owner lost track of it
+    assert _drives(replaced.address, "a-new-owner", 1)
+    with pytest.raises(CommandRefused):
+        _drives(replaced.address, "token-2", 2)
 
 
 def test_a_killed_robot_actor_is_restarted_and_obeys_its_controller_again(farm: RayFarm) -> None:

@@ -65,3 +65,58 @@ def test_an_unreachable_farm_is_said_on_the_page(live_server) -> None:
         assert (status, error["error"]["code"]) == (503, "farm_unavailable")
     finally:
         extensions["telelab.farm"] = real
+
+
+def test_a_telelab_command_beside_the_web_server_leaves_its_local_robots_alone(live_server) -> None:
+    import os
+    import subprocess
+    import sys
+
+    from middleware.teaching.practice_robots import practice_manager
+
+    ann = _client(live_server, "ann", "student")
+    environment = {**os.environ, "TELELAB_DATABASE_URL": live_server.app.config["DATABASE_URL"],
+                   "TELELAB_FARM": "local", "TELELAB_ROBOTS": ""}
+    try:
+        assert _api(ann, "POST", "/api/practice")[0] == 201
+
+        def telelab(*args: str) -> subprocess.CompletedProcess[str]:
+            return subprocess.run([sys.executable, "-m", "middleware.cli", *args], env=environment,
+                                  capture_output=True, text=True, timeout=120)
+
+        status = telelab("farm", "status")
+        assert status.returncode == 0, status.stderr
+        assert "practice-ann" in status.stdout and "another process" in status.stdout
+        stop = telelab("farm", "stop", "practice-ann")
+        assert stop.returncode == 1 and "/admin/farm" in stop.stderr
+        status, seen = _api(ann, "GET", "/api/practice")  # the commands' own app did not forget the robot
+        assert status == 200 and seen["running"] and seen["name"] == "practice-ann"
+        status, ran = _api(ann, "POST", "/api/practice/commands", {"command": {"stop": True}})
+        assert status == 202, ran
+    finally:
+        practice_manager(live_server.app).shutdown()
+
+
+def test_a_farm_replaces_a_robot_of_the_same_name_started_for_another_token() -> None:
+    from middleware.farm.base import RobotSpec
+    from middleware.farm.local import LocalProcessFarm
+    from middleware.robots.link import CommandRefused, RobotLink
+
+    farm = LocalProcessFarm()
+    try:
+        first = farm.start(RobotSpec("practice-zed", "empty", "old-token"))
+        assert farm.start(RobotSpec("practice-zed", "empty", "old-token")).address == first.address
+        second = farm.start(RobotSpec("practice-zed", "empty", "new-token"))
+        link = RobotLink("practice-zed", second.address)
+        try:
+            assert link.drive("new-token", 1, 0.1, 0.0).applied_sequence == 1
+            try:
+                link.drive("old-token", 2, 0.1, 0.0)
+                raise AssertionError("the replaced robot's token still drives")
+            except CommandRefused:
+                pass
+        finally:
+            link.close()
+        assert len(farm.robots()) == 1
+    finally:
+        farm.close()
