@@ -30,6 +30,7 @@ from middleware.errors import register_error_handlers
 from middleware.experiment import routes as experiment_routes
 from middleware.extensions import csrf, login_manager, login_still_open
 from middleware.farm import setup as farm_setup
+from middleware.lab import pool_routes
 from middleware.lab import routes as lab_routes
 from middleware.lab import skills as lab_skills
 from middleware.lab import sockets as lab_sockets
@@ -110,7 +111,7 @@ def _register_areas(app: Flask) -> None:
                       bookings_routes.blueprint, chat_routes.blueprint, accounts_routes.blueprint,
                       courses_routes.blueprint, experiment_routes.blueprint, assessment_routes.blueprint,
                       assessment_pages.blueprint, practice_routes.blueprint, lesson_routes.blueprint,
-                      tour_routes.blueprint, class_routes.blueprint, farm_routes.blueprint):
+                      tour_routes.blueprint, class_routes.blueprint, farm_routes.blueprint, pool_routes.blueprint):
         app.register_blueprint(blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
                             practice_routes.register, tour_live.register], login_still_open)

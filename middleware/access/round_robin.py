@@ -20,6 +20,7 @@ from typing import overload
 from sqlalchemy import delete, select, update
 from sqlalchemy.orm import Session
 
+from middleware.access import pools
 from middleware.locking import lock_robot_control, rows_matched
 from middleware.models import QueueEntry, RobotControl
 
@@ -112,8 +113,18 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
         control.faulted = False
 
     priority = policy.priority_user_id(session, control.robot_name, now)
+    if (robot_online and priority is not None and priority not in present
+            and pools.next_waiter(session, control.robot_name, now, policy.grace_s, only_user=priority) is not None
+            and pools.take(session, control.robot_name, priority, now)):
+        present.append(priority)  # a pool booking's holder, waiting in its pool: bound here at the slot
+        entries = _entries(session, control.robot_name)
     if priority is not None and priority in present and control.controller_id != priority:
         _grant(control, priority, now)
+    if robot_online and not present:
+        bound = _bind_pool_waiter(session, control.robot_name, policy, now)
+        if bound is not None:
+            present.append(bound)
+            entries = _entries(session, control.robot_name)
 
     if not robot_online:
         # Nobody loses a turn to a fault: the clock stops and the controller keeps the seat. With nobody in
@@ -131,17 +142,23 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
 
     waiting = [u for u in present if u != control.controller_id]
     if robot_online and control.controller_id is not None:
-        limited = waiting and control.controller_id != priority
+        pool_waits = not waiting and pools.next_waiter(session, control.robot_name, now, policy.grace_s) is not None
+        limited = (waiting or pool_waits) and control.controller_id != priority
         if not limited:
             control.turn_ends_at = None
         elif control.turn_ends_at is None:
             control.turn_ends_at = now + timedelta(seconds=policy.turn_length_s(session, control.controller_id))
         elif _as_utc(control.turn_ends_at) <= now:
-            previous = next(e for e in entries if e.user_id == control.controller_id)
-            previous.enqueued_at = now  # to the end of the waiting list
-            _grant(control, waiting[0], now)
-            control.turn_ends_at = now + timedelta(seconds=policy.turn_length_s(session, waiting[0]))
-            waiting = waiting[1:] + [previous.user_id]
+            if not waiting and (bound := _bind_pool_waiter(session, control.robot_name, policy, now)) is not None:
+                waiting = [bound]
+            if waiting:
+                previous = next(e for e in entries if e.user_id == control.controller_id)
+                previous.enqueued_at = now  # to the end of the waiting list
+                _grant(control, waiting[0], now)
+                control.turn_ends_at = now + timedelta(seconds=policy.turn_length_s(session, waiting[0]))
+                waiting = waiting[1:] + [previous.user_id]
+            else:
+                control.turn_ends_at = None  # the pool waiter went (or another robot took them): no one to hand to
     control.updated_at = now
     session.flush()
     return QueueState(
@@ -153,6 +170,14 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
         faulted=control.faulted,
         token_changed=control.token != token_before,
     )
+
+
+def _bind_pool_waiter(session: Session, robot_name: str, policy: AccessPolicy, now: datetime) -> int | None:
+    """Seats the first waiter of the robot's pool in its queue; their id, or None when nobody could be bound."""
+    candidate = pools.next_waiter(session, robot_name, now, policy.grace_s)
+    if candidate is not None and pools.take(session, robot_name, candidate, now):
+        return candidate
+    return None
 
 
 def tick(session: Session, robot_name: str, policy: AccessPolicy, now: datetime,
@@ -198,7 +223,8 @@ def pass_turn(session: Session, robot_name: str, user_id: int, policy: AccessPol
     control = lock_robot(session, robot_name)
     if control.controller_id == user_id:
         entries = _entries(session, robot_name)
-        if any(e.user_id != user_id for e in entries):
+        if (any(e.user_id != user_id for e in entries)
+                or pools.next_waiter(session, robot_name, now, policy.grace_s) is not None):
             control.turn_ends_at = now  # expires now: _settle rotates exactly as at the end of a turn
     return _settle(session, control, policy, now, robot_online)
 

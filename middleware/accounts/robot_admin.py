@@ -11,11 +11,12 @@ from dataclasses import dataclass
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.accounts.schemas import clean_robot_address, clean_robot_name, clean_robot_title
+from middleware.accounts.schemas import clean_robot_address, clean_robot_kind, clean_robot_name, clean_robot_title
 from middleware.accounts.services import require_admin
 from middleware.errors import Refused
 from middleware.models import Robot, User
 from middleware.models.accounts import utc_now
+from middleware.robots.catalog import default_kind
 
 
 @dataclass(frozen=True)
@@ -27,25 +28,34 @@ class RobotView:
     title: str
     address: str
     enabled: bool
+    kind: str
+    farm_managed: bool = False
+
+    @classmethod
+    def of(cls, robot: Robot) -> RobotView:
+        """The view of a robots row."""
+        return cls(robot.id, robot.name, robot.title, robot.address, robot.enabled, robot.kind, robot.farm_managed)
 
     def to_dict(self) -> dict[str, object]:
         """The JSON form."""
         return {"id": self.id, "name": self.name, "title": self.title, "address": self.address,
-                "enabled": self.enabled}
+                "enabled": self.enabled, "kind": self.kind, "farm_managed": self.farm_managed}
 
 
 def list_robots(session: Session, actor: User) -> list[RobotView]:
     """Every robot in the table (admins only)."""
     require_admin(actor)
-    return [RobotView(r.id, r.name, r.title, r.address, r.enabled)
-            for r in session.scalars(select(Robot).order_by(Robot.id))]
+    return [RobotView.of(r) for r in session.scalars(select(Robot).order_by(Robot.id))]
 
 
-def add_robot(session: Session, actor: User, name: object, title: object, address: object) -> Robot:
-    """Adds an enabled robot (admins only); names are unique. The caller commits."""
+def add_robot(session: Session, actor: User, name: object, title: object, address: object,
+              kind: object = None) -> Robot:
+    """Adds an enabled robot (admins only); names are unique; the kind defaults to the name without its number.
+    The caller commits."""
     require_admin(actor)
     clean_name = clean_robot_name(name)
-    robot = Robot(name=clean_name, title=clean_robot_title(title or clean_name), address=clean_robot_address(address))
+    robot = Robot(name=clean_name, title=clean_robot_title(title or clean_name), address=clean_robot_address(address),
+                  kind=clean_robot_kind(kind) if kind not in (None, "") else default_kind(clean_name))
     if session.scalar(select(Robot.id).where(Robot.name == clean_name)) is not None:
         raise Refused(409, "robot_exists", f"A robot named {clean_name!r} exists already.", "name")
     session.add(robot)
@@ -54,8 +64,8 @@ def add_robot(session: Session, actor: User, name: object, title: object, addres
 
 
 def update_robot(session: Session, actor: User, robot_id: int, *, title: object = None, address: object = None,
-                 enabled: bool | None = None) -> Robot:
-    """Changes a robot's title, address or enabled flag (admins only). The caller commits."""
+                 enabled: bool | None = None, kind: object = None) -> Robot:
+    """Changes a robot's title, address, kind or enabled flag (admins only). The caller commits."""
     require_admin(actor)
     robot = session.get(Robot, robot_id)
     if robot is None:
@@ -64,6 +74,8 @@ def update_robot(session: Session, actor: User, robot_id: int, *, title: object 
         robot.title = clean_robot_title(title)
     if address is not None:
         robot.address = clean_robot_address(address)
+    if kind is not None:
+        robot.kind = clean_robot_kind(kind)
     if enabled is not None:
         robot.enabled = enabled
     robot.updated_at = utc_now()

@@ -44,7 +44,7 @@ def robots_add() -> ResponseReturnValue:
 
     def add() -> ResponseReturnValue:
         robot = robot_admin.add_robot(get_session(), current_user, form.get("name"), form.get("title"),
-                                      form.get("address"))
+                                      form.get("address"), form.get("kind"))
         _refresh_robots_after_commit()
         flash(f"Robot {robot.name} added.", "success")
         return redirect(url_for("accounts.robots_page"), 303)
@@ -62,7 +62,7 @@ def robots_update(robot_id: int) -> ResponseReturnValue:
     def update() -> ResponseReturnValue:
         robot = robot_admin.update_robot(
             get_session(), current_user, robot_id, title=form.get("title"), address=form.get("address"),
-            enabled=clean_flag(form["enabled"], "enabled") if "enabled" in form else None)
+            kind=form.get("kind"), enabled=clean_flag(form["enabled"], "enabled") if "enabled" in form else None)
         _refresh_robots_after_commit()
         flash(f"Robot {robot.name} saved ({'enabled' if robot.enabled else 'disabled'}).", "success")
         return redirect(url_for("accounts.robots_page"), 303)
@@ -80,22 +80,22 @@ def api_robots() -> ResponseReturnValue:
 @blueprint.post("/api/admin/robots")
 @login_required
 def api_add_robot() -> ResponseReturnValue:
-    """{name, title?, address}: adds a robot (admins)."""
+    """{name, title?, address, kind?}: adds a robot (admins)."""
     data = json_body()
-    robot = robot_admin.add_robot(get_session(), current_user, data.get("name"), data.get("title"), data.get("address"))
+    robot = robot_admin.add_robot(get_session(), current_user, data.get("name"), data.get("title"), data.get("address"),
+                                  data.get("kind"))
     _refresh_robots_after_commit()
-    return jsonify({"robot": robot_admin.RobotView(robot.id, robot.name, robot.title, robot.address,
-                                                   robot.enabled).to_dict()}), 201
+    return jsonify({"robot": robot_admin.RobotView.of(robot).to_dict()}), 201
 
 
 @blueprint.patch("/api/admin/robots/<int:robot_id>")
 @login_required
 def api_update_robot(robot_id: int) -> ResponseReturnValue:
-    """{title?, address?, enabled?}: changes a robot (admins)."""
+    """{title?, address?, kind?, enabled?}: changes a robot (admins)."""
     data = json_body()
     robot = robot_admin.update_robot(
         get_session(), current_user, clean_id(robot_id, "robot_id"), title=data.get("title"),
-        address=data.get("address"), enabled=clean_flag(data["enabled"], "enabled") if "enabled" in data else None)
+        address=data.get("address"), kind=data.get("kind"),
+        enabled=clean_flag(data["enabled"], "enabled") if "enabled" in data else None)
     _refresh_robots_after_commit()
-    return jsonify({"robot": robot_admin.RobotView(robot.id, robot.name, robot.title, robot.address,
-                                                   robot.enabled).to_dict()})
+    return jsonify({"robot": robot_admin.RobotView.of(robot).to_dict()})

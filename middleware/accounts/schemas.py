@@ -47,6 +47,13 @@ def clean_robot_name(value: object) -> str:
     return value.strip()
 
 
+def clean_robot_kind(value: object) -> str:
+    """A robot kind (the pool it serves in): 1-32 letters, digits, '-' or '_', like a robot name."""
+    if not isinstance(value, str) or not ROBOT_NAME.fullmatch(value.strip()):
+        raise InvalidField("kind", "kind must be 1 to 32 letters, digits, '-' or '_' (robots of one kind form a pool).")
+    return value.strip()
+
+
 def clean_robot_title(value: object) -> str:
     """A title for people: 1-100 characters on one line."""
     if not isinstance(value, str) or not value.strip() or len(value.strip()) > 100 or not value.isprintable():

@@ -24,7 +24,7 @@ from middleware.bookings.week import form_default_start, week_days
 from middleware.db import get_session
 from middleware.errors import ApiError, flashed, unless_refused
 from middleware.models import Booking
-from middleware.robots.registry import robot_registry
+from middleware.robots.registry import RobotRegistry, robot_registry
 from middleware.validation import within_calendar
 
 blueprint = Blueprint("bookings", __name__)
@@ -62,13 +62,14 @@ def api_my_bookings() -> ResponseReturnValue:
 @blueprint.post("/api/bookings")
 @login_required
 def api_create_booking() -> ResponseReturnValue:
-    """Books a slot: {robot_name, starts_at, ends_at | duration_min, kind?, course_id?}."""
+    """Books a slot: {robot_name | pool, starts_at, ends_at | duration_min, kind?, course_id?}."""
     data = request.get_json(silent=True)
     if not isinstance(data, dict):
         raise ApiError(400, "invalid_field", "Send the booking as a JSON object.", "body")
     session, now = get_session(), _now()
     booking_request = parse_booking_request(data)
-    _require_robot(booking_request.robot_name)
+    if booking_request.pool_kind is None:
+        _require_robot(booking_request.robot_name)
     booking = services.create_booking(session, current_user, booking_request, now)
     return jsonify({"booking": services.describe(session, current_user, [booking], now)[0].to_dict()}), 201
 
@@ -158,7 +159,17 @@ def page() -> ResponseReturnValue:
         this_week_url=_page_url(robot_name, None, tz_name, "all" if all_hours else None),
         hours_url=_page_url(robot_name, week_iso, tz_name, None if all_hours else "all"),
         robot_urls={n: _page_url(n, week_iso, tz_name) for n in names},
+        pool=_pool_of(registry, robot_name),
     )
+
+
+def _pool_of(registry: RobotRegistry, robot_name: str | None) -> dict[str, object] | None:
+    """The kind of robot_name and how many robots share it, when it has others (a pool booking may be offered)."""
+    if robot_name is None:
+        return None
+    kind = registry.addresses[robot_name].kind
+    count = sum(1 for n in registry.names() if registry.addresses[n].kind == kind)
+    return {"kind": kind, "count": count} if kind and count > 1 else None
 
 
 def _form_starts_at(form: dict[str, str]) -> str | None:
@@ -189,10 +200,12 @@ def create_from_form() -> ResponseReturnValue:
 
     def book() -> ResponseReturnValue:
         booking_request = parse_booking_request(form)
-        _require_robot(booking_request.robot_name)
+        if booking_request.pool_kind is None:
+            _require_robot(booking_request.robot_name)
         booking = services.create_booking(get_session(), current_user, booking_request, _now())
         zone = parse_time_zone(form.get("tz"))
-        flash(f"Booked {booking.robot_name} on {booking_request.starts_at.astimezone(zone):%a %d %b, %H:%M}"
+        what = booking.robot_name or f"any {booking.pool_kind} robot (assigned when the slot starts)"
+        flash(f"Booked {what} on {booking_request.starts_at.astimezone(zone):%a %d %b, %H:%M}"
               f"–{booking_request.ends_at.astimezone(zone):%H:%M}.", "success")
         return redirect(back, 303)
 
@@ -229,15 +242,16 @@ def ical_export() -> ResponseReturnValue:
     grace_min = services.grace_period_s(current_app.config.get("BOOKING_GRACE_S")) / 60
     events = []
     for view in sorted(views, key=lambda v: v.starts_at):
-        address = registry.addresses.get(view.robot_name)
-        title = address.title if address else view.robot_name
+        address = registry.addresses.get(view.robot_name) if view.robot_name else None
+        title = address.title if address else (view.robot_name or f"any {view.pool_kind} robot")
+        opens = (url_for("lab.console", robot_name=view.robot_name, _external=True) if view.robot_name
+                 else url_for("pools.wait_page", kind=view.pool_kind, _external=True))
         summary = (f"Telelab class session ({view.course_code}) on {title}" if view.kind == "class"
                    else f"Telelab booking: {title}")
         events.append(ical.CalendarEvent(
             uid=f"booking-{view.id}@{host}", starts_at=view.starts_at, ends_at=view.ends_at, summary=summary,
-            description=f"Robot {view.robot_name}. Open "
-                        f"{url_for('lab.console', robot_name=view.robot_name, _external=True)}"
-                        f" within {grace_min:g} minutes of the start, or the slot goes back to the queue.",
+            description=f"Robot {title}. Open {opens} within {grace_min:g} minutes of the start, "
+                        "or the slot goes back to the queue.",
             status="CANCELLED" if view.status in ("cancelled", "released") else "CONFIRMED"))
     body = ical.calendar(events, f"Telelab bookings of {current_user.username}", now)
     return Response(body, mimetype="text/calendar", headers={

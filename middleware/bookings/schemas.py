@@ -19,13 +19,15 @@ MAX_ID = 2**31 - 1
 
 @dataclass(frozen=True)
 class BookingRequest:
-    """A validated request to book one robot from starts_at to ends_at (aware, UTC)."""
+    """A validated request to book one robot, or any robot of a pool (pool_kind), from starts_at to ends_at
+    (aware, UTC). For a pool booking robot_name is the robot it was asked from (may be empty)."""
 
     robot_name: str
     starts_at: datetime
     ends_at: datetime
     kind: str
     course_id: int | None
+    pool_kind: str | None = None
 
 
 def parse_instant(value: object, field: str) -> datetime:
@@ -54,9 +56,17 @@ def parse_optional_id(value: object, field: str) -> int | None:
 
 
 def parse_booking_request(data: Mapping[str, object]) -> BookingRequest:
-    """A BookingRequest from JSON or form fields; ends_at or duration_min gives the end."""
+    """A BookingRequest from JSON or form fields; ends_at or duration_min gives the end; pool (a robot kind)
+    books any robot of that kind instead of robot_name."""
+    pool = data.get("pool")
+    if pool in (None, ""):
+        pool = None
+    elif not isinstance(pool, str) or not pool.strip() or len(pool) > 32:
+        raise InvalidField("pool", "pool must name a kind of robot, such as 'lab'.")
     robot_name = data.get("robot_name")
-    if not isinstance(robot_name, str) or not robot_name.strip() or len(robot_name) > 32:
+    if pool is not None and robot_name in (None, ""):
+        robot_name = ""
+    elif not isinstance(robot_name, str) or not robot_name.strip() or len(robot_name) > 32:
         raise InvalidField("robot_name", "robot_name must name one of the lab's robots.")
     starts_at = parse_instant(data.get("starts_at"), "starts_at")
     if data.get("ends_at") not in (None, ""):
@@ -72,7 +82,8 @@ def parse_booking_request(data: Mapping[str, object]) -> BookingRequest:
     course_id = parse_optional_id(data.get("course_id"), "course_id")
     if kind == "class" and course_id is None:
         raise InvalidField("course_id", "A class booking needs the course it is for (course_id).")
-    return BookingRequest(robot_name.strip(), starts_at, ends_at, str(kind), course_id)
+    return BookingRequest(robot_name.strip(), starts_at, ends_at, str(kind), course_id,
+                          pool.strip() if pool is not None else None)
 
 
 def check_slot_shape(starts_at: datetime, ends_at: datetime, now: datetime) -> None:

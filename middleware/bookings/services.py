@@ -14,6 +14,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware.auth.schemas import InvalidField
+from middleware.bookings import pool_slots
 from middleware.bookings.schemas import SLOT_MINUTES, BookingRequest, check_slot_shape
 from middleware.courses.services import is_course_tutor
 from middleware.errors import Refused
@@ -72,6 +73,9 @@ def priority_user_id(session: Session, robot_name: str, now: datetime, *, grace_
     """
     now = as_utc(now)
     booking = _active_booking(session, robot_name, now)
+    if booking is None:
+        pool_slots.bind_at_slot_start(session, robot_name, now)  # a pool booking whose slot starts takes this robot
+        booking = _active_booking(session, robot_name, now)
     if booking is None or _release_if_no_show(booking, now, grace_period_s(grace_s)):
         return None
     return booking.user_id
@@ -175,6 +179,41 @@ def _check_role(session: Session, actor: User, request: BookingRequest) -> int |
     return request.course_id
 
 
+def _lock_and_check_slot(session: Session, request: BookingRequest) -> str | None:
+    """Locks the robot's (and its pool's) control rows, then refuses a slot the robot or the pool cannot give;
+    the robot_name to store (None for a pool booking, bound when its slot starts).
+
+    Locks come first: on SQLite the first write of the transaction takes the database's write lock."""
+    kind = request.pool_kind or pool_slots.robot_kind(session, request.robot_name)
+    robots = pool_slots.lock_kind(session, kind) if kind else []
+    if request.pool_kind is not None:
+        kind = request.pool_kind
+        if not robots:
+            raise BookingRefused(404, "unknown_pool", f"There is no pool of robots of kind {kind!r}.", "pool")
+        if pool_slots.most_held(session, kind, robots, request.starts_at, request.ends_at) >= len(robots):
+            free_at = pool_slots.first_free_start(session, kind, robots, request.starts_at, request.ends_at)
+            when = (f"the first slot as long that fits starts at {free_at:%Y-%m-%d %H:%M} UTC" if free_at
+                    else "no slot as long fits within two weeks")
+            raise BookingRefused(409, "pool_full", f"All {len(robots)} robots of kind {kind!r} are booked for part "
+                                 f"of that time; {when}.", "starts_at")
+        return None
+    if request.robot_name not in robots:
+        lock_robot_control(session, request.robot_name)
+    clash = session.scalar(
+        select(Booking).where(Booking.robot_name == request.robot_name, Booking.cancelled_at.is_(None),
+                              Booking.released_at.is_(None), Booking.starts_at < request.ends_at,
+                              Booking.ends_at > request.starts_at).limit(1)
+    )
+    if clash is not None:
+        raise BookingRefused(409, "slot_taken",
+                             "Someone has already booked part of that time on this robot; choose a free slot.",
+                             "starts_at")
+    if kind and pool_slots.most_held(session, kind, robots, request.starts_at, request.ends_at) >= len(robots):
+        raise BookingRefused(409, "slot_taken", f"Bookings of any {kind} robot hold every robot of the kind for "
+                             "part of that time; choose a free slot.", "starts_at")
+    return request.robot_name
+
+
 def create_booking(session: Session, actor: User, request: BookingRequest, now: datetime) -> Booking:
     """Books the slot after every check; overlap and allowance are checked under row locks. Caller commits.
 
@@ -187,17 +226,8 @@ def create_booking(session: Session, actor: User, request: BookingRequest, now: 
         raise BookingRefused(400, "invalid_field", invalid.message, invalid.field) from None
     course_id = _check_role(session, actor, request)
 
-    lock_robot_control(session, request.robot_name)  # first: on SQLite it must be the transaction's first write
+    robot_name = _lock_and_check_slot(session, request)
     lock_user(session, actor.id)
-    clash = session.scalar(
-        select(Booking).where(Booking.robot_name == request.robot_name, Booking.cancelled_at.is_(None),
-                              Booking.released_at.is_(None), Booking.starts_at < request.ends_at,
-                              Booking.ends_at > request.starts_at).limit(1)
-    )
-    if clash is not None:
-        raise BookingRefused(409, "slot_taken",
-                             "Someone has already booked part of that time on this robot; choose a free slot.",
-                             "starts_at")
     if actor.role == "student":
         allowance, allowance_course = student_allowance(session, actor.id)
         wanted = int((request.ends_at - request.starts_at).total_seconds() // 60)
@@ -208,8 +238,8 @@ def create_booking(session: Session, actor: User, request: BookingRequest, now: 
                 f"Your course allows {allowance} minutes of bookings a week; you have {max(0, allowance - used)} "
                 f"left that week and asked for {wanted}.", "ends_at")
         course_id = course_id or allowance_course
-    booking = Booking(robot_name=request.robot_name, user_id=actor.id, course_id=course_id, kind=request.kind,
-                      starts_at=request.starts_at, ends_at=request.ends_at, created_at=as_utc(now))
+    booking = Booking(robot_name=robot_name, pool_kind=request.pool_kind, user_id=actor.id, course_id=course_id,
+                      kind=request.kind, starts_at=request.starts_at, ends_at=request.ends_at, created_at=as_utc(now))
     session.add(booking)
     session.flush()
     return booking
@@ -245,7 +275,7 @@ class BookingView:
     """One booking as pages and the API show it."""
 
     id: int
-    robot_name: str
+    robot_name: str | None  # None: a pool booking whose slot has not started (any robot of pool_kind)
     kind: str
     starts_at: datetime
     ends_at: datetime
@@ -254,13 +284,15 @@ class BookingView:
     may_cancel: bool
     course_code: str | None
     booked_by: str | None  # shown to tutors and admins only
+    pool_kind: str | None = None
 
     def to_dict(self) -> dict[str, object]:
         """The JSON form, with times as ISO 8601 UTC ('Z')."""
         iso = lambda m: m.strftime("%Y-%m-%dT%H:%M:%SZ")  # noqa: E731
         return {"id": self.id, "robot_name": self.robot_name, "kind": self.kind, "starts_at": iso(self.starts_at),
                 "ends_at": iso(self.ends_at), "status": self.status, "mine": self.mine,
-                "may_cancel": self.may_cancel, "course_code": self.course_code, "booked_by": self.booked_by}
+                "may_cancel": self.may_cancel, "course_code": self.course_code, "booked_by": self.booked_by,
+                "pool": self.pool_kind}
 
 
 def _status(booking: Booking) -> str:
@@ -288,7 +320,7 @@ def describe(session: Session, actor: User, bookings: Iterable[Booking], now: da
         views.append(BookingView(
             b.id, b.robot_name, b.kind, as_utc(b.starts_at), as_utc(b.ends_at), status, b.user_id == actor.id,
             open_ and may_cancel(session, actor, b), codes.get(b.course_id) if b.course_id else None,
-            names.get(b.user_id)))
+            names.get(b.user_id), b.pool_kind))
     return views
 
 

@@ -8,8 +8,10 @@ from flask import Flask, current_app
 
 from middleware.config import ConfigError
 from middleware.farm.base import RobotFarm
+from middleware.farm.pool_robots import PoolKeeper
 
 _EXTENSION_KEY = "telelab.farm"
+_KEEPER_KEY = "telelab.pool_keeper"
 BACKENDS = ("local", "ray")
 
 
@@ -34,9 +36,28 @@ def build_farm(environ: dict[str, str] | None = None) -> RobotFarm:
 
 def init_app(app: Flask, farm: RobotFarm | None = None) -> RobotFarm:
     """Gives app its farm (from app.config["FARM"], the argument, or the environment)."""
+    from middleware.db import session_factory
+    from middleware.robots.registry import robot_registry
+
     chosen = farm or app.config.get("FARM") or build_farm()
     app.extensions[_EXTENSION_KEY] = chosen
+    keeper = app.extensions[_KEEPER_KEY] = PoolKeeper(chosen, session_factory(app),
+                                                      lambda: robot_registry(app).refresh())
+    serving = [False]
+
+    @app.before_request
+    def keep_pools_once_serving() -> None:
+        # A process keeps the pools' farm robots once it serves requests: `telelab` commands never do.
+        if not serving[0]:
+            serving[0] = True
+            keeper.start_if_needed()
+
     return chosen
+
+
+def pool_keeper(app: Flask | None = None) -> PoolKeeper:
+    """The keeper of app's pool robots (or of the current app's)."""
+    return (app or current_app).extensions[_KEEPER_KEY]
 
 
 def robot_farm(app: Flask | None = None) -> RobotFarm:

@@ -35,7 +35,12 @@ def index() -> ResponseReturnValue:
         RobotCard(name, registry.addresses[name].title, registry.get(name).is_online())  # type: ignore[union-attr]
         for name in registry.names()
     ]
-    return render_template("lab/lab_index.html", robots=robots)
+    kinds: dict[str, int] = {}
+    for name in registry.names():
+        kind = registry.addresses[name].kind
+        kinds[kind] = kinds.get(kind, 0) + 1
+    pools = sorted((kind, count) for kind, count in kinds.items() if kind and count > 1)
+    return render_template("lab/lab_index.html", robots=robots, pools=pools)
 
 
 @blueprint.get("/lab/<robot_name>")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from middleware.models.access import QueueEntry, RobotControl
+from middleware.models.access import PoolQueueEntry, QueueEntry, RobotControl
 from middleware.models.accounts import Role, User
 from middleware.models.assessment import Attempt, AttemptReview, Exam, Question, SurveyResponse  # noqa: F401
 from middleware.models.auth import LoginSession
@@ -18,5 +18,5 @@ from middleware.models.teaching import GuidedSession, Lesson, Tour  # noqa: F401
 
 __all__ = [
     "Base", "Booking", "ChatMessage", "Course", "CourseMembership", "Invitation", "LoginFailure",
-    "LoginSession", "QueueEntry", "Robot", "Role", "RobotControl", "User", "UserPreference",
+    "LoginSession", "PoolQueueEntry", "QueueEntry", "Robot", "Role", "RobotControl", "User", "UserPreference",
 ]

@@ -40,3 +40,16 @@ class QueueEntry(Base):
     user_id: Mapped[int] = mapped_column(ForeignKey("users.id", ondelete="CASCADE"))
     enqueued_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
     last_seen_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+
+
+class PoolQueueEntry(Base):
+    """A user waiting for any robot of a kind; bound to one when a robot of the kind can start their turn."""
+
+    __tablename__ = "pool_queue_entries"
+    __table_args__ = (UniqueConstraint("kind", "user_id", name="uq_pool_queue_entries_kind_user"),)
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    kind: Mapped[str] = mapped_column(String(32), index=True)
+    user_id: Mapped[int] = mapped_column(ForeignKey("users.id", ondelete="CASCADE"))
+    enqueued_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+    last_seen_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)

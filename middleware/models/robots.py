@@ -12,7 +12,8 @@ from middleware.models.base import Base
 
 
 class Robot(Base):
-    """A robot the middleware may reach: a URL-safe name, a title for people, its skill server's address."""
+    """A robot the middleware may reach: a URL-safe name, a title for people, its skill server's address, and its
+    kind (robots of one kind are interchangeable: same scene and model, so a pool of them serves a queue)."""
 
     __tablename__ = "robots"
 
@@ -20,6 +21,9 @@ class Robot(Base):
     name: Mapped[str] = mapped_column(String(32), unique=True)
     title: Mapped[str] = mapped_column(String(100))
     address: Mapped[str] = mapped_column(String(255))  # host:port of the gRPC skill server
+    kind: Mapped[str] = mapped_column(String(32), index=True)
+    farm_managed: Mapped[bool] = mapped_column(default=False)  # started by the robot farm for its pool
+    scene: Mapped[str | None] = mapped_column(String(64))  # the farm runs it in this scene (farm_managed only)
     enabled: Mapped[bool] = mapped_column(default=True)
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
     updated_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 from sqlalchemy import select
@@ -15,12 +16,18 @@ from middleware.models.accounts import utc_now
 
 @dataclass(frozen=True)
 class RobotEntry:
-    """One robot as the registry sees it: name, skill server address, title for people, enabled."""
+    """One robot as the registry sees it: name, skill server address, title for people, enabled, kind."""
 
     name: str
     address: str
     title: str
     enabled: bool = True
+    kind: str = ""
+
+
+def default_kind(name: str) -> str:
+    """The kind a robot gets unless an admin says otherwise: its name without a copy number ('lab-2' -> 'lab')."""
+    return re.sub(r"-\d+$", "", name) or name
 
 
 def seed_from_config(session: Session, configured: tuple[RobotAddress, ...]) -> None:
@@ -28,7 +35,8 @@ def seed_from_config(session: Session, configured: tuple[RobotAddress, ...]) -> 
     for robot in configured:
         row = session.scalar(select(Robot).where(Robot.name == robot.name))
         if row is None:
-            session.add(Robot(name=robot.name, title=robot.title, address=robot.address, enabled=True))
+            session.add(Robot(name=robot.name, title=robot.title, address=robot.address, enabled=True,
+                              kind=default_kind(robot.name)))
         elif row.address != robot.address:
             row.address, row.updated_at = robot.address, utc_now()
         try:
@@ -39,5 +47,5 @@ def seed_from_config(session: Session, configured: tuple[RobotAddress, ...]) -> 
 
 def load_entries(session: Session) -> list[RobotEntry]:
     """Every robot in the table, enabled or not, in the order they were added."""
-    return [RobotEntry(r.name, r.address, r.title, r.enabled)
+    return [RobotEntry(r.name, r.address, r.title, r.enabled, r.kind)
             for r in session.scalars(select(Robot).order_by(Robot.id))]

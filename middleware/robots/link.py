@@ -231,6 +231,15 @@ _REFUSAL_CODES = {
 }
 
 
+def answers_at(name: str, address: str, rpc_timeout_s: float = 1.0) -> bool:
+    """Whether a skill server answers at address now (a robot run by another process, or by nobody)."""
+    link = RobotLink(name, address, rpc_timeout_s)
+    try:
+        return link.is_online()
+    finally:
+        link.close()
+
+
 def _translate(error: grpc.RpcError) -> Exception:
     code = error.code()
     details = error.details() or ""

@@ -33,7 +33,7 @@ from middleware.errors import Refused
 from middleware.farm.base import FarmFull, FarmUnavailable, RobotFarm, RobotSpec
 from middleware.models.accounts import as_utc, utc_now
 from middleware.models.farm import ClassSession, PersonalRobotRecord
-from middleware.robots.link import RobotLink
+from middleware.robots.link import RobotLink, answers_at
 from middleware.robots.registry import PersonalRobot, RobotRegistry
 
 log = logging.getLogger(__name__)
@@ -260,7 +260,7 @@ class PracticeManager:
             records = session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.address,
                                              PersonalRobotRecord.started_at)).all()
         lost = [name for name, address, started_at in records
-                if (address and self.farm.find(name) is None and not _answers(name, address))
+                if (address and self.farm.find(name) is None and not answers_at(name, address))
                 or (not address and as_utc(started_at) < stale_start)]
         for name in lost:
             self._release(name)
@@ -363,13 +363,6 @@ class PracticeManager:
             except Exception:  # noqa: BLE001 - one failed stop must not end the keeper
                 log.exception("stopping idle practice robots failed")
 
-
-def _answers(name: str, address: str) -> bool:
-    link = RobotLink(name, address, rpc_timeout_s=1.0)
-    try:
-        return link.is_online()
-    finally:
-        link.close()
 
 
 _managers: weakref.WeakSet[PracticeManager] = weakref.WeakSet()

@@ -1,0 +1,154 @@
+"""Waiting for any robot of a kind, as a user sees it: join, claim a free robot now, leave, and the expected wait.
+
+The binding itself is the round-robin rule's (access/pools.py); this module runs it for the pool's robots at
+once when a user joins, so a free robot is bound within the request, and estimates the wait otherwise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from middleware.access import pools
+from middleware.access.coordinator import AccessCoordinator
+from middleware.access.round_robin import QueueState
+from middleware.db import session_factory
+from middleware.errors import Refused
+from middleware.robots.registry import robot_registry
+
+
+@dataclass(frozen=True)
+class PoolSeat:
+    """A user's place for a kind: bound to a robot, or waiting at a position with an expected wait."""
+
+    kind: str
+    robot_name: str | None  # the robot the user was bound to (go to its console)
+    position: int  # 1.. while waiting; 0 once bound; -1 when not in the pool's queue
+    queue_size: int
+    robots: int  # robots of the kind that answer now
+    estimated_wait_s: float | None  # None: no robot of the kind answers, so no turn can start
+
+    def to_dict(self) -> dict[str, object]:
+        """The JSON form."""
+        return {"kind": self.kind, "robot_name": self.robot_name, "position": self.position,
+                "queue_size": self.queue_size, "robots": self.robots, "estimated_wait_s": self.estimated_wait_s}
+
+
+def _about(seconds: float) -> str:
+    minutes = round(seconds / 60)
+    if minutes < 1:
+        return f"{max(1, round(seconds))} s"
+    return "1 minute" if minutes == 1 else f"{minutes} minutes"
+
+
+class PoolFull(Refused):
+    """No robot of the kind is free now: 409 with the expected wait, so the client can offer the queue."""
+
+    def __init__(self, kind: str, robots: int, wait_s: float | None) -> None:
+        when = ("no robot of it answers now" if wait_s is None
+                else f"the next is expected free in about {_about(wait_s)}")
+        super().__init__(409, "pool_full", f"All {robots} robots of kind {kind!r} are in use; {when}. "
+                         "Join the pool's queue to be given the first that frees.", "kind")
+        self.expected_wait_s = wait_s
+
+    def to_dict(self) -> dict[str, object]:
+        body = super().to_dict()
+        body["error"]["expected_wait_s"] = self.expected_wait_s  # type: ignore[index]
+        return body
+
+
+class PoolSeats:
+    """Pool operations over one app's access coordinator."""
+
+    def __init__(self, coordinator: AccessCoordinator) -> None:
+        self._coordinator = coordinator
+        self._sessions = session_factory(coordinator.app)
+
+    def robots(self, kind: str) -> list[str]:
+        """The kind's enabled robots; a 404 naming the field when the kind has none (an unknown pool)."""
+        with self._sessions() as session:
+            names = pools.robots_of_kind(session, kind)
+        if not names:
+            raise Refused(404, "unknown_pool", f"There is no pool of robots of kind {kind[:32]!r}.", "kind")
+        return names
+
+    def join(self, kind: str, user_id: int) -> PoolSeat:
+        """Waits for any robot of kind (or refreshes the wait); bound at once when one is free."""
+        names = self.robots(kind)
+        already = self._bound(kind, user_id)
+        if already is None:
+            with self._sessions() as session, session.begin():
+                pools.join(session, kind, user_id, self._coordinator.now())
+            self._settle(names, user_id)
+        return self.seat(kind, user_id)
+
+    def claim(self, kind: str, user_id: int) -> PoolSeat:
+        """A free robot of kind now, or PoolFull (409, with the expected wait) and nothing changed."""
+        names = self.robots(kind)
+        if self._bound(kind, user_id) is None:
+            states = self._states(names)
+            if not any(self._is_free(state) for state in states.values()):
+                raise PoolFull(kind, len(self._online(names)), self._wait_for(states, 1))
+        return self.join(kind, user_id)
+
+    def leave(self, kind: str, user_id: int) -> None:
+        """Stops waiting for kind (a seat already bound on a robot is that robot's to leave)."""
+        self.robots(kind)
+        with self._sessions() as session, session.begin():
+            pools.leave(session, kind, user_id)
+
+    def seat(self, kind: str, user_id: int) -> PoolSeat:
+        """Where user_id stands for kind now."""
+        names = self.robots(kind)
+        online = self._online(names)
+        bound = self._bound(kind, user_id)
+        with self._sessions() as session, session.begin():
+            waiting = pools.waiting(session, kind, self._coordinator.now(), self._coordinator.policy.grace_s)
+        if bound is not None:
+            return PoolSeat(kind, bound, 0, len(waiting), len(online), 0.0)
+        if user_id not in waiting:
+            return PoolSeat(kind, None, -1, len(waiting), len(online), None)
+        position = waiting.index(user_id) + 1
+        return PoolSeat(kind, None, position, len(waiting), len(online),
+                        self._wait_for(self._states(names), position))
+
+    def _bound(self, kind: str, user_id: int) -> str | None:
+        with self._sessions() as session:
+            return pools.bound_robot(session, kind, user_id)
+
+    def _online(self, names: list[str]) -> list[str]:
+        registry = robot_registry(self._coordinator.app)
+        return [n for n in names if (link := registry.get(n)) is not None and link.is_online()]
+
+    def _states(self, names: list[str]) -> dict[str, QueueState]:
+        return {name: self._coordinator.snapshot(name) for name in self._online(names)}
+
+    @staticmethod
+    def _is_free(state: QueueState) -> bool:
+        return state.controller_id is None and not state.waiting_ids and not state.faulted
+
+    def _settle(self, names: list[str], user_id: int) -> None:
+        """Ticks the kind's robots, free ones first, until one has bound user_id."""
+        states = self._states(names)
+        for name in sorted(states, key=lambda n: not self._is_free(states[n])):
+            state = self._coordinator.tick(name)
+            if user_id == state.controller_id or user_id in state.waiting_ids:
+                return
+
+    def _wait_for(self, states: dict[str, QueueState], position: int) -> float | None:
+        """When the position-th pool waiter can expect a turn: each robot frees after its current turn and its
+        named waiters' turns; pool waiters take the robots in the order they free, one turn each."""
+        if not states:
+            return None
+        now = self._coordinator.now()
+        frees: list[float] = []
+        turn_s = 0.0
+        for state in states.values():
+            turn_s = max(turn_s, self._coordinator.turn_length_s(state.controller_id or 0))
+            if self._is_free(state):
+                frees.append(0.0)
+                continue
+            remaining = (state.turn_ends_at - now).total_seconds() if state.turn_ends_at else turn_s
+            frees.append(max(0.0, remaining) + len(state.waiting_ids) * turn_s)
+        frees.sort()
+        rounds, index = divmod(position - 1, len(frees))
+        return frees[index] + rounds * turn_s
