@@ -117,6 +117,8 @@ class SkillServerProcess:
                 self.process.wait()
         if self._watcher is not None and self._watcher is not threading.current_thread():
             self._watcher.join(timeout_s)
+        elif self._watcher is None and self.process.stdout is not None:
+            self.process.stdout.close()  # a start that failed: no watcher ever read (and closed) the pipe
 
 
 def wait_until_serving(address: str, timeout_s: float = START_TIMEOUT_S) -> None:

@@ -144,3 +144,27 @@ def test_a_disabled_robot_binds_nobody(engine, users) -> None:
     pool.wait(users["ann"], at_s=0)
     assert pool.tick("sim-1", at_s=1).controller_id is None
     assert pool.waiting(at_s=2) == [users["ann"]]
+
+
+def test_a_pool_booking_is_bound_at_its_start_to_a_robot_free_for_the_whole_slot(engine, users) -> None:
+    from middleware.bookings.services import priority_user_id
+    from middleware.models import Booking
+
+    ten = T0.replace(hour=10)
+    with Session(engine) as session:
+        session.add_all([
+            Booking(robot_name=None, pool_kind="sim", user_id=users["bob"], kind="personal", starts_at=ten,
+                    ends_at=ten + timedelta(hours=1)),
+            Booking(robot_name="sim-1", user_id=users["ann"], kind="personal", starts_at=ten + timedelta(minutes=30),
+                    ends_at=ten + timedelta(hours=1))])
+        session.commit()
+    with Session(engine) as session, session.begin():
+        assert priority_user_id(session, "sim-1", ten - timedelta(minutes=1), grace_s=600) is None, "not yet"
+        assert priority_user_id(session, "sim-1", ten, grace_s=600) is None, "sim-1 is booked later in the slot"
+        assert priority_user_id(session, "sim-2", ten, grace_s=600) == users["bob"]
+    with Session(engine) as session:
+        bound = session.scalar(select(Booking).where(Booking.pool_kind == "sim"))
+        assert bound.robot_name == "sim-2"
+    with Session(engine) as session, session.begin():
+        assert priority_user_id(session, "sim-1", ten + timedelta(minutes=5), grace_s=600) is None
+        assert priority_user_id(session, "sim-2", ten + timedelta(minutes=5), grace_s=600) == users["bob"]
