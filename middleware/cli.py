@@ -142,15 +142,43 @@ def cmd_farm_status(_args: argparse.Namespace) -> int:
     return 0
 
 
+def _local_farm_refused(farm, page: str) -> bool:
+    if farm.backend != "local":
+        return False
+    print(f"error: with the local farm, robots are children of the web server; use its page {page} "
+          "(or the Ray farm, TELELAB_FARM=ray)", file=sys.stderr)
+    return True
+
+
+def cmd_farm_start(args: argparse.Namespace) -> int:
+    """Starts simulated robots of a pool on the farm (they join the lab as robots of the kind)."""
+    from middleware.db import session_factory
+    from middleware.farm.pool_robots import clean_pool_request, start_pool_robots
+
+    farm, app = _farm_and_app()
+    if _local_farm_refused(farm, "/admin/pools"):
+        return 1
+    kind, scene, count = clean_pool_request(args.pool, args.scene, args.count)
+    started = start_pool_robots(farm, session_factory(app), kind, scene, count)
+    print(f"started {', '.join(started)} (kind {kind}, scene {scene})")
+    return 0
+
+
 def cmd_farm_stop(args: argparse.Namespace) -> int:
-    """Stops one robot of the farm (a practice robot's owner sees it stopped)."""
+    """Stops one robot of the farm (a practice robot's owner sees it stopped), or a pool's robots."""
+    from middleware.db import session_factory
+    from middleware.farm.pool_robots import stop_pool_robots
     from middleware.teaching.practice_robots import practice_manager
 
     farm, app = _farm_and_app()
-    if farm.backend == "local":
-        print("error: with the local farm, robots are children of the web server; stop them on its page "
-              "/admin/farm (or use the Ray farm, TELELAB_FARM=ray)", file=sys.stderr)
+    if _local_farm_refused(farm, "/admin/pools" if args.pool else "/admin/farm"):
         return 1
+    if args.pool:
+        print(f"stopped {', '.join(stop_pool_robots(farm, session_factory(app), args.pool))}")
+        return 0
+    if not args.name:
+        print("error: name a robot, or a pool with --pool KIND", file=sys.stderr)
+        return 2
     if practice_manager(app).stop_named(args.name) or farm.stop(args.name):
         print(f"stopped {args.name}")
         return 0
@@ -235,12 +263,18 @@ def build_parser() -> argparse.ArgumentParser:
     enable.add_argument("name")
     enable.set_defaults(handler=cmd_users_set_active, active=True)
 
-    farm = commands.add_parser("farm", help="the robot farm: status, stop a robot, drain a host")
+    farm = commands.add_parser("farm", help="the robot farm: status, start or stop a pool's robots, drain a host")
     farm_commands = farm.add_subparsers(dest="farm_command", required=True)
     farm_commands.add_parser("status", help="hosts, capacity, robots and their load").set_defaults(
         handler=cmd_farm_status)
-    stop = farm_commands.add_parser("stop", help="stop one robot")
-    stop.add_argument("name")
+    start = farm_commands.add_parser("start", help="start simulated robots of a pool (named KIND-1, KIND-2...)")
+    start.add_argument("--pool", required=True, metavar="KIND", help="the robots' kind (their pool)")
+    start.add_argument("--scene", default="lab", help="the simulator scene they run (default lab)")
+    start.add_argument("--count", default="1", help="how many to add (1-50, default 1)")
+    start.set_defaults(handler=cmd_farm_start)
+    stop = farm_commands.add_parser("stop", help="stop one robot, or every farm robot of a pool")
+    stop.add_argument("name", nargs="?")
+    stop.add_argument("--pool", metavar="KIND", help="stop the farm's robots of this kind")
     stop.set_defaults(handler=cmd_farm_stop)
     drain = farm_commands.add_parser("drain", help="move every robot off a Ray node (its id from status)")
     drain.add_argument("node")

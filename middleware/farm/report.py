@@ -10,15 +10,20 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware.farm.base import RobotFarm
+from middleware.models import Robot
 from middleware.models.farm import PersonalRobotRecord
 
 
 def farm_status(farm: RobotFarm, sessions: Callable[[], Session]) -> dict[str, Any]:
     """{backend, capacity: {robots, running, free, hosts}, hosts: [...], robots: [...]} of the farm now; a robot
-    recorded but run by another process's local farm is listed with elsewhere=True and no load."""
+    recorded but run by another process's local farm is listed with elsewhere=True and no load. A pool's robot
+    has "pool <kind>" as its owner."""
     with sessions() as session:
-        records = session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.owner_name,
-                                         PersonalRobotRecord.scene, PersonalRobotRecord.address)).all()
+        records: list[Any] = list(session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.owner_name,
+                                                          PersonalRobotRecord.scene,
+                                                          PersonalRobotRecord.address)).all())
+        records += session.execute(select(Robot.name, "pool " + Robot.kind, Robot.scene, Robot.address)
+                                   .where(Robot.farm_managed.is_(True))).all()
     owners = {name: owner for name, owner, _scene, _address in records}
     capacity = farm.capacity()
     robots = sorted(farm.robots(), key=lambda robot: robot.name)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import time
 
 from flask import Flask, current_app
 
@@ -12,6 +13,7 @@ from middleware.farm.pool_robots import PoolKeeper
 
 _EXTENSION_KEY = "telelab.farm"
 _KEEPER_KEY = "telelab.pool_keeper"
+RECHECK_POOLS_S = 30.0
 BACKENDS = ("local", "ray")
 
 
@@ -43,14 +45,15 @@ def init_app(app: Flask, farm: RobotFarm | None = None) -> RobotFarm:
     app.extensions[_EXTENSION_KEY] = chosen
     keeper = app.extensions[_KEEPER_KEY] = PoolKeeper(chosen, session_factory(app),
                                                       lambda: robot_registry(app).refresh())
-    serving = [False]
+    looked_at = [-RECHECK_POOLS_S]
 
     @app.before_request
     def keep_pools_once_serving() -> None:
-        # A process keeps the pools' farm robots once it serves requests: `telelab` commands never do.
-        if not serving[0]:
-            serving[0] = True
-            keeper.start_if_needed()
+        # A process keeps the pools' farm robots once it serves requests (`telelab` commands never do); until it
+        # has some, it looks again now and then, as `telelab farm start --pool` may add them from outside.
+        now = time.monotonic()
+        if now - looked_at[0] >= RECHECK_POOLS_S:
+            looked_at[0] = now if not keeper.start_if_needed() else float("inf")
 
     return chosen
 

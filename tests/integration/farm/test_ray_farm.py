@@ -221,3 +221,60 @@ def test_two_web_processes_find_and_drive_the_same_farm_robot(cluster: Cluster, 
         for process in processes:
             process.terminate()
             process.wait(20)
+
+
+def test_a_pool_started_from_the_command_line_serves_a_web_process_and_survives_a_killed_actor(
+        cluster: Cluster, tmp_path: Path) -> None:
+    import ray
+    from sqlalchemy import select
+    from sqlalchemy.orm import sessionmaker
+
+    from middleware.auth.services import create_user
+    from middleware.db import make_engine, upgrade_to_head
+    from middleware.models import Robot
+
+    database_url = f"sqlite:///{tmp_path / 'pool.sqlite3'}"
+    upgrade_to_head(database_url)
+    engine = make_engine(database_url)
+    with sessionmaker(engine)() as session:
+        create_user(session, "student1", "student", STUDENT_PASSWORD)
+        session.commit()
+    environment = {**os.environ, "TELELAB_DATABASE_URL": database_url, "TELELAB_SECRET_KEY": "pool",
+                   "TELELAB_FARM": "ray", "TELELAB_RAY_ADDRESS": cluster.address, "TELELAB_ROBOTS": ""}
+    assert "started raysim-1, raysim-2 (kind raysim, scene empty)" in _telelab(
+        environment, "farm", "start", "--pool", "raysim", "--scene", "empty", "--count", "2")
+    assert "count must be a whole number" in _telelab(environment, "farm", "start", "--pool", "raysim", "--count",
+                                                      "0", code=1)
+    port, log = _free_port(), tmp_path / "web.log"
+    process = _web_process(port, environment, log)
+    client = LabClient(f"http://127.0.0.1:{port}")
+    try:
+        _wait_for(client, process, log)
+        assert client.login() == 302
+        status, listed = _json(client, "GET", "/api/pools")
+        assert {"kind": "raysim", "robots": 2, "online": 2, "free": 2, "queue": 0} in listed["pools"], listed
+        status, seat = _json(client, "POST", "/api/pools/raysim/claim")
+        assert status == 200 and seat["robot_name"] in ("raysim-1", "raysim-2"), seat
+        bound = seat["robot_name"]
+        with sessionmaker(engine)() as session:
+            before = session.scalar(select(Robot.address).where(Robot.name == bound))
+        ray.init(address=cluster.address, namespace=NAMESPACE, ignore_reinit_error=True)
+        ray.kill(ray.get_actor(ACTOR_PREFIX + bound, namespace=NAMESPACE), no_restart=False)
+        deadline = time.monotonic() + 90
+        while True:  # the web process's keeper follows the restarted actor to its new port
+            with sessionmaker(engine)() as session:
+                after = session.scalar(select(Robot.address).where(Robot.name == bound))
+            status, report = _json(client, "GET", f"/api/robots/{bound}")
+            if after != before and report.get("online"):
+                break
+            assert time.monotonic() < deadline, f"{bound} did not serve again: {before} -> {after}\n" + log.read_text()
+            time.sleep(0.5)
+        assert "stopped raysim-1, raysim-2" in _telelab(environment, "farm", "stop", "--pool", "raysim")
+        status, listed = _json(client, "GET", "/api/pools")
+        assert all(p["kind"] != "raysim" for p in listed["pools"])
+    finally:
+        process.terminate()
+        process.wait(20)
+        engine.dispose()
+        RayFarm(cluster.address).stop("raysim-1")
+        RayFarm(cluster.address).stop("raysim-2")
