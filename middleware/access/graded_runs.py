@@ -28,7 +28,8 @@ Priority = Callable[[Session, str, datetime], int | None]
 def graded_run_started_at(session: Session, robot_name: str, user_id: int, now: datetime) -> datetime | None:
     """When user_id's open graded run on robot_name began (the latest, if several); None without one."""
     attempt = session.scalar(select(func.max(Attempt.started_at)).join(Exam, Exam.id == Attempt.exam_id).where(
-        Exam.robot_name == robot_name, Attempt.user_id == user_id, Attempt.status == "in_progress",
+        func.coalesce(Attempt.robot_name, Exam.robot_name) == robot_name, Attempt.user_id == user_id,
+        Attempt.status == "in_progress",
         or_(Attempt.deadline_at.is_(None), Attempt.deadline_at > now)))
     trial = session.scalar(select(func.max(Trial.created_at)).where(
         Trial.robot_name == robot_name, Trial.user_id == user_id, Trial.status == TRIAL_OPEN))

@@ -109,8 +109,12 @@ def settle_due(session: Session, now: datetime, *, exam_id: int | None = None, u
 
 
 def start_attempt(session: Session, actor: User, exam_id: int, now: datetime,
-                  controls_robot: Callable[[str, int], bool] | None = None) -> Attempt:
-    """The student's attempt in progress, or a new one when the window is open and attempts remain."""
+                  controls_robot: Callable[[str, int], bool] | None = None,
+                  own_robot: Callable[[Exam, int], str | None] | None = None) -> Attempt:
+    """The student's attempt in progress, or a new one when the window is open and attempts remain.
+
+    An experimental test runs on the student's own robot when own_robot names one (their robot in a class
+    session of the course), else on the exam's robot, which they must control."""
     exam = get_exam(session, exam_id)
     student_course(session, actor, exam.course_id)
     lock_user(session, actor.id)
@@ -127,16 +131,20 @@ def start_attempt(session: Session, actor: User, exam_id: int, now: datetime,
     if exam.max_attempts is not None and done >= exam.max_attempts:
         raise Refused(409, "no_attempts_left", f"You have used your {exam.max_attempts} attempt(s) at this test.",
                       "exam_id")
-    if exam.kind == "experimental" and (controls_robot is None or not controls_robot(exam.robot_name or "", actor.id)):
-        raise Refused(409, "no_robot", f"Take control of {exam.robot_name} first (open it in the lab, or during your "
-                                       "booking), then start the test.", "robot_name")
+    robot_name = None
+    if exam.kind == "experimental":
+        robot_name = (own_robot(exam, actor.id) if own_robot else None) or exam.robot_name
+        if robot_name == exam.robot_name and (controls_robot is None or not controls_robot(robot_name or "",
+                                                                                            actor.id)):
+            raise Refused(409, "no_robot", f"Take control of {exam.robot_name} first (open it in the lab, or during "
+                                           "your booking), then start the test.", "robot_name")
     deadline = None
     if exam.duration_s is not None:
         deadline = now + timedelta(seconds=exam.duration_s)
     if exam.closes_at is not None:
         deadline = min(deadline or as_utc(exam.closes_at), as_utc(exam.closes_at))
     attempt = Attempt(exam_id=exam.id, user_id=actor.id, status="in_progress", open_key=f"{exam.id}:{actor.id}",
-                      started_at=now, deadline_at=deadline, answers={})
+                      started_at=now, deadline_at=deadline, answers={}, robot_name=robot_name)
     session.add(attempt)
     try:
         session.flush()

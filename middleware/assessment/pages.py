@@ -15,7 +15,13 @@ from sqlalchemy.orm import Session
 
 from middleware.assessment import attempts, bank, recommendations, review, survey
 from middleware.assessment.attempts import window_state
-from middleware.assessment.routes import controls_robot, finish_recording, record_after_commit, server_now
+from middleware.assessment.routes import (
+    controls_robot,
+    finish_recording,
+    own_robot,
+    record_after_commit,
+    server_now,
+)
 from middleware.assessment.schemas import (
     AGREEMENT,
     RUBRIC_ROWS,
@@ -329,8 +335,8 @@ def start(exam_id: int) -> ResponseReturnValue:
         dbs = get_session()
         exam = bank.get_exam(dbs, exam_id)
         bank.student_course(dbs, current_user, exam.course_id)
-        attempt = attempts.start_attempt(dbs, current_user, exam_id, server_now(), controls_robot)
-        record_after_commit(attempt.id, exam)
+        attempt = attempts.start_attempt(dbs, current_user, exam_id, server_now(), controls_robot, own_robot)
+        record_after_commit(attempt, exam)
         return redirect(url_for("assessment_pages.attempt_page", attempt_id=attempt.id), 303)
 
     return unless_refused(begin, flashed(url_for("assessment_pages.exam_page", exam_id=exam_id)))

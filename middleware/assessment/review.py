@@ -67,7 +67,8 @@ def attempt_view(session: Session, actor: User, attempt_id: int, now: datetime) 
     if not submitted and attempt.deadline_at is not None:
         remaining = max(0.0, (as_utc(attempt.deadline_at) - now).total_seconds())
     return {
-        "id": attempt.id, "exam": exam_dict(exam, now), "student": names.get(attempt.user_id),
+        "id": attempt.id, "exam": {**exam_dict(exam, now), "robot_name": attempt.robot_name or exam.robot_name},
+        "student": names.get(attempt.user_id),
         "status": attempt.status, "started_at": as_utc(attempt.started_at).isoformat(),
         "deadline_at": as_utc(attempt.deadline_at).isoformat() if attempt.deadline_at else None,
         "remaining_s": remaining, "server_now": now.isoformat(),

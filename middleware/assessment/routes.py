@@ -15,7 +15,7 @@ from middleware.assessment import attempts, bank, recommendations, review, surve
 from middleware.assessment.schemas import parse_exam, parse_question, parse_survey
 from middleware.db import after_commit, get_session, session_factory
 from middleware.errors import ApiError
-from middleware.models.assessment import Exam
+from middleware.models.assessment import Attempt, Exam
 
 blueprint = Blueprint("assessment", __name__)
 
@@ -34,6 +34,24 @@ def controls_robot(robot_name: str, user_id: int) -> bool:
         return access_coordinator().controller_token(robot_name, user_id) is not None
     except Exception:  # an unknown robot: nobody controls it
         return False
+
+
+def own_robot(exam: Exam, user_id: int) -> str | None:
+    """The student's own robot in an open class session of the exam's course, when it runs the scene of the
+    exam's robot (or that robot does not answer to say): the experimental attempt then runs there."""
+    from middleware.robots.link import RobotUnavailable
+    from middleware.robots.registry import robot_registry
+    from middleware.teaching.class_sessions import class_robot
+
+    record = class_robot(get_session(), exam.course_id, user_id)
+    if record is None:
+        return None
+    link = robot_registry().get(exam.robot_name or "")
+    try:
+        scene = link.info(max_age_s=5.0).scene_name if link is not None else None
+    except RobotUnavailable:
+        scene = None
+    return record.name if scene in (None, record.scene) else None
 
 
 def start_recording(attempt_id: int, robot_name: str) -> None:
@@ -205,15 +223,15 @@ def api_exam_attempts(exam_id: int) -> ResponseReturnValue:
 
 def start_attempt(dbs: Session, exam_id: int) -> Any:
     """Starts (or resumes) the student's attempt; starts recording for an experimental test."""
-    attempt = attempts.start_attempt(dbs, current_user, exam_id, server_now(), controls_robot)
-    record_after_commit(attempt.id, bank.get_exam(dbs, exam_id))
+    attempt = attempts.start_attempt(dbs, current_user, exam_id, server_now(), controls_robot, own_robot)
+    record_after_commit(attempt, bank.get_exam(dbs, exam_id))
     return attempt
 
 
-def record_after_commit(attempt_id: int, exam: Exam) -> None:
-    """For an experimental test, starts recording the robot once the attempt is committed (the recorder
+def record_after_commit(attempt: Attempt, exam: Exam) -> None:
+    """For an experimental test, starts recording the attempt's robot once the attempt is committed (the recorder
     writes the trace into the attempt's row from a thread of its own)."""
-    robot_name = exam.robot_name
+    robot_name, attempt_id = attempt.robot_name or exam.robot_name, attempt.id
     if exam.kind == "experimental" and robot_name:
         after_commit(lambda: start_recording(attempt_id, robot_name))
 

@@ -13,7 +13,7 @@ from flask_login import current_user, login_required
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.access.coordinator import access_coordinator
+from middleware.access.commands import robot_commands
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
 from middleware.experiment import services
@@ -22,6 +22,7 @@ from middleware.lab.delay import delay_book
 from middleware.models import User, UserPreference
 from middleware.models.accounts import utc_now
 from middleware.models.experiment import TRIAL_OPEN, Trial
+from middleware.models.farm import PersonalRobotRecord
 from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
 from middleware.robots.registry import robot_registry
 
@@ -49,10 +50,15 @@ def _trial_dict(trial: Trial) -> dict[str, object]:
             "errors": trial.errors}
 
 
-def track_robots() -> list[dict[str, str]]:
-    """Online robots whose skill server runs a track scene."""
+def track_robots(user_id: int) -> list[dict[str, object]]:
+    """The user's own robot when it runs a track scene (their robot in a class session), then the online lab
+    robots whose skill server runs one."""
     registry = robot_registry()
-    found = []
+    found: list[dict[str, object]] = []
+    own = get_session().scalar(select(PersonalRobotRecord).where(PersonalRobotRecord.owner_id == user_id,
+                                                                 PersonalRobotRecord.address != ""))
+    if own is not None and own.scene in services.COURSES and registry.get(own.name) is not None:
+        found.append({"name": own.name, "scene": own.scene, "own": True})
     for name in registry.names():
         link = registry.get(name)
         try:
@@ -60,7 +66,7 @@ def track_robots() -> list[dict[str, str]]:
         except RobotUnavailable:
             continue
         if scene in services.COURSES:
-            found.append({"name": name, "scene": scene})
+            found.append({"name": name, "scene": scene, "own": False})
     return found
 
 
@@ -137,7 +143,7 @@ def state() -> ResponseReturnValue:
         "trial": _trial_dict(trial) if trial else None,
         "run": _run_progress(trial) if trial else None,
         "last_trial": _trial_dict(last) if last else None,
-        "robots": track_robots() if trial is None else [],
+        "robots": track_robots(actor.id) if trial is None else [],
         "delay_s": trial.delay_s if trial else services.get_video_delay(session, actor.id),
     })
 
@@ -148,7 +154,7 @@ def start_trial() -> ResponseReturnValue:
     """Assigns a random condition on the chosen track robot and applies its delay and feedback setting."""
     body = request.get_json(silent=True) or {}
     robot_name = body.get("robot_name")
-    robots = {r["name"]: r["scene"] for r in track_robots()}
+    robots = {str(r["name"]): str(r["scene"]) for r in track_robots(int(current_user.get_id()))}
     if not isinstance(robot_name, str) or robot_name not in robots:
         raise ApiError(400, "invalid_field", "Choose a robot that runs a course scene.", "robot_name")
 
@@ -171,8 +177,7 @@ def finish(trial_id: int) -> ResponseReturnValue:
     trial = session.get(Trial, trial_id)
     if trial is None or trial.user_id != int(current_user.get_id()):
         raise ApiError(404, "unknown_trial", "There is no such trial of yours.", "trial_id")
-    if trial.status == TRIAL_OPEN and access_coordinator().controller_token(trial.robot_name, trial.user_id,
-                                                                            session) is None:
+    if trial.status == TRIAL_OPEN and not robot_commands().for_user(trial.robot_name, trial.user_id).is_controller():
         raise ApiError(403, "not_controller", f"Only the person driving {trial.robot_name} can record its run: take "
                        "your turn in its console and drive the course yourself.")
     try:

@@ -75,6 +75,8 @@ class Attempt(Base):
     submitted_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
     submitted_by: Mapped[str | None] = mapped_column(String(16))  # student | deadline
     answers: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
+    # An experimental attempt's robot: the exam's, or the student's own one in a class session.
+    robot_name: Mapped[str | None] = mapped_column(String(64))
     trace: Mapped[list[list[float]] | None] = mapped_column(JSON)  # [t_s, gx, gy, gth, ox, oy, oth]
     results: Mapped[list[dict[str, Any]] | None] = mapped_column(JSON)  # graded items at submission
     auto_score: Mapped[float | None] = mapped_column()

@@ -49,6 +49,7 @@ class ClassSession(Base):
     started_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"))
     started_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
     ended_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    scene: Mapped[str] = mapped_column(String(64), default="lab")  # every student's robot runs this scene
 
 
 class ClassSeat(Base):

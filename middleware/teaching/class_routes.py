@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from flask import Blueprint, current_app, jsonify, render_template, url_for
+from flask import Blueprint, current_app, jsonify, render_template, request, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
@@ -22,7 +22,7 @@ def _actor() -> User:
 def _session_dict(course_id: int) -> dict[str, object]:
     opened, seats = class_sessions.seats(get_session(), _actor(), course_id)
     counts = {state: sum(1 for seat in seats if seat.state == state) for state in ("starting", "ready", "failed")}
-    return {"course_id": course_id, "open": opened is not None,
+    return {"course_id": course_id, "open": opened is not None, "scene": opened.scene if opened else None,
             "started_at": opened.started_at.isoformat() if opened else None,
             "seats": [seat.to_dict() for seat in seats], "counts": counts}
 
@@ -32,7 +32,8 @@ def _session_dict(course_id: int) -> dict[str, object]:
 def tutor_page(course_id: int) -> ResponseReturnValue:
     """The tutor's class session page: start, everyone's robot, end."""
     class_sessions.seats(get_session(), _actor(), course_id)  # 404 or 403 before the page
-    return render_template("teaching/class_tutor.html", course=get_course(get_session(), course_id))
+    return render_template("teaching/class_tutor.html", course=get_course(get_session(), course_id),
+                           scenes=class_sessions.CLASS_SCENES)
 
 
 @blueprint.get("/api/courses/<int:course_id>/class-session")
@@ -47,7 +48,9 @@ def status(course_id: int) -> ResponseReturnValue:
 def start(course_id: int) -> ResponseReturnValue:
     """Opens a class session and starts every student's robot in the background."""
     session, manager = get_session(), practice_manager()
-    opened = class_sessions.start_session(session, _actor(), course_id, manager)  # FarmUnavailable: nothing kept
+    body = request.get_json(silent=True)
+    scene = class_sessions.clean_scene(body.get("scene") if isinstance(body, dict) else None)
+    opened = class_sessions.start_session(session, _actor(), course_id, manager, scene)  # FarmUnavailable: none kept
     sessions, opened_id = session_factory(current_app), opened.id
     after_commit(lambda: class_sessions.prestart_robots(sessions, manager, opened_id))
     return jsonify(_session_dict(course_id)), 201

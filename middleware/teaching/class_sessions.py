@@ -27,6 +27,9 @@ from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord
 from middleware.teaching.practice_robots import PracticeManager, practice_name
 
 STARTS_AT_ONCE = 8  # robots started in parallel: enough to fill a host's cores, few enough to share them
+# The scenes a class may run: the lab arena (lessons, tours, most tests) or a course of the delay experiment.
+CLASS_SCENES = {"lab": "The lab arena", "course-A": "Course A of the delay experiment",
+                "course-B": "Course B of the delay experiment"}
 log = logging.getLogger(__name__)
 
 
@@ -52,8 +55,27 @@ def open_session(session: Session, course_id: int) -> ClassSession | None:
                                                      ClassSession.ended_at.is_(None)))
 
 
-def start_session(session: Session, actor: User, course_id: int, manager: PracticeManager) -> ClassSession:
-    """Opens a class session for the course (its tutors and admins only) with a seat per enrolled student.
+def clean_scene(value: object) -> str:
+    """The scene a tutor chose for a class session ("lab" when none); a 400 naming the field otherwise."""
+    if value in (None, ""):
+        return "lab"
+    if not isinstance(value, str) or value not in CLASS_SCENES:
+        raise Refused(400, "invalid_field", f"scene must be one of {', '.join(CLASS_SCENES)}.", "scene")
+    return value
+
+
+def class_robot(session: Session, course_id: int, user_id: int) -> PersonalRobotRecord | None:
+    """The student's own running robot in the course's open class session, if there is one."""
+    return session.scalar(select(PersonalRobotRecord).join(
+        ClassSession, ClassSession.id == PersonalRobotRecord.class_session_id).where(
+        ClassSession.course_id == course_id, ClassSession.ended_at.is_(None), PersonalRobotRecord.owner_id == user_id,
+        PersonalRobotRecord.address != ""))
+
+
+def start_session(session: Session, actor: User, course_id: int, manager: PracticeManager,
+                  scene: str = "lab") -> ClassSession:
+    """Opens a class session for the course (its tutors and admins only) with a seat per enrolled student, every
+    student's robot running scene.
 
     Refused when one is open already (409), when the course has no student (409), when the farm cannot hold
     one robot per student beside those running (409), or cannot be reached (503); nothing is written then.
@@ -72,7 +94,7 @@ def start_session(session: Session, actor: User, course_id: int, manager: Practi
         raise Refused(409, "farm_full", f"The robot farm can start {max(free, 0)} more robots now and the class "
                                         f"needs {needed}. Ask an administrator to add a robot host, or try again "
                                         "when other classes have ended.")
-    opened = ClassSession(course_id=course.id, started_by_id=actor.id)
+    opened = ClassSession(course_id=course.id, started_by_id=actor.id, scene=scene)
     session.add(opened)
     try:
         session.flush()
@@ -89,10 +111,11 @@ def prestart_robots(sessions: Callable[[], Session], manager: PracticeManager, c
     with sessions() as session:
         seats = session.execute(select(ClassSeat.user_id, User.username).join(User, User.id == ClassSeat.user_id)
                                 .where(ClassSeat.session_id == class_session_id)).all()
+        scene = session.scalar(select(ClassSession.scene).where(ClassSession.id == class_session_id)) or "lab"
 
     def start_one(user_id: int, username: str) -> None:
         try:
-            manager.start(user_id, username, class_session_id=class_session_id)
+            manager.start(user_id, username, class_session_id=class_session_id, scene=scene)
             state, message = "ready", ""
         except Refused as refusal:
             state, message = "failed", refusal.message

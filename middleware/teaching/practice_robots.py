@@ -151,21 +151,26 @@ class PracticeManager:
         capacity = self.farm.capacity().robots
         return capacity if self.cap is None else min(self.cap, capacity)
 
-    def start(self, owner_id: int, username: str, class_session_id: int | None = None) -> PracticeRobot:
+    def start(self, owner_id: int, username: str, class_session_id: int | None = None,
+              scene: str | None = None) -> PracticeRobot:
         """owner_id's practice robot, started now if not running; refused when the lab or the farm is full.
 
-        class_session_id: the robot is the student's in that class session (kept while it is open).
+        class_session_id: the robot is the student's in that class session (kept while it is open), running
+        scene (the manager's own by default): a robot already running another scene is replaced.
         """
+        wanted = scene or self.scene
         running = self.get(owner_id)
-        if running is not None:
+        if running is not None and (class_session_id is None or self.scene_of(running.name) == wanted):
             if class_session_id is not None:
                 self._join_class(running.name, class_session_id)
             return running
+        if running is not None:
+            self.stop(owner_id)
         name = practice_name(username, owner_id)
         token = secrets.token_urlsafe(32)
-        self._claim(name, owner_id, username, token, class_session_id)
+        self._claim(name, owner_id, username, token, class_session_id, wanted)
         try:
-            robot = self.farm.start(RobotSpec(name, self.scene, token))
+            robot = self.farm.start(RobotSpec(name, wanted, token))
         except (FarmFull, FarmUnavailable) as error:
             self._release(name)
             log.warning("practice robot %s did not start: %s", name, error.message)
@@ -327,7 +332,13 @@ class PracticeManager:
                 record.class_session_id = class_session_id
                 session.commit()
 
-    def _claim(self, name: str, owner_id: int, username: str, token: str, class_session_id: int | None) -> None:
+    def scene_of(self, name: str) -> str | None:
+        """The scene the practice robot called name runs."""
+        with self._sessions() as session:
+            return session.scalar(select(PersonalRobotRecord.scene).where(PersonalRobotRecord.name == name))
+
+    def _claim(self, name: str, owner_id: int, username: str, token: str, class_session_id: int | None,
+               scene: str) -> None:
         """Writes the row that claims the name for owner_id, across workers; refuses when the lab is full."""
         limit = self.limit()
         if self.count() >= limit:
@@ -335,7 +346,7 @@ class PracticeManager:
                                      "or watch a lab robot in the meantime.")
         now = self._clock()
         with self._sessions() as session:
-            session.add(PersonalRobotRecord(name=name, owner_id=owner_id, owner_name=username, scene=self.scene,
+            session.add(PersonalRobotRecord(name=name, owner_id=owner_id, owner_name=username, scene=scene,
                                             token=token, address="", backend=self.farm.backend, started_at=now,
                                             last_used_at=now, class_session_id=class_session_id))
             try:

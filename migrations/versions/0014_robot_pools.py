@@ -1,4 +1,5 @@
-"""robot pools: each robot has a kind, users queue for any robot of a kind, and bookings may name a kind
+"""robot pools: each robot has a kind, users queue for any robot of a kind, and bookings may name a kind;
+a class session's scene, and the robot each experimental attempt runs on (a student's own one in class)
 
 Revision ID: 0014
 Revises: 0013
@@ -52,9 +53,17 @@ def upgrade() -> None:
         sa.UniqueConstraint("kind", "user_id", name="uq_pool_queue_entries_kind_user"),
     )
     op.create_index(op.f("ix_pool_queue_entries_kind"), "pool_queue_entries", ["kind"])
+    with op.batch_alter_table("class_sessions") as batch:
+        batch.add_column(sa.Column("scene", sa.String(length=64), nullable=False, server_default="lab"))
+    with op.batch_alter_table("assessment_attempts") as batch:
+        batch.add_column(sa.Column("robot_name", sa.String(length=64), nullable=True))
 
 
 def downgrade() -> None:
+    with op.batch_alter_table("assessment_attempts") as batch:
+        batch.drop_column("robot_name")
+    with op.batch_alter_table("class_sessions") as batch:
+        batch.drop_column("scene")
     op.drop_table("pool_queue_entries")
     op.drop_index(op.f("ix_bookings_pool_kind"), table_name="bookings")
     op.execute("DELETE FROM bookings WHERE robot_name IS NULL")

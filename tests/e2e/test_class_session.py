@@ -30,7 +30,7 @@ def test_a_tutor_runs_a_class_session_and_a_student_opens_their_robot(page, chro
         page.get_by_role("link", name="Class session").click()
         page.get_by_role("status").filter(has_text="No class session is open for this course.").wait_for()
         page.get_by_role("button", name="Start the class session").click()
-        page.get_by_role("status").filter(has_text="Class session open: 2 of 2 robots ready.").wait_for(
+        page.get_by_role("status").filter(has_text="Class session open (lab): 2 of 2 robots ready.").wait_for(
             timeout=60_000)
         rows = page.locator("table.class-seats tbody tr")
         assert rows.count() == 2

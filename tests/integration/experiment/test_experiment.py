@@ -97,7 +97,7 @@ def test_a_student_runs_a_trial_on_course_a_and_the_tutor_sees_it(course_app, co
     student = LabClient(course_app.url)
     assert student.login() == 302
     status, state = get_json(student, "/api/experiment/state")
-    assert status == 200 and state["robots"] == [{"name": "course-1", "scene": "course-A"}]
+    assert status == 200 and state["robots"] == [{"name": "course-1", "scene": "course-A", "own": False}]
     status, body = send_json(student, "POST", "/api/experiment/trials", {"robot_name": "course-1"})
     assert status == 201
     trial = body["trial"]

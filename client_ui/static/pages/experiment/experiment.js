@@ -122,7 +122,8 @@ function showStart(slot, state) {
     return;
   }
   const select = h("select", { name: "robot_name", id: "trial-robot" },
-    ...robots.map((robot) => h("option", { value: robot.name, text: `${robot.name} (${robot.scene})` })));
+    ...robots.map((robot) => h("option", {
+      value: robot.name, text: `${robot.own ? "Your robot, " : ""}${robot.name} (${robot.scene})` })));
   const start = h("button", { type: "submit", class: "button button--primary",
     text: last ? "Start the next trial" : "Start a trial" });
   const form = h("form", { class: "experiment__form" }, h("label", {}, "Robot ", select), start);

@@ -7,6 +7,8 @@ const summary = root.querySelector("[data-field=summary]");
 const errorLine = root.querySelector("[data-field=error]");
 const startButton = root.querySelector("[data-action=start]");
 const endButton = root.querySelector("[data-action=end]");
+const sceneChoice = root.querySelector("[data-field=scene-choice]");
+const sceneSelect = sceneChoice.querySelector("select");
 const table = root.querySelector("table");
 const rows = table.querySelector("tbody");
 const STATE_WORDS = { starting: "starting…", ready: "ready", failed: "did not start", stopped: "stopped" };
@@ -28,12 +30,13 @@ function seatRow(seat) {
 function render(state) {
   root.dataset.open = String(state.open);
   startButton.hidden = state.open;
+  sceneChoice.hidden = state.open;
   endButton.hidden = !state.open;
   table.hidden = !state.open;
   rows.replaceChildren(...state.seats.map(seatRow));
   const { starting, ready, failed } = state.counts;
   summary.textContent = state.open
-    ? `Class session open: ${ready} of ${state.seats.length} robots ready`
+    ? `Class session open (${state.scene}): ${ready} of ${state.seats.length} robots ready`
       + (starting ? `, ${starting} starting` : "") + (failed ? `, ${failed} did not start` : "") + "."
     : "No class session is open for this course.";
   clearTimeout(timer);
@@ -54,7 +57,7 @@ async function act(method) {
   errorLine.hidden = true;
   summary.textContent = method === "POST" ? "Starting every student's robot…" : "Stopping every robot…";
   try {
-    render(await fetchJson(api, { method }));
+    render(await fetchJson(api, method === "POST" ? { method, body: { scene: sceneSelect.value } } : { method }));
   } catch (error) {
     showError(error);
     await refresh();
