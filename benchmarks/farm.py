@@ -7,8 +7,9 @@ same steps:
 - one robot started alone: the floor of every start figure;
 - a class start: N robots of the lab scene requested at once (one thread per student, as N students pressing
   "Start" together) -> the time until each one answers SERVING (p50, max), for N = 10, 20, 30;
-- with the N robots running headless and driven (each in a slow circle, commands at 5 Hz as a console sends
-  them), over a 10 s window: each robot's real-time factor (simulated seconds per wall second, read from its
+- with the N robots running headless, driven (each in a slow circle, commands at 5 Hz as a console sends them)
+  and watched (each robot's telemetry streamed at 30 Hz: the server's side of a view rendered in the browser from
+  the pose stream, one frame per pose; the server renders no camera), over a 10 s window: each robot's real-time factor (simulated seconds per wall second, read from its
   telemetry), its CPU share (its processes' CPU time, /proc) and resident memory. Targets: real-time factor >= 0.95
   for every robot while the farm admits them; CPU share per robot <= the share Ray placement declares
   (middleware/farm/costs.py);
@@ -44,6 +45,7 @@ SETTLE_S = 5.0
 PARKED_CPU_TARGET = 0.01
 WAKE_TARGET_S = 0.2
 IDLE_CROWD = 100
+WATCH_HZ = 30.0
 
 
 def sim_clock(address: str) -> tuple[float, float]:
@@ -75,26 +77,46 @@ def start_class(farm: RobotFarm, prefix: str, count: int) -> list[float]:
 
 
 class Drivers:
-    """Drives every robot in a slow circle, a command per robot every 0.2 s (under the 0.4 s deadman)."""
+    """Drives every robot in a slow circle, a command per robot every 0.2 s (under the 0.4 s deadman), and watches
+    each through its telemetry at watch_hz (0: not watched), as its student's browser-rendered view would."""
 
-    def __init__(self, addresses: dict[str, str], tokens: dict[str, str]) -> None:
+    def __init__(self, addresses: dict[str, str], tokens: dict[str, str], watch_hz: float = WATCH_HZ) -> None:
         self._channels = {name: grpc.insecure_channel(address) for name, address in addresses.items()}
         self._tokens = tokens
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
+        self._streams: list[Any] = []
+        self._watchers = [threading.Thread(target=self._watch, args=(channel, watch_hz), daemon=True)
+                          for channel in self._channels.values()] if watch_hz > 0 else []
+        self.poses_seen = 0
 
     def __enter__(self) -> Drivers:
         self._thread.start()
+        for watcher in self._watchers:
+            watcher.start()
         return self
 
     def __exit__(self, *_exc: object) -> None:
         self._stop.set()
         self._thread.join()
+        for stream in list(self._streams):
+            stream.cancel()
+        for watcher in self._watchers:
+            watcher.join(5)
         for name, channel in self._channels.items():
             with contextlib.suppress(grpc.RpcError):
                 robot_pb2_grpc.RobotStub(channel).Drive(robot_pb2.DriveCommand(
                     token=self._tokens[name], sequence=10**9, linear_mps=0.0, angular_radps=0.0), timeout=2)
             channel.close()
+
+    def _watch(self, channel: grpc.Channel, rate_hz: float) -> None:
+        stream = robot_pb2_grpc.RobotStub(channel).StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=rate_hz))
+        self._streams.append(stream)
+        with contextlib.suppress(grpc.RpcError):
+            for _message in stream:
+                self.poses_seen += 1
+                if self._stop.is_set():
+                    break
 
     def _run(self) -> None:
         sequence = 0
@@ -155,9 +177,12 @@ def measure_backend(backend: str, make: Callable[[], RobotFarm], counts: list[in
             durations = start_class(farm, prefix, count)
             names = [f"{prefix}-{i}" for i in range(count)]
             addresses = {robot.name: robot.address for robot in farm.robots()}
-            with Drivers({name: addresses[name] for name in names}, {n: token_of(i) for i, n in enumerate(names)}):
+            with Drivers({name: addresses[name] for name in names},
+                         {n: token_of(i) for i, n in enumerate(names)}) as drivers:
                 time.sleep(SETTLE_S)
+                seen_before, watched_from = drivers.poses_seen, time.monotonic()
                 driven = measure_running(farm, names)
+                pose_hz = (drivers.poses_seen - seen_before) / (time.monotonic() - watched_from) / count
             time.sleep(SETTLE_S)  # they park a second after the last command
             parked = measure_running(farm, names)
             wakes = [wake_time_s(addresses[names[i]], token_of(i)) for i in range(min(count, 5))]
@@ -169,9 +194,11 @@ def measure_backend(backend: str, make: Callable[[], RobotFarm], counts: list[in
             rows += [
                 Measurement(scenario, "start until SERVING p50", statistics.median(durations), "s", "-", alone_s),
                 Measurement(scenario, "start until SERVING max", max(durations), "s", "-", alone_s),
-                Measurement(scenario, "real-time factor, slowest driven robot", worst_factor, "x", ">= 0.95", 1.0,
-                            None if quick else worst_factor >= 0.95),
-                Measurement(scenario, "CPU share per driven robot, mean", share, "core",
+                Measurement(scenario, "real-time factor, slowest driven and watched robot", worst_factor, "x",
+                            ">= 0.95", 1.0, None if quick else worst_factor >= 0.95),
+                Measurement(scenario, "poses received per watched robot", pose_hz, "Hz", f">= {WATCH_HZ * 0.9:g}",
+                            WATCH_HZ, None if quick else pose_hz >= WATCH_HZ * 0.9),
+                Measurement(scenario, "CPU share per driven and watched robot, mean", share, "core",
                             f"<= {HEADLESS_ROBOT_CPU_SHARE}", HEADLESS_ROBOT_CPU_SHARE,
                             None if quick else share <= HEADLESS_ROBOT_CPU_SHARE),
                 Measurement(scenario, "CPU share per parked robot, mean", parked_share, "core", "<= 0.01",
@@ -180,7 +207,8 @@ def measure_backend(backend: str, make: Callable[[], RobotFarm], counts: list[in
                             None if quick else max(wakes) <= WAKE_TARGET_S),
                 Measurement(scenario, "memory per robot, mean", statistics.mean(driven["memory_mb"]), "MB", "-"),
             ]
-            detail[scenario] = {"start_s": durations, "driven": driven, "parked": parked, "wake_s": wakes}
+            detail[scenario] = {"start_s": durations, "driven": driven, "parked": parked, "wake_s": wakes,
+                                "poses_hz_per_robot": pose_hz}
     finally:
         for robot in farm.robots():
             farm.stop(robot.name)
@@ -220,7 +248,8 @@ def overhead_rows(rows: list[Measurement], counts: list[int]) -> list[Measuremen
 
     ratios = []
     for count in counts:
-        for name in ("start until SERVING max", "memory per robot, mean"):
+        for name in ("start until SERVING max", "CPU share per driven and watched robot, mean",
+                     "memory per robot, mean"):
             ray_value, local_value = figure(f"class of {count} (ray)", name), figure(f"class of {count} (local)", name)
             if ray_value is not None and local_value:
                 ratios.append(Measurement(f"Ray overhead, class of {count}", name + " ray/local",

@@ -1,4 +1,5 @@
-"""Row locks that serialise a decision across worker processes (bookings, chat rate limits).
+"""Row locks that serialise a decision across worker processes (bookings, chat rate limits), and the election of
+the one process that runs a cluster's periodic job.
 
 PostgreSQL takes a row lock with SELECT ... FOR UPDATE. SQLite has no row locks, but one writer at a
 time: starting the transaction with a write takes the database's write lock before anything is read,
@@ -7,10 +8,12 @@ so a second process waits (busy timeout) and then reads what the first one commi
 
 from __future__ import annotations
 
+import contextlib
 from typing import Any, cast
 
-from sqlalchemy import CursorResult, Update, select, update
+from sqlalchemy import Connection, CursorResult, Engine, Update, select, text, update
 from sqlalchemy.dialects.postgresql import insert as postgresql_insert
+from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import Session
 
 from middleware.models import RobotControl, User
@@ -48,3 +51,45 @@ def lock_user(session: Session, user_id: int) -> None:
         session.execute(update(User).where(User.id == user_id).values(id=User.id))
         return
     session.execute(select(User.id).where(User.id == user_id).with_for_update())
+
+
+class ClusterElection:
+    """Elects one process of the cluster to run a periodic job: the holder of a PostgreSQL advisory lock, taken on
+    a connection of its own and held while that connection lives. A process that dies closes its connection, and
+    the lock goes to the next process that asks (each asks every tick, so within a tick). With SQLite there is one
+    process: it always runs the job. The job must stay correct if two run (a lost connection may leave a former
+    holder running one more tick): it is only who runs it that is elected, never what it may do.
+    """
+
+    def __init__(self, engine: Engine, key: int) -> None:
+        self._engine, self._key = engine, key
+        self._connection: Connection | None = None
+
+    def leads(self) -> bool:
+        """Whether this process runs the job now (takes the lock when it is free)."""
+        if self._engine.dialect.name != "postgresql":
+            return True
+        try:
+            if self._connection is None:
+                self._connection = self._engine.connect()
+                self._connection.execution_options(isolation_level="AUTOCOMMIT")
+            if self._held:
+                self._connection.execute(text("SELECT 1"))  # still connected, so still holding it
+                return True
+            self._held = bool(self._connection.execute(text("SELECT pg_try_advisory_lock(:key)"),
+                                                       {"key": self._key}).scalar())
+            return self._held
+        except DBAPIError:
+            self.resign()
+            return False
+
+    def resign(self) -> None:
+        """Gives the job up (closing the connection releases the lock for another process)."""
+        self._held = False
+        if self._connection is not None:
+            with contextlib.suppress(DBAPIError):
+                self._connection.invalidate()  # closed for real: back in the pool it would keep holding the lock
+                self._connection.close()
+            self._connection = None
+
+    _held: bool = False

@@ -16,11 +16,13 @@ from middleware.access import round_robin
 from middleware.access.commands import hand_over
 from middleware.access.round_robin import AccessPolicy, QueueState
 from middleware.db import session_factory
+from middleware.locking import ClusterElection
 from middleware.models import Course, CourseMembership, RobotControl
 from middleware.robots.registry import robot_registry
 
 log = logging.getLogger(__name__)
 _EXTENSION_KEY = "telelab.access"
+ACCESS_TICKER_LOCK = 0x7E1E_1AB0  # the advisory lock that elects the one process ticking every robot
 
 
 def _utc_now() -> datetime:
@@ -73,6 +75,7 @@ class AccessCoordinator:
         self._push_lock = threading.Lock()
         self._stop = threading.Event()
         self._ticker: threading.Thread | None = None
+        self.election = ClusterElection(self._sessions.kw["bind"], ACCESS_TICKER_LOCK)
 
     @property
     def policy(self) -> AccessPolicy:
@@ -177,15 +180,20 @@ class AccessCoordinator:
         self._ticker.start()
 
     def stop_ticker(self) -> None:
-        """Stops the background ticker."""
+        """Stops the background ticker (and gives its election up, so another process ticks at once)."""
         self._stop.set()
         if self._ticker is not None:
             self._ticker.join(5)
             self._ticker = None
+        self.election.resign()
 
     def _tick_forever(self) -> None:
+        # Every process with a channel open runs this loop, but only the elected one ticks (PostgreSQL: one per
+        # cluster; another takes over within a tick when it dies). Operations of users still run in their process.
         interval_s = float(self.app.config["ACCESS_TICK_S"])
         while not self._stop.wait(interval_s):
+            if not self.election.leads():
+                continue
             for robot_name in robot_registry(self.app).names():
                 try:
                     self.tick(robot_name)

@@ -127,9 +127,12 @@ class PoolSeats:
         return state.controller_id is None and not state.waiting_ids and not state.faulted
 
     def _settle(self, names: list[str], user_id: int) -> None:
-        """Ticks the kind's robots, free ones first, until one has bound user_id."""
-        states = self._states(names)
-        for name in sorted(states, key=lambda n: not self._is_free(states[n])):
+        """Ticks the kind's robots that could bind a waiter now (free, or at their turn's end) until one has bound
+        user_id; the others are the background ticker's (a heartbeat of every waiter must not lock every robot)."""
+        states, now = self._states(names), self._coordinator.now()
+        ready = [name for name, state in states.items()
+                 if self._is_free(state) or (state.turn_ends_at is not None and state.turn_ends_at <= now)]
+        for name in sorted(ready, key=lambda n: not self._is_free(states[n])):
             state = self._coordinator.tick(name)
             if user_id == state.controller_id or user_id in state.waiting_ids:
                 return

@@ -18,8 +18,9 @@ def test_quick_farm_benchmark_starts_a_class_on_both_backends_and_grades_nothing
     figures = {(row["scenario"], row["figure"]): row for row in report["rows"]}
     for backend in ("local", "ray"):
         assert figures[(f"farm start ({backend})", "one robot alone")]["measured"] > 0
-        for figure in ("start until SERVING p50", "start until SERVING max", "real-time factor, slowest driven robot",
-                       "CPU share per driven robot, mean", "CPU share per parked robot, mean",
+        for figure in ("start until SERVING p50", "start until SERVING max",
+                       "real-time factor, slowest driven and watched robot", "poses received per watched robot",
+                       "CPU share per driven and watched robot, mean", "CPU share per parked robot, mean",
                        "wake: drive -> moving, max of 5", "memory per robot, mean"):
             assert figures[(f"class of 2 ({backend})", figure)]["measured"] > 0, (backend, figure)
     assert ("Ray overhead, class of 2", "start until SERVING max ray/local") in figures
