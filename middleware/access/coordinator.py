@@ -12,6 +12,7 @@ from flask import Flask, current_app
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
+from middleware import events
 from middleware.access import round_robin
 from middleware.access.commands import hand_over
 from middleware.access.round_robin import AccessPolicy, QueueState
@@ -76,6 +77,12 @@ class AccessCoordinator:
         self._stop = threading.Event()
         self._ticker: threading.Thread | None = None
         self.election = ClusterElection(self._sessions.kw["bind"], ACCESS_TICKER_LOCK)
+        # Each robot's queue as last read, dropped when a change to it is announced (by any worker, through the
+        # event bus): pages showing seats read memory, not the table, until something changes.
+        self._bus = events.bus_of(self._sessions.kw["bind"])
+        self._seen: dict[str, QueueState] = {}
+        self._announced = 0  # counts announcements, so a read that overlapped one is not kept
+        self._bus.listen(round_robin.QUEUE_TOPIC, self._forget_seen)
 
     @property
     def policy(self) -> AccessPolicy:
@@ -111,6 +118,26 @@ class AccessCoordinator:
         """The robot's queue as stored now."""
         with self._sessions() as session:
             return round_robin.snapshot(session, robot_name)
+
+    def seen_snapshot(self, robot_name: str) -> QueueState:
+        """The robot's queue as last read here, read again only after a change was announced (any worker); the
+        table itself while this process cannot hear announcements (its PostgreSQL listener is reconnecting)."""
+        if self._bus.shared and not self._bus.listening.is_set():
+            return self.snapshot(robot_name)
+        state = self._seen.get(robot_name)
+        if state is None:
+            announced_before = self._announced
+            state = self.snapshot(robot_name)
+            if self._announced == announced_before:
+                self._seen[robot_name] = state
+        return state
+
+    def _forget_seen(self, robot_name: str | None) -> None:
+        self._announced += 1
+        if robot_name is None:
+            self._seen.clear()
+        else:
+            self._seen.pop(robot_name, None)
 
     def controller_token(self, robot_name: str, user_id: int, session: Session | None = None) -> str | None:
         """The token of user_id if they control the robot now, else None (one primary-key read, in the caller's

@@ -20,11 +20,13 @@ from typing import overload
 from sqlalchemy import delete, select, update
 from sqlalchemy.orm import Session
 
+from middleware import events
 from middleware.access import pools
 from middleware.locking import lock_robot_control, rows_matched
 from middleware.models import QueueEntry, RobotControl
 
 TURN_WARNING_S = 20.0
+QUEUE_TOPIC = "queue"
 
 
 @dataclass(frozen=True)
@@ -96,10 +98,18 @@ def _grant(control: RobotControl, user_id: int, now: datetime) -> None:
     control.faulted = False
 
 
+def _seen(session: Session, control: RobotControl) -> tuple[object, ...]:
+    """What a queue page shows of the robot: who controls it, until when, faults, and who waits in which order."""
+    return (control.controller_id, control.token, _as_utc(control.turn_ends_at), control.faulted,
+            tuple(e.user_id for e in _entries(session, control.robot_name)))
+
+
 def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: datetime,
             robot_online: bool) -> QueueState:
-    """Applies the rule to the locked row: drops users gone past grace, grants, rotates, pauses on faults."""
+    """Applies the rule to the locked row: drops users gone past grace, grants, rotates, pauses on faults; a change
+    is announced on the event bus (topic "queue", the robot's name) for every worker's queue pages."""
     token_before = control.token
+    seen_before = _seen(session, control)
     cutoff = now - timedelta(seconds=policy.grace_s)
     entries = _entries(session, control.robot_name)
     for gone in [e for e in entries if _as_utc(e.last_seen_at) < cutoff]:
@@ -161,6 +171,8 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
                 control.turn_ends_at = None  # the pool waiter went (or another robot took them): no one to hand to
     control.updated_at = now
     session.flush()
+    if _seen(session, control) != seen_before:
+        events.announce(session, QUEUE_TOPIC, control.robot_name)
     return QueueState(
         robot_name=control.robot_name,
         controller_id=control.controller_id,

@@ -54,15 +54,39 @@ class ChannelSeat:
             self._heartbeat_at = at
 
 
-def seat_message(coordinator: AccessCoordinator, robot_name: str, user_id: int) -> dict[str, object]:
-    """The queue as user_id sees it, as a JSON-ready message."""
-    state = coordinator.snapshot(robot_name)
-    turn_length_s = coordinator.turn_length_s(state.controller_id or user_id)
+class SeatFacts:
+    """What a queue socket reads besides the queue, kept for the socket's life: users' names and turn lengths
+    (a turn length at most TURN_LENGTH_FRESH_S old, as a tutor may change it)."""
+
+    TURN_LENGTH_FRESH_S = 10.0
+
+    def __init__(self, coordinator: AccessCoordinator) -> None:
+        self._coordinator = coordinator
+        self._names: dict[int, str | None] = {}
+        self._turns: dict[int, tuple[float, float]] = {}
+
+    def username(self, user_id: int) -> str | None:
+        if user_id not in self._names:
+            with session_factory(self._coordinator.app)() as session:
+                self._names[user_id] = session.scalar(select(User.username).where(User.id == user_id))
+        return self._names[user_id]
+
+    def turn_length_s(self, user_id: int) -> float:
+        read_at, length = self._turns.get(user_id, (-float("inf"), 0.0))
+        if time.monotonic() - read_at > self.TURN_LENGTH_FRESH_S:
+            length = self._coordinator.turn_length_s(user_id)
+            self._turns[user_id] = (time.monotonic(), length)
+        return length
+
+
+def seat_message(coordinator: AccessCoordinator, robot_name: str, user_id: int,
+                 facts: SeatFacts | None = None) -> dict[str, object]:
+    """The queue as user_id sees it, as a JSON-ready message (from memory until the queue changes)."""
+    facts = facts or SeatFacts(coordinator)
+    state = coordinator.seen_snapshot(robot_name)
+    turn_length_s = facts.turn_length_s(state.controller_id or user_id)
     seat = round_robin.seat_of(state, user_id, coordinator.now(), turn_length_s)
-    controller_name = None
-    if state.controller_id is not None:
-        with session_factory(coordinator.app)() as session:
-            controller_name = session.scalar(select(User.username).where(User.id == state.controller_id))
+    controller_name = facts.username(state.controller_id) if state.controller_id is not None else None
     return {
         "type": "queue",
         "in_queue": seat.in_queue,
@@ -97,6 +121,7 @@ def queue_channel(ws: WebSocket, robot_name: str) -> None:
     user_id = int(current_user.get_id())
     seat = ChannelSeat(robot_name, user_id)
     seat.join()
+    facts = SeatFacts(coordinator)
     last_sent: dict[str, object] | None = None
     last_sent_at = 0.0
     try:
@@ -116,7 +141,7 @@ def queue_channel(ws: WebSocket, robot_name: str) -> None:
                     coordinator.apply(ACTIONS[action], robot_name, user_id)
                 last_sent = None
             now = time.monotonic()
-            message = seat_message(coordinator, robot_name, user_id)
+            message = seat_message(coordinator, robot_name, user_id, facts)
             if message != last_sent or now - last_sent_at >= 1.0:
                 send_json(ws, message)
                 last_sent, last_sent_at = message, now

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from middleware import events
 from middleware.accounts.schemas import clean_robot_address, clean_robot_kind, clean_robot_name, clean_robot_title
 from middleware.accounts.services import require_admin
 from middleware.errors import Refused
@@ -60,6 +61,7 @@ def add_robot(session: Session, actor: User, name: object, title: object, addres
         raise Refused(409, "robot_exists", f"A robot named {clean_name!r} exists already.", "name")
     session.add(robot)
     session.flush()
+    events.announce(session, "robots", robot.name)
     return robot
 
 
@@ -79,4 +81,5 @@ def update_robot(session: Session, actor: User, robot_id: int, *, title: object 
     if enabled is not None:
         robot.enabled = enabled
     robot.updated_at = utc_now()
+    events.announce(session, "robots", robot.name)
     return robot

@@ -1,9 +1,10 @@
 """Delivers new and deleted chat messages to this process's sockets, whichever process wrote them.
 
-One background thread per process polls the database every POLL_S for each room that has sockets open
-here (one query pair per room, however many viewers), and puts events on each subscriber's queue. A
-per-socket poll would cost one query pair per viewer; LISTEN/NOTIFY would not work on SQLite. The
-thread stops when the last subscriber leaves.
+A message posted or deleted is announced on the event bus (middleware/events.py: PostgreSQL NOTIFY to every
+process, or this process's own with SQLite) with its room's name. One thread per process, woken by those
+announcements, reads each announced room that has sockets open here (one query pair per room, however many
+viewers) and puts events on each subscriber's queue. Nothing is polled on a timer. The thread stops when the
+last subscriber leaves.
 """
 
 from __future__ import annotations
@@ -15,11 +16,12 @@ from dataclasses import dataclass, field
 
 from flask import Flask
 
+from middleware import events
 from middleware.chat import services
 from middleware.db import session_factory
 
 log = logging.getLogger(__name__)
-POLL_S = 0.5
+TOPIC = "chat"
 _EXTENSION_KEY = "telelab.chat_hub"
 
 
@@ -68,6 +70,15 @@ class ChatHub:
         self._lock = threading.Lock()
         self._rooms: dict[str, _Room] = {}
         self._thread: threading.Thread | None = None
+        self._changed: set[str | None] = set()  # rooms announced since the thread last looked (None: all)
+        self._wake = threading.Event()
+        events.listen(self._sessions.kw["bind"], TOPIC, self._announced)
+
+    def _announced(self, robot_name: str | None) -> None:
+        with self._lock:
+            if robot_name is None or robot_name in self._rooms:
+                self._changed.add(robot_name)
+                self._wake.set()
 
     def subscribe(self, robot_name: str) -> Subscription:
         """A subscription to the room; subscribe before reading the history so nothing falls between."""
@@ -80,33 +91,39 @@ class ChatHub:
                 room = self._rooms[robot_name] = _Room(last_id=newest, window_start_id=newest + 1)
             room.window_start_id = min(room.window_start_id, max(1, newest - services.HISTORY_LENGTH))
             room.subscribers.add(subscription)
+            self._changed.add(robot_name)  # one read now: a message announced before the room was here
+            self._wake.set()
             if self._thread is None:
                 self._thread = threading.Thread(target=self._run, name="chat-hub", daemon=True)
                 self._thread.start()
         return subscription
 
     def unsubscribe(self, subscription: Subscription) -> None:
-        """Removes the subscription; an empty room is forgotten."""
+        """Removes the subscription; an empty room is forgotten (the thread ends with the last)."""
         with self._lock:
             room = self._rooms.get(subscription.robot_name)
             if room is not None:
                 room.subscribers.discard(subscription)
                 if not room.subscribers:
                     del self._rooms[subscription.robot_name]
+            if not self._rooms:
+                self._wake.set()
 
     def _run(self) -> None:
-        stop = threading.Event()
-        while not stop.wait(POLL_S):
+        while True:
+            self._wake.wait()
             with self._lock:
-                rooms = {name: room for name, room in self._rooms.items()}
-                if not rooms:
+                self._wake.clear()
+                if not self._rooms:
                     self._thread = None
                     return
+                changed, self._changed = self._changed, set()
+                rooms = {name: room for name, room in self._rooms.items() if None in changed or name in changed}
             for name, room in rooms.items():
                 try:
                     self._poll(name, room)
                 except Exception:  # a database hiccup must not end delivery for everyone
-                    log.exception("chat poll of %s failed", name)
+                    log.exception("chat delivery of %s failed", name)
 
     def _poll(self, robot_name: str, room: _Room) -> None:
         with self._sessions() as session:

@@ -9,6 +9,7 @@ from datetime import UTC, datetime, timedelta
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
+from middleware import events
 from middleware.chat.schemas import clean_body
 from middleware.errors import Refused
 from middleware.locking import lock_user
@@ -70,6 +71,7 @@ def post_message(session: Session, robot_name: str, user: User, body: object, no
     message = ChatMessage(robot_name=robot_name, user_id=user.id, body=text, created_at=now)
     session.add(message)
     session.flush()
+    events.announce(session, "chat", robot_name)
     return MessageView(message.id, robot_name, text, user.id, user.username, user.role, now)
 
 
@@ -108,3 +110,4 @@ def delete_message(session: Session, robot_name: str, actor: User, message_id: i
         raise ChatRefused(404, "unknown_message", f"There is no message {message_id} in this chat.", "id")
     message.deleted_at = now
     message.deleted_by_id = actor.id
+    events.announce(session, "chat", robot_name)

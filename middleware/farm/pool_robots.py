@@ -17,6 +17,7 @@ from sqlalchemy import select
 from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.orm import Session
 
+from middleware import events
 from middleware.errors import Refused
 from middleware.farm.base import FarmUnavailable, RobotFarm, RobotSpec
 from middleware.models import Robot
@@ -67,6 +68,7 @@ def start_pool_robots(farm: RobotFarm, sessions: Callable[[], Session], kind: st
         with sessions() as session:
             session.add(Robot(name=name, title=f"{kind.capitalize()} {name.rsplit('-', 1)[1]}", address=robot.address,
                               kind=kind, farm_managed=True, scene=scene, enabled=True))
+            events.announce(session, "robots", name)
             try:
                 session.commit()
             except IntegrityError:  # another admin took the name meanwhile: this robot is nobody's
@@ -89,6 +91,7 @@ def stop_pool_robots(farm: RobotFarm, sessions: Callable[[], Session], kind: str
             row = session.scalar(select(Robot).where(Robot.name == name))
             if row is not None:
                 session.delete(row)
+                events.announce(session, "robots", name)
                 session.commit()
     return names
 
@@ -113,6 +116,7 @@ def keep_pool_robots(farm: RobotFarm, sessions: Callable[[], Session]) -> list[s
                 row = session.scalar(select(Robot).where(Robot.name == name))
                 if row is not None:
                     row.address, row.updated_at = running.address, utc_now()
+                    events.announce(session, "robots", name)
                     session.commit()
             changed.append(name)
     return changed

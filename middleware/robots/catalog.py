@@ -9,6 +9,7 @@ from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
+from middleware import events
 from middleware.config import RobotAddress
 from middleware.models import Robot
 from middleware.models.accounts import utc_now
@@ -39,6 +40,8 @@ def seed_from_config(session: Session, configured: tuple[RobotAddress, ...]) -> 
                               kind=default_kind(robot.name)))
         elif row.address != robot.address:
             row.address, row.updated_at = robot.address, utc_now()
+        if session.dirty or session.new:
+            events.announce(session, "robots", robot.name)
         try:
             session.commit()
         except IntegrityError:  # another worker seeded the same name first; its row is as good as ours

@@ -1,7 +1,9 @@
 """The robots this middleware process knows, one RobotLink each, following the robots table.
 
-The table (managed by admins, seeded from TELELAB_ROBOTS) is re-read at most every `refresh_s`
-seconds when someone asks, and at once after a change made in this process (`refresh(force=True)`).
+The table (managed by admins, seeded from TELELAB_ROBOTS) is re-read when a change to it is announced on the
+event bus (middleware/events.py: by any process with PostgreSQL), and at once after a change made in this
+process (`refresh(force=True)`). With SQLite, whose announcements stay in their process, it is also re-read at
+most every `refresh_s` seconds when someone asks (a `telelab` command beside the server may have changed it).
 Disabled robots have no link: `get()` answers None (so pages and sockets give 404s) and their old
 link is closed. Until the table exists (before `telelab db upgrade`), the configuration is used.
 
@@ -30,6 +32,7 @@ from middleware.robots.link import RobotLink
 
 _EXTENSION_KEY = "telelab.robots"
 DEFAULT_REFRESH_S = 3.0
+ROBOTS_TOPIC = "robots"  # announced with a robot's name whenever the robots table changes
 log = logging.getLogger(__name__)
 
 
@@ -163,11 +166,15 @@ class RobotRegistry:
 
 def init_app(app: Flask) -> RobotRegistry:
     """Creates the registry for app from its ROBOTS setting and the robots table (seeded here)."""
+    from middleware import events
     from middleware.db import session_factory
 
-    registry = RobotRegistry(app.config["ROBOTS"], app.config["ROBOT_RPC_TIMEOUT_S"], session_factory(app),
-                             float(app.config.get("ROBOTS_REFRESH_S", DEFAULT_REFRESH_S)))
+    sessions = session_factory(app)
+    bus = events.bus_of(sessions.kw["bind"])
+    refresh_s = float("inf") if bus.shared else float(app.config.get("ROBOTS_REFRESH_S", DEFAULT_REFRESH_S))
+    registry = RobotRegistry(app.config["ROBOTS"], app.config["ROBOT_RPC_TIMEOUT_S"], sessions, refresh_s)
     app.extensions[_EXTENSION_KEY] = registry
+    bus.listen(ROBOTS_TOPIC, lambda _name: registry.refresh())
     registry.refresh()
     return registry
 

@@ -1,0 +1,110 @@
+"""Two web workers on one PostgreSQL database hear each other's changes through LISTEN/NOTIFY at once (nothing
+polls the tables): a chat message posted or deleted through one reaches a socket on the other, a robot an admin
+adds through one is in the other's lab; a transaction that rolls back announces nothing."""
+
+from __future__ import annotations
+
+import threading
+import time
+from pathlib import Path
+
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_test_app
+from tests.integration.bookings.conftest import api
+from tests.integration.chat.test_chat import next_of
+
+
+def test_a_message_posted_on_one_worker_reaches_a_socket_on_the_other_at_once(postgres_url: str, tmp_path: Path,
+                                                                                skill_server_address: str) -> None:
+    from middleware.access.coordinator import access_coordinator
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from middleware.events import bus_of
+
+    robots = f"lab-1={skill_server_address}"
+    first = make_test_app(postgres_url, robots, tmp_path / "one")
+    second = make_test_app_without_user(postgres_url, robots, tmp_path / "two")
+    with session_factory(first)() as session:
+        create_user(session, "tutor1", "tutor", STUDENT_PASSWORD)
+        session.commit()
+    servers = [LiveServer(first), LiveServer(second)]
+    try:
+        reader, writer = LabClient(servers[0].url), LabClient(servers[1].url)
+        assert reader.login() == 302 and writer.login("tutor1", STUDENT_PASSWORD) == 302
+        socket = reader.websocket("/ws/robots/lab-1/chat")
+        assert next_of(socket, "history")["messages"] == []
+        assert bus_of(session_factory(first).kw["bind"]).listening.wait(10), "the first worker listens"
+        delays = []
+        for body in ("one", "two", "three"):
+            sent = time.monotonic()
+            status, posted = api(writer, "POST", "/api/robots/lab-1/chat", {"body": body})
+            assert status == 201, posted
+            assert next_of(socket, "message", timeout_s=2.0)["message"]["body"] == body
+            delays.append(time.monotonic() - sent)
+        print(f"\nposted on one worker -> read on the other's socket: {[f'{d * 1000:.0f} ms' for d in delays]}")
+        assert max(delays) < 0.4, "delivered by notification, not a poll"
+        status, _ = api(writer, "DELETE", f"/api/robots/lab-1/chat/{posted['message']['id']}")
+        assert status == 200
+        assert next_of(socket, "deleted", timeout_s=2.0)["id"] == posted["message"]["id"]
+        socket.close()
+
+        with session_factory(first)() as session:
+            create_user(session, "root", "admin", STUDENT_PASSWORD)
+            session.commit()
+        admin = LabClient(servers[1].url)
+        assert admin.login("root", STUDENT_PASSWORD) == 302
+        status, added = api(admin, "POST", "/api/admin/robots", {"name": "lab-9", "address": "127.0.0.1:9"})
+        assert status == 201, added
+        added_at = time.monotonic()
+        while 'data-robot="lab-9"' not in reader.request("GET", "/lab")[2]:
+            assert time.monotonic() - added_at < 1.0, "the other worker did not hear of the new robot"
+            time.sleep(0.05)
+    finally:
+        for server in servers:
+            server.stop()
+        for app in (first, second):
+            access_coordinator(app).stop_ticker()
+            session_factory(app).kw["bind"].dispose()
+
+
+def make_test_app_without_user(database_url: str, robots: str, tmp_path: Path):
+    """A second worker: the same database (already migrated, its users made by the first)."""
+    import secrets
+
+    from middleware import create_app
+    from middleware.config import parse_robots
+
+    app = create_app({"DATABASE_URL": database_url, "SECRET_KEY": secrets.token_hex(16),
+                      "ROBOTS": parse_robots(robots), "TESTING": True})
+    app.instance_path = str(tmp_path / "instance")
+    return app
+
+
+def test_an_announcement_is_heard_after_commit_and_never_after_a_rollback(postgres_url: str) -> None:
+    from sqlalchemy import create_engine
+    from sqlalchemy.orm import Session
+
+    from middleware import events
+
+    engine = create_engine(postgres_url)
+    heard: list[str | None] = []
+    arrived = threading.Event()
+
+    def hear(key: str | None) -> None:
+        heard.append(key)
+        arrived.set()
+
+    bus = events.bus_of(engine)
+    stop = events.listen(engine, "probe", hear)
+    try:
+        assert bus.listening.wait(10)
+        with Session(engine) as session:
+            events.announce(session, "probe", "rolled-back")
+            session.rollback()
+            events.announce(session, "probe", "kept")
+            assert not arrived.wait(0.3), "nothing before the commit"
+            session.commit()
+        assert arrived.wait(2) and heard == ["kept"]
+    finally:
+        stop()
+        bus.close()
+        engine.dispose()
