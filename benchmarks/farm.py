@@ -8,9 +8,9 @@ same steps:
 - a class start: N robots of the lab scene requested at once (one thread per student, as N students pressing
   "Start" together) -> the time until each one answers SERVING (p50, max), for N = 10, 20, 30;
 - with the N robots running headless, driven (each in a slow circle, commands at 5 Hz as a console sends them)
-  and watched (each robot's telemetry streamed at 30 Hz: the server's side of a view rendered in the browser from
-  the pose stream, one frame per pose; the server renders no camera), over a 10 s window: each robot's real-time factor (simulated seconds per wall second, read from its
-  telemetry), its CPU share (its processes' CPU time, /proc) and resident memory. Targets: real-time factor >= 0.95
+  and watched (each robot's pose stream, StreamTelemetry with pose_only at 30 Hz: the server's side of a view
+  rendered in the browser, one frame per pose; the server renders no camera), over a 10 s window: each robot's
+  real-time factor (simulated seconds per wall second, read from its telemetry), its CPU share (its processes' CPU time, /proc) and resident memory. Targets: real-time factor >= 0.95
   for every robot while the farm admits them; CPU share per robot <= the share Ray placement declares
   (middleware/farm/costs.py);
 - then left alone: each robot parks (no physics steps; sensors at 4 Hz): its CPU share over 10 s (target <= 1 %
@@ -110,7 +110,8 @@ class Drivers:
             channel.close()
 
     def _watch(self, channel: grpc.Channel, rate_hz: float) -> None:
-        stream = robot_pb2_grpc.RobotStub(channel).StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=rate_hz))
+        stream = robot_pb2_grpc.RobotStub(channel).StreamTelemetry(
+            robot_pb2.StreamTelemetryRequest(rate_hz=rate_hz, pose_only=True))
         self._streams.append(stream)
         with contextlib.suppress(grpc.RpcError):
             for _message in stream:

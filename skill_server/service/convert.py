@@ -104,8 +104,8 @@ def drive_ack_to_proto(ack: DriveAck) -> robot_pb2.DriveAck:
     )
 
 
-def telemetry_to_proto(snapshot: RobotSnapshot, laser: LaserSpec) -> robot_pb2.Telemetry:
-    return robot_pb2.Telemetry(
+def telemetry_to_proto(snapshot: RobotSnapshot, laser: LaserSpec, pose_only: bool = False) -> robot_pb2.Telemetry:
+    pose = robot_pb2.Telemetry(
         tick=snapshot.tick,
         sim_time_s=snapshot.sim_time_s,
         capture_unix_s=snapshot.capture_unix_s,
@@ -115,6 +115,16 @@ def telemetry_to_proto(snapshot: RobotSnapshot, laser: LaserSpec) -> robot_pb2.T
             linear_mps=snapshot.odometry.linear_mps,
             angular_radps=snapshot.odometry.angular_radps,
         ),
+        deadman_stopped=snapshot.deadman_stopped,
+    )
+    if pose_only:
+        return pose
+    return robot_pb2.Telemetry(
+        tick=snapshot.tick,
+        sim_time_s=snapshot.sim_time_s,
+        capture_unix_s=snapshot.capture_unix_s,
+        last_applied_sequence=snapshot.last_applied_sequence,
+        odometry=pose.odometry,
         ground_truth=pose_to_proto(snapshot.ground_truth),
         sonar=robot_pb2.SonarReading(ranges_m=snapshot.sonar_ranges_m),
         laser=robot_pb2.LaserScan(

@@ -145,11 +145,11 @@ class RobotService(robot_pb2_grpc.RobotServicer):
     def StreamTelemetry(
         self, request: robot_pb2.StreamTelemetryRequest, context: grpc.ServicerContext
     ) -> Iterator[robot_pb2.Telemetry]:
-        """Odometry, ground truth, sonar and laser at the requested rate of sim time."""
+        """Odometry, ground truth, sonar and laser at the requested rate of sim time (pose_only: odometry only)."""
         return self._stream(context, lambda stopped: self._robot.telemetry(
             1.0 / convert.rate_from_proto("rate_hz", request.rate_hz, DEFAULT_TELEMETRY_HZ, MAX_TELEMETRY_HZ, "Hz"),
             stopped,
-        ), lambda snapshot: convert.telemetry_to_proto(snapshot, self._laser))
+        ), lambda snapshot: convert.telemetry_to_proto(snapshot, self._laser, request.pose_only))
 
     def StreamCamera(
         self, request: robot_pb2.StreamCameraRequest, context: grpc.ServicerContext

@@ -219,10 +219,12 @@ class DriveAck(_message.Message):
     def __init__(self, applied_sequence: _Optional[int] = ..., linear_mps: _Optional[float] = ..., angular_radps: _Optional[float] = ...) -> None: ...
 
 class StreamTelemetryRequest(_message.Message):
-    __slots__ = ("rate_hz",)
+    __slots__ = ("rate_hz", "pose_only")
     RATE_HZ_FIELD_NUMBER: _ClassVar[int]
+    POSE_ONLY_FIELD_NUMBER: _ClassVar[int]
     rate_hz: float
-    def __init__(self, rate_hz: _Optional[float] = ...) -> None: ...
+    pose_only: bool
+    def __init__(self, rate_hz: _Optional[float] = ..., pose_only: _Optional[bool] = ...) -> None: ...
 
 class Pose2D(_message.Message):
     __slots__ = ("x_m", "y_m", "theta_rad")

@@ -97,6 +97,20 @@ def test_one_drive_command_moves_the_robot_until_the_deadman(fresh_server: Skill
     assert message.ground_truth.y_m - start.y_m == pytest.approx(0.0, abs=0.02)
 
 
+def test_a_pose_only_stream_carries_the_pose_and_nothing_a_student_could_read_the_truth_from(
+        robot: robot_pb2_grpc.RobotStub) -> None:
+    stream = robot.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=30, pose_only=True), timeout=DEADLINE_S)
+    messages = [next(stream) for _ in range(3)]
+    stream.cancel()
+    assert [m.tick for m in messages] == sorted({m.tick for m in messages})
+    last = messages[-1]
+    assert last.HasField("odometry") and last.capture_unix_s > 0 and last.sim_time_s > 0
+    assert not last.HasField("ground_truth") and not last.HasField("laser") and not last.HasField("sonar")
+    full = robot.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=30), timeout=DEADLINE_S)
+    assert last.ByteSize() * 10 < next(full).ByteSize(), "a pose is a small part of the full message"
+    full.cancel()
+
+
 def test_telemetry_messages_advance_and_carry_every_sensor(robot: robot_pb2_grpc.RobotStub) -> None:
     stream = robot.StreamTelemetry(robot_pb2.StreamTelemetryRequest(), timeout=DEADLINE_S)
     messages = [next(stream) for _ in range(5)]
