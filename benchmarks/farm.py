@@ -10,8 +10,9 @@ same steps:
 - with the N robots running headless, driven (each in a slow circle, commands at 5 Hz as a console sends them)
   and watched (each robot's pose stream, StreamTelemetry with pose_only at 30 Hz: the server's side of a view
   rendered in the browser, one frame per pose; the server renders no camera), over a 10 s window: each robot's
-  real-time factor (simulated seconds per wall second, read from its telemetry), its CPU share (its processes' CPU time, /proc) and resident memory. Targets: real-time factor >= 0.95
-  for every robot while the farm admits them; CPU share per robot <= the share Ray placement declares
+  real-time factor (simulated seconds per wall second, read from its telemetry), its CPU share (its processes'
+  CPU time, /proc) and resident memory. Targets: real-time factor >= 0.95 for every robot while the farm admits
+  them; CPU share per robot <= the share Ray placement declares
   (middleware/farm/costs.py);
 - then left alone: each robot parks (no physics steps; sensors at 4 Hz): its CPU share over 10 s (target <= 1 %
   of a core), and the wake time of one robot, a drive command -> its telemetry showing it move (target <= 200 ms).
