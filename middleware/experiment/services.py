@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 from sqlalchemy import select
 
+from middleware import events
 from middleware.courses.authority import taught_student_ids, teaches_student
 from middleware.errors import Refused
 from middleware.lab.delay import parse_delay_s
@@ -24,6 +25,7 @@ from middleware.models.accounts import utc_now
 from middleware.models.experiment import TRIAL_OPEN, Trial, VideoDelay
 
 COURSES = ("course-A", "course-B")
+DELAYS_TOPIC = "delays"  # announced with the user's id when a delay in force may have changed
 TRIAL_DELAYS_S = (1.0, 3.0)
 CONDITIONS: tuple[tuple[str, float, bool], ...] = tuple(
     (course, delay, feedback) for course in COURSES for delay in TRIAL_DELAYS_S for feedback in (True, False)
@@ -51,6 +53,7 @@ def _store_delay(session, user_id: int, delay_s: float, set_by_id: int) -> Video
     else:
         row.delay_s, row.set_by_id, row.updated_at = delay_s, set_by_id, utc_now()
     session.flush()
+    events.announce(session, DELAYS_TOPIC, str(user_id))
     return row
 
 
@@ -115,6 +118,7 @@ def assign_trial(session, student: User, robot_name: str, robot_scene: str,
                   status=TRIAL_OPEN, errors=0, created_at=utc_now())
     session.add(trial)
     session.flush()
+    events.announce(session, DELAYS_TOPIC, str(student.id))
     return trial
 
 
@@ -145,6 +149,7 @@ def finish_trial(session, student: User, trial_id: int, result: RunResult) -> Tr
     _check_result(result)
     trial.status, trial.total_time_s, trial.errors = "completed", float(result.total_time_s), int(result.errors)
     trial.finished_at = utc_now()
+    events.announce(session, DELAYS_TOPIC, str(student.id))
     return trial
 
 
@@ -154,6 +159,7 @@ def abandon_trial(session, student: User, trial_id: int) -> Trial:
     if trial is None or trial.user_id != student.id or trial.status != TRIAL_OPEN:
         raise Refused(404, "unknown_trial", "There is no trial of yours in progress with that number.", "trial_id")
     trial.status, trial.finished_at = "abandoned", utc_now()
+    events.announce(session, DELAYS_TOPIC, str(student.id))
     return trial
 
 

@@ -3,7 +3,8 @@
 The thesis added delay with a distant proxy; here the relay does it per viewer. `DelayQueue` is the pure
 part (ordering, bounds); `parse_delay_s` validates a requested delay; `ViewerDelay` follows one viewer's
 delay on one robot through the process's `DelayBook`, which reads every delay in force from the database (so
-every worker process applies it) in one query at most every REFRESH_S.
+every worker process applies it) in one query, again only after a change is announced on the event bus (topic
+"delays", by any worker; middleware/events.py), or at most every REFRESH_S while announcements cannot be heard.
 
 Two kinds of delay are in force: a tutor's (`video_delays`, on every robot the user watches) and an open
 experiment trial's (its own row in `experiment_trials`, on the trial's robot only, for as long as the trial is
@@ -147,17 +148,20 @@ class DelayBook:
     """
 
     def __init__(self, load: Callable[[], Delays], refresh_s: float = REFRESH_S,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic,
+                 hears_changes: Callable[[], bool] = lambda: False) -> None:
         self._load, self._refresh_s, self._clock = load, refresh_s, clock
+        self._hears_changes = hears_changes  # True: changes are announced (forget), so no periodic read
         self._delays: Delays = {}
         self._loaded_at = float("-inf")
         self._lock = threading.Lock()
 
     def delay_of(self, user_id: int, robot_name: str) -> float:
         """user_id's delay on robot_name as read at most refresh_s ago (0 when none is in force)."""
-        if self._clock() - self._loaded_at >= self._refresh_s:
+        period = float("inf") if self._hears_changes() else self._refresh_s
+        if self._clock() - self._loaded_at >= period:
             with self._lock:
-                if self._clock() - self._loaded_at >= self._refresh_s:
+                if self._clock() - self._loaded_at >= period:
                     try:
                         self._delays = self._load()
                     finally:
@@ -181,6 +185,7 @@ def delay_book(app=None) -> DelayBook:
     """The delay book of app (or of the current app), made on first use."""
     from flask import current_app
 
+    from middleware import events
     from middleware.db import session_factory
 
     app = app or current_app._get_current_object()  # type: ignore[attr-defined]
@@ -192,7 +197,11 @@ def delay_book(app=None) -> DelayBook:
             with factory() as session:
                 return read_all_delays_s(session)
 
-        book = app.extensions.setdefault(_BOOK_KEY, DelayBook(load))
+        bus = events.bus_of(factory.kw["bind"])
+        made = DelayBook(load, hears_changes=lambda: not bus.shared or bus.listening.is_set())
+        book = app.extensions.setdefault(_BOOK_KEY, made)
+        if book is made:
+            bus.listen("delays", lambda _user: made.forget())
     return book
 
 

@@ -1,6 +1,7 @@
 """Two web workers on one PostgreSQL database hear each other's changes through LISTEN/NOTIFY at once (nothing
 polls the tables): a chat message posted or deleted through one reaches a socket on the other, a robot an admin
-adds through one is in the other's lab; a transaction that rolls back announces nothing."""
+adds through one is in the other's lab, a delay a tutor sets through one is applied by the other's viewers; a
+transaction that rolls back announces nothing."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import threading
 import time
 from pathlib import Path
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_test_app
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_course, make_test_app
 from tests.integration.bookings.conftest import api
 from tests.integration.chat.test_chat import next_of
 
@@ -19,6 +20,7 @@ def test_a_message_posted_on_one_worker_reaches_a_socket_on_the_other_at_once(po
     from middleware.auth.services import create_user
     from middleware.db import session_factory
     from middleware.events import bus_of
+    from middleware.lab.delay import delay_book
 
     robots = f"lab-1={skill_server_address}"
     first = make_test_app(postgres_url, robots, tmp_path / "one")
@@ -58,12 +60,30 @@ def test_a_message_posted_on_one_worker_reaches_a_socket_on_the_other_at_once(po
         while 'data-robot="lab-9"' not in reader.request("GET", "/lab")[2]:
             assert time.monotonic() - added_at < 1.0, "the other worker did not hear of the new robot"
             time.sleep(0.05)
+
+        make_course(first, "EV1", {"tutor1": "tutor", "student1": "student"})
+        book, student_id = delay_book(first), find_user_id(first, "student1")
+        assert book.delay_of(student_id, "lab-1") == 0.0
+        status, _ = api(writer, "PUT", "/api/experiment/delays/student1", {"delay_s": 2.5})
+        assert status == 200
+        set_at = time.monotonic()
+        while book.delay_of(student_id, "lab-1") != 2.5:
+            assert time.monotonic() - set_at < 1.0, "the first worker's viewers did not get the new delay"
+            time.sleep(0.02)
     finally:
         for server in servers:
             server.stop()
         for app in (first, second):
             access_coordinator(app).stop_ticker()
             session_factory(app).kw["bind"].dispose()
+
+
+def find_user_id(app, username: str) -> int:
+    from middleware.auth.services import find_user
+    from middleware.db import session_factory
+
+    with session_factory(app)() as session:
+        return find_user(session, username).id
 
 
 def make_test_app_without_user(database_url: str, robots: str, tmp_path: Path):
