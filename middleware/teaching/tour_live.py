@@ -1,7 +1,9 @@
 """Live guided sessions: the state every page shows, and the channel that pushes it when the tutor acts.
 
-A change wakes this process's sockets at once; every socket also re-reads the session's version from the
-database each second, so a change made in another worker process arrives too (a little later).
+A change is announced on the event bus (topic "tours", the session's id; middleware/events.py), which wakes the
+sockets of that session in every worker process at once; a socket reads the session from the database only when
+woken so, or each second while this process cannot hear announcements (its PostgreSQL listener reconnecting).
+Who is present is each process's own (its sockets).
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ import threading
 from flask_login import current_user
 from sqlalchemy.orm import Session
 
+from middleware import events
 from middleware.db import get_session
 from middleware.models import User
 from middleware.models.teaching import GuidedSession, Tour
@@ -21,7 +24,9 @@ from middleware.teaching.tours import tour_steps
 _changed = threading.Condition()
 _versions: dict[int, int] = {}
 _present: dict[int, dict[int, str]] = {}  # session id -> user id -> name, of this process's sockets
-RECHECK_S = 1.0
+RECHECK_S = 1.0  # how often a socket checks that it is still open (and re-reads, if announcements go unheard)
+TOPIC = "tours"
+_listening_engines: set[int] = set()
 
 
 def notify(session_id: int) -> None:
@@ -29,6 +34,28 @@ def notify(session_id: int) -> None:
     with _changed:
         _versions[session_id] = _versions.get(session_id, 0) + 1
         _changed.notify_all()
+
+
+def announce(session: Session, session_id: int) -> None:
+    """Announces a change of the class, heard by every worker's sockets once session commits."""
+    events.announce(session, TOPIC, str(session_id))
+
+
+def _heard(key: str | None) -> None:
+    if key is None:  # the listener reconnected: anything may have changed
+        for session_id in list(_versions):
+            notify(session_id)
+    elif key.isdigit():
+        notify(int(key))
+
+
+def _bus_for(db: Session) -> events.EventBus:
+    engine = db.get_bind().engine
+    bus = events.bus_of(engine)
+    if id(engine) not in _listening_engines:
+        _listening_engines.add(id(engine))
+        bus.listen(TOPIC, _heard)
+    return bus
 
 
 def state(session: Session, live: GuidedSession) -> dict[str, object]:
@@ -62,21 +89,25 @@ def session_channel(ws: WebSocket, session_id: int) -> None:
         return
     _present.setdefault(session_id, {})[user_id] = username
     notify(session_id)  # the tutor's list of participants changes
+    bus = _bus_for(db)
     sent: tuple[int, tuple[object, ...]] | None = None
-    seen_local = -1
+    seen_local, read_local = -1, -2
     try:
         while ws.connected:
-            db.expire_all()
-            live = db.get(GuidedSession, session_id)
-            if live is None:
-                break
-            current = state(db, live)
-            participants = current["participants"]
-            signature = (live.version, tuple(participants) if isinstance(participants, list) else ())
-            if signature != sent:
-                send_json(ws, current)
-                sent = signature
-            db.rollback()  # end the read transaction; a socket lives long
+            hears = not bus.shared or bus.listening.is_set()
+            if seen_local != read_local or not hears:
+                read_local = seen_local
+                db.expire_all()
+                live = db.get(GuidedSession, session_id)
+                if live is None:
+                    break
+                current = state(db, live)
+                participants = current["participants"]
+                signature = (live.version, tuple(participants) if isinstance(participants, list) else ())
+                if signature != sent:
+                    send_json(ws, current)
+                    sent = signature
+                db.rollback()  # end the read transaction; a socket lives long
             with _changed:
                 if _versions.get(session_id, 0) == seen_local:
                     _changed.wait(RECHECK_S)

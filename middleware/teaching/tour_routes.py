@@ -194,7 +194,7 @@ def start_live(tour_id: int) -> ResponseReturnValue:
     check_class_start(session, actor, course_id, override, active_session(session, robot))
     created = start_session(session, tour, robot, actor.id, course_id, access_coordinator().now(),
                             actor.id if override else None)
-    after_commit(lambda: live.notify(created.id))  # the class's sockets read it in sessions of their own
+    live.announce(session, created.id)  # every worker's sockets of the class read it once committed
     return jsonify(live.state(session, created)), 201
 
 
@@ -250,6 +250,7 @@ def session_action(session_id: int) -> ResponseReturnValue:
         end_session(found, access_coordinator().now())
     else:
         raise TourInvalid("action", 'action must be "step", "control" or "end".')
+    live.announce(session, found.id)
     after_commit(lambda: _class_changed(found.id, found.robot_name, handover=action in ("control", "end")))
     return jsonify(live.state(session, found))
 
