@@ -29,6 +29,8 @@ def test_a_tutor_runs_a_class_session_and_a_student_opens_their_robot(page, chro
         page.goto(f"{live_server.url}/courses/{course_id}")
         page.get_by_role("link", name="Class session").click()
         page.get_by_role("status").filter(has_text="No class session is open for this course.").wait_for()
+        scene = page.get_by_label("The students' robots run")
+        assert scene.input_value() == "lab" and scene.locator("option").count() == 3
         page.get_by_role("button", name="Start the class session").click()
         page.get_by_role("status").filter(has_text="Class session open (lab): 2 of 2 robots ready.").wait_for(
             timeout=60_000)
