@@ -221,7 +221,9 @@ def build_parser() -> argparse.ArgumentParser:
     up = commands.add_parser("up", help="start the whole lab: skill server(s), database, web")
     up.add_argument("--host", default="127.0.0.1")
     up.add_argument("--port", type=int, default=5000)
-    up.add_argument("--robots", type=int, default=1, help="how many simulated lab robots (default 1)")
+    up.add_argument("--robots", type=int, default=2,
+                    help="how many simulated lab robots (default 2: a pool of lab robots, so students may queue for "
+                         "any of them)")
     up.add_argument("--scene", default="lab", help="scene of the simulated robots (default lab)")
     up.add_argument("--no-course-robots", dest="course_robots", action="store_false",
                     help="do not start the experiment's robots course-a and course-b")
