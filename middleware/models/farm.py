@@ -50,6 +50,8 @@ class ClassSession(Base):
     started_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
     ended_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
     scene: Mapped[str] = mapped_column(String(64), default="lab")  # every student's robot runs this scene
+    # The class booking that opened it (at the slot's start, and that ends it at the slot's end); None: by hand.
+    booking_id: Mapped[int | None] = mapped_column(ForeignKey("bookings.id", ondelete="SET NULL"))
 
 
 class ClassSeat(Base):

@@ -2,17 +2,42 @@
 
 from __future__ import annotations
 
+import time
+
 from flask import Blueprint, current_app, jsonify, render_template, request, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
+from sqlalchemy.exc import DBAPIError
 
 from middleware.courses.services import get_course
 from middleware.db import after_commit, get_session, session_factory
 from middleware.models import User
-from middleware.teaching import class_sessions
+from middleware.teaching import class_bookings, class_sessions
 from middleware.teaching.practice_robots import practice_manager, practice_name
 
 blueprint = Blueprint("classes", __name__)
+_KEEPER_KEY = "telelab.class_bookings"
+LOOK_FOR_CLASS_BOOKINGS_S = 60.0
+
+
+@blueprint.before_app_request
+def keep_booked_classes() -> None:
+    """Once a process serves requests and a class booking lies ahead, it keeps booked class sessions in step
+    (the keeper itself runs in one process of the cluster)."""
+    app = current_app._get_current_object()  # type: ignore[attr-defined]
+    state = app.extensions.setdefault(_KEEPER_KEY, {"looked_at": -LOOK_FOR_CLASS_BOOKINGS_S, "keeper": None})
+    now = time.monotonic()
+    if state["keeper"] is not None or now - state["looked_at"] < LOOK_FOR_CLASS_BOOKINGS_S:
+        return
+    state["looked_at"] = now
+    sessions = session_factory(app)
+    try:
+        if not class_bookings.any_class_booking_ahead(sessions):
+            return
+    except DBAPIError:
+        return  # no tables yet
+    keeper = state["keeper"] = class_bookings.ClassBookingKeeper(sessions, practice_manager(app))
+    keeper.start()
 
 
 def _actor() -> User:
@@ -23,6 +48,7 @@ def _session_dict(course_id: int) -> dict[str, object]:
     opened, seats = class_sessions.seats(get_session(), _actor(), course_id)
     counts = {state: sum(1 for seat in seats if seat.state == state) for state in ("starting", "ready", "failed")}
     return {"course_id": course_id, "open": opened is not None, "scene": opened.scene if opened else None,
+            "booking_id": opened.booking_id if opened else None,
             "started_at": opened.started_at.isoformat() if opened else None,
             "seats": [seat.to_dict() for seat in seats], "counts": counts}
 

@@ -73,7 +73,7 @@ def class_robot(session: Session, course_id: int, user_id: int) -> PersonalRobot
 
 
 def start_session(session: Session, actor: User, course_id: int, manager: PracticeManager,
-                  scene: str = "lab") -> ClassSession:
+                  scene: str = "lab", booking_id: int | None = None) -> ClassSession:
     """Opens a class session for the course (its tutors and admins only) with a seat per enrolled student, every
     student's robot running scene.
 
@@ -94,7 +94,7 @@ def start_session(session: Session, actor: User, course_id: int, manager: Practi
         raise Refused(409, "farm_full", f"The robot farm can start {max(free, 0)} more robots now and the class "
                                         f"needs {needed}. Ask an administrator to add a robot host, or try again "
                                         "when other classes have ended.")
-    opened = ClassSession(course_id=course.id, started_by_id=actor.id, scene=scene)
+    opened = ClassSession(course_id=course.id, started_by_id=actor.id, scene=scene, booking_id=booking_id)
     session.add(opened)
     try:
         session.flush()

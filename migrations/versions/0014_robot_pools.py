@@ -55,6 +55,9 @@ def upgrade() -> None:
     op.create_index(op.f("ix_pool_queue_entries_kind"), "pool_queue_entries", ["kind"])
     with op.batch_alter_table("class_sessions") as batch:
         batch.add_column(sa.Column("scene", sa.String(length=64), nullable=False, server_default="lab"))
+        batch.add_column(sa.Column("booking_id", sa.Integer(), nullable=True))
+        batch.create_foreign_key(op.f("fk_class_sessions_booking_id_bookings"), "bookings", ["booking_id"], ["id"],
+                                 ondelete="SET NULL")
     with op.batch_alter_table("assessment_attempts") as batch:
         batch.add_column(sa.Column("robot_name", sa.String(length=64), nullable=True))
 
@@ -63,6 +66,8 @@ def downgrade() -> None:
     with op.batch_alter_table("assessment_attempts") as batch:
         batch.drop_column("robot_name")
     with op.batch_alter_table("class_sessions") as batch:
+        batch.drop_constraint(op.f("fk_class_sessions_booking_id_bookings"), type_="foreignkey")
+        batch.drop_column("booking_id")
         batch.drop_column("scene")
     op.drop_table("pool_queue_entries")
     op.drop_index(op.f("ix_bookings_pool_kind"), table_name="bookings")

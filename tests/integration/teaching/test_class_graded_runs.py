@@ -107,3 +107,44 @@ def test_a_class_on_a_course_scene_runs_the_experiments_trials_on_each_students_
     assert (status, error["error"]["field"]) == (400, "robot_name"), "another student's robot is not offered"
     status, error = _api(ann, "POST", f"/api/exams/{exam_id}/attempts")
     assert (status, error["error"]["code"]) == (409, "no_robot"), "her robot runs course-A, the test's robot lab"
+
+
+def test_a_class_booking_opens_its_session_before_the_slot_and_ends_it_with_the_slot(small_class) -> None:
+    from sqlalchemy import select, update
+
+    from middleware.auth.services import find_user
+    from middleware.db import session_factory
+    from middleware.models import Booking
+    from middleware.models.farm import ClassSession
+    from middleware.teaching.class_bookings import sync_with_bookings
+    from middleware.teaching.practice_robots import practice_manager
+
+    server, course_id, _exam = small_class
+    sessions, manager = session_factory(server.app), practice_manager(server.app)
+    now = datetime.now(UTC)
+    with sessions() as session:
+        tutor = find_user(session, "tutor1")
+        booking = Booking(robot_name="lab-1", user_id=tutor.id, course_id=course_id, kind="class",
+                          starts_at=now + timedelta(minutes=3), ends_at=now + timedelta(minutes=63))
+        later = Booking(robot_name="lab-1", user_id=tutor.id, course_id=course_id, kind="class",
+                        starts_at=now + timedelta(hours=3), ends_at=now + timedelta(hours=4))
+        session.add_all([booking, later])
+        session.commit()
+        booking_id = booking.id
+    opened, ended = sync_with_bookings(sessions, manager, now)
+    assert opened == [booking_id] and ended == [], "five minutes ahead: the robots start now; not the later one"
+    tutor = _login(server, "tutor1")
+    state = _wait_until_ready(tutor, course_id)
+    assert state["open"] and state["counts"]["ready"] == 2
+    assert sync_with_bookings(sessions, manager, now) == ([], []), "one session per booking"
+
+    with sessions() as session:
+        session.execute(update(Booking).where(Booking.id == booking_id).values(
+            starts_at=now - timedelta(minutes=61), ends_at=now - timedelta(minutes=1)))
+        session.commit()
+    opened, ended = sync_with_bookings(sessions, manager, now)
+    assert opened == [] and len(ended) == 1
+    status, state = _api(tutor, "GET", f"/api/courses/{course_id}/class-session")
+    assert not state["open"] and manager.count() == 0, "the slot ended: every robot stopped"
+    with sessions() as session:
+        assert session.scalar(select(ClassSession.booking_id).where(ClassSession.id == ended[0])) == booking_id
