@@ -30,13 +30,36 @@ from middleware.robots.link import CommandRefused, RobotLink  # noqa: E402
 from tests.conftest import STUDENT_PASSWORD, LabClient  # noqa: E402
 
 
+def _print_ray_logs(made: Cluster) -> None:
+    """The tails of the raylets' and the GCS's logs, so that a node that did not come up says why in CI's log."""
+    logs = Path(made.head_node.get_logs_dir_path())
+    for log in sorted(logs.glob("raylet*.out")) + sorted(logs.glob("raylet*.err")) + sorted(logs.glob("gcs_server.*")):
+        print(f"--- {log.name} ---", *log.read_text(errors="replace").splitlines()[-25:], sep="\n")
+
+
+def _two_nodes() -> Cluster:
+    """Ray waits a fixed 30 s for a node's raylet to register; on a loaded CI machine it once did not, so a node
+    that does not come up is reported with Ray's logs and the whole cluster is started once more."""
+    for attempt in (1, 2):
+        made = Cluster(initialize_head=True, head_node_args={
+            "num_cpus": 2, "node_ip_address": "127.0.0.1", "include_dashboard": False})
+        try:
+            made.add_node(num_cpus=2, node_ip_address="127.0.0.1")
+            made.wait_for_nodes()
+            return made
+        except Exception:
+            _print_ray_logs(made)
+            subprocess.run([sys.executable, "-m", "ray.scripts.scripts", "stop", "--force"], check=False,
+                           capture_output=True)
+            if attempt == 2:
+                raise
+    raise AssertionError("unreachable")
+
+
 @pytest.fixture(scope="module")
 def cluster() -> Iterator[Cluster]:
     """A head node and a worker node, each with 2 CPUs, bound to 127.0.0.1."""
-    made = Cluster(initialize_head=True, head_node_args={
-        "num_cpus": 2, "node_ip_address": "127.0.0.1", "include_dashboard": False})
-    made.add_node(num_cpus=2, node_ip_address="127.0.0.1")
-    made.wait_for_nodes()
+    made = _two_nodes()
     yield made
     import ray
 
