@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 RUN_STAMP := $(VENV)/.run-installed
 TEST_STAMP := $(VENV)/.test-installed
 
-.PHONY: run test protos bench lint chromium ffmpeg clean
+.PHONY: run test protos bench lint chromium ffmpeg nginx clean
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -25,7 +25,7 @@ DEMO_VIDEO := instance/lessons/demo-first-moves.webm
 run: $(RUN_STAMP) $(if $(wildcard $(DEMO_VIDEO)),,ffmpeg)
 	$(VENV)/bin/telelab up
 
-test: $(TEST_STAMP) chromium ffmpeg
+test: $(TEST_STAMP) chromium ffmpeg nginx
 	$(VENV)/bin/mypy
 	$(PY) -m pytest
 
@@ -40,6 +40,13 @@ ffmpeg:
 	  echo "Installing Debian's ffmpeg to record the demo lesson's video"; \
 	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq ffmpeg; }
+
+# The scale-out tests put Debian's nginx in front of `telelab up --workers 2`, as the README's deployment does.
+nginx:
+	@command -v nginx >/dev/null 2>&1 || test -x /usr/sbin/nginx || { \
+	  echo "Installing Debian's nginx for the reverse-proxy tests"; \
+	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq nginx; }
 
 protos: $(TEST_STAMP)
 	$(PY) protos/generate.py

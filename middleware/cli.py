@@ -122,7 +122,8 @@ def cmd_up(args: argparse.Namespace) -> int:
     from middleware.lab_runner import run_lab
 
     return run_lab(host=args.host, port=args.port, robot_count=args.robots, scene=args.scene,
-                   course_robots=args.course_robots, farm=args.farm)
+                   course_robots=args.course_robots, farm=args.farm, workers=args.workers,
+                   demo_video=args.demo_video)
 
 
 def _farm_and_app():
@@ -230,6 +231,11 @@ def build_parser() -> argparse.ArgumentParser:
     up.add_argument("--farm", choices=["local", "ray"], default=None,
                     help="where practice robots run: child processes (local, the default) or a Ray cluster; "
                          "ray starts one on 127.0.0.1 unless TELELAB_RAY_ADDRESS names one")
+    up.add_argument("--workers", type=int, default=None,
+                    help="web workers (gunicorn) on the one port: default one per core with PostgreSQL, "
+                         "1 with the embedded SQLite database")
+    up.add_argument("--no-demo-video", dest="demo_video", action="store_false",
+                    help="do not record the demo lesson's video (its lesson is added once the video exists)")
     up.set_defaults(handler=cmd_up)
 
     web = commands.add_parser("web", help="serve the middleware only (robots from TELELAB_ROBOTS)")

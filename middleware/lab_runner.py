@@ -12,6 +12,7 @@ from middleware.robots.processes import SkillServerProcess, SkillServerStartErro
 DEMO_ACCOUNTS = (("student", Role.STUDENT), ("tutor", Role.TUTOR), ("admin", Role.ADMIN))
 # The teleoperation-under-delay experiment's robots (thesis chapter 4): one per course scene, idle until driven.
 COURSE_ROBOTS = (("course-a", "course-A"), ("course-b", "course-B"))
+MAX_WORKERS = 64
 
 
 class LabStopRequested(Exception):
@@ -46,12 +47,12 @@ def ensure_demo_accounts(app) -> list[tuple[str, str, str]]:
     return created
 
 
-def seed_demo_content(app) -> list[str]:
+def seed_demo_content(app, record_video: bool = True) -> list[str]:
     """The demo data: the demo course with its tests (so the demo student can book and be assessed), then the
     teaching area's example tours and the lesson whose video is recorded from the simulator."""
     from middleware.teaching.demo_content import seed_demo_content as seed
 
-    return seed_demo_course(app) + seed(app)
+    return seed_demo_course(app) + seed(app, record_video)
 
 
 def seed_demo_course(app) -> list[str]:
@@ -88,14 +89,32 @@ def choose_farm(farm: str | None) -> None:
         print(f"robot farm: a local Ray cluster at {os.environ['TELELAB_RAY_ADDRESS']}", flush=True)
 
 
+def choose_workers(database_url: str, workers: int | None) -> int:
+    """How many web workers `telelab up` runs: one per core on PostgreSQL, one on SQLite (whose announcements
+    stay inside one process, so a second worker would miss the first one's chat, queue and robot changes)."""
+    on_sqlite = database_url.startswith("sqlite")
+    if workers is None:
+        return 1 if on_sqlite else max(1, os.cpu_count() or 1)
+    if workers < 1 or workers > MAX_WORKERS:
+        raise SkillServerStartError(f"--workers must be between 1 and {MAX_WORKERS}, not {workers}.")
+    if workers > 1 and on_sqlite:
+        raise SkillServerStartError("Several web workers need PostgreSQL, through which they hear each other's "
+                                    "changes: set TELELAB_DATABASE_URL=postgresql://..., or use --workers 1.")
+    return workers
+
+
 def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: bool = True,
-            farm: str | None = None) -> int:
-    """Starts skill servers, migrates the database, creates demo accounts, and serves until Ctrl-C or SIGTERM."""
+            farm: str | None = None, workers: int | None = None, demo_video: bool = True) -> int:
+    """Starts skill servers and the farm, migrates the database, creates demo accounts, and serves with gunicorn
+    until Ctrl-C or SIGTERM (SIGHUP restarts the web workers)."""
     from middleware import create_app
     from middleware.db import upgrade_to_head
-    from middleware.serve import serve_forever
+    from middleware.farm.base import FarmUnavailable
+    from middleware.farm.owner import FarmOwner
+    from middleware.serve import serve_with_gunicorn
 
     robots = lab_robots(robot_count, scene, course_robots)
+    owner: FarmOwner | None = None
     stop_on_termination_signals()
     try:
         choose_farm(farm)
@@ -103,26 +122,46 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
             robot.serve()
             print(f"robot {robot.name}: skill server at {robot.address} (scene {robot.scene})", flush=True)
         os.environ["TELELAB_ROBOTS"] = ",".join(f"{r.name}={r.address}" for r in robots)
+        if os.environ.get("TELELAB_FARM", "local") == "local":  # the workers share one owner of the robots
+            owner = FarmOwner()
+            owner.start()
         app = create_app()
+        worker_count = choose_workers(app.config["DATABASE_URL"], workers)
         upgrade_to_head(app.config["DATABASE_URL"])
         created = ensure_demo_accounts(app)
-        seeded = seed_demo_content(app)
-        _print_banner(host, port, created, seeded)
-        serve_forever(app, host, port)
-    except SkillServerStartError as error:
+        seeded = seed_demo_content(app, demo_video)
+        _let_go(app)
+        _print_banner(host, port, created, seeded, worker_count)
+        serve_with_gunicorn(host, port, worker_count)
+    except (SkillServerStartError, FarmUnavailable) as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
-    except (KeyboardInterrupt, LabStopRequested):
+    except (KeyboardInterrupt, LabStopRequested, SystemExit):
         print("\nstopping the lab", flush=True)
     finally:
+        if owner is not None:
+            owner.stop()
         for robot in robots:
             robot.stop()
     print("the lab has stopped", flush=True)
     return 0
 
 
-def _print_banner(host: str, port: int, created: list[tuple[str, str, str]], seeded: list[str] | None = None) -> None:
-    lines = ["", f"Telelab is running at http://{host}:{port}  (Ctrl-C stops it)"]
+def _let_go(app) -> None:
+    """The launcher's own app has done its set-up: its connections and threads must not be forked into workers."""
+    from middleware.access.coordinator import access_coordinator
+    from middleware.db import session_factory
+    from middleware.robots.registry import robot_registry
+
+    access_coordinator(app).stop_ticker()
+    robot_registry(app).close()
+    session_factory(app).kw["bind"].dispose()
+
+
+def _print_banner(host: str, port: int, created: list[tuple[str, str, str]], seeded: list[str] | None = None,
+                  workers: int = 1) -> None:
+    served_by = f"{workers} web worker{'s' if workers > 1 else ''}"
+    lines = ["", f"Telelab is running at http://{host}:{port} with {served_by}  (Ctrl-C stops it)"]
     if seeded:
         lines.append("Demo data added: " + "; ".join(seeded) + ".")
     if created:

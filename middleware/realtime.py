@@ -13,6 +13,7 @@ import json
 import math
 import threading
 import time
+import weakref
 from collections import deque
 from collections.abc import Callable, Iterable
 from functools import wraps
@@ -37,6 +38,7 @@ CLOSE_FORBIDDEN = 4403
 CLOSE_NOT_FOUND = 4404
 CLOSE_TRY_AGAIN_LATER = 1013
 CLOSE_GOING_AWAY = 1001
+CLOSE_SERVICE_RESTART = 1012  # this worker is leaving (a rolling restart): the client reconnects to another
 # A client over its inbound limits (RFC 6455's "policy violation"); it may reconnect, with its backoff.
 CLOSE_TOO_MANY_MESSAGES = 1008
 STREAM_POLL_S = 0.5
@@ -103,6 +105,18 @@ class InboundQueue:
         return len(self._messages)
 
 
+_open_sockets: weakref.WeakSet[ChannelSocket] = weakref.WeakSet()
+_draining = threading.Event()
+
+
+def drain_channels() -> None:
+    """This worker is leaving: every channel closes with CLOSE_SERVICE_RESTART at its next receive or send, and
+    wakes now if it waits for a message. Safe in a signal handler: it only sets events."""
+    _draining.set()
+    for ws in list(_open_sockets):
+        ws.event.set()
+
+
 class ChannelSocket(Server):
     """simple_websocket's server socket with a bounded inbound queue, closed with CLOSE_TOO_MANY_MESSAGES when
     its client exceeds it, and the time its client was last heard (any frame: a message, a pong, its close).
@@ -119,6 +133,7 @@ class ChannelSocket(Server):
         self._login_checked_at = time.monotonic()
         self._closing_since: float | None = None
         super().__init__(environ, **options)
+        _open_sockets.add(self)
 
     def handshake(self) -> None:
         """Installs the bounded queue: Base.__init__ calls this after making its list, before its reader starts."""
@@ -166,15 +181,24 @@ class ChannelSocket(Server):
                 super().close(CLOSE_NOT_LOGGED_IN, message)
             raise ConnectionClosed(CLOSE_NOT_LOGGED_IN, message)
 
+    def _raise_if_draining(self) -> None:
+        if _draining.is_set():
+            message = "The server is restarting; reconnecting."
+            with contextlib.suppress(ConnectionClosed, LocalProtocolError, OSError):
+                super().close(CLOSE_SERVICE_RESTART, message)
+            raise ConnectionClosed(CLOSE_SERVICE_RESTART, message)
+
     def receive(self, timeout: float | None = None) -> str | bytes | None:
         """The next message (None after timeout s); ConnectionClosed once closed and nothing is left."""
         self._raise_if_overflowed()
+        self._raise_if_draining()
         self._raise_if_logged_out()
         while self.connected and not self.inbound:
             if not self.event.wait(timeout=timeout):
                 return None
             self.event.clear()
             self._raise_if_overflowed()
+            self._raise_if_draining()
         message = self.inbound.pop()
         if message is None:
             raise ConnectionClosed(self.close_reason, self.close_message)
@@ -183,6 +207,7 @@ class ChannelSocket(Server):
     def send(self, data: str | bytes) -> None:
         """Sends data; ConnectionClosed once the socket is closing."""
         self._raise_if_overflowed()
+        self._raise_if_draining()
         self._raise_if_logged_out()
         try:
             super().send(data)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import signal
 import socket
 from typing import Any
 
@@ -58,5 +59,55 @@ def serve_forever(app: Flask, host: str, port: int) -> None:
         server.serve_forever()
     finally:
         server.server_close()
+        access_coordinator(app).stop_ticker()
+        robot_registry(app).close()
+
+
+GRACEFUL_TIMEOUT_S = 15  # a leaving worker's requests finish within this; its sockets reconnect elsewhere at once
+
+
+def serve_with_gunicorn(host: str, port: int, workers: int, threads: int = 200) -> None:
+    """Serves create_app() with gunicorn's threaded workers on one port, until SIGINT or SIGTERM.
+
+    Every worker makes its own app after the fork (connections, listeners and the robot links are per process).
+    SIGHUP to this process restarts the workers one generation at a time: new ones start, the old ones close
+    their WebSockets with 1012 (the browser reconnects to a new worker) and finish their requests.
+    """
+    from gunicorn.app.base import BaseApplication  # type: ignore[import-untyped]
+
+    options = {"bind": f"{host}:{port}", "workers": workers, "worker_class": "gthread", "threads": threads,
+               "graceful_timeout": GRACEFUL_TIMEOUT_S, "timeout": 60, "keepalive": 5,
+               "post_worker_init": _close_channels_when_leaving, "worker_exit": _let_go_of_robots,
+               "loglevel": "warning", "proc_name": "telelab"}
+
+    class LabServer(BaseApplication):
+        def load_config(self) -> None:
+            for key, value in options.items():
+                self.cfg.set(key, value)
+
+        def load(self) -> Flask:
+            from middleware import create_app
+
+            return create_app()
+
+    LabServer().run()
+
+
+def _close_channels_when_leaving(worker: Any) -> None:
+    from middleware.realtime import drain_channels
+
+    def leave(signum: int, frame: Any) -> None:
+        worker.handle_exit(signum, frame)
+        drain_channels()
+
+    signal.signal(signal.SIGTERM, leave)
+
+
+def _let_go_of_robots(_server: Any, worker: Any) -> None:
+    from middleware.access.coordinator import access_coordinator
+    from middleware.robots.registry import robot_registry
+
+    app = worker.wsgi
+    with contextlib.suppress(Exception):  # the worker is leaving either way; a failed close must not hide why
         access_coordinator(app).stop_ticker()
         robot_registry(app).close()

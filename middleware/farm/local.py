@@ -1,7 +1,8 @@
 """The local farm: each robot a child process of this process, as many as this host's capacity.
 
-The embedded default for `make run`. Its robots are children of one process, so this farm serves one web
-process; a lab with several web workers or hosts uses the Ray farm.
+The embedded default for `make run`. Its robots are children of one process: the web process itself, or under
+`telelab up --workers N` the farm owner process that every worker of the host asks (farm/owner.py). A lab
+with several web hosts uses the Ray farm.
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ class LocalProcessFarm:
 
     backend = "local"
 
-    def __init__(self, capacity: int | None = None) -> None:
+    def __init__(self, capacity: int | None = None, exit_with_owner: bool = False) -> None:
+        self._exit_with_owner = exit_with_owner  # robots of the farm owner process (farm/owner.py) end with it
         self._capacity = robots_per_host(host_cores(), available_memory_mb()) if capacity is None else capacity
         self._processes: dict[str, SkillServerProcess] = {}
         self._starting: set[str] = set()
@@ -43,7 +45,8 @@ class LocalProcessFarm:
             self._starting.add(spec.name)
         if running is not None:
             running.stop()
-        process = SkillServerProcess(spec.name, spec.scene, echo=False, controller_token=spec.controller_token)
+        process = SkillServerProcess(spec.name, spec.scene, echo=False, controller_token=spec.controller_token,
+                                     exit_with_parent=self._exit_with_owner)
         try:
             process.serve()
         except SkillServerStartError as error:

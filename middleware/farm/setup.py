@@ -24,6 +24,10 @@ def build_farm(environ: dict[str, str] | None = None) -> RobotFarm:
     if backend not in BACKENDS:
         raise ConfigError(f"TELELAB_FARM must be one of {', '.join(BACKENDS)}, not {backend!r}.")
     if backend == "local":
+        from middleware.farm.owner import ADDRESS_VARIABLE, KEY_VARIABLE, SharedLocalFarm
+
+        if env.get(ADDRESS_VARIABLE):  # a worker of `telelab up --workers N`: the launcher's owner holds the robots
+            return SharedLocalFarm(env[ADDRESS_VARIABLE], env.get(KEY_VARIABLE, ""))
         from middleware.farm.local import LocalProcessFarm
 
         return LocalProcessFarm()

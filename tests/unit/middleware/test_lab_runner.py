@@ -36,3 +36,16 @@ def test_a_termination_signal_stops_the_lab_like_ctrl_c_and_a_second_one_cannot_
     finally:
         for number, handler in saved.items():
             signal.signal(number, handler)
+
+
+def test_workers_are_one_per_core_on_postgresql_and_one_on_sqlite() -> None:
+    from middleware.lab_runner import choose_workers
+    from middleware.robots.processes import SkillServerStartError
+
+    assert choose_workers("sqlite:///x.sqlite3", None) == 1
+    assert choose_workers("postgresql+psycopg://db/telelab", None) == max(1, os.cpu_count() or 1)
+    assert choose_workers("postgresql+psycopg://db/telelab", 3) == 3
+    with pytest.raises(SkillServerStartError, match="need PostgreSQL"):
+        choose_workers("sqlite:///x.sqlite3", 2)
+    with pytest.raises(SkillServerStartError, match="--workers must be between 1 and 64"):
+        choose_workers("postgresql+psycopg://db/telelab", 0)
