@@ -8,12 +8,13 @@ calls them, so no channel exists by the side effect of an import. Every channel 
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import contextlib
 import json
 import math
 import threading
 import time
-import weakref
 from collections import deque
 from collections.abc import Callable, Iterable
 from functools import wraps
@@ -23,26 +24,27 @@ from urllib.parse import urlsplit
 from flask import Flask, Response, current_app, request
 from flask_login import current_user
 from flask_sock import Sock
-from simple_websocket import ConnectionClosed, Server
-from wsproto.events import CloseConnection
-from wsproto.utilities import LocalProtocolError
+from simple_websocket import ConnectionClosed
+from werkzeug.exceptions import NotFound
 
 from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.lab.delay import DelayQueue, ViewerDelay, apply_viewer_delay, capture_time_s
+from middleware.live.codes import (  # noqa: F401 - the channels import the codes from here
+    CLOSE_FORBIDDEN,
+    CLOSE_GOING_AWAY,
+    CLOSE_NOT_FOUND,
+    CLOSE_NOT_LOGGED_IN,
+    CLOSE_SERVICE_RESTART,
+    CLOSE_TOO_MANY_MESSAGES,
+    CLOSE_TRY_AGAIN_LATER,
+)
+from middleware.live.link import LINK_PATH, CoolingDown, Declared, Link, RecordingSocket
+from middleware.live.loop import Continuation, channel_loop
+from middleware.live.wire import LiveSocket, PendingSocket, accept_websocket
 from middleware.robots.fanout import FanoutHub
 
-# Close codes the client knows: it does not reconnect after these.
-CLOSE_NOT_LOGGED_IN = 4401
-CLOSE_FORBIDDEN = 4403
-CLOSE_NOT_FOUND = 4404
-CLOSE_TRY_AGAIN_LATER = 1013
-CLOSE_GOING_AWAY = 1001
-CLOSE_SERVICE_RESTART = 1012  # this worker is leaving (a rolling restart): the client reconnects to another
-# A client over its inbound limits (RFC 6455's "policy violation"); it may reconnect, with its backoff.
-CLOSE_TOO_MANY_MESSAGES = 1008
 STREAM_POLL_S = 0.5
-CLOSE_HANDSHAKE_WAIT_S = 1.0
 # A live client answers each ping, so it is heard at least this often; one that does not answer by the next
 # ping is closed (simple_websocket's rule), and a seat counts its grace from when its client was last heard.
 PING_INTERVAL_S = 5.0
@@ -52,6 +54,8 @@ LOGIN_RECHECK_S = 5.0
 MAX_MESSAGE_BYTES = 4096
 # Channels take a person's actions (a click, a chat line) and pings; the drive channel declares more.
 DEFAULT_MESSAGES_PER_S = 10
+# A link carries a page's channels: the drive channel's 50 a second and the others' few.
+LINK_MESSAGES_PER_S = 80
 # Open sockets per user in one process: a console tab holds about eight, so a few tabs fit; each socket costs
 # a thread, so a script opening thousands is refused (429) before the handshake.
 MAX_SOCKETS_PER_USER = 40
@@ -61,7 +65,7 @@ FLOOD_COOL_DOWN_S = 10.0
 # Set in the WSGI environ once a request was served as a WebSocket (serve.py then writes no HTTP answer).
 WEBSOCKET_ENDED = "telelab.websocket_ended"
 
-WebSocket = Any  # simple_websocket.Server: the library ships no type information
+WebSocket = Any  # a PendingSocket while a channel opens (live.wire)
 
 
 class InboundQueue:
@@ -103,124 +107,6 @@ class InboundQueue:
 
     def __len__(self) -> int:
         return len(self._messages)
-
-
-_open_sockets: weakref.WeakSet[ChannelSocket] = weakref.WeakSet()
-_draining = threading.Event()
-
-
-def drain_channels() -> None:
-    """This worker is leaving: every channel closes with CLOSE_SERVICE_RESTART at its next receive or send, and
-    wakes now if it waits for a message. Safe in a signal handler: it only sets events."""
-    _draining.set()
-    for ws in list(_open_sockets):
-        ws.event.set()
-
-
-class ChannelSocket(Server):
-    """simple_websocket's server socket with a bounded inbound queue, closed with CLOSE_TOO_MANY_MESSAGES when
-    its client exceeds it, and the time its client was last heard (any frame: a message, a pong, its close).
-
-    simple_websocket's own reader thread keeps every message in an unbounded list: a flooding client grew the
-    process by the flood and kept the handler busy long after it ended.
-    """
-
-    def __init__(self, environ: dict[str, Any], messages_per_s: int, **options: Any) -> None:
-        self.inbound = InboundQueue(messages_per_s)
-        self.heard_at = time.monotonic()
-        self.on_overflow: Callable[[], None] = lambda: None  # called once, by the reader thread
-        self.login_still_open: Callable[[], bool] = lambda: True  # asked by the handler's thread
-        self._login_checked_at = time.monotonic()
-        self._closing_since: float | None = None
-        super().__init__(environ, **options)
-        _open_sockets.add(self)
-
-    def handshake(self) -> None:
-        """Installs the bounded queue: Base.__init__ calls this after making its list, before its reader starts."""
-        self.input_buffer = self.inbound
-        super().handshake()
-
-    def silent_s(self) -> float:
-        """Seconds since the client was last heard."""
-        return time.monotonic() - self.heard_at
-
-    def _handle_events(self) -> bool:
-        # The reader thread calls this whenever bytes arrived from the client.
-        self.heard_at = time.monotonic()
-        keep_going: bool = super()._handle_events()
-        if keep_going and self.inbound.overflow is not None:
-            return self._close_for_overflow(self.inbound.overflow)
-        return keep_going
-
-    def _close_for_overflow(self, reason: str) -> bool:
-        """Sends the closing frame once, then reads on (dropping) until the client's own closing frame, so the
-        connection ends cleanly and the client reads the code; a client that floods on is cut off."""
-        if self._closing_since is None:
-            self._closing_since = time.monotonic()
-            self.close_reason, self.close_message = CLOSE_TOO_MANY_MESSAGES, reason
-            self.on_overflow()
-            try:
-                self.sock.send(self.ws.send(CloseConnection(CLOSE_TOO_MANY_MESSAGES, reason)))
-            except LocalProtocolError:
-                return False
-            self.event.set()
-        return time.monotonic() - self._closing_since < CLOSE_HANDSHAKE_WAIT_S
-
-    def _raise_if_overflowed(self) -> None:
-        if self.inbound.overflow is not None:
-            raise ConnectionClosed(CLOSE_TOO_MANY_MESSAGES, self.inbound.overflow)
-
-    def _raise_if_logged_out(self) -> None:
-        if time.monotonic() - self._login_checked_at < LOGIN_RECHECK_S:
-            return
-        self._login_checked_at = time.monotonic()
-        if not self.login_still_open():
-            message = "Your session has ended. Log in again."
-            with contextlib.suppress(ConnectionClosed, LocalProtocolError, OSError):
-                send_json(self, {"type": "error", "code": "not_logged_in", "message": message, "field": None})
-                super().close(CLOSE_NOT_LOGGED_IN, message)
-            raise ConnectionClosed(CLOSE_NOT_LOGGED_IN, message)
-
-    def _raise_if_draining(self) -> None:
-        if _draining.is_set():
-            message = "The server is restarting; reconnecting."
-            with contextlib.suppress(ConnectionClosed, LocalProtocolError, OSError):
-                super().close(CLOSE_SERVICE_RESTART, message)
-            raise ConnectionClosed(CLOSE_SERVICE_RESTART, message)
-
-    def receive(self, timeout: float | None = None) -> str | bytes | None:
-        """The next message (None after timeout s); ConnectionClosed once closed and nothing is left."""
-        self._raise_if_overflowed()
-        self._raise_if_draining()
-        self._raise_if_logged_out()
-        while self.connected and not self.inbound:
-            if not self.event.wait(timeout=timeout):
-                return None
-            self.event.clear()
-            self._raise_if_overflowed()
-            self._raise_if_draining()
-        message = self.inbound.pop()
-        if message is None:
-            raise ConnectionClosed(self.close_reason, self.close_message)
-        return message
-
-    def send(self, data: str | bytes) -> None:
-        """Sends data; ConnectionClosed once the socket is closing."""
-        self._raise_if_overflowed()
-        self._raise_if_draining()
-        self._raise_if_logged_out()
-        try:
-            super().send(data)
-        except LocalProtocolError:  # the reader thread closed it meanwhile
-            raise ConnectionClosed(self.close_reason, self.close_message) from None
-
-    def close(self, reason: int | None = None, message: str | None = None) -> None:
-        """Closes with reason and message; ConnectionClosed when it is already closing."""
-        self._raise_if_overflowed()
-        try:
-            super().close(reason, message)
-        except LocalProtocolError:
-            raise ConnectionClosed(self.close_reason, self.close_message) from None
 
 
 class FloodMemory:
@@ -292,13 +178,16 @@ class Channels(Sock):
         self.floods = FloodMemory()
         self.sockets = SocketCount()
         self.login_still_open = login_still_open
+        self.declared: dict[str, Declared] = {}  # rule -> opener, for channels opened on a link
         super().__init__(app)
 
     def route(self, path: str, bp: Any = None, *, messages_per_s: int = DEFAULT_MESSAGES_PER_S,
-              **kwargs: Any) -> Callable[[Callable[..., None]], None]:
+              **kwargs: Any) -> Callable[[Callable[..., Continuation | None]], None]:
         """Declares a channel at path; messages_per_s bounds what its clients may send."""
 
-        def decorator(handler: Callable[..., None]) -> None:
+        def decorator(handler: Callable[..., Continuation | None]) -> None:
+            self.declared[path] = Declared(handler, messages_per_s)
+
             @wraps(handler)
             def channel(*args: Any, **values: Any) -> Response:
                 # No permessage-deflate: a 4 kB compressed frame inflates to megabytes before any size check
@@ -308,27 +197,88 @@ class Channels(Sock):
                 if counted is not None and not self.sockets.open(counted):
                     raise ApiError(429, "too_many_sockets", f"You have {MAX_SOCKETS_PER_USER} connections open "
                                                             "already; close some of your lab tabs.")
+                served: concurrent.futures.Future[None] | None = None
                 try:
-                    ws = ChannelSocket(request.environ, messages_per_s, **current_app.config["SOCK_SERVER_OPTIONS"])
+                    raw = accept_websocket(request.environ)
+                    ws = PendingSocket(raw)
+                    continuation = None
                     with contextlib.suppress(ConnectionClosed):
                         if open_channel(ws):
-                            user_id = int(current_user.get_id())
-                            ws.on_overflow = lambda: self.floods.remember(path, user_id)
-                            ws.login_still_open = lambda: self._still_open(user_id)
-                            if ws.inbound.overflow is not None:  # it flooded during the checks
-                                ws.on_overflow()
-                            handler(ws, *args, **values)
-                    with contextlib.suppress(ConnectionClosed, LocalProtocolError, OSError):
-                        ws.close()
+                            continuation = handler(ws, *args, **values)
+                    if continuation is not None:
+                        served = self._adopt(raw, continuation, path, messages_per_s, counted)
+                    else:
+                        with contextlib.suppress(ConnectionClosed):
+                            ws.close()
                 finally:
-                    if counted is not None:
+                    if served is None and counted is not None:
                         self.sockets.close(counted)
+                get_session().close()  # the request's database connection goes back before the socket lives on
+                mode = "gunicorn" if "gunicorn.socket" in request.environ else "werkzeug"
+                if served is not None and mode == "werkzeug":
+                    # Werkzeug shuts a request's socket down when its handler returns, which would cut the
+                    # duplicate the loop holds: under the development server the request waits for the channel.
+                    served.result()
                 request.environ[WEBSOCKET_ENDED] = True
-                return _ChannelEnded(ws.mode)
+                return _ChannelEnded(mode)
 
             (bp or self.app).route(path, websocket=True, **kwargs)(channel)
 
         return decorator
+
+    def _adopt(self, raw: Any, continuation: Continuation, path: str, messages_per_s: int,
+               user_id: int | None) -> concurrent.futures.Future[None]:
+        """Hands the accepted socket to the process's channel loop."""
+        assert user_id is not None  # open_channel refused everyone else
+        options = current_app.config["SOCK_SERVER_OPTIONS"]
+        return channel_loop().adopt(
+            raw, continuation, app=current_app._get_current_object(),  # type: ignore[attr-defined]
+            inbound=InboundQueue(messages_per_s), max_message_bytes=options["max_message_size"],
+            ping_interval_s=options["ping_interval"], login_recheck_s=LOGIN_RECHECK_S,
+            login_still_open=lambda: self._still_open(user_id),
+            on_overflow=lambda: self.floods.remember(path, user_id),
+            on_end=lambda: self.sockets.close(user_id))
+
+    def link_channel(self, ws: WebSocket) -> Continuation:
+        """/ws/link: every channel of a page on one socket (live/link.py). Each channel is opened later, on the
+        pool, in a request made from this one's headers, with the same checks as its own socket."""
+        app = current_app._get_current_object()  # type: ignore[attr-defined]
+        user_id = int(current_user.get_id())
+        headers = {name: value for name, value in request.headers.items()
+                   if name.lower() in {"cookie", "origin", "host", "user-agent", "x-forwarded-for",
+                                       "x-forwarded-proto"}}
+        headers.update({"Upgrade": "websocket", "Connection": "Upgrade"})
+        environ_base = {"REMOTE_ADDR": request.remote_addr or "", "wsgi.url_scheme": request.scheme}
+        loop = channel_loop()
+
+        def open_in_request(path: str) -> tuple[str, Declared, Continuation | None, RecordingSocket]:
+            with app.test_request_context(path, base_url=request_base, headers=headers, environ_base=environ_base):
+                rule = request.url_rule
+                if rule is None or rule.rule == LINK_PATH or rule.rule not in self.declared:
+                    raise NotFound()
+                wait_s = self.floods.wait_s(rule.rule, user_id)
+                if wait_s > 0:
+                    raise CoolingDown("This channel was closed for too many messages; try again in "
+                                      f"{math.ceil(wait_s)} s.")
+                declared = self.declared[rule.rule]
+                opening = RecordingSocket()
+                continuation = None
+                try:
+                    with contextlib.suppress(ConnectionClosed):
+                        if open_channel(opening):
+                            continuation = declared.opener(opening, **(request.view_args or {}))
+                finally:
+                    get_session().close()
+                return rule.rule, declared, continuation, opening
+
+        request_base = request.host_url
+
+        async def serve(live: LiveSocket) -> None:
+            link = Link(live, app, lambda path: loop.work(app, open_in_request, path), InboundQueue,
+                        lambda rule: self.floods.remember(rule, user_id))
+            await link.serve()
+
+        return serve
 
     def _still_open(self, user_id: int) -> bool:
         try:
@@ -361,6 +311,7 @@ def init_app(app: Flask, channels: Iterable[ChannelDeclarations],
     sock = Channels(app, login_still_open)
     for declare in channels:
         declare(sock)
+    sock.route(LINK_PATH, messages_per_s=LINK_MESSAGES_PER_S, endpoint="link_channel")(sock.link_channel)
 
     @app.before_request
     def _websocket_only() -> None:
@@ -371,18 +322,20 @@ def init_app(app: Flask, channels: Iterable[ChannelDeclarations],
     return sock
 
 
+def as_json(message: dict[str, object]) -> str:
+    """message as compact JSON text."""
+    return json.dumps(message, separators=(",", ":"))
+
+
 def send_json(ws: WebSocket, message: dict[str, object]) -> None:
-    """Sends message as compact JSON text."""
-    ws.send(json.dumps(message, separators=(",", ":")))
+    """Sends message as compact JSON text (on a socket still opening: a PendingSocket)."""
+    ws.send(as_json(message))
 
 
 def refuse(ws: WebSocket, close_code: int, code: str, message: str, field: str | None = None) -> None:
     """Sends an error message naming code and field, then closes the socket with close_code."""
     send_json(ws, {"type": "error", "code": code, "message": message, "field": field})
-    ws.close(reason=close_code, message=message[:120])
-    # Wait for the client's closing frame: a socket torn down with it unread is reset, and the reset
-    # can discard our error message before the client reads it.
-    ws.thread.join(CLOSE_HANDSHAKE_WAIT_S)
+    ws.close(reason=close_code, message=message[:120])  # waits for the client's closing frame (see PendingSocket)
 
 
 def same_origin() -> bool:
@@ -406,41 +359,57 @@ def open_channel(ws: WebSocket) -> bool:
     return True
 
 
-def relay_stream(ws: WebSocket, hub: FanoutHub, choose: Callable[[Any], Any] | None = None,
-                 delay: ViewerDelay | None = None) -> None:
+async def relay_stream(ws: LiveSocket, hub: FanoutHub, choose: Callable[[Any], Any] | None = None,
+                       delay: ViewerDelay | None = None) -> None:
     """Sends the hub's newest message whenever there is one, and status changes, until the socket closes.
 
     choose picks this viewer's version of a message packed in several versions (e.g. with or without
     the ground truth). delay, when given, holds each message until its capture time + the viewer's injected
     delay (middleware/lab/delay.py); a change of delay is announced as {"type": "status", "injected_delay_s"}.
+    A viewer that reads slower than the stream skips to the newest message.
     """
+    watch = channel_loop().watch(hub)
+    news = watch.join()
     subscription = hub.subscribe()
     held = DelayQueue(0.0)
+    announcer = _Announcer(ws)
     try:
         # A closed hub returns at once: looping on it would spin a core until the viewer leaves.
         while ws.connected and not hub.closed:
+            news.clear()  # before reading: news from now on wakes the wait below
             status = subscription.status_change()
             if status is not None:
-                send_json(ws, {"type": "status", "robot_online": status.online, "message": status.message})
-            delay_s = apply_viewer_delay(ws, delay, held, hub.status_with_version()[0].online)
-            wait_s = held.seconds_until_next(time.time())
-            message = subscription.next_message(STREAM_POLL_S if wait_s is None else min(wait_s, STREAM_POLL_S))
+                await ws.send(json.dumps({"type": "status", "robot_online": status.online,
+                                          "message": status.message}, separators=(",", ":")))
+            delay_s = apply_viewer_delay(announcer, delay, held, hub.status_with_version()[0].online)
+            message = subscription.next_message(0)
             if message is not None:
                 message = message if choose is None else choose(message)
                 if delay_s > 0 or len(held):  # after a delay ends, the held ones go first
                     held.push(message, capture_time_s(message), time.time())
                 else:
-                    ws.send(message)
+                    ws.send_latest(message)
             for due in held.pop_due(time.time()):
-                ws.send(due)
-            while ws.receive(timeout=0) is not None:
+                ws.send_latest(due)
+            while await ws.receive(timeout=0) is not None:
                 pass  # nothing is expected from viewers; drop it so it cannot pile up
+            if message is None:
+                wait_s = held.seconds_until_next(time.time())
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(news.wait(), STREAM_POLL_S if wait_s is None else min(wait_s,
+                                                                                                STREAM_POLL_S))
         if hub.closed:
-            ws.close(CLOSE_GOING_AWAY, "The lab is shutting down; reload the page in a moment.")
-    except (ConnectionClosed, OSError):
-        pass  # the viewer went (a closed tab mid-send): the end of this stream, not an error to log
+            await ws.close(CLOSE_GOING_AWAY, "The lab is shutting down; reload the page in a moment.")
     finally:
+        watch.leave(news)
         subscription.close()
+
+
+class _Announcer:
+    """What apply_viewer_delay announces on: the socket's non-waiting write."""
+
+    def __init__(self, ws: LiveSocket) -> None:
+        self.send = ws.write
 
 
 def parse_ping(raw: object) -> int | None:

@@ -94,7 +94,7 @@ def serve_with_gunicorn(host: str, port: int, workers: int, threads: int = 200) 
 
 
 def _close_channels_when_leaving(worker: Any) -> None:
-    from middleware.realtime import drain_channels
+    from middleware.live.loop import drain_channels
 
     def leave(signum: int, frame: Any) -> None:
         worker.handle_exit(signum, frame)

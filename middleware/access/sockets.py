@@ -13,8 +13,10 @@ from middleware.access import round_robin
 from middleware.access.commands import robot_commands
 from middleware.access.coordinator import AccessCoordinator, access_coordinator
 from middleware.db import session_factory
+from middleware.live.loop import Continuation, blocking_work
+from middleware.live.wire import LiveSocket
 from middleware.models import User
-from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, refuse, send_json
+from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, as_json, refuse
 from middleware.robots.link import RobotLink
 
 HEARTBEAT_INTERVAL_S = 2.0
@@ -45,6 +47,10 @@ class ChannelSeat:
         """Connects the user to the robot's queue (the first user gets control at once)."""
         self._coordinator.start_ticker()
         self._coordinator.join(self.robot_name, self.user_id)
+
+    def due(self) -> bool:
+        """Whether the next keep() writes (a channel on the loop runs it on the pool only then)."""
+        return time.monotonic() - self._heartbeat_at >= HEARTBEAT_INTERVAL_S
 
     def keep(self, ws: WebSocket, *, now: bool = False) -> None:
         """Tells the queue when ws's client was last heard (at most every HEARTBEAT_INTERVAL_S, unless now)."""
@@ -113,40 +119,50 @@ def parse_queue_action(raw: object) -> str:
     return action
 
 
-def queue_channel(ws: WebSocket, robot_name: str) -> None:
+def queue_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     """Joins the robot's queue and reports the user's seat until the socket closes (the seat outlives it)."""
     if open_robot_channel(ws, robot_name) is None:
-        return
+        return None
     coordinator = access_coordinator()
     user_id = int(current_user.get_id())
     seat = ChannelSeat(robot_name, user_id)
     seat.join()
     facts = SeatFacts(coordinator)
-    last_sent: dict[str, object] | None = None
-    last_sent_at = 0.0
-    try:
-        while ws.connected:
-            raw = ws.receive(timeout=REFRESH_INTERVAL_S)
-            seat.keep(ws)
-            if raw is not None:
-                try:
-                    action = parse_queue_action(raw)
-                except ValueError as invalid:
-                    send_json(ws, {"type": "error", "code": "invalid_field", "message": str(invalid),
-                                   "field": "type"})
-                    continue
-                if action == "join":
-                    coordinator.join(robot_name, user_id)
-                else:
-                    coordinator.apply(ACTIONS[action], robot_name, user_id)
-                last_sent = None
-            now = time.monotonic()
-            message = seat_message(coordinator, robot_name, user_id, facts)
-            if message != last_sent or now - last_sent_at >= 1.0:
-                send_json(ws, message)
-                last_sent, last_sent_at = message, now
-    finally:
-        seat.keep(ws, now=True)  # a closing frame was heard just now: a reload keeps the whole grace
+    work = blocking_work()
+
+    def act(action: str) -> None:
+        if action == "join":
+            coordinator.join(robot_name, user_id)
+        else:
+            coordinator.apply(ACTIONS[action], robot_name, user_id)
+
+    async def report(live: LiveSocket) -> None:
+        last_sent: dict[str, object] | None = None
+        last_sent_at = 0.0
+        try:
+            while live.connected:
+                raw = await live.receive(timeout=REFRESH_INTERVAL_S)
+                if seat.due():
+                    await work(seat.keep, live)
+                if raw is not None:
+                    try:
+                        action = parse_queue_action(raw)
+                    except ValueError as invalid:
+                        await live.send(as_json({"type": "error", "code": "invalid_field", "message": str(invalid),
+                                                 "field": "type"}))
+                        continue
+                    await work(act, action)
+                    last_sent = None
+                now = time.monotonic()
+                message = await work(seat_message, coordinator, robot_name, user_id, facts)
+                if message != last_sent or now - last_sent_at >= 1.0:
+                    await live.send(as_json(message))
+                    last_sent, last_sent_at = message, now
+        finally:
+            await work(lambda: seat.keep(live, now=True))  # a closing frame was heard just now: a reload keeps
+            # the whole grace
+
+    return report
 
 
 def register(sock: Channels) -> None:

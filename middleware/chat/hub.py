@@ -12,6 +12,7 @@ from __future__ import annotations
 import logging
 import queue
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from flask import Flask
@@ -32,10 +33,12 @@ class Subscription:
         self.hub, self.robot_name = hub, robot_name
         self.after_id = 0
         self._events: queue.SimpleQueue[tuple[str, object]] = queue.SimpleQueue()
+        self.on_put: Callable[[], object] = lambda: None  # how the socket learns of an event (must not block)
 
     def put(self, kind: str, payload: object) -> None:
         """Queues an event (called by the hub's thread)."""
         self._events.put((kind, payload))
+        self.on_put()
 
     def drain(self) -> list[tuple[str, object]]:
         """The events queued since the last call."""

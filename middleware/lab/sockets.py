@@ -3,6 +3,7 @@ command path), a goal's updates and the localization estimate."""
 
 from __future__ import annotations
 
+import functools
 import logging
 
 import grpc
@@ -14,11 +15,14 @@ from middleware.access.sockets import ChannelSeat, open_robot_channel
 from middleware.auth.schemas import InvalidField
 from middleware.lab.delay import viewer_delay
 from middleware.lab.schemas import GOAL_ID_PATTERN, DriveLimits, parse_drive_message
+from middleware.live.loop import Continuation, blocking_work, read_in_thread
+from middleware.live.wire import LiveSocket
 from middleware.realtime import (
     CLOSE_NOT_FOUND,
     CLOSE_TRY_AGAIN_LATER,
     Channels,
     WebSocket,
+    as_json,
     parse_ping,
     pong,
     refuse,
@@ -36,18 +40,22 @@ DRIVE_MESSAGES_PER_S = 50
 RECEIVE_WAIT_S = 2.0
 
 
-def camera_channel(ws: WebSocket, robot_name: str) -> None:
+def camera_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     """Camera frames, packed once per frame for every viewer."""
     link = open_robot_channel(ws, robot_name)
-    if link is not None:
-        relay_stream(ws, link.camera, delay=viewer_delay(robot_name))
+    if link is None:
+        return None
+    delay = viewer_delay(robot_name)
+    return lambda live: relay_stream(live, link.camera, delay=delay)
 
 
-def telemetry_channel(ws: WebSocket, robot_name: str) -> None:
+def telemetry_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     """Odometry, sonar and laser readings."""
     link = open_robot_channel(ws, robot_name)
-    if link is not None:
-        relay_stream(ws, link.telemetry, delay=viewer_delay(robot_name))
+    if link is None:
+        return None
+    delay = viewer_delay(robot_name)
+    return lambda live: relay_stream(live, link.telemetry, delay=delay)
 
 
 def measured_round_trip_ms(link: RobotLink) -> float | None:
@@ -58,16 +66,16 @@ def measured_round_trip_ms(link: RobotLink) -> float | None:
         return None
 
 
-def drive_channel(ws: WebSocket, robot_name: str) -> None:
+def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     """Drive commands: validated here, sent through the command path; the robot stops when the socket closes."""
     link = open_robot_channel(ws, robot_name)
     if link is None:
-        return
+        return None
     try:
         info = link.info()
     except RobotUnavailable as error:
         refuse(ws, CLOSE_TRY_AGAIN_LATER, "robot_offline", f"{error} Try again in a moment.")
-        return
+        return None
     user_id = int(current_user.get_id())
     seat = ChannelSeat(robot_name, user_id)
     seat.join()
@@ -82,43 +90,51 @@ def drive_channel(ws: WebSocket, robot_name: str) -> None:
         "sequence_base": sequence_base,
         "is_controller": robot.is_controller(),
     })
-    last_sequence = 0
-    try:
-        while True:
-            raw = ws.receive(timeout=RECEIVE_WAIT_S)
-            seat.keep(ws)  # an idle driver still holds the seat while its client answers pings
-            if raw is None:
-                continue
-            ping_id = parse_ping(raw)
-            if ping_id is not None:
-                send_json(ws, pong(ping_id, lambda: measured_round_trip_ms(link)))
-                continue
-            try:
-                command = parse_drive_message(raw, limits, last_sequence)
-            except InvalidField as invalid:
-                send_json(ws, {"type": "error", "code": "invalid_field", "message": invalid.message,
-                               "field": invalid.field})
-                continue
-            last_sequence = command.sequence
-            try:
-                result = robot.drive(sequence_base + command.sequence, command.linear_mps, command.angular_radps)
-            except (CommandRefused, RobotUnavailable) as error:
-                refused = refusal_error(error)
-                send_json(ws, {"type": "error", "code": refused.code, "message": refused.message,
-                               "field": refused.field})
-                continue
-            send_json(ws, {
-                "type": "ack",
-                "sequence": command.sequence,
-                "applied_sequence": max(0, result.applied_sequence - sequence_base),
-                "linear_mps": result.linear_mps,
-                "angular_radps": result.angular_radps,
-                "robot_rtt_ms": round(result.round_trip_ms, 3),
-            })
-    finally:
-        # The stop goes first: the seat's heartbeat is a database write that can wait behind others.
-        _stop_quietly(robot, sequence_base + last_sequence + 1)
-        seat.keep(ws, now=True)
+    work = blocking_work()
+
+    async def drive(live: LiveSocket) -> None:
+        last_sequence = 0
+        try:
+            while True:
+                raw = await live.receive(timeout=RECEIVE_WAIT_S)
+                if seat.due():  # an idle driver still holds the seat while its client answers pings
+                    await work(seat.keep, live)
+                if raw is None:
+                    continue
+                ping_id = parse_ping(raw)
+                if ping_id is not None:
+                    measured = await work(measured_round_trip_ms, link)
+                    await live.send(as_json(pong(ping_id, functools.partial(lambda ms: ms, measured))))
+                    continue
+                try:
+                    command = parse_drive_message(raw, limits, last_sequence)
+                except InvalidField as invalid:
+                    await live.send(as_json({"type": "error", "code": "invalid_field", "message": invalid.message,
+                                             "field": invalid.field}))
+                    continue
+                last_sequence = command.sequence
+                try:
+                    result = await work(robot.drive, sequence_base + command.sequence, command.linear_mps,
+                                        command.angular_radps)
+                except (CommandRefused, RobotUnavailable) as error:
+                    refused = refusal_error(error)
+                    await live.send(as_json({"type": "error", "code": refused.code, "message": refused.message,
+                                             "field": refused.field}))
+                    continue
+                await live.send(as_json({
+                    "type": "ack",
+                    "sequence": command.sequence,
+                    "applied_sequence": max(0, result.applied_sequence - sequence_base),
+                    "linear_mps": result.linear_mps,
+                    "angular_radps": result.angular_radps,
+                    "robot_rtt_ms": round(result.round_trip_ms, 3),
+                }))
+        finally:
+            # The stop goes first: the seat's heartbeat is a database write that can wait behind others.
+            await work(_stop_quietly, robot, sequence_base + last_sequence + 1)
+            await work(lambda: seat.keep(live, now=True))
+
+    return drive
 
 
 def _stop_quietly(robot: Commander, sequence: int) -> None:
@@ -134,38 +150,43 @@ def sees_ground_truth() -> bool:
     return current_user.role in current_app.config["GROUND_TRUTH_ROLES"]
 
 
-def goal_channel(ws: WebSocket, robot_name: str, goal_id: str) -> None:
+def goal_channel(ws: WebSocket, robot_name: str, goal_id: str) -> Continuation | None:
     """Relays one goal's state, events and feedback; closes after its final state."""
     link = open_robot_channel(ws, robot_name)
     if link is None:
-        return
+        return None
     if not GOAL_ID_PATTERN.fullmatch(goal_id):
         refuse(ws, CLOSE_NOT_FOUND, "unknown_goal", "There is no goal with that id.", "goal_id")
-        return
+        return None
     updates = link.watch_goal(goal_id)
-    try:
-        for update in updates:
-            if not ws.connected:
-                break
-            message = goal_update_message(update)
-            send_json(ws, message)
-            goal = message.get("goal")
-            if message["type"] == "goal" and isinstance(goal, dict) and goal.get("status") in FINAL_GOAL_STATUSES:
-                break
-    except grpc.RpcError as error:
-        code = "unknown_goal" if error.code() == grpc.StatusCode.NOT_FOUND else "robot_offline"
-        send_json(ws, {"type": "error", "code": code, "message": error.details() or "The robot is not answering.",
-                       "field": "goal_id" if code == "unknown_goal" else None})
-    finally:
-        updates.cancel()
+
+    async def relay(live: LiveSocket) -> None:
+        # A goal's updates come from a blocking gRPC stream: a thread of its own reads them while the goal runs.
+        try:
+            async for update in read_in_thread(updates, f"goal-{goal_id[:12]}"):
+                message = goal_update_message(update)
+                await live.send(as_json(message))
+                goal = message.get("goal")
+                if message["type"] == "goal" and isinstance(goal, dict) and goal.get("status") in FINAL_GOAL_STATUSES:
+                    break
+        except grpc.RpcError as error:
+            code = "unknown_goal" if error.code() == grpc.StatusCode.NOT_FOUND else "robot_offline"
+            await live.send(as_json({"type": "error", "code": code,
+                                     "message": error.details() or "The robot is not answering.",
+                                     "field": "goal_id" if code == "unknown_goal" else None}))
+        finally:
+            updates.cancel()
+
+    return relay
 
 
-def localization_channel(ws: WebSocket, robot_name: str) -> None:
+def localization_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     """The localization estimate, particles and errors; the ground truth only where the teaching mode allows."""
     link = open_robot_channel(ws, robot_name)
-    if link is not None:
-        index = 0 if sees_ground_truth() else 1
-        relay_stream(ws, link.localization, choose=lambda versions: versions[index])
+    if link is None:
+        return None
+    index = 0 if sees_ground_truth() else 1
+    return lambda live: relay_stream(live, link.localization, choose=lambda versions: versions[index])
 
 
 def register(sock: Channels) -> None:

@@ -78,7 +78,18 @@ class FanoutHub(Generic[Packed]):
         self._pump: threading.Thread | None = None
         self._stream: Iterator[object] | None = None
         self._closed = False
+        self._listeners: list[Callable[[], None]] = []
         self.messages_packed = 0
+
+    def listen(self, news: Callable[[], None]) -> None:
+        """Calls news() (from the pump's thread; it must not block) after every new message or status change and
+        when the hub closes: how viewers that are not threads learn of them."""
+        with self._lock:
+            self._listeners.append(news)
+
+    def _tell_listeners(self) -> None:
+        for news in list(self._listeners):
+            news()
 
     def subscribe(self) -> Subscription[Packed]:
         """A new viewer; starts the pump if it is the first."""
@@ -136,15 +147,18 @@ class FanoutHub(Generic[Packed]):
             self._closed = True
             stream = self._stream
             self._lock.notify_all()
+        self._tell_listeners()
         if stream is not None:
             self._cancel(stream)
 
     def _set_status(self, status: StreamStatus) -> None:
         with self._lock:
-            if status != self._status:
-                self._status = status
-                self._status_version += 1
-                self._lock.notify_all()
+            if status == self._status:
+                return
+            self._status = status
+            self._status_version += 1
+            self._lock.notify_all()
+        self._tell_listeners()
 
     def _wanted(self) -> bool:
         with self._lock:
@@ -172,6 +186,7 @@ class FanoutHub(Generic[Packed]):
                         self._version += 1
                         self.messages_packed += 1
                         self._lock.notify_all()
+                    self._tell_listeners()
                     self._set_status(StreamStatus(True, "live"))
                     backoff_s = self._backoff_min_s
                     if not self._wanted():

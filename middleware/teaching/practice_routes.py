@@ -11,6 +11,7 @@ from flask_login import current_user, login_required
 
 from middleware.access.commands import refusal_error
 from middleware.errors import ApiError
+from middleware.live.loop import Continuation
 from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, refuse, relay_stream
 from middleware.robots.link import RobotUnavailable
 from middleware.teaching.command_form import parse_command
@@ -90,13 +91,13 @@ def goal(target_name: str, goal_id: str) -> ResponseReturnValue:
     return jsonify({"goal": goal_state(resolve_target(target_name, _user_id()), goal_id)})
 
 
-def camera_channel(ws: WebSocket) -> None:
+def camera_channel(ws: WebSocket) -> Continuation | None:
     """The camera of the user's own practice robot."""
     robot = practice_manager().get(_user_id())
     if robot is None:
         refuse(ws, CLOSE_NOT_FOUND, "no_practice_robot", "Start your practice robot first.")
-        return
-    relay_stream(ws, robot.link.camera)
+        return None
+    return lambda live: relay_stream(live, robot.link.camera)
 
 
 def register(sock: Channels) -> None:

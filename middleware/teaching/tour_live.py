@@ -8,22 +8,28 @@ Who is present is each process's own (its sockets).
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import threading
+from collections.abc import Callable
 
 from flask_login import current_user
 from sqlalchemy.orm import Session
 
 from middleware import events
 from middleware.db import get_session
+from middleware.live.loop import Continuation, blocking_work
+from middleware.live.wire import LiveSocket
 from middleware.models import User
 from middleware.models.teaching import GuidedSession, Tour
-from middleware.realtime import CLOSE_FORBIDDEN, CLOSE_NOT_FOUND, Channels, WebSocket, refuse, send_json
+from middleware.realtime import CLOSE_FORBIDDEN, CLOSE_NOT_FOUND, Channels, WebSocket, as_json, refuse
 from middleware.teaching.authority import may_follow_class
 from middleware.teaching.tours import tour_steps
 
 _changed = threading.Condition()
 _versions: dict[int, int] = {}
 _present: dict[int, dict[int, str]] = {}  # session id -> user id -> name, of this process's sockets
+_wakers: dict[int, set[Callable[[], None]]] = {}  # session id -> how to wake each of its sockets
 RECHECK_S = 1.0  # how often a socket checks that it is still open (and re-reads, if announcements go unheard)
 TOPIC = "tours"
 _listening_engines: set[int] = set()
@@ -34,6 +40,9 @@ def notify(session_id: int) -> None:
     with _changed:
         _versions[session_id] = _versions.get(session_id, 0) + 1
         _changed.notify_all()
+        wakers = list(_wakers.get(session_id, ()))
+    for wake in wakers:
+        wake()
 
 
 def announce(session: Session, session_id: int) -> None:
@@ -74,50 +83,68 @@ def state(session: Session, live: GuidedSession) -> dict[str, object]:
     }
 
 
-def session_channel(ws: WebSocket, session_id: int) -> None:
+def _read_state(session_id: int) -> dict[str, object] | None:
+    db = get_session()
+    try:
+        live = db.get(GuidedSession, session_id)
+        return None if live is None else state(db, live)
+    finally:
+        db.close()  # a socket lives long: no transaction stays open between reads
+
+
+def session_channel(ws: WebSocket, session_id: int) -> Continuation | None:
     """Pushes the class's state whenever it changes, until the socket closes."""
     user_id, username = int(current_user.get_id()), current_user.username
     db = get_session()
     found = db.get(GuidedSession, session_id)
     if found is None:
         refuse(ws, CLOSE_NOT_FOUND, "unknown_session", "There is no such class.")
-        return
+        return None
     follower = db.get(User, user_id)
     if follower is None or not may_follow_class(db, follower, found):
         refuse(ws, CLOSE_FORBIDDEN, "not_in_course", "This class is for the students of another course.",
                "session_id")
-        return
-    _present.setdefault(session_id, {})[user_id] = username
-    notify(session_id)  # the tutor's list of participants changes
+        return None
     bus = _bus_for(db)
-    sent: tuple[int, tuple[object, ...]] | None = None
-    seen_local, read_local = -1, -2
-    try:
-        while ws.connected:
-            hears = not bus.shared or bus.listening.is_set()
-            if seen_local != read_local or not hears:
-                read_local = seen_local
-                db.expire_all()
-                live = db.get(GuidedSession, session_id)
-                if live is None:
-                    break
-                current = state(db, live)
-                participants = current["participants"]
-                signature = (live.version, tuple(participants) if isinstance(participants, list) else ())
-                if signature != sent:
-                    send_json(ws, current)
-                    sent = signature
-                db.rollback()  # end the read transaction; a socket lives long
-            with _changed:
-                if _versions.get(session_id, 0) == seen_local:
-                    _changed.wait(RECHECK_S)
+    work = blocking_work()
+
+    async def follow(live: LiveSocket) -> None:
+        loop = asyncio.get_running_loop()
+
+        def wake() -> None:
+            with contextlib.suppress(RuntimeError):  # the loop closed: the process is ending
+                loop.call_soon_threadsafe(live.nudge)
+
+        with _changed:
+            _present.setdefault(session_id, {})[user_id] = username
+            _wakers.setdefault(session_id, set()).add(wake)
+        notify(session_id)  # the tutor's list of participants changes
+        sent: tuple[int, tuple[object, ...]] | None = None
+        seen_local, read_local = -1, -2
+        try:
+            while live.connected:
+                hears = not bus.shared or bus.listening.is_set()
+                if seen_local != read_local or not hears:
+                    read_local = seen_local
+                    current = await work(_read_state, session_id)
+                    if current is None:
+                        break
+                    participants = current["participants"]
+                    signature = (int(current["version"]),
+                                 tuple(participants) if isinstance(participants, list) else ())
+                    if signature != sent:
+                        await live.send(as_json(current))
+                        sent = signature
+                if _versions.get(session_id, 0) == read_local:
+                    await live.receive(timeout=RECHECK_S)  # woken by notify(); what the page sends is dropped
                 seen_local = _versions.get(session_id, 0)
-            while ws.receive(timeout=0) is not None:
-                pass
-    finally:
-        _present.get(session_id, {}).pop(user_id, None)
-        notify(session_id)
-        db.close()
+        finally:
+            with _changed:
+                _present.get(session_id, {}).pop(user_id, None)
+                _wakers.get(session_id, set()).discard(wake)
+            await work(notify, session_id)
+
+    return follow
 
 
 def register(sock: Channels) -> None:

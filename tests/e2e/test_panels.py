@@ -370,20 +370,24 @@ def test_a_malformed_descriptor_shows_a_notice_and_the_other_panels_still_work(p
 
 def test_an_unreadable_stream_message_leaves_a_notice_not_a_blank_page(page, live_server: LiveServer) -> None:
     def garble(ws) -> None:
+        # The page's channels ride on its link: a telemetry message is "<its channel's number> {...}".
         server = ws.connect_to_server()
         sent = {"n": 0}
 
         def to_page(message) -> None:
-            sent["n"] += 1
-            if sent["n"] == 5:
-                ws.send("{not json")
-                ws.send(json.dumps({"type": "telemetry", "odometry": {"pose": "sideways"}, "sonar": 3}))
+            if isinstance(message, str) and '"type":"telemetry"' in message:
+                sent["n"] += 1
+                if sent["n"] == 5:
+                    sub = message.split(" ", 1)[0]
+                    ws.send(f"{sub} {{not json")
+                    ws.send(f"{sub} " + json.dumps({"type": "telemetry", "odometry": {"pose": "sideways"},
+                                                    "sonar": 3}))
             ws.send(message)
 
         server.on_message(to_page)
         ws.on_message(lambda message: server.send(message))
 
-    page.route_web_socket("**/ws/robots/lab-1/telemetry", garble)
+    page.route_web_socket("**/ws/link", garble)
     open_console(page, live_server)
     page.locator('section[data-panel-id="odometry"] [data-field="panel-notice"]').filter(
         has_text="could not be read").wait_for()

@@ -200,6 +200,7 @@ ROUTES = (
     "GET /tours/new",
     "GET /tours/sessions/<int:session_id>",
     "POST /users/<int:user_id>/reset-password",
+    "GET /ws/link",
     "GET /ws/practice/camera",
     "GET /ws/robots/<robot_name>/camera",
     "GET /ws/robots/<robot_name>/chat",

@@ -1,5 +1,6 @@
-// The one place that talks to the server: JSON over fetch, and WebSockets that reconnect.
+// The one place that talks to the server: JSON over fetch, and channels that reconnect, on one WebSocket a page.
 // Everything the server says is data to show; nothing here decides what the user may do.
+import { PageLink } from "./page-link.js";
 
 /** Close codes after which trying again cannot help. */
 export const CLOSE_CODES = Object.freeze({
@@ -77,24 +78,27 @@ export function backoffDelayMs(attempt, { baseMs = 500, capMs = 15000, random = 
 }
 
 /**
- * A WebSocket that reconnects with backoff until closed or refused for good.
+ * A channel (a server path under /ws/) that reconnects with backoff until closed or refused for good. It rides
+ * on the page's one WebSocket (page-link.js) unless `own` asks for a socket of its own.
  *
- * Events: "statechange" (detail: the state object), "open" (a fresh socket is ready; re-subscribe
+ * Events: "statechange" (detail: the state object), "open" (a fresh channel is ready; re-subscribe
  * here), "message" (detail: string or ArrayBuffer).
  * State: { phase: "connecting"|"open"|"reconnecting"|"closed", code, reason, retryAt, attempt }.
  */
 export class Channel extends EventTarget {
-  #url;
-  #socket = null;
+  #path;
+  #own;
+  #carrier = null;
   #attempt = 0;
   #retryTimer = 0;
   #stableTimer = 0;
   #stopped = false;
   #state = { phase: "connecting", code: null, reason: "", retryAt: null, attempt: 0 };
 
-  constructor(path, { binary = false, stableAfterMs = 3000 } = {}) {
+  constructor(path, { binary = false, stableAfterMs = 3000, own = false } = {}) {
     super();
-    this.#url = socketUrl(path);
+    this.#path = path;
+    this.#own = own;
     this.binary = binary;
     this.stableAfterMs = stableAfterMs;
     this.#connect();
@@ -105,13 +109,13 @@ export class Channel extends EventTarget {
   }
 
   get isOpen() {
-    return this.#socket?.readyState === WebSocket.OPEN;
+    return this.#carrier?.isOpen ?? false;
   }
 
-  /** Send a JSON-serialisable value; returns false when the socket is not open. */
+  /** Send a JSON-serialisable value; returns false when the channel is not open. */
   sendJson(value) {
     if (!this.isOpen) return false;
-    this.#socket.send(JSON.stringify(value));
+    this.#carrier.send(JSON.stringify(value));
     return true;
   }
 
@@ -120,7 +124,7 @@ export class Channel extends EventTarget {
     this.#stopped = true;
     clearTimeout(this.#retryTimer);
     clearTimeout(this.#stableTimer);
-    if (this.#socket && this.#socket.readyState <= WebSocket.OPEN) this.#socket.close(NORMAL_CLOSURE, reason);
+    this.#carrier?.close(NORMAL_CLOSURE, reason);
     this.#setState({ phase: "closed", code: NORMAL_CLOSURE, reason, retryAt: null });
   }
 
@@ -138,35 +142,72 @@ export class Channel extends EventTarget {
 
   #connect() {
     this.#setState({ phase: "connecting", retryAt: null });
-    const socket = new WebSocket(this.#url);
-    if (this.binary) socket.binaryType = "arraybuffer";
-    this.#socket = socket;
-
-    socket.addEventListener("open", () => {
-      // A server that accepts and then drops us at once must not earn a fast retry loop,
-      // so the backoff resets only once the socket has stayed up for a while.
-      this.#stableTimer = setTimeout(() => { this.#attempt = 0; }, this.stableAfterMs);
-      this.#setState({ phase: "open", code: null, reason: "" });
-      this.dispatchEvent(new Event("open"));
-    });
-    socket.addEventListener("message", (event) => {
-      this.dispatchEvent(new CustomEvent("message", { detail: event.data }));
-    });
-    socket.addEventListener("close", (event) => {
-      clearTimeout(this.#stableTimer);
-      if (this.#socket !== socket || this.#stopped) return;
-      this.#socket = null;
-      if (FINAL_CLOSE_CODES.has(event.code)) {
-        this.#stopped = true;
-        this.#setState({ phase: "closed", code: event.code, reason: event.reason, retryAt: null });
-        return;
-      }
-      const delayMs = backoffDelayMs(this.#attempt);
-      this.#attempt += 1;
-      this.#setState({ phase: "reconnecting", code: event.code, reason: event.reason, retryAt: Date.now() + delayMs });
-      this.#retryTimer = setTimeout(() => this.#connect(), delayMs);
-    });
+    let carrier = null;
+    const current = () => this.#carrier === carrier && !this.#stopped;
+    const on = {
+      open: () => {
+        if (!current()) return;
+        // A server that accepts and then drops us at once must not earn a fast retry loop,
+        // so the backoff resets only once the channel has stayed up for a while.
+        this.#stableTimer = setTimeout(() => { this.#attempt = 0; }, this.stableAfterMs);
+        this.#setState({ phase: "open", code: null, reason: "" });
+        this.dispatchEvent(new Event("open"));
+      },
+      message: (data) => {
+        if (current()) this.dispatchEvent(new CustomEvent("message", { detail: data }));
+      },
+      close: (code, reason) => {
+        clearTimeout(this.#stableTimer);
+        if (!current()) return;
+        this.#carrier = null;
+        if (FINAL_CLOSE_CODES.has(code)) {
+          this.#stopped = true;
+          this.#setState({ phase: "closed", code, reason, retryAt: null });
+          return;
+        }
+        const delayMs = backoffDelayMs(this.#attempt);
+        this.#attempt += 1;
+        this.#setState({ phase: "reconnecting", code, reason, retryAt: Date.now() + delayMs });
+        this.#retryTimer = setTimeout(() => this.#connect(), delayMs);
+      },
+    };
+    carrier = this.#own ? new OwnSocket(socketUrl(this.#path), this.binary, on) : pageLink().carry(this.#path, on);
+    this.#carrier = carrier;
   }
+}
+
+/** A channel's own WebSocket (the carrier of `new Channel(path, { own: true })`). */
+class OwnSocket {
+  #socket;
+
+  constructor(url, binary, on) {
+    const socket = new WebSocket(url);
+    if (binary) socket.binaryType = "arraybuffer";
+    socket.addEventListener("open", () => on.open());
+    socket.addEventListener("message", (event) => on.message(event.data));
+    socket.addEventListener("close", (event) => on.close(event.code, event.reason));
+    this.#socket = socket;
+  }
+
+  get isOpen() {
+    return this.#socket.readyState === WebSocket.OPEN;
+  }
+
+  send(text) {
+    this.#socket.send(text);
+  }
+
+  close(code, reason) {
+    if (this.#socket.readyState <= WebSocket.OPEN) this.#socket.close(code, reason);
+  }
+}
+
+let theLink = null;
+
+/** The page's link, made on first use. */
+function pageLink() {
+  theLink ??= new PageLink(socketUrl("/ws/link"));
+  return theLink;
 }
 
 /** Parse a text frame as JSON; returns null (not throws) for anything that is not an object. */

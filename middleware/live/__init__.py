@@ -1,0 +1,1 @@
+"""The real-time channels' runtime: every WebSocket of a process served on one asyncio loop, no thread each."""

@@ -1,0 +1,200 @@
+"""The channel loop: one asyncio event loop per process that serves every WebSocket of the process.
+
+A channel is opened in the request's thread (its checks need the request: the login, the Origin, the robot),
+then its socket is handed to this loop and the request's thread goes back to the server at once, so an open
+socket costs a few kilobytes and no thread. Work that blocks (a database read, a robot's RPC) runs on a small
+pool shared by all sockets, inside the app's context.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import contextlib
+import functools
+import logging
+import os
+import socket
+import threading
+from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
+from typing import Any
+
+from flask import Flask
+from simple_websocket import ConnectionClosed
+
+from middleware.live.codes import CLOSE_SERVICE_RESTART
+from middleware.live.wire import LiveSocket
+
+log = logging.getLogger(__name__)
+
+WORK_THREADS = 16  # blocking work of all sockets; the database pool (5 + 10 overflow) bounds it anyway
+STREAM_READ_LIMIT = 256 * 1024
+
+Continuation = Callable[[LiveSocket], Awaitable[None]]
+
+
+class ChannelLoop:
+    """This process's loop, its sockets and its pool for blocking work."""
+
+    def __init__(self) -> None:
+        self.loop = asyncio.new_event_loop()
+        self._pool = concurrent.futures.ThreadPoolExecutor(WORK_THREADS, thread_name_prefix="channel-work")
+        self._sockets: set[LiveSocket] = set()
+        self._watches: dict[int, StreamWatch] = {}
+        self.draining = False
+        self._thread = threading.Thread(target=self.loop.run_forever, name="channel-loop", daemon=True)
+        self._thread.start()
+
+    @property
+    def open_sockets(self) -> int:
+        return len(self._sockets)
+
+    def adopt(self, raw: socket.socket, continuation: Continuation, *, app: Flask, inbound: Any,
+              max_message_bytes: int, ping_interval_s: float, login_recheck_s: float,
+              login_still_open: Callable[[], bool], on_overflow: Callable[[], None],
+              on_end: Callable[[], None]) -> concurrent.futures.Future[None]:
+        """Serves the accepted socket raw with continuation on this loop; the request's thread may return now (the
+        server's own file descriptor may be closed: the loop holds a duplicate)."""
+        held = raw.dup()
+        held.setblocking(False)
+
+        async def serve() -> None:
+            try:
+                reader, writer = await asyncio.open_connection(sock=held, limit=STREAM_READ_LIMIT)
+            except OSError:
+                held.close()
+                on_end()
+                return
+            ws = LiveSocket(reader, writer, inbound, max_message_bytes, ping_interval_s)
+            ws.on_overflow = on_overflow
+            ws.start(lambda: self.work(app, login_still_open), login_recheck_s)
+            self._sockets.add(ws)
+            try:
+                if self.draining:
+                    await ws.close(CLOSE_SERVICE_RESTART, "The server is restarting; reconnecting.")
+                    return
+                await continuation(ws)
+            except (ConnectionClosed, ConnectionError):
+                pass  # the client went, or the socket was closed for a reason already sent
+            except Exception:
+                log.exception("a channel failed")
+                with contextlib.suppress(Exception):
+                    await ws.close(1011, "The server failed on this channel; reload the page.")
+            finally:
+                self._sockets.discard(ws)
+                if ws.connected:
+                    with contextlib.suppress(Exception):
+                        await ws.close()
+                ws.abort()
+                on_end()
+
+        return asyncio.run_coroutine_threadsafe(serve(), self.loop)
+
+    async def work(self, app: Flask, fn: Callable[..., Any], *args: Any) -> Any:
+        """fn(*args) on the pool, in app's context: for anything that blocks."""
+
+        def call() -> Any:
+            with app.app_context():
+                return fn(*args)
+
+        return await self.loop.run_in_executor(self._pool, call)
+
+    def watch(self, hub: Any) -> StreamWatch:
+        """The loop's watch of a FanoutHub (made once per hub); call on the loop."""
+        watch = self._watches.get(id(hub))
+        if watch is None or watch.hub is not hub:
+            watch = self._watches[id(hub)] = StreamWatch(self.loop, hub)
+        return watch
+
+    def drain(self) -> None:
+        """This worker is leaving: every socket closes with CLOSE_SERVICE_RESTART (its client reconnects to another
+        worker) and new ones are closed at once. Safe from a signal handler."""
+        self.draining = True
+        self.loop.call_soon_threadsafe(self._close_all)
+
+    def _close_all(self) -> None:
+        for ws in list(self._sockets):
+            asyncio.ensure_future(ws.close(CLOSE_SERVICE_RESTART, "The server is restarting; reconnecting."))
+
+
+class StreamWatch:
+    """Wakes this loop's viewers of one FanoutHub when it has a new message or status: one hop per message from
+    the hub's pump thread, however many viewers."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop, hub: Any) -> None:
+        self.hub = hub
+        self._loop = loop
+        self._viewers: set[asyncio.Event] = set()
+        hub.listen(self._news)
+
+    def _news(self) -> None:
+        with contextlib.suppress(RuntimeError):  # the loop is closed: the process is ending
+            self._loop.call_soon_threadsafe(self._wake)
+
+    def _wake(self) -> None:
+        for event in self._viewers:
+            event.set()
+
+    def join(self) -> asyncio.Event:
+        event = asyncio.Event()
+        self._viewers.add(event)
+        return event
+
+    def leave(self, event: asyncio.Event) -> None:
+        self._viewers.discard(event)
+
+
+_loops: dict[int, ChannelLoop] = {}
+_lock = threading.Lock()
+
+
+def channel_loop() -> ChannelLoop:
+    """This process's channel loop, started on first use (a forked worker starts its own)."""
+    pid = os.getpid()
+    with _lock:
+        if pid not in _loops:
+            _loops.clear()
+            _loops[pid] = ChannelLoop()
+        return _loops[pid]
+
+
+def drain_channels() -> None:
+    """Closes every socket of this process with CLOSE_SERVICE_RESTART (a worker leaving)."""
+    loop = _loops.get(os.getpid())
+    if loop is not None:
+        loop.drain()
+
+
+def blocking_work() -> Callable[..., Awaitable[Any]]:
+    """For a channel's continuation, made while the channel opens (in its request): `await work(fn, *args)` runs
+    fn on the loop's pool in the request's app."""
+    from flask import current_app
+
+    return functools.partial(channel_loop().work, current_app._get_current_object())  # type: ignore[attr-defined]
+
+
+_END = object()
+
+
+async def read_in_thread(items: Iterator[Any], name: str) -> AsyncIterator[Any]:
+    """The items of a blocking iterator, read by a thread of its own (a gRPC stream); its error is raised here."""
+    loop = asyncio.get_running_loop()
+    arrived: asyncio.Queue[Any] = asyncio.Queue()
+
+    def read() -> None:
+        try:
+            for item in items:
+                loop.call_soon_threadsafe(arrived.put_nowait, item)
+            loop.call_soon_threadsafe(arrived.put_nowait, _END)
+        except BaseException as error:  # noqa: BLE001 - handed to the reader, which raises it
+            with contextlib.suppress(RuntimeError):
+                loop.call_soon_threadsafe(arrived.put_nowait, error)
+
+    threading.Thread(target=read, name=name, daemon=True).start()
+    while True:
+        item = await arrived.get()
+        if item is _END:
+            return
+        if isinstance(item, BaseException):
+            raise item
+        yield item
