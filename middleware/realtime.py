@@ -8,7 +8,6 @@ calls them, so no channel exists by the side effect of an import. Every channel 
 
 from __future__ import annotations
 
-import asyncio
 import concurrent.futures
 import contextlib
 import json
@@ -41,8 +40,9 @@ from middleware.live.codes import (  # noqa: F401 - the channels import the code
 )
 from middleware.live.link import LINK_PATH, CoolingDown, Declared, Link, RecordingSocket
 from middleware.live.loop import Continuation, channel_loop
-from middleware.live.wire import LiveSocket, PendingSocket, accept_websocket
+from middleware.live.wire import LiveSocket, PendingSocket, accept_websocket, wait_at_most
 from middleware.robots.fanout import FanoutHub
+from middleware.validation import TolerantResponse
 
 STREAM_POLL_S = 0.5
 # A live client answers each ping, so it is heard at least this often; one that does not answer by the next
@@ -154,8 +154,9 @@ class SocketCount:
                 self._open.pop(user_id, None)
 
 
-class _ChannelEnded(Response):
-    """What the WSGI server gets once a channel's handler returned, per server (as flask-sock answers)."""
+class _ChannelEnded(TolerantResponse):
+    """What the WSGI server gets once a channel's handler returned, per server (as flask-sock answers). The app's
+    own response class: Flask would otherwise recast it, and gunicorn would write a 200 after the handshake."""
 
     def __init__(self, mode: str) -> None:
         super().__init__()
@@ -214,13 +215,8 @@ class Channels(Sock):
                     if served is None and counted is not None:
                         self.sockets.close(counted)
                 get_session().close()  # the request's database connection goes back before the socket lives on
-                mode = "gunicorn" if "gunicorn.socket" in request.environ else "werkzeug"
-                if served is not None and mode == "werkzeug":
-                    # Werkzeug shuts a request's socket down when its handler returns, which would cut the
-                    # duplicate the loop holds: under the development server the request waits for the channel.
-                    served.result()
                 request.environ[WEBSOCKET_ENDED] = True
-                return _ChannelEnded(mode)
+                return _ChannelEnded("gunicorn" if "gunicorn.socket" in request.environ else "werkzeug")
 
             (bp or self.app).route(path, websocket=True, **kwargs)(channel)
 
@@ -395,9 +391,7 @@ async def relay_stream(ws: LiveSocket, hub: FanoutHub, choose: Callable[[Any], A
                 pass  # nothing is expected from viewers; drop it so it cannot pile up
             if message is None:
                 wait_s = held.seconds_until_next(time.time())
-                with contextlib.suppress(TimeoutError):
-                    await asyncio.wait_for(news.wait(), STREAM_POLL_S if wait_s is None else min(wait_s,
-                                                                                                STREAM_POLL_S))
+                await wait_at_most(news, STREAM_POLL_S if wait_s is None else min(wait_s, STREAM_POLL_S))
         if hub.closed:
             await ws.close(CLOSE_GOING_AWAY, "The lab is shutting down; reload the page in a moment.")
     finally:

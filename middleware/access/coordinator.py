@@ -15,6 +15,7 @@ from sqlalchemy.orm import Session
 from middleware import events
 from middleware.access import round_robin
 from middleware.access.commands import hand_over
+from middleware.access.heard import HeardBook
 from middleware.access.round_robin import AccessPolicy, QueueState
 from middleware.db import session_factory
 from middleware.locking import ClusterElection
@@ -24,6 +25,7 @@ from middleware.robots.registry import robot_registry
 log = logging.getLogger(__name__)
 _EXTENSION_KEY = "telelab.access"
 ACCESS_TICKER_LOCK = 0x7E1E_1AB0  # the advisory lock that elects the one process ticking every robot
+HEARD_WRITE_S = 2.0  # how often the seats' "last heard" times noted by channels are written
 
 
 def _utc_now() -> datetime:
@@ -83,6 +85,7 @@ class AccessCoordinator:
         self._seen: dict[str, QueueState] = {}
         self._announced = 0  # counts announcements, so a read that overlapped one is not kept
         self._bus.listen(round_robin.QUEUE_TOPIC, self._forget_seen)
+        self.heard = HeardBook(self._sessions, HEARD_WRITE_S)
 
     @property
     def policy(self) -> AccessPolicy:
@@ -109,6 +112,10 @@ class AccessCoordinator:
         """The user is still connected: their client was last heard silent_s ago (the grace counts from then)."""
         with self._sessions() as session, session.begin():
             return round_robin.heartbeat(session, robot_name, user_id, self.clock() - timedelta(seconds=silent_s))
+
+    def note_heard(self, robot_name: str, user_id: int, silent_s: float = 0.0) -> None:
+        """heartbeat() without a write now: the seat's time is written with this process's next batch."""
+        self.heard.note(robot_name, user_id, self.clock() - timedelta(seconds=silent_s))
 
     def tick(self, robot_name: str) -> QueueState:
         """Brings the robot's queue up to date."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import time
+import weakref
 
 from flask_login import current_user
 from sqlalchemy import select
@@ -20,7 +21,7 @@ from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, as_json, r
 from middleware.robots.link import RobotLink
 
 HEARTBEAT_INTERVAL_S = 2.0
-REFRESH_INTERVAL_S = 0.5
+REFRESH_INTERVAL_S = 1.0  # the countdown a seat shows moves in whole seconds
 ACTIONS = {"pass": round_robin.pass_turn, "leave": round_robin.leave}
 
 
@@ -48,20 +49,20 @@ class ChannelSeat:
         self._coordinator.start_ticker()
         self._coordinator.join(self.robot_name, self.user_id)
 
-    def due(self) -> bool:
-        """Whether the next keep() writes (a channel on the loop runs it on the pool only then)."""
-        return time.monotonic() - self._heartbeat_at >= HEARTBEAT_INTERVAL_S
-
     def keep(self, ws: WebSocket, *, now: bool = False) -> None:
-        """Tells the queue when ws's client was last heard (at most every HEARTBEAT_INTERVAL_S, unless now)."""
+        """Tells the queue when ws's client was last heard (at most every HEARTBEAT_INTERVAL_S): in memory, written
+        with the process's next batch; with now, written at once (a database write: run it on the pool)."""
         at = time.monotonic()
-        if now or at - self._heartbeat_at >= HEARTBEAT_INTERVAL_S:
+        if now:
             self._coordinator.heartbeat(self.robot_name, self.user_id, ws.silent_s())
+            self._heartbeat_at = at
+        elif at - self._heartbeat_at >= HEARTBEAT_INTERVAL_S:
+            self._coordinator.note_heard(self.robot_name, self.user_id, ws.silent_s())
             self._heartbeat_at = at
 
 
 class SeatFacts:
-    """What a queue socket reads besides the queue, kept for the socket's life: users' names and turn lengths
+    """What queue sockets read besides the queue, shared by this process's sockets: users' names and turn lengths
     (a turn length at most TURN_LENGTH_FRESH_S old, as a tutor may change it)."""
 
     TURN_LENGTH_FRESH_S = 10.0
@@ -70,6 +71,12 @@ class SeatFacts:
         self._coordinator = coordinator
         self._names: dict[int, str | None] = {}
         self._turns: dict[int, tuple[float, float]] = {}
+
+    def known(self, state: round_robin.QueueState, user_id: int) -> bool:
+        """Whether seat_message for user_id needs no database read now."""
+        read_at, _ = self._turns.get(state.controller_id or user_id, (-float("inf"), 0.0))
+        return ((state.controller_id is None or state.controller_id in self._names)
+                and time.monotonic() - read_at <= self.TURN_LENGTH_FRESH_S)
 
     def username(self, user_id: int) -> str | None:
         if user_id not in self._names:
@@ -83,6 +90,17 @@ class SeatFacts:
             length = self._coordinator.turn_length_s(user_id)
             self._turns[user_id] = (time.monotonic(), length)
         return length
+
+
+_shared_facts: weakref.WeakKeyDictionary[AccessCoordinator, SeatFacts] = weakref.WeakKeyDictionary()
+
+
+def shared_facts(coordinator: AccessCoordinator) -> SeatFacts:
+    """The facts every queue socket of this process shares (one read per user, not per socket)."""
+    facts = _shared_facts.get(coordinator)
+    if facts is None:
+        facts = _shared_facts.setdefault(coordinator, SeatFacts(coordinator))
+    return facts
 
 
 def seat_message(coordinator: AccessCoordinator, robot_name: str, user_id: int,
@@ -127,7 +145,7 @@ def queue_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     user_id = int(current_user.get_id())
     seat = ChannelSeat(robot_name, user_id)
     seat.join()
-    facts = SeatFacts(coordinator)
+    facts = shared_facts(coordinator)
     work = blocking_work()
 
     def act(action: str) -> None:
@@ -142,8 +160,7 @@ def queue_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
         try:
             while live.connected:
                 raw = await live.receive(timeout=REFRESH_INTERVAL_S)
-                if seat.due():
-                    await work(seat.keep, live)
+                seat.keep(live)
                 if raw is not None:
                     try:
                         action = parse_queue_action(raw)
@@ -154,7 +171,10 @@ def queue_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
                     await work(act, action)
                     last_sent = None
                 now = time.monotonic()
-                message = await work(seat_message, coordinator, robot_name, user_id, facts)
+                if facts.known(coordinator.seen_snapshot(robot_name), user_id):
+                    message = seat_message(coordinator, robot_name, user_id, facts)  # from memory: on the loop
+                else:
+                    message = await work(seat_message, coordinator, robot_name, user_id, facts)
                 if message != last_sent or now - last_sent_at >= 1.0:
                     await live.send(as_json(message))
                     last_sent, last_sent_at = message, now

@@ -97,8 +97,7 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
         try:
             while True:
                 raw = await live.receive(timeout=RECEIVE_WAIT_S)
-                if seat.due():  # an idle driver still holds the seat while its client answers pings
-                    await work(seat.keep, live)
+                seat.keep(live)  # an idle driver still holds the seat while its client answers pings
                 if raw is None:
                     continue
                 ping_id = parse_ping(raw)

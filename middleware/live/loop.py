@@ -53,9 +53,8 @@ class ChannelLoop:
               max_message_bytes: int, ping_interval_s: float, login_recheck_s: float,
               login_still_open: Callable[[], bool], on_overflow: Callable[[], None],
               on_end: Callable[[], None]) -> concurrent.futures.Future[None]:
-        """Serves the accepted socket raw with continuation on this loop; the request's thread may return now (the
-        server's own file descriptor may be closed: the loop holds a duplicate)."""
-        held = raw.dup()
+        """Serves the accepted socket raw with continuation on this loop; the request's thread returns at once."""
+        held = take_connection(raw)
         held.setblocking(False)
 
         async def serve() -> None:
@@ -115,6 +114,18 @@ class ChannelLoop:
     def _close_all(self) -> None:
         for ws in list(self._sockets):
             asyncio.ensure_future(ws.close(CLOSE_SERVICE_RESTART, "The server is restarting; reconnecting."))
+
+
+def take_connection(raw: socket.socket) -> socket.socket:
+    """The connection under raw, on a descriptor of our own. The WSGI server's descriptor then holds a stand-in
+    whose peer is closed: what the server does when the request ends (gunicorn and Werkzeug shut the socket down,
+    drain it, close it) happens to the stand-in at once, and the connection lives on."""
+    held = raw.dup()
+    stand_in, peer = socket.socketpair()
+    peer.close()
+    os.dup2(stand_in.fileno(), raw.fileno())
+    stand_in.close()
+    return held
 
 
 class StreamWatch:

@@ -55,6 +55,19 @@ def _is_handshake_key(key: str) -> bool:
         return False
 
 
+async def wait_at_most(event: asyncio.Event, timeout: float | None) -> None:
+    """Waits until event is set or timeout s passed (then it is set: callers clear it). asyncio.wait_for makes a
+    task per wait, which at a thousand sockets' refreshes a second was the loop's largest cost."""
+    if timeout is None:
+        await event.wait()
+        return
+    timer = asyncio.get_running_loop().call_later(timeout, event.set)
+    try:
+        await event.wait()
+    finally:
+        timer.cancel()
+
+
 class PendingSocket:
     """The accepted socket while the request's thread checks who opened it: blocking sends, and a close."""
 
@@ -113,8 +126,7 @@ class Inbox:
                 raise ConnectionClosed(self.close_reason, self.close_message)
             if timeout is not None and timeout <= 0:
                 return None
-            with contextlib.suppress(TimeoutError):  # set already: something came since the last receive
-                await asyncio.wait_for(self._arrived.wait(), timeout)
+            await wait_at_most(self._arrived, timeout)  # set already: something came since the last receive
             self._arrived.clear()
             self._raise_if_overflowed()
             if not len(self.inbound):
