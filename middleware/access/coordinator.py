@@ -84,6 +84,7 @@ class AccessCoordinator:
         self._bus = events.bus_of(self._sessions.kw["bind"])
         self._seen: dict[str, QueueState] = {}
         self._announced = 0  # counts announcements, so a read that overlapped one is not kept
+        self._queue_watchers: set[Callable[[str | None], object]] = set()
         self._bus.listen(round_robin.QUEUE_TOPIC, self._forget_seen)
         self.heard = HeardBook(self._sessions, HEARD_WRITE_S)
 
@@ -145,6 +146,14 @@ class AccessCoordinator:
             self._seen.clear()
         else:
             self._seen.pop(robot_name, None)
+        for watcher in list(self._queue_watchers):
+            watcher(robot_name)
+
+    def watch_queues(self, watcher: Callable[[str | None], object]) -> Callable[[], None]:
+        """Calls watcher(robot_name) (None: any robot) whenever a queue change is announced, from the event bus's
+        thread (it must not block); returns what stops it."""
+        self._queue_watchers.add(watcher)
+        return lambda: self._queue_watchers.discard(watcher)
 
     def controller_token(self, robot_name: str, user_id: int, session: Session | None = None) -> str | None:
         """The token of user_id if they control the robot now, else None (one primary-key read, in the caller's

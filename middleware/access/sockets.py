@@ -3,6 +3,7 @@ channel keeps for its user, and the checks every robot channel makes."""
 
 from __future__ import annotations
 
+import asyncio
 import json
 import time
 import weakref
@@ -21,7 +22,7 @@ from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, as_json, r
 from middleware.robots.link import RobotLink
 
 HEARTBEAT_INTERVAL_S = 2.0
-REFRESH_INTERVAL_S = 1.0  # the countdown a seat shows moves in whole seconds
+REFRESH_INTERVAL_S = 1.0  # the countdown a seat shows moves in whole seconds; a change wakes the socket at once
 ACTIONS = {"pass": round_robin.pass_turn, "leave": round_robin.leave}
 
 
@@ -155,6 +156,13 @@ def queue_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
             coordinator.apply(ACTIONS[action], robot_name, user_id)
 
     async def report(live: LiveSocket) -> None:
+        loop = asyncio.get_running_loop()
+
+        def changed(robot: str | None) -> None:
+            if robot in (None, robot_name):
+                loop.call_soon_threadsafe(live.nudge)
+
+        stop_watching = coordinator.watch_queues(changed)  # a turn passing in any worker shows at once
         last_sent: dict[str, object] | None = None
         last_sent_at = 0.0
         try:
@@ -179,6 +187,7 @@ def queue_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
                     await live.send(as_json(message))
                     last_sent, last_sent_at = message, now
         finally:
+            stop_watching()
             await work(lambda: seat.keep(live, now=True))  # a closing frame was heard just now: a reload keeps
             # the whole grace
 

@@ -92,15 +92,18 @@ class SubSocket(Inbox):
     def send_latest(self, data: str | bytes) -> bool:
         return self._link.send_latest(self._framed(data))
 
-    async def close(self, reason: int | None = None, message: str | None = None) -> None:
-        """Ends the channel; the page hears its code on sub 0. The link stays open."""
+    def begin_close(self, reason: int, message: str) -> None:
         if self.connected:
             self.connected = False
-            self.close_reason, self.close_message = reason or 1000, message or ""
+            self.close_reason, self.close_message = reason, message
             with contextlib.suppress(ConnectionClosed):
-                self._link.write(control({"type": "closed", "sub": self.sub, "code": self.close_reason,
-                                          "reason": self.close_message[:120]}))
+                self._link.write(control({"type": "closed", "sub": self.sub, "code": reason,
+                                          "reason": message[:120]}))
         self.nudge()
+
+    async def close(self, reason: int | None = None, message: str | None = None) -> None:
+        """Ends the channel; the page hears its code on sub 0. The link stays open."""
+        self.begin_close(reason or 1000, message or "")
 
     def admit(self, message: str | bytes) -> None:
         if self.connected and self.inbound.overflow is None:

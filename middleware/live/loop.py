@@ -22,7 +22,7 @@ from typing import Any
 from flask import Flask
 from simple_websocket import ConnectionClosed
 
-from middleware.live.codes import CLOSE_SERVICE_RESTART
+from middleware.live.codes import CLOSE_GOING_AWAY, CLOSE_SERVICE_RESTART
 from middleware.live.wire import LiveSocket
 
 log = logging.getLogger(__name__)
@@ -96,7 +96,12 @@ class ChannelLoop:
             with app.app_context():
                 return fn(*args)
 
-        return await self.loop.run_in_executor(self._pool, call)
+        try:
+            return await self.loop.run_in_executor(self._pool, call)
+        except RuntimeError as error:  # the pool was shut down: the interpreter is exiting
+            if "after shutdown" not in str(error):
+                raise
+            raise ConnectionClosed(CLOSE_GOING_AWAY, "The server is stopping.") from None
 
     def watch(self, hub: Any) -> StreamWatch:
         """The loop's watch of a FanoutHub (made once per hub); call on the loop."""

@@ -114,8 +114,15 @@ class Inbox:
         self._arrived = asyncio.Event()
         self.on_overflow = lambda: None
 
+    def begin_close(self, reason: int, message: str) -> None:
+        """Closes with reason at once (what follows may wait): receive and send raise from now on."""
+        raise NotImplementedError
+
     async def close(self, reason: int | None = None, message: str | None = None) -> None:
         raise NotImplementedError
+
+    async def _closed_for_overflow(self) -> None:
+        """What follows begin_close after a flood (a socket waits for its client's closing frame)."""
 
     async def receive(self, timeout: float | None = None) -> str | bytes | None:
         """The next message, or None after timeout s or when nudged; ConnectionClosed once closed and nothing is
@@ -147,7 +154,8 @@ class Inbox:
         self.inbound.append(message)
         if self.inbound.overflow is not None:
             self.on_overflow()
-            asyncio.ensure_future(self.close(CLOSE_TOO_MANY_MESSAGES, self.inbound.overflow))
+            self.begin_close(CLOSE_TOO_MANY_MESSAGES, self.inbound.overflow)
+            asyncio.ensure_future(self._closed_for_overflow())
         self._arrived.set()
 
 
@@ -207,16 +215,23 @@ class LiveSocket(Inbox):
         except (LocalProtocolError, RuntimeError):
             raise ConnectionClosed(self.close_reason, self.close_message) from None
 
-    async def close(self, reason: int | None = None, message: str | None = None) -> None:
-        """Closes with reason and message, waits briefly for the client's answer, then drops the connection."""
+    def begin_close(self, reason: int, message: str) -> None:
         if self.connected:
             self.connected = False
-            self.close_reason, self.close_message = reason or CloseReason.NORMAL_CLOSURE, message or ""
+            self.close_reason, self.close_message = reason, message
             with contextlib.suppress(LocalProtocolError, RuntimeError, ConnectionError):
-                self._writer.write(self._frames.send(CloseConnection(self.close_reason, message)))
+                self._writer.write(self._frames.send(CloseConnection(reason, message)))
             self._arrived.set()
-            with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._closed.wait(), CLOSE_HANDSHAKE_WAIT_S)
+
+    async def close(self, reason: int | None = None, message: str | None = None) -> None:
+        """Closes with reason and message, waits briefly for the client's answer, then drops the connection."""
+        self.begin_close(reason or CloseReason.NORMAL_CLOSURE, message or "")
+        await self._closed_for_overflow()
+
+    async def _closed_for_overflow(self) -> None:
+        # Reads on (dropping) until the client's closing frame, so it reads our code; then the connection goes.
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(self._closed.wait(), CLOSE_HANDSHAKE_WAIT_S)
         self.abort()
 
     def abort(self, why: str = "") -> None:

@@ -14,7 +14,7 @@ from middleware.models.experiment import Trial, VideoDelay  # noqa: F401
 from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord  # noqa: F401
 from middleware.models.preferences import UserPreference
 from middleware.models.robots import Robot
-from middleware.models.teaching import GuidedSession, Lesson, Tour  # noqa: F401
+from middleware.models.teaching import GuidedSession, GuidedSessionPresence, Lesson, Tour  # noqa: F401
 
 __all__ = [
     "Base", "Booking", "ChatMessage", "Course", "CourseMembership", "Invitation", "LoginFailure",

@@ -48,6 +48,18 @@ class GuidedSession(Base):
     ended_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
 
 
+class GuidedSessionPresence(Base):
+    """One open page of a live class (a socket, in whichever worker): its user is present while it is heard."""
+
+    __tablename__ = "guided_session_presence"
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    session_id: Mapped[int] = mapped_column(ForeignKey("guided_sessions.id", ondelete="CASCADE"), index=True)
+    user_id: Mapped[int] = mapped_column(ForeignKey("users.id", ondelete="CASCADE"))
+    socket_key: Mapped[str] = mapped_column(String(96), unique=True)
+    heard_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+
+
 class Lesson(Base):
     """A video lesson: a video file of the lessons folder and its checked cue track (canonical WebVTT)."""
 

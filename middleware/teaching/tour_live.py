@@ -3,34 +3,42 @@
 A change is announced on the event bus (topic "tours", the session's id; middleware/events.py), which wakes the
 sockets of that session in every worker process at once; a socket reads the session from the database only when
 woken so, or each second while this process cannot hear announcements (its PostgreSQL listener reconnecting).
-Who is present is each process's own (its sockets).
+Who is present is a table every worker shares: a row per open page, refreshed while its socket lives and
+deleted when it closes; a worker that died leaves rows that stop counting once PRESENCE_FRESH_S old.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
+import socket
 import threading
+import time
 from collections.abc import Callable
+from datetime import UTC, datetime, timedelta
 
+from flask import current_app
 from flask_login import current_user
+from sqlalchemy import delete, select, update
 from sqlalchemy.orm import Session
 
 from middleware import events
-from middleware.db import get_session
+from middleware.db import get_session, unit_of_work
 from middleware.live.loop import Continuation, blocking_work
 from middleware.live.wire import LiveSocket
 from middleware.models import User
-from middleware.models.teaching import GuidedSession, Tour
+from middleware.models.teaching import GuidedSession, GuidedSessionPresence, Tour
 from middleware.realtime import CLOSE_FORBIDDEN, CLOSE_NOT_FOUND, Channels, WebSocket, as_json, refuse
 from middleware.teaching.authority import may_follow_class
 from middleware.teaching.tours import tour_steps
 
 _changed = threading.Condition()
 _versions: dict[int, int] = {}
-_present: dict[int, dict[int, str]] = {}  # session id -> user id -> name, of this process's sockets
 _wakers: dict[int, set[Callable[[], None]]] = {}  # session id -> how to wake each of its sockets
 RECHECK_S = 1.0  # how often a socket checks that it is still open (and re-reads, if announcements go unheard)
+PRESENCE_REFRESH_S = 20.0
+PRESENCE_FRESH_S = 60.0  # a page not heard of for this long (its worker died) no longer counts as present
 TOPIC = "tours"
 _listening_engines: set[int] = set()
 
@@ -79,8 +87,36 @@ def state(session: Session, live: GuidedSession) -> dict[str, object]:
         "tutor": tutor.username if tutor else None, "step_index": live.step_index, "step_count": len(steps),
         "step": step, "controller": controller.username if controller else None,
         "ended": live.ended_at is not None, "version": live.version,
-        "participants": sorted(set(_present.get(live.id, {}).values())),
+        "participants": present_names(session, live.id),
     }
+
+
+def present_names(session: Session, session_id: int) -> list[str]:
+    """The users with a page of the class open now, in any worker."""
+    fresh_after = datetime.now(UTC) - timedelta(seconds=PRESENCE_FRESH_S)
+    return list(session.scalars(
+        select(User.username).distinct()
+        .join(GuidedSessionPresence, GuidedSessionPresence.user_id == User.id)
+        .where(GuidedSessionPresence.session_id == session_id, GuidedSessionPresence.heard_at > fresh_after)
+        .order_by(User.username)))
+
+
+def _arrive(session_id: int, user_id: int, socket_key: str) -> None:
+    with unit_of_work(current_app) as db:
+        db.add(GuidedSessionPresence(session_id=session_id, user_id=user_id, socket_key=socket_key))
+        announce(db, session_id)  # the tutor's list of participants changes, in every worker
+
+
+def _still_here(socket_key: str) -> None:
+    with unit_of_work(current_app) as db:
+        db.execute(update(GuidedSessionPresence).where(GuidedSessionPresence.socket_key == socket_key)
+                   .values(heard_at=datetime.now(UTC)))
+
+
+def _leave(session_id: int, socket_key: str) -> None:
+    with unit_of_work(current_app) as db:
+        db.execute(delete(GuidedSessionPresence).where(GuidedSessionPresence.socket_key == socket_key))
+        announce(db, session_id)
 
 
 def _read_state(session_id: int) -> dict[str, object] | None:
@@ -94,7 +130,7 @@ def _read_state(session_id: int) -> dict[str, object] | None:
 
 def session_channel(ws: WebSocket, session_id: int) -> Continuation | None:
     """Pushes the class's state whenever it changes, until the socket closes."""
-    user_id, username = int(current_user.get_id()), current_user.username
+    user_id = int(current_user.get_id())
     db = get_session()
     found = db.get(GuidedSession, session_id)
     if found is None:
@@ -110,15 +146,16 @@ def session_channel(ws: WebSocket, session_id: int) -> Continuation | None:
 
     async def follow(live: LiveSocket) -> None:
         loop = asyncio.get_running_loop()
+        socket_key = f"{socket.gethostname()[:60]}:{os.getpid()}:{id(live)}"
 
         def wake() -> None:
             with contextlib.suppress(RuntimeError):  # the loop closed: the process is ending
                 loop.call_soon_threadsafe(live.nudge)
 
         with _changed:
-            _present.setdefault(session_id, {})[user_id] = username
             _wakers.setdefault(session_id, set()).add(wake)
-        notify(session_id)  # the tutor's list of participants changes
+        await work(_arrive, session_id, user_id, socket_key)
+        refreshed_at = time.monotonic()
         sent: tuple[int, tuple[object, ...]] | None = None
         seen_local, read_local = -1, -2
         try:
@@ -138,11 +175,13 @@ def session_channel(ws: WebSocket, session_id: int) -> Continuation | None:
                 if _versions.get(session_id, 0) == read_local:
                     await live.receive(timeout=RECHECK_S)  # woken by notify(); what the page sends is dropped
                 seen_local = _versions.get(session_id, 0)
+                if time.monotonic() - refreshed_at >= PRESENCE_REFRESH_S:
+                    await work(_still_here, socket_key)
+                    refreshed_at = time.monotonic()
         finally:
             with _changed:
-                _present.get(session_id, {}).pop(user_id, None)
                 _wakers.get(session_id, set()).discard(wake)
-            await work(notify, session_id)
+            await work(_leave, session_id, socket_key)
 
     return follow
 

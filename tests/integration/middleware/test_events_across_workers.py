@@ -128,3 +128,50 @@ def test_an_announcement_is_heard_after_commit_and_never_after_a_rollback(postgr
         stop()
         bus.close()
         engine.dispose()
+
+
+def test_who_follows_a_live_class_on_one_worker_is_listed_on_the_other(postgres_url: str, tmp_path: Path,
+                                                                         skill_server_address: str) -> None:
+    import json
+
+    from middleware.access.coordinator import access_coordinator
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from middleware.models.teaching import GuidedSession, Tour
+    from middleware.teaching.demo_content import DEMO_TOURS
+    from tests.integration.chat.test_chat import next_of
+
+    robots = f"lab-1={skill_server_address}"
+    first = make_test_app(postgres_url, robots, tmp_path / "one")
+    second = make_test_app_without_user(postgres_url, robots, tmp_path / "two")
+    with session_factory(first)() as session:
+        create_user(session, "tutor1", "tutor", STUDENT_PASSWORD)
+        session.commit()
+    course_id = make_course(first, "LIVE1", {"tutor1": "tutor", "student1": "student"})
+    with session_factory(first)() as session, session.begin():
+        tour = Tour(slug="live-tour", title="Live", steps_json=json.dumps(DEMO_TOURS[0]["steps"]))
+        session.add(tour)
+        session.flush()
+        live = GuidedSession(tour_id=tour.id, robot_name="lab-1", tutor_id=find_user_id(first, "tutor1"),
+                             course_id=course_id, step_index=0, control_user_id=find_user_id(first, "tutor1"),
+                             version=1)
+        session.add(live)
+    servers = [LiveServer(first), LiveServer(second)]
+    try:
+        student, tutor = LabClient(servers[0].url), LabClient(servers[1].url)
+        assert student.login() == 302 and tutor.login("tutor1", STUDENT_PASSWORD) == 302
+        tutors_page = tutor.websocket(f"/ws/tour-sessions/{live.id}")
+        assert next_of(tutors_page, "state")["participants"] == ["tutor1"]
+        students_page = student.websocket(f"/ws/tour-sessions/{live.id}")
+        deadline = time.monotonic() + 3.0
+        while next_of(tutors_page, "state", timeout_s=3.0)["participants"] != ["student1", "tutor1"]:
+            assert time.monotonic() < deadline, "the tutor's worker never listed the student of the other worker"
+        students_page.close()
+        while next_of(tutors_page, "state", timeout_s=3.0)["participants"] != ["tutor1"]:
+            assert time.monotonic() < deadline + 3.0, "the student who left is still listed"
+    finally:
+        for server in servers:
+            server.stop()
+        for app in (first, second):
+            access_coordinator(app).stop_ticker()
+            session_factory(app).kw["bind"].dispose()
