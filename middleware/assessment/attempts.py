@@ -16,7 +16,7 @@ from collections.abc import Callable
 from datetime import datetime, timedelta
 from typing import Any
 
-from sqlalchemy import func, select, update
+from sqlalchemy import func, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -212,11 +212,38 @@ def submit_attempt(session: Session, actor: User, attempt_id: int, now: datetime
     return attempt
 
 
-def record_trace(session: Session, attempt_id: int, trace: list[list[float]]) -> bool:
-    """Stores the recorder's samples so far in an attempt still in progress (a conditional UPDATE)."""
-    done = rows_matched(session, update(Attempt).where(Attempt.id == attempt_id, Attempt.status == "in_progress")
-                        .values(trace=trace[-MAX_TRACE_SAMPLES:]))
+def record_trace(session: Session, attempt_id: int, trace: list[list[float]], recorder_key: str,
+                 now: datetime) -> bool:
+    """Stores the recorder's samples so far in an attempt still in progress that this recorder still holds (a
+    conditional UPDATE); False: the attempt ended, or another process took the recording over."""
+    done = rows_matched(session, update(Attempt).where(Attempt.id == attempt_id, Attempt.status == "in_progress",
+                                                       Attempt.recorder_key == recorder_key)
+                        .values(trace=trace[-MAX_TRACE_SAMPLES:], recorder_heard_at=now))
     return bool(done)
+
+
+def claim_recording(session: Session, attempt_id: int, recorder_key: str, now: datetime,
+                    stale_before: datetime) -> list[list[float]] | None:
+    """Makes recorder_key the attempt's recorder if nobody records it or its recorder went quiet before
+    stale_before (its process died); the trace stored so far, or None when another recorder holds it."""
+    done = rows_matched(session, update(Attempt).where(
+        Attempt.id == attempt_id, Attempt.status == "in_progress",
+        or_(Attempt.recorder_key.is_(None), Attempt.recorder_key == recorder_key,
+            Attempt.recorder_heard_at.is_(None), Attempt.recorder_heard_at < stale_before))
+        .values(recorder_key=recorder_key, recorder_heard_at=now))
+    if not done:
+        return None
+    return list(session.scalar(select(Attempt.trace).where(Attempt.id == attempt_id)) or [])
+
+
+def orphaned_recordings(session: Session, stale_before: datetime) -> list[tuple[int, str]]:
+    """(attempt id, robot) of experimental attempts in progress whose recorder went quiet before stale_before."""
+    rows = session.execute(
+        select(Attempt.id, func.coalesce(Attempt.robot_name, Exam.robot_name))
+        .join(Exam, Exam.id == Attempt.exam_id)
+        .where(Attempt.status == "in_progress", Exam.kind == "experimental", Attempt.recorder_key.is_not(None),
+               Attempt.recorder_heard_at < stale_before))
+    return [(attempt_id, robot) for attempt_id, robot in rows if robot]
 
 
 def my_attempts(session: Session, user_id: int, exam_id: int) -> list[Attempt]:

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable
-from datetime import UTC, datetime
-from typing import Any
+from datetime import UTC, datetime, timedelta
+from typing import TYPE_CHECKING, Any
 
-from flask import Blueprint, Response, current_app, jsonify, request
+from flask import Blueprint, Flask, Response, current_app, jsonify, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy.orm import Session
@@ -17,7 +18,11 @@ from middleware.db import after_commit, get_session, session_factory
 from middleware.errors import ApiError
 from middleware.models.assessment import Attempt, Exam
 
+if TYPE_CHECKING:
+    from middleware.assessment.recorder import RecordingKeeper
+
 blueprint = Blueprint("assessment", __name__)
+_KEEPER_KEY = "telelab.recording_keeper"
 
 
 def server_now() -> datetime:
@@ -55,7 +60,8 @@ def own_robot(exam: Exam, user_id: int) -> str | None:
 
 
 def start_recording(attempt_id: int, robot_name: str) -> None:
-    """Records the robot's ground truth for the attempt in this process, flushing to the database."""
+    """Records the robot's ground truth for the attempt in this process, flushing to the database, unless another
+    process records it (a recording that went quiet is taken over, after the trace stored so far)."""
     from middleware.assessment import recorder
     from middleware.robots.registry import robot_registry
 
@@ -63,12 +69,48 @@ def start_recording(attempt_id: int, robot_name: str) -> None:
     if link is None:
         return
     factory = session_factory(current_app._get_current_object())  # type: ignore[attr-defined]
+    key, now = recorder.process_key(), datetime.now(UTC)
+    with factory() as session, session.begin():
+        stored = attempts.claim_recording(session, attempt_id, key, now, now - timedelta(seconds=recorder.STALE_S))
+    if stored is None:
+        return
 
     def flush(trace: list[list[float]]) -> bool:
         with factory() as session, session.begin():
-            return attempts.record_trace(session, attempt_id, trace)
+            return attempts.record_trace(session, attempt_id, trace, key, datetime.now(UTC))
 
-    recorder.start(attempt_id, link, flush)
+    recorder.start(attempt_id, link, flush, stored)
+
+
+def recording_keeper(app: Flask) -> RecordingKeeper:
+    """The app's keeper of orphaned recordings (made once)."""
+    from middleware.assessment.recorder import STALE_S, RecordingKeeper
+
+    keeper = app.extensions.get(_KEEPER_KEY)
+    if keeper is None:
+        factory = session_factory(app)
+        app_ref = weakref.ref(app)  # the keeper's thread ends with the app (tests make many)
+
+        def find_orphans() -> list[tuple[int, str]] | None:
+            if app_ref() is None:
+                return None
+            with factory() as session:
+                return attempts.orphaned_recordings(session, datetime.now(UTC) - timedelta(seconds=STALE_S))
+
+        def resume(attempt_id: int, robot_name: str) -> None:
+            alive = app_ref()
+            if alive is not None:
+                with alive.app_context():
+                    start_recording(attempt_id, robot_name)
+
+        keeper = app.extensions.setdefault(_KEEPER_KEY, RecordingKeeper(find_orphans, resume))
+    return keeper
+
+
+@blueprint.before_app_request
+def keep_recordings() -> None:
+    # Every worker that serves requests takes over the recordings of a worker that died.
+    recording_keeper(current_app._get_current_object()).start()  # type: ignore[attr-defined]
 
 
 def run(action: Callable[[Session], Any], status: int = 200) -> tuple[Response, int]:

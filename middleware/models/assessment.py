@@ -78,6 +78,10 @@ class Attempt(Base):
     # An experimental attempt's robot: the exam's, or the student's own one in a class session.
     robot_name: Mapped[str | None] = mapped_column(String(64))
     trace: Mapped[list[list[float]] | None] = mapped_column(JSON)  # [t_s, gx, gy, gth, ox, oy, oth]
+    # Which process records the robot for an experimental attempt, and when it last stored the trace: another
+    # worker takes the recording over when that goes stale (the process died).
+    recorder_key: Mapped[str | None] = mapped_column(String(96))
+    recorder_heard_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
     results: Mapped[list[dict[str, Any]] | None] = mapped_column(JSON)  # graded items at submission
     auto_score: Mapped[float | None] = mapped_column()
     max_score: Mapped[float | None] = mapped_column()

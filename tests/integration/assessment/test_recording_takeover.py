@@ -1,0 +1,73 @@
+"""When the worker recording an experimental attempt dies, another takes the recording over from the trace it had
+stored, and the attempt is graded on the whole run; a recorder that is alive is never taken over."""
+
+from __future__ import annotations
+
+import time
+from datetime import UTC, datetime, timedelta
+
+from sqlalchemy import update
+
+from tests.integration.bookings.conftest import api
+from tests.integration.lab.test_robot_channels import drive_for, receive_json
+
+
+def _experimental_exam(app, course_people) -> int:
+    from middleware.assessment import bank
+    from middleware.assessment.schemas import parse_exam
+    from middleware.db import session_factory
+    from middleware.models import User
+
+    now = datetime.now(UTC)
+    with session_factory(app)() as session:
+        tutor = session.get(User, course_people["tutor1"])
+        exam = bank.create_exam(session, tutor, course_people["course"], parse_exam({
+            "title": "Drive on", "kind": "experimental", "opens_at": (now - timedelta(minutes=1)).isoformat(),
+            "closes_at": (now + timedelta(hours=1)).isoformat(), "duration_s": 600, "task_kind": "reach_point",
+            "x_m": 0.0, "y_m": 0.0, "rubric": "0.1:1, 0.5:0.5, 2:0.25", "task_points": 10, "robot_name": "lab-1"}))
+        session.commit()
+        return exam.id
+
+
+def test_a_recording_whose_worker_died_is_taken_over_and_the_whole_run_is_graded(app, client_as,
+                                                                                   course_people) -> None:
+    from middleware.assessment import attempts, recorder
+    from middleware.assessment.routes import recording_keeper
+    from middleware.db import session_factory
+    from middleware.models.assessment import Attempt
+
+    exam_id = _experimental_exam(app, course_people)
+    student = client_as("student1")
+    drive = student.websocket("/ws/robots/lab-1/drive")
+    assert receive_json(drive)["type"] == "ready"
+    status, answer = api(student, "POST", f"/api/exams/{exam_id}/attempts")
+    assert status == 201, answer
+    attempt_id = answer["attempt"]["id"]
+    time.sleep(2.5)  # at least one flush
+    recorder.stop(attempt_id)  # the recording worker dies: its recorder stops, its claim stays behind
+    factory = session_factory(app)
+    with factory() as session, session.begin():
+        died_at = datetime.now(UTC) - timedelta(seconds=recorder.STALE_S + 1)
+        session.execute(update(Attempt).where(Attempt.id == attempt_id)
+                        .values(recorder_key="dead-host:1", recorder_heard_at=died_at))
+        stored = list(session.get(Attempt, attempt_id).trace or [])
+    assert stored, "the first worker had stored samples"
+
+    with factory() as session, session.begin():  # a live recorder is never taken over
+        assert attempts.claim_recording(session, attempt_id, "someone-else:2", datetime.now(UTC),
+                                        died_at - timedelta(seconds=1)) is None
+    assert recording_keeper(app).check()  # another worker's keeper, as it runs every few seconds
+    drive_for(drive, 1.5, 0.2, 0.0, 1)
+    time.sleep(2.5)
+    with factory() as session:
+        taken = session.get(Attempt, attempt_id)
+        assert taken.recorder_key == recorder.process_key()
+        trace = list(taken.trace or [])
+    assert trace[:len(stored)] == stored, "the stored trace is continued, not replaced"
+    assert len(trace) > len(stored) + 5 and trace[len(stored)][0] > stored[-1][0], "time goes on after the gap"
+    status, answer = api(student, "POST", f"/api/attempts/{attempt_id}/submit")
+    drive.close()
+    assert status == 200, answer
+    with factory() as session:
+        graded = session.get(Attempt, attempt_id).trace or []
+    assert len(graded) >= len(trace) and any(row["item"] == "task" for row in answer["attempt"]["results"])
