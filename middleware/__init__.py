@@ -28,7 +28,7 @@ from middleware.chat import sockets as chat_sockets
 from middleware.courses import routes as courses_routes
 from middleware.errors import register_error_handlers
 from middleware.experiment import routes as experiment_routes
-from middleware.extensions import csrf, login_manager, login_still_open
+from middleware.extensions import csrf, login_manager, socket_login_check
 from middleware.farm import setup as farm_setup
 from middleware.lab import pool_routes
 from middleware.lab import routes as lab_routes
@@ -114,4 +114,4 @@ def _register_areas(app: Flask) -> None:
                       tour_routes.blueprint, class_routes.blueprint, farm_routes.blueprint, pool_routes.blueprint):
         app.register_blueprint(blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
-                            practice_routes.register, tour_live.register], login_still_open)
+                            practice_routes.register, tour_live.register], socket_login_check)

@@ -19,7 +19,7 @@ import threading
 from collections import defaultdict
 from collections.abc import Callable
 
-from sqlalchemy import Engine, event, text
+from sqlalchemy import Connection, Engine, event, text
 from sqlalchemy.orm import Session
 
 log = logging.getLogger(__name__)
@@ -149,6 +149,16 @@ def bus_of(engine: Engine) -> EventBus:
 def listen(engine: Engine, topic: str, callback: Callback) -> Callable[[], None]:
     """bus_of(engine).listen(topic, callback)."""
     return bus_of(engine).listen(topic, callback)
+
+
+def announce_in_flush(session: Session, connection: Connection, topic: str, key: str) -> None:
+    """announce() from a mapper event (during a flush, on its connection), delivered when the session commits."""
+    payload = f"{topic}:{key}"[:MAX_PAYLOAD]
+    if connection.dialect.name == "postgresql":
+        connection.execute(text("SELECT pg_notify(:channel, :payload)"), {"channel": CHANNEL, "payload": payload})
+        return
+    bus = bus_of(connection.engine)
+    event.listen(session, "after_commit", lambda _session: bus.post(topic, key[:MAX_PAYLOAD]), once=True)
 
 
 def announce(session: Session, topic: str, key: str) -> None:

@@ -3,7 +3,9 @@ the login manager (how a session's user is loaded, and what an anonymous visitor
 
 from __future__ import annotations
 
-from flask import redirect, request, url_for
+from collections.abc import Callable
+
+from flask import redirect, request, session, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import LoginManager
 from flask_wtf.csrf import CSRFProtect
@@ -31,10 +33,15 @@ def _load_user(user_id: str) -> User | None:
     return identity.load_user(db.get_session(), number)
 
 
-def login_still_open(user_id: int) -> bool:
-    """Whether this request's login (its cookie, read when the request began) still holds for user_id: asked
-    again by long-lived sockets."""
-    return _load_user(str(user_id)) is not None
+def socket_login_check() -> Callable[[int], bool]:
+    """Called in the request that opens a socket: how to ask later, outside any request (on the channel loop's
+    pool, in the app's context), whether that request's login still holds for user_id."""
+    key = session.get(sessions.LOGIN_KEY)
+
+    def still_open(user_id: int) -> bool:
+        return sessions.key_is_live(key, user_id) and identity.load_user(db.get_session(), user_id) is not None
+
+    return still_open
 
 
 @login_manager.unauthorized_handler

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
+import functools
 import json
 import math
 import threading
@@ -26,7 +27,9 @@ from flask_sock import Sock
 from simple_websocket import ConnectionClosed
 from werkzeug.exceptions import NotFound
 
-from middleware.db import get_session
+from middleware import events
+from middleware.auth.session_records import ACCOUNTS_TOPIC
+from middleware.db import get_session, session_factory
 from middleware.errors import ApiError
 from middleware.lab.delay import DelayQueue, ViewerDelay, apply_viewer_delay, capture_time_s
 from middleware.live.codes import (  # noqa: F401 - the channels import the codes from here
@@ -39,7 +42,7 @@ from middleware.live.codes import (  # noqa: F401 - the channels import the code
     CLOSE_TRY_AGAIN_LATER,
 )
 from middleware.live.link import LINK_PATH, CoolingDown, Declared, Link, RecordingSocket
-from middleware.live.loop import Continuation, channel_loop
+from middleware.live.loop import Continuation, channel_loop, recheck_logins
 from middleware.live.wire import LiveSocket, PendingSocket, accept_websocket, wait_at_most
 from middleware.robots.fanout import FanoutHub
 from middleware.validation import TolerantResponse
@@ -48,9 +51,11 @@ STREAM_POLL_S = 0.5
 # A live client answers each ping, so it is heard at least this often; one that does not answer by the next
 # ping is closed (simple_websocket's rule), and a seat counts its grace from when its client was last heard.
 PING_INTERVAL_S = 5.0
-# A socket outlives the request that opened it: its login is checked again this often, so a logout, a password
-# change or a disabled account closes it (CLOSE_NOT_LOGGED_IN) within this time, in every worker.
+# A socket outlives the request that opened it: a logout, a password change or a disabled account is announced
+# and closes the user's sockets (CLOSE_NOT_LOGGED_IN) in every worker at once; besides, the login is checked every
+# LOGIN_RECHECK_QUIET_S (its idle timeout and lifetime), or every LOGIN_RECHECK_S while announcements go unheard.
 LOGIN_RECHECK_S = 5.0
+LOGIN_RECHECK_QUIET_S = 60.0
 MAX_MESSAGE_BYTES = 4096
 # Channels take a person's actions (a click, a chat line) and pings; the drive channel declares more.
 DEFAULT_MESSAGES_PER_S = 10
@@ -66,6 +71,9 @@ FLOOD_COOL_DOWN_S = 10.0
 WEBSOCKET_ENDED = "telelab.websocket_ended"
 
 WebSocket = Any  # a PendingSocket while a channel opens (live.wire)
+# Called in the request that opens a socket; what it returns says later, in the app's context, whether that
+# request's login still holds for a user id.
+LoginCheck = Callable[[], Callable[[int], bool]]
 
 
 class InboundQueue:
@@ -174,11 +182,10 @@ class Channels(Sock):
     """flask-sock's extension, with every channel opened one way: a ChannelSocket, then `open_channel`'s checks
     (logged in, same Origin), and only then the area's handler. A channel cannot skip them."""
 
-    def __init__(self, app: Flask | None = None, login_still_open: Callable[[int], bool] = lambda _user_id: True
-                 ) -> None:
+    def __init__(self, app: Flask | None = None, login_check: LoginCheck = lambda: lambda _user_id: True) -> None:
         self.floods = FloodMemory()
         self.sockets = SocketCount()
-        self.login_still_open = login_still_open
+        self.login_check = login_check
         self.declared: dict[str, Declared] = {}  # rule -> opener, for channels opened on a link
         super().__init__(app)
 
@@ -230,8 +237,8 @@ class Channels(Sock):
         return channel_loop().adopt(
             raw, continuation, app=current_app._get_current_object(),  # type: ignore[attr-defined]
             inbound=InboundQueue(messages_per_s), max_message_bytes=options["max_message_size"],
-            ping_interval_s=options["ping_interval"], login_recheck_s=LOGIN_RECHECK_S,
-            login_still_open=lambda: self._still_open(user_id),
+            ping_interval_s=options["ping_interval"], login_recheck_s=self._login_recheck_s, user_id=user_id,
+            login_still_open=functools.partial(self._still_open, self.login_check(), user_id),
             on_overflow=lambda: self.floods.remember(path, user_id),
             on_end=lambda: self.sockets.close(user_id))
 
@@ -276,9 +283,15 @@ class Channels(Sock):
 
         return serve
 
-    def _still_open(self, user_id: int) -> bool:
+    def _login_recheck_s(self) -> float:
+        # Ended logins are announced (session_records.ACCOUNTS_TOPIC): while this process hears announcements a
+        # socket checks its login when told and otherwise rarely (idle timeouts); else every LOGIN_RECHECK_S.
+        bus = events.bus_of(session_factory(self.app).kw["bind"])
+        return LOGIN_RECHECK_QUIET_S if not bus.shared or bus.listening.is_set() else LOGIN_RECHECK_S
+
+    def _still_open(self, still_open: Callable[[int], bool], user_id: int) -> bool:
         try:
-            return self.login_still_open(user_id)
+            return still_open(user_id)
         finally:
             get_session().close()  # the socket lives on; the check's database connection goes back
 
@@ -298,16 +311,18 @@ ChannelDeclarations = Callable[[Channels], None]
 
 
 def init_app(app: Flask, channels: Iterable[ChannelDeclarations],
-             login_still_open: Callable[[int], bool] = lambda _user_id: True) -> Channels:
+             login_check: LoginCheck = lambda: lambda _user_id: True) -> Channels:
     """Binds the WebSocket extension to app and declares each area's channels on it; incoming messages are
-    small and few, and idle sockets are pinged. login_still_open(user_id) says whether the login that opened
-    a socket still holds (asked every LOGIN_RECHECK_S)."""
+    small and few, and idle sockets are pinged. login_check(), called in the request that opens a socket, says
+    later whether that login still holds (asked when a login of the user ends, and every LOGIN_RECHECK_QUIET_S)."""
     app.config.setdefault("SOCK_SERVER_OPTIONS", {"ping_interval": PING_INTERVAL_S,
                                                   "max_message_size": MAX_MESSAGE_BYTES})
-    sock = Channels(app, login_still_open)
+    sock = Channels(app, login_check)
     for declare in channels:
         declare(sock)
     sock.route(LINK_PATH, messages_per_s=LINK_MESSAGES_PER_S, endpoint="link_channel")(sock.link_channel)
+    events.listen(session_factory(app).kw["bind"], ACCOUNTS_TOPIC,
+                  lambda key: recheck_logins(int(key) if key and key.isdigit() else None))
 
     @app.before_request
     def _websocket_only() -> None:

@@ -16,12 +16,16 @@ from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
 from sqlalchemy import Connection, event, inspect, select, update
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session, object_session
 
+from middleware import events
 from middleware.models import LoginSession, User
 from middleware.models.accounts import as_utc
 
 RECHECK_S = 1.0
+# Announced (middleware/events.py) with the user's id when logins of the user end, so every worker's sockets of
+# that user check their login at once instead of on their next periodic check.
+ACCOUNTS_TOPIC = "accounts"
 # last_seen_at is written at most this often per session (a write per request would serialise SQLite).
 TOUCH_EVERY = timedelta(minutes=1)
 
@@ -75,8 +79,13 @@ def end_session(session: Session, key: str, now: datetime) -> None:
     """Ends the login whose cookie carries key (logout); the caller commits."""
     digest = _key_hash(key)
     _forget(digest)
+    user_id = session.scalar(select(LoginSession.user_id).where(LoginSession.key_hash == digest,
+                                                                 LoginSession.ended_at.is_(None)))
+    if user_id is None:
+        return
     session.execute(update(LoginSession).where(LoginSession.key_hash == digest, LoginSession.ended_at.is_(None))
                     .values(ended_at=now))
+    events.announce(session, ACCOUNTS_TOPIC, str(user_id))
 
 
 def end_all_sessions(connection: Connection | Session, user_id: int, now: datetime) -> None:
@@ -103,3 +112,6 @@ def _credentials_changed(_mapper, connection: Connection, target: User) -> None:
     disabled = state.attrs.is_active.history.has_changes() and not target.is_active
     if disabled or state.attrs.password_hash.history.has_changes():
         end_all_sessions(connection, target.id, datetime.now(UTC))
+        owner = object_session(target)
+        if owner is not None:
+            events.announce_in_flush(owner, connection, ACCOUNTS_TOPIC, str(target.id))

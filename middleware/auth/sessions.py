@@ -50,7 +50,11 @@ def end() -> None:
 
 def is_live(user_id: int) -> bool:
     """True when this request's cookie belongs to an open login of user_id."""
-    key = session.get(LOGIN_KEY)
+    return key_is_live(session.get(LOGIN_KEY), user_id)
+
+
+def key_is_live(key: object, user_id: int) -> bool:
+    """True when key (a cookie's login key, read earlier) is an open login of user_id; needs the app's context."""
     if not isinstance(key, str) or len(key) > 128:
         return False
     return session_records.is_open(get_session(), key, user_id, _limits(), datetime.now(UTC))

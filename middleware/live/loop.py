@@ -40,6 +40,7 @@ class ChannelLoop:
         self.loop = asyncio.new_event_loop()
         self._pool = concurrent.futures.ThreadPoolExecutor(WORK_THREADS, thread_name_prefix="channel-work")
         self._sockets: set[LiveSocket] = set()
+        self._by_user: dict[int, set[LiveSocket]] = {}
         self._watches: dict[int, StreamWatch] = {}
         self.draining = False
         self._thread = threading.Thread(target=self.loop.run_forever, name="channel-loop", daemon=True)
@@ -50,8 +51,8 @@ class ChannelLoop:
         return len(self._sockets)
 
     def adopt(self, raw: socket.socket, continuation: Continuation, *, app: Flask, inbound: Any,
-              max_message_bytes: int, ping_interval_s: float, login_recheck_s: float,
-              login_still_open: Callable[[], bool], on_overflow: Callable[[], None],
+              max_message_bytes: int, ping_interval_s: float, login_recheck_s: Callable[[], float],
+              user_id: int, login_still_open: Callable[[], bool], on_overflow: Callable[[], None],
               on_end: Callable[[], None]) -> concurrent.futures.Future[None]:
         """Serves the accepted socket raw with continuation on this loop; the request's thread returns at once."""
         held = take_connection(raw)
@@ -68,6 +69,7 @@ class ChannelLoop:
             ws.on_overflow = on_overflow
             ws.start(lambda: self.work(app, login_still_open), login_recheck_s)
             self._sockets.add(ws)
+            self._by_user.setdefault(user_id, set()).add(ws)
             try:
                 if self.draining:
                     await ws.close(CLOSE_SERVICE_RESTART, "The server is restarting; reconnecting.")
@@ -81,6 +83,9 @@ class ChannelLoop:
                     await ws.close(1011, "The server failed on this channel; reload the page.")
             finally:
                 self._sockets.discard(ws)
+                self._by_user.get(user_id, set()).discard(ws)
+                if not self._by_user.get(user_id, True):
+                    del self._by_user[user_id]
                 if ws.connected:
                     with contextlib.suppress(Exception):
                         await ws.close()
@@ -109,6 +114,16 @@ class ChannelLoop:
         if watch is None or watch.hub is not hub:
             watch = self._watches[id(hub)] = StreamWatch(self.loop, hub)
         return watch
+
+    def recheck_logins(self, user_id: int | None) -> None:
+        """The sockets of user_id (None: everyone's) check their login now. From any thread."""
+        def recheck() -> None:
+            sockets = self._sockets if user_id is None else self._by_user.get(user_id, set())
+            for ws in list(sockets):
+                ws.recheck_login()
+
+        with contextlib.suppress(RuntimeError):  # the loop closed: the process is ending
+            self.loop.call_soon_threadsafe(recheck)
 
     def drain(self) -> None:
         """This worker is leaving: every socket closes with CLOSE_SERVICE_RESTART (its client reconnects to another
@@ -214,3 +229,10 @@ async def read_in_thread(items: Iterator[Any], name: str) -> AsyncIterator[Any]:
         if isinstance(item, BaseException):
             raise item
         yield item
+
+
+def recheck_logins(user_id: int | None) -> None:
+    """This process's sockets of user_id (None: all) check their login now (a login ended, in any worker)."""
+    loop = _loops.get(os.getpid())
+    if loop is not None:
+        loop.recheck_logins(user_id)

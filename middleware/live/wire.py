@@ -176,9 +176,10 @@ class LiveSocket(Inbox):
         self.close_reason: int = CloseReason.NO_STATUS_RCVD
         self.close_message = ""
         self._closed = asyncio.Event()
+        self._recheck = asyncio.Event()
         self._tasks: list[asyncio.Task] = []
 
-    def start(self, login_still_open: Callable[[], Awaitable[bool]], login_recheck_s: float) -> None:
+    def start(self, login_still_open: Callable[[], Awaitable[bool]], login_recheck_s: Callable[[], float]) -> None:
         """Starts reading frames, pinging, and checking the login."""
         self._tasks = [asyncio.ensure_future(self._read_forever()), asyncio.ensure_future(self._ping_forever()),
                        asyncio.ensure_future(self._check_login_forever(login_still_open, login_recheck_s))]
@@ -302,9 +303,15 @@ class LiveSocket(Inbox):
             with contextlib.suppress(LocalProtocolError, RuntimeError):
                 self._writer.write(self._frames.send(Ping()))
 
-    async def _check_login_forever(self, login_still_open: Callable[[], Awaitable[bool]], every_s: float) -> None:
+    def recheck_login(self) -> None:
+        """Checks the login now (a login of the user ended somewhere). On the loop."""
+        self._recheck.set()
+
+    async def _check_login_forever(self, login_still_open: Callable[[], Awaitable[bool]],
+                                   every_s: Callable[[], float]) -> None:
         while self.connected:
-            await asyncio.sleep(every_s)
+            await wait_at_most(self._recheck, every_s())
+            self._recheck.clear()
             if self.connected and not await login_still_open():
                 message = "Your session has ended. Log in again."
                 with contextlib.suppress(ConnectionClosed):

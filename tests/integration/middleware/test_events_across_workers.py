@@ -175,3 +175,34 @@ def test_who_follows_a_live_class_on_one_worker_is_listed_on_the_other(postgres_
         for app in (first, second):
             access_coordinator(app).stop_ticker()
             session_factory(app).kw["bind"].dispose()
+
+
+def test_a_password_changed_on_one_worker_closes_the_sockets_on_the_other_at_once(
+        postgres_url: str, tmp_path: Path, skill_server_address: str) -> None:
+    from middleware.access.coordinator import access_coordinator
+    from middleware.auth.services import set_password
+    from middleware.db import session_factory
+    from middleware.realtime import CLOSE_NOT_LOGGED_IN
+    from tests.integration.lab.test_robot_channels import closed_with
+
+    robots = f"lab-1={skill_server_address}"
+    first = make_test_app(postgres_url, robots, tmp_path / "one")
+    second = make_test_app_without_user(postgres_url, robots, tmp_path / "two")
+    server = LiveServer(first)
+    try:
+        student = LabClient(server.url)
+        assert student.login() == 302
+        link = student.websocket("/ws/link")
+        time.sleep(0.5)
+        with session_factory(second)() as session:  # the second worker: an admin resets the password
+            set_password(session, "student1", "a-brand-new-password-1")
+            session.commit()
+        changed_at = time.monotonic()
+        assert closed_with(link, 3.0) == CLOSE_NOT_LOGGED_IN
+        print(f"\npassword changed on one worker -> socket closed on the other: "
+              f"{(time.monotonic() - changed_at) * 1000:.0f} ms")
+    finally:
+        server.stop()
+        for app in (first, second):
+            access_coordinator(app).stop_ticker()
+            session_factory(app).kw["bind"].dispose()
