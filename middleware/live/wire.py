@@ -13,6 +13,7 @@ import asyncio
 import base64
 import contextlib
 import json
+import logging
 import socket
 import time
 from collections.abc import Awaitable, Callable
@@ -33,6 +34,7 @@ CLOSE_HANDSHAKE_WAIT_S = 1.0
 STREAM_BUFFER_BYTES = 256 * 1024
 STALLED_BUFFER_BYTES = 4 * 1024 * 1024
 READ_BYTES = 65536
+log = logging.getLogger(__name__)
 
 
 def accept_websocket(environ: dict) -> socket.socket:
@@ -66,6 +68,16 @@ async def wait_at_most(event: asyncio.Event, timeout: float | None) -> None:
         await event.wait()
     finally:
         timer.cancel()
+
+
+def _log_failure(task: asyncio.Task) -> None:
+    """A socket's own task (reader, pinger, login check) that failed is logged: silently, the socket would stop
+    checking its login or answering pings."""
+    if task.cancelled():
+        return
+    error = task.exception()
+    if error is not None and not isinstance(error, ConnectionClosed):  # closed: the process is ending
+        log.error("a socket's task failed", exc_info=error)
 
 
 class PendingSocket:
@@ -183,6 +195,8 @@ class LiveSocket(Inbox):
         """Starts reading frames, pinging, and checking the login."""
         self._tasks = [asyncio.ensure_future(self._read_forever()), asyncio.ensure_future(self._ping_forever()),
                        asyncio.ensure_future(self._check_login_forever(login_still_open, login_recheck_s))]
+        for task in self._tasks:
+            task.add_done_callback(_log_failure)
 
     def silent_s(self) -> float:
         """Seconds since the client was last heard (any frame)."""
