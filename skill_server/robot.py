@@ -178,6 +178,11 @@ class Robot:
             raise NoMap("no environment model yet: activate environment_modelling and drive the robot around")
         return grid
 
+    def pose_log(self, from_unix_s: float, to_unix_s: float) -> tuple[list[tuple[float, ...]], float | None]:
+        """The true and odometric poses kept between two wall-clock times, and the oldest time kept."""
+        samples, oldest = self.world.pose_log.between(from_unix_s, to_unix_s)
+        return list(samples), oldest
+
     def track_run(self) -> TrackState | None:
         """The run on the scene's track now; None in scenes without a track."""
         monitor = self.world.track_monitor

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 import weakref
 from collections.abc import Callable
 from datetime import UTC, datetime, timedelta
@@ -16,6 +17,7 @@ from middleware.assessment import attempts, bank, recommendations, review, surve
 from middleware.assessment.schemas import parse_exam, parse_question, parse_survey
 from middleware.db import after_commit, get_session, session_factory
 from middleware.errors import ApiError
+from middleware.models.accounts import as_utc
 from middleware.models.assessment import Attempt, Exam
 
 if TYPE_CHECKING:
@@ -310,10 +312,42 @@ def api_save_answers(attempt_id: int) -> ResponseReturnValue:
 
 
 def finish_recording(attempt_id: int) -> list[list[float]] | None:
-    """The trace this process recorded for the attempt (None: use what was flushed to the database)."""
+    """The attempt's run: from the robot's own pose log when it covers the whole attempt (complete, whichever worker
+    recorded and whether it lived), else what this process recorded; None: grade what was stored."""
     from middleware.assessment import recorder
+    from middleware.assessment.policy import get_attempt, get_exam
 
-    return recorder.stop(attempt_id)
+    recorded = recorder.stop(attempt_id)
+    session = get_session()
+    attempt = get_attempt(session, attempt_id)
+    exam = get_exam(session, attempt.exam_id)
+    robot_name = attempt.robot_name or exam.robot_name
+    if exam.kind == "experimental" and robot_name:
+        kept = robot_run(robot_name, as_utc(attempt.started_at).timestamp())
+        if kept is not None:
+            return kept
+    return recorded
+
+
+def robot_run(robot_name: str, since_unix_s: float) -> list[list[float]] | None:
+    """[t_s, gx, gy, gth, ox, oy, oth] from the robot's pose log since since_unix_s; None when the robot does not
+    answer or no longer keeps that time (it restarted since)."""
+    from middleware.assessment.recorder import RATE_HZ
+    from middleware.robots.link import RobotUnavailable
+    from middleware.robots.registry import robot_registry
+
+    link = robot_registry().get(robot_name)
+    if link is None:
+        return None
+    try:
+        log = link.pose_log(since_unix_s, time.time())
+    except RobotUnavailable:
+        return None
+    if not log.oldest_unix_s or log.oldest_unix_s > since_unix_s + 2.0 / RATE_HZ:
+        return None
+    return [[round(s.unix_s - since_unix_s, 3), round(s.ground_truth.x_m, 4), round(s.ground_truth.y_m, 4),
+             round(s.ground_truth.theta_rad, 4), round(s.odometry.x_m, 4), round(s.odometry.y_m, 4),
+             round(s.odometry.theta_rad, 4)] for s in log.samples]
 
 
 @blueprint.post("/api/attempts/<int:attempt_id>/submit")

@@ -154,6 +154,12 @@ class RobotLink:
         new one); the run after that."""
         return self._call(self._stub.RestartTrackRun, robot_pb2.RestartTrackRunRequest())
 
+    def pose_log(self, from_unix_s: float, to_unix_s: float) -> robot_pb2.PoseLog:
+        """The robot's true and odometric poses between two wall-clock times, as the robot kept them (the run of an
+        experimental attempt; ground truth, never for a student's page)."""
+        return self._call(self._stub.GetPoseLog, robot_pb2.GetPoseLogRequest(from_unix_s=from_unix_s,
+                                                                             to_unix_s=to_unix_s))
+
     def is_online(self) -> bool:
         """Whether the skill server answers now."""
         try:

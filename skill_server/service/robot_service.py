@@ -140,6 +140,15 @@ class RobotService(robot_pb2_grpc.RobotServicer):
         with domain_errors(context):
             return convert.track_run_to_proto(self._robot.scene_name, self._robot.restart_track_run())
 
+    def GetPoseLog(self, request: robot_pb2.GetPoseLogRequest, context: grpc.ServicerContext) -> robot_pb2.PoseLog:
+        """The poses kept between two wall-clock times; INVALID_ARGUMENT names the field at fault."""
+        with domain_errors(context):
+            samples, oldest = self._robot.pose_log(request.from_unix_s, request.to_unix_s)
+        return robot_pb2.PoseLog(samples=[robot_pb2.PoseSample(
+            unix_s=s[0], ground_truth=robot_pb2.Pose2D(x_m=s[1], y_m=s[2], theta_rad=s[3]),
+            odometry=robot_pb2.Pose2D(x_m=s[4], y_m=s[5], theta_rad=s[6])) for s in samples],
+            oldest_unix_s=oldest or 0.0)
+
     # ---- streams -----------------------------------------------------------------------------------
 
     def StreamTelemetry(

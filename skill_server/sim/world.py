@@ -22,6 +22,7 @@ from skill_server.sim.geometry import Pose2D, yaw_from_quaternion
 from skill_server.sim.laser import Laser, LaserSpec
 from skill_server.sim.odometry import WheelOdometry
 from skill_server.sim.pacing import SimTimePacer
+from skill_server.sim.pose_log import PoseLog
 from skill_server.sim.publication import CameraSubscription, Publication
 from skill_server.sim.raycast import StaticSceneCaster
 from skill_server.sim.robot_model import TELEBOT, RobotSpec, ramp_toward, wheel_speeds_radps
@@ -103,6 +104,7 @@ class World:
         self._rest_since_s: float | None = None
         self.parked = False  # read by tests and benchmarks
         self._publication = Publication()
+        self.pose_log = PoseLog()
         self._autonomy: Autonomy | None = None
         # Built in the caller's thread before the loop exists; from start() on only the loop touches it.
         self._client: Any = bullet_client.BulletClient(connection_mode=pybullet.DIRECT)
@@ -511,6 +513,7 @@ class World:
             commanded_angular_radps=self._angular_radps,
         )
         self._publication.publish_snapshot(snapshot)
+        self.pose_log.note(snapshot)
 
     def _maybe_render(self) -> None:
         fps = self._publication.requested_camera_fps

@@ -632,3 +632,29 @@ class TrackEvent(_message.Message):
     errors: int
     message: str
     def __init__(self, index: _Optional[int] = ..., kind: _Optional[str] = ..., sim_time_s: _Optional[float] = ..., unix_s: _Optional[float] = ..., attempt: _Optional[int] = ..., elapsed_s: _Optional[float] = ..., errors: _Optional[int] = ..., message: _Optional[str] = ...) -> None: ...
+
+class GetPoseLogRequest(_message.Message):
+    __slots__ = ("from_unix_s", "to_unix_s")
+    FROM_UNIX_S_FIELD_NUMBER: _ClassVar[int]
+    TO_UNIX_S_FIELD_NUMBER: _ClassVar[int]
+    from_unix_s: float
+    to_unix_s: float
+    def __init__(self, from_unix_s: _Optional[float] = ..., to_unix_s: _Optional[float] = ...) -> None: ...
+
+class PoseSample(_message.Message):
+    __slots__ = ("unix_s", "ground_truth", "odometry")
+    UNIX_S_FIELD_NUMBER: _ClassVar[int]
+    GROUND_TRUTH_FIELD_NUMBER: _ClassVar[int]
+    ODOMETRY_FIELD_NUMBER: _ClassVar[int]
+    unix_s: float
+    ground_truth: Pose2D
+    odometry: Pose2D
+    def __init__(self, unix_s: _Optional[float] = ..., ground_truth: _Optional[_Union[Pose2D, _Mapping]] = ..., odometry: _Optional[_Union[Pose2D, _Mapping]] = ...) -> None: ...
+
+class PoseLog(_message.Message):
+    __slots__ = ("samples", "oldest_unix_s")
+    SAMPLES_FIELD_NUMBER: _ClassVar[int]
+    OLDEST_UNIX_S_FIELD_NUMBER: _ClassVar[int]
+    samples: _containers.RepeatedCompositeFieldContainer[PoseSample]
+    oldest_unix_s: float
+    def __init__(self, samples: _Optional[_Iterable[_Union[PoseSample, _Mapping]]] = ..., oldest_unix_s: _Optional[float] = ...) -> None: ...

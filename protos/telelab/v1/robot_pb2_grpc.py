@@ -124,6 +124,11 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamTrackEventsRequest.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.TrackEvent.FromString,
                 _registered_method=True)
+        self.GetPoseLog = channel.unary_unary(
+                '/telelab.v1.Robot/GetPoseLog',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetPoseLogRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PoseLog.FromString,
+                _registered_method=True)
 
 
 class RobotServicer:
@@ -260,6 +265,14 @@ class RobotServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def GetPoseLog(self, request, context):
+        """The robot's true and odometric pose at 5 Hz between two wall-clock times (the last 3 hours are kept): an
+        experimental attempt's run, complete whichever web worker asks. Ground truth: never forwarded to students.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
 
 def add_RobotServicer_to_server(servicer, server):
     rpc_method_handlers = {
@@ -352,6 +365,11 @@ def add_RobotServicer_to_server(servicer, server):
                     servicer.StreamTrackEvents,
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamTrackEventsRequest.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.TrackEvent.SerializeToString,
+            ),
+            'GetPoseLog': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetPoseLog,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetPoseLogRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PoseLog.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -840,6 +858,33 @@ class Robot:
             '/telelab.v1.Robot/StreamTrackEvents',
             protos_dot_telelab_dot_v1_dot_robot__pb2.StreamTrackEventsRequest.SerializeToString,
             protos_dot_telelab_dot_v1_dot_robot__pb2.TrackEvent.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def GetPoseLog(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/GetPoseLog',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GetPoseLogRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.PoseLog.FromString,
             options,
             channel_credentials,
             insecure,

@@ -1,5 +1,6 @@
 """When the worker recording an experimental attempt dies, another takes the recording over from the trace it had
-stored, and the attempt is graded on the whole run; a recorder that is alive is never taken over."""
+stored; a recorder that is alive is never taken over; and the attempt is graded on the robot's own pose log, the
+whole run without the gap the dead worker left."""
 
 from __future__ import annotations
 
@@ -70,4 +71,7 @@ def test_a_recording_whose_worker_died_is_taken_over_and_the_whole_run_is_graded
     assert status == 200, answer
     with factory() as session:
         graded = session.get(Attempt, attempt_id).trace or []
-    assert len(graded) >= len(trace) and any(row["item"] == "task" for row in answer["attempt"]["results"])
+    assert any(row["item"] == "task" for row in answer["attempt"]["results"])
+    gaps = [later[0] - earlier[0] for earlier, later in zip(graded, graded[1:], strict=False)]
+    assert graded[0][0] < 0.5 and max(gaps) < 0.5, "graded on the robot's log: the whole run, no gap"
+    assert graded[-1][0] >= trace[-1][0] - 0.5 and len(graded) >= len(trace)

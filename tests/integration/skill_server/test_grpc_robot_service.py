@@ -264,3 +264,16 @@ def test_track_events_stream_as_the_robot_runs_and_a_scene_without_a_track_refus
             events.cancel()
     finally:
         running.stop(grace_s=0.5)
+
+
+def test_the_pose_log_gives_the_run_between_two_times_and_refuses_a_backwards_range(
+        robot: robot_pb2_grpc.RobotStub) -> None:
+    started = time.time()
+    time.sleep(1.5)
+    log = robot.GetPoseLog(robot_pb2.GetPoseLogRequest(from_unix_s=started, to_unix_s=time.time()), timeout=5)
+    assert 0 < log.oldest_unix_s <= started
+    times = [sample.unix_s for sample in log.samples]
+    assert 4 <= len(times) <= 10 and all(started <= t for t in times)  # 5 Hz, awake or parked (4 Hz)
+    assert all(later - earlier <= 0.3 for earlier, later in zip(times, times[1:], strict=False))
+    expect_status(lambda: robot.GetPoseLog(robot_pb2.GetPoseLogRequest(from_unix_s=2.0, to_unix_s=1.0), timeout=5),
+                  grpc.StatusCode.INVALID_ARGUMENT, "from_unix_s")
