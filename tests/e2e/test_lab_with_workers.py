@@ -15,6 +15,7 @@ import signal
 import socket
 import subprocess
 import sys
+import time
 import urllib.request
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -37,6 +38,7 @@ class RunningLab:
     url: str
     process: subprocess.Popen[str]
     passwords: dict[str, str]
+    database_url: str = ""
     output: list[str] = field(default_factory=list)
     robot_addresses: list[str] = field(default_factory=list)
 
@@ -97,7 +99,7 @@ def lab() -> Iterator[RunningLab]:
             [str(Path(sys.executable).parent / "telelab"), "up", "--workers", "2", "--robots", "1",
              "--no-course-robots", "--no-demo-video", "--port", str(port)],
             cwd=REPO, env=environment, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        running = RunningLab(f"http://127.0.0.1:{port}", process, {})
+        running = RunningLab(f"http://127.0.0.1:{port}", process, {}, database_url)
         assert process.stdout is not None
         for line in process.stdout:
             running.output.append(line)
@@ -224,3 +226,43 @@ def test_through_nginx_the_camera_streams_and_a_chat_message_reaches_a_phone(
         page.screenshot(path=str(ARTIFACTS_DIR / "nginx-console-desktop.png"))
     finally:
         phone_context.close()
+
+
+def test_a_worker_killed_mid_attempt_leaves_the_attempt_graded_on_the_whole_run(lab: RunningLab) -> None:
+    from sqlalchemy import create_engine, select
+
+    from middleware.models.assessment import Attempt
+    from tests.conftest import LabClient
+    from tests.integration.bookings.conftest import api
+    from tests.integration.lab.test_robot_channels import drive_for, receive_json
+
+    student = LabClient(lab.url)
+    assert student.login("student", lab.passwords["student"]) == 302
+    exams = [exam for course_id in (1, 2, 3) for exam in api(student, "GET", f"/api/courses/{course_id}/exams")[1]
+             .get("exams", [])]
+    exam = next(exam for exam in exams if exam["kind"] == "experimental")
+    drive = student.websocket("/ws/robots/lab-1/drive")
+    assert receive_json(drive)["type"] == "ready"
+    status, answer = api(student, "POST", f"/api/exams/{exam['id']}/attempts")
+    assert status == 201, answer
+    attempt_id = answer["attempt"]["id"]
+    drive_for(drive, 1.0, 0.2, 0.0, 1)
+    os.kill(sorted(lab.worker_pids())[0], signal.SIGKILL)  # a worker dies mid-attempt, whatever it held
+    time.sleep(3.0)
+    drive.close()
+    drive = student.websocket("/ws/robots/lab-1/drive")  # the page reconnects; the seat waited for it
+    ready = receive_json(drive)
+    assert ready["type"] == "ready" and ready["is_controller"], ready
+    drive_for(drive, 1.0, 0.2, 0.0, 1)
+    status, answer = api(student, "POST", f"/api/attempts/{attempt_id}/submit")
+    drive.close()
+    assert status == 200, answer
+    engine = create_engine(lab.database_url)
+    try:
+        with engine.connect() as connection:
+            trace = connection.scalar(select(Attempt.trace).where(Attempt.id == attempt_id))
+    finally:
+        engine.dispose()
+    gaps = [later[0] - earlier[0] for earlier, later in zip(trace, trace[1:], strict=False)]
+    assert trace[0][0] < 0.5 and trace[-1][0] > 4.0 and max(gaps) < 0.5, "the whole run, across the dead worker"
+    assert any(row["item"] == "task" for row in answer["attempt"]["results"])
