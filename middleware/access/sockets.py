@@ -22,7 +22,11 @@ from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, as_json, r
 from middleware.robots.link import RobotLink
 
 HEARTBEAT_INTERVAL_S = 2.0
-REFRESH_INTERVAL_S = 1.0  # the countdown a seat shows moves in whole seconds; a change wakes the socket at once
+REFRESH_INTERVAL_S = 1.0  # how often a seat is looked at (a turn ending); a change wakes the socket at once
+# The page runs these down itself between messages (queue-panel.js): a seat is sent when anything else changes,
+# and every RESEND_S besides, not every second to every console.
+RUNNING_FIELDS = ("turn_remaining_s", "estimated_wait_s")
+RESEND_S = 10.0
 ACTIONS = {"pass": round_robin.pass_turn, "leave": round_robin.leave}
 
 
@@ -183,9 +187,10 @@ def queue_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
                     message = seat_message(coordinator, robot_name, user_id, facts)  # from memory: on the loop
                 else:
                     message = await work(seat_message, coordinator, robot_name, user_id, facts)
-                if message != last_sent or now - last_sent_at >= 1.0:
+                shown = {key: value for key, value in message.items() if key not in RUNNING_FIELDS}
+                if shown != last_sent or now - last_sent_at >= RESEND_S:
                     await live.send(as_json(message))
-                    last_sent, last_sent_at = message, now
+                    last_sent, last_sent_at = shown, now
         finally:
             stop_watching()
             await work(lambda: seat.keep(live, now=True))  # a closing frame was heard just now: a reload keeps

@@ -5,7 +5,8 @@ and the channel is opened exactly as if that path had been connected on its own 
 made from the link's own headers: its login cookie, Origin and Host), then served on the link:
 
 - server to page: a text message `"7 <text>"`, a binary message of 4 bytes (7, big-endian) + the channel's bytes;
-  on sub 0, `{"type": "subscribed", "sub": 7}` and `{"type": "closed", "sub": 7, "code": 4404, "reason": "..."}`;
+  on sub 0, `{"type": "ready", "max_channels": 24}` once, then `{"type": "subscribed", "sub": 7}` and
+  `{"type": "closed", "sub": 7, "code": 4404, "reason": "..."}`;
 - page to server: `"7 <text>"` to channel 7, `{"type": "unsubscribe", "sub": 7}`.
 
 A channel's close code means what it means on its own socket (transport.js: final or try again).
@@ -126,6 +127,7 @@ class Link:
         self._subs: dict[int, tuple[SubSocket, asyncio.Task[None]]] = {}
 
     async def serve(self) -> None:
+        self.live.write(control({"type": "ready", "max_channels": MAX_SUBSCRIPTIONS}))
         try:
             while self.live.connected:
                 raw = await self.live.receive(timeout=None)

@@ -57,12 +57,20 @@ export function describeBooking(booking, nowMs) {
   return `${when} · ${whose}${starts <= nowMs ? " · now" : ""}`;
 }
 
+/** The seat as it stands elapsedS after the server sent it: the countdown and the wait have run on. */
+export function agedSeat(seat, elapsedS) {
+  const less = (value) => (value === null || value === undefined ? value : Math.max(0, value - elapsedS));
+  return { ...seat, turn_remaining_s: less(seat.turn_remaining_s), estimated_wait_s: less(seat.estimated_wait_s) };
+}
+
 export class QueuePanel extends PanelElement {
   #fields = {};
   #buttons = {};
   #bookingList;
   #bookingSection;
   #bookLink;
+  #received = null; // { seat, at }: the last seat message and when it came
+  #ticker = 0;
 
   build() {
     this.classList.add("panel");
@@ -110,8 +118,32 @@ export class QueuePanel extends PanelElement {
       : [h("li", { class: "muted", text: "None in the next two weeks: the queue decides." })]));
   }
 
-  /** The seat message from the server. */
+  /**
+   * The seat message from the server. It comes when something changes (and every few seconds); the countdown
+   * and the expected wait run on here, from the moment it came, so a thousand consoles need no message a second.
+   */
   set seat(seat) {
+    this.#received = seat ? { seat, at: performance.now() } : null;
+    this.#show(seat);
+    this.#tickLater();
+  }
+
+  disconnectedCallback() {
+    clearTimeout(this.#ticker);
+    super.disconnectedCallback?.();
+  }
+
+  #tickLater() {
+    clearTimeout(this.#ticker);
+    if (!this.#received) return;
+    this.#ticker = setTimeout(() => {
+      if (!this.isConnected || !this.#received) return;
+      this.#show(agedSeat(this.#received.seat, (performance.now() - this.#received.at) / 1000));
+      this.#tickLater();
+    }, 1000);
+  }
+
+  #show(seat) {
     this.ensureBuilt();
     this.dataset.role = !seat ? "joining" : seat.is_controller ? "controller" : seat.in_queue ? "waiting" : "watching";
     this.#fields["queue-summary"].textContent = describeSeat(seat);
