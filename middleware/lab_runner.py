@@ -115,6 +115,7 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
 
     robots = lab_robots(robot_count, scene, course_robots)
     owner: FarmOwner | None = None
+    launcher = os.getpid()
     stop_on_termination_signals()
     try:
         choose_farm(farm)
@@ -137,12 +138,15 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
         print(f"error: {error}", file=sys.stderr)
         return 1
     except (KeyboardInterrupt, LabStopRequested, SystemExit):
+        if os.getpid() != launcher:
+            raise  # a gunicorn worker (a fork of this process) leaving: the lab, its robots and farm stay up
         print("\nstopping the lab", flush=True)
     finally:
-        if owner is not None:
-            owner.stop()
-        for robot in robots:
-            robot.stop()
+        if os.getpid() == launcher:
+            if owner is not None:
+                owner.stop()
+            for robot in robots:
+                robot.stop()
     print("the lab has stopped", flush=True)
     return 0
 

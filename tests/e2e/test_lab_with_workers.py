@@ -7,6 +7,7 @@ workers while a student drives their practice robot, whose console reconnects by
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import re
@@ -22,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
+import simple_websocket
 
 from tests.conftest import ARTIFACTS_DIR, postgres_database
 from tests.e2e.test_panels import odometry, wait_for
@@ -119,7 +121,7 @@ def lab() -> Iterator[RunningLab]:
             rest, _ = process.communicate(timeout=90)
             running.output.append(rest)
         assert process.returncode == 0, "".join(running.output)
-        assert "the lab has stopped" in rest
+        assert rest.count("the lab has stopped") == 1, rest  # the launcher stops it; its workers only leave
         assert not any(_listens(address) for address in running.robot_addresses), "a robot outlived the lab"
 
 
@@ -162,7 +164,8 @@ def _log_in(page, url: str, username: str, password: str) -> None:
 def _open_practice_console(page, url: str) -> None:
     page.goto(f"{url}/practice")
     start = page.get_by_role("button", name="Start my practice robot")
-    if start.count():
+    page.locator("#practice[data-running=true], #practice [data-action=start]:visible").first.wait_for()
+    if start.is_visible():
         start.click()
     page.locator("#practice[data-running=true]").wait_for(timeout=60_000)
     page.get_by_role("link", name="Open in the console").click()
@@ -249,7 +252,8 @@ def test_a_worker_killed_mid_attempt_leaves_the_attempt_graded_on_the_whole_run(
     drive_for(drive, 1.0, 0.2, 0.0, 1)
     os.kill(sorted(lab.worker_pids())[0], signal.SIGKILL)  # a worker dies mid-attempt, whatever it held
     time.sleep(3.0)
-    drive.close()
+    with contextlib.suppress(simple_websocket.ConnectionClosed):  # it was on the worker that died, or not
+        drive.close()
     drive = student.websocket("/ws/robots/lab-1/drive")  # the page reconnects; the seat waited for it
     ready = receive_json(drive)
     assert ready["type"] == "ready" and ready["is_controller"], ready
