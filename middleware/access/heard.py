@@ -20,6 +20,7 @@ from sqlalchemy.orm import Session
 from middleware.models import QueueEntry
 
 log = logging.getLogger(__name__)
+IDLE_WRITES = 15  # intervals with nothing to write before the writer's thread ends
 
 _QUEUE = cast(Table, QueueEntry.__table__)
 _BY_SEAT = (update(_QUEUE)
@@ -58,9 +59,14 @@ class HeardBook:
         return len(heard)
 
     def _write_forever(self) -> None:
+        idle = 0
         while True:
             threading.Event().wait(self._interval_s)
             try:
-                self.write()
+                idle = 0 if self.write() else idle + 1
             except Exception:  # noqa: BLE001 - a failed batch is retried with the next one's newer times
                 log.exception("writing when seats were last heard failed")
+            with self._lock:
+                if idle >= IDLE_WRITES and not self._heard:  # nobody connected for a while: the next note restarts it
+                    self._writer = None
+                    return

@@ -107,7 +107,8 @@ def stop(attempt_id: int) -> list[list[float]] | None:
 
 class RecordingKeeper:
     """Takes over, every CHECK_S, the recordings of attempts whose recorder went quiet (its worker died). Each worker
-    that serves assessment pages runs one; the claim is a conditional UPDATE, so one worker wins each attempt."""
+    that has recorded an attempt runs one; the claim is a conditional UPDATE, so one worker wins each attempt. (The
+    grade itself comes from the robot's pose log; a recording matters when the robot restarted meanwhile.)"""
 
     def __init__(self, find_orphans: Callable[[], list[tuple[int, str]] | None],
                  resume: Callable[[int, str], None]) -> None:

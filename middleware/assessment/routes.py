@@ -82,6 +82,7 @@ def start_recording(attempt_id: int, robot_name: str) -> None:
             return attempts.record_trace(session, attempt_id, trace, key, datetime.now(UTC))
 
     recorder.start(attempt_id, link, flush, stored)
+    recording_keeper(current_app._get_current_object()).start()  # type: ignore[attr-defined]
 
 
 def recording_keeper(app: Flask) -> RecordingKeeper:
@@ -107,12 +108,6 @@ def recording_keeper(app: Flask) -> RecordingKeeper:
 
         keeper = app.extensions.setdefault(_KEEPER_KEY, RecordingKeeper(find_orphans, resume))
     return keeper
-
-
-@blueprint.before_app_request
-def keep_recordings() -> None:
-    # Every worker that serves requests takes over the recordings of a worker that died.
-    recording_keeper(current_app._get_current_object()).start()  # type: ignore[attr-defined]
 
 
 def run(action: Callable[[Session], Any], status: int = 200) -> tuple[Response, int]:
