@@ -93,21 +93,43 @@ class GoneViewer:
     connected = True
     sends = 0
 
-    def send(self, _message: object) -> None:
-        self.sends += 1
-        raise BrokenPipeError(32, "Broken pipe")
+    def send_latest(self, _message: object) -> bool:
+        from simple_websocket import ConnectionClosed
 
-    def receive(self, timeout: float = 0) -> None:
+        self.sends += 1
+        raise ConnectionClosed(1006, "")
+
+    write = send_latest
+
+    async def send(self, message: object) -> None:
+        self.send_latest(message)
+
+    async def receive(self, timeout: float = 0) -> None:
         return None
 
 
-def test_a_viewer_gone_mid_send_ends_its_stream_quietly_and_releases_the_upstream() -> None:
+def _relay_on_the_channel_loop(viewer: object, hub: FanoutHub) -> object:
+    """relay_stream served as the channel loop serves it (a future of its end)."""
+    import asyncio
+
+    from middleware.live.loop import channel_loop
     from middleware.realtime import relay_stream
+
+    return asyncio.run_coroutine_threadsafe(relay_stream(viewer, hub), channel_loop().loop)  # type: ignore[arg-type]
+
+
+def test_a_viewer_gone_mid_send_ends_its_stream_and_releases_the_upstream() -> None:
+    from simple_websocket import ConnectionClosed
 
     upstream = Upstream()
     hub = FanoutHub("t", upstream.open, upstream.pack, upstream.cancel)
     viewer = GoneViewer()
-    relay_stream(viewer, hub)  # returns instead of raising (Flask would log it as a server error)
+    relay = _relay_on_the_channel_loop(viewer, hub)
+    try:
+        relay.result(3.0)  # type: ignore[attr-defined]
+        raise AssertionError("a send to a gone viewer must end the relay")
+    except ConnectionClosed:
+        pass  # the channel loop takes this as the client having gone, not as a server error
     assert viewer.sends == 1
     assert upstream.cancelled.wait(2.0), "its subscription was closed"
     hub.close()
@@ -122,28 +144,34 @@ class StayingViewer:
         self.sends = 0
         self.closed_with: int | None = None
 
-    def send(self, _data: object) -> None:
+    def send_latest(self, _data: object) -> bool:
         self.sends += 1
+        return True
 
-    def receive(self, timeout: float = 0) -> None:
+    def write(self, data: object) -> None:
+        self.send_latest(data)
+
+    async def send(self, data: object) -> None:
+        self.send_latest(data)
+
+    async def receive(self, timeout: float = 0) -> None:
         return None
 
-    def close(self, reason: int | None = None, _message: str | None = None) -> None:
+    async def close(self, reason: int | None = None, _message: str | None = None) -> None:
         self.closed_with, self.connected = reason, False
 
 
 def test_closing_the_hub_ends_an_open_viewer_s_stream_instead_of_spinning() -> None:
-    from middleware.realtime import CLOSE_GOING_AWAY, relay_stream
+    from middleware.realtime import CLOSE_GOING_AWAY
 
     upstream = Upstream()
     hub = FanoutHub("t", upstream.open, upstream.pack, upstream.cancel)
     viewer = StayingViewer()
-    relay = threading.Thread(target=relay_stream, args=(viewer, hub), daemon=True)
-    relay.start()
+    relay = _relay_on_the_channel_loop(viewer, hub)
     deadline = time.monotonic() + 2.0
     while viewer.sends == 0 and time.monotonic() < deadline:
         time.sleep(0.01)
+    assert viewer.sends > 0
     hub.close()  # the application shuts down while the tab is still open
-    relay.join(2.0)
-    assert not relay.is_alive(), "the stream kept looping on a closed hub (a core spent until the tab closes)"
+    relay.result(2.0)  # type: ignore[attr-defined]  # raises TimeoutError if it kept looping on the closed hub
     assert viewer.closed_with == CLOSE_GOING_AWAY
