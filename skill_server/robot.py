@@ -21,6 +21,8 @@ from skill_server.sim.drive_gate import DriveAck
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.laser import LaserSpec
 from skill_server.sim.pacing import SimTimePacer
+from skill_server.sim.scene_description import SceneDescription
+from skill_server.sim.scenes import FloorPatch
 from skill_server.sim.snapshots import CameraFrame, RobotDescription, RobotSnapshot
 from skill_server.sim.track_monitor import TrackEvent, TrackMonitor, TrackState
 from skill_server.sim.world import World
@@ -31,9 +33,9 @@ from skill_server.skills.registry import SkillEntry, SkillRegistry
 
 # The value types adapters convert come from here too, so that they import nothing from sim/ or skills/.
 __all__ = [
-    "DEFAULT_CAMERA_FPS", "MAX_CAMERA_FPS", "Activation", "CameraFrame", "DriveAck", "GoalUpdate", "LaserSpec",
-    "LocalizationEstimate", "NavigationPose", "NumberedEvent", "Pose2D", "PublishedGrid", "Robot",
-    "RobotDescription", "RobotSnapshot", "SkillEntry", "TrackEvent", "TrackState",
+    "DEFAULT_CAMERA_FPS", "MAX_CAMERA_FPS", "Activation", "CameraFrame", "DriveAck", "FloorPatch", "GoalUpdate",
+    "LaserSpec", "LocalizationEstimate", "NavigationPose", "NumberedEvent", "Pose2D", "PublishedGrid", "Robot",
+    "RobotDescription", "RobotSnapshot", "SceneDescription", "SkillEntry", "TrackEvent", "TrackState",
 ]
 
 Published = TypeVar("Published", RobotSnapshot, CameraFrame)
@@ -96,6 +98,10 @@ class Robot:
     def describe(self) -> RobotDescription:
         """The robot's figures, sensors and scene."""
         return self.world.describe()
+
+    def scene_description(self) -> SceneDescription:
+        """The static world, the robot's body, its camera and sensors, as a view drawn elsewhere needs them."""
+        return self.world.describe_scene()
 
     @property
     def scene_name(self) -> str:

@@ -25,5 +25,5 @@ def test_every_rpc_of_the_contract_is_generated() -> None:
 
     service = robot_pb2.DESCRIPTOR.services_by_name["Robot"]
     assert {m.name for m in service.methods} >= {
-        "GetRobotInfo", "ListSkills", "SetController", "Drive", "StreamTelemetry", "StreamCamera",
+        "GetRobotInfo", "ListSkills", "SetController", "Drive", "StreamTelemetry", "StreamCamera", "GetScene",
     }

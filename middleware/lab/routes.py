@@ -4,15 +4,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from flask import Blueprint, abort, jsonify, render_template
+from flask import Blueprint, abort, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
+from middleware.errors import ApiError
 from middleware.lab.skills import SUPERVISOR_ROLES
 from middleware.robots.link import RobotUnavailable
 from middleware.robots.messages import robot_info_dict
 from middleware.robots.registry import robot_registry
+from middleware.robots.scene import scene_dict
 
 blueprint = Blueprint("lab", __name__)
 
@@ -69,3 +71,25 @@ def robot_description(robot_name: str) -> ResponseReturnValue:
         info = None
     title = robot_registry().title(robot_name)
     return jsonify({"name": robot_name, "title": title, "online": info is not None, "info": info})
+
+
+# The scene does not change while a skill server runs; a robot restarted in another scene is noticed within this.
+SCENE_RECHECK_S = 5.0
+
+
+@blueprint.get("/api/robots/<robot_name>/scene")
+@login_required
+def robot_scene(robot_name: str) -> ResponseReturnValue:
+    """The robot's static world for the browser's 3D views, to whoever may see the robot (its camera's rule).
+
+    The version is the ETag: a page that holds it gets 304 Not Modified and keeps its copy.
+    """
+    link = robot_commands().require(robot_name, int(current_user.get_id()))
+    try:
+        scene = link.scene(max_age_s=SCENE_RECHECK_S)
+    except RobotUnavailable as error:
+        raise ApiError(503, "robot_offline", f"{error} Try again in a moment.") from None
+    response = jsonify(scene_dict(scene))
+    response.set_etag(scene.version)
+    response.headers["Cache-Control"] = "private, no-cache"  # kept by the browser, but asked again each time
+    return response.make_conditional(request)

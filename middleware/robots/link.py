@@ -84,6 +84,8 @@ class RobotLink:
         self.localization = FanoutHub(f"{name}-localization", self._open_localization, pack_localization,
                                       _cancel_call)
         self._skills: list[robot_pb2.SkillDescription] | None = None
+        self._scene: robot_pb2.SceneDescription | None = None
+        self._scene_at = 0.0
         self.unreachable_since: float | None = None  # monotonic time of the first failed call in a row
 
     def info(self, refresh: bool = False, max_age_s: float | None = None) -> robot_pb2.RobotInfo:
@@ -93,6 +95,18 @@ class RobotLink:
             self._info = self._call(self._stub.GetRobotInfo, robot_pb2.GetRobotInfoRequest())
             self._info_at = time.monotonic()
         return self._info
+
+    def scene(self, max_age_s: float) -> robot_pb2.SceneDescription:
+        """The robot's static world (GetScene), kept once fetched; older than max_age_s, the robot is asked again
+        with the version held, and answers with the version alone while the world is the same."""
+        scene = self._scene
+        if scene is None or time.monotonic() - self._scene_at > max_age_s:
+            held = scene.version if scene is not None else ""
+            answer = self._call(self._stub.GetScene, robot_pb2.GetSceneRequest(known_version=held))
+            if scene is None or not answer.unchanged:
+                scene = self._scene = answer
+            self._scene_at = time.monotonic()
+        return scene
 
     def skills(self, refresh: bool = False) -> list[robot_pb2.SkillDescription]:
         """The skills the robot offers, with their parameter schemas (cached once fetched)."""

@@ -11,6 +11,7 @@ from skill_server.goals import EventKind, GoalEvent, GoalFeedback, GoalSnapshot,
 from skill_server.robot import (
     CameraFrame,
     DriveAck,
+    FloorPatch,
     GoalUpdate,
     LaserSpec,
     LocalizationEstimate,
@@ -20,6 +21,7 @@ from skill_server.robot import (
     PublishedGrid,
     RobotDescription,
     RobotSnapshot,
+    SceneDescription,
     SkillEntry,
     TrackEvent,
     TrackState,
@@ -82,6 +84,7 @@ def robot_info_to_proto(robot_name: str, info: RobotDescription) -> robot_pb2.Ro
             beam_count=info.laser.beam_count,
             min_range_m=info.laser.min_range_m,
             max_range_m=info.laser.max_range_m,
+            height_m=info.laser.height_m,
         ),
         scene_boxes=[
             robot_pb2.SceneBox(
@@ -95,6 +98,79 @@ def robot_info_to_proto(robot_name: str, info: RobotDescription) -> robot_pb2.Ro
             for b in info.scene_boxes
         ],
     )
+
+
+_PATCH_KINDS = {
+    "floor": robot_pb2.FLOOR_PATCH_KIND_FLOOR,
+    "paint": robot_pb2.FLOOR_PATCH_KIND_PAINT,
+    "grid": robot_pb2.FLOOR_PATCH_KIND_GRID,
+    "track_line": robot_pb2.FLOOR_PATCH_KIND_TRACK_LINE,
+    "track_point": robot_pb2.FLOOR_PATCH_KIND_TRACK_POINT,
+}
+_PART_SHAPES = {"box": robot_pb2.PART_SHAPE_BOX, "cylinder": robot_pb2.PART_SHAPE_CYLINDER,
+                "sphere": robot_pb2.PART_SHAPE_SPHERE}
+
+
+def _rgba(rgba: tuple[float, float, float, float]) -> robot_pb2.Rgba:
+    return robot_pb2.Rgba(r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3])
+
+
+def scene_to_proto(scene: SceneDescription, known_version: str = "") -> robot_pb2.SceneDescription:
+    """The static world; only its version, marked unchanged, when the caller already holds that version."""
+    if known_version == scene.version:
+        return robot_pb2.SceneDescription(version=scene.version, unchanged=True)
+    camera = scene.camera
+    track = scene.track
+    return robot_pb2.SceneDescription(
+        version=scene.version,
+        scene_name=scene.scene_name,
+        floor=_patch_to_proto(scene.floor),
+        marks=[_patch_to_proto(mark) for mark in scene.marks],
+        blocks=[robot_pb2.SceneBlock(name=b.name, center_x_m=b.center_x_m, center_y_m=b.center_y_m, half_x_m=b.half_x_m,
+                                     half_y_m=b.half_y_m, height_m=b.height_m, yaw_rad=b.yaw_rad, colour=_rgba(b.rgba))
+                for b in scene.boxes],
+        cylinders=[robot_pb2.SceneCylinder(name=c.name, center_x_m=c.center_x_m, center_y_m=c.center_y_m,
+                                           radius_m=c.radius_m, height_m=c.height_m, colour=_rgba(c.rgba))
+                   for c in scene.cylinders],
+        track=None if track is None else robot_pb2.TrackLayout(
+            a_x_m=track.a_x_m, a_y_m=track.a_y_m, b_x_m=track.b_x_m, b_y_m=track.b_y_m, round_trip=track.round_trip,
+            arrival_radius_m=track.arrival_radius_m,
+            lines=[robot_pb2.TrackLine(x1_m=line.x1_m, y1_m=line.y1_m, x2_m=line.x2_m, y2_m=line.y2_m,
+                                       half_width_m=line.half_width_m) for line in track.lines]),
+        spawn=pose_to_proto(scene.spawn),
+        body_radius_m=scene.body_radius_m,
+        robot_parts=[robot_pb2.RobotPart(
+            link=part.link, shape=_PART_SHAPES[part.shape], size_x_m=part.size_m[0], size_y_m=part.size_m[1],
+            size_z_m=part.size_m[2], position_m=robot_pb2.Vector3(x=part.position_m[0], y=part.position_m[1],
+                                                                  z=part.position_m[2]),
+            orientation=robot_pb2.Quaternion(x=part.orientation_xyzw[0], y=part.orientation_xyzw[1],
+                                             z=part.orientation_xyzw[2], w=part.orientation_xyzw[3]),
+            colour=_rgba(part.rgba)) for part in scene.robot_parts],
+        camera=robot_pb2.CameraModel(
+            width_px=camera.width_px, height_px=camera.height_px, hfov_deg=camera.hfov_deg, vfov_deg=camera.vfov_deg,
+            near_m=camera.near_m, far_m=camera.far_m, mount_forward_m=camera.mount_forward_m,
+            mount_height_m=camera.mount_height_m, mount_pitch_rad=camera.mount_pitch_rad,
+            light_direction=robot_pb2.Vector3(x=camera.light_direction[0], y=camera.light_direction[1],
+                                              z=camera.light_direction[2]),
+            light_ambient=camera.light_ambient, light_diffuse=camera.light_diffuse,
+            light_specular=camera.light_specular, specular_exponent=camera.specular_exponent,
+            background=_rgba(camera.background_rgba)),
+        laser=robot_pb2.LaserGeometry(
+            angle_min_rad=scene.laser.angle_min_rad, angle_max_rad=scene.laser.angle_max_rad,
+            beam_count=scene.laser.beam_count, min_range_m=scene.laser.min_range_m,
+            max_range_m=scene.laser.max_range_m, height_m=scene.laser.height_m),
+        sonar=robot_pb2.SonarRing(
+            mount_radius_m=scene.sonar.mount_radius_m, height_m=scene.sonar.height_m,
+            sonars=[robot_pb2.SonarGeometry(mount_angle_rad=s.mount_angle_rad,
+                                            cone_half_angle_rad=s.cone_half_angle_rad, min_range_m=s.min_range_m,
+                                            max_range_m=s.max_range_m) for s in scene.sonar.sonars]),
+    )
+
+
+def _patch_to_proto(patch: FloorPatch) -> robot_pb2.FloorPatch:
+    return robot_pb2.FloorPatch(center_x_m=patch.center_x_m, center_y_m=patch.center_y_m, half_x_m=patch.half_x_m,
+                                half_y_m=patch.half_y_m, top_z_m=patch.top_z_m, colour=_rgba(patch.rgba),
+                                kind=_PATCH_KINDS[patch.kind])
 
 
 def drive_ack_to_proto(ack: DriveAck) -> robot_pb2.DriveAck:

@@ -64,6 +64,11 @@ class RobotService(robot_pb2_grpc.RobotServicer):
         """Describes the robot, its sensors and its scene."""
         return convert.robot_info_to_proto(self._robot.name, self._robot.describe())
 
+    def GetScene(self, request: robot_pb2.GetSceneRequest,
+                 context: grpc.ServicerContext) -> robot_pb2.SceneDescription:
+        """The static world for views drawn elsewhere; only the version when the caller already holds it."""
+        return convert.scene_to_proto(self._robot.scene_description(), request.known_version)
+
     def ListSkills(
         self, request: robot_pb2.ListSkillsRequest, context: grpc.ServicerContext
     ) -> robot_pb2.ListSkillsResponse:

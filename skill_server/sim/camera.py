@@ -14,6 +14,11 @@ from skill_server.sim.robot_model import RobotSpec
 
 DEFAULT_CAMERA_FPS = 15.0
 MAX_CAMERA_FPS = 30.0
+# What pybullet's TinyRenderer does that no argument sets: it clears to white, and an untextured surface's
+# highlight is max(0, r_z) ** 2 (r: the light reflected about the normal). A view drawn elsewhere from the scene
+# description needs them, so they are named here beside the lighting the camera passes.
+RENDERER_BACKGROUND_RGBA = (1.0, 1.0, 1.0, 1.0)
+RENDERER_SPECULAR_EXPONENT = 2.0
 
 
 @dataclass(frozen=True)
@@ -26,12 +31,26 @@ class CameraSpec:
     near_m: float = 0.05
     far_m: float = 20.0
     jpeg_quality: int = 80
+    # The lighting the renderer is given: brightness = ambient + min(diffuse * max(0, n.l) + specular * highlight,
+    # 1 - ambient), times the surface's colour.
+    light_direction: tuple[float, float, float] = (0.4, -0.3, 1.0)  # toward the light, world frame, any length
+    light_ambient: float = 0.6
+    light_diffuse: float = 0.35
+    light_specular: float = 0.05
 
     @property
     def vfov_deg(self) -> float:
         """Vertical field of view, which is what pybullet's projection takes."""
         half_h = math.tan(math.radians(self.hfov_deg) / 2.0)
         return math.degrees(2.0 * math.atan(half_h * self.height_px / self.width_px))
+
+
+def camera_eye_and_target(robot: RobotSpec, pose: Pose2D) -> tuple[list[float], list[float]]:
+    """Where the camera is and a point 1 m along its optical axis (world frame) for a robot at pose; up is +z."""
+    cos_t, sin_t = math.cos(pose.theta_rad), math.sin(pose.theta_rad)
+    eye = [pose.x_m + robot.camera_forward_m * cos_t, pose.y_m + robot.camera_forward_m * sin_t, robot.camera_height_m]
+    cos_p, sin_p = math.cos(robot.camera_pitch_rad), math.sin(robot.camera_pitch_rad)
+    return eye, [eye[0] + cos_t * cos_p, eye[1] + sin_t * cos_p, eye[2] + sin_p]
 
 
 class Camera:
@@ -52,14 +71,7 @@ class Camera:
                 nearVal=spec.near_m,
                 farVal=spec.far_m,
             )
-        cos_t, sin_t = math.cos(pose.theta_rad), math.sin(pose.theta_rad)
-        eye = [
-            pose.x_m + robot.camera_forward_m * cos_t,
-            pose.y_m + robot.camera_forward_m * sin_t,
-            robot.camera_height_m,
-        ]
-        cos_p, sin_p = math.cos(robot.camera_pitch_rad), math.sin(robot.camera_pitch_rad)
-        target = [eye[0] + cos_t * cos_p, eye[1] + sin_t * cos_p, eye[2] + sin_p]
+        eye, target = camera_eye_and_target(robot, pose)
         view = client.computeViewMatrix(
             cameraEyePosition=eye, cameraTargetPosition=target, cameraUpVector=[0.0, 0.0, 1.0]
         )
@@ -70,7 +82,10 @@ class Camera:
             projectionMatrix=self._projection,
             renderer=client.ER_TINY_RENDERER,
             shadow=0,
-            lightDirection=[0.4, -0.3, 1.0],
+            lightDirection=list(spec.light_direction),
+            lightAmbientCoeff=spec.light_ambient,
+            lightDiffuseCoeff=spec.light_diffuse,
+            lightSpecularCoeff=spec.light_specular,
             flags=client.ER_NO_SEGMENTATION_MASK,
         )
         return np.asarray(rgba, dtype=np.uint8).reshape(spec.height_px, spec.width_px, 4)

@@ -43,6 +43,10 @@ class CylinderObstacle:
     rgba: Rgba
 
 
+# What a floor mark is, for views that treat them apart (a track's border lines, the grid, plain paint).
+MARK_KINDS = ("paint", "grid", "track_line", "track_point")
+
+
 @dataclass(frozen=True)
 class FloorMark:
     """A coloured patch painted on the floor: seen by the camera, invisible to physics and range sensors."""
@@ -52,6 +56,20 @@ class FloorMark:
     half_x_m: float
     half_y_m: float
     rgba: Rgba
+    kind: str = "paint"  # one of MARK_KINDS
+
+
+@dataclass(frozen=True)
+class FloorPatch:
+    """A flat upward-facing rectangle as the world builds it: the floor itself or one painted mark on it."""
+
+    center_x_m: float
+    center_y_m: float
+    half_x_m: float
+    half_y_m: float
+    top_z_m: float  # [m] height of the visible face above the floor's top (0 for the floor)
+    rgba: Rgba
+    kind: str  # "floor", or the mark's kind
 
 
 @dataclass(frozen=True)
@@ -142,9 +160,9 @@ def _grid_marks(
     grey = (0.92, 0.92, 0.92, 1.0)
     marks = []
     for i in range(-int(half_x_m / spacing_m), int(half_x_m / spacing_m) + 1):
-        marks.append(FloorMark(i * spacing_m, 0.0, half_width_m, half_y_m, grey))
+        marks.append(FloorMark(i * spacing_m, 0.0, half_width_m, half_y_m, grey, "grid"))
     for j in range(-int(half_y_m / spacing_m), int(half_y_m / spacing_m) + 1):
-        marks.append(FloorMark(0.0, j * spacing_m, half_x_m, half_width_m, grey))
+        marks.append(FloorMark(0.0, j * spacing_m, half_x_m, half_width_m, grey, "grid"))
     return marks
 
 
@@ -191,12 +209,13 @@ def _line_mark(line: BorderLine) -> FloorMark:
     """An axis-aligned white line as a floor mark."""
     half = line.half_width_m
     return FloorMark((line.x1_m + line.x2_m) / 2, (line.y1_m + line.y2_m) / 2,
-                     abs(line.x2_m - line.x1_m) / 2 + half, abs(line.y2_m - line.y1_m) / 2 + half, WHITE_LINE)
+                     abs(line.x2_m - line.x1_m) / 2 + half, abs(line.y2_m - line.y1_m) / 2 + half, WHITE_LINE,
+                     "track_line")
 
 
 def _point_marks(track: TrackSpec) -> list[FloorMark]:
-    return [FloorMark(track.a_x_m, track.a_y_m, 0.30, 0.30, POINT_A_RGBA),
-            FloorMark(track.b_x_m, track.b_y_m, 0.30, 0.30, POINT_B_RGBA)]
+    return [FloorMark(track.a_x_m, track.a_y_m, 0.30, 0.30, POINT_A_RGBA, "track_point"),
+            FloorMark(track.b_x_m, track.b_y_m, 0.30, 0.30, POINT_B_RGBA, "track_point")]
 
 
 def track_a_scene() -> SceneSpec:
@@ -243,12 +262,28 @@ register_scene("course-A", track_a_scene)
 register_scene("course-B", track_b_scene)
 
 
+FLOOR_MARGIN_M = 0.5  # the floor reaches this far past the room's walls
+
+
+def floor_patches(spec: SceneSpec) -> list[FloorPatch]:
+    """The floor, then every mark painted on it in order, as the world builds them and the scene description
+    reports them (one list for both, so a view drawn from the description cannot drift from the world)."""
+    patches = [FloorPatch(0.0, 0.0, spec.floor_half_x_m + FLOOR_MARGIN_M, spec.floor_half_y_m + FLOOR_MARGIN_M, 0.0,
+                          spec.floor_rgba, "floor")]
+    for index, mark in enumerate(spec.marks):
+        # Each painted layer sits a hair above the previous one so overlapping marks do not z-fight.
+        patches.append(FloorPatch(mark.center_x_m, mark.center_y_m, mark.half_x_m, mark.half_y_m,
+                                  MARK_THICKNESS_M + index * 1e-5, mark.rgba, mark.kind))
+    return patches
+
+
 def build_scene(client: Any, spec: SceneSpec, obstacle_collision_group: int) -> list[int]:
     """Creates the scene's bodies in a pybullet client (only from the world's thread); returns their ids."""
     bodies: list[int] = []
-    floor_half = [spec.floor_half_x_m + 0.5, spec.floor_half_y_m + 0.5, FLOOR_THICKNESS_M / 2.0]
+    floor, *marks = floor_patches(spec)
+    floor_half = [floor.half_x_m, floor.half_y_m, FLOOR_THICKNESS_M / 2.0]
     floor_collision = client.createCollisionShape(client.GEOM_BOX, halfExtents=floor_half)
-    floor_visual = _flat_visual(client, floor_half[0], floor_half[1], spec.floor_rgba, FLOOR_THICKNESS_M / 2.0)
+    floor_visual = _flat_visual(client, floor.half_x_m, floor.half_y_m, floor.rgba, FLOOR_THICKNESS_M / 2.0)
     bodies.append(client.createMultiBody(0, floor_collision, floor_visual, [0.0, 0.0, -FLOOR_THICKNESS_M / 2.0]))
     for box in spec.boxes:
         half = [box.half_x_m, box.half_y_m, box.height_m / 2.0]
@@ -269,11 +304,9 @@ def build_scene(client: Any, spec: SceneSpec, obstacle_collision_group: int) -> 
         )
     for body in bodies:
         client.setCollisionFilterGroupMask(body, -1, obstacle_collision_group, -1)
-    for index, mark in enumerate(spec.marks):
-        # Each painted layer sits a hair above the previous one so overlapping marks do not z-fight.
-        z_m = MARK_THICKNESS_M + index * 1e-5
+    for mark in marks:
         visual = _flat_visual(client, mark.half_x_m, mark.half_y_m, mark.rgba)
-        bodies.append(client.createMultiBody(0, -1, visual, [mark.center_x_m, mark.center_y_m, z_m]))
+        bodies.append(client.createMultiBody(0, -1, visual, [mark.center_x_m, mark.center_y_m, mark.top_z_m]))
     return bodies
 
 

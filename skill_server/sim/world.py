@@ -26,6 +26,7 @@ from skill_server.sim.pose_log import PoseLog
 from skill_server.sim.publication import CameraSubscription, Publication
 from skill_server.sim.raycast import StaticSceneCaster
 from skill_server.sim.robot_model import TELEBOT, RobotSpec, ramp_toward, wheel_speeds_radps
+from skill_server.sim.scene_description import SceneDescription, describe_scene
 from skill_server.sim.scenes import build_scene, get_scene
 from skill_server.sim.snapshots import CameraFrame, RobotDescription, RobotSnapshot
 from skill_server.sim.sonar import SonarRing, SonarRingSpec
@@ -106,6 +107,7 @@ class World:
         self._publication = Publication()
         self.pose_log = PoseLog()
         self._autonomy: Autonomy | None = None
+        self._scene_description: SceneDescription | None = None
         # Built in the caller's thread before the loop exists; from start() on only the loop touches it.
         self._client: Any = bullet_client.BulletClient(connection_mode=pybullet.DIRECT)
         self._build(seed)
@@ -246,6 +248,13 @@ class World:
             laser=self._laser.spec,
             scene_boxes=tuple(self.scene.scene_boxes()),
         )
+
+    def describe_scene(self) -> SceneDescription:
+        """The static world as the loop builds it and the camera renders it, versioned (computed once)."""
+        if self._scene_description is None:
+            self._scene_description = describe_scene(self.scene, self.spec, self._camera.spec, self._laser.spec,
+                                                     self._sonar.spec)
+        return self._scene_description
 
     # ---- the loop (only this part touches pybullet) -----------------------------------------------
 

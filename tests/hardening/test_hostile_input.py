@@ -125,6 +125,7 @@ ROUTES = (
     "DELETE /api/robots/<robot_name>/map",
     "POST /api/robots/<robot_name>/dock",
     "GET /api/robots/<robot_name>/panels",
+    "GET /api/robots/<robot_name>/scene",
     "POST /api/robots/<robot_name>/skills/<skill>/goals",
     "GET /api/robots/<target_name>/command-goals/<goal_id>",
     "GET /api/tour-sessions/<int:session_id>",

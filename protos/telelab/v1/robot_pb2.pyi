@@ -37,6 +37,22 @@ class GoalEventKind(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     GOAL_EVENT_KIND_FAILED: _ClassVar[GoalEventKind]
     GOAL_EVENT_KIND_CANCELED: _ClassVar[GoalEventKind]
     GOAL_EVENT_KIND_PREEMPTED: _ClassVar[GoalEventKind]
+
+class FloorPatchKind(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = ()
+    FLOOR_PATCH_KIND_UNSPECIFIED: _ClassVar[FloorPatchKind]
+    FLOOR_PATCH_KIND_FLOOR: _ClassVar[FloorPatchKind]
+    FLOOR_PATCH_KIND_PAINT: _ClassVar[FloorPatchKind]
+    FLOOR_PATCH_KIND_GRID: _ClassVar[FloorPatchKind]
+    FLOOR_PATCH_KIND_TRACK_LINE: _ClassVar[FloorPatchKind]
+    FLOOR_PATCH_KIND_TRACK_POINT: _ClassVar[FloorPatchKind]
+
+class PartShape(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = ()
+    PART_SHAPE_UNSPECIFIED: _ClassVar[PartShape]
+    PART_SHAPE_BOX: _ClassVar[PartShape]
+    PART_SHAPE_CYLINDER: _ClassVar[PartShape]
+    PART_SHAPE_SPHERE: _ClassVar[PartShape]
 PARAMETER_TYPE_UNSPECIFIED: ParameterType
 PARAMETER_TYPE_DOUBLE: ParameterType
 PARAMETER_TYPE_INT: ParameterType
@@ -59,6 +75,16 @@ GOAL_EVENT_KIND_GOAL_REACHED: GoalEventKind
 GOAL_EVENT_KIND_FAILED: GoalEventKind
 GOAL_EVENT_KIND_CANCELED: GoalEventKind
 GOAL_EVENT_KIND_PREEMPTED: GoalEventKind
+FLOOR_PATCH_KIND_UNSPECIFIED: FloorPatchKind
+FLOOR_PATCH_KIND_FLOOR: FloorPatchKind
+FLOOR_PATCH_KIND_PAINT: FloorPatchKind
+FLOOR_PATCH_KIND_GRID: FloorPatchKind
+FLOOR_PATCH_KIND_TRACK_LINE: FloorPatchKind
+FLOOR_PATCH_KIND_TRACK_POINT: FloorPatchKind
+PART_SHAPE_UNSPECIFIED: PartShape
+PART_SHAPE_BOX: PartShape
+PART_SHAPE_CYLINDER: PartShape
+PART_SHAPE_SPHERE: PartShape
 
 class GetRobotInfoRequest(_message.Message):
     __slots__ = ()
@@ -109,18 +135,20 @@ class SonarGeometry(_message.Message):
     def __init__(self, mount_angle_rad: _Optional[float] = ..., cone_half_angle_rad: _Optional[float] = ..., min_range_m: _Optional[float] = ..., max_range_m: _Optional[float] = ...) -> None: ...
 
 class LaserGeometry(_message.Message):
-    __slots__ = ("angle_min_rad", "angle_max_rad", "beam_count", "min_range_m", "max_range_m")
+    __slots__ = ("angle_min_rad", "angle_max_rad", "beam_count", "min_range_m", "max_range_m", "height_m")
     ANGLE_MIN_RAD_FIELD_NUMBER: _ClassVar[int]
     ANGLE_MAX_RAD_FIELD_NUMBER: _ClassVar[int]
     BEAM_COUNT_FIELD_NUMBER: _ClassVar[int]
     MIN_RANGE_M_FIELD_NUMBER: _ClassVar[int]
     MAX_RANGE_M_FIELD_NUMBER: _ClassVar[int]
+    HEIGHT_M_FIELD_NUMBER: _ClassVar[int]
     angle_min_rad: float
     angle_max_rad: float
     beam_count: int
     min_range_m: float
     max_range_m: float
-    def __init__(self, angle_min_rad: _Optional[float] = ..., angle_max_rad: _Optional[float] = ..., beam_count: _Optional[int] = ..., min_range_m: _Optional[float] = ..., max_range_m: _Optional[float] = ...) -> None: ...
+    height_m: float
+    def __init__(self, angle_min_rad: _Optional[float] = ..., angle_max_rad: _Optional[float] = ..., beam_count: _Optional[int] = ..., min_range_m: _Optional[float] = ..., max_range_m: _Optional[float] = ..., height_m: _Optional[float] = ...) -> None: ...
 
 class SceneBox(_message.Message):
     __slots__ = ("name", "center_x_m", "center_y_m", "half_x_m", "half_y_m", "yaw_rad")
@@ -658,3 +686,225 @@ class PoseLog(_message.Message):
     samples: _containers.RepeatedCompositeFieldContainer[PoseSample]
     oldest_unix_s: float
     def __init__(self, samples: _Optional[_Iterable[_Union[PoseSample, _Mapping]]] = ..., oldest_unix_s: _Optional[float] = ...) -> None: ...
+
+class GetSceneRequest(_message.Message):
+    __slots__ = ("known_version",)
+    KNOWN_VERSION_FIELD_NUMBER: _ClassVar[int]
+    known_version: str
+    def __init__(self, known_version: _Optional[str] = ...) -> None: ...
+
+class Rgba(_message.Message):
+    __slots__ = ("r", "g", "b", "a")
+    R_FIELD_NUMBER: _ClassVar[int]
+    G_FIELD_NUMBER: _ClassVar[int]
+    B_FIELD_NUMBER: _ClassVar[int]
+    A_FIELD_NUMBER: _ClassVar[int]
+    r: float
+    g: float
+    b: float
+    a: float
+    def __init__(self, r: _Optional[float] = ..., g: _Optional[float] = ..., b: _Optional[float] = ..., a: _Optional[float] = ...) -> None: ...
+
+class Vector3(_message.Message):
+    __slots__ = ("x", "y", "z")
+    X_FIELD_NUMBER: _ClassVar[int]
+    Y_FIELD_NUMBER: _ClassVar[int]
+    Z_FIELD_NUMBER: _ClassVar[int]
+    x: float
+    y: float
+    z: float
+    def __init__(self, x: _Optional[float] = ..., y: _Optional[float] = ..., z: _Optional[float] = ...) -> None: ...
+
+class Quaternion(_message.Message):
+    __slots__ = ("x", "y", "z", "w")
+    X_FIELD_NUMBER: _ClassVar[int]
+    Y_FIELD_NUMBER: _ClassVar[int]
+    Z_FIELD_NUMBER: _ClassVar[int]
+    W_FIELD_NUMBER: _ClassVar[int]
+    x: float
+    y: float
+    z: float
+    w: float
+    def __init__(self, x: _Optional[float] = ..., y: _Optional[float] = ..., z: _Optional[float] = ..., w: _Optional[float] = ...) -> None: ...
+
+class FloorPatch(_message.Message):
+    __slots__ = ("center_x_m", "center_y_m", "half_x_m", "half_y_m", "top_z_m", "colour", "kind")
+    CENTER_X_M_FIELD_NUMBER: _ClassVar[int]
+    CENTER_Y_M_FIELD_NUMBER: _ClassVar[int]
+    HALF_X_M_FIELD_NUMBER: _ClassVar[int]
+    HALF_Y_M_FIELD_NUMBER: _ClassVar[int]
+    TOP_Z_M_FIELD_NUMBER: _ClassVar[int]
+    COLOUR_FIELD_NUMBER: _ClassVar[int]
+    KIND_FIELD_NUMBER: _ClassVar[int]
+    center_x_m: float
+    center_y_m: float
+    half_x_m: float
+    half_y_m: float
+    top_z_m: float
+    colour: Rgba
+    kind: FloorPatchKind
+    def __init__(self, center_x_m: _Optional[float] = ..., center_y_m: _Optional[float] = ..., half_x_m: _Optional[float] = ..., half_y_m: _Optional[float] = ..., top_z_m: _Optional[float] = ..., colour: _Optional[_Union[Rgba, _Mapping]] = ..., kind: _Optional[_Union[FloorPatchKind, str]] = ...) -> None: ...
+
+class SceneBlock(_message.Message):
+    __slots__ = ("name", "center_x_m", "center_y_m", "half_x_m", "half_y_m", "height_m", "yaw_rad", "colour")
+    NAME_FIELD_NUMBER: _ClassVar[int]
+    CENTER_X_M_FIELD_NUMBER: _ClassVar[int]
+    CENTER_Y_M_FIELD_NUMBER: _ClassVar[int]
+    HALF_X_M_FIELD_NUMBER: _ClassVar[int]
+    HALF_Y_M_FIELD_NUMBER: _ClassVar[int]
+    HEIGHT_M_FIELD_NUMBER: _ClassVar[int]
+    YAW_RAD_FIELD_NUMBER: _ClassVar[int]
+    COLOUR_FIELD_NUMBER: _ClassVar[int]
+    name: str
+    center_x_m: float
+    center_y_m: float
+    half_x_m: float
+    half_y_m: float
+    height_m: float
+    yaw_rad: float
+    colour: Rgba
+    def __init__(self, name: _Optional[str] = ..., center_x_m: _Optional[float] = ..., center_y_m: _Optional[float] = ..., half_x_m: _Optional[float] = ..., half_y_m: _Optional[float] = ..., height_m: _Optional[float] = ..., yaw_rad: _Optional[float] = ..., colour: _Optional[_Union[Rgba, _Mapping]] = ...) -> None: ...
+
+class SceneCylinder(_message.Message):
+    __slots__ = ("name", "center_x_m", "center_y_m", "radius_m", "height_m", "colour")
+    NAME_FIELD_NUMBER: _ClassVar[int]
+    CENTER_X_M_FIELD_NUMBER: _ClassVar[int]
+    CENTER_Y_M_FIELD_NUMBER: _ClassVar[int]
+    RADIUS_M_FIELD_NUMBER: _ClassVar[int]
+    HEIGHT_M_FIELD_NUMBER: _ClassVar[int]
+    COLOUR_FIELD_NUMBER: _ClassVar[int]
+    name: str
+    center_x_m: float
+    center_y_m: float
+    radius_m: float
+    height_m: float
+    colour: Rgba
+    def __init__(self, name: _Optional[str] = ..., center_x_m: _Optional[float] = ..., center_y_m: _Optional[float] = ..., radius_m: _Optional[float] = ..., height_m: _Optional[float] = ..., colour: _Optional[_Union[Rgba, _Mapping]] = ...) -> None: ...
+
+class TrackLine(_message.Message):
+    __slots__ = ("x1_m", "y1_m", "x2_m", "y2_m", "half_width_m")
+    X1_M_FIELD_NUMBER: _ClassVar[int]
+    Y1_M_FIELD_NUMBER: _ClassVar[int]
+    X2_M_FIELD_NUMBER: _ClassVar[int]
+    Y2_M_FIELD_NUMBER: _ClassVar[int]
+    HALF_WIDTH_M_FIELD_NUMBER: _ClassVar[int]
+    x1_m: float
+    y1_m: float
+    x2_m: float
+    y2_m: float
+    half_width_m: float
+    def __init__(self, x1_m: _Optional[float] = ..., y1_m: _Optional[float] = ..., x2_m: _Optional[float] = ..., y2_m: _Optional[float] = ..., half_width_m: _Optional[float] = ...) -> None: ...
+
+class TrackLayout(_message.Message):
+    __slots__ = ("a_x_m", "a_y_m", "b_x_m", "b_y_m", "round_trip", "arrival_radius_m", "lines")
+    A_X_M_FIELD_NUMBER: _ClassVar[int]
+    A_Y_M_FIELD_NUMBER: _ClassVar[int]
+    B_X_M_FIELD_NUMBER: _ClassVar[int]
+    B_Y_M_FIELD_NUMBER: _ClassVar[int]
+    ROUND_TRIP_FIELD_NUMBER: _ClassVar[int]
+    ARRIVAL_RADIUS_M_FIELD_NUMBER: _ClassVar[int]
+    LINES_FIELD_NUMBER: _ClassVar[int]
+    a_x_m: float
+    a_y_m: float
+    b_x_m: float
+    b_y_m: float
+    round_trip: bool
+    arrival_radius_m: float
+    lines: _containers.RepeatedCompositeFieldContainer[TrackLine]
+    def __init__(self, a_x_m: _Optional[float] = ..., a_y_m: _Optional[float] = ..., b_x_m: _Optional[float] = ..., b_y_m: _Optional[float] = ..., round_trip: _Optional[bool] = ..., arrival_radius_m: _Optional[float] = ..., lines: _Optional[_Iterable[_Union[TrackLine, _Mapping]]] = ...) -> None: ...
+
+class RobotPart(_message.Message):
+    __slots__ = ("link", "shape", "size_x_m", "size_y_m", "size_z_m", "position_m", "orientation", "colour")
+    LINK_FIELD_NUMBER: _ClassVar[int]
+    SHAPE_FIELD_NUMBER: _ClassVar[int]
+    SIZE_X_M_FIELD_NUMBER: _ClassVar[int]
+    SIZE_Y_M_FIELD_NUMBER: _ClassVar[int]
+    SIZE_Z_M_FIELD_NUMBER: _ClassVar[int]
+    POSITION_M_FIELD_NUMBER: _ClassVar[int]
+    ORIENTATION_FIELD_NUMBER: _ClassVar[int]
+    COLOUR_FIELD_NUMBER: _ClassVar[int]
+    link: str
+    shape: PartShape
+    size_x_m: float
+    size_y_m: float
+    size_z_m: float
+    position_m: Vector3
+    orientation: Quaternion
+    colour: Rgba
+    def __init__(self, link: _Optional[str] = ..., shape: _Optional[_Union[PartShape, str]] = ..., size_x_m: _Optional[float] = ..., size_y_m: _Optional[float] = ..., size_z_m: _Optional[float] = ..., position_m: _Optional[_Union[Vector3, _Mapping]] = ..., orientation: _Optional[_Union[Quaternion, _Mapping]] = ..., colour: _Optional[_Union[Rgba, _Mapping]] = ...) -> None: ...
+
+class CameraModel(_message.Message):
+    __slots__ = ("width_px", "height_px", "hfov_deg", "vfov_deg", "near_m", "far_m", "mount_forward_m", "mount_height_m", "mount_pitch_rad", "light_direction", "light_ambient", "light_diffuse", "light_specular", "specular_exponent", "background")
+    WIDTH_PX_FIELD_NUMBER: _ClassVar[int]
+    HEIGHT_PX_FIELD_NUMBER: _ClassVar[int]
+    HFOV_DEG_FIELD_NUMBER: _ClassVar[int]
+    VFOV_DEG_FIELD_NUMBER: _ClassVar[int]
+    NEAR_M_FIELD_NUMBER: _ClassVar[int]
+    FAR_M_FIELD_NUMBER: _ClassVar[int]
+    MOUNT_FORWARD_M_FIELD_NUMBER: _ClassVar[int]
+    MOUNT_HEIGHT_M_FIELD_NUMBER: _ClassVar[int]
+    MOUNT_PITCH_RAD_FIELD_NUMBER: _ClassVar[int]
+    LIGHT_DIRECTION_FIELD_NUMBER: _ClassVar[int]
+    LIGHT_AMBIENT_FIELD_NUMBER: _ClassVar[int]
+    LIGHT_DIFFUSE_FIELD_NUMBER: _ClassVar[int]
+    LIGHT_SPECULAR_FIELD_NUMBER: _ClassVar[int]
+    SPECULAR_EXPONENT_FIELD_NUMBER: _ClassVar[int]
+    BACKGROUND_FIELD_NUMBER: _ClassVar[int]
+    width_px: int
+    height_px: int
+    hfov_deg: float
+    vfov_deg: float
+    near_m: float
+    far_m: float
+    mount_forward_m: float
+    mount_height_m: float
+    mount_pitch_rad: float
+    light_direction: Vector3
+    light_ambient: float
+    light_diffuse: float
+    light_specular: float
+    specular_exponent: float
+    background: Rgba
+    def __init__(self, width_px: _Optional[int] = ..., height_px: _Optional[int] = ..., hfov_deg: _Optional[float] = ..., vfov_deg: _Optional[float] = ..., near_m: _Optional[float] = ..., far_m: _Optional[float] = ..., mount_forward_m: _Optional[float] = ..., mount_height_m: _Optional[float] = ..., mount_pitch_rad: _Optional[float] = ..., light_direction: _Optional[_Union[Vector3, _Mapping]] = ..., light_ambient: _Optional[float] = ..., light_diffuse: _Optional[float] = ..., light_specular: _Optional[float] = ..., specular_exponent: _Optional[float] = ..., background: _Optional[_Union[Rgba, _Mapping]] = ...) -> None: ...
+
+class SonarRing(_message.Message):
+    __slots__ = ("mount_radius_m", "height_m", "sonars")
+    MOUNT_RADIUS_M_FIELD_NUMBER: _ClassVar[int]
+    HEIGHT_M_FIELD_NUMBER: _ClassVar[int]
+    SONARS_FIELD_NUMBER: _ClassVar[int]
+    mount_radius_m: float
+    height_m: float
+    sonars: _containers.RepeatedCompositeFieldContainer[SonarGeometry]
+    def __init__(self, mount_radius_m: _Optional[float] = ..., height_m: _Optional[float] = ..., sonars: _Optional[_Iterable[_Union[SonarGeometry, _Mapping]]] = ...) -> None: ...
+
+class SceneDescription(_message.Message):
+    __slots__ = ("version", "unchanged", "scene_name", "floor", "marks", "blocks", "cylinders", "track", "spawn", "body_radius_m", "robot_parts", "camera", "laser", "sonar")
+    VERSION_FIELD_NUMBER: _ClassVar[int]
+    UNCHANGED_FIELD_NUMBER: _ClassVar[int]
+    SCENE_NAME_FIELD_NUMBER: _ClassVar[int]
+    FLOOR_FIELD_NUMBER: _ClassVar[int]
+    MARKS_FIELD_NUMBER: _ClassVar[int]
+    BLOCKS_FIELD_NUMBER: _ClassVar[int]
+    CYLINDERS_FIELD_NUMBER: _ClassVar[int]
+    TRACK_FIELD_NUMBER: _ClassVar[int]
+    SPAWN_FIELD_NUMBER: _ClassVar[int]
+    BODY_RADIUS_M_FIELD_NUMBER: _ClassVar[int]
+    ROBOT_PARTS_FIELD_NUMBER: _ClassVar[int]
+    CAMERA_FIELD_NUMBER: _ClassVar[int]
+    LASER_FIELD_NUMBER: _ClassVar[int]
+    SONAR_FIELD_NUMBER: _ClassVar[int]
+    version: str
+    unchanged: bool
+    scene_name: str
+    floor: FloorPatch
+    marks: _containers.RepeatedCompositeFieldContainer[FloorPatch]
+    blocks: _containers.RepeatedCompositeFieldContainer[SceneBlock]
+    cylinders: _containers.RepeatedCompositeFieldContainer[SceneCylinder]
+    track: TrackLayout
+    spawn: Pose2D
+    body_radius_m: float
+    robot_parts: _containers.RepeatedCompositeFieldContainer[RobotPart]
+    camera: CameraModel
+    laser: LaserGeometry
+    sonar: SonarRing
+    def __init__(self, version: _Optional[str] = ..., unchanged: _Optional[bool] = ..., scene_name: _Optional[str] = ..., floor: _Optional[_Union[FloorPatch, _Mapping]] = ..., marks: _Optional[_Iterable[_Union[FloorPatch, _Mapping]]] = ..., blocks: _Optional[_Iterable[_Union[SceneBlock, _Mapping]]] = ..., cylinders: _Optional[_Iterable[_Union[SceneCylinder, _Mapping]]] = ..., track: _Optional[_Union[TrackLayout, _Mapping]] = ..., spawn: _Optional[_Union[Pose2D, _Mapping]] = ..., body_radius_m: _Optional[float] = ..., robot_parts: _Optional[_Iterable[_Union[RobotPart, _Mapping]]] = ..., camera: _Optional[_Union[CameraModel, _Mapping]] = ..., laser: _Optional[_Union[LaserGeometry, _Mapping]] = ..., sonar: _Optional[_Union[SonarRing, _Mapping]] = ...) -> None: ...

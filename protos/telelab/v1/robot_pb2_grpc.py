@@ -129,6 +129,11 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetPoseLogRequest.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PoseLog.FromString,
                 _registered_method=True)
+        self.GetScene = channel.unary_unary(
+                '/telelab.v1.Robot/GetScene',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetSceneRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.SceneDescription.FromString,
+                _registered_method=True)
 
 
 class RobotServicer:
@@ -273,6 +278,16 @@ class RobotServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def GetScene(self, request, context):
+        """The robot's static world, once: the floor and its markings, walls and obstacles with their colours, the track,
+        the robot's body, the camera's mount, intrinsics and lighting, and the sensors' geometry, all taken from what
+        the world builds and the camera renders with. It does not change while the server runs. version is a hash of
+        the content: a caller that sends the version it holds gets that version back with unchanged set, and no more.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
 
 def add_RobotServicer_to_server(servicer, server):
     rpc_method_handlers = {
@@ -370,6 +385,11 @@ def add_RobotServicer_to_server(servicer, server):
                     servicer.GetPoseLog,
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetPoseLogRequest.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PoseLog.SerializeToString,
+            ),
+            'GetScene': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetScene,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetSceneRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.SceneDescription.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -885,6 +905,33 @@ class Robot:
             '/telelab.v1.Robot/GetPoseLog',
             protos_dot_telelab_dot_v1_dot_robot__pb2.GetPoseLogRequest.SerializeToString,
             protos_dot_telelab_dot_v1_dot_robot__pb2.PoseLog.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def GetScene(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/GetScene',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GetSceneRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.SceneDescription.FromString,
             options,
             channel_credentials,
             insecure,
