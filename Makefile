@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 RUN_STAMP := $(VENV)/.run-installed
 TEST_STAMP := $(VENV)/.test-installed
 
-.PHONY: run test protos bench lint chromium ffmpeg nginx clean
+.PHONY: run test protos bench lint chromium ffmpeg nginx three clean
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -19,13 +19,28 @@ $(TEST_STAMP): pyproject.toml | $(VENV)/bin/python
 	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(RUN_STAMP) $@
 
+# three.js draws the console's 3D views: from the npm registry at the version client_ui/static/vendor/package-lock.json
+# pins, into node_modules there, served as static ES modules (an import map names them; no bundler, no build step).
+VENDOR := client_ui/static/vendor
+THREE_STAMP := $(VENDOR)/node_modules/.package-lock.json
+
+three: $(THREE_STAMP)
+
+$(THREE_STAMP): $(VENDOR)/package-lock.json
+	@command -v npm >/dev/null 2>&1 || { \
+	  echo "Installing Debian's nodejs and npm to fetch the browser's libraries"; \
+	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq nodejs npm; }
+	cd $(VENDOR) && npm ci --ignore-scripts --no-audit --no-fund
+	touch $@
+
 # ffmpeg encodes the demo lesson's video from the simulator, needed only until that video exists.
 DEMO_VIDEO := instance/lessons/demo-first-moves.webm
 
-run: $(RUN_STAMP) $(if $(wildcard $(DEMO_VIDEO)),,ffmpeg)
+run: $(RUN_STAMP) $(THREE_STAMP) $(if $(wildcard $(DEMO_VIDEO)),,ffmpeg)
 	$(VENV)/bin/telelab up
 
-test: $(TEST_STAMP) chromium ffmpeg nginx
+test: $(TEST_STAMP) $(THREE_STAMP) chromium ffmpeg nginx
 	$(VENV)/bin/mypy
 	$(PY) -m pytest
 

@@ -9,8 +9,8 @@ from flask import Flask, Response, redirect, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user
 
+from middleware import browser_modules, db, realtime, validation
 from middleware import config as config_module
-from middleware import db, realtime, validation
 from middleware.access import commands
 from middleware.access import coordinator as access_coordinator
 from middleware.access import sockets as access_sockets
@@ -69,6 +69,7 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
     csrf.init_app(app)
     login_manager.init_app(app)
     register_error_handlers(app)
+    import_map_source = browser_modules.init_app(app)
     _compose_robot_access(app)
     _register_areas(app)
 
@@ -88,7 +89,7 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
         response.headers.setdefault(
             "Content-Security-Policy",
             "default-src 'self'; img-src 'self' blob: data:; connect-src 'self' ws: wss:; "
-            "style-src 'self'; script-src 'self'; object-src 'none'; frame-ancestors 'none'",
+            f"style-src 'self'; script-src 'self' {import_map_source}; object-src 'none'; frame-ancestors 'none'",
         )
         return response
 

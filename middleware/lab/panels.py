@@ -76,6 +76,9 @@ def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | Non
         DynamicRepository("map", "map", "Lab model", f"{base}/localization",
                           "The lab seen from above: the robot, its readings, the map; click to set a goal.",
                           "navigate"),
+        DynamicRepository("lab-view", "lab-view", "3D lab view", f"{base}/telemetry",
+                          "The lab in 3D, drawn by your browser: the robot at its odometry pose, its laser hits and "
+                          "sonar cones, the goal. Drag to turn it.", "navigate"),
         DynamicRepository("sonar", "sonar", "Sonar", f"{base}/telemetry", "The ring of sonars, nearest echo each.",
                           "sense"),
         DynamicRepository("laser", "laser", "Laser", f"{base}/telemetry", "The 180-degree laser scan ahead.", "sense"),

@@ -67,6 +67,7 @@ def scene_dict(scene: robot_pb2.SceneDescription) -> dict[str, object]:
             "light_ambient": camera.light_ambient, "light_diffuse": camera.light_diffuse,
             "light_specular": camera.light_specular, "specular_exponent": camera.specular_exponent,
             "background_rgba": _rgba(camera.background),
+            "sample_offset_x_px": camera.sample_offset_x_px, "sample_offset_y_px": camera.sample_offset_y_px,
         },
         "laser": {"angle_min_rad": laser.angle_min_rad, "angle_max_rad": laser.angle_max_rad,
                   "beam_count": laser.beam_count, "min_range_m": laser.min_range_m, "max_range_m": laser.max_range_m,

@@ -154,7 +154,8 @@ def scene_to_proto(scene: SceneDescription, known_version: str = "") -> robot_pb
                                               z=camera.light_direction[2]),
             light_ambient=camera.light_ambient, light_diffuse=camera.light_diffuse,
             light_specular=camera.light_specular, specular_exponent=camera.specular_exponent,
-            background=_rgba(camera.background_rgba)),
+            background=_rgba(camera.background_rgba), sample_offset_x_px=camera.sample_offset_px[0],
+            sample_offset_y_px=camera.sample_offset_px[1]),
         laser=robot_pb2.LaserGeometry(
             angle_min_rad=scene.laser.angle_min_rad, angle_max_rad=scene.laser.angle_max_rad,
             beam_count=scene.laser.beam_count, min_range_m=scene.laser.min_range_m,

@@ -14,11 +14,13 @@ from skill_server.sim.robot_model import RobotSpec
 
 DEFAULT_CAMERA_FPS = 15.0
 MAX_CAMERA_FPS = 30.0
-# What pybullet's TinyRenderer does that no argument sets: it clears to white, and an untextured surface's
-# highlight is max(0, r_z) ** 2 (r: the light reflected about the normal). A view drawn elsewhere from the scene
-# description needs them, so they are named here beside the lighting the camera passes.
+# What pybullet's TinyRenderer does that no argument sets: it clears to white, an untextured surface's highlight is
+# max(0, r_z) ** 2 (r: the light reflected about the normal), and it samples each pixel at a corner instead of its
+# centre: half a pixel left of it and half a pixel below it (x right, y down). A view drawn elsewhere from the scene
+# description needs them to match pixel for pixel, so they are named here beside the lighting the camera passes.
 RENDERER_BACKGROUND_RGBA = (1.0, 1.0, 1.0, 1.0)
 RENDERER_SPECULAR_EXPONENT = 2.0
+RENDERER_SAMPLE_OFFSET_PX = (-0.5, 0.5)
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,12 @@ import hashlib
 import math
 from dataclasses import dataclass, replace
 
-from skill_server.sim.camera import RENDERER_BACKGROUND_RGBA, RENDERER_SPECULAR_EXPONENT, CameraSpec
+from skill_server.sim.camera import (
+    RENDERER_BACKGROUND_RGBA,
+    RENDERER_SAMPLE_OFFSET_PX,
+    RENDERER_SPECULAR_EXPONENT,
+    CameraSpec,
+)
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.laser import LaserSpec
 from skill_server.sim.robot_model import RobotSpec
@@ -44,6 +49,7 @@ class CameraModel:
     light_specular: float
     specular_exponent: float
     background_rgba: Rgba
+    sample_offset_px: tuple[float, float]  # where each pixel is sampled from its centre, x right, y down [px]
 
 
 @dataclass(frozen=True)
@@ -85,6 +91,7 @@ def camera_model(camera: CameraSpec, robot: RobotSpec) -> CameraModel:
         light_direction=(lx / norm, ly / norm, lz / norm), light_ambient=camera.light_ambient,
         light_diffuse=camera.light_diffuse, light_specular=camera.light_specular,
         specular_exponent=RENDERER_SPECULAR_EXPONENT, background_rgba=RENDERER_BACKGROUND_RGBA,
+        sample_offset_px=RENDERER_SAMPLE_OFFSET_PX,
     )
 
 

@@ -19,8 +19,8 @@ import { elementRegistrar } from "./panel-base.js";
 
 /** The folders of the panel modules the console loads; each registers one kind. */
 export const PANEL_MODULES = Object.freeze([
-  "camera-panel", "map-panel", "odometry-panel", "sonar-panel", "laser-panel", "drive-pad", "skill-panel",
-  "queue-panel", "chat-panel", "response-times-panel",
+  "camera-panel", "map-panel", "lab-view", "odometry-panel", "sonar-panel", "laser-panel", "drive-pad",
+  "skill-panel", "queue-panel", "chat-panel", "response-times-panel",
 ]);
 
 const panels = new Map();

@@ -834,7 +834,7 @@ class RobotPart(_message.Message):
     def __init__(self, link: _Optional[str] = ..., shape: _Optional[_Union[PartShape, str]] = ..., size_x_m: _Optional[float] = ..., size_y_m: _Optional[float] = ..., size_z_m: _Optional[float] = ..., position_m: _Optional[_Union[Vector3, _Mapping]] = ..., orientation: _Optional[_Union[Quaternion, _Mapping]] = ..., colour: _Optional[_Union[Rgba, _Mapping]] = ...) -> None: ...
 
 class CameraModel(_message.Message):
-    __slots__ = ("width_px", "height_px", "hfov_deg", "vfov_deg", "near_m", "far_m", "mount_forward_m", "mount_height_m", "mount_pitch_rad", "light_direction", "light_ambient", "light_diffuse", "light_specular", "specular_exponent", "background")
+    __slots__ = ("width_px", "height_px", "hfov_deg", "vfov_deg", "near_m", "far_m", "mount_forward_m", "mount_height_m", "mount_pitch_rad", "light_direction", "light_ambient", "light_diffuse", "light_specular", "specular_exponent", "background", "sample_offset_x_px", "sample_offset_y_px")
     WIDTH_PX_FIELD_NUMBER: _ClassVar[int]
     HEIGHT_PX_FIELD_NUMBER: _ClassVar[int]
     HFOV_DEG_FIELD_NUMBER: _ClassVar[int]
@@ -850,6 +850,8 @@ class CameraModel(_message.Message):
     LIGHT_SPECULAR_FIELD_NUMBER: _ClassVar[int]
     SPECULAR_EXPONENT_FIELD_NUMBER: _ClassVar[int]
     BACKGROUND_FIELD_NUMBER: _ClassVar[int]
+    SAMPLE_OFFSET_X_PX_FIELD_NUMBER: _ClassVar[int]
+    SAMPLE_OFFSET_Y_PX_FIELD_NUMBER: _ClassVar[int]
     width_px: int
     height_px: int
     hfov_deg: float
@@ -865,7 +867,9 @@ class CameraModel(_message.Message):
     light_specular: float
     specular_exponent: float
     background: Rgba
-    def __init__(self, width_px: _Optional[int] = ..., height_px: _Optional[int] = ..., hfov_deg: _Optional[float] = ..., vfov_deg: _Optional[float] = ..., near_m: _Optional[float] = ..., far_m: _Optional[float] = ..., mount_forward_m: _Optional[float] = ..., mount_height_m: _Optional[float] = ..., mount_pitch_rad: _Optional[float] = ..., light_direction: _Optional[_Union[Vector3, _Mapping]] = ..., light_ambient: _Optional[float] = ..., light_diffuse: _Optional[float] = ..., light_specular: _Optional[float] = ..., specular_exponent: _Optional[float] = ..., background: _Optional[_Union[Rgba, _Mapping]] = ...) -> None: ...
+    sample_offset_x_px: float
+    sample_offset_y_px: float
+    def __init__(self, width_px: _Optional[int] = ..., height_px: _Optional[int] = ..., hfov_deg: _Optional[float] = ..., vfov_deg: _Optional[float] = ..., near_m: _Optional[float] = ..., far_m: _Optional[float] = ..., mount_forward_m: _Optional[float] = ..., mount_height_m: _Optional[float] = ..., mount_pitch_rad: _Optional[float] = ..., light_direction: _Optional[_Union[Vector3, _Mapping]] = ..., light_ambient: _Optional[float] = ..., light_diffuse: _Optional[float] = ..., light_specular: _Optional[float] = ..., specular_exponent: _Optional[float] = ..., background: _Optional[_Union[Rgba, _Mapping]] = ..., sample_offset_x_px: _Optional[float] = ..., sample_offset_y_px: _Optional[float] = ...) -> None: ...
 
 class SonarRing(_message.Message):
     __slots__ = ("mount_radius_m", "height_m", "sonars")

@@ -29,6 +29,7 @@ def test_a_student_gets_the_scene_and_then_only_a_304_for_the_version_held(stude
     assert (camera["width_px"], camera["height_px"], camera["hfov_deg"]) == (320, 240, 60.0)
     assert (camera["mount_forward_m"], camera["mount_height_m"]) == (0.17, 0.30)
     assert len(camera["light_direction"]) == 3 and camera["background_rgba"] == [1.0, 1.0, 1.0, 1.0]
+    assert (camera["sample_offset_x_px"], camera["sample_offset_y_px"]) == (-0.5, 0.5)  # TinyRenderer: corners
     assert {part["shape"] for part in scene["robot_parts"]} == {"box", "cylinder", "sphere"}
     assert scene["laser"]["height_m"] == 0.20 and len(scene["sonar"]["sonars"]) == 16
 

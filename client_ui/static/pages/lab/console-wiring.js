@@ -13,6 +13,7 @@ import { playTurnTone } from "./turn-tone.js";
 
 const FINAL_GOAL_STATES = new Set(["succeeded", "canceled", "aborted"]);
 const MAP_POLL_MS = 2000;
+const SCENE_RETRY_MS = 5000;
 const PING_EVERY_MS = 1000;
 const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
 const BOOKINGS_REFRESH_MS = 60 * 1000;
@@ -34,6 +35,7 @@ export class ConsoleWiring {
   #drivePads = [];
   #skills = [];                 // [{descriptor, panel, goalChannel, goalNames}]
   #maps = [];
+  #goalViews = [];              // panels that show goals without picking them (the 3D lab view)
   #cameras = [];                // camera panels: the feedback layer follows the drive session
   #starters = [];
   #lastSeat = null;
@@ -52,6 +54,8 @@ export class ConsoleWiring {
     "camera-stream": (descriptor, panel) => this.#cameraStream(descriptor, panel),
     "map-grid": (descriptor, panel) => this.#mapGrid(descriptor, panel),
     "goal-target": (descriptor, panel) => this.#goalTarget(panel),
+    "goal-view": (descriptor, panel) => { this.#goalViews.push(panel); },
+    scene: (descriptor, panel) => this.#scene(descriptor, panel),
     drive: (descriptor, panel) => this.#drivePad(descriptor, panel),
     "skill-goals": (descriptor, panel) => this.#skill(descriptor, panel),
     queue: (descriptor, panel) => this.#queue(descriptor, panel),
@@ -187,6 +191,22 @@ export class ConsoleWiring {
     this.#starters.push(() => { panel.canGo = this.#skills.some((entry) => entry.goalNames); });
   }
 
+  /** The robot's static world for views drawn in the browser, once (the browser keeps it by its version, the
+   *  ETag, and asks again only to confirm); tried again while the robot does not answer. */
+  #scene(descriptor, panel) {
+    const load = async () => {
+      try {
+        const scene = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/scene`);
+        panel.note = "";
+        this.#guard(descriptor.id, () => { panel.scene = scene; });
+      } catch (error) {
+        panel.note = `The lab's description could not be loaded: ${error.message}`;
+        if (error.status === 503 || error.status === 0) setTimeout(load, SCENE_RETRY_MS);
+      }
+    };
+    this.#starters.push(load);
+  }
+
   /** The occupancy grid, polled while the panel is shown. */
   #mapGrid(descriptor, panel) {
     let lastCells = null;
@@ -241,6 +261,7 @@ export class ConsoleWiring {
     if (!skill) return;
     skill.panel.parameters = { [skill.goalNames.x]: x_m, [skill.goalNames.y]: y_m };
     mapPanel.target = [x_m, y_m];
+    for (const view of this.#goalViews) view.target = [x_m, y_m];
   }
 
   /** "Go there": the map's target as a goal of the first goal skill, through the skill API like its Activate. */
@@ -416,6 +437,6 @@ export class ConsoleWiring {
   /** Go-to-goal style feedback also shows on the map (its goal and any obstacle values). */
   #shareFeedback(entry, feedback) {
     if (!entry.goalNames) return;
-    for (const map of this.#maps) map.goalFeedback = feedback;
+    for (const map of [...this.#maps, ...this.#goalViews]) map.goalFeedback = feedback;
   }
 }

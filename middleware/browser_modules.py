@@ -1,0 +1,39 @@
+"""The import map naming the browser libraries that `make run` / `make test` install under
+client_ui/static/vendor (three.js, from the npm registry at the version its package-lock.json pins), and the CSP
+source that lets exactly this inline map run: pages `import * as THREE from "three"`, with no bundler and no build
+step."""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+
+from flask import Flask
+from markupsafe import Markup
+
+VENDOR_MODULES = {
+    "three": "vendor/node_modules/three/build/three.module.js",
+    "three/addons/": "vendor/node_modules/three/examples/jsm/",
+}
+
+
+def import_map_text(static_url_path: str) -> str:
+    """The JSON of the import map, with the static files' URL prefix."""
+    prefix = static_url_path.rstrip("/") + "/"
+    return json.dumps({"imports": {name: prefix + path for name, path in VENDOR_MODULES.items()}},
+                      separators=(",", ":"), sort_keys=True)
+
+
+def csp_hash_source(text: str) -> str:
+    """The script-src source that allows one inline script whose text is exactly text."""
+    return "'sha256-" + base64.b64encode(hashlib.sha256(text.encode()).digest()).decode() + "'"
+
+
+def init_app(app: Flask) -> str:
+    """Gives templates `import_map` (the whole <script type="importmap"> element); returns its CSP source."""
+    text = import_map_text(app.static_url_path or "/static")
+    # The text is JSON of fixed paths (no "<"), so it goes into the page as it is and its hash holds.
+    element = Markup(f'<script type="importmap">{text}</script>')
+    app.jinja_env.globals["import_map"] = element
+    return csp_hash_source(text)
