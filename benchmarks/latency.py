@@ -385,7 +385,7 @@ def run(quick: bool, output: Path) -> list[Measurement]:
         rows += latency_rows("direct command (WS -> ack)", drive, floors["websocket"], 10, 30, quick)
         histograms["direct_command"] = drive
 
-        camera = measure_camera(controller, 5.0 if quick else 60.0)
+        camera = measure_camera(controller, 2.0 if quick else 60.0)
         camera_latency = [latency for _, latency in camera]
         rows += latency_rows("camera capture -> viewer", camera_latency, None, 60, 150, quick)
         third = max(len(camera_latency) // 3, 1)
@@ -396,14 +396,14 @@ def run(quick: bool, output: Path) -> list[Measurement]:
 
         viewer_browsers = [lab.browser(i) for i in range(1, min(users, 10))]
         for viewers in ((1, 10) if quick else (1, 10, 50, 100)):
-            fps, packs = measure_fanout(lab, viewer_browsers, viewers, 3.0 if quick else 10.0)
+            fps, packs = measure_fanout(lab, viewer_browsers, viewers, 1.5 if quick else 10.0)
             rows.append(Measurement(f"fan-out, {viewers} viewers", "frames per second at a viewer", fps, "fps",
                                     ">= 14 at 50 viewers", None, None if quick or viewers != 50 else fps >= 14))
             rows.append(Measurement(f"fan-out, {viewers} viewers", "middleware packs per frame", packs, "count",
                                     "= 1", None, None if quick else math.isclose(packs, 1.0, abs_tol=0.05),
                                     "the skill server JPEG-encodes each frame once"))
 
-        latencies, errors, cpu_share = measure_capacity(lab, lab.usernames, 5.0 if quick else 30.0)
+        latencies, errors, cpu_share = measure_capacity(lab, lab.usernames, 2.0 if quick else 30.0)
         rows += latency_rows(f"capacity, {users} users", latencies, floors["http"], 100, 100, quick)[1:]
         rows.append(Measurement(f"capacity, {users} users", "errors", float(errors), "count", "= 0", None,
                                 None if quick else errors == 0))
@@ -412,10 +412,10 @@ def run(quick: bool, output: Path) -> list[Measurement]:
         histograms["capacity_api"] = latencies
         queue.close()
 
-        speed = headless_speed(3.0 if quick else 20.0)
+        speed = headless_speed(1.5 if quick else 20.0)
         rows.append(Measurement("world, headless physics + sensors", "speed", speed, "x real time", ">= 20", None,
                                 None if quick else speed >= 20))
-        share = camera_cpu_share(lab, controller, 3.0 if quick else 10.0)
+        share = camera_cpu_share(lab, controller, 1.5 if quick else 10.0)
         rows.append(Measurement("world, real time + camera 15 fps", "CPU of one core", share, "%", "<= 60", None,
                                 None if quick else share <= 60))
     finally:

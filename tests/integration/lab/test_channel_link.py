@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Iterator
+
+import pytest
 
 from middleware.robots.messages import unpack_camera_frame
 from tests.conftest import LabClient
@@ -20,12 +23,29 @@ def _next(ws, timeout_s: float = 5.0) -> tuple[int, str | bytes]:
     return int(head), text
 
 
+_unmatched: dict[int, list[tuple[int, str | bytes]]] = {}
+
+
+@pytest.fixture(autouse=True)
+def _forget_unmatched() -> Iterator[None]:
+    yield
+    _unmatched.clear()  # a later test's socket may reuse an id
+
+
 def _until(ws, predicate, timeout_s: float = 10.0):
+    """The link's first message that predicate accepts, earlier unmatched ones first: the channels interleave in any
+    order (a drive's "ready" may come before the camera's first frame), so what one wait skips, a later one reads."""
+    kept = _unmatched.setdefault(id(ws), [])
+    for index, (sub, message) in enumerate(kept):
+        if predicate(sub, message):
+            del kept[index]
+            return sub, message
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         sub, message = _next(ws, max(0.05, deadline - time.monotonic()))
         if predicate(sub, message):
             return sub, message
+        kept.append((sub, message))
     raise AssertionError("the expected message never came")
 
 
