@@ -28,7 +28,7 @@ from simple_websocket import ConnectionClosed
 from werkzeug.exceptions import NotFound
 
 from middleware import events
-from middleware.auth.session_records import ACCOUNTS_TOPIC
+from middleware.auth.session_records import ACCOUNTS_TOPIC, forget_verdicts
 from middleware.db import get_session, session_factory
 from middleware.errors import ApiError
 from middleware.lab.delay import DelayQueue, ViewerDelay, apply_viewer_delay, capture_time_s
@@ -321,8 +321,7 @@ def init_app(app: Flask, channels: Iterable[ChannelDeclarations],
     for declare in channels:
         declare(sock)
     sock.route(LINK_PATH, messages_per_s=LINK_MESSAGES_PER_S, endpoint="link_channel")(sock.link_channel)
-    events.listen(session_factory(app).kw["bind"], ACCOUNTS_TOPIC,
-                  lambda key: recheck_logins(int(key) if key and key.isdigit() else None))
+    events.listen(session_factory(app).kw["bind"], ACCOUNTS_TOPIC, _logins_ended)
 
     @app.before_request
     def _websocket_only() -> None:
@@ -331,6 +330,14 @@ def init_app(app: Flask, channels: Iterable[ChannelDeclarations],
         sock.refuse_while_cooling_down()
 
     return sock
+
+
+def _logins_ended(key: str | None) -> None:
+    """A login of user key (None: anyone's) ended in some worker. This process's verdicts on it go first: kept up
+    to RECHECK_S, a verdict from just before would let the next request in, and answer each socket's check yes."""
+    user_id = int(key) if key and key.isdigit() else None
+    forget_verdicts(user_id)
+    recheck_logins(user_id)
 
 
 def as_json(message: dict[str, object]) -> str:

@@ -3,7 +3,8 @@
 The cookie carries a random key; the `login_sessions` row, found by the key's SHA-256, says whether the
 login is still open. Every worker reads the same rows, so logout, a password change or reset and disabling
 an account end the login in every process. A process keeps each verdict at most RECHECK_S (so a request
-usually costs no read) and drops it at once when it ends a session itself. No request state in here.
+usually costs no read) and drops it at once when it ends a session itself, or when it hears that a login of
+the user ended in another process (forget_verdicts, on the ACCOUNTS_TOPIC announcement). No request state in here.
 """
 
 from __future__ import annotations
@@ -90,12 +91,18 @@ def end_session(session: Session, key: str, now: datetime) -> None:
 
 def end_all_sessions(connection: Connection | Session, user_id: int, now: datetime) -> None:
     """Ends every open login of user_id; the caller commits."""
-    with _lock:
-        for digest in [d for d, (owner, _) in _verdicts.items() if owner == user_id]:
-            del _verdicts[digest]
+    forget_verdicts(user_id)
     connection.execute(update(LoginSession)
                        .where(LoginSession.user_id == user_id, LoginSession.ended_at.is_(None))
                        .values(ended_at=now))
+
+
+def forget_verdicts(user_id: int | None) -> None:
+    """Drops this process's verdicts on user_id's logins (None: everyone's), so their next check reads the rows:
+    another process announced that a login of theirs ended."""
+    with _lock:
+        for digest in [d for d, (owner, _) in _verdicts.items() if user_id is None or owner == user_id]:
+            del _verdicts[digest]
 
 
 def _forget(digest: str) -> bool:
