@@ -119,17 +119,25 @@ def make_test_app(database_url: str, robots: str, tmp_path: Path):
     return app
 
 
+def _let_go(application) -> None:
+    """Stops what a test app started: its ticker, its links, and its farm's robots (a lab's robots outlive its web
+    process by design, so the practice robots of a test would otherwise run on after the suite)."""
+    from middleware.access.coordinator import access_coordinator
+    from middleware.farm.setup import robot_farm
+    from middleware.robots.registry import robot_registry
+
+    access_coordinator(application).stop_ticker()
+    robot_registry(application).close()
+    robot_farm(application).close()
+
+
 @pytest.fixture
 def app(tmp_path: Path, skill_server_address: str):
     """The middleware on SQLite, wired to the session's skill server."""
-    from middleware.access.coordinator import access_coordinator
-    from middleware.robots.registry import robot_registry
-
     application = make_test_app(f"sqlite:///{tmp_path / 'app.sqlite3'}",
                                 f"lab-1={skill_server_address},ghost=127.0.0.1:9", tmp_path)
     yield application
-    access_coordinator(application).stop_ticker()
-    robot_registry(application).close()
+    _let_go(application)
 
 
 class LiveServer:
@@ -153,10 +161,8 @@ class LiveServer:
 @contextmanager
 def served_lab(robots: str, tmp_path: Path) -> Iterator[LiveServer]:
     """The app on a fresh SQLite database with student1 and tutor1, wired to robots ('name=host:port,...'), served."""
-    from middleware.access.coordinator import access_coordinator
     from middleware.auth.services import create_user
     from middleware.db import session_factory
-    from middleware.robots.registry import robot_registry
 
     application = make_test_app(f"sqlite:///{tmp_path / 'lab.sqlite3'}", robots, tmp_path)
     with session_factory(application)() as session:
@@ -167,8 +173,7 @@ def served_lab(robots: str, tmp_path: Path) -> Iterator[LiveServer]:
         yield server
     finally:
         server.stop()
-        access_coordinator(application).stop_ticker()
-        robot_registry(application).close()
+        _let_go(application)
 
 
 def make_course(app, code: str, members: dict[str, str]) -> int:
