@@ -65,6 +65,15 @@ class Camera:
 
     def render_rgba(self, client: Any, pose: Pose2D) -> np.ndarray:
         """An (height, width, 4) uint8 image of what the camera sees."""
+        return self._render(client, pose, with_body_ids=False)[0]
+
+    def render_rgba_and_body_ids(self, client: Any, pose: Pose2D) -> tuple[np.ndarray, np.ndarray]:
+        """The image and, per pixel, the id of the pybullet body it shows (-1: none), from one rendering."""
+        rgba, body_ids = self._render(client, pose, with_body_ids=True)
+        assert body_ids is not None
+        return rgba, body_ids
+
+    def _render(self, client: Any, pose: Pose2D, with_body_ids: bool) -> tuple[np.ndarray, np.ndarray | None]:
         spec, robot = self.spec, self._robot
         if self._projection is None:
             self._projection = client.computeProjectionMatrixFOV(
@@ -77,7 +86,7 @@ class Camera:
         view = client.computeViewMatrix(
             cameraEyePosition=eye, cameraTargetPosition=target, cameraUpVector=[0.0, 0.0, 1.0]
         )
-        _, _, rgba, _, _ = client.getCameraImage(
+        _, _, rgba, _, segmentation = client.getCameraImage(
             spec.width_px,
             spec.height_px,
             viewMatrix=view,
@@ -88,9 +97,12 @@ class Camera:
             lightAmbientCoeff=spec.light_ambient,
             lightDiffuseCoeff=spec.light_diffuse,
             lightSpecularCoeff=spec.light_specular,
-            flags=client.ER_NO_SEGMENTATION_MASK,
+            flags=0 if with_body_ids else client.ER_NO_SEGMENTATION_MASK,
         )
-        return np.asarray(rgba, dtype=np.uint8).reshape(spec.height_px, spec.width_px, 4)
+        image = np.asarray(rgba, dtype=np.uint8).reshape(spec.height_px, spec.width_px, 4)
+        if not with_body_ids:
+            return image, None
+        return image, np.asarray(segmentation, dtype=np.int64).reshape(spec.height_px, spec.width_px)
 
     def render_jpeg(self, client: Any, pose: Pose2D) -> bytes:
         """One rendered frame, JPEG-encoded."""

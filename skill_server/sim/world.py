@@ -60,6 +60,8 @@ MAX_REALTIME_LAG_S = 0.25  # beyond this the loop stops trying to catch up with 
 # publishes fresh sensor readings at 4 Hz, sim time following the wall clock, until a command or a viewer wakes it.
 PARK_AFTER_S = 1.0
 PARKED_PERIOD_S = 0.25
+# What a pixel of render_surfaces() shows.
+SURFACE_BACKGROUND, SURFACE_FLOOR, SURFACE_MARK, SURFACE_SOLID, SURFACE_ROBOT = range(5)
 REST_SPEED_MPS = 1e-3
 REST_TURN_RADPS = 1e-2
 
@@ -370,7 +372,7 @@ class World:
         client.setGravity(0.0, 0.0, -9.81)
         client.setPhysicsEngineParameter(fixedTimeStep=PHYSICS_DT_S, numSubSteps=0,
                                          numSolverIterations=SOLVER_ITERATIONS)
-        build_scene(client, self.scene, OBSTACLE_GROUP)
+        self._scene_bodies = build_scene(client, self.scene, OBSTACLE_GROUP)
         spawn = self.scene.spawn
         self._robot = client.loadURDF(
             str(robot_model.URDF_PATH),
@@ -555,3 +557,19 @@ class World:
     def render_rgba(self) -> np.ndarray:
         """The raw camera image (for tests and inspection before start())."""
         return self._camera.render_rgba(self._client, self._ground_truth())
+
+    def render_surfaces(self) -> tuple[np.ndarray, np.ndarray]:
+        """The raw camera image and, per pixel, what it shows: a SURFACE_* code (tests and tools, before start()).
+
+        The codes follow the scene description: the floor, a mark painted on it, a solid (wall, obstacle), the robot.
+        """
+        rgba, body_ids = self._camera.render_rgba_and_body_ids(self._client, self._ground_truth())
+        floor, *rest = self._scene_bodies
+        solids = len(self.scene.boxes) + len(self.scene.cylinders)
+        surface_of = {floor: SURFACE_FLOOR, self._robot: SURFACE_ROBOT}
+        surface_of.update({body: SURFACE_SOLID for body in rest[:solids]})
+        surface_of.update({body: SURFACE_MARK for body in rest[solids:]})
+        lookup = np.full(max(surface_of) + 2, SURFACE_BACKGROUND, dtype=np.uint8)
+        for body, surface in surface_of.items():
+            lookup[body] = surface
+        return rgba, lookup[np.where(body_ids >= 0, body_ids & 0xFFFFFF, len(lookup) - 1)]

@@ -7,6 +7,8 @@
 import * as THREE from "three";
 
 const UP = new THREE.Vector3(0, 0, 1);
+/** What a mesh shows, in mesh.userData.surface, as the server's render_surfaces() codes them. */
+export const SURFACES = Object.freeze({ background: 0, floor: 1, mark: 2, solid: 3, robot: 4 });
 const CYLINDER_SEGMENTS = 32;
 
 /**
@@ -94,13 +96,13 @@ export function buildScene(scene) {
   const lab = new THREE.Group();
   lab.name = "lab";
   const floor = scene.floor;
-  lab.add(patchMesh(floor, material(floor.rgba), 0));
+  lab.add(patchMesh(floor, material(floor.rgba), 0, "floor"));
   // Marks are painted over the floor in order, as the server layers them a hair apart: each draws after the
   // previous without writing depth, so a later mark covers an earlier one and walls still hide them.
   scene.marks.forEach((mark, index) => {
     const paint = material(mark.rgba).clone();
     paint.depthWrite = false;
-    lab.add(patchMesh(mark, paint, 1 + index));
+    lab.add(patchMesh(mark, paint, 1 + index, "mark"));
   });
   for (const block of scene.blocks) {
     const mesh = new THREE.Mesh(new THREE.BoxGeometry(2 * block.half_x_m, 2 * block.half_y_m, block.height_m),
@@ -108,12 +110,14 @@ export function buildScene(scene) {
     mesh.position.set(block.center_x_m, block.center_y_m, block.height_m / 2);
     mesh.rotation.z = block.yaw_rad;
     mesh.name = block.name;
+    mesh.userData.surface = "solid";
     lab.add(mesh);
   }
   for (const cylinder of scene.cylinders) {
     const mesh = new THREE.Mesh(zCylinder(cylinder.radius_m, cylinder.height_m), material(cylinder.rgba));
     mesh.position.set(cylinder.center_x_m, cylinder.center_y_m, cylinder.height_m / 2);
     mesh.name = cylinder.name;
+    mesh.userData.surface = "solid";
     lab.add(mesh);
   }
   const robot = new THREE.Group();
@@ -128,6 +132,7 @@ export function buildScene(scene) {
     mesh.position.set(...part.position_m);
     mesh.quaternion.set(...part.orientation_xyzw);
     mesh.name = part.link;
+    mesh.userData.surface = "robot";
     robot.add(mesh);
   }
   const bounds = {
@@ -152,11 +157,12 @@ export function buildScene(scene) {
   };
 }
 
-function patchMesh(patch, patchMaterial, renderOrder) {
+function patchMesh(patch, patchMaterial, renderOrder, surface) {
   const mesh = new THREE.Mesh(new THREE.PlaneGeometry(2 * patch.half_x_m, 2 * patch.half_y_m), patchMaterial);
   mesh.position.set(patch.center_x_m, patch.center_y_m, patch.top_z_m);
   mesh.renderOrder = renderOrder;
   mesh.name = patch.kind;
+  mesh.userData.surface = surface;
   return mesh;
 }
 

@@ -15,7 +15,14 @@ from skill_server.sim.geometry import Pose2D
 from skill_server.sim.robot_model import TELEBOT
 from skill_server.sim.scene_description import SceneDescription, content_version
 from skill_server.sim.scenes import known_scenes
-from skill_server.sim.world import World
+from skill_server.sim.world import (
+    SURFACE_BACKGROUND,
+    SURFACE_FLOOR,
+    SURFACE_MARK,
+    SURFACE_ROBOT,
+    SURFACE_SOLID,
+    World,
+)
 
 BOX, CYLINDER, SPHERE, MESH = 3, 4, 2, 5  # pybullet's GEOM_* numbers as getVisualShapeData reports them
 
@@ -144,3 +151,16 @@ def test_marks_say_what_they_are() -> None:
     assert kinds.count("track_line") == len(scene.track.lines) and kinds.count("track_point") == 2
     assert scene.floor.kind == "floor"
     assert [mark.top_z_m for mark in scene.marks] == sorted(mark.top_z_m for mark in scene.marks)
+
+
+def test_the_camera_says_what_each_pixel_shows_from_the_same_rendering() -> None:
+    """render_surfaces() draws the frame once and names each pixel's surface: the picture is render_rgba()'s."""
+    with World("lab", realtime=False) as world:
+        picture, surfaces = world.render_surfaces()  # at the dock, facing the red lane and the east wall
+        assert (picture == world.render_rgba()).all()
+    counts = np.bincount(surfaces.ravel(), minlength=5)
+    assert counts[SURFACE_FLOOR] > counts[SURFACE_MARK] > 0 and counts[SURFACE_SOLID] > 0
+    assert counts[SURFACE_ROBOT] == 0  # the robot never sees itself
+    assert (surfaces[0] == SURFACE_BACKGROUND).all() and (surfaces[-1] != SURFACE_SOLID).all()
+    lane = picture[200, 160, :3].astype(int)
+    assert surfaces[200, 160] == SURFACE_MARK and lane[0] > lane[1] + 80  # the red lane is paint
