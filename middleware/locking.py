@@ -28,21 +28,29 @@ def rows_matched(session: Session, statement: Update) -> int:
     return cast("CursorResult[Any]", session.execute(statement)).rowcount
 
 
-def lock_robot_control(session: Session, robot_name: str) -> None:
-    """Locks the robot's robot_control row until the transaction ends, creating the row if missing."""
+def lock_robot_control(session: Session, robot_name: str) -> RobotControl:
+    """Locks the robot's robot_control row until the transaction ends, creating the row if missing; the row as
+    stored now (one statement when it exists: a turn passing is latency every waiting user sees)."""
     if _is_sqlite(session):
         touched = rows_matched(session, update(RobotControl).where(RobotControl.robot_name == robot_name)
                                .values(robot_name=RobotControl.robot_name))
         if touched == 0:
             session.add(RobotControl(robot_name=robot_name))
             session.flush()
-        return
-    # A concurrent creator blocks here until it commits; then the row exists and we lock it.
-    session.execute(
-        postgresql_insert(RobotControl).values(robot_name=robot_name, faulted=False)
-        .on_conflict_do_nothing(index_elements=["robot_name"])
-    )
-    session.execute(select(RobotControl.robot_name).where(RobotControl.robot_name == robot_name).with_for_update())
+        control = session.get(RobotControl, robot_name, populate_existing=True)
+    else:
+        locked = (select(RobotControl).where(RobotControl.robot_name == robot_name).with_for_update()
+                  .execution_options(populate_existing=True))
+        control = session.scalar(locked)
+        if control is None:
+            # A concurrent creator blocks here until it commits; then the row exists and we lock it.
+            session.execute(
+                postgresql_insert(RobotControl).values(robot_name=robot_name, faulted=False)
+                .on_conflict_do_nothing(index_elements=["robot_name"])
+            )
+            control = session.scalar(locked)
+    assert control is not None
+    return control
 
 
 def lock_user(session: Session, user_id: int) -> None:

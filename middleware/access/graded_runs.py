@@ -47,7 +47,8 @@ def graded_run_hold_s(session: Session, user_id: int) -> float:
 
 def graded_run_holder(session: Session, robot_name: str, now: datetime) -> int | None:
     """The robot's controller when their graded run on it is open and within its hold; None otherwise."""
-    controller_id = session.scalar(select(RobotControl.controller_id).where(RobotControl.robot_name == robot_name))
+    control = session.get(RobotControl, robot_name)  # the caller's locked row, from memory
+    controller_id = control.controller_id if control is not None else None
     if controller_id is None:
         return None
     started = graded_run_started_at(session, robot_name, controller_id, now)

@@ -78,10 +78,7 @@ def _as_utc(moment: datetime | None) -> datetime | None:
 
 def lock_robot(session: Session, robot_name: str) -> RobotControl:
     """The robot's control row, locked for this transaction (created when missing)."""
-    lock_robot_control(session, robot_name)
-    control = session.get(RobotControl, robot_name, populate_existing=True)
-    assert control is not None
-    return control
+    return lock_robot_control(session, robot_name)
 
 
 def _entries(session: Session, robot_name: str) -> list[QueueEntry]:
@@ -98,20 +95,20 @@ def _grant(control: RobotControl, user_id: int, now: datetime) -> None:
     control.faulted = False
 
 
-def _seen(session: Session, control: RobotControl) -> tuple[object, ...]:
+def _seen(control: RobotControl, entries: list[QueueEntry]) -> tuple[object, ...]:
     """What a queue page shows of the robot: who controls it, until when, faults, and who waits in which order."""
     return (control.controller_id, control.token, _as_utc(control.turn_ends_at), control.faulted,
-            tuple(e.user_id for e in _entries(session, control.robot_name)))
+            tuple(e.user_id for e in entries))
 
 
 def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: datetime,
-            robot_online: bool) -> QueueState:
+            robot_online: bool, entries: list[QueueEntry] | None = None) -> QueueState:
     """Applies the rule to the locked row: drops users gone past grace, grants, rotates, pauses on faults; a change
     is announced on the event bus (topic "queue", the robot's name) for every worker's queue pages."""
     token_before = control.token
-    seen_before = _seen(session, control)
+    entries = _entries(session, control.robot_name) if entries is None else entries
+    seen_before = _seen(control, entries)
     cutoff = now - timedelta(seconds=policy.grace_s)
-    entries = _entries(session, control.robot_name)
     for gone in [e for e in entries if _as_utc(e.last_seen_at) < cutoff]:
         session.delete(gone)
         entries.remove(gone)
@@ -171,7 +168,7 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
                 control.turn_ends_at = None  # the pool waiter went (or another robot took them): no one to hand to
     control.updated_at = now
     session.flush()
-    if _seen(session, control) != seen_before:
+    if _seen(control, _entries(session, control.robot_name)) != seen_before:
         events.announce(session, QUEUE_TOPIC, control.robot_name)
     return QueueState(
         robot_name=control.robot_name,
@@ -238,6 +235,7 @@ def pass_turn(session: Session, robot_name: str, user_id: int, policy: AccessPol
         if (any(e.user_id != user_id for e in entries)
                 or pools.next_waiter(session, robot_name, now, policy.grace_s) is not None):
             control.turn_ends_at = now  # expires now: _settle rotates exactly as at the end of a turn
+        return _settle(session, control, policy, now, robot_online, entries)
     return _settle(session, control, policy, now, robot_online)
 
 

@@ -63,21 +63,22 @@ def first_free_start(session: Session, kind: str, robots: list[str], start: date
     return None
 
 
-def bind_at_slot_start(session: Session, robot_name: str, now: datetime) -> None:
+def bind_at_slot_start(session: Session, robot_name: str, now: datetime) -> bool:
     """Binds the oldest started, unbound pool booking of the robot's kind to robot_name, unless another robot of
-    the kind is free for the rest of that slot and this one is not (then that robot binds it when it ticks)."""
+    the kind is free for the rest of that slot and this one is not (then that robot binds it when it ticks);
+    whether one was bound here."""
     kind = robot_kind(session, robot_name)
     if kind is None:
-        return
+        return False
     pending = session.scalar(select(Booking).where(
         Booking.pool_kind == kind, Booking.robot_name.is_(None), Booking.cancelled_at.is_(None),
         Booking.released_at.is_(None), Booking.starts_at <= now, Booking.ends_at > now)
         .order_by(Booking.starts_at, Booking.id).limit(1))
     if pending is None:
-        return
+        return False
     robots = robots_of_kind(session, kind)
     busy = {b.robot_name for b in _holding(session, kind, robots, now, _utc(pending.ends_at)) if b.robot_name}
     if robot_name in busy and any(r not in busy for r in robots):
-        return
-    rows_matched(session, update(Booking).where(Booking.id == pending.id, Booking.robot_name.is_(None))
-                 .values(robot_name=robot_name))
+        return False
+    return rows_matched(session, update(Booking).where(Booking.id == pending.id, Booking.robot_name.is_(None))
+                        .values(robot_name=robot_name)) > 0

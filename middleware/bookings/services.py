@@ -73,9 +73,8 @@ def priority_user_id(session: Session, robot_name: str, now: datetime, *, grace_
     """
     now = as_utc(now)
     booking = _active_booking(session, robot_name, now)
-    if booking is None:
-        pool_slots.bind_at_slot_start(session, robot_name, now)  # a pool booking whose slot starts takes this robot
-        booking = _active_booking(session, robot_name, now)
+    if booking is None and pool_slots.bind_at_slot_start(session, robot_name, now):
+        booking = _active_booking(session, robot_name, now)  # a pool booking whose slot starts took this robot
     if booking is None or _release_if_no_show(booking, now, grace_period_s(grace_s)):
         return None
     return booking.user_id
