@@ -166,8 +166,26 @@ export class ConsoleWiring {
     panel.robotName = this.#robotName;
     this.#cameras.push(panel);
     bindFeedback(panel);
-    const camera = this.#channel(descriptor.channel ?? `${this.#robotPath}/camera`, { binary: true });
-    camera.addEventListener("statechange", ({ detail }) => { panel.connected = detail.phase === "open"; });
+    const path = descriptor.channel ?? `${this.#robotPath}/camera`;
+    const open = () => this.#openCamera(descriptor, panel, path);
+    open();
+    // While the picture is drawn here the video socket is closed: a robot nobody watches renders nothing.
+    panel.addEventListener("camera-source-change", ({ detail }) => {
+      const channel = this.#channels.get(path);
+      if (detail.source === "drawn" && channel) {
+        this.#channels.delete(path);
+        channel.close("the picture is drawn by this browser");
+      } else if (detail.source === "video" && !channel) {
+        open();
+      }
+    });
+  }
+
+  #openCamera(descriptor, panel, path) {
+    const camera = this.#channel(path, { binary: true });
+    camera.addEventListener("statechange", ({ detail }) => {
+      if (this.#channels.get(path) === camera) panel.connected = detail.phase === "open";
+    });
     camera.addEventListener("message", ({ detail }) => {
       if (detail instanceof ArrayBuffer) {
         panel.frame = detail;

@@ -3,17 +3,22 @@
 // JSON from the server), `connected` (bool: is the camera socket open), and for the feedback layer
 // `info` (RobotInfo: camera size and field of view), `driveReady` / `driveSent` (the drive socket's
 // "ready" and every message sent on it), `feedbackEnabled` (bool), `feedbackFill` ("edges" | "black": what
-// fills the view the frame does not cover), `telemetry` (its laser scan sets the depth the zoom assumes).
+// fills the view the frame does not cover), `telemetry` (its laser scan sets the depth the zoom assumes; while the
+// picture is drawn here, its odometry pose is where the view is drawn from), `scene` (the robot's scene
+// description: offers the picture drawn by this browser), `source` ("video" | "drawn").
 // Out: `camera-feedback-change` {enabled} when the person turns the motion preview on or off,
-// `camera-feedback-fill-change` {fill} when they choose the fill.
+// `camera-feedback-fill-change` {fill} when they choose the fill, `camera-source-change` {source} when they
+// choose where the picture comes from (the wiring closes the video socket while it is drawn here).
 
 import { h } from "../../lib/dom.js";
 import { framesInWindow, parseFramePacket } from "../../lib/camera-frame.js";
 import { FILL_MODES, FeedbackLayer } from "./camera-feedback.js";
+import { DrawnView } from "./drawn-view.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
 
 const FPS_WINDOW_MS = 1000;
+const SOURCES = ["video", "drawn"];
 
 export class CameraPanel extends PanelElement {
   #canvas;
@@ -35,6 +40,12 @@ export class CameraPanel extends PanelElement {
   #fillSelect;
   #delayOutput;
   #injectedBadge;
+  #sourceSelect;
+  #source = "video";
+  #scene = null;
+  #drawn = null;          // DrawnView, once made
+  #drawnProblem = "";
+  #drawing = false;       // a drawn frame is being made: telemetry meanwhile is dropped, the newest wins
 
   connectedCallback() {
     super.connectedCallback();
@@ -68,6 +79,13 @@ export class CameraPanel extends PanelElement {
       h("option", { value: "edges", text: "continue the picture" }),
       h("option", { value: "black", text: "black" }));
     this.#fillSelect.value = this.#feedback.fill;
+    this.#sourceSelect = h("select", { id: "camera-source", "data-field": "camera-source" },
+      h("option", { value: "video", text: "the robot's camera (video)" }),
+      h("option", { value: "drawn", text: "drawn by this browser from the robot's pose", disabled: true }));
+    this.#sourceSelect.addEventListener("change", () => {
+      this.source = this.#sourceSelect.value;
+      this.emit("camera-source-change", { source: this.#source });
+    });
     this.#fillSelect.addEventListener("change", () => {
       this.feedbackFill = this.#fillSelect.value;
       this.emit("camera-feedback-fill-change", { fill: this.#feedback.fill });
@@ -84,7 +102,9 @@ export class CameraPanel extends PanelElement {
         this.#injectedBadge),
       // Folded on a phone, where the picture and the drive pad must share one screen.
       h("details", { class: "camera__options", open: window.matchMedia("(min-width: 760px)").matches },
-        h("summary", { text: "Motion preview" }),
+        h("summary", { text: "Picture and motion preview" }),
+        h("p", { class: "camera__feedback" },
+          h("label", { class: "camera__source" }, "Picture: ", this.#sourceSelect)),
         h("p", { class: "camera__feedback" },
           h("label", {}, this.#feedbackToggle, " Move the picture at once with my commands"),
           h("label", { class: "camera__fill" }, "Where the frame shows nothing: ", this.#fillSelect))),
@@ -111,6 +131,7 @@ export class CameraPanel extends PanelElement {
   /** One binary message from the camera socket. Only the newest waiting frame is kept. */
   set frame(buffer) {
     this.ensureBuilt();
+    if (this.#source !== "video") return; // a frame still on its way when the picture was switched
     if (this.#decoding) {
       this.#pending = buffer;
       return;
@@ -157,9 +178,78 @@ export class CameraPanel extends PanelElement {
     return this.#feedback.fill;
   }
 
-  /** A telemetry message: its laser scan tells how far away what the camera sees is. */
+  /** A telemetry message: its laser scan tells how far away what the camera sees is; while the picture is drawn
+   *  here, its odometry pose is where the next frame is drawn from. */
   set telemetry(message) {
     this.#feedback.setScan(message?.laser);
+    if (this.#source === "drawn" && this.#drawn && !this.#drawing) this.#drawFrom(message);
+  }
+
+  /** A status message from the telemetry socket: it announces an added delay as the camera socket does (the
+   *  drawn picture's poses come through it, delayed alike, while the camera socket is closed). */
+  set telemetryStatus(message) {
+    this.ensureBuilt();
+    if (message && "injected_delay_s" in message) this.#showInjectedDelay(Number(message.injected_delay_s));
+  }
+
+  /** The robot's scene description: the picture may then be drawn here. */
+  set scene(scene) {
+    this.ensureBuilt();
+    if (!scene?.camera || scene.version === this.#scene?.version) return;
+    this.#scene = scene;
+    this.#drawn?.dispose();
+    this.#drawn = null;
+    this.#sourceSelect.querySelector('option[value="drawn"]').disabled = false;
+    if (this.#source === "drawn") this.#startDrawn();
+  }
+
+  /** "video" (the robot's JPEG stream) or "drawn" (drawn by this browser); anything else is ignored. */
+  set source(source) {
+    this.ensureBuilt();
+    if (!SOURCES.includes(source)) return;
+    this.#source = source;
+    this.#sourceSelect.value = source;
+    this.dataset.source = source;
+    this.#canvas.setAttribute("aria-label", source === "drawn"
+      ? `The view of ${this.#robotName || "the robot"}, drawn by this browser from its odometry pose`
+      : `Live camera of ${this.#robotName || "the robot"}`);
+    if (source === "drawn") this.#startDrawn();
+  }
+
+  get source() {
+    return this.#source;
+  }
+
+  async #startDrawn() {
+    if (this.#drawn || !this.#scene) return;
+    const scene = this.#scene;
+    const scale = Math.min(window.devicePixelRatio || 1, window.innerWidth < 600 ? 1 : 2);
+    const { view, problem } = await DrawnView.create(scene, scale);
+    if (scene !== this.#scene) {
+      view?.dispose();
+      return;
+    }
+    this.#drawn = view;
+    this.#drawnProblem = problem;
+    if (!view) {
+      this.#sourceSelect.querySelector('option[value="drawn"]').disabled = true;
+      this.#showMessage(problem, true);
+      this.source = "video";
+      this.emit("camera-source-change", { source: "video" });
+    }
+  }
+
+  async #drawFrom(message) {
+    this.#drawing = true;
+    try {
+      const frame = await this.#drawn.frameFrom(message);
+      if (frame && this.#source === "drawn") this.#draw(frame.bitmap, frame.header);
+      else frame?.bitmap.close();
+    } catch (error) {
+      console.warn("drawn frame skipped:", error.message);
+    } finally {
+      this.#drawing = false;
+    }
   }
 
   /** A text message from the camera socket: {type: "status"|"error", ...}. */
@@ -181,7 +271,7 @@ export class CameraPanel extends PanelElement {
   }
 
   #applyLabel() {
-    this.#canvas?.setAttribute("aria-label", `Live camera of ${this.#robotName || "the robot"}`);
+    if (this.#source === "video") this.#canvas?.setAttribute("aria-label", `Live camera of ${this.#robotName || "the robot"}`);
   }
 
   #showMessage(text, isProblem) {
@@ -237,6 +327,7 @@ export class CameraPanel extends PanelElement {
     this.#placeholder.hidden = true;
     this.#stage.classList.remove("camera__stage--stale");
     this.#lastHeader = header;
+    this.dataset.frameSource = header.drawn_here ? "drawn" : "video"; // for tools and tests
     const now = performance.now();
     this.#drawTimesMs.push(now);
     this.#drawTimesMs = this.#drawTimesMs.filter((t) => now - t <= FPS_WINDOW_MS);
@@ -261,5 +352,6 @@ export const register = registerPanel({
   kind: "camera", tag: "camera-panel", element: CameraPanel, span: 2,
   stylesheets: [new URL("./camera-panel.css", import.meta.url)],
   // The laser scan in the telemetry gives the motion preview the depth of what the camera sees.
-  feeds: [{ service: "camera-stream" }, { robotInfo: "info" }, { socket: "telemetry", messages: { telemetry: "telemetry" } }],
+  feeds: [{ service: "camera-stream" }, { robotInfo: "info" }, { service: "scene" },
+    { socket: "telemetry", messages: { telemetry: "telemetry", status: "telemetryStatus" } }],
 });

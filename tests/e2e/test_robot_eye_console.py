@@ -1,0 +1,93 @@
+"""The camera panel's picture drawn by the browser (three.js, from the robot's scene and its odometry pose) in
+Debian's Chromium against the real three tiers: the person switches to it, the video socket closes (the robot
+renders nothing for this viewer), the picture follows the robot, the motion preview and an added delay work on it
+as on the video, and the person switches back."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from tests.conftest import ARTIFACTS_DIR, LiveServer
+from tests.e2e.test_console import canvas_pixels, log_in, number, wait_for
+from tests.e2e.test_feedback import INJECTED_DELAY_S, canvas_data, set_delay
+from tests.e2e.test_lab_view import three_installed  # noqa: F401 - the fixture: fail clearly without three.js
+from tests.e2e.test_panels import open_console, wait_for_control
+
+pytestmark = pytest.mark.e2e
+
+
+def camera_viewers(live_server: LiveServer) -> int:
+    """How many of this web process's sockets take lab-1's JPEG stream."""
+    from middleware.robots.registry import robot_registry
+
+    return robot_registry(live_server.app).get("lab-1").camera.viewer_count
+
+
+def choose_source(page, source: str) -> None:
+    page.locator('[data-field="camera-source"]').select_option(source)
+    page.locator(f'camera-panel[data-source="{source}"]').wait_for(state="attached")
+
+
+def test_the_picture_drawn_here_follows_the_robot_and_the_video_socket_closes(page, live_server: LiveServer) -> None:
+    open_console(page, live_server)
+    wait_for_control(page)
+    wait_for(lambda: number(page, "frame-sequence") > 0, 15, "no video frame was drawn")
+    assert camera_viewers(live_server) == 1
+
+    choose_source(page, "drawn")
+    page.locator('[data-connection="camera"][data-phase="closed"]').wait_for()
+    wait_for(lambda: camera_viewers(live_server) == 0, 5, "the page still takes the JPEG stream")
+    page.locator('camera-panel[data-frame-source="drawn"]').wait_for(state="attached")
+    first = number(page, "frame-sequence")
+    wait_for(lambda: number(page, "frame-sequence") >= first + 5, 5, "no drawn frames came")
+    assert "drawn by this browser" in (page.locator("#camera-canvas").get_attribute("aria-label") or "")
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-console-drawn.png"))
+
+    before = canvas_pixels(page)
+    heading = number(page, "heading-rad")
+    page.evaluate("document.activeElement.blur()")
+    page.keyboard.down("ArrowLeft")
+    time.sleep(1.0)
+    page.keyboard.up("ArrowLeft")
+    wait_for(lambda: abs(number(page, "heading-rad") - heading) > 0.2, 5, "the robot did not turn")
+    wait_for(lambda: canvas_pixels(page) != before, 5, "the drawn picture did not follow the turn")
+    page.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-console-drawn-turned.png"))
+
+    choose_source(page, "video")
+    page.locator('[data-connection="camera"][data-phase="open"]').wait_for()
+    wait_for(lambda: camera_viewers(live_server) == 1, 5, "the video did not come back")
+    page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached")
+
+
+def test_the_motion_preview_and_an_added_delay_work_on_the_drawn_picture(
+    page, live_server: LiveServer, demo_accounts
+) -> None:
+    set_delay(live_server.app, "student", INJECTED_DELAY_S)
+    log_in(page, live_server, "student", demo_accounts["student"])
+    page.goto(f"{live_server.url}/lab/lab-1")
+    page.locator('[data-connection="drive"][data-phase="open"]').wait_for()
+    choose_source(page, "drawn")
+    page.locator('camera-panel[data-frame-source="drawn"]').wait_for(state="attached")
+    badge = page.locator('[data-field="injected-delay"]')  # announced on the telemetry socket too
+    badge.wait_for(state="visible")
+    assert "2.5" in badge.text_content()
+    wait_for(lambda: canvas_data(page, "outstandingCommands") == 0, 10, "stale commands outstanding at start")
+
+    page.evaluate("document.activeElement.blur()")
+    pressed_at = time.monotonic()
+    page.keyboard.down("ArrowLeft")
+    # The poses come through the same added delay as video frames: only the preview can show the turn this soon.
+    wait_for(lambda: canvas_data(page, "warpShiftPx") > 20, 2, "the drawn picture did not move with the key")
+    assert time.monotonic() - pressed_at < INJECTED_DELAY_S
+    assert canvas_data(page, "outstandingCommands") > 0
+    page.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-console-preview.png"))
+    time.sleep(0.6)
+    page.keyboard.up("ArrowLeft")
+    wait_for(lambda: canvas_data(page, "outstandingCommands") == 0, INJECTED_DELAY_S + 8,
+             "the delayed poses never caught up with the commands")
+    wait_for(lambda: abs(canvas_data(page, "warpShiftPx")) < 0.5, 3, "the warp did not fall back")
+    delay_text = page.locator('[data-field="video-delay"]').text_content()
+    assert float(delay_text) >= INJECTED_DELAY_S - 0.2, f"measured delay {delay_text} s"
