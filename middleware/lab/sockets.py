@@ -15,7 +15,7 @@ from middleware.access.sockets import ChannelSeat, open_robot_channel
 from middleware.auth.schemas import InvalidField
 from middleware.lab.delay import viewer_delay
 from middleware.lab.schemas import GOAL_ID_PATTERN, DriveLimits, parse_drive_message
-from middleware.live.loop import Continuation, blocking_work, read_in_thread
+from middleware.live.loop import Continuation, blocking_work
 from middleware.live.wire import LiveSocket
 from middleware.realtime import (
     CLOSE_NOT_FOUND,
@@ -157,12 +157,11 @@ def goal_channel(ws: WebSocket, robot_name: str, goal_id: str) -> Continuation |
     if not GOAL_ID_PATTERN.fullmatch(goal_id):
         refuse(ws, CLOSE_NOT_FOUND, "unknown_goal", "There is no goal with that id.", "goal_id")
         return None
-    updates = link.watch_goal(goal_id)
 
     async def relay(live: LiveSocket) -> None:
-        # A goal's updates come from a blocking gRPC stream: a thread of its own reads them while the goal runs.
+        updates = link.watch_goal(goal_id)
         try:
-            async for update in read_in_thread(updates, f"goal-{goal_id[:12]}"):
+            async for update in updates:
                 message = goal_update_message(update)
                 await live.send(as_json(message))
                 goal = message.get("goal")
@@ -174,7 +173,7 @@ def goal_channel(ws: WebSocket, robot_name: str, goal_id: str) -> Continuation |
                                      "message": error.details() or "The robot is not answering.",
                                      "field": "goal_id" if code == "unknown_goal" else None}))
         finally:
-            updates.cancel()
+            await updates.aclose()
 
     return relay
 

@@ -16,7 +16,7 @@ import logging
 import os
 import socket
 import threading
-from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from flask import Flask
@@ -202,33 +202,6 @@ def blocking_work() -> Callable[..., Awaitable[Any]]:
     from flask import current_app
 
     return functools.partial(channel_loop().work, current_app._get_current_object())  # type: ignore[attr-defined]
-
-
-_END = object()
-
-
-async def read_in_thread(items: Iterator[Any], name: str) -> AsyncIterator[Any]:
-    """The items of a blocking iterator, read by a thread of its own (a gRPC stream); its error is raised here."""
-    loop = asyncio.get_running_loop()
-    arrived: asyncio.Queue[Any] = asyncio.Queue()
-
-    def read() -> None:
-        try:
-            for item in items:
-                loop.call_soon_threadsafe(arrived.put_nowait, item)
-            loop.call_soon_threadsafe(arrived.put_nowait, _END)
-        except BaseException as error:  # noqa: BLE001 - handed to the reader, which raises it
-            with contextlib.suppress(RuntimeError):
-                loop.call_soon_threadsafe(arrived.put_nowait, error)
-
-    threading.Thread(target=read, name=name, daemon=True).start()
-    while True:
-        item = await arrived.get()
-        if item is _END:
-            return
-        if isinstance(item, BaseException):
-            raise item
-        yield item
 
 
 def recheck_logins(user_id: int | None) -> None:

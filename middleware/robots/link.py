@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import AsyncGenerator, Iterator
 from dataclasses import dataclass
 from typing import Protocol, TypeVar
 
@@ -77,6 +79,8 @@ class RobotLink:
         self._info: robot_pb2.RobotInfo | None = None
         self._info_at = 0.0
         self._closed = False
+        # A grpc.aio channel for streams read on the channel loop (one asyncio loop per process), made there.
+        self._aio: tuple[asyncio.AbstractEventLoop, grpc.aio.Channel, robot_pb2_grpc.RobotStub] | None = None
         self._sequence_lock = threading.Lock()
         self._highest_sequence = 0
         self.camera = FanoutHub(f"{name}-camera", self._open_camera, pack_camera_frame, _cancel_call)
@@ -146,9 +150,22 @@ class RobotLink:
         """A running goal or one that ended recently."""
         return self._call(self._stub.GetGoal, robot_pb2.GetGoalRequest(goal_id=goal_id))
 
-    def watch_goal(self, goal_id: str) -> ServerStream[robot_pb2.GoalUpdate]:
-        """The goal's updates until it ends (a stream of its own: goals have few watchers)."""
-        return self._stub.WatchGoal(robot_pb2.WatchGoalRequest(goal_id=goal_id, feedback_rate_hz=5))
+    async def watch_goal(self, goal_id: str) -> AsyncGenerator[robot_pb2.GoalUpdate, None]:
+        """The goal's updates until it ends, read on the running asyncio loop without a thread of its own (a stream
+        per watcher: goals have few); leaving the iteration cancels the stream. grpc.RpcError as the sync calls."""
+        call = self._aio_stub().WatchGoal(robot_pb2.WatchGoalRequest(goal_id=goal_id, feedback_rate_hz=5))
+        try:
+            async for update in call:
+                yield update
+        finally:
+            call.cancel()
+
+    def _aio_stub(self) -> robot_pb2_grpc.RobotStub:
+        loop = asyncio.get_running_loop()
+        if self._aio is None or self._aio[0] is not loop:
+            channel = grpc.aio.insecure_channel(self.address, options=CHANNEL_OPTIONS)
+            self._aio = (loop, channel, robot_pb2_grpc.RobotStub(channel))
+        return self._aio[2]
 
     def stream_telemetry(self, rate_hz: float) -> ServerStream[robot_pb2.Telemetry]:
         """A telemetry stream of its own, ground truth included (for graders; never forwarded to browsers)."""
@@ -215,6 +232,11 @@ class RobotLink:
         self.telemetry.close()
         self._closed = True
         self._channel.close()
+        if self._aio is not None:
+            loop, channel, _ = self._aio
+            self._aio = None
+            with contextlib.suppress(RuntimeError):  # its loop has already stopped: nothing is left to close
+                asyncio.run_coroutine_threadsafe(channel.close(), loop)
 
     def _open_camera(self) -> Iterator[object]:
         return self._stub.StreamCamera(robot_pb2.StreamCameraRequest(max_fps=15))
