@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import time
 import weakref
 from collections.abc import Callable
 from datetime import UTC, datetime, timedelta
 from typing import TYPE_CHECKING, Any
 
-from flask import Blueprint, Flask, Response, current_app, jsonify, request
+from flask import Blueprint, Flask, Response, current_app, has_app_context, jsonify, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy.orm import Session
@@ -318,24 +317,32 @@ def finish_recording(attempt_id: int) -> list[list[float]] | None:
     exam = get_exam(session, attempt.exam_id)
     robot_name = attempt.robot_name or exam.robot_name
     if exam.kind == "experimental" and robot_name:
-        kept = robot_run(robot_name, as_utc(attempt.started_at).timestamp())
+        kept = robot_run(robot_name, as_utc(attempt.started_at), datetime.now(UTC))
         if kept is not None:
             return kept
     return recorded
 
 
-def robot_run(robot_name: str, since_unix_s: float) -> list[list[float]] | None:
-    """[t_s, gx, gy, gth, ox, oy, oth] from the robot's pose log since since_unix_s; None when the robot does not
-    answer or no longer keeps that time (it restarted since)."""
+@blueprint.record_once
+def _grade_settled_attempts_on_the_robot_s_run(_state: object) -> None:
+    attempts.read_runs_from(robot_run)
+
+
+def robot_run(robot_name: str, since: datetime, until: datetime) -> list[list[float]] | None:
+    """[t_s, gx, gy, gth, ox, oy, oth] from the robot's pose log between since and until; None when the robot does
+    not answer, no longer keeps that time (it restarted since), or there is no app to ask it through."""
     from middleware.assessment.recorder import RATE_HZ
     from middleware.robots.link import RobotUnavailable
     from middleware.robots.registry import robot_registry
 
+    if not has_app_context():
+        return None
     link = robot_registry().get(robot_name)
     if link is None:
         return None
+    since_unix_s = since.timestamp()
     try:
-        log = link.pose_log(since_unix_s, time.time())
+        log = link.pose_log(since_unix_s, until.timestamp())
     except RobotUnavailable:
         return None
     if not log.oldest_unix_s or log.oldest_unix_s > since_unix_s + 2.0 / RATE_HZ:

@@ -1,6 +1,6 @@
 """When the worker recording an experimental attempt dies, another takes the recording over from the trace it had
 stored; a recorder that is alive is never taken over; and the attempt is graded on the robot's own pose log, the
-whole run without the gap the dead worker left."""
+whole run without the gap the dead worker left, also when the attempt is settled at its deadline."""
 
 from __future__ import annotations
 
@@ -75,3 +75,38 @@ def test_a_recording_whose_worker_died_is_taken_over_and_the_whole_run_is_graded
     gaps = [later[0] - earlier[0] for earlier, later in zip(graded, graded[1:], strict=False)]
     assert graded[0][0] < 0.5 and max(gaps) < 0.5, "graded on the robot's log: the whole run, no gap"
     assert graded[-1][0] >= trace[-1][0] - 0.5 and len(graded) >= len(trace)
+
+
+def test_an_attempt_settled_at_its_deadline_is_graded_on_the_robot_s_run_up_to_the_deadline(app, client_as,
+                                                                                             course_people) -> None:
+    from middleware.assessment import recorder
+    from middleware.db import session_factory
+    from middleware.models.assessment import Attempt
+
+    exam_id = _experimental_exam(app, course_people)
+    student = client_as("student1")
+    drive = student.websocket("/ws/robots/lab-1/drive")
+    assert receive_json(drive)["type"] == "ready"
+    status, answer = api(student, "POST", f"/api/exams/{exam_id}/attempts")
+    assert status == 201, answer
+    attempt_id = answer["attempt"]["id"]
+    recorder.stop(attempt_id)  # the recording worker dies at once: next to nothing was stored
+    drive_for(drive, 1.5, 0.2, 0.0, 1)
+    factory = session_factory(app)
+    with factory() as session, session.begin():
+        attempt = session.get(Attempt, attempt_id)
+        stored = len(attempt.trace or [])
+        deadline = datetime.now(UTC) - timedelta(seconds=0.5)  # the time ran out while nobody submitted
+        attempt.deadline_at = deadline
+        started = attempt.started_at.replace(tzinfo=UTC) if attempt.started_at.tzinfo is None else attempt.started_at
+    drive.close()
+    status, answer = api(student, "GET", f"/api/attempts/{attempt_id}")  # any read settles it
+    assert status == 200 and answer["attempt"]["status"] == "submitted", answer
+    with factory() as session:
+        settled = session.get(Attempt, attempt_id)
+        graded = list(settled.trace or [])
+        assert settled.submitted_by == "deadline"
+    span_s = (deadline - started).total_seconds()
+    assert len(graded) > stored and len(graded) >= 4 * span_s - 1, "the robot's 5 Hz log, not the dead one's"
+    assert graded[0][0] < 0.5 and abs(graded[-1][0] - span_s) < 0.5, (graded[0][0], graded[-1][0], span_s)
+    assert max(later[0] - earlier[0] for earlier, later in zip(graded, graded[1:], strict=False)) < 0.5
