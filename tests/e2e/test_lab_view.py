@@ -60,6 +60,15 @@ def test_the_lab_view_draws_the_robot_where_odometry_says_and_follows_it(page, l
     assert drawn["rgba"][:3] == pytest.approx([round(c * up_brightness * 255) for c in body[:3]], abs=3)
     page.screenshot(path=str(ARTIFACTS_DIR / "lab-view-above-desktop.png"))
 
+    # A target picked on the 2D map stands in the 3D view too.
+    canvas = page.locator('map-panel [data-field="map-canvas"]')
+    canvas.scroll_into_view_if_needed()
+    px, py = page.evaluate("document.querySelector('map-panel').cssPointOf(1.5, -0.5)")
+    canvas.click(position={"x": px, "y": py})
+    view.locator('[data-field="lab-view-summary"]').filter(has_text="goal (1.5").wait_for()
+    goal = view.evaluate("(panel) => panel.drawnColourAt(1.5, -0.5, 0.52)")  # the pin's head
+    assert goal is not None and goal["rgba"][0] > 150 > goal["rgba"][1], f"no red pin at the target: {goal}"
+
     # The robot turns; the drawn heading follows odometry's.
     show_tab_of(page, "drive")
     page.evaluate("document.activeElement.blur()")  # not the tab just clicked: arrows there move between tabs
