@@ -37,7 +37,15 @@ def test_the_picture_drawn_here_follows_the_robot_and_the_video_socket_closes(pa
     assert camera_viewers(live_server) == 1
 
     choose_source(page, "drawn")
-    page.locator('[data-connection="camera"][data-phase="closed"]').wait_for()
+    # The camera socket is closed on purpose: its status line says where the picture comes from, calmly.
+    camera_line = page.locator('[data-connection="camera"][data-phase="off"]')
+    camera_line.wait_for()
+    assert " ".join(camera_line.inner_text().split()) == (
+        "Camera: video off: picture drawn by this browser from the robot's odometry pose")
+    danger = "rgb(177, 38, 27)"  # --danger in app.css: the colour of a socket that failed
+    assert camera_line.locator(".connection__text").evaluate("e => getComputedStyle(e).color") != danger
+    assert camera_line.locator(".connection__dot").evaluate("e => getComputedStyle(e).backgroundColor") != danger
+    assert page.locator('[data-connection="camera"][data-phase="closed"]').count() == 0
     wait_for(lambda: camera_viewers(live_server) == 0, 5, "the page still takes the JPEG stream")
     page.locator('camera-panel[data-frame-source="drawn"]').wait_for(state="attached")
     first = number(page, "frame-sequence")

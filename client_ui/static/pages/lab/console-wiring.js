@@ -17,6 +17,7 @@ const SCENE_RETRY_MS = 5000;
 const PING_EVERY_MS = 1000;
 const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
 const BOOKINGS_REFRESH_MS = 60 * 1000;
+const DRAWN_PICTURE_STATUS = "video off: picture drawn by this browser from the robot's odometry pose";
 
 function isStatusOrError(message) {
   return message?.type === "status" || message?.type === "error";
@@ -175,6 +176,8 @@ export class ConsoleWiring {
       if (detail.source === "drawn" && channel) {
         this.#channels.delete(path);
         channel.close("the picture is drawn by this browser");
+        // Closed on purpose, not a fault: the line says where the picture comes from instead, without alarm.
+        this.#status.update(path.split("/").pop(), { phase: "off", reason: DRAWN_PICTURE_STATUS });
       } else if (detail.source === "video" && !channel) {
         open();
       }

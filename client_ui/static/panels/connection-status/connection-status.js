@@ -1,5 +1,6 @@
 // <connection-status>: one line per socket (camera, telemetry, drive): connected, reconnecting in
-// N s, or closed with the reason; and a line for the robot itself, since the sockets reach the lab
+// N s, closed with the reason, or off on purpose (phase "off", e.g. the camera socket while the picture is
+// drawn by this browser: calm, not a fault); and a line for the robot itself, since the sockets reach the lab
 // server even while the robot behind it does not answer. In: `loginUrl` (string), `robotName` (string),
 // `robotOnline` (boolean), and `update(name, state)` with a transport Channel state. Out: none.
 
@@ -21,6 +22,8 @@ export function describeState(state, { robotName = "the robot", nowMs = Date.now
       const why = state.reason ? ` (${state.reason})` : "";
       return seconds > 0 ? `reconnecting in ${seconds} s${why}` : "reconnecting…";
     }
+    case "off":
+      return state.reason || "off";
     case "closed":
       if (state.code === CLOSE_CODES.NOT_LOGGED_IN) return "closed: your session has ended";
       if (state.code === CLOSE_CODES.NOT_ALLOWED) return "closed: you are not allowed to use this robot";
