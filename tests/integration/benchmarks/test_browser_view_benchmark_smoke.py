@@ -1,0 +1,38 @@
+"""The browser-drawn view's benchmark runs end to end in quick mode (a smoke check: it asserts the report's shape,
+never a timing): server CPU per watched robot for each viewer, idle and driven, and the browser's frame times."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from benchmarks import browser_view
+from benchmarks.feedback import STATIC_DIR
+
+
+def test_quick_browser_view_benchmark_reports_both_viewers_and_the_frame_times(tmp_path: Path) -> None:
+    if not (STATIC_DIR / "vendor/node_modules/three/build/three.module.js").exists():
+        pytest.fail("three.js is not installed: `make test` (or `make three`) runs npm ci in client_ui/static/vendor.")
+    assert browser_view.main(["--quick", "--output", str(tmp_path)]) == 0
+    report = json.loads((tmp_path / "browser_view.json").read_text())
+    assert report["quick"] is True
+    assert set(report["measured"]) == {"idle", "driven"}
+    for state in report["measured"].values():
+        assert set(state) == {"none", "drawn", "camera"}
+        assert all(set(figures) == {"robot", "worker", "server"} for figures in state.values())
+        assert state["none"]["worker"] == 0.0  # nobody watching: no worker relays anything
+    assert len(report["frame_times_ms"]["draw"]) == report["frames"] == len(report["frame_times_ms"]["whole"])
+    assert report["webgl_renderer"]
+
+    rows = report["rows"]
+    assert all(isinstance(row["target"], str) and row["target"] for row in rows), "every target is a string, '-'"
+    assert all(row["passed"] is None for row in rows), "a quick run grades nothing"
+    ratios = [row for row in rows if row["figure"] == "server CPU, drawn view / JPEG camera"]
+    assert [row["scenario"] for row in ratios] == ["one robot, idle, one viewer", "one robot, driven, one viewer"]
+    assert all(row["target"] == "<= 1/8" and row["unit"] == "ratio" for row in ratios)
+    figures = {row["figure"] for row in rows if row["scenario"].startswith("robot's-eye view 640x480")}
+    assert figures == {"frame time, drawing, p50", "frame time, drawing, p99",
+                       "frame time, drawn + taken as bitmap, p50", "frame time, drawn + taken as bitmap, p99"}
+    assert all(row["target"] == "-" for row in rows if row not in ratios)
