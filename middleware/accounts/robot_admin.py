@@ -12,12 +12,18 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware import events
-from middleware.accounts.schemas import clean_robot_address, clean_robot_kind, clean_robot_name, clean_robot_title
+from middleware.accounts.schemas import (
+    InvalidField,
+    clean_robot_address,
+    clean_robot_kind,
+    clean_robot_name,
+    clean_robot_title,
+)
 from middleware.accounts.services import require_admin
 from middleware.errors import Refused
-from middleware.models import Robot, User
+from middleware.models import Robot, RobotKindSetting, User
 from middleware.models.accounts import utc_now
-from middleware.robots.catalog import default_kind
+from middleware.robots.catalog import CAMERA_PICTURES, camera_pictures, default_kind
 
 
 @dataclass(frozen=True)
@@ -83,3 +89,30 @@ def update_robot(session: Session, actor: User, robot_id: int, *, title: object 
     robot.updated_at = utc_now()
     events.announce(session, "robots", robot.name)
     return robot
+
+
+def kind_pictures(session: Session, actor: User) -> dict[str, str]:
+    """Every kind in the robots table with its camera panel's default picture ("video" unless chosen; admins)."""
+    require_admin(actor)
+    kinds = session.scalars(select(Robot.kind).distinct().order_by(Robot.kind))
+    chosen = camera_pictures(session)
+    return {kind: chosen.get(kind, "video") for kind in kinds}
+
+
+def set_kind_picture(session: Session, actor: User, kind: object, picture: object) -> RobotKindSetting:
+    """Makes picture ("video" or "drawn") the camera panel's default for every robot of kind (admins only); each
+    person may still switch, and their own choice is kept by their browser. The caller commits."""
+    require_admin(actor)
+    clean_kind = clean_robot_kind(kind)
+    if picture not in CAMERA_PICTURES:
+        raise InvalidField("picture", "picture must be 'video' (the robot's camera) or 'drawn' (drawn by the browser).")
+    if session.scalar(select(Robot.id).where(Robot.kind == clean_kind).limit(1)) is None:
+        raise Refused(404, "unknown_kind", f"No robot is of the kind {clean_kind!r}.", "kind")
+    setting = session.get(RobotKindSetting, clean_kind)
+    if setting is None:
+        setting = RobotKindSetting(kind=clean_kind, camera_picture=str(picture))
+        session.add(setting)
+    else:
+        setting.camera_picture, setting.updated_at = str(picture), utc_now()
+    session.flush()
+    return setting

@@ -25,8 +25,9 @@ def _robots_page(errors: dict[str, str] | None = None, form: dict[str, str] | No
     views = robot_admin.list_robots(get_session(), current_user)
     links = {v.name: registry.get(v.name) for v in views}
     online = {v.name: bool(v.enabled and (link := links[v.name]) is not None and link.is_online()) for v in views}
+    pictures = robot_admin.kind_pictures(get_session(), current_user)
     return render_template("accounts/robots.html", robots=views, online=online, errors=errors or {},
-                           form=form or {}), status
+                           form=form or {}, pictures=pictures), status
 
 
 @blueprint.get("/admin/robots")
@@ -99,3 +100,35 @@ def api_update_robot(robot_id: int) -> ResponseReturnValue:
         enabled=clean_flag(data["enabled"], "enabled") if "enabled" in data else None)
     _refresh_robots_after_commit()
     return jsonify({"robot": robot_admin.RobotView.of(robot).to_dict()})
+
+
+@blueprint.post("/admin/robot-kinds/<kind>/picture")
+@login_required
+def robots_kind_picture(kind: str) -> ResponseReturnValue:
+    """Sets the camera panel's default picture for the robots of one kind (admins)."""
+    picture = request.form.get("picture")
+
+    def update() -> ResponseReturnValue:
+        setting = robot_admin.set_kind_picture(get_session(), current_user, kind, picture)
+        words = "the picture drawn by the browser" if setting.camera_picture == "drawn" else "the robot's video"
+        flash(f"Robots of the kind {setting.kind} now show {words} unless a person chooses otherwise.", "success")
+        return redirect(url_for("accounts.robots_page"), 303)
+
+    return unless_refused(update, flashed(url_for("accounts.robots_page")))
+
+
+@blueprint.get("/api/admin/robot-kinds")
+@login_required
+def api_kind_pictures() -> ResponseReturnValue:
+    """Every robot kind with its camera panel's default picture (admins)."""
+    return jsonify({"kinds": [{"kind": kind, "camera_picture": picture}
+                              for kind, picture in robot_admin.kind_pictures(get_session(), current_user).items()]})
+
+
+@blueprint.put("/api/admin/robot-kinds/<kind>/picture")
+@login_required
+def api_set_kind_picture(kind: str) -> ResponseReturnValue:
+    """{picture: "video" | "drawn"}: the camera panel's default picture for the robots of one kind (admins)."""
+    data = json_body()
+    setting = robot_admin.set_kind_picture(get_session(), current_user, kind, data.get("picture"))
+    return jsonify({"kind": setting.kind, "camera_picture": setting.camera_picture})

@@ -29,11 +29,12 @@ class DynamicRepository:
     channel: str | None
     help: str
     tab: Tab
+    extra: tuple[tuple[str, object], ...] = ()  # what this kind of panel needs besides (the camera: its picture)
 
     def describe(self) -> dict[str, object]:
         """The panel descriptor."""
         return {"id": self.id, "kind": self.kind, "title": self.title, "channel": self.channel, "help": self.help,
-                "tab": self.tab}
+                "tab": self.tab, **dict(self.extra)}
 
 
 @dataclass(frozen=True)
@@ -59,15 +60,17 @@ class SkillController:
 
 
 def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | None,
-                 personal: bool = False) -> list[dict[str, object]]:
-    """Every panel of the console of robot_name, in the order they are placed (personal: a practice robot)."""
+                 personal: bool = False, camera_picture: tuple[str, str] = ("", "video")) -> list[dict[str, object]]:
+    """Every panel of the console of robot_name, in the order they are placed (personal: a practice robot;
+    camera_picture: the robot's kind and the picture an admin chose as its camera panel's default)."""
     base = f"/ws/robots/{robot_name}"
     turn_help = ("Your personal practice robot: only you see it, so you control it whenever you are here."
                  if personal else "Who controls the robot and who waits.")
     chat_help = ("Your personal practice robot: nobody else reads this chat; notes to yourself."
                  if personal else "Talk with the others connected to this robot.")
     repositories = [
-        DynamicRepository("camera", "camera", "Camera", f"{base}/camera", "The robot's camera, live.", "drive"),
+        DynamicRepository("camera", "camera", "Camera", f"{base}/camera", "The robot's camera, live.", "drive",
+                          (("picture", {"kind": camera_picture[0] or robot_name, "default": camera_picture[1]}),)),
         DynamicRepository("drive", "drive", "Drive", f"{base}/drive",
                           "Direct control: arrow keys, the pad or a gamepad.", "drive"),
         DynamicRepository("queue", "queue", "Turn", f"{base}/queue", turn_help, "drive"),

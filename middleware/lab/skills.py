@@ -9,10 +9,12 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import Commander, refusal_error, robot_commands
+from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.lab.panels import robot_panels
 from middleware.lab.schemas import GOAL_ID_PATTERN, NAME_PATTERN
 from middleware.models import Role
+from middleware.robots.catalog import camera_picture_of
 from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.messages import goal_dict, map_dict
 from middleware.robots.registry import robot_registry
@@ -62,7 +64,7 @@ def panels(robot_name: str) -> ResponseReturnValue:
         skills = None
     personal = robot_registry().is_personal_name(robot_name)
     return jsonify({"robot": robot_name, "skills_available": skills is not None, "personal": personal,
-                    "panels": robot_panels(robot_name, skills, personal)})
+                    "panels": robot_panels(robot_name, skills, personal, camera_picture_of(get_session(), robot_name))})
 
 
 @blueprint.post("/api/robots/<robot_name>/skills/<skill>/goals")

@@ -13,10 +13,11 @@ from middleware.models.courses import Course, CourseMembership, Invitation, Logi
 from middleware.models.experiment import Trial, VideoDelay  # noqa: F401
 from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord  # noqa: F401
 from middleware.models.preferences import UserPreference
-from middleware.models.robots import Robot
+from middleware.models.robots import Robot, RobotKindSetting
 from middleware.models.teaching import GuidedSession, GuidedSessionPresence, Lesson, Tour  # noqa: F401
 
 __all__ = [
     "Base", "Booking", "ChatMessage", "Course", "CourseMembership", "Invitation", "LoginFailure",
-    "LoginSession", "PoolQueueEntry", "QueueEntry", "Robot", "Role", "RobotControl", "User", "UserPreference",
+    "LoginSession", "PoolQueueEntry", "QueueEntry", "Robot", "RobotKindSetting", "Role", "RobotControl", "User",
+    "UserPreference",
 ]

@@ -27,3 +27,14 @@ class Robot(Base):
     enabled: Mapped[bool] = mapped_column(default=True)
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
     updated_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+
+
+class RobotKindSetting(Base):
+    """What an admin chose for every robot of one kind: the camera panel's default picture, the robot's JPEG video
+    ("video") or the view drawn by the browser from the scene and the odometry pose ("drawn")."""
+
+    __tablename__ = "robot_kind_settings"
+
+    kind: Mapped[str] = mapped_column(String(32), primary_key=True)
+    camera_picture: Mapped[str] = mapped_column(String(8), default="video")
+    updated_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)

@@ -11,7 +11,7 @@ from sqlalchemy.orm import Session
 
 from middleware import events
 from middleware.config import RobotAddress
-from middleware.models import Robot
+from middleware.models import Robot, RobotKindSetting
 from middleware.models.accounts import utc_now
 
 
@@ -24,6 +24,24 @@ class RobotEntry:
     title: str
     enabled: bool = True
     kind: str = ""
+
+
+# Where the camera panel's picture comes from: the robot's JPEG video, or the view the browser draws from the scene
+# and the odometry pose (simulated robots only: a robot standing for a real one keeps its video).
+CAMERA_PICTURES = ("video", "drawn")
+
+
+def camera_pictures(session: Session) -> dict[str, str]:
+    """The kinds whose camera picture an admin chose, and the choice."""
+    return {row.kind: row.camera_picture for row in session.scalars(select(RobotKindSetting))}
+
+
+def camera_picture_of(session: Session, robot_name: str) -> tuple[str, str]:
+    """(kind, default camera picture) of the robot called robot_name: its kind's setting, else "video"; a robot not
+    in the table (a personal practice robot) is its own kind by its name."""
+    kind = session.scalar(select(Robot.kind).where(Robot.name == robot_name)) or default_kind(robot_name)
+    setting = session.get(RobotKindSetting, kind)
+    return kind, setting.camera_picture if setting is not None else "video"
 
 
 def default_kind(name: str) -> str:

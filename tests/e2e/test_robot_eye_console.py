@@ -99,3 +99,41 @@ def test_the_motion_preview_and_an_added_delay_work_on_the_drawn_picture(
     wait_for(lambda: abs(canvas_data(page, "warpShiftPx")) < 0.5, 3, "the warp did not fall back")
     delay_text = page.locator('[data-field="video-delay"]').text_content()
     assert float(delay_text) >= INJECTED_DELAY_S - 0.2, f"measured delay {delay_text} s"
+
+
+def test_the_admins_default_picture_shows_first_and_the_persons_choice_is_remembered(
+    page, chromium, live_server: LiveServer, demo_accounts
+) -> None:
+    """The admin makes the drawn view the first picture of the lab's robots on the robots page; a student's console
+    opens with it (no video socket at all), the student switches to the video, and a reload keeps the video."""
+    admin = chromium.new_context(viewport={"width": 1280, "height": 800}).new_page()
+    try:
+        log_in(admin, live_server, "admin", demo_accounts["admin"])
+        admin.locator('[data-field="username"]').first.wait_for(state="attached")
+        admin.goto(f"{live_server.url}/admin/robots")
+        row = admin.locator('#kind-pictures tr[data-kind="lab"]')
+        row.locator('[data-field="picture"]').select_option("drawn")
+        row.get_by_role("button", name="Save the picture for lab").click()
+        admin.get_by_text("Robots of the kind lab now show the picture drawn by the browser").wait_for()
+        ARTIFACTS_DIR.mkdir(exist_ok=True)
+        admin.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-admin-default-picture.png"), full_page=True)
+
+        open_console(page, live_server)
+        page.locator('camera-panel[data-frame-source="drawn"]').wait_for(state="attached")
+        assert page.locator("camera-panel").get_attribute("data-source") == "drawn"
+        assert page.locator('[data-connection="camera"]').get_attribute("data-phase") == "off"
+        assert camera_viewers(live_server) == 0, "the drawn default opened the video socket"
+
+        choose_source(page, "video")
+        page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached")
+        page.reload()
+        page.locator('[data-connection="camera"][data-phase="open"]').wait_for()
+        page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached")
+        assert page.locator("camera-panel").get_attribute("data-source") == "video"
+        page.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-console-remembered-video.png"))
+    finally:
+        admin.goto(f"{live_server.url}/admin/robots")
+        row = admin.locator('#kind-pictures tr[data-kind="lab"]')
+        row.locator('[data-field="picture"]').select_option("video")
+        row.get_by_role("button", name="Save the picture for lab").click()
+        admin.context.close()

@@ -18,6 +18,25 @@ const PING_EVERY_MS = 1000;
 const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
 const BOOKINGS_REFRESH_MS = 60 * 1000;
 const DRAWN_PICTURE_STATUS = "video off: picture drawn by this browser from the robot's odometry pose";
+const PICTURE_CHOICE_PREFIX = "telelab.camera-picture."; // + the robot's kind: this browser's last choice
+
+/** This browser's saved picture choice ("video" | "drawn") under key, or null (none, unreadable, or storage off). */
+function savedPictureChoice(key) {
+  try {
+    const value = window.localStorage.getItem(key);
+    return value === "video" || value === "drawn" ? value : null;
+  } catch {
+    return null;
+  }
+}
+
+function savePictureChoice(key, source) {
+  try {
+    window.localStorage.setItem(key, source);
+  } catch {
+    // Storage off (a private window, a full quota): the choice holds for this page only.
+  }
+}
 
 function isStatusOrError(message) {
   return message?.type === "status" || message?.type === "error";
@@ -168,16 +187,26 @@ export class ConsoleWiring {
     this.#cameras.push(panel);
     bindFeedback(panel);
     const path = descriptor.channel ?? `${this.#robotPath}/camera`;
+    const name = path.split("/").pop();
     const open = () => this.#openCamera(descriptor, panel, path);
-    open();
+    // The picture first shown: this browser's last choice for robots of this kind, else the admin's default.
+    const choiceKey = `${PICTURE_CHOICE_PREFIX}${descriptor.picture?.kind ?? this.#robotName}`;
+    const initial = savedPictureChoice(choiceKey) ?? (descriptor.picture?.default === "drawn" ? "drawn" : "video");
+    panel.source = initial;
+    if (initial === "drawn") {
+      this.#status.update(name, { phase: "off", reason: DRAWN_PICTURE_STATUS });
+    } else {
+      open();
+    }
     // While the picture is drawn here the video socket is closed: a robot nobody watches renders nothing.
     panel.addEventListener("camera-source-change", ({ detail }) => {
+      if (!detail.fallback) savePictureChoice(choiceKey, detail.source); // not a choice: this browser cannot draw
       const channel = this.#channels.get(path);
       if (detail.source === "drawn" && channel) {
         this.#channels.delete(path);
         channel.close("the picture is drawn by this browser");
         // Closed on purpose, not a fault: the line says where the picture comes from instead, without alarm.
-        this.#status.update(path.split("/").pop(), { phase: "off", reason: DRAWN_PICTURE_STATUS });
+        this.#status.update(name, { phase: "off", reason: DRAWN_PICTURE_STATUS });
       } else if (detail.source === "video" && !channel) {
         open();
       }

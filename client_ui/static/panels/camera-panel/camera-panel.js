@@ -8,7 +8,8 @@
 // description: offers the picture drawn by this browser), `source` ("video" | "drawn").
 // Out: `camera-feedback-change` {enabled} when the person turns the motion preview on or off,
 // `camera-feedback-fill-change` {fill} when they choose the fill, `camera-source-change` {source} when they
-// choose where the picture comes from (the wiring closes the video socket while it is drawn here).
+// choose where the picture comes from (the wiring closes the video socket while it is drawn here; `fallback` is true
+// when this browser cannot draw it and the video comes back without the person choosing it).
 
 import { h } from "../../lib/dom.js";
 import { framesInWindow, parseFramePacket } from "../../lib/camera-frame.js";
@@ -235,7 +236,7 @@ export class CameraPanel extends PanelElement {
       this.#sourceSelect.querySelector('option[value="drawn"]').disabled = true;
       this.#showMessage(problem, true);
       this.source = "video";
-      this.emit("camera-source-change", { source: "video" });
+      this.emit("camera-source-change", { source: "video", fallback: true });
     }
   }
 

@@ -1,0 +1,51 @@
+"""Admins choose, per robot kind, the camera panel's first picture (the robot's video or the view drawn by the
+browser); the console's panel list carries it to the camera panel. Checked on the live app: the admin's page and
+API, what others are refused, and bad input refused with the field named."""
+
+from __future__ import annotations
+
+from tests.integration.bookings.conftest import api
+
+
+def camera_picture(client, robot_name: str) -> dict:
+    status, answer = api(client, "GET", f"/api/robots/{robot_name}/panels")
+    assert status == 200, answer
+    return next(panel for panel in answer["panels"] if panel["kind"] == "camera")["picture"]
+
+
+def test_an_admin_makes_the_drawn_view_the_default_for_a_kind_and_the_console_hears_it(client_as,
+                                                                                      course_people) -> None:
+    admin, student = client_as("admin1"), client_as("student1")
+    assert camera_picture(student, "lab-1") == {"kind": "lab", "default": "video"}
+    status, kinds = api(admin, "GET", "/api/admin/robot-kinds")
+    assert status == 200 and {"kind": "lab", "camera_picture": "video"} in kinds["kinds"]
+
+    status, answer = api(admin, "PUT", "/api/admin/robot-kinds/lab/picture", {"picture": "drawn"})
+    assert (status, answer) == (200, {"kind": "lab", "camera_picture": "drawn"})
+    assert camera_picture(student, "lab-1") == {"kind": "lab", "default": "drawn"}
+
+    # The robots page's form says the same and sets it back.
+    _, _, page = admin.request("GET", "/admin/robots")
+    row = page.split('data-kind="lab"', 1)[1].split("</tr>", 1)[0]
+    assert '<option value="drawn" selected>' in row
+    token = admin.csrf_token("/admin/robots")
+    status, _, _ = admin.request("POST", "/admin/robot-kinds/lab/picture", {"picture": "video", "csrf_token": token})
+    assert status == 303
+    assert camera_picture(student, "lab-1") == {"kind": "lab", "default": "video"}
+    _, _, page = admin.request("GET", "/admin/robots")
+    assert "now show the robot&#39;s video" in page or "now show the robot's video" in page
+
+
+def test_only_admins_choose_and_bad_input_is_refused_with_its_field(client_as, course_people) -> None:
+    admin, student, tutor = client_as("admin1"), client_as("student1"), client_as("tutor1")
+    for client in (student, tutor):
+        assert api(client, "PUT", "/api/admin/robot-kinds/lab/picture", {"picture": "drawn"})[0] == 403
+        assert api(client, "GET", "/api/admin/robot-kinds")[0] == 403
+    for body, field in (({"picture": "jpeg"}, "picture"), ({"picture": ["drawn"]}, "picture"), ({}, "picture")):
+        status, answer = api(admin, "PUT", "/api/admin/robot-kinds/lab/picture", body)
+        assert (status, answer["error"]["field"]) == (400, field), answer
+    status, answer = api(admin, "PUT", "/api/admin/robot-kinds/no-such-kind/picture", {"picture": "drawn"})
+    assert (status, answer["error"]["code"], answer["error"]["field"]) == (404, "unknown_kind", "kind")
+    status, answer = api(admin, "PUT", "/api/admin/robot-kinds/bad%20kind/picture", {"picture": "drawn"})
+    assert (status, answer["error"]["field"]) == (400, "kind")
+    assert camera_picture(student, "lab-1")["default"] == "video"
