@@ -3,16 +3,20 @@ command path), a goal's updates and the localization estimate."""
 
 from __future__ import annotations
 
+import asyncio
 import functools
 import logging
+from datetime import UTC, datetime
 
 import grpc
 from flask import current_app
 from flask_login import current_user
 
 from middleware.access.commands import Commander, refusal_error, robot_commands
+from middleware.access.graded_runs import graded_run_started_at
 from middleware.access.sockets import ChannelSeat, open_robot_channel
 from middleware.auth.schemas import InvalidField
+from middleware.db import session_factory
 from middleware.lab.delay import viewer_delay
 from middleware.lab.schemas import GOAL_ID_PATTERN, DriveLimits, parse_drive_message
 from middleware.live.loop import Continuation, blocking_work
@@ -178,13 +182,38 @@ def goal_channel(ws: WebSocket, robot_name: str, goal_id: str) -> Continuation |
     return relay
 
 
+GRADED_RUN_RECHECK_S = 1.0  # how soon a graded run begun while the panel is open hides the ground truth
+
+
+def in_graded_run(robot_name: str, user_id: int) -> bool:
+    """Whether user_id's experimental attempt or delay trial on robot_name is open now (a database read)."""
+    with session_factory(current_app)() as session:
+        return graded_run_started_at(session, robot_name, user_id, datetime.now(UTC)) is not None
+
+
 def localization_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
-    """The localization estimate, particles and errors; the ground truth only where the teaching mode allows."""
+    """The localization estimate, particles and errors; the ground truth only where the teaching mode allows, and
+    never to a user in a graded run on the robot (a "report your pose" question must not be read off the panel)."""
     link = open_robot_channel(ws, robot_name)
     if link is None:
         return None
-    index = 0 if sees_ground_truth() else 1
-    return lambda live: relay_stream(live, link.localization, choose=lambda versions: versions[index])
+    user_id = int(current_user.get_id())
+    truth = [sees_ground_truth() and not in_graded_run(robot_name, user_id)]
+    work = blocking_work()
+
+    async def relay(live: LiveSocket) -> None:
+        async def hide_truth_when_a_graded_run_begins() -> None:
+            while truth[0]:
+                await asyncio.sleep(GRADED_RUN_RECHECK_S)
+                truth[0] = not await work(in_graded_run, robot_name, user_id)
+
+        watcher = asyncio.ensure_future(hide_truth_when_a_graded_run_begins())
+        try:
+            await relay_stream(live, link.localization, choose=lambda versions: versions[0 if truth[0] else 1])
+        finally:
+            watcher.cancel()
+
+    return relay
 
 
 def register(sock: Channels) -> None:

@@ -127,3 +127,32 @@ def texts_for(ws, seconds: float) -> list[str]:
         if isinstance(message, str):
             texts.append(message)
     return texts
+
+
+def test_the_localization_panel_hides_the_truth_once_a_graded_run_begins(app, client_as, course_people) -> None:
+    roles = app.config["GROUND_TRUTH_ROLES"]
+    app.config["GROUND_TRUTH_ROLES"] = roles | {"student"}  # a teaching mode that shows students the truth
+    try:
+        student, exam_id = open_attempt(app, client_as, course_people)
+        drive = student.websocket("/ws/robots/lab-1/drive")
+        assert receive_json(drive)["type"] == "ready"
+        localization = student.websocket("/ws/robots/lab-1/localization")
+        before = [json.loads(text) for text in texts_for(localization, 1.0)]
+        status, answer = api(student, "POST", f"/api/exams/{exam_id}/attempts")
+        assert status == 201, answer
+        started = time.monotonic()
+        texts_for(localization, 2.0)  # the panel, open all along, hears of the attempt within a second
+        after = [json.loads(text) for text in texts_for(localization, 1.0)]
+        waited_s = time.monotonic() - started
+        status_submit, _ = api(student, "POST", f"/api/attempts/{answer['attempt']['id']}/submit")
+        reopened = student.websocket("/ws/robots/lab-1/localization")  # after the attempt the teaching mode rules
+        again = [json.loads(text) for text in texts_for(reopened, 1.0)]
+        for ws in (drive, localization, reopened):
+            ws.close()
+    finally:
+        app.config["GROUND_TRUTH_ROLES"] = roles
+    assert status_submit == 200
+    before, after, again = ([m for m in messages if m["type"] == "localization"] for messages in (before, after, again))
+    assert before and all(truth_keys(message) for message in before), "the teaching mode showed the truth before"
+    assert after and not any(truth_keys(message) for message in after), f"truth shown {waited_s:.1f} s into the run"
+    assert again and all(truth_keys(message) for message in again)
