@@ -13,6 +13,7 @@ import { playTurnTone } from "./turn-tone.js";
 
 const FINAL_GOAL_STATES = new Set(["succeeded", "canceled", "aborted"]);
 const MAP_POLL_MS = 2000;
+const ACTION_NOTE_MS = 10000; // an action's answer on the map (docked, cleared) stays this long before polls speak
 const SCENE_RETRY_MS = 5000;
 const PING_EVERY_MS = 1000;
 const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
@@ -55,6 +56,7 @@ export class ConsoleWiring {
   #drivePads = [];
   #skills = [];                 // [{descriptor, panel, goalChannel, goalNames}]
   #maps = [];
+  #actionNoteUntil = 0;         // Date.now() until which the map's note is an action's answer
   #goalViews = [];              // panels that show goals without picking them (the 3D lab view)
   #cameras = [];                // camera panels: the feedback layer follows the drive session
   #starters = [];
@@ -268,7 +270,7 @@ export class ConsoleWiring {
       try {
         const answer = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/map`);
         const grid = answer?.map ?? null;
-        panel.note = grid ? "" : String(answer?.message ?? "");
+        if (Date.now() >= this.#actionNoteUntil) panel.note = grid ? "" : String(answer?.message ?? "");
         if (grid?.cells_b64 === lastCells) return;
         lastCells = grid?.cells_b64;
         this.#guard(descriptor.id, () => { panel.grid = grid; });
@@ -289,17 +291,23 @@ export class ConsoleWiring {
     try {
       const answer = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/map`, { method: "DELETE" });
       mapPanel.grid = null;
-      mapPanel.note = String(answer?.message ?? "");
+      this.#actionNote(mapPanel, String(answer?.message ?? ""));
     } catch (error) {
       mapPanel.note = `The map was not cleared: ${error.message}`;
     }
+  }
+
+  /** Shows an action's answer on the map, kept over the poll's "No map yet" long enough to be read. */
+  #actionNote(mapPanel, text) {
+    this.#actionNoteUntil = Date.now() + ACTION_NOTE_MS;
+    mapPanel.note = text;
   }
 
   async #returnToDock(mapPanel) {
     try {
       const answer = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/dock`, { method: "POST" });
       mapPanel.resetTrails();
-      mapPanel.note = String(answer?.message ?? "");
+      this.#actionNote(mapPanel, String(answer?.message ?? ""));
     } catch (error) {
       mapPanel.note = `The robot was not moved: ${error.message}`;
     }
