@@ -13,7 +13,7 @@ import { playTurnTone } from "./turn-tone.js";
 
 const FINAL_GOAL_STATES = new Set(["succeeded", "canceled", "aborted"]);
 const MAP_POLL_MS = 2000;
-const ACTION_NOTE_MS = 10000; // an action's answer on the map (docked, cleared) stays this long before polls speak
+const ACTION_NOTE_MS = 10000; // "back at its dock" stays this long before the map's polls speak again
 const SCENE_RETRY_MS = 5000;
 const PING_EVERY_MS = 1000;
 const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
@@ -291,13 +291,13 @@ export class ConsoleWiring {
     try {
       const answer = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/map`, { method: "DELETE" });
       mapPanel.grid = null;
-      this.#actionNote(mapPanel, String(answer?.message ?? ""));
+      mapPanel.note = String(answer?.message ?? ""); // the next poll's "No map yet" follows on from it
     } catch (error) {
       mapPanel.note = `The map was not cleared: ${error.message}`;
     }
   }
 
-  /** Shows an action's answer on the map, kept over the poll's "No map yet" long enough to be read. */
+  /** Shows an action's answer on the map, kept over the polls' notes long enough to be read. */
   #actionNote(mapPanel, text) {
     this.#actionNoteUntil = Date.now() + ACTION_NOTE_MS;
     mapPanel.note = text;
