@@ -23,12 +23,18 @@ def test_quick_database_load_benchmark_counts_transactions_before_and_after_the_
     assert report["quick"] is True
     rows = report["rows"]
     scenarios = {row["scenario"] for row in rows}
-    assert len(scenarios) == 3 and any("before events" in scenario for scenario in scenarios)
+    has_history = subprocess.run(["git", "cat-file", "-e", "163cb08^{commit}"], cwd=ROOT, check=False,
+                                 capture_output=True).returncode == 0
+    if has_history:
+        assert len(scenarios) == 3 and any("before events" in scenario for scenario in scenarios)
+    else:  # a shallow clone: the old code cannot be taken from history, and the run says so
+        assert len(scenarios) == 2 and "'before' is not measured" in result.stdout
     for row in rows:
         assert row["target"].strip(), row
         if row["figure"] == "channels open through the window":
             assert row["measured"] == 2 * report["users"], row
         if row["figure"] == "transactions/s reaching PostgreSQL (commits + rollbacks)":
             assert row["measured"] > 0, row
-            assert ("before events" in row["scenario"]) == (row["floor"] is None), "before is the others' floor"
+            if has_history:
+                assert ("before events" in row["scenario"]) == (row["floor"] is None), "before is the others' floor"
     assert all(row["passed"] is None for row in rows), "quick mode grades nothing"
