@@ -291,7 +291,7 @@ class LaserScan(_message.Message):
     def __init__(self, angle_min_rad: _Optional[float] = ..., angle_increment_rad: _Optional[float] = ..., ranges_m: _Optional[_Iterable[float]] = ...) -> None: ...
 
 class Telemetry(_message.Message):
-    __slots__ = ("tick", "sim_time_s", "capture_unix_s", "last_applied_sequence", "odometry", "ground_truth", "sonar", "laser", "deadman_stopped")
+    __slots__ = ("tick", "sim_time_s", "capture_unix_s", "last_applied_sequence", "odometry", "ground_truth", "sonar", "laser", "deadman_stopped", "battery")
     TICK_FIELD_NUMBER: _ClassVar[int]
     SIM_TIME_S_FIELD_NUMBER: _ClassVar[int]
     CAPTURE_UNIX_S_FIELD_NUMBER: _ClassVar[int]
@@ -301,6 +301,7 @@ class Telemetry(_message.Message):
     SONAR_FIELD_NUMBER: _ClassVar[int]
     LASER_FIELD_NUMBER: _ClassVar[int]
     DEADMAN_STOPPED_FIELD_NUMBER: _ClassVar[int]
+    BATTERY_FIELD_NUMBER: _ClassVar[int]
     tick: int
     sim_time_s: float
     capture_unix_s: float
@@ -310,7 +311,18 @@ class Telemetry(_message.Message):
     sonar: SonarReading
     laser: LaserScan
     deadman_stopped: bool
-    def __init__(self, tick: _Optional[int] = ..., sim_time_s: _Optional[float] = ..., capture_unix_s: _Optional[float] = ..., last_applied_sequence: _Optional[int] = ..., odometry: _Optional[_Union[Odometry, _Mapping]] = ..., ground_truth: _Optional[_Union[Pose2D, _Mapping]] = ..., sonar: _Optional[_Union[SonarReading, _Mapping]] = ..., laser: _Optional[_Union[LaserScan, _Mapping]] = ..., deadman_stopped: _Optional[bool] = ...) -> None: ...
+    battery: Battery
+    def __init__(self, tick: _Optional[int] = ..., sim_time_s: _Optional[float] = ..., capture_unix_s: _Optional[float] = ..., last_applied_sequence: _Optional[int] = ..., odometry: _Optional[_Union[Odometry, _Mapping]] = ..., ground_truth: _Optional[_Union[Pose2D, _Mapping]] = ..., sonar: _Optional[_Union[SonarReading, _Mapping]] = ..., laser: _Optional[_Union[LaserScan, _Mapping]] = ..., deadman_stopped: _Optional[bool] = ..., battery: _Optional[_Union[Battery, _Mapping]] = ...) -> None: ...
+
+class Battery(_message.Message):
+    __slots__ = ("charge", "charging", "empty")
+    CHARGE_FIELD_NUMBER: _ClassVar[int]
+    CHARGING_FIELD_NUMBER: _ClassVar[int]
+    EMPTY_FIELD_NUMBER: _ClassVar[int]
+    charge: float
+    charging: bool
+    empty: bool
+    def __init__(self, charge: _Optional[float] = ..., charging: _Optional[bool] = ..., empty: _Optional[bool] = ...) -> None: ...
 
 class StreamCameraRequest(_message.Message):
     __slots__ = ("max_fps",)
@@ -912,3 +924,154 @@ class SceneDescription(_message.Message):
     laser: LaserGeometry
     sonar: SonarRing
     def __init__(self, version: _Optional[str] = ..., unchanged: _Optional[bool] = ..., scene_name: _Optional[str] = ..., floor: _Optional[_Union[FloorPatch, _Mapping]] = ..., marks: _Optional[_Iterable[_Union[FloorPatch, _Mapping]]] = ..., blocks: _Optional[_Iterable[_Union[SceneBlock, _Mapping]]] = ..., cylinders: _Optional[_Iterable[_Union[SceneCylinder, _Mapping]]] = ..., track: _Optional[_Union[TrackLayout, _Mapping]] = ..., spawn: _Optional[_Union[Pose2D, _Mapping]] = ..., body_radius_m: _Optional[float] = ..., robot_parts: _Optional[_Iterable[_Union[RobotPart, _Mapping]]] = ..., camera: _Optional[_Union[CameraModel, _Mapping]] = ..., laser: _Optional[_Union[LaserGeometry, _Mapping]] = ..., sonar: _Optional[_Union[SonarRing, _Mapping]] = ...) -> None: ...
+
+class RunPlanRequest(_message.Message):
+    __slots__ = ("token", "name", "plan", "preempt")
+    TOKEN_FIELD_NUMBER: _ClassVar[int]
+    NAME_FIELD_NUMBER: _ClassVar[int]
+    PLAN_FIELD_NUMBER: _ClassVar[int]
+    PREEMPT_FIELD_NUMBER: _ClassVar[int]
+    token: str
+    name: str
+    plan: PlanBlock
+    preempt: bool
+    def __init__(self, token: _Optional[str] = ..., name: _Optional[str] = ..., plan: _Optional[_Union[PlanBlock, _Mapping]] = ..., preempt: _Optional[bool] = ...) -> None: ...
+
+class PlanBlock(_message.Message):
+    __slots__ = ("steps",)
+    STEPS_FIELD_NUMBER: _ClassVar[int]
+    steps: _containers.RepeatedCompositeFieldContainer[PlanStep]
+    def __init__(self, steps: _Optional[_Iterable[_Union[PlanStep, _Mapping]]] = ...) -> None: ...
+
+class PlanStep(_message.Message):
+    __slots__ = ("line", "column", "skill", "drive", "wait", "repeat", "branch", "set", "say")
+    LINE_FIELD_NUMBER: _ClassVar[int]
+    COLUMN_FIELD_NUMBER: _ClassVar[int]
+    SKILL_FIELD_NUMBER: _ClassVar[int]
+    DRIVE_FIELD_NUMBER: _ClassVar[int]
+    WAIT_FIELD_NUMBER: _ClassVar[int]
+    REPEAT_FIELD_NUMBER: _ClassVar[int]
+    BRANCH_FIELD_NUMBER: _ClassVar[int]
+    SET_FIELD_NUMBER: _ClassVar[int]
+    SAY_FIELD_NUMBER: _ClassVar[int]
+    line: int
+    column: int
+    skill: SkillStep
+    drive: DriveStep
+    wait: WaitStep
+    repeat: RepeatStep
+    branch: IfStep
+    set: SetStep
+    say: SayStep
+    def __init__(self, line: _Optional[int] = ..., column: _Optional[int] = ..., skill: _Optional[_Union[SkillStep, _Mapping]] = ..., drive: _Optional[_Union[DriveStep, _Mapping]] = ..., wait: _Optional[_Union[WaitStep, _Mapping]] = ..., repeat: _Optional[_Union[RepeatStep, _Mapping]] = ..., branch: _Optional[_Union[IfStep, _Mapping]] = ..., set: _Optional[_Union[SetStep, _Mapping]] = ..., say: _Optional[_Union[SayStep, _Mapping]] = ...) -> None: ...
+
+class SkillStep(_message.Message):
+    __slots__ = ("skill", "parameters", "duration_s")
+    class ParametersEntry(_message.Message):
+        __slots__ = ("key", "value")
+        KEY_FIELD_NUMBER: _ClassVar[int]
+        VALUE_FIELD_NUMBER: _ClassVar[int]
+        key: str
+        value: ParameterValue
+        def __init__(self, key: _Optional[str] = ..., value: _Optional[_Union[ParameterValue, _Mapping]] = ...) -> None: ...
+    SKILL_FIELD_NUMBER: _ClassVar[int]
+    PARAMETERS_FIELD_NUMBER: _ClassVar[int]
+    DURATION_S_FIELD_NUMBER: _ClassVar[int]
+    skill: str
+    parameters: _containers.MessageMap[str, ParameterValue]
+    duration_s: float
+    def __init__(self, skill: _Optional[str] = ..., parameters: _Optional[_Mapping[str, ParameterValue]] = ..., duration_s: _Optional[float] = ...) -> None: ...
+
+class DriveStep(_message.Message):
+    __slots__ = ("linear_mps", "angular_radps", "duration_s")
+    LINEAR_MPS_FIELD_NUMBER: _ClassVar[int]
+    ANGULAR_RADPS_FIELD_NUMBER: _ClassVar[int]
+    DURATION_S_FIELD_NUMBER: _ClassVar[int]
+    linear_mps: float
+    angular_radps: float
+    duration_s: float
+    def __init__(self, linear_mps: _Optional[float] = ..., angular_radps: _Optional[float] = ..., duration_s: _Optional[float] = ...) -> None: ...
+
+class WaitStep(_message.Message):
+    __slots__ = ("condition", "duration_s")
+    CONDITION_FIELD_NUMBER: _ClassVar[int]
+    DURATION_S_FIELD_NUMBER: _ClassVar[int]
+    condition: PlanCondition
+    duration_s: float
+    def __init__(self, condition: _Optional[_Union[PlanCondition, _Mapping]] = ..., duration_s: _Optional[float] = ...) -> None: ...
+
+class RepeatStep(_message.Message):
+    __slots__ = ("count", "body")
+    COUNT_FIELD_NUMBER: _ClassVar[int]
+    BODY_FIELD_NUMBER: _ClassVar[int]
+    count: int
+    body: PlanBlock
+    def __init__(self, count: _Optional[int] = ..., body: _Optional[_Union[PlanBlock, _Mapping]] = ...) -> None: ...
+
+class IfStep(_message.Message):
+    __slots__ = ("condition", "then_block", "else_block")
+    CONDITION_FIELD_NUMBER: _ClassVar[int]
+    THEN_BLOCK_FIELD_NUMBER: _ClassVar[int]
+    ELSE_BLOCK_FIELD_NUMBER: _ClassVar[int]
+    condition: PlanCondition
+    then_block: PlanBlock
+    else_block: PlanBlock
+    def __init__(self, condition: _Optional[_Union[PlanCondition, _Mapping]] = ..., then_block: _Optional[_Union[PlanBlock, _Mapping]] = ..., else_block: _Optional[_Union[PlanBlock, _Mapping]] = ...) -> None: ...
+
+class PlanCondition(_message.Message):
+    __slots__ = ("kind", "value", "negate")
+    KIND_FIELD_NUMBER: _ClassVar[int]
+    VALUE_FIELD_NUMBER: _ClassVar[int]
+    NEGATE_FIELD_NUMBER: _ClassVar[int]
+    kind: str
+    value: float
+    negate: bool
+    def __init__(self, kind: _Optional[str] = ..., value: _Optional[float] = ..., negate: _Optional[bool] = ...) -> None: ...
+
+class SetStep(_message.Message):
+    __slots__ = ("setting", "value")
+    SETTING_FIELD_NUMBER: _ClassVar[int]
+    VALUE_FIELD_NUMBER: _ClassVar[int]
+    setting: str
+    value: float
+    def __init__(self, setting: _Optional[str] = ..., value: _Optional[float] = ...) -> None: ...
+
+class SayStep(_message.Message):
+    __slots__ = ("text",)
+    TEXT_FIELD_NUMBER: _ClassVar[int]
+    text: str
+    def __init__(self, text: _Optional[str] = ...) -> None: ...
+
+class SetLimitsRequest(_message.Message):
+    __slots__ = ("token", "max_linear_mps", "max_angular_radps", "watchdog_s")
+    TOKEN_FIELD_NUMBER: _ClassVar[int]
+    MAX_LINEAR_MPS_FIELD_NUMBER: _ClassVar[int]
+    MAX_ANGULAR_RADPS_FIELD_NUMBER: _ClassVar[int]
+    WATCHDOG_S_FIELD_NUMBER: _ClassVar[int]
+    token: str
+    max_linear_mps: float
+    max_angular_radps: float
+    watchdog_s: float
+    def __init__(self, token: _Optional[str] = ..., max_linear_mps: _Optional[float] = ..., max_angular_radps: _Optional[float] = ..., watchdog_s: _Optional[float] = ...) -> None: ...
+
+class GetLimitsRequest(_message.Message):
+    __slots__ = ()
+    def __init__(self) -> None: ...
+
+class Limits(_message.Message):
+    __slots__ = ("max_linear_mps", "max_angular_radps", "watchdog_s", "robot_max_linear_mps", "robot_max_angular_radps", "min_watchdog_s", "max_watchdog_s")
+    MAX_LINEAR_MPS_FIELD_NUMBER: _ClassVar[int]
+    MAX_ANGULAR_RADPS_FIELD_NUMBER: _ClassVar[int]
+    WATCHDOG_S_FIELD_NUMBER: _ClassVar[int]
+    ROBOT_MAX_LINEAR_MPS_FIELD_NUMBER: _ClassVar[int]
+    ROBOT_MAX_ANGULAR_RADPS_FIELD_NUMBER: _ClassVar[int]
+    MIN_WATCHDOG_S_FIELD_NUMBER: _ClassVar[int]
+    MAX_WATCHDOG_S_FIELD_NUMBER: _ClassVar[int]
+    max_linear_mps: float
+    max_angular_radps: float
+    watchdog_s: float
+    robot_max_linear_mps: float
+    robot_max_angular_radps: float
+    min_watchdog_s: float
+    max_watchdog_s: float
+    def __init__(self, max_linear_mps: _Optional[float] = ..., max_angular_radps: _Optional[float] = ..., watchdog_s: _Optional[float] = ..., robot_max_linear_mps: _Optional[float] = ..., robot_max_angular_radps: _Optional[float] = ..., min_watchdog_s: _Optional[float] = ..., max_watchdog_s: _Optional[float] = ...) -> None: ...

@@ -134,6 +134,21 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetSceneRequest.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.SceneDescription.FromString,
                 _registered_method=True)
+        self.RunPlan = channel.unary_unary(
+                '/telelab.v1.Robot/RunPlan',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.RunPlanRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ActivateSkillResponse.FromString,
+                _registered_method=True)
+        self.SetLimits = channel.unary_unary(
+                '/telelab.v1.Robot/SetLimits',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.SetLimitsRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.Limits.FromString,
+                _registered_method=True)
+        self.GetLimits = channel.unary_unary(
+                '/telelab.v1.Robot/GetLimits',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetLimitsRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.Limits.FromString,
+                _registered_method=True)
 
 
 class RobotServicer:
@@ -288,6 +303,34 @@ class RobotServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def RunPlan(self, request, context):
+        """Runs a plan (skills, timed drives, waits, repeat and if blocks, settings and messages) as one motor goal with the
+        lifecycle of a skill's goal: skill "plan:<name>", feedback whose state and values name the line running now
+        (values["line"]), CancelGoal stops the wheels, ABORTED names the line that failed in its message and the
+        step's error code. Every step obeys the controller token, the safety filter and the one-motor-goal rule; a
+        skill step's parameters are checked against that skill's schema before anything moves. INVALID_ARGUMENT names
+        the line, the column and the field (unknown skill, parameter out of range, limits on steps, nesting and
+        duration passed); FAILED_PRECONDITION and the token's codes as ActivateSkill.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def SetLimits(self, request, context):
+        """The low-level settings a controller may change: velocity limits (within the robot's own) and the deadman
+        (watchdog) timeout of direct commands. Values out of range are refused naming the field; 0 keeps a value.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def GetLimits(self, request, context):
+        """The settings in force and their allowed ranges.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
 
 def add_RobotServicer_to_server(servicer, server):
     rpc_method_handlers = {
@@ -390,6 +433,21 @@ def add_RobotServicer_to_server(servicer, server):
                     servicer.GetScene,
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetSceneRequest.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.SceneDescription.SerializeToString,
+            ),
+            'RunPlan': grpc.unary_unary_rpc_method_handler(
+                    servicer.RunPlan,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.RunPlanRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ActivateSkillResponse.SerializeToString,
+            ),
+            'SetLimits': grpc.unary_unary_rpc_method_handler(
+                    servicer.SetLimits,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.SetLimitsRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.Limits.SerializeToString,
+            ),
+            'GetLimits': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetLimits,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetLimitsRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.Limits.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -932,6 +990,87 @@ class Robot:
             '/telelab.v1.Robot/GetScene',
             protos_dot_telelab_dot_v1_dot_robot__pb2.GetSceneRequest.SerializeToString,
             protos_dot_telelab_dot_v1_dot_robot__pb2.SceneDescription.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def RunPlan(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/RunPlan',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.RunPlanRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.ActivateSkillResponse.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def SetLimits(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/SetLimits',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.SetLimitsRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.Limits.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def GetLimits(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/GetLimits',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GetLimitsRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.Limits.FromString,
             options,
             channel_credentials,
             insecure,
