@@ -53,12 +53,17 @@ class RobotCommand:
 def _number(value: object, field: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise CommandInvalid(field, f"{field} must be a number.")
-    if not math.isfinite(value):
+    try:
+        number = float(value)
+    except OverflowError:  # an int from JSON too large for a float
+        raise CommandInvalid(field, f"{field} must be a finite number.") from None
+    if not math.isfinite(number):
         raise CommandInvalid(field, f"{field} must be a finite number.")
-    return float(value)
+    return number
 
 
-def _check_parameter(name: str, value: object, schema: Mapping[str, object]) -> object:
+def check_parameter(name: str, value: object, schema: Mapping[str, object]) -> object:
+    """value checked against one parameter schema (type, range, choices); CommandInvalid naming the field."""
     field = f"parameters.{name}"
     kind = schema.get("type")
     if kind == "bool":
@@ -108,7 +113,7 @@ def parse_skill(skill: object, parameters: object, skills: SkillSchemas | None) 
             if name not in schema:
                 known = ", ".join(schema) or "none"
                 raise CommandInvalid(f"parameters.{name}", f"{skill} has no parameter {name!r} (it has {known}).")
-            checked.append((name, _check_parameter(name, value, schema[name])))
+            checked.append((name, check_parameter(name, value, schema[name])))
         elif isinstance(value, bool | str | int | float):
             checked.append((name, _number(value, f"parameters.{name}") if isinstance(value, float) else value))
         else:
