@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import gc
 import logging
 import signal
 import socket
@@ -55,12 +56,21 @@ def serve_forever(app: Flask, host: str, port: int) -> None:
     from middleware.robots.registry import robot_registry
 
     server = make_threaded_server(app, host, port)
+    settle_heap()
     try:
         server.serve_forever()
     finally:
         server.server_close()
         access_coordinator(app).stop_ticker()
         robot_registry(app).close()
+
+
+def settle_heap() -> None:
+    """Takes what the app built at start (modules, models, templates, routes) out of the collector's reach: a full
+    collection then walks only what requests made since. Without it every full collection of a worker walked some
+    200 000 objects and paused every request in flight for 100-140 ms, a tail that more workers did not shorten."""
+    gc.collect()
+    gc.freeze()
 
 
 GRACEFUL_TIMEOUT_S = 15  # a leaving worker's requests finish within this; its sockets reconnect elsewhere at once
@@ -77,7 +87,7 @@ def serve_with_gunicorn(host: str, port: int, workers: int, threads: int = 200) 
 
     options = {"bind": f"{host}:{port}", "workers": workers, "worker_class": "gthread", "threads": threads,
                "graceful_timeout": GRACEFUL_TIMEOUT_S, "timeout": 60, "keepalive": 5,
-               "post_worker_init": _close_channels_when_leaving, "worker_exit": _let_go_of_robots,
+               "post_worker_init": _settle_worker, "worker_exit": _let_go_of_robots,
                "loglevel": "warning", "proc_name": "telelab"}
 
     class LabServer(BaseApplication):
@@ -91,6 +101,12 @@ def serve_with_gunicorn(host: str, port: int, workers: int, threads: int = 200) 
             return create_app()
 
     LabServer().run()
+
+
+def _settle_worker(worker: Any) -> None:
+    """Once the worker's app is made: its start-up heap is settled, and SIGTERM drains its channels."""
+    settle_heap()
+    _close_channels_when_leaving(worker)
 
 
 def _close_channels_when_leaving(worker: Any) -> None:
