@@ -63,3 +63,7 @@ class NoMap(RobotError):
 
 class NoTrack(RobotError):
     """A track's run or events were asked for in a scene without a track."""
+
+
+class BatteryEmpty(RobotError):
+    """The battery is empty: the base refuses to move until the robot is recharged at its dock."""

@@ -10,17 +10,19 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TypeVar
 
 from skill_server.errors import NoMap, NoTrack, UnknownGoal, WorldStopped
 from skill_server.goals import Goal, GoalEvent, GoalFeedback, GoalSnapshot, GoalStatus
 from skill_server.sequencer import Activation, Sequencer, attach_sequencer
+from skill_server.sim.battery import BatterySpec, BatteryState
 from skill_server.sim.camera import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS
-from skill_server.sim.drive_gate import DriveAck
+from skill_server.sim.drive_gate import DriveAck, MotionLimits
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.laser import LaserSpec
 from skill_server.sim.pacing import SimTimePacer
+from skill_server.sim.robot_model import TELEBOT
 from skill_server.sim.scene_description import SceneDescription
 from skill_server.sim.scenes import FloorPatch
 from skill_server.sim.snapshots import CameraFrame, RobotDescription, RobotSnapshot
@@ -33,9 +35,9 @@ from skill_server.skills.registry import SkillEntry, SkillRegistry
 
 # The value types adapters convert come from here too, so that they import nothing from sim/ or skills/.
 __all__ = [
-    "DEFAULT_CAMERA_FPS", "MAX_CAMERA_FPS", "Activation", "CameraFrame", "DriveAck", "FloorPatch", "GoalUpdate",
-    "LaserSpec", "LocalizationEstimate", "NavigationPose", "NumberedEvent", "Pose2D", "PublishedGrid", "Robot",
-    "RobotDescription", "RobotSnapshot", "SceneDescription", "SkillEntry", "TrackEvent", "TrackState",
+    "DEFAULT_CAMERA_FPS", "MAX_CAMERA_FPS", "Activation", "BatterySpec", "BatteryState", "CameraFrame", "DriveAck",
+    "FloorPatch", "GoalUpdate", "LaserSpec", "LocalizationEstimate", "MotionLimits", "NavigationPose", "NumberedEvent",
+    "Pose2D", "PublishedGrid", "Robot", "RobotDescription", "RobotSnapshot", "SceneDescription", "SkillEntry", "TrackEvent", "TrackState",
 ]
 
 Published = TypeVar("Published", RobotSnapshot, CameraFrame)
@@ -72,9 +74,12 @@ class Robot:
         realtime: bool = True,
         deadman_timeout_s: float = 0.4,
         registry: SkillRegistry | None = None,
+        battery: BatterySpec | None = None,
     ) -> Robot:
-        """A robot in scene with every catalogued skill (or registry's), not started yet."""
-        world = World(scene, seed=seed, realtime=realtime, deadman_timeout_s=deadman_timeout_s)
+        """A robot in scene with every catalogued skill (or registry's), not started yet (battery: the Telebot's
+        unless given, e.g. a tiny one for tests)."""
+        spec = TELEBOT if battery is None else replace(TELEBOT, battery=battery)
+        world = World(scene, seed=seed, realtime=realtime, deadman_timeout_s=deadman_timeout_s, spec=spec)
         return cls(world, attach_sequencer(world, registry or default_registry(world.spec)), name)
 
     # ---- lifecycle -------------------------------------------------------------------------------
@@ -129,6 +134,15 @@ class Robot:
         if self.sequencer.motor_goal_running:  # a goal was activated while this command was on its way
             self.world.run_in_loop(self._take_wheels_back)
         return ack
+
+    def limits(self) -> MotionLimits:
+        """The velocity ceilings and the deadman timeout in force, with the ranges SetLimits accepts."""
+        return self.world.limits
+
+    def set_limits(self, token: str, max_linear_mps: object, max_angular_radps: object,
+                   watchdog_s: object) -> MotionLimits:
+        """The controller's new limits (0 keeps a value); they bind Drive commands, skills and plans alike."""
+        return self.world.set_limits(token, max_linear_mps, max_angular_radps, watchdog_s)
 
     def activate(self, token: str, skill: str, parameters: Mapping[str, object], preempt: bool) -> Activation:
         """Starts a skill as a goal, or raises (unknown skill, invalid parameter, no control, busy)."""

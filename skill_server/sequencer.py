@@ -9,6 +9,7 @@ from typing import Any
 
 from skill_server.errors import MissingControllerToken, NoMap, NotController, ResourceBusy, UnknownGoal
 from skill_server.goals import EventKind, Goal, GoalBook, GoalSnapshot, GoalStatus
+from skill_server.sim.drive_gate import BATTERY_EMPTY_MESSAGE
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.sim.snapshots import RobotSnapshot
 from skill_server.skills.base import SensorLayout, SkillController, TickInput
@@ -173,6 +174,7 @@ class Sequencer:
             spec=self.spec,
             sensors=self.sensors,
             obstacles=self.perception.obstacles,
+            battery_charge=snapshot.battery.charge,
         )
         # Pose estimators first, so the others (and the obstacle grid) use the pose they believe.
         tracker = self._pose_tracker()
@@ -189,6 +191,8 @@ class Sequencer:
                 self._step(running, tick)
         if new_scan:
             self.perception.obstacles.add_scan(tick)
+        if self._motor is not None and snapshot.battery.empty:
+            self._end(self._motor, GoalStatus.ABORTED, "BATTERY_EMPTY", BATTERY_EMPTY_MESSAGE, EventKind.FAILED)
         if self._motor is not None:
             command = self._step(self._motor, tick)
             if command is not None:

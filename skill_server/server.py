@@ -18,7 +18,7 @@ from grpc_reflection.v1alpha import reflection
 
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 from skill_server.errors import RobotError
-from skill_server.robot import Robot
+from skill_server.robot import BatterySpec, Robot
 from skill_server.sequencer import Sequencer
 from skill_server.service import RobotService
 from skill_server.sim.world import World
@@ -88,13 +88,15 @@ def create_server(
     robot_name: str = "lab-1",
     host: str = "127.0.0.1",
     controller_token: str = "",
+    battery: BatterySpec | None = None,
 ) -> SkillServer:
     """Builds the world and the gRPC server, starts both, and returns them (port=0 picks a free port).
 
     controller_token names the controller from the start: a robot restarted by its farm keeps obeying its
     owner without anyone handing the token over again.
     """
-    robot = Robot.build(scene, name=robot_name, seed=seed, realtime=realtime, deadman_timeout_s=deadman_timeout_s)
+    robot = Robot.build(scene, name=robot_name, seed=seed, realtime=realtime, deadman_timeout_s=deadman_timeout_s,
+                        battery=battery)
     if controller_token:
         robot.set_controller(controller_token)
     server = grpc.server(futures.ThreadPoolExecutor(max_workers=MAX_WORKERS, thread_name_prefix="robot-rpc"))
@@ -124,6 +126,9 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--fast", action="store_true", help="step as fast as possible instead of in real time")
     parser.add_argument("--deadman-s", type=float, default=0.4, help="deadman timeout in sim seconds (default 0.4)")
     parser.add_argument("--name", default="lab-1", help="robot name (default lab-1)")
+    parser.add_argument("--battery-drive-s", type=float, default=BatterySpec.full_drive_s,
+                        help="seconds a full battery lasts driving at top speed "
+                             f"(default {BatterySpec.full_drive_s:g})")
     parser.add_argument("--parent-pid", type=int, default=0,
                         help="stop when this process is no longer the parent (a farm's actor that died)")
     return parser.parse_args(argv)
@@ -146,6 +151,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             robot_name=args.name,
             host=args.host,
             controller_token=os.environ.get(CONTROLLER_TOKEN_VARIABLE, ""),
+            battery=BatterySpec(full_drive_s=args.battery_drive_s),
         )
     except (RobotError, OSError) as error:
         print(f"skill server: {error}", file=sys.stderr, flush=True)

@@ -9,12 +9,14 @@ from protos.telelab.v1 import robot_pb2
 from skill_server.errors import InvalidParameter
 from skill_server.goals import EventKind, GoalEvent, GoalFeedback, GoalSnapshot, GoalStatus
 from skill_server.robot import (
+    BatteryState,
     CameraFrame,
     DriveAck,
     FloorPatch,
     GoalUpdate,
     LaserSpec,
     LocalizationEstimate,
+    MotionLimits,
     NavigationPose,
     NumberedEvent,
     Pose2D,
@@ -181,6 +183,20 @@ def drive_ack_to_proto(ack: DriveAck) -> robot_pb2.DriveAck:
     )
 
 
+def battery_to_proto(battery: BatteryState) -> robot_pb2.Battery:
+    """The battery's charge as telemetry carries it."""
+    return robot_pb2.Battery(charge=battery.charge, charging=battery.charging, empty=battery.empty)
+
+
+def limits_to_proto(limits: MotionLimits) -> robot_pb2.Limits:
+    """The limits in force and the ranges SetLimits accepts."""
+    return robot_pb2.Limits(
+        max_linear_mps=limits.max_linear_mps, max_angular_radps=limits.max_angular_radps,
+        watchdog_s=limits.watchdog_s, robot_max_linear_mps=limits.robot_max_linear_mps,
+        robot_max_angular_radps=limits.robot_max_angular_radps, min_watchdog_s=limits.min_watchdog_s,
+        max_watchdog_s=limits.max_watchdog_s)
+
+
 def telemetry_to_proto(snapshot: RobotSnapshot, laser: LaserSpec, pose_only: bool = False) -> robot_pb2.Telemetry:
     pose = robot_pb2.Telemetry(
         tick=snapshot.tick,
@@ -193,6 +209,7 @@ def telemetry_to_proto(snapshot: RobotSnapshot, laser: LaserSpec, pose_only: boo
             angular_radps=snapshot.odometry.angular_radps,
         ),
         deadman_stopped=snapshot.deadman_stopped,
+        battery=battery_to_proto(snapshot.battery),
     )
     if pose_only:
         return pose
@@ -210,6 +227,7 @@ def telemetry_to_proto(snapshot: RobotSnapshot, laser: LaserSpec, pose_only: boo
             ranges_m=snapshot.laser_ranges_m,
         ),
         deadman_stopped=snapshot.deadman_stopped,
+        battery=pose.battery,
     )
 
 

@@ -14,6 +14,7 @@ import grpc
 
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 from skill_server.errors import (
+    BatteryEmpty,
     InvalidParameter,
     MissingControllerToken,
     NoMap,
@@ -40,6 +41,7 @@ STATUS_OF_ERROR: list[tuple[type[Exception], grpc.StatusCode]] = [
     (ResourceBusy, grpc.StatusCode.FAILED_PRECONDITION),
     (NoMap, grpc.StatusCode.FAILED_PRECONDITION),
     (NoTrack, grpc.StatusCode.FAILED_PRECONDITION),
+    (BatteryEmpty, grpc.StatusCode.FAILED_PRECONDITION),
     (MissingControllerToken, grpc.StatusCode.UNAUTHENTICATED),
     (NotController, grpc.StatusCode.PERMISSION_DENIED),
     (WorldStopped, grpc.StatusCode.UNAVAILABLE),
@@ -88,6 +90,18 @@ class RobotService(robot_pb2_grpc.RobotServicer):
         with domain_errors(context):
             ack = self._robot.drive(request.token, request.sequence, request.linear_mps, request.angular_radps)
         return convert.drive_ack_to_proto(ack)
+
+    def SetLimits(self, request: robot_pb2.SetLimitsRequest, context: grpc.ServicerContext) -> robot_pb2.Limits:
+        """The controller's velocity ceilings and deadman timeout (0 keeps a value); INVALID_ARGUMENT names the
+        field out of range or not finite, and nothing changes then."""
+        with domain_errors(context):
+            limits = self._robot.set_limits(request.token, request.max_linear_mps, request.max_angular_radps,
+                                            request.watchdog_s)
+        return convert.limits_to_proto(limits)
+
+    def GetLimits(self, request: robot_pb2.GetLimitsRequest, context: grpc.ServicerContext) -> robot_pb2.Limits:
+        """The limits in force and the ranges SetLimits accepts."""
+        return convert.limits_to_proto(self._robot.limits())
 
     def ActivateSkill(
         self, request: robot_pb2.ActivateSkillRequest, context: grpc.ServicerContext

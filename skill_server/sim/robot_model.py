@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+
+from skill_server.sim.battery import BatterySpec
 
 URDF_PATH = Path(__file__).with_name("telebot.urdf")
 
@@ -31,6 +33,7 @@ class RobotSpec:
     camera_forward_m: float = 0.17  # [m] camera mount ahead of the centre
     camera_height_m: float = 0.30  # [m] camera above the floor
     camera_pitch_rad: float = math.radians(-12.0)  # looks slightly down so the floor markings show
+    battery: BatterySpec = field(default_factory=BatterySpec)
 
 
 TELEBOT = RobotSpec()

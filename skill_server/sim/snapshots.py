@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from skill_server.sim.battery import FULL_BATTERY, BatteryState
 from skill_server.sim.camera import CameraSpec
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.laser import LaserSpec
@@ -28,6 +29,7 @@ class RobotSnapshot:
     deadman_stopped: bool
     commanded_linear_mps: float  # after the acceleration ramp
     commanded_angular_radps: float
+    battery: BatteryState = FULL_BATTERY
 
 
 @dataclass(frozen=True)

@@ -16,8 +16,9 @@ from pybullet_utils import bullet_client  # type: ignore[import-untyped]
 
 from skill_server.errors import InvalidParameter, WorldStopped
 from skill_server.sim import robot_model
+from skill_server.sim.battery import Battery, BatteryState, at_dock
 from skill_server.sim.camera import DEFAULT_CAMERA_FPS, Camera, CameraSpec
-from skill_server.sim.drive_gate import DriveAck, DriveGate
+from skill_server.sim.drive_gate import DriveAck, DriveGate, MotionLimits
 from skill_server.sim.geometry import Pose2D, yaw_from_quaternion
 from skill_server.sim.laser import Laser, LaserSpec
 from skill_server.sim.odometry import WheelOdometry
@@ -88,12 +89,11 @@ class World:
         self.scene = get_scene(scene)
         self.spec = spec
         self.realtime = realtime
-        self.deadman_timeout_s = float(deadman_timeout_s)
         self.tick_dt_s = PHYSICS_DT_S * PHYSICS_STEPS_PER_TICK
         self._sonar = SonarRing(sonar or SonarRingSpec(mount_radius_m=spec.body_radius_m))
         self._laser = Laser(laser or LaserSpec())
         self._camera = Camera(camera or CameraSpec(), spec)
-        self._gate = DriveGate(spec)
+        self._gate = DriveGate(spec, float(deadman_timeout_s))
         self._caster = StaticSceneCaster(self.scene)  # the scene is static: exact hits without pybullet's cost
         self.track_monitor = TrackMonitor(self.scene.track) if self.scene.track is not None else None
         self._commands: queue.SimpleQueue[tuple[Callable[[], Any], Future[Any]]] = queue.SimpleQueue()
@@ -157,6 +157,23 @@ class World:
     def run_in_loop(self, action: Callable[[], T]) -> T:
         """Runs action in the loop thread (or at once before start()) and returns its result or raises."""
         return self._call_in_loop(action)
+
+    @property
+    def deadman_timeout_s(self) -> float:
+        """How long a moving direct drive lasts without a newer command (the watchdog; SetLimits changes it)."""
+        return self._gate.limits.watchdog_s
+
+    @property
+    def limits(self) -> MotionLimits:
+        """The velocity ceilings and the deadman timeout in force."""
+        return self._gate.limits
+
+    def set_limits(self, token: str, max_linear_mps: object, max_angular_radps: object,
+                   watchdog_s: object) -> MotionLimits:
+        """The controller changes the limits (0 keeps a value); they apply from the next tick to every motion."""
+        limits = self._gate.set_limits(token, max_linear_mps, max_angular_radps, watchdog_s)
+        self._command_waiting.set()
+        return limits
 
     @property
     def drive_version(self) -> int:
@@ -315,6 +332,7 @@ class World:
                     self._sim_time_s += ticks * self.tick_dt_s
                     self._tick += ticks
                     ground_truth = self._ground_truth()
+                    self._drain_battery(ticks * self.tick_dt_s, ground_truth, 0.0, 0.0)
                     self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(ground_truth)
                     self._publish_snapshot(ground_truth)
                 if not self._at_rest():
@@ -400,6 +418,8 @@ class World:
         self._last_command_sim_s = 0.0
         self._deadman_armed = False
         self._deadman_stopped = False
+        self._battery = Battery(self.spec.battery, self.spec.max_linear_mps / self.spec.wheel_radius_m)
+        self._gate.note_battery(self._battery.state.empty)
         self._frame_pacer.restart()
         self._odometry = WheelOdometry(self.spec, spawn, self._odometry_rng)
         self._apply_wheel_speeds()
@@ -433,6 +453,12 @@ class World:
             if command is not None:  # a motor skill holds the wheels; the deadman guards Drive commands only
                 self._target_linear_mps, self._target_angular_radps = command
                 self._deadman_armed = False
+        # One place for every motion source (Drive, skills, plans): the ceilings in force, and an empty battery.
+        self._target_linear_mps, self._target_angular_radps = self._gate.limits.clamp(
+            self._target_linear_mps, self._target_angular_radps)
+        if self._battery.state.empty:
+            self._target_linear_mps = self._target_angular_radps = 0.0
+            self._deadman_armed = False
         dt_s = self.tick_dt_s
         self._linear_mps = ramp_toward(
             self._linear_mps, self._target_linear_mps, self.spec.max_linear_accel_mps2 * dt_s
@@ -447,6 +473,7 @@ class World:
         self._tick += 1
         self._read_odometry(dt_s)
         ground_truth = self._ground_truth()
+        self._drain_battery(dt_s, ground_truth, *wheel_speeds_radps(self.spec, self._linear_mps, self._angular_radps))
         if self.track_monitor is not None and self.track_monitor.observe(ground_truth, self._sim_time_s):
             self._place_robot(self.scene.spawn)  # a border line touched: the run restarts at A
             ground_truth = self.scene.spawn
@@ -454,6 +481,13 @@ class World:
             self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(ground_truth)
         self._publish_snapshot(ground_truth)
         self._maybe_render()
+
+    def _drain_battery(self, dt_s: float, pose: Pose2D, left_radps: float, right_radps: float) -> BatteryState:
+        dock = self.scene.spawn
+        docked = at_dock(pose.x_m, pose.y_m, dock.x_m, dock.y_m, self.spec.battery.dock_radius_m)
+        state = self._battery.advance(dt_s, left_radps, right_radps, docked)
+        self._gate.note_battery(state.empty)
+        return state
 
     def _follow_drive_target(self) -> None:
         target = self._gate.latest()
@@ -522,6 +556,7 @@ class World:
             deadman_stopped=self._deadman_stopped,
             commanded_linear_mps=self._linear_mps,
             commanded_angular_radps=self._angular_radps,
+            battery=self._battery.state,
         )
         self._publication.publish_snapshot(snapshot)
         self.pose_log.note(snapshot)

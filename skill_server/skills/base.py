@@ -50,6 +50,7 @@ class TickInput:
     spec: RobotSpec
     sensors: SensorLayout
     obstacles: object = None  # the detect-obstacle skill's ObstacleMap (typed loosely to avoid an import cycle)
+    battery_charge: float = 1.0  # 0..1 of full (the simulated battery)
 
 
 @dataclass(frozen=True)

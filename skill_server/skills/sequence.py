@@ -18,7 +18,11 @@ StepFactory = Callable[[Pose2D], SkillController]  # builds a step from the pose
 
 
 class StepSequence(SkillController):
-    """Runs simple skills one after the other on the same goal; the first failure ends the whole."""
+    """Runs simple skills one after the other on the same goal; the first failure ends the whole.
+
+    Subclasses (a plan's blocks) change how steps are named in feedback, events and failures through the hooks
+    below, and may start the next step in the tick the previous one ended (advance_at_once).
+    """
 
     def __init__(self, steps: list[tuple[str, StepFactory]]) -> None:
         super().__init__()
@@ -36,34 +40,67 @@ class StepSequence(SkillController):
         """Ticks the current step; moves on when it succeeds."""
         if self._start_pose is None:
             self._start_pose = tick.pose
-        if self._current is None:
-            self._advance(tick)
-        assert self._current is not None
-        step = self._current.tick(tick)
-        for kind, message in step.events:
-            if kind is not EventKind.GOAL_REACHED:
-                self.announce(kind, f"{self.current_step}: {message}")
-        progress = (self._index + (step.feedback.progress if step.feedback else 0.0)) / len(self._steps)
-        base = step.feedback or GoalFeedback()
-        feedback = feedback_for(tick, f"{self.current_step}:{base.state}", progress, base.distance_error_m,
-                                base.heading_error_rad, step_index=float(self._index), **dict(base.values))
-        if step.outcome is None:
-            return step.linear_mps, step.angular_radps, None, feedback
-        if step.outcome.status is not GoalStatus.SUCCEEDED:
-            return 0.0, 0.0, Outcome(step.outcome.status, step.outcome.error_code,
-                                     f"{self.current_step}: {step.outcome.message}"), feedback
-        if self._index + 1 >= len(self._steps):
-            self.announce(EventKind.GOAL_REACHED, f"back at the start: {step.outcome.message}")
-            return 0.0, 0.0, succeeded(f"all {len(self._steps)} steps done; last: {step.outcome.message}"), feedback
-        self._current = None
-        return 0.0, 0.0, None, feedback
+        while True:
+            if self._current is None:
+                self._advance(tick)
+            assert self._current is not None
+            step = self._current.tick(tick)
+            for kind, message in step.events:
+                self.relay_event(kind, message)
+            progress = (self._index + (step.feedback.progress if step.feedback else 0.0)) / len(self._steps)
+            feedback = self.step_feedback(tick, step.feedback or GoalFeedback(), progress)
+            if step.outcome is None:
+                return step.linear_mps, step.angular_radps, None, feedback
+            self._current.stop()
+            self._current = None
+            if step.outcome.status is not GoalStatus.SUCCEEDED:
+                return 0.0, 0.0, self.step_failed(step.outcome), feedback
+            if self._index + 1 >= len(self._steps):
+                return 0.0, 0.0, self.all_done(step.outcome), feedback
+            if not self.advance_at_once():
+                return 0.0, 0.0, None, feedback
+
+    def stop(self) -> None:
+        """Releases the step running now (a goal ended mid-step)."""
+        if self._current is not None:
+            self._current.stop()
+            self._current = None
+
+    # ---- hooks -------------------------------------------------------------------------------------
+
+    def relay_event(self, kind: EventKind, message: str) -> None:
+        """Publishes a step's event as the sequence's own (the sequence announces its own arrival)."""
+        if kind is not EventKind.GOAL_REACHED:
+            self.announce(kind, f"{self.current_step}: {message}")
+
+    def step_feedback(self, tick: TickInput, step: GoalFeedback, progress: float) -> GoalFeedback:
+        """The sequence's feedback from its step's."""
+        return feedback_for(tick, f"{self.current_step}:{step.state}", progress, step.distance_error_m,
+                            step.heading_error_rad, step_index=float(self._index), **dict(step.values))
+
+    def step_failed(self, outcome: Outcome) -> Outcome:
+        """How the sequence ends when a step did not succeed."""
+        return Outcome(outcome.status, outcome.error_code, f"{self.current_step}: {outcome.message}")
+
+    def all_done(self, last: Outcome) -> Outcome:
+        """How the sequence ends after its last step succeeded."""
+        self.announce(EventKind.GOAL_REACHED, f"back at the start: {last.message}")
+        return succeeded(f"all {len(self._steps)} steps done; last: {last.message}")
+
+    def step_started(self) -> None:
+        """Announces the step that begins now."""
+        self.announce(EventKind.STEP_STARTED, f"step {self._index + 1}/{len(self._steps)}: {self.current_step}")
+
+    def advance_at_once(self) -> bool:
+        """Whether the next step starts in the tick the previous one ended (else the wheels get a stop tick)."""
+        return False
 
     def _advance(self, tick: TickInput) -> None:
         assert self._start_pose is not None
         self._index += 1
-        name, factory = self._steps[self._index]
+        _, factory = self._steps[self._index]
+        self.step_started()
         self._current = factory(self._start_pose)
-        self.announce(EventKind.STEP_STARTED, f"step {self._index + 1}/{len(self._steps)}: {name}")
 
 
 def round_trip_description(spec: RobotSpec) -> SkillDescription:
