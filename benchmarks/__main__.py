@@ -11,7 +11,8 @@ from pathlib import Path
 # Each runs in a process of its own, so one benchmark's threads and worlds do not weigh on the next.
 BENCHMARKS = ("benchmarks.latency", "benchmarks.skills", "benchmarks.feedback", "benchmarks.farm",
               "benchmarks.consoles", "benchmarks.workers", "benchmarks.sticky",
-              "benchmarks.browser_view", "benchmarks.capacity", "benchmarks.database_load")
+              "benchmarks.browser_view", "benchmarks.capacity", "benchmarks.database_load",
+              "benchmarks.plans")
 
 
 def main(argv: list[str] | None = None) -> int:

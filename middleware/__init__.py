@@ -34,6 +34,7 @@ from middleware.lab import pool_routes
 from middleware.lab import routes as lab_routes
 from middleware.lab import skills as lab_skills
 from middleware.lab import sockets as lab_sockets
+from middleware.plans import routes as plans_routes
 from middleware.preferences import routes as preferences_routes
 from middleware.robots import registry
 from middleware.teaching import (
@@ -112,7 +113,8 @@ def _register_areas(app: Flask) -> None:
                       bookings_routes.blueprint, chat_routes.blueprint, accounts_routes.blueprint,
                       courses_routes.blueprint, experiment_routes.blueprint, assessment_routes.blueprint,
                       assessment_pages.blueprint, practice_routes.blueprint, lesson_routes.blueprint,
-                      tour_routes.blueprint, class_routes.blueprint, farm_routes.blueprint, pool_routes.blueprint):
+                      tour_routes.blueprint, class_routes.blueprint, farm_routes.blueprint, pool_routes.blueprint,
+                      plans_routes.blueprint):
         app.register_blueprint(blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
                             practice_routes.register, tour_live.register], socket_login_check)

@@ -13,6 +13,7 @@ from skill_server.sim.geometry import Pose2D
 
 RETAINED_FINISHED_GOALS = 200  # finished goals kept for GetGoal/WatchGoal after their end
 MAX_EVENTS_PER_GOAL = 500  # a runaway skill must not grow a goal's log without bound
+PLANNED_PATH_POINTS = 64  # feedback carries at most this many waypoints: each watcher gets them at 10 Hz
 
 
 class GoalStatus(enum.Enum):
@@ -66,6 +67,16 @@ class GoalFeedback:
     pose: Pose2D = field(default_factory=Pose2D)  # the pose the skill believes (odometry or localization)
     pose_source: str = "odometry"
     values: tuple[tuple[str, float], ...] = ()  # skill-specific figures, e.g. ("wall_distance_m", 0.5)
+    planned_path: tuple[tuple[float, float], ...] = ()  # waypoints still ahead (x_m, y_m), lab frame (go-to-goal)
+
+
+def capped_path(path: tuple[tuple[float, float], ...],
+                limit: int = PLANNED_PATH_POINTS) -> tuple[tuple[float, float], ...]:
+    """The path with at most limit waypoints: a longer one thinned evenly, keeping its first and its last (the goal)."""
+    if len(path) <= limit:
+        return path
+    step = (len(path) - 1) / (limit - 1)
+    return tuple(path[round(index * step)] for index in range(limit))
 
 
 @dataclass(frozen=True)

@@ -53,7 +53,8 @@ def test_every_top_level_folder_has_a_readme() -> None:
 # The shape of the middleware's robot-facing half (issue 13): one command path, areas that never import upward.
 
 PRODUCT_PACKAGES = ("middleware", "skill_server", "protos")
-ROBOT_COMMAND_METHODS = {"drive", "activate_skill", "cancel_goal", "clear_map", "return_to_dock", "set_controller"}
+ROBOT_COMMAND_METHODS = {"drive", "activate_skill", "cancel_goal", "clear_map", "return_to_dock", "set_controller",
+                         "run_plan"}
 REQUEST_STATE = {("flask", "request"), ("flask", "g"), ("flask", "session"), ("flask_login", "current_user")}
 
 

@@ -5,7 +5,7 @@ It owns the controller token (the known-token fast path, a database re-read when
 re-sending it to a robot that restarted and forgot it), sequence numbering, the deadman-friendly held
 drive, and the one map from a robot's refusal to the error a person or API client sees. Nothing else in
 the middleware calls a RobotLink command method (drive, activate_skill, cancel_goal, clear_map,
-return_to_dock, set_controller): tests/test_architecture.py checks it.
+return_to_dock, set_controller, run_plan): tests/test_architecture.py checks it.
 
 Supervisory actions (clearing the map, the return to the dock) are the controller's, or a tutor's or an
 admin's at any time: those go out under whatever token the robot obeys now ("" while nobody has control),
@@ -173,6 +173,10 @@ class Commander:
     def activate(self, skill: str, parameters: dict[str, object], preempt: bool) -> robot_pb2.GoalState:
         """Starts a skill as a goal."""
         return self._as_controller(lambda token: self.link.activate_skill(token, skill, parameters, preempt))
+
+    def run_plan(self, name: str, plan: robot_pb2.PlanBlock, preempt: bool) -> robot_pb2.GoalState:
+        """Starts a checked plan as one motor goal "plan:<name>"."""
+        return self._as_controller(lambda token: self.link.run_plan(token, name, plan, preempt))
 
     def hold_drive(self, linear_mps: float, angular_radps: float, hold_s: float) -> robot_pb2.GoalState:
         """A drive held for hold_s (0.1 to 10 s) as a direct_control goal: it stops by itself if its sender goes."""

@@ -12,12 +12,13 @@ from middleware.models.chat import ChatMessage
 from middleware.models.courses import Course, CourseMembership, Invitation, LoginFailure
 from middleware.models.experiment import Trial, VideoDelay  # noqa: F401
 from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord  # noqa: F401
+from middleware.models.plans import PlanVersion, StoredPlan
 from middleware.models.preferences import UserPreference
 from middleware.models.robots import Robot, RobotKindSetting
 from middleware.models.teaching import GuidedSession, GuidedSessionPresence, Lesson, Tour  # noqa: F401
 
 __all__ = [
     "Base", "Booking", "ChatMessage", "Course", "CourseMembership", "Invitation", "LoginFailure",
-    "LoginSession", "PoolQueueEntry", "QueueEntry", "Robot", "RobotKindSetting", "Role", "RobotControl", "User",
-    "UserPreference",
+    "LoginSession", "PlanVersion", "PoolQueueEntry", "QueueEntry", "Robot", "RobotKindSetting", "Role",
+    "RobotControl", "StoredPlan", "User", "UserPreference",
 ]

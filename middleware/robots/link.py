@@ -133,6 +133,11 @@ class RobotLink:
         )
         return self._call(self._stub.ActivateSkill, request).goal
 
+    def run_plan(self, token: str, name: str, plan: robot_pb2.PlanBlock, preempt: bool) -> robot_pb2.GoalState:
+        """Starts a plan as one motor goal "plan:<name>" under the controller's token."""
+        request = robot_pb2.RunPlanRequest(token=token, name=name, plan=plan, preempt=preempt)
+        return self._call(self._stub.RunPlan, request).goal
+
     def cancel_goal(self, token: str, goal_id: str) -> robot_pb2.GoalState:
         """Cancels a goal; the answer says the error left."""
         return self._call(self._stub.CancelGoal, robot_pb2.CancelGoalRequest(token=token, goal_id=goal_id))

@@ -9,6 +9,8 @@ import time
 
 from protos.telelab.v1 import robot_pb2
 
+PLANNED_PATH_POINTS = 64  # a goal's path as the page gets it: the robot caps it so, and nothing else is trusted
+
 
 def pose_dict(pose: robot_pb2.Pose2D) -> dict[str, float]:
     """A pose as JSON-ready numbers."""
@@ -141,6 +143,7 @@ def feedback_dict(feedback: robot_pb2.GoalFeedback) -> dict[str, object]:
         "pose": pose_dict(feedback.pose),
         "pose_source": feedback.pose_source,
         "values": dict(feedback.values),
+        "planned_path": [[point.x_m, point.y_m] for point in feedback.planned_path[:PLANNED_PATH_POINTS]],
     }
 
 

@@ -302,6 +302,7 @@ def feedback_to_proto(feedback: GoalFeedback) -> robot_pb2.GoalFeedback:
         pose=pose_to_proto(feedback.pose),
         pose_source=feedback.pose_source,
         values={name: value for name, value in feedback.values if math.isfinite(value)},
+        planned_path=[robot_pb2.Pose2D(x_m=x_m, y_m=y_m) for x_m, y_m in feedback.planned_path],
     )
 
 

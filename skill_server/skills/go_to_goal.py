@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
-from skill_server.goals import EventKind, GoalFeedback
+from skill_server.goals import EventKind, GoalFeedback, capped_path
 from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.skills.base import (
@@ -184,8 +185,9 @@ class GoToGoal(SkillController):
 
     def _feedback(self, tick: TickInput, state: str, distance_m: float, bearing_error_rad: float) -> GoalFeedback:
         progress = 1.0 - distance_m / self._start_distance_m if self._start_distance_m else 0.0
-        return feedback_for(tick, state, progress, distance_m, bearing_error_rad,
-                            goal_x_m=self.goal[0], goal_y_m=self.goal[1], waypoints=float(len(self._path)))
+        feedback = feedback_for(tick, state, progress, distance_m, bearing_error_rad,
+                                goal_x_m=self.goal[0], goal_y_m=self.goal[1], waypoints=float(len(self._path)))
+        return replace(feedback, planned_path=capped_path(self._path))  # the path ahead, planned from the belief
 
 
 def _point(xy: tuple[float, float]) -> str:

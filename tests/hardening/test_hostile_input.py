@@ -106,6 +106,17 @@ ROUTES = (
     "DELETE /api/lessons/videos/<name>",
     "GET /api/me/preferences/<key>",
     "PUT /api/me/preferences/<key>",
+    "GET /api/plans",
+    "POST /api/plans",
+    "GET /api/plans/<int:plan_id>",
+    "PUT /api/plans/<int:plan_id>",
+    "DELETE /api/plans/<int:plan_id>",
+    "POST /api/plans/<int:plan_id>/copy",
+    "GET /api/plans/<int:plan_id>/export",
+    "POST /api/plans/<int:plan_id>/runs",
+    "PUT /api/plans/<int:plan_id>/share",
+    "POST /api/plans/check",
+    "POST /api/plans/import",
     "GET /api/pools",
     "POST /api/pools/<kind>/claim",
     "POST /api/pools/<kind>/queue",
@@ -195,6 +206,8 @@ ROUTES = (
     "GET /login",
     "POST /login",
     "POST /logout",
+    "GET /plans",
+    "GET /plans/<int:plan_id>",
     "GET /pools/<kind>",
     "GET /practice",
     "GET /teaching",
@@ -230,6 +243,7 @@ FIELDS = (
     "robot", "role", "rubric", "scene", "skill", "slug", "start", "starts_at", "steps", "summary", "target",
     "task_kind", "task_points", "task_topics", "text", "title", "tolerance", "topics", "turn_length_s", "type",
     "tz", "unit", "user", "user_id", "username", "value", "video", "video_name", "week", "x_m", "y_m",
+    "beside", "from_dock", "version",  # the plans' (issue 16), last so the others keep their hostile values
 )
 INT64_PAST = ("9223372036854775808", "18446744073709551616", "1" * 40)
 HOSTILE_TEXT = ("\ud800", "a\udfffb", "\x00", "²", "٣", "1" * 5000, "x" * 100_000, "<script>alert(1)</script>",
@@ -269,7 +283,8 @@ def fill_path(rule: str, int_value: str, text_value: str) -> str:
 
 def hostile_query(variant: int) -> str:
     """A query string of the fields the views read from it, each with a hostile value."""
-    names = ("week", "tz", "after_id", "question", "exam", "format", "date", "next", "start", "end", "course_id")
+    names = ("week", "tz", "after_id", "question", "exam", "format", "date", "next", "start", "end", "course_id",
+             "version")
     values = {name: as_form_text(hostile_value(variant * 7 + i))[:2000] for i, name in enumerate(names)}
     return urlencode({k: v.encode("utf-8", "surrogatepass") for k, v in values.items()})
 

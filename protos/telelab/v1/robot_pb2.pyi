@@ -390,7 +390,7 @@ class ActivateSkillResponse(_message.Message):
     def __init__(self, goal: _Optional[_Union[GoalState, _Mapping]] = ..., preempted_goal_id: _Optional[str] = ...) -> None: ...
 
 class GoalFeedback(_message.Message):
-    __slots__ = ("sim_time_s", "state", "progress", "distance_error_m", "heading_error_rad", "pose", "pose_source", "values")
+    __slots__ = ("sim_time_s", "state", "progress", "distance_error_m", "heading_error_rad", "pose", "pose_source", "values", "planned_path")
     class ValuesEntry(_message.Message):
         __slots__ = ("key", "value")
         KEY_FIELD_NUMBER: _ClassVar[int]
@@ -406,6 +406,7 @@ class GoalFeedback(_message.Message):
     POSE_FIELD_NUMBER: _ClassVar[int]
     POSE_SOURCE_FIELD_NUMBER: _ClassVar[int]
     VALUES_FIELD_NUMBER: _ClassVar[int]
+    PLANNED_PATH_FIELD_NUMBER: _ClassVar[int]
     sim_time_s: float
     state: str
     progress: float
@@ -414,7 +415,8 @@ class GoalFeedback(_message.Message):
     pose: Pose2D
     pose_source: str
     values: _containers.ScalarMap[str, float]
-    def __init__(self, sim_time_s: _Optional[float] = ..., state: _Optional[str] = ..., progress: _Optional[float] = ..., distance_error_m: _Optional[float] = ..., heading_error_rad: _Optional[float] = ..., pose: _Optional[_Union[Pose2D, _Mapping]] = ..., pose_source: _Optional[str] = ..., values: _Optional[_Mapping[str, float]] = ...) -> None: ...
+    planned_path: _containers.RepeatedCompositeFieldContainer[Pose2D]
+    def __init__(self, sim_time_s: _Optional[float] = ..., state: _Optional[str] = ..., progress: _Optional[float] = ..., distance_error_m: _Optional[float] = ..., heading_error_rad: _Optional[float] = ..., pose: _Optional[_Union[Pose2D, _Mapping]] = ..., pose_source: _Optional[str] = ..., values: _Optional[_Mapping[str, float]] = ..., planned_path: _Optional[_Iterable[_Union[Pose2D, _Mapping]]] = ...) -> None: ...
 
 class GoalEvent(_message.Message):
     __slots__ = ("index", "sim_time_s", "kind", "message")
