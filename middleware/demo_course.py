@@ -25,6 +25,7 @@ from middleware.auth.services import find_user
 from middleware.courses import services as courses
 from middleware.courses.schemas import CourseSettings
 from middleware.models import Course, Role
+from middleware.plans.demo_plans import seed_demo_plans
 
 DEMO_COURSE_CODE = "DEMO-ROBOTICS"
 DEMO_COURSE_TITLE = "Mobile robotics (demo)"
@@ -93,6 +94,7 @@ def seed_demo_course(session: Session, now: datetime | None = None) -> DemoCours
         bank.create_exam(session, tutor, course.id, parse_exam(data))
         added.append(label)
     added.append("the lab survey")
+    added += seed_demo_plans(session, course.id)
     return DemoCourse(course.id, added)
 
 

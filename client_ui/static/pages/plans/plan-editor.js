@@ -1,0 +1,340 @@
+// The plan editor: write and check a plan (errors marked on their lines), save it as a version, copy, share,
+// export; try it on the practice robot and run it on a lab robot during one's turn, each run's trace drawn on
+// the map with its line progress and its end state.
+import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
+import { h } from "../../lib/dom.js";
+import { boxCorners, fitView, sceneBounds, worldToCanvas } from "../../lib/map-geometry.js";
+import { addSample, endErrorCm, endStateWords, isFinal, lineOf } from "./plan-trace.js";
+
+const root = document.getElementById("plan-editor");
+const planId = Number(root.dataset.planId);
+const mine = root.dataset.mine === "true";
+const text = root.querySelector("textarea[name=text]");
+const gutter = root.querySelector("[data-slot=gutter]");
+const errorList = root.querySelector("[data-slot=errors]");
+const checkStatus = root.querySelector("[data-field=check-status]");
+const versionSelect = root.querySelector("[data-field=version]");
+const nameInput = root.querySelector("input[name=name]");
+const robotSelect = root.querySelector("[data-field=robot]");
+const turnLine = root.querySelector("[data-field=turn]");
+const progressLine = root.querySelector("[data-field=progress]");
+const endStateLine = root.querySelector("[data-field=end-state]");
+const endErrorLine = root.querySelector("[data-field=end-error]");
+const canvas = root.querySelector("[data-field=map]");
+const button = (action) => root.querySelector(`[data-action=${action}]`);
+const TRACE_COLOURS = { predicted: "#1d6fd8", real: "#e07b00" };
+
+const state = { errors: [], runningLine: null, latest: 0, sceneBoxes: [], traces: { predicted: [], real: [] },
+  run: null, queue: null };
+
+// --- text, gutter and errors -------------------------------------------------------------------
+
+function renderGutter() {
+  const count = text.value.split("\n").length;
+  const errorLines = new Set(state.errors.map((e) => e.line));
+  const lines = [];
+  for (let line = 1; line <= count; line += 1) {
+    const mark = line === state.runningLine ? "▶" : errorLines.has(line) ? "⚠" : " ";
+    const classes = ["plan-code__line"];
+    if (errorLines.has(line)) classes.push("plan-code__line--error");
+    if (line === state.runningLine) classes.push("plan-code__line--running");
+    lines.push(h("span", { class: classes.join(" "), "data-line": line }, `${mark}${String(line).padStart(3)}`));
+    lines.push("\n");
+  }
+  gutter.replaceChildren(...lines);
+  gutter.scrollTop = text.scrollTop;
+}
+
+function moveToLine(line, column = 1) {
+  const starts = [0];
+  for (let i = 0; i < text.value.length; i += 1) if (text.value[i] === "\n") starts.push(i + 1);
+  const at = (starts[line - 1] ?? 0) + Math.max(0, column - 1);
+  text.focus();
+  text.setSelectionRange(at, at);
+}
+
+function showErrors(errors) {
+  state.errors = errors;
+  errorList.replaceChildren(...errors.map((error) => h("li", { class: "plans-errors__item", "data-line": error.line },
+    h("button", { type: "button", class: "plans-errors__goto", onclick: () => moveToLine(error.line, error.column) },
+      error.line ? `Line ${error.line}, column ${error.column}` : "The plan"),
+    ` ${error.message}`)));
+  renderGutter();
+}
+
+function summaryWords(summary) {
+  if (!summary) return "";
+  const duration = summary.max_duration_s == null ? "no time bound" : `at most ${summary.max_duration_s} s`;
+  return `${summary.steps} step${summary.steps === 1 ? "" : "s"}, ${duration}`;
+}
+
+async function check() {
+  checkStatus.textContent = "Checking…";
+  try {
+    const answer = await fetchJson("/api/plans/check", { method: "POST", body: { text: text.value } });
+    showErrors(answer.errors);
+    checkStatus.textContent = answer.valid
+      ? `The plan is valid: ${summaryWords(answer.summary)}.`
+      : `${answer.errors.length} problem${answer.errors.length === 1 ? "" : "s"} found: see the marked lines.`;
+    checkStatus.dataset.valid = String(answer.valid);
+    return answer.valid;
+  } catch (error) {
+    checkStatus.textContent = error.message;
+    checkStatus.dataset.valid = "false";
+    return false;
+  }
+}
+
+// --- the stored plan ---------------------------------------------------------------------------
+
+function showPlan(plan) {
+  text.value = plan.text;
+  state.latest = plan.latest_version;
+  versionSelect.replaceChildren(...plan.versions.map((v) => h("option", { value: v.version,
+    selected: v.version === plan.version }, `${v.version}${v.version === plan.latest_version ? " (latest)" : ""}`)));
+  const shared = plan.shared_with ? `Shared with ${plan.shared_with.code}.` : "Not shared.";
+  root.closest("main").querySelector("[data-field=plan-about]").textContent = plan.mine
+    ? `Your plan, version ${plan.version} of ${plan.latest_version}. ${shared}`
+    : `${plan.owner}'s plan, shared with you to read and run: copy it to change it. Version ${plan.version}.`;
+  root.closest("main").querySelector("[data-field=plan-name]").textContent = plan.name;
+  const shareSelect = root.querySelector("[data-field=share-course]");
+  if (shareSelect) shareSelect.value = plan.shared_with ? String(plan.shared_with.id) : "";
+  showErrors([]);
+}
+
+async function load(version = null) {
+  const query = version ? `?version=${version}` : "";
+  try {
+    showPlan((await fetchJson(`/api/plans/${planId}${query}`)).plan);
+  } catch (error) {
+    checkStatus.textContent = error.message;
+  }
+}
+
+async function save() {
+  if (!mine) return;
+  checkStatus.textContent = "Saving…";
+  try {
+    const body = { text: text.value };
+    if (nameInput) body.name = nameInput.value.trim();
+    showPlan((await fetchJson(`/api/plans/${planId}`, { method: "PUT", body })).plan);
+    checkStatus.textContent = `Saved as version ${state.latest}.`;
+    checkStatus.dataset.valid = "true";
+  } catch (error) {
+    showErrors(error.payload?.errors ?? []);
+    checkStatus.textContent = error.message;
+    checkStatus.dataset.valid = "false";
+    if (error.field === "name") nameInput?.setAttribute("aria-invalid", "true");
+  }
+}
+
+async function copy() {
+  try {
+    const { plan } = await fetchJson(`/api/plans/${planId}/copy`, { method: "POST", body: {} });
+    window.location.assign(`/plans/${plan.id}`);
+  } catch (error) {
+    checkStatus.textContent = error.message;
+  }
+}
+
+async function share() {
+  const value = root.querySelector("[data-field=share-course]").value;
+  try {
+    const { plan } = await fetchJson(`/api/plans/${planId}/share`, { method: "PUT",
+      body: { course_id: value ? Number(value) : null } });
+    showPlan({ ...plan });
+    checkStatus.textContent = plan.shared_with ? `Shared with ${plan.shared_with.code}.` : "No longer shared.";
+  } catch (error) {
+    checkStatus.textContent = error.message;
+  }
+}
+
+async function remove() {
+  if (!window.confirm("Delete this plan and all its versions?")) return;
+  try {
+    await fetchJson(`/api/plans/${planId}`, { method: "DELETE" });
+    window.location.assign("/plans");
+  } catch (error) {
+    checkStatus.textContent = error.message;
+  }
+}
+
+// --- the map -----------------------------------------------------------------------------------
+
+function draw() {
+  const width = canvas.clientWidth || canvas.width;
+  const height = Math.round(width * 0.75);
+  if (canvas.width !== width || canvas.height !== height) Object.assign(canvas, { width, height });
+  const context = canvas.getContext("2d");
+  const points = [...state.traces.predicted, ...state.traces.real];
+  const bounds = sceneBounds(state.sceneBoxes);
+  for (const p of points) {
+    bounds.minX = Math.min(bounds.minX, p.x_m - 0.3); bounds.maxX = Math.max(bounds.maxX, p.x_m + 0.3);
+    bounds.minY = Math.min(bounds.minY, p.y_m - 0.3); bounds.maxY = Math.max(bounds.maxY, p.y_m + 0.3);
+  }
+  const view = fitView(bounds, width, height);
+  context.clearRect(0, 0, width, height);
+  context.fillStyle = "#f4f6f8";
+  context.fillRect(0, 0, width, height);
+  context.fillStyle = "#7d8793";
+  for (const box of state.sceneBoxes) {
+    const corners = boxCorners(box).map(([x, y]) => worldToCanvas(view, x, y));
+    context.beginPath();
+    corners.forEach(([x, y], i) => (i ? context.lineTo(x, y) : context.moveTo(x, y)));
+    context.closePath();
+    context.fill();
+  }
+  for (const [kind, trace] of Object.entries(state.traces)) {
+    if (!trace.length) continue;
+    context.strokeStyle = context.fillStyle = TRACE_COLOURS[kind];
+    context.lineWidth = 3;
+    context.beginPath();
+    trace.forEach((p, i) => { const [x, y] = worldToCanvas(view, p.x_m, p.y_m); if (i) context.lineTo(x, y); else context.moveTo(x, y); });
+    context.stroke();
+    const [sx, sy] = worldToCanvas(view, trace[0].x_m, trace[0].y_m);
+    context.strokeRect(sx - 4, sy - 4, 8, 8);
+    const end = trace[trace.length - 1];
+    const [ex, ey] = worldToCanvas(view, end.x_m, end.y_m);
+    context.beginPath();
+    context.arc(ex, ey, 5, 0, 2 * Math.PI);
+    context.fill();
+  }
+  canvas.dataset.predictedPoints = String(state.traces.predicted.length);
+  canvas.dataset.realPoints = String(state.traces.real.length);
+  const error = endErrorCm(state.traces.predicted, state.traces.real);
+  endErrorLine.textContent = error == null ? "" : ` — end points ${error.toFixed(1)} cm apart`;
+}
+
+async function loadScene(robotName) {
+  try {
+    const robot = await fetchJson(`/api/robots/${encodeURIComponent(robotName)}`);
+    state.sceneBoxes = robot.info?.scene_boxes ?? [];
+  } catch {
+    state.sceneBoxes = [];
+  }
+  draw();
+}
+
+// --- runs --------------------------------------------------------------------------------------
+
+function setRunning(running) {
+  button("cancel").hidden = !running;
+  button("try").disabled = running;
+  button("run").disabled = running;
+}
+
+function finish(run, goal) {
+  if (run.finished) return;
+  run.finished = true;
+  endStateLine.textContent = `${run.label}: ${endStateWords(goal)}`;
+  endStateLine.dataset.status = goal.status;
+  root.dataset.lastEnd = goal.status;
+  progressLine.textContent = "";
+  state.runningLine = null;
+  renderGutter();
+  setRunning(false);
+  // One more telemetry sample lands the trace where the robot stopped.
+  setTimeout(() => { run.goalChannel.close(); run.telemetry.close(); draw(); }, 600);
+}
+
+function follow(answer, kind, label) {
+  state.traces[kind] = [];
+  const run = { answer, kind, label, finished: false };
+  state.run = run;
+  endStateLine.textContent = "";
+  progressLine.textContent = `${label}: started.`;
+  setRunning(true);
+  run.telemetry = new Channel(answer.telemetry_channel);
+  run.telemetry.addEventListener("message", (event) => {
+    const message = parseJsonMessage(event.detail);
+    if (message?.type !== "telemetry") return;
+    state.traces[kind] = addSample(state.traces[kind], message.odometry?.pose);
+    draw();
+  });
+  run.goalChannel = new Channel(answer.goal_channel);
+  run.goalChannel.addEventListener("message", (event) => {
+    const message = parseJsonMessage(event.detail);
+    if (!message || run.finished) return;
+    const feedback = message.type === "goal_feedback" ? message.feedback : message.goal?.feedback;
+    if (feedback) {
+      const line = lineOf(feedback);
+      if (line && line !== state.runningLine) { state.runningLine = line; renderGutter(); }
+      if (line) progressLine.textContent = `${label}: running line ${line}: ${feedback.state.replace(/^line \d+:\s*/, "")}`;
+    }
+    if (message.type === "goal" && isFinal(message.goal?.status)) finish(run, message.goal);
+  });
+  run.goalChannel.addEventListener("statechange", (event) => {
+    if (event.detail.phase === "closed" && event.detail.code && event.detail.code !== 1000 && !run.finished) {
+      progressLine.textContent = `${label}: the run's progress cannot be followed (${event.detail.reason}).`;
+      setRunning(false);
+    }
+  });
+}
+
+async function startRun(target) {
+  if (!(await check())) return;
+  const robotName = robotSelect?.value ?? "";
+  const practice = target === "practice";
+  const body = practice
+    ? { target, beside: robotName || null, from_dock: root.querySelector("input[name=from_dock]").checked }
+    : { target };
+  progressLine.textContent = practice ? "Starting on your practice robot…" : `Starting on ${robotName}…`;
+  endStateLine.textContent = "";
+  try {
+    const answer = await fetchJson(`/api/plans/${planId}/runs`, { method: "POST", body });
+    follow(answer, practice ? "predicted" : "real", practice ? "Practice robot" : answer.robot);
+  } catch (error) {
+    progressLine.textContent = error.message;
+    setRunning(false);
+  }
+}
+
+async function cancel() {
+  if (!state.run) return;
+  try {
+    await fetchJson(state.run.answer.cancel_url, { method: "DELETE" });
+  } catch (error) {
+    progressLine.textContent = error.message;
+  }
+}
+
+function queueForRobot() {
+  const robotName = robotSelect?.value;
+  if (!robotName) return;
+  state.queue?.close();
+  turnLine.textContent = `Joining ${robotName}'s queue…`;
+  state.queue = new Channel(`/ws/robots/${encodeURIComponent(robotName)}/queue`);
+  state.queue.addEventListener("message", (event) => {
+    const seat = parseJsonMessage(event.detail);
+    if (seat?.type !== "queue") return;
+    button("run").hidden = !seat.is_controller;
+    button("run").textContent = `Run on ${robotName}`;
+    turnLine.textContent = seat.is_controller
+      ? `Your turn on ${robotName}${seat.turn_remaining_s != null ? ` (${Math.round(seat.turn_remaining_s)} s left)` : ""}.`
+      : `Waiting for ${robotName}: position ${seat.position ?? "?"} of ${seat.queue_size}${seat.controller ? `, ${seat.controller} has it` : ""}.`;
+  });
+}
+
+// --- wiring ------------------------------------------------------------------------------------
+
+text.addEventListener("input", () => { if (state.errors.length) showErrors([]); else renderGutter(); });
+text.addEventListener("scroll", () => { gutter.scrollTop = text.scrollTop; });
+text.addEventListener("keydown", (event) => {
+  if ((event.ctrlKey || event.metaKey) && event.key === "Enter") { event.preventDefault(); check(); }
+  if ((event.ctrlKey || event.metaKey) && event.key.toLowerCase() === "s") { event.preventDefault(); save(); }
+});
+versionSelect.addEventListener("change", () => load(Number(versionSelect.value)));
+button("check").addEventListener("click", check);
+button("save")?.addEventListener("click", save);
+button("copy").addEventListener("click", copy);
+button("share")?.addEventListener("click", share);
+button("delete")?.addEventListener("click", remove);
+button("try").addEventListener("click", () => startRun("practice"));
+button("run").addEventListener("click", () => startRun(robotSelect.value));
+button("cancel").addEventListener("click", cancel);
+button("queue").addEventListener("click", queueForRobot);
+robotSelect?.addEventListener("change", () => { loadScene(robotSelect.value); button("run").hidden = true;
+  state.queue?.close(); turnLine.textContent = ""; });
+window.addEventListener("resize", draw);
+if (robotSelect?.value) loadScene(robotSelect.value); else draw();
+load();

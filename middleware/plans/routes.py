@@ -1,0 +1,198 @@
+"""Plans pages and API: list, write and check, save as versions, copy, share, export, import, and run on a robot.
+
+Routes parse and respond; middleware.plans.services decides who may do what, middleware.plans.runs sends a plan
+to a robot. Plans are checked against the skills of a robot that answers (the user's practice robot, else any lab
+robot): with none answering, saving is refused with a sentence (503 no_robot_to_check).
+"""
+
+from __future__ import annotations
+
+from flask import Blueprint, Response, abort, jsonify, render_template, request
+from flask.typing import ResponseReturnValue
+from flask_login import current_user, login_required
+
+from middleware.accounts.web import json_body
+from middleware.auth.schemas import InvalidField
+from middleware.courses.services import list_courses
+from middleware.db import get_session
+from middleware.models import Role
+from middleware.plans import schemas, services
+from middleware.plans.language import PlanInvalid
+from middleware.plans.runs import RunRequest, run_plan
+from middleware.plans.services import PlanRefused
+from middleware.robots.registry import robot_registry
+from middleware.teaching.targets import reference_skills
+
+blueprint = Blueprint("plans", __name__)
+
+
+def _skills() -> dict[str, list[dict[str, object]]]:
+    return reference_skills(current_user.id)
+
+
+def _plan_answer(plan_id: int, status: int = 200, version: int | None = None) -> ResponseReturnValue:
+    dbs = get_session()
+    plan = services.readable_plan(dbs, current_user, plan_id)
+    return jsonify({"plan": services.plan_dict(dbs, current_user, plan, services.plan_version(dbs, plan, version))}), \
+        status
+
+
+# --- pages ----------------------------------------------------------------------------------------
+
+
+@blueprint.get("/plans")
+@login_required
+def index() -> ResponseReturnValue:
+    """My plans and the plans shared with my courses, with New and Import."""
+    return render_template("plans/index.html")
+
+
+@blueprint.get("/plans/<int:plan_id>")
+@login_required
+def editor(plan_id: int) -> ResponseReturnValue:
+    """The plan's editor: write, check, save, copy, share, export; try it on the practice robot or run it."""
+    dbs = get_session()
+    try:
+        plan = services.readable_plan(dbs, current_user, plan_id)
+    except PlanRefused:
+        abort(404)
+    teaches = current_user.role in (Role.TUTOR, Role.ADMIN)
+    courses = list_courses(dbs, current_user) if teaches else []
+    lab_robots = robot_registry().names()
+    return render_template("plans/editor.html", plan_id=plan.id, plan_name=plan.name,
+                           mine=plan.owner_id == current_user.id, courses=courses, teaches=teaches,
+                           lab_robots=lab_robots)
+
+
+# --- JSON API -----------------------------------------------------------------------------------
+
+
+@blueprint.get("/api/plans")
+@login_required
+def api_list() -> ResponseReturnValue:
+    """{"plans": [...]}: mine first, then those shared with my courses."""
+    dbs = get_session()
+    return jsonify({"plans": [services.plan_dict(dbs, current_user, plan)
+                              for plan in services.visible_plans(dbs, current_user)]})
+
+
+@blueprint.post("/api/plans/check")
+@login_required
+def api_check() -> ResponseReturnValue:
+    """Checks a plan's text: {"valid", "errors": [{line, column, field, message}], "summary", "plan"}."""
+    text = schemas.plan_text(json_body().get("text"))
+    try:
+        checked = services.check_text(text, _skills())
+    except PlanInvalid as invalid:
+        return jsonify({"valid": False, "errors": [error.to_dict() for error in invalid.errors],
+                        "summary": None, "plan": None})
+    return jsonify({"valid": True, "errors": [], "summary": checked.summary(), "plan": checked.document()})
+
+
+@blueprint.post("/api/plans")
+@login_required
+def api_create() -> ResponseReturnValue:
+    """Creates a plan from {"name", "text"}; 201 with it, or 400 invalid_plan listing every error."""
+    body = json_body()
+    name = schemas.plan_name(body.get("name"))
+    checked = services.check_text(schemas.plan_text(body.get("text")), _skills())
+    plan = services.create_plan(get_session(), current_user, name, checked)
+    return _plan_answer(plan.id, 201)
+
+
+@blueprint.get("/api/plans/<int:plan_id>")
+@login_required
+def api_read(plan_id: int) -> ResponseReturnValue:
+    """A plan with its latest version, or ?version=N."""
+    return _plan_answer(plan_id, version=schemas.optional_version(request.args.get("version")))
+
+
+@blueprint.put("/api/plans/<int:plan_id>")
+@login_required
+def api_save(plan_id: int) -> ResponseReturnValue:
+    """Saves {"text", "name"?} as the plan's next version."""
+    body = json_body()
+    services.owned_plan(get_session(), current_user, plan_id)  # who may, before what was sent
+    name = schemas.plan_name(body["name"]) if body.get("name") is not None else None
+    checked = services.check_text(schemas.plan_text(body.get("text")), _skills())
+    services.save_plan(get_session(), current_user, plan_id, checked, name)
+    return _plan_answer(plan_id)
+
+
+@blueprint.delete("/api/plans/<int:plan_id>")
+@login_required
+def api_delete(plan_id: int) -> ResponseReturnValue:
+    """Deletes my plan and its versions."""
+    services.delete_plan(get_session(), current_user, plan_id)
+    return jsonify({"deleted": plan_id})
+
+
+@blueprint.post("/api/plans/<int:plan_id>/copy")
+@login_required
+def api_copy(plan_id: int) -> ResponseReturnValue:
+    """Copies a plan I may read into my plans ({"name"?}); 201 with the copy."""
+    body = request.get_json(silent=True)
+    raw_name = body.get("name") if isinstance(body, dict) else None
+    name = schemas.plan_name(raw_name) if raw_name not in (None, "") else None
+    copy = services.copy_plan(get_session(), current_user, plan_id, name)
+    return _plan_answer(copy.id, 201)
+
+
+@blueprint.put("/api/plans/<int:plan_id>/share")
+@login_required
+def api_share(plan_id: int) -> ResponseReturnValue:
+    """Shares my plan with a course I teach ({"course_id": id}) or stops sharing it ({"course_id": null})."""
+    body = json_body()
+    if "course_id" not in body:
+        raise InvalidField("course_id", "course_id must be a course's id or null.")
+    services.share_plan(get_session(), current_user, plan_id, schemas.optional_course_id(body["course_id"]))
+    return _plan_answer(plan_id)
+
+
+@blueprint.get("/api/plans/<int:plan_id>/export")
+@login_required
+def api_export(plan_id: int) -> ResponseReturnValue:
+    """The plan as a file: ?format=json (canonical, the default) or txt; ?version=N for an older one."""
+    chosen = schemas.export_format(request.args.get("format"))
+    dbs = get_session()
+    plan = services.readable_plan(dbs, current_user, plan_id)
+    version = services.plan_version(dbs, plan, schemas.optional_version(request.args.get("version")))
+    if chosen == "txt":
+        body, mimetype = version.text if version.text.endswith("\n") else version.text + "\n", "text/plain"
+    else:
+        body, mimetype = services.export_json(version), "application/json"
+    response = Response(body, mimetype=mimetype)
+    response.headers["Content-Disposition"] = f'attachment; filename="{plan.name}.{chosen}"'
+    response.headers["X-Content-Type-Options"] = "nosniff"
+    return response
+
+
+@blueprint.post("/api/plans/import")
+@login_required
+def api_import() -> ResponseReturnValue:
+    """Imports a plan file (multipart "file", optional "name"); 201 with the new plan, or 400 naming the line."""
+    upload = request.files.get("file")
+    if upload is None or not upload.filename:
+        raise InvalidField("file", "Choose a plan file (.json or .txt) to import.")
+    plan_file = schemas.read_plan_file(upload.filename, upload.read(schemas.MAX_JSON_FILE_BYTES + 1))
+    raw_name = request.form.get("name")
+    name = schemas.plan_name(raw_name) if raw_name else schemas.plan_name(plan_file.suggested_name, "file")
+    checked = services.check_file(plan_file, _skills())
+    plan = services.create_plan(get_session(), current_user, name, checked)
+    return _plan_answer(plan.id, 201)
+
+
+@blueprint.post("/api/plans/<int:plan_id>/runs")
+@login_required
+def api_run(plan_id: int) -> ResponseReturnValue:
+    """Runs the plan ({"target": "practice" | robot name, "beside": lab robot, "from_dock": bool, "version"?})."""
+    body = json_body()
+    dbs = get_session()
+    plan = services.readable_plan(dbs, current_user, plan_id)
+    version = services.plan_version(dbs, plan, schemas.optional_version(body.get("version")))
+    beside = body.get("beside")
+    run = RunRequest(schemas.run_target(body.get("target")),
+                     None if beside in (None, "") else schemas.run_target(beside, "beside"),
+                     schemas.flag(body.get("from_dock"), "from_dock"))
+    answer = run_plan(current_user.id, current_user.username, plan.name, services.stored_document(version), run)
+    return jsonify({**answer, "plan_id": plan.id, "version": version.version}), 202

@@ -1,0 +1,97 @@
+"""A lab on SQLite and on PostgreSQL for the plans tests: student1 and student2 in course ROB1 taught by tutor1,
+tutor2 teaching ROB2, admin1; wired to the session's real skill server (plans are checked against its skills)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from urllib.request import Request
+
+import pytest
+
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_course, make_test_app
+
+PEOPLE = {"student2": "student", "student3": "student", "tutor1": "tutor", "tutor2": "tutor", "admin1": "admin"}
+
+
+@dataclass
+class PlansLab:
+    """The served lab and its course ids."""
+
+    server: LiveServer
+    course: int
+    other_course: int
+
+    def client(self, username: str) -> LabClient:
+        """A client logged in as username."""
+        client = LabClient(self.server.url)
+        assert client.login(username, STUDENT_PASSWORD) == 302
+        return client
+
+
+@pytest.fixture
+def plans_lab(database_url: str, tmp_path: Path, skill_server_address: str) -> Iterator[PlansLab]:
+    """The app on database_url (SQLite, then PostgreSQL) with the people above, served."""
+    from middleware.access.coordinator import access_coordinator
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from middleware.robots.registry import robot_registry
+    from middleware.teaching.practice_robots import practice_manager
+
+    app = make_test_app(database_url, f"lab-1={skill_server_address}", tmp_path)
+    with session_factory(app)() as session:
+        for name, role in PEOPLE.items():
+            create_user(session, name, role, STUDENT_PASSWORD)
+        session.commit()
+    course = make_course(app, "ROB1", {"student1": "student", "student2": "student", "tutor1": "tutor"})
+    other = make_course(app, "ROB2", {"student3": "student", "tutor2": "tutor"})
+    server = LiveServer(app)
+    try:
+        yield PlansLab(server, course, other)
+    finally:
+        practice_manager(app).shutdown()
+        server.stop()
+        access_coordinator(app).stop_ticker()
+        robot_registry(app).close()
+        session_factory(app).kw["bind"].dispose()  # before the PostgreSQL database is dropped
+
+
+def api(client: LabClient, method: str, path: str, body: object | None = None,
+        raw: bytes | None = None, content_type: str | None = None) -> tuple[int, dict]:
+    """A request as the page sends it (CSRF header, JSON body, or raw bytes with content_type); (status, JSON)."""
+    headers = {"X-CSRFToken": client.csrf_token("/plans"), "Accept": "application/json"}
+    data = raw
+    if body is not None:
+        data, headers["Content-Type"] = json.dumps(body).encode(), "application/json"
+    elif content_type is not None:
+        headers["Content-Type"] = content_type
+    request = Request(client.base_url + path, data=data, method=method, headers=headers)
+    try:
+        with client._opener.open(request, timeout=60) as response:
+            payload = response.read()
+            if response.headers.get_content_type() == "application/json" and \
+                    "attachment" not in response.headers.get("Content-Disposition", ""):
+                return response.status, json.loads(payload)
+            return response.status, {"body": payload.decode(), "headers": dict(response.headers)}
+    except Exception as error:
+        if hasattr(error, "code"):
+            return error.code, json.loads(error.read() or b"{}")
+        raise
+
+
+def upload(client: LabClient, path: str, filename: str, content: bytes, fields: dict[str, str] | None = None
+           ) -> tuple[int, dict]:
+    """A multipart upload of one file (field "file") and form fields."""
+    boundary = "----telelab-plans-test"
+    parts = []
+    for name, value in (fields or {}).items():
+        parts.append(f'--{boundary}\r\nContent-Disposition: form-data; name="{name}"\r\n\r\n{value}\r\n'.encode())
+    parts.append(f'--{boundary}\r\nContent-Disposition: form-data; name="file"; filename="{filename}"\r\n'
+                 f"Content-Type: application/octet-stream\r\n\r\n".encode() + content + b"\r\n")
+    parts.append(f"--{boundary}--\r\n".encode())
+    return api(client, "POST", path, raw=b"".join(parts), content_type=f"multipart/form-data; boundary={boundary}")
+
+
+ApiCall = Callable[..., tuple[int, dict]]
