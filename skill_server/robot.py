@@ -15,6 +15,21 @@ from typing import TypeVar
 
 from skill_server.errors import NoMap, NoTrack, UnknownGoal, WorldStopped
 from skill_server.goals import Goal, GoalEvent, GoalFeedback, GoalSnapshot, GoalStatus
+from skill_server.plans.model import (
+    DriveLine,
+    IfLine,
+    InvalidPlan,
+    Plan,
+    PlanCondition,
+    PlanError,
+    PlanLine,
+    RepeatLine,
+    SayLine,
+    SetLine,
+    SkillLine,
+    WaitLine,
+)
+from skill_server.plans.validation import check_plan
 from skill_server.sequencer import Activation, Sequencer, attach_sequencer
 from skill_server.sim.battery import BatterySpec, BatteryState
 from skill_server.sim.camera import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS
@@ -37,7 +52,11 @@ from skill_server.skills.registry import SkillEntry, SkillRegistry
 __all__ = [
     "DEFAULT_CAMERA_FPS", "MAX_CAMERA_FPS", "Activation", "BatterySpec", "BatteryState", "CameraFrame", "DriveAck",
     "FloorPatch", "GoalUpdate", "LaserSpec", "LocalizationEstimate", "MotionLimits", "NavigationPose", "NumberedEvent",
-    "Pose2D", "PublishedGrid", "Robot", "RobotDescription", "RobotSnapshot", "SceneDescription", "SkillEntry", "TrackEvent", "TrackState",
+    "Pose2D", "PublishedGrid", "Robot", "RobotDescription", "RobotSnapshot", "SceneDescription", "SkillEntry",
+    "TrackEvent", "TrackState",
+    # a plan's shapes, for RunPlan's conversion
+    "DriveLine", "IfLine", "InvalidPlan", "Plan", "PlanCondition", "PlanError", "PlanLine", "RepeatLine", "SayLine",
+    "SetLine", "SkillLine", "WaitLine",
 ]
 
 Published = TypeVar("Published", RobotSnapshot, CameraFrame)
@@ -148,6 +167,12 @@ class Robot:
         """Starts a skill as a goal, or raises (unknown skill, invalid parameter, no control, busy)."""
         self.sequencer.validate(skill, parameters)  # refuse bad input without waiting for the loop
         return self.world.run_in_loop(lambda: self.sequencer.activate(token, skill, parameters, preempt))
+
+    def run_plan(self, token: str, plan: Plan, preempt: bool) -> Activation:
+        """Starts a plan as one motor goal, or raises: InvalidPlan naming every fault (checked here, before the
+        loop), then as activate (no control, wheels busy)."""
+        checked = check_plan(plan, self.sequencer.registry, self.sequencer.spec)
+        return self.world.run_in_loop(lambda: self.sequencer.run_plan(token, checked, preempt))
 
     def cancel(self, token: str, goal_id: str) -> GoalSnapshot:
         """Cancels a goal; its state afterwards."""

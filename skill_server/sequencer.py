@@ -9,6 +9,8 @@ from typing import Any
 
 from skill_server.errors import MissingControllerToken, NoMap, NotController, ResourceBusy, UnknownGoal
 from skill_server.goals import EventKind, Goal, GoalBook, GoalSnapshot, GoalStatus
+from skill_server.plans.executor import PlanObserver, PlanRunner
+from skill_server.plans.validation import CheckedPlan
 from skill_server.sim.drive_gate import BATTERY_EMPTY_MESSAGE
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.sim.snapshots import RobotSnapshot
@@ -19,6 +21,7 @@ from skill_server.skills.perception import NavigationPose, Perception
 from skill_server.skills.pose_tracking import POSE_SOURCE, PoseTracker
 from skill_server.skills.registry import SkillRegistry
 
+PLAN_GOAL_PREFIX = "plan:"  # a plan's goal is named "plan:<name>"
 FEEDBACK_PERIOD_S = 0.1  # feedback reaches the goal records at 10 Hz of sim time; events go at once
 
 
@@ -62,6 +65,7 @@ class Sequencer:
         self._last_feedback_s: dict[str, float] = {}
         self._tracker: PoseTracker | None = None  # built at the first tick once the floor plan is known
         self._tracker_built = False
+        self.plan_observer: PlanObserver | None = None  # told when each plan's skill line starts (benchmarks)
 
     # ---- requests (loop thread) ------------------------------------------------------------------
 
@@ -74,25 +78,42 @@ class Sequencer:
         entry = self.registry.entry(skill)
         values = entry.description.validate(parameters)
         self._check_token(token)
-        holder = self._motor if entry.motor else self._perceptive.get(skill)
+        holder = self._free_or_preempting(skill, entry.motor, preempt)
+        return self._start(skill, entry.motor, values, entry.build(values, self.perception), holder,
+                           entry.description.title)
+
+    def run_plan(self, token: str, plan: CheckedPlan, preempt: bool) -> Activation:
+        """Starts a checked plan as one motor goal "plan:<name>", or raises (no control, wheels busy)."""
+        self._check_token(token)
+        skill = f"{PLAN_GOAL_PREFIX}{plan.plan.name}"
+        holder = self._free_or_preempting(skill, True, preempt)
+        runner = PlanRunner(plan, self.registry, self.perception, self.spec, self.plan_observer)
+        return self._start(skill, True, {"steps": plan.expanded_steps}, runner, holder, f"Plan {plan.plan.name}")
+
+    def _free_or_preempting(self, skill: str, motor: bool, preempt: bool) -> tuple[Goal, SkillController] | None:
+        """The goal holding what skill needs, to be preempted; ResourceBusy when it holds it without preempt."""
+        holder = self._motor if motor else self._perceptive.get(skill)
         if holder is not None and not preempt:
             goal = holder[0]
-            what = "the wheels" if entry.motor else f"the {skill} skill"
+            what = "the wheels" if motor else f"the {skill} skill"
             raise ResourceBusy(f"{what} are held by {goal.goal_id} ({goal.skill}); activate with preempt to "
                                "cancel it, or cancel it first", goal.goal_id)
-        controller = entry.build(values, self.perception)
+        return holder
+
+    def _start(self, skill: str, motor: bool, values: dict[str, Any], controller: SkillController,
+               holder: tuple[Goal, SkillController] | None, title: str) -> Activation:
         preempted = ""
-        goal = self.goals.create(skill, entry.motor, values, self._sim_time_s)
+        goal = self.goals.create(skill, motor, values, self._sim_time_s)
         if holder is not None:
             preempted = holder[0].goal_id
             self._end(holder, GoalStatus.CANCELED, "PREEMPTED", f"preempted by {goal.goal_id} ({skill})",
                       EventKind.PREEMPTED)
-        if entry.motor:
+        if motor:
             self._motor = (goal, controller)
             self._motor_since_version = self._drive_version()
         else:
             self._perceptive[skill] = (goal, controller)
-        goal.announce(self._sim_time_s, EventKind.STARTED, f"{entry.description.title} started")
+        goal.announce(self._sim_time_s, EventKind.STARTED, f"{title} started")
         return Activation(goal.snapshot(), preempted)
 
     def cancel(self, token: str, goal_id: str) -> GoalSnapshot:

@@ -27,6 +27,7 @@ from skill_server.errors import (
 )
 from skill_server.robot import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS, Robot
 from skill_server.service import convert
+from skill_server.service.plan_convert import plan_from_proto
 
 DEFAULT_TELEMETRY_HZ, MAX_TELEMETRY_HZ = 10.0, 50.0
 DEFAULT_FEEDBACK_HZ, MAX_FEEDBACK_HZ = 10.0, 50.0
@@ -110,6 +111,16 @@ class RobotService(robot_pb2_grpc.RobotServicer):
         with domain_errors(context):
             parameters = convert.parameters_from_proto(request.parameters)
             activation = self._robot.activate(request.token, request.skill, parameters, request.preempt)
+        return robot_pb2.ActivateSkillResponse(
+            goal=convert.goal_to_proto(activation.goal), preempted_goal_id=activation.preempted_goal_id
+        )
+
+    def RunPlan(self, request: robot_pb2.RunPlanRequest,
+                context: grpc.ServicerContext) -> robot_pb2.ActivateSkillResponse:
+        """Runs a plan as one motor goal, or refuses: INVALID_ARGUMENT naming every fault's line, column and field
+        (nothing moves then), else as ActivateSkill."""
+        with domain_errors(context):
+            activation = self._robot.run_plan(request.token, plan_from_proto(request), request.preempt)
         return robot_pb2.ActivateSkillResponse(
             goal=convert.goal_to_proto(activation.goal), preempted_goal_id=activation.preempted_goal_id
         )
