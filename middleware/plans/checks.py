@@ -46,6 +46,7 @@ UNITS: dict[str, tuple[str, float]] = {
 }
 _DIVISORS = {"cm": 100.0, "ms": 1000.0}  # divided rather than multiplied, so 40cm is exactly 0.4
 _UNIT_LIST = "m, cm, s, ms, deg, rad, m/s, rad/s or deg/s"
+TAB_IN_TEXT = "a tab is not allowed; write spaces"
 _BIDI_CONTROLS = frozenset("\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069\u200e\u200f")
 
 
@@ -73,6 +74,11 @@ def shown(value: object) -> str:
     return "a list" if isinstance(value, list) else ("an object" if isinstance(value, dict) else type(value).__name__)
 
 
+def cut(written: str) -> str:
+    """What the user wrote, cut short for a sentence."""
+    return written if len(written) <= 40 else written[:37] + "..."
+
+
 def character_problem(character: str) -> str | None:
     """Why a character may not stand in a plan's text, or None when it may."""
     category = unicodedata.category(character)
@@ -86,7 +92,7 @@ def character_problem(character: str) -> str | None:
 def text_problem(text: str) -> str | None:
     """Why a text (a say, a word) cannot be used, or None."""
     for character in text:
-        problem = character_problem(character) or ("tabs are not allowed in a text" if character == "\t" else None)
+        problem = character_problem(character) or (TAB_IN_TEXT if character == "\t" else None)
         if problem:
             return problem
     return None
@@ -97,7 +103,7 @@ def _checked(name: str, value: object, schema: Mapping[str, object], field: str,
         return check_parameter(name, value, schema)
     except CommandInvalid as invalid:
         message = invalid.message.rstrip(".").replace(f"parameters.{name}", name)
-        raise StepProblem(field, f"{message}; got {written or shown(value)}.") from None
+        raise StepProblem(field, f"{message}; got {cut(written) if written else shown(value)}.") from None
 
 
 def convert_unit(number: float, unit: str, wanted: str, name: str, written: str) -> float:
@@ -105,15 +111,20 @@ def convert_unit(number: float, unit: str, wanted: str, name: str, written: str)
     if not unit:
         return number
     if unit not in UNITS:
-        raise StepProblem("", f"{written}: {unit!r} is not a unit; use {_UNIT_LIST}.")
+        raise StepProblem("", f"{cut(written)}: {unit[:20]!r} is not a unit; use {_UNIT_LIST}.")
     measure, factor = UNITS[unit]
     wanted_measure = UNITS.get(wanted, ("", 1.0))[0]
     if not wanted_measure:
-        raise StepProblem("", f"{name} takes a plain number, without a unit; got {written}.")
+        raise StepProblem("", f"{name} takes a plain number, without a unit; got {cut(written)}.")
     if measure != wanted_measure:
         fitting = ", ".join(u for u, (m, _) in UNITS.items() if m == wanted_measure)
-        raise StepProblem("", f"{name} is a {wanted_measure} in {wanted}; {written} is a {measure}. Use {fitting}.")
+        raise StepProblem("", f"{name} is {_a(wanted_measure)} in {wanted}; {cut(written)} is {_a(measure)}. "
+                              f"Use {fitting}.")
     return number / _DIVISORS[unit] if unit in _DIVISORS else number * factor
+
+
+def _a(noun: str) -> str:
+    return f"an {noun}" if noun[:1] in "aeiou" else f"a {noun}"
 
 
 def skill_schema(skill: str, skills: SkillSchemas) -> dict[str, Mapping[str, object]]:
@@ -135,7 +146,10 @@ def skill_parameter(skill: str, schema: Mapping[str, Mapping[str, object]], name
     """One parameter of a skill checked against its schema, as command_form checks a command's."""
     field = f"parameters.{name}" if SKILL_NAME.fullmatch(name) else "parameters"
     if name not in schema:
-        raise StepProblem(field, f"{skill} has no parameter {shown(name)}{did_you_mean(name, schema)}; "
+        short = {parameter.rpartition("_")[0] or parameter: parameter for parameter in schema}
+        close = difflib.get_close_matches(name[:64], [*schema, *short], n=1, cutoff=0.75)
+        hint = f" (did you mean {short.get(close[0], close[0])}?)" if close else ""
+        raise StepProblem(field, f"{skill} has no parameter {shown(name)}{hint}; "
                                  f"it has {', '.join(schema) or 'none'}.")
     checked = _checked(name, value, schema[name], field, written)
     problem = text_problem(checked) if isinstance(checked, str) else None
@@ -150,7 +164,7 @@ def duration(value: object, field: str = "duration_s", written: str | None = Non
     assert isinstance(number, float)
     if not 0.0 < number <= MAX_STEP_DURATION_S:
         raise StepProblem(field, f"A duration must be more than 0 s and at most {MAX_STEP_DURATION_S:g} s; "
-                                 f"got {written or shown(value)}.")
+                                 f"got {cut(written) if written else shown(value)}.")
     return number
 
 
@@ -189,10 +203,11 @@ def condition(kind: str, value: object, negate: bool, written: str | None = None
     schema = condition_schema(kind)
     if schema is None:
         if value is not None:
-            raise StepProblem("value", f"{kind} takes no value; got {written or shown(value)}.")
+            raise StepProblem("value", f"{kind} takes no value; got {cut(written) if written else shown(value)}.")
         return Condition(kind, None, negate)
     if value is None:
-        raise StepProblem("value", f"{kind} needs a value, as in {kind} {'0.5' if kind == 'obstacle_within' else '0.2'}.")
+        example = "0.5" if kind == "obstacle_within" else "0.2"
+        raise StepProblem("value", f"{kind} needs a value, as in {kind} {example}.")
     checked = _checked(kind, value, schema, "value", written)
     assert isinstance(checked, float)
     return Condition(kind, checked, negate)
@@ -205,9 +220,11 @@ def setting_schema(setting: str, skills: SkillSchemas) -> Mapping[str, object]:
                                      f"use {', '.join(SETTINGS)}.")
     linear, angular = velocity_schemas(skills)
     if setting == "max_speed":
-        return {"type": "double", "unit": "m/s", "minimum": MIN_SPEED_MPS, "maximum": linear.get("maximum", MAX_LINEAR_MPS)}
+        return {"type": "double", "unit": "m/s", "minimum": MIN_SPEED_MPS,
+                "maximum": linear.get("maximum", MAX_LINEAR_MPS)}
     if setting == "max_turn_rate":
-        return {"type": "double", "unit": "rad/s", "minimum": MIN_TURN_RATE_RADPS, "maximum": angular.get("maximum", MAX_ANGULAR_RADPS)}
+        return {"type": "double", "unit": "rad/s", "minimum": MIN_TURN_RATE_RADPS,
+                "maximum": angular.get("maximum", MAX_ANGULAR_RADPS)}
     return {"type": "double", "unit": "s", "minimum": WATCHDOG_RANGE_S[0], "maximum": WATCHDOG_RANGE_S[1]}
 
 
@@ -263,10 +280,7 @@ def plan_totals(steps: Sequence[Step], path: str = "steps") -> list[PlanError]:
 
 def place_error(line: int, column: int, field: str, message: str) -> PlanError:
     """A PlanError whose sentence starts with where it is: "line 3, column 9: ...", or the field without a line."""
-    if line > 0:
-        where = f"line {line}, column {column}" if column > 0 else f"line {line}"
-    else:
-        where = field
-    if message[:1].isupper() and message[1:2].islower():
+    where = (f"line {line}, column {column}" if column > 0 else f"line {line}") if line > 0 else field
+    if message[:1].isupper() and not message[1:2].isupper():  # "A plan ..." but not "URL ..."
         message = message[0].lower() + message[1:]
     return PlanError(line, column, field, f"{where}: {message}")

@@ -161,7 +161,8 @@ class _Reader:
             return None
         missing = [key for key in required if key not in value]
         if missing:
-            self.report(line, column, f"{path}.{missing[0]}", f"a {kind} step needs {', '.join(missing)}.")
+            article = "an" if kind == "if" else "a"
+            self.report(line, column, f"{path}.{missing[0]}", f"{article} {kind} step needs {', '.join(missing)}.")
             return None
         readers: Mapping[str, Callable[[dict[str, object], str, int], Step | None]] = {
             "skill": self._skill, "drive": self._drive, "wait": self._wait, "repeat": self._repeat, "if": self._if,

@@ -40,8 +40,8 @@ from middleware.plans.text_writer import plan_to_text
 from middleware.teaching.command_form import SkillSchemas
 
 __all__ = [
-    "ALIASES", "Alias", "FORMAT", "MAX_DEPTH", "MAX_EXPANDED_STEPS", "MAX_LINES", "MAX_PLAN_DURATION_S", "MAX_REPEAT", "MAX_SAY_CHARS",
-    "MAX_STEP_DURATION_S", "MAX_TEXT_BYTES", "Condition", "DriveStep", "IfStep", "Plan", "PlanError", "PlanInvalid",
-    "RepeatStep", "SayStep", "SetStep", "SkillSchemas", "SkillStep", "Step", "WaitStep", "is_plan_name",
+    "ALIASES", "Alias", "FORMAT", "MAX_DEPTH", "MAX_EXPANDED_STEPS", "MAX_LINES", "MAX_PLAN_DURATION_S", "MAX_REPEAT",
+    "MAX_SAY_CHARS", "MAX_STEP_DURATION_S", "MAX_TEXT_BYTES", "Condition", "DriveStep", "IfStep", "Plan", "PlanError",
+    "PlanInvalid", "RepeatStep", "SayStep", "SetStep", "SkillSchemas", "SkillStep", "Step", "WaitStep", "is_plan_name",
     "parse_plan_text", "plan_from_json", "plan_summary", "plan_to_json", "plan_to_text",
 ]

@@ -8,13 +8,13 @@ from middleware.plans.steps import DriveStep, IfStep, Plan, RepeatStep, SkillSte
 
 
 def expanded_count(steps: Iterable[Step]) -> int:
-    """Steps as the robot runs them: a repeat's body count times, both branches of an if."""
+    """Steps as the skill server counts them: a repeat's body count times; an if, and both its branches."""
     total = 0
     for step in steps:
         if isinstance(step, RepeatStep):
             total += step.count * expanded_count(step.body)
         elif isinstance(step, IfStep):
-            total += expanded_count(step.then) + expanded_count(step.otherwise)
+            total += 1 + expanded_count(step.then) + expanded_count(step.otherwise)  # the test is a step too
         else:
             total += 1
     return total
@@ -55,8 +55,8 @@ def certain_duration_s(steps: Iterable[Step]) -> float:
             total += min(certain_duration_s(step.then), certain_duration_s(step.otherwise))
         elif isinstance(step, DriveStep):
             total += step.duration_s
-        elif isinstance(step, WaitStep) and step.condition is None and step.duration_s is not None:
-            total += step.duration_s
+        elif isinstance(step, WaitStep) and step.condition is None:
+            total += step.duration_s or 0.0
     return total
 
 

@@ -14,6 +14,7 @@ from middleware.plans.steps import (
     MAX_ERRORS,
     MAX_LINES,
     MAX_TEXT_BYTES,
+    Condition,
     DriveStep,
     IfStep,
     Plan,
@@ -104,6 +105,7 @@ class _Parser:
     def block(self, path: str, depth: int, opener: Token | None) -> list[Step]:
         """The commands up to the } closing opener (or the end of the plan when opener is None)."""
         steps: list[Step] = []
+        written = 0  # commands met, refused ones included, so paths match the lines
         while True:
             token = self.peek()
             if token.kind is Kind.NEWLINE:
@@ -118,7 +120,8 @@ class _Parser:
                     return steps
                 self.report(token.line, token.column, "this } closes no block; remove it.", path)
             else:
-                step = self.statement(f"{path}[{len(steps)}]", depth)
+                step = self.statement(f"{path}[{written}]", depth)
+                written += 1
                 if step is not None:
                     steps.append(step)
 
@@ -129,6 +132,16 @@ class _Parser:
             return self._repeat(head, path, depth)
         if head.kind is Kind.WORD and head.text == "if":
             return self._if(head, path, depth)
+        if head.kind is Kind.OPEN:
+            self.report(head.line, head.column, "a { block } belongs after repeat, if or else.", path)
+            self._skip_block(head, path)
+            return None
+        if head.kind is Kind.WORD and head.text == "else":
+            self.report(head.line, head.column, "else must follow the } of an if: if ... { } else { }.", path)
+            self._line_tokens()
+            if self.peek().kind is Kind.OPEN:
+                self._skip_block(self.advance(), path)
+            return None
         arguments = self._line_tokens()
         if self.peek().kind is Kind.OPEN:
             opener = self.advance()
@@ -205,8 +218,9 @@ class _Parser:
             self.report(header[0].line, header[0].column, problem.message, f"{path}.count")
         except _Reported:
             pass
+        before = len(self.errors)
         body = self._nested_block(head, f"{path}.body", depth)
-        if count is None or body is None:
+        if count is None or body is None or len(self.errors) > before:
             return None
         if not body:
             self.report(head.line, head.column, "this repeat has nothing in its block.", f"{path}.body")
@@ -238,8 +252,6 @@ class _Parser:
 
     def _simple(self, head: Token, tokens: list[Token], path: str) -> Step | None:
         name = head.text
-        if name == "else":
-            raise self._at(head, path, "else must follow the } of an if: if ... { } else { }.")
         if name in ALIASES:
             alias = ALIASES[name]
             return self._skill(head, self._arguments(tokens, ("for",), path), path, alias.skill, alias)
@@ -302,7 +314,7 @@ class _Parser:
         if token.kind is not Kind.NUMBER:
             raise self._at(token, f"{path}.duration_s", f"{keyword.text} needs a time, as in {keyword.text} 20s.")
         try:
-            return checks.duration(self._number(token, "s", "the time", f"{path}.duration_s"), written=token.written)
+            return checks.duration(self._number(token, "s", "a duration", f"{path}.duration_s"), written=token.written)
         except StepProblem as problem:
             raise self._at(token, f"{path}.duration_s", problem.message) from None
 
@@ -321,17 +333,19 @@ class _Parser:
                        f"({', '.join(names)}), as in {alias.example}." if alias else
                        f"{skill} takes its parameters as name=value, as in {first}=...")
             raise self._at(extra, path, message)
-        pairs = list(zip(names, arguments.positional))
-        pairs += [(parameter_for_key(key.text, schema, alias), value) for key, value in arguments.keywords]
-        given = [name for name, _ in pairs]
+        pairs = [(name, token, token) for name, token in zip(names, arguments.positional, strict=False)]
+        pairs += [(parameter_for_key(key.text, schema, alias), key, value) for key, value in arguments.keywords]
+        given = [name for name, _, _ in pairs]
         if alias and (missing := [n for n in names[:alias.required] if n not in given]):
             raise self._at(head, f"{path}.parameters.{missing[0]}",
                            f"{head.text} needs {', '.join(missing)}, as in {alias.example}.")
         parameters: list[tuple[str, object]] = []
         failed = False
-        for name, token in pairs:
+        for name, key, token in pairs:
             field = f"{path}.parameters.{name}"
             try:
+                if name in dict(parameters) or name not in schema:
+                    token = key
                 if name in dict(parameters):
                     raise StepProblem(f"parameters.{name}", f"{name} is given twice.")
                 unit = str(schema[name].get("unit") or "") if name in schema else ""
@@ -353,7 +367,8 @@ class _Parser:
             raise self._at(head, path, "drive takes a speed, a turn rate and a time: drive 0.2 0 for 2s "
                                        "(m/s, rad/s).")
         velocities = []
-        for name, unit, token in zip(("linear_mps", "angular_radps"), ("m/s", "rad/s"), arguments.positional):
+        measures = (("linear_mps", "m/s"), ("angular_radps", "rad/s"))
+        for (name, unit), token in zip(measures, arguments.positional, strict=False):
             try:
                 value = self._number(token, unit, name, f"{path}.{name}")
                 velocities.append(checks.drive_value(name, value, self.skills, token.written))
@@ -380,7 +395,7 @@ class _Parser:
         duration = self._duration(arguments.clauses.get("timeout"), path)
         return WaitStep(condition, duration, head.line, head.column)
 
-    def _condition(self, head: Token, tokens: list[Token], path: str) -> checks.Condition:
+    def _condition(self, head: Token, tokens: list[Token], path: str) -> Condition:
         if any(t.kind is Kind.BAD for t in tokens):
             raise _Reported()
         negate = bool(tokens) and tokens[0].kind is Kind.WORD and tokens[0].text == "not"

@@ -7,7 +7,7 @@ import enum
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from middleware.plans.checks import character_problem
+from middleware.plans.checks import TAB_IN_TEXT, character_problem
 
 _LETTERS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ_")
 _DIGITS = frozenset("0123456789")
@@ -128,7 +128,7 @@ class Tokenizer:
                 return
 
     def _read_text(self, line: str, number: int, start: int) -> int:
-        position, parts = start + 1, []
+        position, parts = start + 1, list[str]()
         while position < len(line):
             character = line[position]
             if character == '"':
@@ -142,7 +142,7 @@ class Tokenizer:
                 parts.append(_ESCAPES[following])
                 position += 2
                 continue
-            problem = character_problem(character) or ("tabs are not allowed in a text" if character == "\t" else None)
+            problem = character_problem(character) or (TAB_IN_TEXT if character == "\t" else None)
             if problem:
                 self._bad(number, position, character, f"in a text, {problem}.")
                 return _closing_quote(line, position + 1)
