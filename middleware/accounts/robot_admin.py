@@ -6,6 +6,7 @@ committing so this process sees the change at once and other workers within a fe
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from sqlalchemy import select
@@ -24,6 +25,10 @@ from middleware.errors import Refused
 from middleware.models import Robot, RobotKindSetting, User
 from middleware.models.accounts import utc_now
 from middleware.robots.catalog import CAMERA_PICTURES, camera_pictures, default_kind
+
+SceneCheck = Callable[[str], bool | None]
+"""Whether the robot called name describes a scene the browser can draw from: True (a simulated robot), False (it
+answers but describes none: a robot standing for a real one), None (it does not answer now)."""
 
 
 @dataclass(frozen=True)
@@ -99,15 +104,20 @@ def kind_pictures(session: Session, actor: User) -> dict[str, str]:
     return {kind: chosen.get(kind, "video") for kind in kinds}
 
 
-def set_kind_picture(session: Session, actor: User, kind: object, picture: object) -> RobotKindSetting:
+def set_kind_picture(session: Session, actor: User, kind: object, picture: object,
+                     has_scene: SceneCheck) -> RobotKindSetting:
     """Makes picture ("video" or "drawn") the camera panel's default for every robot of kind (admins only); each
-    person may still switch, and their own choice is kept by their browser. The caller commits."""
+    person may still switch, and their own choice is kept by their browser. "drawn" only for a kind whose robots
+    describe a scene (simulated ones, asked through has_scene). The caller commits."""
     require_admin(actor)
     clean_kind = clean_robot_kind(kind)
     if picture not in CAMERA_PICTURES:
         raise InvalidField("picture", "picture must be 'video' (the robot's camera) or 'drawn' (drawn by the browser).")
-    if session.scalar(select(Robot.id).where(Robot.kind == clean_kind).limit(1)) is None:
+    robots = session.scalars(select(Robot).where(Robot.kind == clean_kind).order_by(Robot.id)).all()
+    if not robots:
         raise Refused(404, "unknown_kind", f"No robot is of the kind {clean_kind!r}.", "kind")
+    if picture == "drawn":
+        _require_scenes(clean_kind, robots, has_scene)
     setting = session.get(RobotKindSetting, clean_kind)
     if setting is None:
         setting = RobotKindSetting(kind=clean_kind, camera_picture=str(picture))
@@ -116,3 +126,19 @@ def set_kind_picture(session: Session, actor: User, kind: object, picture: objec
         setting.camera_picture, setting.updated_at = str(picture), utc_now()
     session.flush()
     return setting
+
+
+def _require_scenes(kind: str, robots: Sequence[Robot], has_scene: SceneCheck) -> None:
+    """Refuses the drawn picture unless the kind's robots describe a scene: none may answer without one (a robot
+    standing for a real one keeps its video) and one at least must answer with one (the farm's robots are simulated
+    by construction, answering or not)."""
+    answers = {robot.name: True if robot.farm_managed else has_scene(robot.name) for robot in robots}
+    without = [name for name, answer in answers.items() if answer is False]
+    if without:
+        raise Refused(409, "no_scene", f"picture cannot be 'drawn' for the kind {kind}: {', '.join(without)} describes "
+                      "no scene to draw from (a robot standing for a real one keeps its video). Choose 'video'.",
+                      "picture")
+    if True not in answers.values():
+        raise Refused(409, "scene_unknown", f"picture cannot be 'drawn' for the kind {kind} now: none of its robots "
+                      "answers, so whether they describe a scene to draw from cannot be checked. Try again once one "
+                      "is online.", "picture")

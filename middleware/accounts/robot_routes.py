@@ -11,7 +11,25 @@ from middleware.accounts.schemas import clean_flag, clean_id
 from middleware.accounts.web import blueprint, json_body
 from middleware.db import after_commit, get_session
 from middleware.errors import flashed, unless_refused
+from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.registry import robot_registry
+
+SCENE_RECHECK_S = 5.0  # as the scene route: a robot restarted in another scene is noticed within this
+
+
+def _robot_has_scene(name: str) -> bool | None:
+    """Whether the robot describes a scene (GetScene answers): None when it does not answer at all, False when it
+    answers but not GetScene (a robot standing for a real one)."""
+    link = robot_registry().get(name)
+    if link is None:
+        return None
+    try:
+        link.scene(max_age_s=SCENE_RECHECK_S)
+    except CommandRefused:
+        return False
+    except RobotUnavailable:
+        return False if link.is_online() else None
+    return True
 
 
 def _refresh_robots_after_commit() -> None:
@@ -109,7 +127,7 @@ def robots_kind_picture(kind: str) -> ResponseReturnValue:
     picture = request.form.get("picture")
 
     def update() -> ResponseReturnValue:
-        setting = robot_admin.set_kind_picture(get_session(), current_user, kind, picture)
+        setting = robot_admin.set_kind_picture(get_session(), current_user, kind, picture, _robot_has_scene)
         words = "the picture drawn by the browser" if setting.camera_picture == "drawn" else "the robot's video"
         flash(f"Robots of the kind {setting.kind} now show {words} unless a person chooses otherwise.", "success")
         return redirect(url_for("accounts.robots_page"), 303)
@@ -130,5 +148,5 @@ def api_kind_pictures() -> ResponseReturnValue:
 def api_set_kind_picture(kind: str) -> ResponseReturnValue:
     """{picture: "video" | "drawn"}: the camera panel's default picture for the robots of one kind (admins)."""
     data = json_body()
-    setting = robot_admin.set_kind_picture(get_session(), current_user, kind, data.get("picture"))
+    setting = robot_admin.set_kind_picture(get_session(), current_user, kind, data.get("picture"), _robot_has_scene)
     return jsonify({"kind": setting.kind, "camera_picture": setting.camera_picture})
