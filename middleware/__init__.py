@@ -34,6 +34,7 @@ from middleware.lab import pool_routes
 from middleware.lab import routes as lab_routes
 from middleware.lab import skills as lab_skills
 from middleware.lab import sockets as lab_sockets
+from middleware.lab import teleperception_routes as lab_teleperception
 from middleware.plans import routes as plans_routes
 from middleware.preferences import routes as preferences_routes
 from middleware.robots import registry
@@ -116,5 +117,6 @@ def _register_areas(app: Flask) -> None:
                       tour_routes.blueprint, class_routes.blueprint, farm_routes.blueprint, pool_routes.blueprint,
                       plans_routes.blueprint):
         app.register_blueprint(blueprint)
+    app.register_blueprint(lab_teleperception.blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
                             practice_routes.register, tour_live.register], socket_login_check)

@@ -45,8 +45,10 @@ from skill_server.sim.track_monitor import TrackEvent, TrackMonitor, TrackState
 from skill_server.sim.world import World
 from skill_server.skills.catalog import default_registry
 from skill_server.skills.environment_model import PublishedGrid
+from skill_server.skills.evidence_grid import EvidenceGrid, RangeSensors
 from skill_server.skills.perception import LocalizationEstimate, NavigationPose
 from skill_server.skills.registry import SkillEntry, SkillRegistry
+from skill_server.skills.teleperception import EvidenceState, PerceptionScan, Teleperception
 
 # The value types adapters convert come from here too, so that they import nothing from sim/ or skills/.
 __all__ = [
@@ -58,6 +60,8 @@ __all__ = [
     "DriveLine", "IfLine", "InvalidPlan", "Plan", "PlanCondition", "PlanError", "PlanLine", "RepeatLine", "SayLine",
     "SetLine", "SkillLine", "WaitLine",
 ]
+
+__all__ += ["EvidenceState", "PerceptionScan"]  # teleperception
 
 Published = TypeVar("Published", RobotSnapshot, CameraFrame)
 
@@ -82,6 +86,7 @@ class Robot:
         self.world = world
         self.sequencer = sequencer
         self.name = name
+        self.teleperception = _teleperception_of(world)
 
     @classmethod
     def build(
@@ -223,6 +228,29 @@ class Robot:
             raise NoMap("no environment model yet: activate environment_modelling and drive the robot around")
         return grid
 
+    # ---- teleperception ---------------------------------------------------------------------------
+
+    def evidence(self, sensors: tuple[str, ...], parts: tuple[str, ...],
+                 watch: bool) -> tuple[EvidenceState, Pose2D]:
+        """The evidence grid's chosen layers with its counts, and the odometry pose now; watch keeps it
+        accumulating."""
+        if watch:
+            self.teleperception.watch()
+        return self.teleperception.state(sensors, parts), self.world.snapshot.odometry.pose
+
+    def reset_evidence(self, token: str) -> None:
+        """Forgets the evidence grid and the readings kept (supervisory, like clear_map)."""
+
+        def reset() -> None:
+            self.sequencer.check_supervisory_token(token)
+            self.teleperception.reset()
+
+        self.world.run_in_loop(reset)
+
+    def perception_scans(self, after_index: int) -> list[PerceptionScan]:
+        """The raw readings kept, numbered above after_index, oldest first."""
+        return self.teleperception.scans_after(after_index)
+
     def pose_log(self, from_unix_s: float, to_unix_s: float) -> tuple[list[tuple[float, ...]], float | None]:
         """The true and odometric poses kept between two wall-clock times, and the oldest time kept."""
         samples, oldest = self.world.pose_log.between(from_unix_s, to_unix_s)
@@ -355,3 +383,12 @@ class Robot:
             for event in monitor.events_after(seen, POLL_S):
                 seen = event.index
                 yield event
+
+
+def _teleperception_of(world: World) -> Teleperception:
+    """The robot's teleperception over its scene's floor, fed by every snapshot its loop publishes."""
+    info = world.describe()
+    sensors = RangeSensors(info.sonars, info.spec.body_radius_m, info.laser)
+    teleperception = Teleperception(EvidenceGrid(world.scene.floor_half_x_m, world.scene.floor_half_y_m, sensors))
+    world.observe_snapshots(teleperception.observe)
+    return teleperception

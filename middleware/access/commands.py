@@ -196,6 +196,10 @@ class Commander:
         """Carries the robot to its dock: every goal ends, odometry restarts at the dock."""
         return self._as_controller(self.link.return_to_dock)
 
+    def reset_evidence(self) -> robot_pb2.EvidenceGrid:
+        """Forgets the robot's teleperception evidence grid and readings (for every viewer); the emptied grid."""
+        return self._as_controller(self.link.reset_evidence_grid)
+
     def goal_state(self, goal_id: str) -> robot_pb2.GoalState:
         """A goal's state (reading needs no control)."""
         return self.link.get_goal(goal_id)

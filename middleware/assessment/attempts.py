@@ -21,6 +21,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from middleware.accounts.services import forbidden
+from middleware.assessment import obstacle_zone
 from middleware.assessment.bank import questions_of
 from middleware.assessment.grading import ItemResult, grade_question
 from middleware.assessment.policy import get_attempt, get_exam, student_course
@@ -75,7 +76,8 @@ def grade_attempt(session: Session, exam: Exam, answers: dict[str, Any],
     results = [grade_question(str(q.id), q.kind, q.spec, q.points, answers.get(str(q.id)), tuple(q.topics))
                for q in questions_of(session, exam)]
     if exam.kind == "experimental" and exam.task:
-        results.append(grade_task(exam.task, float(exam.task.get("points", 10)), trace or [], answers.get("report")))
+        item = obstacle_zone.ZONE_ITEM if exam.task.get("kind") == obstacle_zone.TASK_KIND else "report"
+        results.append(grade_task(exam.task, float(exam.task.get("points", 10)), trace or [], answers.get(item)))
     return results
 
 
@@ -195,6 +197,8 @@ def _clean_answer(exam_items: set[str], item: str, answer: object, started: date
             raise Refused(400, "invalid_field", "A pose report is {x_m, y_m}.", "report")
         # The moment of the report is the server's, never the browser's.
         return {"x_m": answer.get("x_m"), "y_m": answer.get("y_m"), "t_s": (now - started).total_seconds()}
+    if item == obstacle_zone.ZONE_ITEM:
+        return obstacle_zone.clean_zone(answer)
     if len(repr(answer)) > MAX_ANSWER_CHARS:
         raise Refused(400, "invalid_field", "The answer is too long.", item)
     if answer is not None and not isinstance(answer, str | int | float | list | dict):
@@ -206,6 +210,8 @@ def _items(exam: Exam) -> set[str]:
     items = {str(i) for i in exam.question_ids or []}
     if exam.kind == "experimental" and exam.task and exam.task.get("kind") == "report_pose":
         items.add("report")
+    if exam.kind == "experimental" and exam.task and exam.task.get("kind") == obstacle_zone.TASK_KIND:
+        items.add(obstacle_zone.ZONE_ITEM)
     return items
 
 

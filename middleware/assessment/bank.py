@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from typing import Any
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from middleware.assessment.obstacle_zone import with_scene_truth
 from middleware.assessment.policy import get_exam, may_teach, student_course, teaching_course  # noqa: F401
 from middleware.assessment.schemas import BANK_FORMAT, ExamInput, QuestionInput, parse_bank_file
 from middleware.auth.schemas import InvalidField
@@ -107,7 +109,8 @@ def create_exam(session: Session, actor: User, course_id: int, data: ExamInput) 
     _check_questions(session, course_id, data.question_ids)
     exam = Exam(course_id=course_id, title=data.title, kind=data.kind, opens_at=data.opens_at,
                 closes_at=data.closes_at, duration_s=data.duration_s, max_attempts=data.max_attempts,
-                question_ids=data.question_ids, task=data.task, robot_name=data.robot_name)
+                question_ids=data.question_ids, task=with_scene_truth(data.task, data.robot_name),
+                robot_name=data.robot_name)
     session.add(exam)
     session.flush()
     return exam
@@ -124,6 +127,7 @@ def update_exam(session: Session, actor: User, exam_id: int, data: ExamInput) ->
     """Changes an exam; its questions and task are frozen once someone has started it."""
     exam = managed_exam(session, actor, exam_id)
     _check_questions(session, exam.course_id, data.question_ids)
+    data = replace(data, task=with_scene_truth(data.task, data.robot_name))
     started = has_attempts(session, exam.id)
     if started and (data.question_ids != exam.question_ids or data.task != exam.task or data.kind != exam.kind):
         raise Refused(409, "exam_started", "Students have started this test: only its title and times can change.",

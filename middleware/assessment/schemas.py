@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
 
+from middleware.assessment import obstacle_zone
 from middleware.assessment.grading import QUESTION_KINDS, UNITS
 from middleware.assessment.trace_grading import TASK_KINDS
 from middleware.auth.schemas import InvalidField
@@ -240,6 +241,8 @@ def parse_task(data: dict[str, Any]) -> dict[str, Any]:
             task[name] = _number(data.get(name), name, -50, 50)
         task["distance_m"] = _number(data.get("distance_m"), "distance_m", 0.05, 5)
         task["min_travel_m"] = _number(data.get("min_travel_m", 1.0) or 1.0, "min_travel_m", 0, 50)
+    elif kind == obstacle_zone.TASK_KIND and data.get("rubric") in (None, "", []):
+        task["rubric"] = obstacle_zone.ZONE_RUBRIC  # bands on 1 - IoU, not metres
     return task
 
 

@@ -11,6 +11,8 @@ Tasks:
   of (distance from the wall's line - distance_m); a run travelling less than min_travel_m scores 0.
 - report_pose {}: the student reports (x_m, y_m) read from the localization panel; the error is the distance
   from the ground truth at the moment of the report (the trace sample nearest to it).
+- obstacle_zone {obstacles, bounds}: the student marks rectangles on the teleperception grid; the error is
+  1 - IoU of the marked cells and the scene's obstacles' cells (obstacle_zone.py; no trace needed).
 """
 
 from __future__ import annotations
@@ -19,9 +21,10 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from middleware.assessment import obstacle_zone
 from middleware.assessment.grading import ItemResult, parse_number
 
-TASK_KINDS = ("reach_point", "wall_following", "report_pose")
+TASK_KINDS = ("reach_point", "wall_following", "report_pose", obstacle_zone.TASK_KIND)
 DEFAULT_RUBRIC = [[0.1, 1.0], [0.2, 0.5], [0.4, 0.25]]
 MAX_TRACE_SAMPLES = 20000
 
@@ -57,6 +60,8 @@ def _travel(trace: list[list[float]]) -> float:
 def measure(task: dict[str, Any], trace: list[list[float]], report: dict[str, Any] | None) -> TaskOutcome:
     """The task's error in metres from the trace (and the student's report), with the rubric's fraction."""
     rubric = task.get("rubric") or DEFAULT_RUBRIC
+    if task["kind"] == obstacle_zone.TASK_KIND:
+        return _measure_zone(task, report, rubric)
     if not trace:
         return TaskOutcome(None, 0.0, "Nothing was recorded: the robot did not report during the attempt.")
     kind = task["kind"]
@@ -85,6 +90,16 @@ def measure(task: dict[str, Any], trace: list[list[float]], report: dict[str, An
         raise ValueError(f"unknown task kind {kind!r}")
     fraction = band_fraction(rubric, error)
     return TaskOutcome(error, fraction, f"{what} Rubric: {int(round(fraction * 100))}% of the points.")
+
+
+def _measure_zone(task: dict[str, Any], zone: dict[str, Any] | None, rubric: list[list[float]]) -> TaskOutcome:
+    if not (zone or {}).get("rects"):
+        return TaskOutcome(None, 0.0, "No obstacle zone was marked.")
+    iou, precision, recall = obstacle_zone.zone_overlap(task, zone)
+    fraction = band_fraction(rubric, 1.0 - iou)
+    return TaskOutcome(1.0 - iou, fraction, f"The zone you marked overlaps the obstacles with IoU {iou:.2f} "
+                                            f"(precision {precision:.2f}, recall {recall:.2f}). "
+                                            f"Rubric: {int(round(fraction * 100))}% of the points.")
 
 
 def grade_task(task: dict[str, Any], points: float, trace: list[list[float]],

@@ -180,6 +180,20 @@ class RobotLink:
         """The occupancy grid built so far."""
         return self._call(self._stub.GetMap, robot_pb2.GetMapRequest())
 
+    def evidence_grid(self, sensor: robot_pb2.EvidenceSensor, part: robot_pb2.EvidencePart) -> robot_pb2.EvidenceGrid:
+        """Teleperception's evidence grid (the chosen layers); reading it keeps it accumulating for 10 s."""
+        return self._call(self._stub.GetEvidenceGrid, robot_pb2.GetEvidenceGridRequest(watch=True, sensor=sensor,
+                                                                                      part=part))
+
+    def reset_evidence_grid(self, token: str) -> robot_pb2.EvidenceGrid:
+        """Forgets the evidence grid and the readings kept (supervisory); the emptied grid."""
+        return self._call(self._stub.ResetEvidenceGrid, robot_pb2.ResetEvidenceGridRequest(token=token))
+
+    def perception_readings(self, after_index: int = 0) -> robot_pb2.PerceptionReadings:
+        """The raw readings the evidence grid integrated, numbered above after_index."""
+        return self._call(self._stub.GetPerceptionReadings,
+                          robot_pb2.GetPerceptionReadingsRequest(after_index=after_index))
+
     def track_run(self) -> robot_pb2.TrackRun:
         """The run on the robot's track now (phase, time, line contacts, last finished attempt); is_track false off a
         track."""

@@ -26,7 +26,7 @@ from skill_server.errors import (
     WorldStopped,
 )
 from skill_server.robot import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS, Robot
-from skill_server.service import convert
+from skill_server.service import convert, perception_convert
 from skill_server.service.plan_convert import plan_from_proto
 
 DEFAULT_TELEMETRY_HZ, MAX_TELEMETRY_HZ = 10.0, 50.0
@@ -178,6 +178,26 @@ class RobotService(robot_pb2_grpc.RobotServicer):
             unix_s=s[0], ground_truth=robot_pb2.Pose2D(x_m=s[1], y_m=s[2], theta_rad=s[3]),
             odometry=robot_pb2.Pose2D(x_m=s[4], y_m=s[5], theta_rad=s[6])) for s in samples],
             oldest_unix_s=oldest or 0.0)
+
+    def GetEvidenceGrid(self, request: robot_pb2.GetEvidenceGridRequest,
+                        context: grpc.ServicerContext) -> robot_pb2.EvidenceGrid:
+        """Teleperception's evidence grid (the chosen layers); watch keeps it accumulating for 10 s more."""
+        with domain_errors(context):
+            sensors, parts = perception_convert.layers_from_proto(request)
+            return perception_convert.evidence_to_proto(*self._robot.evidence(sensors, parts, request.watch))
+
+    def ResetEvidenceGrid(self, request: robot_pb2.ResetEvidenceGridRequest,
+                          context: grpc.ServicerContext) -> robot_pb2.EvidenceGrid:
+        """Forgets the evidence grid and the readings kept (supervisory); the emptied grid."""
+        with domain_errors(context):
+            self._robot.reset_evidence(request.token)
+            return perception_convert.evidence_to_proto(*self._robot.evidence(
+                *perception_convert.layers_from_proto(robot_pb2.GetEvidenceGridRequest()), watch=False))
+
+    def GetPerceptionReadings(self, request: robot_pb2.GetPerceptionReadingsRequest,
+                              context: grpc.ServicerContext) -> robot_pb2.PerceptionReadings:
+        """The raw readings kept, numbered above after_index."""
+        return perception_convert.scans_to_proto(self._robot.perception_scans(request.after_index))
 
     # ---- streams -----------------------------------------------------------------------------------
 

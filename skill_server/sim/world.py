@@ -108,6 +108,7 @@ class World:
         self.parked = False  # read by tests and benchmarks
         self._publication = Publication()
         self.pose_log = PoseLog()
+        self._snapshot_observers: list[Callable[[RobotSnapshot], None]] = []
         self._autonomy: Autonomy | None = None
         self._scene_description: SceneDescription | None = None
         # Built in the caller's thread before the loop exists; from start() on only the loop touches it.
@@ -153,6 +154,10 @@ class World:
     def attach_autonomy(self, autonomy: Autonomy) -> None:
         """Lets skills drive: the loop ticks autonomy before moving the base (call before start())."""
         self._autonomy = autonomy
+
+    def observe_snapshots(self, observer: Callable[[RobotSnapshot], None]) -> None:
+        """Hands observer every snapshot the loop publishes, in the loop (call before start(); keep it cheap)."""
+        self._snapshot_observers.append(observer)
 
     def run_in_loop(self, action: Callable[[], T]) -> T:
         """Runs action in the loop thread (or at once before start()) and returns its result or raises."""
@@ -560,6 +565,8 @@ class World:
         )
         self._publication.publish_snapshot(snapshot)
         self.pose_log.note(snapshot)
+        for observer in self._snapshot_observers:
+            observer(snapshot)
 
     def _maybe_render(self) -> None:
         fps = self._publication.requested_camera_fps

@@ -53,6 +53,18 @@ class PartShape(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     PART_SHAPE_BOX: _ClassVar[PartShape]
     PART_SHAPE_CYLINDER: _ClassVar[PartShape]
     PART_SHAPE_SPHERE: _ClassVar[PartShape]
+
+class EvidenceSensor(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = ()
+    EVIDENCE_SENSOR_UNSPECIFIED: _ClassVar[EvidenceSensor]
+    EVIDENCE_SENSOR_SONAR: _ClassVar[EvidenceSensor]
+    EVIDENCE_SENSOR_LASER: _ClassVar[EvidenceSensor]
+
+class EvidencePart(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = ()
+    EVIDENCE_PART_UNSPECIFIED: _ClassVar[EvidencePart]
+    EVIDENCE_PART_STATIC: _ClassVar[EvidencePart]
+    EVIDENCE_PART_MOVING: _ClassVar[EvidencePart]
 PARAMETER_TYPE_UNSPECIFIED: ParameterType
 PARAMETER_TYPE_DOUBLE: ParameterType
 PARAMETER_TYPE_INT: ParameterType
@@ -85,6 +97,12 @@ PART_SHAPE_UNSPECIFIED: PartShape
 PART_SHAPE_BOX: PartShape
 PART_SHAPE_CYLINDER: PartShape
 PART_SHAPE_SPHERE: PartShape
+EVIDENCE_SENSOR_UNSPECIFIED: EvidenceSensor
+EVIDENCE_SENSOR_SONAR: EvidenceSensor
+EVIDENCE_SENSOR_LASER: EvidenceSensor
+EVIDENCE_PART_UNSPECIFIED: EvidencePart
+EVIDENCE_PART_STATIC: EvidencePart
+EVIDENCE_PART_MOVING: EvidencePart
 
 class GetRobotInfoRequest(_message.Message):
     __slots__ = ()
@@ -1077,3 +1095,69 @@ class Limits(_message.Message):
     min_watchdog_s: float
     max_watchdog_s: float
     def __init__(self, max_linear_mps: _Optional[float] = ..., max_angular_radps: _Optional[float] = ..., watchdog_s: _Optional[float] = ..., robot_max_linear_mps: _Optional[float] = ..., robot_max_angular_radps: _Optional[float] = ..., min_watchdog_s: _Optional[float] = ..., max_watchdog_s: _Optional[float] = ...) -> None: ...
+
+class GetEvidenceGridRequest(_message.Message):
+    __slots__ = ("watch", "sensor", "part")
+    WATCH_FIELD_NUMBER: _ClassVar[int]
+    SENSOR_FIELD_NUMBER: _ClassVar[int]
+    PART_FIELD_NUMBER: _ClassVar[int]
+    watch: bool
+    sensor: EvidenceSensor
+    part: EvidencePart
+    def __init__(self, watch: _Optional[bool] = ..., sensor: _Optional[_Union[EvidenceSensor, str]] = ..., part: _Optional[_Union[EvidencePart, str]] = ...) -> None: ...
+
+class ResetEvidenceGridRequest(_message.Message):
+    __slots__ = ("token",)
+    TOKEN_FIELD_NUMBER: _ClassVar[int]
+    token: str
+    def __init__(self, token: _Optional[str] = ...) -> None: ...
+
+class EvidenceGrid(_message.Message):
+    __slots__ = ("grid", "sonar_scans", "laser_scans", "static_scans", "moving_scans", "odometry", "accumulating", "version")
+    GRID_FIELD_NUMBER: _ClassVar[int]
+    SONAR_SCANS_FIELD_NUMBER: _ClassVar[int]
+    LASER_SCANS_FIELD_NUMBER: _ClassVar[int]
+    STATIC_SCANS_FIELD_NUMBER: _ClassVar[int]
+    MOVING_SCANS_FIELD_NUMBER: _ClassVar[int]
+    ODOMETRY_FIELD_NUMBER: _ClassVar[int]
+    ACCUMULATING_FIELD_NUMBER: _ClassVar[int]
+    VERSION_FIELD_NUMBER: _ClassVar[int]
+    grid: OccupancyGrid
+    sonar_scans: int
+    laser_scans: int
+    static_scans: int
+    moving_scans: int
+    odometry: Pose2D
+    accumulating: bool
+    version: int
+    def __init__(self, grid: _Optional[_Union[OccupancyGrid, _Mapping]] = ..., sonar_scans: _Optional[int] = ..., laser_scans: _Optional[int] = ..., static_scans: _Optional[int] = ..., moving_scans: _Optional[int] = ..., odometry: _Optional[_Union[Pose2D, _Mapping]] = ..., accumulating: _Optional[bool] = ..., version: _Optional[int] = ...) -> None: ...
+
+class GetPerceptionReadingsRequest(_message.Message):
+    __slots__ = ("after_index",)
+    AFTER_INDEX_FIELD_NUMBER: _ClassVar[int]
+    after_index: int
+    def __init__(self, after_index: _Optional[int] = ...) -> None: ...
+
+class PerceptionScan(_message.Message):
+    __slots__ = ("index", "capture_unix_s", "sim_time_s", "odometry", "part", "sonar_ranges_m", "laser_ranges_m")
+    INDEX_FIELD_NUMBER: _ClassVar[int]
+    CAPTURE_UNIX_S_FIELD_NUMBER: _ClassVar[int]
+    SIM_TIME_S_FIELD_NUMBER: _ClassVar[int]
+    ODOMETRY_FIELD_NUMBER: _ClassVar[int]
+    PART_FIELD_NUMBER: _ClassVar[int]
+    SONAR_RANGES_M_FIELD_NUMBER: _ClassVar[int]
+    LASER_RANGES_M_FIELD_NUMBER: _ClassVar[int]
+    index: int
+    capture_unix_s: float
+    sim_time_s: float
+    odometry: Pose2D
+    part: EvidencePart
+    sonar_ranges_m: _containers.RepeatedScalarFieldContainer[float]
+    laser_ranges_m: _containers.RepeatedScalarFieldContainer[float]
+    def __init__(self, index: _Optional[int] = ..., capture_unix_s: _Optional[float] = ..., sim_time_s: _Optional[float] = ..., odometry: _Optional[_Union[Pose2D, _Mapping]] = ..., part: _Optional[_Union[EvidencePart, str]] = ..., sonar_ranges_m: _Optional[_Iterable[float]] = ..., laser_ranges_m: _Optional[_Iterable[float]] = ...) -> None: ...
+
+class PerceptionReadings(_message.Message):
+    __slots__ = ("scans",)
+    SCANS_FIELD_NUMBER: _ClassVar[int]
+    scans: _containers.RepeatedCompositeFieldContainer[PerceptionScan]
+    def __init__(self, scans: _Optional[_Iterable[_Union[PerceptionScan, _Mapping]]] = ...) -> None: ...

@@ -149,6 +149,21 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetLimitsRequest.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.Limits.FromString,
                 _registered_method=True)
+        self.GetEvidenceGrid = channel.unary_unary(
+                '/telelab.v1.Robot/GetEvidenceGrid',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetEvidenceGridRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.EvidenceGrid.FromString,
+                _registered_method=True)
+        self.ResetEvidenceGrid = channel.unary_unary(
+                '/telelab.v1.Robot/ResetEvidenceGrid',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ResetEvidenceGridRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.EvidenceGrid.FromString,
+                _registered_method=True)
+        self.GetPerceptionReadings = channel.unary_unary(
+                '/telelab.v1.Robot/GetPerceptionReadings',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetPerceptionReadingsRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PerceptionReadings.FromString,
+                _registered_method=True)
 
 
 class RobotServicer:
@@ -331,6 +346,31 @@ class RobotServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def GetEvidenceGrid(self, request, context):
+        """Teleperception: every sonar cone and laser beam reading, placed at the robot's ODOMETRY pose (never the ground
+        truth), accumulated as log-odds evidence in a grid of its own, per sensor and per part ("static" while the robot
+        stands, "moving" while it drives). Never environment modelling. It accumulates while someone reads it: a read
+        with watch set keeps it accumulating for 10 s more (wall clock); unwatched it costs nothing. The chosen layers.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def ResetEvidenceGrid(self, request, context):
+        """Forgets the evidence grid and the readings kept. Supervisory, like ClearMap.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def GetPerceptionReadings(self, request, context):
+        """The raw readings the grid integrated (the last 2400 since the last reset, 10 per second), numbered above
+        after_index: the odometry pose at capture, the times, the part and both sensors' ranges.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
 
 def add_RobotServicer_to_server(servicer, server):
     rpc_method_handlers = {
@@ -448,6 +488,21 @@ def add_RobotServicer_to_server(servicer, server):
                     servicer.GetLimits,
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetLimitsRequest.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.Limits.SerializeToString,
+            ),
+            'GetEvidenceGrid': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetEvidenceGrid,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetEvidenceGridRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.EvidenceGrid.SerializeToString,
+            ),
+            'ResetEvidenceGrid': grpc.unary_unary_rpc_method_handler(
+                    servicer.ResetEvidenceGrid,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ResetEvidenceGridRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.EvidenceGrid.SerializeToString,
+            ),
+            'GetPerceptionReadings': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetPerceptionReadings,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetPerceptionReadingsRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PerceptionReadings.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -1071,6 +1126,87 @@ class Robot:
             '/telelab.v1.Robot/GetLimits',
             protos_dot_telelab_dot_v1_dot_robot__pb2.GetLimitsRequest.SerializeToString,
             protos_dot_telelab_dot_v1_dot_robot__pb2.Limits.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def GetEvidenceGrid(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/GetEvidenceGrid',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GetEvidenceGridRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.EvidenceGrid.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def ResetEvidenceGrid(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/ResetEvidenceGrid',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.ResetEvidenceGridRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.EvidenceGrid.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def GetPerceptionReadings(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/GetPerceptionReadings',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GetPerceptionReadingsRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.PerceptionReadings.FromString,
             options,
             channel_credentials,
             insecure,
