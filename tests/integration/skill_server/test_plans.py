@@ -223,3 +223,13 @@ def test_a_bad_plan_name_and_an_empty_plan_are_refused(robot: robot_pb2_grpc.Rob
     with pytest.raises(grpc.RpcError) as empty:
         run_plan(controlled, "empty")
     assert empty.value.code() == grpc.StatusCode.INVALID_ARGUMENT and "steps: " in empty.value.details()
+
+
+def test_a_plan_ends_when_control_changes_hands(controlled: robot_pb2_grpc.RobotStub) -> None:
+    """The deadman rule for plans: a plan lives under its controller's token and ends when the turn does."""
+    goal_id = run_plan(controlled, "my-turn", drive(1, 0.0, 0.3, 30.0)).goal.goal_id
+    controlled.SetController(robot_pb2.SetControllerRequest(token="next-student"), timeout=DEADLINE_S)
+    final, _, _ = watch_to_end(controlled, goal_id, timeout_s=DEADLINE_S)
+    assert (final.status, final.error_code) == (robot_pb2.GOAL_STATUS_ABORTED, "CONTROL_REVOKED")
+    time.sleep(0.3)
+    assert speed_now(controlled) < 0.01

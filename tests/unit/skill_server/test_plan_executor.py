@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
+from dataclasses import replace
 
 import pytest
 from skill_sim_helpers import TOKEN
@@ -26,6 +27,8 @@ from skill_server.plans.model import (
 )
 from skill_server.plans.validation import check_plan
 from skill_server.sequencer import Sequencer, attach_sequencer
+from skill_server.sim.battery import BatterySpec
+from skill_server.sim.robot_model import TELEBOT
 from skill_server.sim.world import World
 
 
@@ -176,3 +179,18 @@ def test_lines_done_in_no_time_do_not_cost_a_tick_each(lab: tuple[World, Sequenc
     world.step_for(2 * world.tick_dt_s)
     goal = sequencer.goals.get(goal_id)
     assert goal is not None and goal.status is GoalStatus.SUCCEEDED
+
+
+def test_battery_below_reads_the_charge_the_skills_see() -> None:
+    spec = replace(TELEBOT, battery=BatterySpec(initial_charge=0.4))
+    with World("lab", realtime=False, deadman_timeout_s=1000.0, spec=spec) as world:
+        sequencer = attach_sequencer(world)
+        world.set_controller(TOKEN)
+        goal_id = start(sequencer,
+                        IfLine(1, 1, PlanCondition("battery_below", 0.3), (SayLine(2, 3, "low"),),
+                               (SayLine(4, 3, "enough"),)),
+                        WaitLine(6, 1, PlanCondition("battery_below", 0.5), 1.0))
+        final = run(world, sequencer, goal_id)
+    assert final.status is GoalStatus.SUCCEEDED, final.message
+    assert messages(sequencer, goal_id, EventKind.STEP_STARTED) == [
+        "line 1: if battery_below 0.3: no, else", "line 4: enough", "line 6: wait until battery_below 0.5 at most 1 s"]
