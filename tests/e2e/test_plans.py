@@ -1,0 +1,70 @@
+"""The plans journey in Chromium as the demo student: write a plan with an error, see it marked on its line, fix
+it, save it, try it on the practice robot, and see its trace drawn and its end state; the seeded plans listed; and
+the editor at phone width. Screenshots in test-artifacts/."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.conftest import ARTIFACTS_DIR, LiveServer
+
+pytestmark = pytest.mark.e2e
+
+WITH_ERROR = 'say "Hello"\nfly_to 1 2\ndrive 0.2 0 for 1.5s\n'
+FIXED = 'say "Hello"\ndrive 0.2 0 for 1.5s\n'
+
+
+def test_the_demo_student_fixes_a_plan_and_tries_it_on_the_practice_robot(
+        page, app, demo_accounts, live_server: LiveServer) -> None:
+    from middleware.lab_runner import seed_demo_course
+    from middleware.teaching.practice_robots import practice_manager
+
+    seed_demo_course(app)  # with the demo course, its plans (what `telelab up` seeds)
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    page.goto(f"{live_server.url}/login")
+    page.get_by_label("Username").fill("student")
+    page.get_by_label("Password").fill(demo_accounts["student"])
+    page.get_by_role("button", name="Log in").click()
+    page.locator('[data-field="username"]').wait_for()
+    try:
+        page.goto(f"{live_server.url}/plans")
+        page.locator("[data-slot=mine] a", has_text="square").wait_for()
+        page.locator("[data-slot=shared] a", has_text="careful-forward").wait_for()
+
+        page.get_by_label("Name").first.fill("first-plan")
+        page.get_by_role("button", name="Create").click()
+        page.wait_for_url("**/plans/*")
+        editor = page.get_by_label("The plan's text, one command a line")
+        editor.fill(WITH_ERROR)
+        page.get_by_role("button", name="Check", exact=True).click()
+        page.locator(".plan-code__line--error[data-line='2']").wait_for()
+        problem = page.locator("[data-slot=errors] li").first
+        assert problem.text_content().startswith("Line 2"), problem.text_content()
+        assert page.locator(".plan-code__line--error").count() == 1
+        page.screenshot(path=str(ARTIFACTS_DIR / "plans-error-marked.png"))
+
+        editor.fill(FIXED)
+        editor.press("Control+Enter")  # the keyboard checks as the button does
+        page.locator("[data-field=check-status][data-valid=true]").wait_for()
+        assert page.locator(".plan-code__line--error").count() == 0
+        page.get_by_role("button", name="Save", exact=True).click()
+        page.locator("[data-field=check-status]", has_text="Saved as version 2").wait_for()
+
+        page.get_by_role("button", name="Try on my practice robot").click()
+        page.locator("[data-field=end-state][data-status]").wait_for(timeout=120_000)
+        end_state = page.locator("[data-field=end-state]")
+        assert end_state.get_attribute("data-status") == "succeeded", end_state.text_content()
+        assert "SUCCEEDED" in end_state.text_content()
+        page.wait_for_function("Number(document.querySelector('[data-field=map]').dataset.predictedPoints) >= 5",
+                               timeout=10_000)
+        page.screenshot(path=str(ARTIFACTS_DIR / "plans-tried-on-practice.png"))
+
+        page.set_viewport_size({"width": 390, "height": 844})
+        page.reload()
+        editor.wait_for()
+        assert page.evaluate("document.documentElement.scrollWidth") <= 390, "the editor scrolls sideways on a phone"
+        box = editor.bounding_box()
+        assert box is not None and box["x"] >= 0 and box["x"] + box["width"] <= 390
+        page.screenshot(path=str(ARTIFACTS_DIR / "plans-editor-phone.png"), full_page=True)
+    finally:
+        practice_manager(live_server.app).shutdown()

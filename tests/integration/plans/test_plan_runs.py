@@ -1,0 +1,161 @@
+"""Running stored plans through the middleware on real skill servers: on a lab robot only during one's turn, on
+one's practice robot at any time; line progress, the end state (ABORTED at the failing line), cancel; and a plan's
+predicted end point on the practice robot agrees with the lab robot's in the same scene (within 5 cm)."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_test_app
+from tests.integration.lab.test_skills_api import take_control
+from tests.integration.plans.conftest import PlansLab, api
+
+SHORT = 'say "start"\ndrive 0.2 0 for 1s\n'
+SQUARE_CORNER = "drive 0.25 0 for 2s\nturn_to 90deg\ndrive 0.25 0 for 1.5s\n"
+
+
+def wait_for_end(client: LabClient, answer: dict, timeout_s: float = 60) -> dict:
+    """Polls the run's goal until it ends; its final state."""
+    deadline = time.monotonic() + timeout_s
+    path = f"/api/robots/{answer['robot']}/goals/{answer['goal']['goal_id']}"
+    while time.monotonic() < deadline:
+        status, body = api(client, "GET", path)
+        assert status == 200, body
+        if body["goal"]["status"] in ("succeeded", "aborted", "canceled"):
+            return body["goal"]
+        time.sleep(0.2)
+    raise AssertionError(f"the plan did not end within {timeout_s} s")
+
+
+def latest_pose(client: LabClient, robot: str) -> dict[str, float]:
+    """The robot's newest odometry pose, read from its telemetry channel."""
+    telemetry = client.websocket(f"/ws/robots/{robot}/telemetry")
+    latest = None
+    deadline = time.monotonic() + 5
+    while time.monotonic() < deadline:
+        message = telemetry.receive(timeout=1)
+        if message is None:
+            continue
+        data = json.loads(message)
+        if data.get("type") == "telemetry":
+            latest = data["odometry"]["pose"]
+            if time.monotonic() > deadline - 4:  # a second of messages: the newest is where it stands
+                break
+    telemetry.close()
+    assert latest is not None, "no telemetry within 5 s"
+    return latest
+
+
+def _create(client: LabClient, name: str, text: str) -> int:
+    status, body = api(client, "POST", "/api/plans", {"name": name, "text": text})
+    assert status == 201, body
+    return body["plan"]["id"]
+
+
+def test_a_plan_runs_on_a_lab_robot_only_during_the_turn(plans_lab: PlansLab) -> None:
+    ann, bob = plans_lab.client("student1"), plans_lab.client("student2")
+    plan_id = _create(ann, "short", SHORT)
+    status, body = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "lab-1"})
+    assert status == 403 and body["error"]["code"] == "not_controller"
+    queue = take_control(ann)
+    status, answer = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "lab-1"})
+    assert status == 202, answer
+    assert answer["goal"]["skill"] == "plan:short" and answer["goal_channel"].startswith("/ws/robots/lab-1/goals/")
+    goal = wait_for_end(ann, answer)
+    assert goal["status"] == "succeeded", goal
+    # Someone else, waiting in the queue, is refused as an observer.
+    bob.websocket("/ws/robots/lab-1/queue")
+    status, body = api(bob, "POST", f"/api/plans/{plan_id}/runs", {"target": "lab-1"})
+    assert status == 404  # ann's plan is private
+    queue.close()
+
+
+def test_the_practice_robot_reports_the_line_running_and_the_failing_line(plans_lab: PlansLab) -> None:
+    ann = plans_lab.client("student1")
+    plan_id = _create(ann, "fails-on-3", 'say "go"\ndrive 0.2 0 for 1s\nwait_until obstacle_within 0.05 timeout 1s\n')
+    status, answer = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "practice", "beside": "lab-1",
+                                                                     "from_dock": True})
+    assert status == 202, answer
+    assert answer["practice"] and answer["robot"].startswith("practice-")
+    lines_seen = set()
+    goal_channel = ann.websocket(answer["goal_channel"])
+    deadline = time.monotonic() + 60
+    final = None
+    while final is None and time.monotonic() < deadline:
+        message = goal_channel.receive(timeout=5)
+        if message is None:
+            continue
+        data = json.loads(message)
+        feedback = data.get("feedback") if data["type"] == "goal_feedback" else (data.get("goal") or {}).get("feedback")
+        if feedback and feedback.get("values", {}).get("line"):
+            lines_seen.add(int(feedback["values"]["line"]))
+        if data["type"] == "goal" and data["goal"]["status"] in ("succeeded", "aborted", "canceled"):
+            final = data["goal"]
+    assert final is not None and final["status"] == "aborted", final
+    assert final["message"].startswith("line 3"), final
+    assert 2 in lines_seen, lines_seen
+    # A long plan is canceled and stops.
+    long_id = _create(ann, "long", "drive 0.1 0 for 60s\n")
+    status, answer = api(ann, "POST", f"/api/plans/{long_id}/runs", {"target": "practice"})
+    assert status == 202, answer
+    time.sleep(1.0)
+    status, body = api(ann, "DELETE", answer["cancel_url"])
+    assert status == 200, body
+    assert wait_for_end(ann, answer)["status"] == "canceled"
+
+
+@pytest.fixture
+def fresh_lab(tmp_path: Path) -> Iterator[LiveServer]:
+    """A lab whose lab-1 is a skill server of its own, fresh at its dock in the lab scene (the session's robot
+    has been moved by other tests), on SQLite."""
+    from middleware.access.coordinator import access_coordinator
+    from middleware.robots.processes import SkillServerProcess, wait_until_serving
+    from middleware.robots.registry import robot_registry
+    from middleware.teaching.practice_robots import practice_manager
+
+    robot = SkillServerProcess("lab-1", "lab", echo=False)
+    robot.start()
+    app = None
+    server = None
+    try:
+        wait_until_serving(robot.address)
+        app = make_test_app(f"sqlite:///{tmp_path / 'fresh.sqlite3'}", f"lab-1={robot.address}", tmp_path)
+        server = LiveServer(app)
+        yield server
+    finally:
+        if server is not None:
+            server.stop()
+        if app is not None:
+            practice_manager(app).shutdown()
+            access_coordinator(app).stop_ticker()
+            robot_registry(app).close()
+        robot.stop()
+
+
+def test_the_predicted_end_point_agrees_with_the_lab_robot_within_5_cm(fresh_lab: LiveServer) -> None:
+    ann = LabClient(fresh_lab.url)
+    assert ann.login("student1", STUDENT_PASSWORD) == 302
+    plan_id = _create(ann, "corner", SQUARE_CORNER)
+    status, predicted = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "practice", "beside": "lab-1",
+                                                                        "from_dock": True})
+    assert status == 202, predicted
+    assert wait_for_end(ann, predicted)["status"] == "succeeded"
+    predicted_end = latest_pose(ann, predicted["robot"])
+    queue = take_control(ann)
+    start = latest_pose(ann, "lab-1")
+    status, real = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "lab-1"})
+    assert status == 202, real
+    assert wait_for_end(ann, real)["status"] == "succeeded"
+    real_end = latest_pose(ann, "lab-1")
+    queue.close()
+    moved_m = math.hypot(real_end["x_m"] - start["x_m"], real_end["y_m"] - start["y_m"])
+    assert moved_m > 0.5, "the plan must move the robot for the comparison to mean anything"
+    error_m = math.hypot(predicted_end["x_m"] - real_end["x_m"], predicted_end["y_m"] - real_end["y_m"])
+    print(f"predicted end {predicted_end}, lab end {real_end}, apart {error_m * 100:.1f} cm")
+    assert error_m <= 0.05, f"the end points are {error_m * 100:.1f} cm apart"
