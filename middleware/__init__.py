@@ -30,7 +30,7 @@ from middleware.errors import register_error_handlers
 from middleware.experiment import routes as experiment_routes
 from middleware.extensions import csrf, login_manager, socket_login_check
 from middleware.farm import setup as farm_setup
-from middleware.lab import pool_routes
+from middleware.lab import limits_routes, pool_routes
 from middleware.lab import routes as lab_routes
 from middleware.lab import skills as lab_skills
 from middleware.lab import sockets as lab_sockets
@@ -115,7 +115,7 @@ def _register_areas(app: Flask) -> None:
                       courses_routes.blueprint, experiment_routes.blueprint, assessment_routes.blueprint,
                       assessment_pages.blueprint, practice_routes.blueprint, lesson_routes.blueprint,
                       tour_routes.blueprint, class_routes.blueprint, farm_routes.blueprint, pool_routes.blueprint,
-                      plans_routes.blueprint):
+                      limits_routes.blueprint, plans_routes.blueprint):
         app.register_blueprint(blueprint)
     app.register_blueprint(lab_teleperception.blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,

@@ -5,7 +5,7 @@ It owns the controller token (the known-token fast path, a database re-read when
 re-sending it to a robot that restarted and forgot it), sequence numbering, the deadman-friendly held
 drive, and the one map from a robot's refusal to the error a person or API client sees. Nothing else in
 the middleware calls a RobotLink command method (drive, activate_skill, cancel_goal, clear_map,
-return_to_dock, set_controller, run_plan): tests/test_architecture.py checks it.
+return_to_dock, set_controller, set_limits, get_limits, run_plan): tests/test_architecture.py checks it.
 
 Supervisory actions (clearing the map, the return to the dock) are the controller's, or a tutor's or an
 admin's at any time: those go out under whatever token the robot obeys now ("" while nobody has control),
@@ -199,6 +199,15 @@ class Commander:
     def reset_evidence(self) -> robot_pb2.EvidenceGrid:
         """Forgets the robot's teleperception evidence grid and readings (for every viewer); the emptied grid."""
         return self._as_controller(self.link.reset_evidence_grid)
+
+    def limits(self) -> robot_pb2.Limits:
+        """The velocity ceilings and the watchdog in force (reading needs no control)."""
+        return self.link.get_limits()
+
+    def set_limits(self, max_linear_mps: float, max_angular_radps: float, watchdog_s: float) -> robot_pb2.Limits:
+        """Changes the robot's limits as its controller (0 keeps a value); the limits in force afterwards."""
+        return self._as_controller(lambda token: self.link.set_limits(token, max_linear_mps, max_angular_radps,
+                                                                      watchdog_s))
 
     def goal_state(self, goal_id: str) -> robot_pb2.GoalState:
         """A goal's state (reading needs no control)."""

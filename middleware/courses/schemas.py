@@ -50,6 +50,8 @@ class CourseSettings:
     turn_length_s: int | None = None
     booking_allowance_min: int | None = None
     graded_run_hold_min: int | None = None
+    students_set_velocity: bool | None = None
+    students_set_watchdog: bool | None = None
 
 
 def parse_settings(data: Mapping[str, object]) -> CourseSettings:
@@ -64,7 +66,23 @@ def parse_settings(data: Mapping[str, object]) -> CourseSettings:
         graded_run_hold_min=(clean_whole(data["graded_run_hold_min"], "graded_run_hold_min", GRADED_RUN_HOLD_MIN,
                                          "minutes")
                              if data.get("graded_run_hold_min") not in (None, "") else None),
+        students_set_velocity=clean_flag(data.get("students_set_velocity"), "students_set_velocity"),
+        students_set_watchdog=clean_flag(data.get("students_set_watchdog"), "students_set_watchdog"),
     )
+
+
+FLAG_WORDS = {"yes": True, "true": True, "on": True, "1": True, "no": False, "false": False, "off": False, "0": False}
+
+
+def clean_flag(value: object, field: str) -> bool | None:
+    """A yes/no setting from JSON (true/false) or a form ("yes"/"no"); None when absent."""
+    if value is None or value == "":
+        return None
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, str) and value.strip().lower() in FLAG_WORDS:
+        return FLAG_WORDS[value.strip().lower()]
+    raise InvalidField(field, f"{field} must be yes or no (true or false).")
 
 
 @dataclass(frozen=True)

@@ -36,6 +36,8 @@ class CourseView:
     booking_allowance_min: int
     graded_run_hold_min: int
     students: int
+    students_set_velocity: bool
+    students_set_watchdog: bool
     my_role: str | None  # the viewer's membership role, None for an admin who is not a member
 
     def to_dict(self) -> dict[str, object]:
@@ -43,7 +45,8 @@ class CourseView:
         return {"id": self.id, "code": self.code, "title": self.title, "turn_length_s": self.turn_length_s,
                 "booking_allowance_min": self.booking_allowance_min,
                 "graded_run_hold_min": self.graded_run_hold_min, "students": self.students,
-                "my_role": self.my_role}
+                "my_role": self.my_role, "students_set_velocity": self.students_set_velocity,
+                "students_set_watchdog": self.students_set_watchdog}
 
 
 @dataclass(frozen=True)
@@ -94,7 +97,7 @@ def _views(session: Session, courses: list[Course], actor: User) -> list[CourseV
     roles = dict(session.execute(select(CourseMembership.course_id, CourseMembership.role).where(
         CourseMembership.course_id.in_(ids), CourseMembership.user_id == actor.id)).all()) if ids else {}
     return [CourseView(c.id, c.code, c.title, c.turn_length_s, c.booking_allowance_min, c.graded_run_hold_min,
-                       counts.get(c.id, 0),
+                       counts.get(c.id, 0), c.students_set_velocity, c.students_set_watchdog,
                        roles.get(c.id)) for c in courses]
 
 
@@ -143,6 +146,10 @@ def update_settings(session: Session, actor: User, course_id: int, settings: Cou
         course.booking_allowance_min = settings.booking_allowance_min
     if settings.graded_run_hold_min is not None:
         course.graded_run_hold_min = settings.graded_run_hold_min
+    if settings.students_set_velocity is not None:
+        course.students_set_velocity = settings.students_set_velocity
+    if settings.students_set_watchdog is not None:
+        course.students_set_watchdog = settings.students_set_watchdog
     return course
 
 

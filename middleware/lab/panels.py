@@ -94,5 +94,7 @@ def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | Non
         DynamicRepository("chat", "chat", "Chat", f"{base}/chat", chat_help, "chat").describe(),
         DynamicRepository("response-times", "response-times", "Response times", f"{base}/drive",
                           "Round trips: browser to middleware, and middleware to the robot.", "sense").describe(),
+        DynamicRepository("low-level", "low-level", "Low-level commands", f"{base}/telemetry",
+                          "The battery, the velocity ceilings and the watchdog timeout.", "sense").describe(),
     ]
     return panels

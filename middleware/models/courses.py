@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from datetime import datetime
 
+import sqlalchemy as sa
 from sqlalchemy import CheckConstraint, DateTime, ForeignKey, Index, String, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
@@ -34,6 +35,10 @@ class Course(Base):
     # The longest a graded attempt or an experiment trial keeps a shared robot past the turn length.
     graded_run_hold_min: Mapped[int] = mapped_column(default=DEFAULT_GRADED_RUN_HOLD_MIN,
                                                      server_default=str(DEFAULT_GRADED_RUN_HOLD_MIN))
+    # The low-level settings its students may change on a robot they control (tutors and admins change all): the
+    # velocity ceilings yes by default (slowing down is an exercise), the watchdog no (it is the lab's safety net).
+    students_set_velocity: Mapped[bool] = mapped_column(default=True, server_default=sa.true())
+    students_set_watchdog: Mapped[bool] = mapped_column(default=False, server_default=sa.false())
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
 
 

@@ -245,6 +245,16 @@ class RobotLink:
         round_trip_ms = (time.perf_counter() - started) * 1000
         return DriveResult(ack.applied_sequence, ack.linear_mps, ack.angular_radps, round_trip_ms)
 
+    def get_limits(self) -> robot_pb2.Limits:
+        """The velocity ceilings and the deadman (watchdog) timeout in force, with the ranges the robot accepts."""
+        return self._call(self._stub.GetLimits, robot_pb2.GetLimitsRequest())
+
+    def set_limits(self, token: str, max_linear_mps: float, max_angular_radps: float,
+                   watchdog_s: float) -> robot_pb2.Limits:
+        """Changes the limits under the controller's token (0 keeps a value); the limits in force afterwards."""
+        return self._call(self._stub.SetLimits, robot_pb2.SetLimitsRequest(
+            token=token, max_linear_mps=max_linear_mps, max_angular_radps=max_angular_radps, watchdog_s=watchdog_s))
+
     def close(self) -> None:
         """Stops the streams and closes the channel."""
         self.camera.close()

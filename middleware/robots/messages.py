@@ -41,6 +41,19 @@ def unpack_camera_frame(message: bytes) -> tuple[dict[str, object], bytes]:
     return json.loads(message[4 : 4 + length]), message[4 + length :]
 
 
+def battery_dict(battery: robot_pb2.Battery) -> dict[str, object]:
+    """The battery's charge (0..1), whether it charges at the dock, and whether it is empty."""
+    return {"charge": round(battery.charge, 4), "charging": battery.charging, "empty": battery.empty}
+
+
+def limits_dict(limits: robot_pb2.Limits) -> dict[str, float]:
+    """The limits in force and the ranges the robot accepts."""
+    return {"max_linear_mps": limits.max_linear_mps, "max_angular_radps": limits.max_angular_radps,
+            "watchdog_s": limits.watchdog_s, "robot_max_linear_mps": limits.robot_max_linear_mps,
+            "robot_max_angular_radps": limits.robot_max_angular_radps, "min_watchdog_s": limits.min_watchdog_s,
+            "max_watchdog_s": limits.max_watchdog_s}
+
+
 def pack_telemetry(telemetry: robot_pb2.Telemetry) -> str:
     """A telemetry text message; the ground truth stays in the middleware (it is for grading)."""
     odometry = telemetry.odometry
@@ -52,6 +65,7 @@ def pack_telemetry(telemetry: robot_pb2.Telemetry) -> str:
             "capture_unix_s": telemetry.capture_unix_s,
             "last_applied_sequence": telemetry.last_applied_sequence,
             "deadman_stopped": telemetry.deadman_stopped,
+            "battery": battery_dict(telemetry.battery),
             "odometry": {
                 "pose": pose_dict(odometry.pose),
                 "linear_mps": odometry.linear_mps,

@@ -143,6 +143,8 @@ ROUTES = (
     "GET /api/robots/<robot_name>/readings.csv",
     "GET /api/robots/<robot_name>/readings.mcap",
     "POST /api/robots/<robot_name>/dock",
+    "GET /api/robots/<robot_name>/limits",
+    "POST /api/robots/<robot_name>/limits",
     "GET /api/robots/<robot_name>/panels",
     "GET /api/robots/<robot_name>/scene",
     "POST /api/robots/<robot_name>/skills/<skill>/goals",

@@ -83,6 +83,7 @@ export class ConsoleWiring {
     queue: (descriptor, panel) => this.#queue(descriptor, panel),
     chat: (descriptor, panel) => connectChat(this.#robotPath, panel),
     pings: (descriptor, panel) => this.#pings(descriptor, panel),
+    limits: (descriptor, panel) => this.#limits(panel),
   };
 
   /** Connect one placed panel to the feeds its module declared. */
@@ -400,6 +401,26 @@ export class ConsoleWiring {
     void notice.offsetWidth; // restarts the flash animation
     notice.classList.add("turn-notice--flash");
     playTurnTone();
+  }
+
+  /** The robot's low-level settings: read once the console starts, changed when the panel asks. */
+  #limits(panel) {
+    const url = `/api/robots/${encodeURIComponent(this.#robotName)}/limits`;
+    panel.addEventListener("limits-change", async ({ detail }) => {
+      try {
+        panel.limits = await fetchJson(url, { method: "POST", body: detail });
+      } catch (error) {
+        panel.error = { code: error.code ?? "network", message: error.message, field: error.field ?? null };
+      }
+    });
+    this.#starters.push(async () => {
+      try {
+        panel.limits = await fetchJson(url);
+      } catch (error) {
+        panel.error = { code: error.code ?? "network", message: `The limits could not be read: ${error.message}`,
+          field: null };
+      }
+    });
   }
 
   #pings(descriptor, panel) {
