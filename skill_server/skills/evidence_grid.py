@@ -99,7 +99,7 @@ class EvidenceGrid:
                              percent.T.tobytes(), readings, sim_time_s)
 
     def _add_rays(self, layer: np.ndarray, start_x: np.ndarray, start_y: np.ndarray, angles: np.ndarray,
-                  ranges: np.ndarray, echoed: np.ndarray, hit: float, free: float) -> None:
+                  ranges: np.ndarray, echoed: np.ndarray, hit: float, free_amount: float) -> None:
         res = self.resolution_m
         steps = np.arange(res / 2, FREE_RANGE_M, res / 2)
         free_len = np.minimum(ranges - res, FREE_RANGE_M)
@@ -107,13 +107,15 @@ class EvidenceGrid:
         cos, sin = np.cos(angles), np.sin(angles)
         fx = start_x[:, None] + steps[None, :] * cos[:, None]
         fy = start_y[:, None] + steps[None, :] * sin[:, None]
-        free_cells = self._cells(fx[along], fy[along])
-        hit_cells = self._cells(start_x[echoed] + ranges[echoed] * cos[echoed],
-                                start_y[echoed] + ranges[echoed] * sin[echoed])
-        # Each cell once per reading, and never both free and hit by one reading: the echo wins.
-        free_cells = np.setdiff1d(free_cells, hit_cells, assume_unique=True)
+        # Each cell once per reading, and never both free and hit by one reading: the echo wins. A mask marks the
+        # free cells without sorting the thousands of points along the beams.
+        free = np.zeros(layer.size, dtype=bool)
+        free[self._cells(fx[along], fy[along])] = True
+        hit_cells = np.unique(self._cells(start_x[echoed] + ranges[echoed] * cos[echoed],
+                                          start_y[echoed] + ranges[echoed] * sin[echoed]))
+        free[hit_cells] = False
         flat = layer.reshape(-1)
-        flat[free_cells] += free
+        flat[free] += free_amount
         flat[hit_cells] += hit
         np.clip(layer, -CLAMP_LOG_ODDS, CLAMP_LOG_ODDS, out=layer)
 
@@ -121,4 +123,4 @@ class EvidenceGrid:
         ix = np.floor((xs - self.origin_x_m) / self.resolution_m).astype(np.int64)
         iy = np.floor((ys - self.origin_y_m) / self.resolution_m).astype(np.int64)
         inside = (ix >= 0) & (ix < self.width) & (iy >= 0) & (iy < self.height)
-        return np.unique(ix[inside] * self.height + iy[inside])
+        return ix[inside] * self.height + iy[inside]

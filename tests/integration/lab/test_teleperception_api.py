@@ -15,7 +15,7 @@ from mcap.reader import make_reader
 from middleware.lab.perception_export import CSV_COLUMNS, MCAP_SCHEMA_NAME, MCAP_TOPIC
 from tests.conftest import LabClient
 from tests.integration.lab.test_skills_api import api, take_control
-from tests.integration.teaching.test_practice_console_and_uploads import _api, practice  # noqa: F401
+from tests.integration.teaching.test_practice_console_and_uploads import _api, _client, practice  # noqa: F401
 
 
 def wait_for_readings(client: LabClient, at_least: int, robot: str = "lab-1", within_s: float = 20.0) -> dict:
@@ -52,6 +52,17 @@ def test_reading_the_grid_makes_it_accumulate_and_layers_are_chosen_by_name(stud
     for query, field in (("sensor=radar", "sensor"), ("part=later", "part")):
         status, body = api(student_client, "GET", f"/api/robots/lab-1/evidence?{query}")
         assert status == 400 and body["error"]["field"] == field, body
+
+
+def test_an_observer_sees_the_grid_the_student_gathered(student_client: LabClient, live_server) -> None:
+    gathered = wait_for_readings(student_client, 6)
+    observer = _client(live_server, "observer1")
+    status, body = _api(observer, "GET", "/api/robots/lab-1/evidence")
+    assert status == 200, body
+    seen = body["evidence"]
+    assert sum(seen["counts"][p] for p in ("static", "moving")) >= sum(gathered["counts"][p] for p in ("static",
+                                                                                                        "moving"))
+    assert seen["version"] >= gathered["version"], "one grid on the robot, not one per viewer"
 
 
 def test_only_the_controller_may_reset_the_grid_and_then_it_starts_again(student_client: LabClient) -> None:
