@@ -145,6 +145,35 @@ def test_any_text_is_a_plan_or_a_plan_invalid_and_an_accepted_one_round_trips(te
     assert plan_from_json(plan_to_json(plan), SKILLS) == plan
 
 
+EDIT_CHARACTERS = st.sampled_from(list("0123456789.-+ \t\n{}=\"#\\edgmsx_") + ["cm", "deg", "m/s", "not ", "é", "\x00"])
+
+
+@st.composite
+def edited_texts(draw: st.DrawFn) -> str:
+    """The text of an accepted plan with a few characters deleted, inserted or replaced: mostly nearly right."""
+    checked = accepted(draw(plans))
+    text = plan_to_text(checked) if checked else 'say "x"\n'
+    for _ in range(draw(st.integers(1, 3))):
+        at = draw(st.integers(0, len(text)))
+        cut = draw(st.integers(0, 2))
+        text = text[:at] + draw(st.sampled_from(["", draw(EDIT_CHARACTERS)])) + text[at + cut:]
+    return text
+
+
+@PROPERTY_SETTINGS
+@given(edited_texts())
+def test_a_nearly_right_text_is_a_plan_or_a_plan_invalid_and_an_accepted_one_round_trips(text: str) -> None:
+    try:
+        plan = parse_plan_text(text, SKILLS)
+    except PlanInvalid as refused:
+        assert refused.errors and all(e.message.startswith(("line ", "steps", "text")) for e in refused.errors)
+        return
+    written = plan_to_text(plan)
+    assert parse_plan_text(written, SKILLS) == plan
+    assert plan_to_text(parse_plan_text(written, SKILLS)) == written
+    assert plan_from_json(plan_to_json(plan), SKILLS) == plan
+
+
 json_values = st.recursive(
     st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=8),
     lambda children: st.lists(children, max_size=4) | st.dictionaries(
