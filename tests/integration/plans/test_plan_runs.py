@@ -159,3 +159,26 @@ def test_the_predicted_end_point_agrees_with_the_lab_robot_within_5_cm(fresh_lab
     error_m = math.hypot(predicted_end["x_m"] - real_end["x_m"], predicted_end["y_m"] - real_end["y_m"])
     print(f"predicted end {predicted_end}, lab end {real_end}, apart {error_m * 100:.1f} cm")
     assert error_m <= 0.05, f"the end points are {error_m * 100:.1f} cm apart"
+
+
+@pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
+def test_a_plan_on_a_lab_robot_ends_when_its_user_goes_away(plans_lab: PlansLab) -> None:
+    """The deadman decision (README, Plans): closing the page ends the turn one grace later, and the robot ends the
+    plan CONTROL_REVOKED."""
+    grace_s = 3.0
+    plans_lab.server.app.config["ACCESS_GRACE_S"] = grace_s
+    ann = plans_lab.client("student1")
+    plan_id = _create(ann, "slow-and-long", "drive 0.02 0 for 120s\n")
+    queue = take_control(ann)
+    status, answer = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "lab-1"})
+    assert status == 202, answer
+    time.sleep(0.5)
+    status, body = api(ann, "GET", f"/api/robots/lab-1/goals/{answer['goal']['goal_id']}")
+    assert body["goal"]["status"] == "executing", body
+    queue.close()
+    left_at = time.monotonic()
+    goal = wait_for_end(ann, answer, timeout_s=grace_s + 30)
+    ended_after_s = time.monotonic() - left_at
+    print(f"the plan ended {ended_after_s:.1f} s after its user left (grace {grace_s} s)")
+    assert goal["status"] == "aborted" and goal["error_code"] == "CONTROL_REVOKED", goal
+    assert ended_after_s <= grace_s + 5.0, "the plan outlived its user's presence by more than the grace"
