@@ -5,7 +5,8 @@ It owns the controller token (the known-token fast path, a database re-read when
 re-sending it to a robot that restarted and forgot it), sequence numbering, the deadman-friendly held
 drive, and the one map from a robot's refusal to the error a person or API client sees. Nothing else in
 the middleware calls a RobotLink command method (drive, activate_skill, cancel_goal, clear_map,
-return_to_dock, set_controller, set_limits, get_limits, run_plan): tests/test_architecture.py checks it.
+return_to_dock, reset_evidence_grid, set_controller, set_limits, get_limits, run_plan):
+tests/test_architecture.py checks it.
 
 Supervisory actions (clearing the map, the return to the dock) are the controller's, or a tutor's or an
 admin's at any time: those go out under whatever token the robot obeys now ("" while nobody has control),
