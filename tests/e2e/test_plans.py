@@ -1,6 +1,7 @@
 """The plans journey in Chromium as the demo student: write a plan with an error, see it marked on its line, fix
-it, save it, try it on the practice robot, and see its trace drawn and its end state; the seeded plans listed; and
-the editor at phone width. Screenshots in test-artifacts/."""
+it, save it, try it on the practice robot, and see its trace drawn and its end state; run it on lab-1 once the turn
+is held, its trace beside the prediction; the seeded plans listed; and the editor at phone width. Screenshots in
+test-artifacts/."""
 
 from __future__ import annotations
 
@@ -58,6 +59,16 @@ def test_the_demo_student_fixes_a_plan_and_tries_it_on_the_practice_robot(
         page.wait_for_function("Number(document.querySelector('[data-field=map]').dataset.predictedPoints) >= 5",
                                timeout=10_000)
         page.screenshot(path=str(ARTIFACTS_DIR / "plans-tried-on-practice.png"))
+
+        # With the turn on lab-1, the real run is drawn beside the prediction with the distance between their ends.
+        assert page.get_by_role("button", name="Run on lab-1").count() == 0, "offered before the turn is held"
+        page.get_by_role("button", name="Queue for the lab robot").click()
+        page.get_by_role("button", name="Run on lab-1").click(timeout=30_000)
+        page.locator("[data-field=end-state]", has_text="lab-1:").wait_for(timeout=60_000)
+        page.wait_for_function("Number(document.querySelector('[data-field=map]').dataset.realPoints) >= 1",
+                               timeout=10_000)
+        assert "cm apart" in page.locator("[data-field=end-error]").text_content()
+        page.screenshot(path=str(ARTIFACTS_DIR / "plans-run-on-lab.png"))
 
         page.set_viewport_size({"width": 390, "height": 844})
         page.reload()

@@ -187,7 +187,8 @@ function draw() {
   for (const [kind, trace] of Object.entries(state.traces)) {
     if (!trace.length) continue;
     context.strokeStyle = context.fillStyle = TRACE_COLOURS[kind];
-    context.lineWidth = 3;
+    context.lineWidth = kind === "predicted" ? 7 : 2.5;  // the prediction under the real run: both show where they meet
+    context.globalAlpha = kind === "predicted" ? 0.55 : 1;
     context.beginPath();
     trace.forEach((p, i) => { const [x, y] = worldToCanvas(view, p.x_m, p.y_m); if (i) context.lineTo(x, y); else context.moveTo(x, y); });
     context.stroke();
@@ -198,6 +199,7 @@ function draw() {
     context.beginPath();
     context.arc(ex, ey, 5, 0, 2 * Math.PI);
     context.fill();
+    context.globalAlpha = 1;
   }
   canvas.dataset.predictedPoints = String(state.traces.predicted.length);
   canvas.dataset.realPoints = String(state.traces.real.length);
