@@ -136,8 +136,13 @@ def skill_schema(skill: str, skills: SkillSchemas) -> dict[str, Mapping[str, obj
 
 
 def did_you_mean(word: str, known: Sequence[str] | Mapping[str, object]) -> str:
-    """ (did you mean 'go_to'?) when a known word is close."""
-    close = difflib.get_close_matches(word[:64], list(known), n=1, cutoff=0.75) if len(word) <= 64 else []
+    """ (did you mean go_to?) when a known word is close; names are lower case, so GO_TO is close to go_to."""
+    if len(word) > 64:
+        return ""
+    lower = {name.lower(): name for name in known}
+    if word.lower() in lower:
+        return f" (did you mean {lower[word.lower()]}? names are written in lower case)"
+    close = difflib.get_close_matches(word, list(known), n=1, cutoff=0.75)
     return f" (did you mean {close[0]}?)" if close else ""
 
 

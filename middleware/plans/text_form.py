@@ -264,11 +264,22 @@ class _Parser:
         if name in self.skills:
             return self._skill(head, self._arguments(tokens, ("for",), path), path, name, None)
         known = (*COMMANDS, *self.skills)
+        joined = f"{name}_{tokens[0].text}" if tokens and tokens[0].kind is Kind.WORD else ""
+        hint = f" (did you mean {joined}, with _?)" if joined in known else checks.did_you_mean(name, known)
         raise self._at(head, f"{path}.skill", f"{name[:40]!r} is not a command or a skill of this robot"
-                                              f"{checks.did_you_mean(name, known)}; commands: {', '.join(COMMANDS)}; "
+                                              f"{hint}; commands: {', '.join(COMMANDS)}; "
                                               f"skills: {', '.join(sorted(self.skills)) or 'none'}.")
 
+    def _units_apart(self, tokens: list[Token], path: str) -> None:
+        """Refuses 90 deg (a unit standing apart from its number) with the way to write it."""
+        for previous, token in zip(tokens, tokens[1:], strict=False):
+            if (token.kind is Kind.WORD and token.text in checks.UNITS and previous.kind is Kind.NUMBER
+                    and not previous.unit):
+                raise self._at(token, path, f"write a unit against its number, without a space: "
+                                            f"{previous.written}{token.text}.")
+
     def _arguments(self, tokens: list[Token], clause_words: tuple[str, ...], path: str) -> _Arguments:
+        self._units_apart(tokens, path)
         arguments = _Arguments()
         index = 0
         while index < len(tokens):
@@ -380,6 +391,7 @@ class _Parser:
         return DriveStep(linear, angular, duration, head.line, head.column)
 
     def _wait(self, head: Token, tokens: list[Token], path: str) -> Step:
+        self._units_apart(tokens, path)
         if len(tokens) != 1:
             raise self._at(tokens[1] if len(tokens) > 1 else head, path,
                            "wait takes one time, as in wait 2s (wait_until waits for a condition).")
@@ -398,6 +410,7 @@ class _Parser:
     def _condition(self, head: Token, tokens: list[Token], path: str) -> Condition:
         if any(t.kind is Kind.BAD for t in tokens):
             raise _Reported()
+        self._units_apart(tokens, path)
         negate = bool(tokens) and tokens[0].kind is Kind.WORD and tokens[0].text == "not"
         tokens = tokens[1:] if negate else tokens
         if not tokens:
@@ -420,6 +433,7 @@ class _Parser:
             raise self._at(values[0] if values else kind, f"{path}.{problem.field}", problem.message) from None
 
     def _set(self, head: Token, tokens: list[Token], path: str) -> Step:
+        self._units_apart(tokens, path)
         if len(tokens) != 2 or tokens[0].kind is not Kind.WORD:
             raise self._at(head, path, "set takes a setting and a value: set max_speed 0.3, set max_turn_rate 1, "
                                        "set watchdog 0.5s.")

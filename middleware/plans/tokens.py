@@ -107,6 +107,9 @@ class Tokenizer:
             self._bad(number, position, character, problem + ".")
         elif character == "'":
             self._bad(number, position, character, 'texts are written in double quotes, as in say "hello".')
+        elif character == ",":
+            self._bad(number, position, character, "values are separated by spaces, and decimals written with a point "
+                                                   "(go_to 1.5 0.5).")
         else:
             self._bad(number, position, character,
                       f"{character!r} has no meaning here; a command is words, numbers, \"texts\", {{ }} and =.")

@@ -87,6 +87,14 @@ ERRORS = [
     ("say \"abc\u202e\"", 1, 9, "text", "U+202E is not allowed"),
     ("say \"a\tb\"", 1, 7, "text", "a tab is not allowed; write spaces"),
     ("say \"a\" # \x07", 1, 11, "text", "in a comment, the invisible character U+0007"),
+    ("turn_to 90 deg", 1, 12, "steps[0]", "write a unit against its number, without a space: 90deg."),
+    ("wait 2 s", 1, 8, "steps[0]", "write a unit against its number, without a space: 2s."),
+    ("if obstacle_within 50 cm {\n}", 1, 23, "steps[0].condition", "without a space: 50cm."),
+    ("set watchdog 500 ms", 1, 18, "steps[0]", "without a space: 500ms."),
+    ("go_to 1,5 0", 1, 8, "text", "decimals written with a point (go_to 1.5 0.5)"),
+    ("go to 1 2", 1, 1, "steps[0].skill",
+     "'go' is not a command or a skill of this robot (did you mean go_to, with _?)"),
+    ("Go_To 1 2", 1, 1, "steps[0].skill", "(did you mean go_to? names are written in lower case)"),
 ]
 
 
