@@ -285,6 +285,9 @@ class Sequencer:
     ) -> None:
         goal, controller = running
         feedback = controller.last_feedback
+        where = controller.position()
+        if where and not message.startswith(f"{where}: "):
+            message = f"{where}: {message}"
         if status is not GoalStatus.SUCCEEDED and feedback.sim_time_s > 0:
             # The paper's rule: deactivating reports the error left between the robot and the goal.
             message += (f"; error left {feedback.distance_error_m:.3f} m, "

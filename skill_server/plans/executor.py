@@ -275,3 +275,7 @@ class PlanRunner(SkillController):
     def stop(self) -> None:
         """Releases the line running now (the plan was cancelled, preempted or ended)."""
         self._block.stop()
+
+    def position(self) -> str:
+        """The line running now: a cancel, a preemption or a revoked control names it."""
+        return f"line {self._context.line}" if self._context.line else ""

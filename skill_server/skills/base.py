@@ -108,6 +108,10 @@ class SkillController:
     def stop(self) -> None:
         """Called once when the goal ends for any reason (release what the skill holds)."""
 
+    def position(self) -> str:
+        """Where the goal stands, for the message of an end that comes from outside (a plan: "line 3")."""
+        return ""
+
 
 def succeeded(message: str) -> Outcome:
     """A SUCCEEDED outcome with the goal reached."""

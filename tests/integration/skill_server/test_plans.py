@@ -129,6 +129,7 @@ def test_a_plan_cancelled_mid_line_stops_the_robot_and_reports_the_line(
         pytest.fail("the plan never got to line 2 at speed")
     canceled = controlled.CancelGoal(robot_pb2.CancelGoalRequest(token=TOKEN, goal_id=goal_id), timeout=DEADLINE_S)
     assert canceled.status == robot_pb2.GOAL_STATUS_CANCELED
+    assert canceled.message.startswith("line 2: canceled by the controller")
     assert canceled.feedback.values["line"] == 2 and canceled.feedback.state.startswith("line 2: drive")
     time.sleep(0.5)  # fast mode: seconds of sim time
     assert speed_now(controlled) < 0.01
@@ -231,5 +232,6 @@ def test_a_plan_ends_when_control_changes_hands(controlled: robot_pb2_grpc.Robot
     controlled.SetController(robot_pb2.SetControllerRequest(token="next-student"), timeout=DEADLINE_S)
     final, _, _ = watch_to_end(controlled, goal_id, timeout_s=DEADLINE_S)
     assert (final.status, final.error_code) == (robot_pb2.GOAL_STATUS_ABORTED, "CONTROL_REVOKED")
+    assert final.message.startswith("line 1: the controller changed")
     time.sleep(0.3)
     assert speed_now(controlled) < 0.01
