@@ -1,16 +1,18 @@
 """The 3D lab view in Debian's Chromium against the real three tiers: three.js installed by the project's set-up,
-the lab drawn from the robot's scene description, the robot at its odometry pose, at desktop and phone sizes, and
-a sentence instead of a blank box where WebGL is missing."""
+the lab drawn from the robot's scene description, the robot at its odometry pose, the occupancy map on the floor and
+the path planned to a goal, at desktop and phone sizes, and a sentence instead of a blank box where WebGL is
+missing."""
 
 from __future__ import annotations
 
+import base64
 import math
 from pathlib import Path
 
 import pytest
 
 from tests.conftest import ARTIFACTS_DIR, LiveServer
-from tests.e2e.test_panels import odometry, open_console, show_tab_of, wait_for, wait_for_control
+from tests.e2e.test_panels import odometry, open_console, show_tab_of, wait_for, wait_for_control, wait_for_status
 
 pytestmark = pytest.mark.e2e
 THREE_MODULE = Path(__file__).resolve().parents[2] / "client_ui/static/vendor/node_modules/three/build/three.module.js"
@@ -128,3 +130,113 @@ def test_without_webgl_the_lab_view_says_so(chromium, live_server: LiveServer) -
     finally:
         context.close()
     assert not errors, errors
+
+
+UNKNOWN_CELL = 255
+
+
+def grid_cells(grid: dict) -> list[tuple[float, float, int]]:
+    """(x_m, y_m, value) of every cell's centre of an occupancy grid as GET /api/robots/<r>/map answers it."""
+    cells = base64.b64decode(grid["cells_b64"])
+    width, resolution = grid["width_cells"], grid["resolution_m"]
+    return [(grid["origin_x_m"] + (index % width + 0.5) * resolution,
+             grid["origin_y_m"] + (index // width + 0.5) * resolution, value) for index, value in enumerate(cells)]
+
+
+def open_floor_point(grid: dict, x_m: float, y_m: float) -> tuple[float, float]:
+    """A cell seen free 0.8-1.5 m from (x_m, y_m) with seen-free cells 0.35 m all round it: somewhere to drive to."""
+    cells = grid_cells(grid)
+    free = {(round(cx, 3), round(cy, 3)) for cx, cy, value in cells if value < 50}
+    step = grid["resolution_m"]
+    reach = int(0.35 / step)
+    around = [(i * step, j * step) for i in range(-reach, reach + 1) for j in range(-reach, reach + 1)
+              if math.hypot(i, j) * step <= 0.35]
+    for cx, cy, value in cells:
+        if value < 50 and 0.8 <= math.hypot(cx - x_m, cy - y_m) <= 1.5 and all(
+                (round(cx + dx, 3), round(cy + dy, 3)) in free for dx, dy in around):
+            return cx, cy
+    raise AssertionError("the map shows no open floor 0.8-1.5 m from the robot")
+
+
+def test_the_lab_view_draws_the_map_on_the_floor_and_the_path_planned_to_a_goal(page, live_server: LiveServer) -> None:
+    open_lab_view(page, live_server)
+    view = page.locator("lab-view")
+    modelling = page.locator('skill-panel[data-skill="environment_modelling"]')
+    modelling.locator('button[data-action="activate"]').click()
+    wait_for_status(page, "environment_modelling", "executing")
+    # The grid the map panel polls (while a panel that shows it is seen) reaches the 3D view too, as a texture on
+    # the floor.
+    view.scroll_into_view_if_needed()
+    page.locator("lab-view[data-map-cells]").wait_for(state="attached", timeout=20_000)
+    view.locator('[data-field="lab-view-summary"]').filter(has_text="on the floor").wait_for()
+    grid = page.evaluate("fetch('/api/robots/lab-1/map').then((r) => r.json()).then((answer) => answer.map)")
+    assert view.get_attribute("data-map-cells") == f"{grid['width_cells']} {grid['height_cells']}"
+    x, y, _ = drawn_pose(page)
+    free = open_floor_point(grid, x, y)
+    floor = page.evaluate("fetch('/api/robots/lab-1/scene').then((r) => r.json()).then((s) => s.floor)")
+    unknown = next((cx, cy) for cx, cy, value in grid_cells(grid)
+                   if value == UNKNOWN_CELL and math.hypot(cx - x, cy - y) > 0.5
+                   and abs(cx - floor["center_x_m"]) < floor["half_x_m"] - 0.1
+                   and abs(cy - floor["center_y_m"]) < floor["half_y_m"] - 0.1)
+    view.locator('[data-action="view-above"]').click()
+    # The same pixels drawn with the grid and without it, in one task (the wiring's polls cannot come between).
+    with_map, without_map = view.evaluate("""(panel, [grid, points]) => {
+      panel.map = grid;
+      const drawn = () => points.map(([x, y]) => panel.drawnColourAt(x, y, 0).rgba);
+      const withMap = drawn();
+      panel.map = null;
+      const withoutMap = drawn();
+      panel.map = grid;
+      return [withMap, withoutMap];
+    }""", [grid, [list(free), list(unknown)]])
+    assert with_map[0] != without_map[0], "a free cell of the map is not drawn on the floor"
+    assert sum(with_map[0][:3]) > sum(without_map[0][:3]), "free cells are drawn lighter than the floor"
+    assert with_map[1] == without_map[1], "an unknown cell of the map hides the floor"
+    view.scroll_into_view_if_needed()
+    page.screenshot(path=str(ARTIFACTS_DIR / "lab-view-map-on-floor.png"))
+
+    # Go-to-goal to open floor: the path still ahead, from the feedback, is drawn as a red ribbon on the floor, and
+    # the 2D map draws it too.
+    canvas = page.locator('map-panel [data-field="map-canvas"]')
+    canvas.scroll_into_view_if_needed()
+    px, py = page.evaluate("(point) => document.querySelector('map-panel').cssPointOf(...point)", list(free))
+    canvas.click(position={"x": px, "y": py})
+    page.locator('map-panel button[data-action="go-there"]').click()
+    wait_for_status(page, "go_to_goal", "executing")
+    page.locator('lab-view:not([data-path-points="0"])[data-path-points]').wait_for(state="attached", timeout=10_000)
+    view.locator('[data-field="lab-view-summary"]').filter(has_text="planned path of").wait_for()
+    page.locator('map-panel [data-field="map-legend"] [data-layer="path"]').wait_for()
+    on_path = view.evaluate("""(panel) => {
+      panel.render();
+      const points = panel.plannedPath;
+      // A point 0.3 m along the path from the robot's pose, past its body.
+      let left = 0.3;
+      for (let i = 1; i < points.length; i += 1) {
+        const [x0, y0] = points[i - 1];
+        const [x1, y1] = points[i];
+        const length = Math.hypot(x1 - x0, y1 - y0);
+        if (length >= left) {
+          const x = x0 + ((x1 - x0) * left) / length;
+          const y = y0 + ((y1 - y0) * left) / length;
+          return { points, colour: panel.drawnColourAt(x, y, 0.02) };
+        }
+        left -= length;
+      }
+      return { points, colour: null };
+    }""")
+    assert len(on_path["points"]) >= 2
+    assert on_path["points"][-1] == pytest.approx(list(free), abs=0.05), "the path does not end at the goal"
+    colour = on_path["colour"]
+    assert colour is not None and colour["rgba"][0] > 120 > colour["rgba"][1] + 40, f"no red path drawn: {colour}"
+    page.screenshot(path=str(ARTIFACTS_DIR / "lab-view-planned-path.png"))
+
+    # An ended goal's path goes; its goal pin may stay.
+    page.locator('skill-panel[data-skill="go_to_goal"] button[data-action="cancel"]').click()
+    page.locator('lab-view[data-path-points="0"]').wait_for(state="attached", timeout=10_000)
+    page.locator('skill-panel[data-skill="environment_modelling"] button[data-action="cancel"]').click()
+    # The session's robot is shared: the next test expects no map.
+    page.once("dialog", lambda dialog: dialog.accept())
+    page.get_by_role("button", name="Clear the map").click()
+    page.locator('map-panel [data-field="map-note"]').filter(has_text="The map was cleared").wait_for()
+    view.scroll_into_view_if_needed()
+    page.locator("lab-view:not([data-map-cells])").wait_for(state="attached", timeout=10_000)

@@ -1,11 +1,15 @@
 """The camera panel's picture drawn by the browser (three.js, from the robot's scene and its odometry pose) in
 Debian's Chromium against the real three tiers: the person switches to it, the video socket closes (the robot
 renders nothing for this viewer), the picture follows the robot, the motion preview and an added delay work on it
-as on the video, and the person switches back."""
+as on the video, and the person switches back. While drawn, the panel's words call it a picture, not video; on a
+phone it draws at most 15 frames a second, and where WebGL is missing the page says so and shows the video."""
 
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
 
 import pytest
 
@@ -13,7 +17,7 @@ from tests.conftest import ARTIFACTS_DIR, LiveServer
 from tests.e2e.test_console import canvas_pixels, log_in, number, wait_for
 from tests.e2e.test_feedback import INJECTED_DELAY_S, canvas_data, set_delay
 from tests.e2e.test_lab_view import three_installed  # noqa: F401 - the fixture: fail clearly without three.js
-from tests.e2e.test_panels import open_console, wait_for_control
+from tests.e2e.test_panels import open_console, show_tab_of, wait_for_control
 
 pytestmark = pytest.mark.e2e
 
@@ -25,9 +29,57 @@ def camera_viewers(live_server: LiveServer) -> int:
     return robot_registry(live_server.app).get("lab-1").camera.viewer_count
 
 
+PHONE = {"viewport": {"width": 390, "height": 844}, "device_scale_factor": 2, "has_touch": True}
+MAX_PHONE_FPS = 15
+NO_WEBGL = """(() => {
+  const original = HTMLCanvasElement.prototype.getContext;
+  HTMLCanvasElement.prototype.getContext = function (kind, ...rest) {
+    return String(kind).startsWith("webgl") ? null : original.call(this, kind, ...rest);
+  };
+})();"""
+
+# Feeds a panel telemetry at `hz` for `seconds` (poses turning and moving, as a fast stream would bring them) and
+# counts what it drew meanwhile: the camera panel's drawn frames, or the lab view's renders.
+FAST_POSES = """async ([selector, hz, seconds]) => {
+  const panel = document.querySelector(selector);
+  let drawn = 0;
+  const onFrame = ({ detail }) => { if (detail.source === "drawn") drawn += 1; };
+  panel.addEventListener("camera-frame-shown", onFrame);
+  const renders = new MutationObserver((records) => { drawn += records.length; });
+  if (selector === "lab-view") renders.observe(panel, { attributes: true, attributeFilter: ["data-drawn-pose"] });
+  const start = performance.now();
+  let sent = 0;
+  await new Promise((resolve) => {
+    const timer = setInterval(() => {
+      sent += 1;
+      panel.telemetry = { type: "telemetry", capture_unix_s: Date.now() / 1000,
+        odometry: { pose: { x_m: 0.01 * (sent % 50), y_m: 0, theta_rad: 0.03 * sent } } };
+      if (performance.now() - start >= seconds * 1000) {
+        clearInterval(timer);
+        resolve();
+      }
+    }, 1000 / hz);
+  });
+  await new Promise((resolve) => setTimeout(resolve, 200));  // the last frame waiting for its turn
+  panel.removeEventListener("camera-frame-shown", onFrame);
+  renders.disconnect();
+  return { sent, drawn, seconds: (performance.now() - start) / 1000 };
+}"""
+
+
 def choose_source(page, source: str) -> None:
+    options = page.locator("camera-panel details.camera__options")
+    if options.get_attribute("open") is None:  # folded on a phone: a person unfolds it first
+        options.locator("summary").click()
     page.locator('[data-field="camera-source"]').select_option(source)
     page.locator(f'camera-panel[data-source="{source}"]').wait_for(state="attached")
+
+
+def camera_words(page) -> str:
+    """What the camera panel says about its picture: its placeholder, figures and the canvas's label."""
+    panel = page.locator("camera-panel")
+    return " ".join([panel.locator(".camera__stats").inner_text(), panel.locator("#camera-canvas").get_attribute(
+        "aria-label") or "", panel.locator('[data-field="camera-placeholder"]').text_content() or ""]).lower()
 
 
 def test_the_picture_drawn_here_follows_the_robot_and_the_video_socket_closes(page, live_server: LiveServer) -> None:
@@ -51,6 +103,10 @@ def test_the_picture_drawn_here_follows_the_robot_and_the_video_socket_closes(pa
     first = number(page, "frame-sequence")
     wait_for(lambda: number(page, "frame-sequence") >= first + 5, 5, "no drawn frames came")
     assert "drawn by this browser" in (page.locator("#camera-canvas").get_attribute("aria-label") or "")
+    words = camera_words(page)
+    assert "picture age" in words and "picture delay" in words, words
+    assert "video" not in words and "live" not in words, f"the drawn picture is called video or live: {words}"
+    assert page.locator('[data-field="video-age"]').count() == 1  # the fields tools read keep their names
     ARTIFACTS_DIR.mkdir(exist_ok=True)
     page.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-console-drawn.png"))
 
@@ -68,6 +124,7 @@ def test_the_picture_drawn_here_follows_the_robot_and_the_video_socket_closes(pa
     page.locator('[data-connection="camera"][data-phase="open"]').wait_for()
     wait_for(lambda: camera_viewers(live_server) == 1, 5, "the video did not come back")
     page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached")
+    assert "video age" in camera_words(page) and "live camera" in camera_words(page)
 
 
 def test_the_motion_preview_and_an_added_delay_work_on_the_drawn_picture(
@@ -137,3 +194,82 @@ def test_the_admins_default_picture_shows_first_and_the_persons_choice_is_rememb
         row.locator('[data-field="picture"]').select_option("video")
         row.get_by_role("button", name="Save the picture for lab").click()
         admin.context.close()
+
+
+@contextmanager
+def phone_console(chromium, live_server: LiveServer, password: str, init_script: str = "") -> Iterator[Any]:
+    """The demo student's console of lab-1 on a phone-sized screen (a tab; its JavaScript errors fail the test)."""
+    context = chromium.new_context(**PHONE)
+    if init_script:
+        context.add_init_script(init_script)
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    try:
+        log_in(page, live_server, "student", password)
+        page.locator('[data-field="username"]').first.wait_for(state="attached")
+        page.goto(f"{live_server.url}/lab/lab-1")
+        yield page
+    finally:
+        context.close()
+    assert not errors, errors
+
+
+def test_on_a_phone_the_drawn_picture_and_the_lab_view_draw_at_most_15_frames_a_second(
+    chromium, live_server: LiveServer, demo_accounts
+) -> None:
+    with phone_console(chromium, live_server, demo_accounts["student"]) as page:
+        page.locator('[data-connection="drive"][data-phase="open"]').wait_for()
+        choose_source(page, "drawn")
+        page.locator('camera-panel[data-frame-source="drawn"]').wait_for(state="attached")
+        wait_for(lambda: number(page, "fps") > 0, 5, "no drawn frames came")
+        # At the camera's own resolution, not the twice finer picture of a large screen.
+        assert page.locator("#camera-canvas").evaluate("(canvas) => [canvas.width, canvas.height]") == [320, 240]
+        camera = page.locator('section[data-panel-id="camera"]')
+        camera.scroll_into_view_if_needed()
+        ARTIFACTS_DIR.mkdir(exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-phone-drawn.png"))
+
+        # Poses at 60 Hz (the robot's stream brings 10): the newest is drawn at most 15 times a second.
+        fed = page.evaluate(FAST_POSES, ["camera-panel", 60, 2.0])
+        assert fed["sent"] / fed["seconds"] > 30, f"the poses were not fed fast: {fed}"
+        assert fed["drawn"] <= MAX_PHONE_FPS * fed["seconds"] + 2, f"the drawn picture is not capped: {fed}"
+        assert fed["drawn"] >= 4 * fed["seconds"], f"the drawn picture stalled: {fed}"
+
+        show_tab_of(page, "lab-view")
+        view = page.locator('lab-view[data-webgl="ok"]')
+        view.wait_for()
+        wait_for(lambda: bool(view.get_attribute("data-drawn-pose")), 15, "the lab view drew no robot")
+        # One device pixel per CSS pixel on a phone, whatever its screen's density.
+        sizes = view.locator("canvas").evaluate("(canvas) => [canvas.width, canvas.clientWidth]")
+        assert sizes[0] == sizes[1], sizes
+        fed = page.evaluate(FAST_POSES, ["lab-view", 60, 2.0])
+        assert fed["drawn"] <= MAX_PHONE_FPS * fed["seconds"] + 2, f"the lab view is not capped: {fed}"
+        assert fed["drawn"] >= 4 * fed["seconds"], f"the lab view stalled: {fed}"
+        view.scroll_into_view_if_needed()
+        page.screenshot(path=str(ARTIFACTS_DIR / "lab-view-phone-drawn.png"))
+        assert page.evaluate("document.documentElement.scrollWidth") <= 390, "the page scrolls sideways"
+
+
+def test_without_webgl_the_page_says_so_and_the_video_comes_back_on_a_phone(
+    chromium, live_server: LiveServer, demo_accounts
+) -> None:
+    # As a browser with WebGL turned off answers: no context of either kind.
+    with phone_console(chromium, live_server, demo_accounts["student"], NO_WEBGL) as page:
+        page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached")
+        options = page.locator("camera-panel details.camera__options")
+        options.locator("summary").click()
+        page.locator('[data-field="camera-source"]').select_option("drawn")
+        message = page.locator('camera-panel [data-field="camera-message"]')
+        message.filter(has_text="WebGL is turned off or missing").wait_for()
+        page.locator('camera-panel[data-source="video"]').wait_for(state="attached")
+        page.locator('[data-connection="camera"][data-phase="open"]').wait_for()
+        first = number(page, "frame-sequence")
+        wait_for(lambda: number(page, "frame-sequence") > first, 10, "the video did not come back")
+        assert page.locator("camera-panel").get_attribute("data-frame-source") == "video"
+        drawn_option = page.locator('[data-field="camera-source"] option[value="drawn"]')
+        assert drawn_option.is_disabled() and "WebGL is missing" in (drawn_option.text_content() or "")
+        page.locator('section[data-panel-id="camera"]').scroll_into_view_if_needed()
+        ARTIFACTS_DIR.mkdir(exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-phone-no-webgl.png"))
+        assert page.evaluate("document.documentElement.scrollWidth") <= 390, "the page scrolls sideways"

@@ -58,6 +58,8 @@ export class ConsoleWiring {
   #maps = [];
   #actionNoteUntil = 0;         // Date.now() until which the map's note is an action's answer
   #goalViews = [];              // panels that show goals without picking them (the 3D lab view)
+  #mapReaders = [];             // panels showing the occupancy grid: [{id, shown(), take(grid, answer, changed), fail}]
+  #lastMapCells = null;
   #cameras = [];                // camera panels: the feedback layer follows the drive session
   #starters = [];
   #lastSeat = null;
@@ -75,6 +77,9 @@ export class ConsoleWiring {
   #services = {
     "camera-stream": (descriptor, panel) => this.#cameraStream(descriptor, panel),
     "map-grid": (descriptor, panel) => this.#mapGrid(descriptor, panel),
+    "map-view": (descriptor, panel) => this.#readMap(descriptor, {
+      take: (grid, answer, changed) => { if (changed) panel.map = grid; },
+    }),
     "goal-target": (descriptor, panel) => this.#goalTarget(panel),
     "goal-view": (descriptor, panel) => { this.#goalViews.push(panel); },
     scene: (descriptor, panel) => this.#scene(descriptor, panel),
@@ -260,31 +265,47 @@ export class ConsoleWiring {
     this.#starters.push(load);
   }
 
-  /** The occupancy grid, polled while the panel is shown. */
+  /** The map panel: the occupancy grid and, when there is none, why. */
   #mapGrid(descriptor, panel) {
-    let lastCells = null;
+    this.#readMap(descriptor, {
+      take: (grid, answer, changed) => {
+        if (Date.now() >= this.#actionNoteUntil) panel.note = grid ? "" : String(answer?.message ?? "");
+        if (changed) panel.grid = grid;
+      },
+      fail: (error) => {
+        panel.grid = null;
+        panel.note = `The map could not be loaded: ${error.message}`;
+      },
+    });
+  }
+
+  /** One more panel showing the occupancy grid; the grid is polled (once for all of them) while one is shown. */
+  #readMap(descriptor, { take, fail = () => {} }) {
     let visible = true;
     const frame = this.#layout.frameOf(descriptor.id);
     new IntersectionObserver((entries) => { visible = entries.some((e) => e.isIntersecting); }).observe(frame);
-    const poll = async () => {
-      if (!visible || !this.#layout.isShown(descriptor.id) || document.visibilityState !== "visible") return;
-      try {
-        const answer = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/map`);
-        const grid = answer?.map ?? null;
-        if (Date.now() >= this.#actionNoteUntil) panel.note = grid ? "" : String(answer?.message ?? "");
-        if (grid?.cells_b64 === lastCells) return;
-        lastCells = grid?.cells_b64;
-        this.#guard(descriptor.id, () => { panel.grid = grid; });
-      } catch (error) {
-        lastCells = null;
-        panel.grid = null;
-        panel.note = `The map could not be loaded: ${error.message}`;
-      }
-    };
-    this.#starters.push(() => {
-      poll();
-      setInterval(poll, MAP_POLL_MS);
-    });
+    const shown = () => visible && this.#layout.isShown(descriptor.id);
+    if (!this.#mapReaders.length) {
+      this.#starters.push(() => {
+        this.#pollMap();
+        setInterval(() => this.#pollMap(), MAP_POLL_MS);
+      });
+    }
+    this.#mapReaders.push({ id: descriptor.id, shown, take, fail });
+  }
+
+  async #pollMap() {
+    if (document.visibilityState !== "visible" || !this.#mapReaders.some((reader) => reader.shown())) return;
+    try {
+      const answer = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/map`);
+      const grid = answer?.map ?? null;
+      const changed = grid?.cells_b64 !== this.#lastMapCells;
+      this.#lastMapCells = grid?.cells_b64;
+      for (const reader of this.#mapReaders) this.#guard(reader.id, () => reader.take(grid, answer, changed));
+    } catch (error) {
+      this.#lastMapCells = null;
+      for (const reader of this.#mapReaders) reader.fail(error);
+    }
   }
 
   /** Forgets the robot's map (the controller's command); the next poll shows "No map yet". */
@@ -499,7 +520,8 @@ export class ConsoleWiring {
       this.#guard(descriptor.id, () => {
         if (message.type === "goal" && message.goal) {
           panel.goal = message.goal;
-          if (message.goal.feedback) this.#shareFeedback(entry, message.goal.feedback);
+          const ended = FINAL_GOAL_STATES.has(message.goal.status);
+          if (message.goal.feedback) this.#shareFeedback(entry, message.goal.feedback, ended);
           if (FINAL_GOAL_STATES.has(message.goal.status)) channel.close("the goal ended");
         } else if (message.type === "goal_event") {
           panel.goalEvent = message;
@@ -514,8 +536,10 @@ export class ConsoleWiring {
   }
 
   /** Go-to-goal style feedback also shows on the map (its goal and any obstacle values). */
-  #shareFeedback(entry, feedback) {
+  #shareFeedback(entry, feedback, ended = false) {
     if (!entry.goalNames) return;
-    for (const map of [...this.#maps, ...this.#goalViews]) map.goalFeedback = feedback;
+    // An ended goal's path is followed no more: its goal stays shown, its path goes.
+    const shown = ended ? { ...feedback, planned_path: [] } : feedback;
+    for (const map of [...this.#maps, ...this.#goalViews]) map.goalFeedback = shown;
   }
 }

@@ -1,4 +1,5 @@
-// <camera-panel>: draws the robot's camera stream on a canvas and shows frame rate and video age.
+// <camera-panel>: draws the robot's camera stream, or the view this browser draws from the robot's pose, on a canvas
+// and shows the frame rate and the picture's age; its words say which of the two the picture is.
 // In: `robotName` (string), `frame` (ArrayBuffer from the camera socket), `message` (status/error
 // JSON from the server), `connected` (bool: is the camera socket open), and for the feedback layer
 // `info` (RobotInfo: camera size and field of view), `driveReady` / `driveSent` (the drive socket's
@@ -9,10 +10,14 @@
 // Out: `camera-feedback-change` {enabled} when the person turns the motion preview on or off,
 // `camera-feedback-fill-change` {fill} when they choose the fill, `camera-source-change` {source} when they
 // choose where the picture comes from (the wiring closes the video socket while it is drawn here; `fallback` is true
-// when this browser cannot draw it and the video comes back without the person choosing it).
+// when this browser cannot draw it and the video comes back without the person choosing it), and, not bubbling,
+// `camera-frame-shown` {source, capture_unix_s, shown_unix_s} each time a frame is put on the canvas (for tools: the
+// browser-view benchmark's capture-to-glass delay). On a small screen the drawn picture is drawn at most 15 times a
+// second, from the newest pose.
 
 import { h } from "../../lib/dom.js";
 import { framesInWindow, parseFramePacket } from "../../lib/camera-frame.js";
+import { FrameCap, isSmallScreen } from "../../lib/frame-cap.js";
 import { FILL_MODES, FeedbackLayer } from "./camera-feedback.js";
 import { DrawnView } from "./drawn-view.js";
 import { PanelElement } from "../panel-base.js";
@@ -20,6 +25,11 @@ import { registerPanel } from "../registry.js";
 
 const FPS_WINDOW_MS = 1000;
 const SOURCES = ["video", "drawn"];
+// What the panel calls its picture, by source: a drawn picture is neither video nor live.
+const WORDS = {
+  video: { age: "video age ", delay: "video delay ", waiting: "Waiting for video…" },
+  drawn: { age: "picture age ", delay: "picture delay ", waiting: "Waiting for the robot's pose to draw its view…" },
+};
 
 export class CameraPanel extends PanelElement {
   #canvas;
@@ -46,7 +56,12 @@ export class CameraPanel extends PanelElement {
   #scene = null;
   #drawn = null;          // DrawnView, once made
   #drawnProblem = "";
-  #drawing = false;       // a drawn frame is being made: telemetry meanwhile is dropped, the newest wins
+  #drawing = false;       // a drawn frame is being made
+  #nextPose = null;       // the newest telemetry not drawn yet: it replaces any older one waiting
+  #poseTimer = 0;
+  #frameCap = new FrameCap();
+  #ageLabel;
+  #delayLabel;
 
   connectedCallback() {
     super.connectedCallback();
@@ -58,14 +73,19 @@ export class CameraPanel extends PanelElement {
   disconnectedCallback() {
     super.disconnectedCallback();
     clearInterval(this.#statsTimer);
+    clearTimeout(this.#poseTimer);
+    this.#poseTimer = 0;
   }
 
   build() {
     this.classList.add("panel");
     this.#canvas = h("canvas", { class: "camera__canvas", width: 320, height: 240, role: "img", id: "camera-canvas" });
-    this.#placeholder = h("p", { class: "camera__placeholder", text: "Waiting for video…" });
+    this.#placeholder = h("p", { class: "camera__placeholder", "data-field": "camera-placeholder",
+      text: WORDS.video.waiting });
     this.#fpsOutput = h("span", { "data-field": "fps", text: "0" });
     this.#ageOutput = h("span", { "data-field": "video-age", text: "—" });
+    this.#ageLabel = h("span", { "data-field": "age-label", text: WORDS.video.age });
+    this.#delayLabel = h("span", { "data-field": "delay-label", text: WORDS.video.delay });
     this.#sequenceOutput = h("span", { "data-field": "frame-sequence", text: "—" });
     this.#messageLine = this.messageLine({ class: "camera__message", "data-field": "camera-message" });
     this.#delayOutput = h("span", { "data-field": "video-delay", text: "—" });
@@ -96,10 +116,10 @@ export class CameraPanel extends PanelElement {
       this.#stage = h("div", { class: "camera__stage" }, this.#canvas, this.#placeholder),
       h("p", { class: "camera__stats" },
         h("span", {}, this.#fpsOutput, " fps"),
-        h("span", {}, "video age ", this.#ageOutput, " ms"),
+        h("span", {}, this.#ageLabel, this.#ageOutput, " ms"),
         h("span", { hidden: true }, "frame ", this.#sequenceOutput), // a number for tests and tools, not people
         h("span", { title: "From sending a command to the first frame that shows it" },
-          "video delay ", this.#delayOutput, " s"),
+          this.#delayLabel, this.#delayOutput, " s"),
         this.#injectedBadge),
       // Folded on a phone, where the picture and the drive pad must share one screen.
       h("details", { class: "camera__options", open: window.matchMedia("(min-width: 760px)").matches },
@@ -122,6 +142,7 @@ export class CameraPanel extends PanelElement {
   /** While the socket is down the last frame stays, dimmed, so nobody mistakes it for live video. */
   set connected(isConnected) {
     this.ensureBuilt();
+    if (this.#source !== "video") return; // the video socket's state says nothing of a picture drawn here
     this.#stage.classList.toggle("camera__stage--stale", !isConnected);
     if (!isConnected && this.#lastHeader) {
       this.#placeholder.textContent = "Video paused: the camera connection is down.";
@@ -183,7 +204,26 @@ export class CameraPanel extends PanelElement {
    *  here, its odometry pose is where the next frame is drawn from. */
   set telemetry(message) {
     this.#feedback.setScan(message?.laser);
-    if (this.#source === "drawn" && this.#drawn && !this.#drawing) this.#drawFrom(message);
+    if (this.#source !== "drawn" || !this.#drawn) return;
+    this.#nextPose = message;
+    this.#drawSoon();
+  }
+
+  /** Draws the newest pose waiting once the previous frame is done and the frame cap allows. */
+  #drawSoon() {
+    if (this.#drawing || this.#poseTimer || !this.#nextPose || !this.#drawn) return;
+    const waitMs = this.#frameCap.waitMs(performance.now());
+    if (waitMs > 0) {
+      this.#poseTimer = setTimeout(() => {
+        this.#poseTimer = 0;
+        this.#drawSoon();
+      }, waitMs);
+      return;
+    }
+    const message = this.#nextPose;
+    this.#nextPose = null;
+    this.#frameCap.drawn(performance.now());
+    this.#drawFrom(message);
   }
 
   /** A status message from the telemetry socket: it announces an added delay as the camera socket does (the
@@ -211,9 +251,8 @@ export class CameraPanel extends PanelElement {
     this.#source = source;
     this.#sourceSelect.value = source;
     this.dataset.source = source;
-    this.#canvas.setAttribute("aria-label", source === "drawn"
-      ? `The view of ${this.#robotName || "the robot"}, drawn by this browser from its odometry pose`
-      : `Live camera of ${this.#robotName || "the robot"}`);
+    this.#nextPose = null;
+    this.#applyWords();
     if (source === "drawn") this.#startDrawn();
   }
 
@@ -224,7 +263,7 @@ export class CameraPanel extends PanelElement {
   async #startDrawn() {
     if (this.#drawn || !this.#scene) return;
     const scene = this.#scene;
-    const scale = Math.min(window.devicePixelRatio || 1, window.innerWidth < 600 ? 1 : 2);
+    const scale = Math.min(window.devicePixelRatio || 1, isSmallScreen() ? 1 : 2); // the camera's own size on a phone
     const { view, problem } = await DrawnView.create(scene, scale);
     if (scene !== this.#scene) {
       view?.dispose();
@@ -233,7 +272,9 @@ export class CameraPanel extends PanelElement {
     this.#drawn = view;
     this.#drawnProblem = problem;
     if (!view) {
-      this.#sourceSelect.querySelector('option[value="drawn"]').disabled = true;
+      const option = this.#sourceSelect.querySelector('option[value="drawn"]');
+      option.disabled = true;
+      option.textContent = "drawn here (WebGL is missing)";
       this.#showMessage(problem, true);
       this.source = "video";
       this.emit("camera-source-change", { source: "video", fallback: true });
@@ -250,6 +291,7 @@ export class CameraPanel extends PanelElement {
       console.warn("drawn frame skipped:", error.message);
     } finally {
       this.#drawing = false;
+      this.#drawSoon();
     }
   }
 
@@ -261,7 +303,7 @@ export class CameraPanel extends PanelElement {
     if (message?.type === "status") {
       const offline = message.robot_online === false;
       this.#showMessage(message.message || (offline ? "The robot is offline." : ""), offline);
-      this.#placeholder.textContent = offline ? "No video: the robot is offline." : "Waiting for video…";
+      this.#placeholder.textContent = offline ? "No video: the robot is offline." : WORDS.video.waiting;
       if (offline) {
         this.#placeholder.hidden = false;
         this.#stage.classList.add("camera__stage--stale");
@@ -272,7 +314,20 @@ export class CameraPanel extends PanelElement {
   }
 
   #applyLabel() {
-    if (this.#source === "video") this.#canvas?.setAttribute("aria-label", `Live camera of ${this.#robotName || "the robot"}`);
+    this.#canvas?.setAttribute("aria-label", this.#source === "drawn"
+      ? `The view of ${this.#robotName || "the robot"}, drawn by this browser from its odometry pose`
+      : `Live camera of ${this.#robotName || "the robot"}`);
+  }
+
+  /** The panel's words for its picture: the video's, or those of a view drawn here (neither video nor live). */
+  #applyWords() {
+    const words = WORDS[this.#source];
+    this.#ageLabel.textContent = words.age;
+    this.#delayLabel.textContent = words.delay;
+    if (!this.#lastHeader || Boolean(this.#lastHeader.drawn_here) !== (this.#source === "drawn")) {
+      this.#placeholder.textContent = words.waiting;
+    }
+    this.#applyLabel();
   }
 
   #showMessage(text, isProblem) {
@@ -329,6 +384,9 @@ export class CameraPanel extends PanelElement {
     this.#stage.classList.remove("camera__stage--stale");
     this.#lastHeader = header;
     this.dataset.frameSource = header.drawn_here ? "drawn" : "video"; // for tools and tests
+    this.dispatchEvent(new CustomEvent("camera-frame-shown", { detail: {
+      source: this.dataset.frameSource, capture_unix_s: Number(header.capture_unix_s), shown_unix_s: Date.now() / 1000,
+    } }));
     const now = performance.now();
     this.#drawTimesMs.push(now);
     this.#drawTimesMs = this.#drawTimesMs.filter((t) => now - t <= FPS_WINDOW_MS);

@@ -1,29 +1,37 @@
 // <lab-view>: the lab in 3D, drawn in the browser from the robot's scene description and its pose stream (the
 // "overview camera" the console lacked): the room with its walls, obstacles and floor markings in the colours the
-// robot's camera sees, the robot at its odometry pose, its laser hits and sonar cones, and the goal. Orbit it by
-// dragging (mouse: both ways; touch: sideways, so the page still scrolls), zoom with the wheel or the buttons, or
-// look straight down. It draws only when something changed and it is on screen. Without WebGL it says so.
+// robot's camera sees, the robot at its odometry pose, its laser hits and sonar cones, the goal and the path planned
+// to it, and the occupancy map on the floor when the robot has one. Orbit it by dragging (mouse: both ways; touch:
+// sideways, so the page still scrolls), zoom with the wheel or the buttons, or look straight down. It draws only when
+// something changed and it is on screen, at most 15 frames a second on a small screen. Without WebGL it says so.
 // In: `scene` (GET /api/robots/<r>/scene), `telemetry` (odometry pose, laser, sonar), `goalFeedback` (go-to-goal
-//     feedback: its goal_x_m/goal_y_m), `target` ([x_m, y_m] picked on the map, or null), `note` (a sentence).
+//     feedback: its goal_x_m/goal_y_m and planned_path), `target` ([x_m, y_m] picked on the map, or null), `map` (the
+//     occupancy grid of GET /api/robots/<r>/map, or null), `note` (a sentence).
 // Out: no events; what it drew is in data-drawn-pose ("x y theta" of the robot as drawn), data-scene-version,
-//      data-laser-hits and data-webgl ("ok" or "missing"), for people's tools and tests.
+//      data-laser-hits, data-path-points (the planned path's points drawn), data-map-cells ("width height" of the
+//      grid on the floor; absent without one) and data-webgl ("ok" or "missing"), for people's tools and tests.
 
 import * as THREE from "three";
 import { h } from "../../lib/dom.js";
+import { FrameCap, isSmallScreen } from "../../lib/frame-cap.js";
 import { isEcho } from "../../lib/polar.js";
 import { buildScene, placeRobot } from "../../lib/scene-three.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
 
-const COLOURS = { laser: "#d1390f", sonar: "#c26a00", goal: "#b1261b" };
+const COLOURS = { laser: "#d1390f", sonar: "#c26a00", goal: "#b1261b", path: "#b1261b" };
 const SONAR_SEGMENTS = 6;
 const FIELD_OF_VIEW_DEG = 45;
 const ORBIT_START = { azimuth: -Math.PI / 2 - 0.5, elevation: 0.85 }; // from the south-south-west, looking down
 const ELEVATION_LIMITS = [0.12, 1.45];
 const ZOOM_STEP = 1.25;
 const DRAG_RAD_PER_PX = 0.008;
-const SMALL_SCREEN_PX = 600;
-const FIT_NDC = 0.94; // the floor's farthest corner this far from the centre to the edge // below this width: no antialiasing and one device pixel per CSS pixel
+const FIT_NDC = 0.94; // the floor's farthest corner this far from the centre to the edge
+const PATH_POINTS = 65; // the robot's believed pose and the 64 waypoints goal feedback carries at most
+const PATH_WIDTH_M = 0.06;
+const PATH_HEIGHT_M = 0.02; // above the floor's paint and the map
+const MAP_LIFT_M = 0.004; // the map lies this far above the floor's highest paint
+const UNKNOWN_CELL = 255;
 
 function fixed(value, decimals = 2) {
   const number = Number(value);
@@ -48,6 +56,15 @@ export class LabView extends PanelElement {
   #laser = null;        // Points
   #sonar = null;        // Mesh of fans
   #goal = null;         // Group
+  #path = null;         // Mesh: a ribbon on the floor through the planned path
+  #pathPoints = 0;
+  #pathWaypoints = 0;
+  #pathDrawn = [];
+  #paintTopM = 0;       // the floor's highest paint: the map lies just above it
+  #map = null;          // {grid, mesh} of the occupancy grid drawn on the floor
+  #grid = null;
+  #frameCap = new FrameCap();
+  #capTimer = 0;
   #scene = null;
   #pose = null;
   #telemetry = null;
@@ -66,6 +83,23 @@ export class LabView extends PanelElement {
   disconnectedCallback() {
     super.disconnectedCallback();
     this.#resizeObserver?.disconnect();
+    clearTimeout(this.#capTimer);
+    this.#capTimer = 0;
+  }
+
+  /** Draws on the next animation frame, but on a small screen no sooner than the frame cap allows; whatever came
+   *  meanwhile is drawn then (the newest pose wins). */
+  scheduleRender() {
+    if (this.#capTimer) return;
+    const waitMs = this.#frameCap.waitMs(performance.now());
+    if (waitMs <= 0) {
+      super.scheduleRender();
+      return;
+    }
+    this.#capTimer = setTimeout(() => {
+      this.#capTimer = 0;
+      super.scheduleRender();
+    }, waitMs);
   }
 
   /** The scene description: the lab is (re)built when its version changes. */
@@ -92,6 +126,14 @@ export class LabView extends PanelElement {
 
   set target(target) {
     this.#target = Array.isArray(target) ? target : null;
+    this.scheduleRender();
+  }
+
+  /** The occupancy grid (the map answer's `map`), or null when the robot has none: drawn on the floor. */
+  set map(grid) {
+    this.ensureBuilt();
+    this.#grid = grid ?? null;
+    if (this.#webgl && this.#three) this.#placeMap();
     this.scheduleRender();
   }
 
@@ -136,7 +178,7 @@ export class LabView extends PanelElement {
   }
 
   #startRenderer() {
-    const small = (window.innerWidth || 0) < SMALL_SCREEN_PX;
+    const small = isSmallScreen();
     try {
       this.#renderer = new THREE.WebGLRenderer({ canvas: this.#canvas, antialias: !small, powerPreference: "low-power" });
     } catch {
@@ -150,7 +192,7 @@ export class LabView extends PanelElement {
       return;
     }
     this.dataset.webgl = "ok";
-    this.#renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, small ? 1 : 2));
+    this.#renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, small ? 1 : 2)); // fewer pixels on a phone
     this.#camera = new THREE.PerspectiveCamera(FIELD_OF_VIEW_DEG, 4 / 3, 0.05, 100);
     this.#three = new THREE.Scene();
     this.#laser = new THREE.Points(new THREE.BufferGeometry(),
@@ -159,7 +201,8 @@ export class LabView extends PanelElement {
       color: COLOURS.sonar, transparent: true, opacity: 0.22, depthWrite: false, side: THREE.DoubleSide }));
     this.#sonar.renderOrder = 10_000; // over the floor's paint
     this.#goal = goalMarker();
-    for (const overlay of [this.#laser, this.#sonar, this.#goal]) {
+    this.#path = pathRibbon();
+    for (const overlay of [this.#laser, this.#sonar, this.#goal, this.#path]) {
       overlay.frustumCulled = false;
       this.#three.add(overlay);
     }
@@ -173,6 +216,9 @@ export class LabView extends PanelElement {
     }
     this.#world = buildScene(scene);
     this.#three.add(this.#world.lab, this.#world.robot);
+    this.#paintTopM = Math.max(0, Number(scene.floor?.top_z_m) || 0,
+      ...(scene.marks ?? []).map((mark) => Number(mark.top_z_m) || 0));
+    if (this.#map) this.#map.mesh.position.z = this.#paintTopM + MAP_LIFT_M;
     this.#renderer.setClearColor(new THREE.Color(...scene.camera.background_rgba.slice(0, 3)));
     const beams = Number(scene.laser?.beam_count) || 0;
     this.#laser.geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(beams * 3), 3));
@@ -197,11 +243,71 @@ export class LabView extends PanelElement {
     const goal = this.#goalPoint();
     this.#goal.visible = Boolean(goal);
     if (goal) this.#goal.position.set(goal[0], goal[1], 0);
+    this.#placePath();
     this.#aim(width / height);
+    this.#frameCap.drawn(performance.now());
     this.#renderer.render(this.#three, this.#camera);
     this.dataset.drawnPose = pose ? `${fixed(pose.x_m, 3)} ${fixed(pose.y_m, 3)} ${fixed(pose.theta_rad, 3)}` : "";
     this.dataset.laserHits = String(hits);
+    this.dataset.pathPoints = String(this.#pathPoints);
     this.#summarize(pose, hits, echoes, goal);
+  }
+
+  /** The go-to-goal path still ahead, from the pose the skill steers by through its waypoints, as a flat ribbon. */
+  #placePath() {
+    const feedback = this.#feedback;
+    const waypoints = Array.isArray(feedback?.planned_path) ? feedback.planned_path : [];
+    const start = isPose(feedback?.pose) ? [[Number(feedback.pose.x_m), Number(feedback.pose.y_m)]] : [];
+    const points = [...start, ...waypoints].filter((point) => Array.isArray(point)
+      && Number.isFinite(Number(point[0])) && Number.isFinite(Number(point[1]))).slice(0, PATH_POINTS);
+    this.#pathPoints = waypoints.length && points.length >= 2 ? points.length : 0;
+    this.#pathWaypoints = this.#pathPoints ? points.length - start.length : 0;
+    this.#pathDrawn = this.#pathPoints ? points.map((point) => point.map(Number)) : [];
+    const attribute = this.#path.geometry.getAttribute("position");
+    let vertices = 0;
+    for (let i = 1; i < this.#pathPoints; i += 1) {
+      const [x0, y0] = points[i - 1].map(Number);
+      const [x1, y1] = points[i].map(Number);
+      const length = Math.hypot(x1 - x0, y1 - y0);
+      if (length < 1e-6) continue;
+      const nx = (-(y1 - y0) / length) * (PATH_WIDTH_M / 2);
+      const ny = ((x1 - x0) / length) * (PATH_WIDTH_M / 2);
+      const corners = [[x0 + nx, y0 + ny], [x0 - nx, y0 - ny], [x1 + nx, y1 + ny], [x1 - nx, y1 - ny]];
+      for (const index of [0, 1, 2, 2, 1, 3]) {
+        attribute.setXYZ(vertices, corners[index][0], corners[index][1], PATH_HEIGHT_M);
+        vertices += 1;
+      }
+    }
+    attribute.needsUpdate = true;
+    this.#path.geometry.setDrawRange(0, vertices);
+    this.#path.visible = vertices > 0;
+  }
+
+  /** The occupancy grid as a texture on the floor: free cells light, occupied ones dark, unknown ones not drawn. */
+  #placeMap() {
+    const grid = this.#grid;
+    if (this.#map && this.#map.grid === grid) return;
+    if (this.#map) {
+      this.#three.remove(this.#map.mesh);
+      this.#map.mesh.geometry.dispose();
+      this.#map.mesh.material.map.dispose();
+      this.#map.mesh.material.dispose();
+      this.#map = null;
+    }
+    delete this.dataset.mapCells;
+    const texture = grid ? gridTexture(grid) : null;
+    if (!texture) return;
+    const resolution = Number(grid.resolution_m);
+    const width = grid.width_cells * resolution;
+    const height = grid.height_cells * resolution;
+    const mesh = new THREE.Mesh(new THREE.PlaneGeometry(width, height), new THREE.MeshBasicMaterial({
+      map: texture, transparent: true, depthWrite: false }));
+    mesh.position.set(Number(grid.origin_x_m) + width / 2, Number(grid.origin_y_m) + height / 2,
+      this.#paintTopM + MAP_LIFT_M);
+    mesh.renderOrder = 9_000; // over the floor's paint, under the sonar cones
+    this.#three.add(mesh);
+    this.#map = { grid, mesh };
+    this.dataset.mapCells = `${grid.width_cells} ${grid.height_cells}`;
   }
 
   #goalPoint() {
@@ -329,6 +435,11 @@ export class LabView extends PanelElement {
     this.scheduleRender();
   }
 
+  /** The planned path's points as last drawn, [[x_m, y_m], ...] from the skill's pose on (for tools and tests). */
+  get plannedPath() {
+    return this.#pathDrawn.map((point) => [...point]);
+  }
+
   /** Draws now and reads back the colour drawn where a world point lands: {css: [x, y], rgba: [0..255 x4]} or
    *  null when it is off the canvas or nothing is drawn yet (for tools and tests). */
   drawnColourAt(x_m, y_m, z_m) {
@@ -357,9 +468,50 @@ export class LabView extends PanelElement {
       parts.push(`The ${this.#scene.scene_name} lab; waiting for the robot's pose`);
     }
     if (goal) parts.push(`goal (${fixed(goal[0])}, ${fixed(goal[1])}) m`);
+    if (this.#pathWaypoints) parts.push(`planned path of ${this.#pathWaypoints} waypoints`);
+    if (this.#map) parts.push(`map of ${this.#grid.scans_integrated ?? 0} scans on the floor`);
     const text = `${parts.join("; ")}.`;
     if (this.#summary.textContent !== text) this.#summary.textContent = text;
   }
+}
+
+/** A flat ribbon through up to PATH_POINTS points (two triangles a segment), placed by #placePath. */
+function pathRibbon() {
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array((PATH_POINTS - 1) * 6 * 3), 3));
+  const ribbon = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({ color: COLOURS.path, side: THREE.DoubleSide }));
+  ribbon.visible = false;
+  return ribbon;
+}
+
+/** The occupancy grid as an RGBA texture, one texel a cell, row 0 the lowest y (as the plane's v); null when its
+ *  size and its cells disagree. Cells hold 0-100 (% occupied) or UNKNOWN_CELL. */
+function gridTexture(grid) {
+  const width = Number(grid.width_cells);
+  const height = Number(grid.height_cells);
+  if (!(Number.isInteger(width) && Number.isInteger(height) && width > 0 && height > 0)
+    || !(Number(grid.resolution_m) > 0)) return null;
+  let bytes;
+  try {
+    bytes = Uint8Array.from(atob(String(grid.cells_b64)), (c) => c.charCodeAt(0));
+  } catch {
+    return null;
+  }
+  if (bytes.length < width * height) return null;
+  const rgba = new Uint8Array(width * height * 4);
+  for (let i = 0; i < width * height; i += 1) {
+    const value = bytes[i];
+    if (value === UNKNOWN_CELL) continue; // transparent: the floor shows through
+    const free = value < 50;
+    const shade = free ? 255 : Math.round(150 - ((Math.min(100, value) - 50) / 50) * 130);
+    rgba.set([shade, shade, free ? 255 : shade, free ? 110 : 235], i * 4);
+  }
+  const texture = new THREE.DataTexture(rgba, width, height, THREE.RGBAFormat);
+  texture.magFilter = THREE.NearestFilter;
+  texture.minFilter = THREE.NearestFilter;
+  texture.colorSpace = THREE.SRGBColorSpace;
+  texture.needsUpdate = true;
+  return texture;
 }
 
 /** A red pin standing on the goal. */
@@ -384,5 +536,6 @@ export const register = registerPanel({
     { socket: "telemetry", messages: { telemetry: "telemetry" } },
     { service: "scene" },
     { service: "goal-view" },
+    { service: "map-view" },
   ],
 });

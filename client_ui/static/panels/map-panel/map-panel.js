@@ -7,7 +7,7 @@
 // what is drawn. Click, tap or keyboard (arrows move a cursor, Enter sets it) picks a target; "Go there"
 // asks for a go-to-goal to it.
 // In: `info` (robot info: scene_boxes, sonars, laser, body_radius_m), `telemetry`, `localization`,
-//     `grid` (the map answer or null), `goalFeedback` (go-to-goal feedback, for its goal and values),
+//     `grid` (the map answer or null), `goalFeedback` (go-to-goal feedback, for its goal, values and planned path),
 //     `target` ([x_m, y_m] or null), `note` (a sentence about the map's data), `canGo` (a goal skill exists),
 //     `observing` (someone else has the turn: "Go there" is off), `supervising` (a tutor or an admin: clearing the
 //     map and the return to the dock stay on while observing).
@@ -49,6 +49,7 @@ const LEGEND = {
   sonar: ["#c26a00", "sonar cones", "cone"],
   particles: [COLOURS.particle, "localization particles", "dot"],
   target: [COLOURS.target, "target", "cross"],
+  path: [COLOURS.target, "path planned to the goal", "line-dashed"],
   grid: ["#444", "occupancy map", "cell"],
 };
 
@@ -375,6 +376,7 @@ export class MapPanel extends PanelElement {
       drawn.add("target");
       this.#cross(ctx, goal, COLOURS.target, 7 * px, 2.5 * px);
     }
+    if (this.#drawPlannedPath(ctx, px)) drawn.add("path");
     if (Number.isFinite(values.obstacle_x_m) && Number.isFinite(values.obstacle_y_m)) {
       ctx.strokeStyle = COLOURS.target;
       ctx.lineWidth = 2 * px;
@@ -416,6 +418,24 @@ export class MapPanel extends PanelElement {
     ctx.stroke();
     ctx.setLineDash([]);
     ctx.globalAlpha = 1;
+    return true;
+  }
+
+  /** The go-to-goal path still ahead, dashed, from the pose the skill steers by; whether there was one. */
+  #drawPlannedPath(ctx, px) {
+    const feedback = this.#feedback;
+    const waypoints = Array.isArray(feedback?.planned_path) ? feedback.planned_path : [];
+    const start = isPose(feedback?.pose) ? [[feedback.pose.x_m, feedback.pose.y_m]] : [];
+    const points = [...start, ...waypoints].map((point) => (Array.isArray(point) ? point.map(Number) : []))
+      .filter(([x, y]) => Number.isFinite(x) && Number.isFinite(y));
+    if (!waypoints.length || points.length < 2) return false;
+    ctx.strokeStyle = COLOURS.target;
+    ctx.lineWidth = 2 * px;
+    ctx.setLineDash([6 * px, 4 * px]);
+    ctx.beginPath();
+    points.forEach(([x, y], index) => (index ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
+    ctx.stroke();
+    ctx.setLineDash([]);
     return true;
   }
 
