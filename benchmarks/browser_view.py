@@ -3,7 +3,11 @@ robot watched by one viewer, the skill server plus the web worker relaying its s
 (a telemetry viewer: the drawn view's only stream) and with the JPEG camera (a camera viewer, with the telemetry a
 console takes anyway), the robot idle and driven; the floor is the same robot with nobody watching. Browser side: the
 frame time of the robot's-eye view at 640x480 in headless Chromium (Debian's, `--disable-gpu`: WebGL in software),
-the drawing alone and the console's whole frame (drawn-view.js: drawn, then taken as a bitmap).
+the drawing alone and the console's whole frame (drawn-view.js: drawn, then taken as a bitmap). End to end: the
+capture-to-glass delay of a pose update, from the skill server's capture time of a pose (Telemetry.capture_unix_s) to
+the frame drawn from it on the console's canvas one animation frame later (the middleware, the WebSocket leg and the
+drawing), beside the JPEG camera's capture-to-glass in the same console and run (the comparison); one machine, so
+the skill server's and the browser's wall clocks are one clock.
 
     python -m benchmarks.browser_view [--quick] [--output DIR]
 """
@@ -28,6 +32,7 @@ VIEWERS = {"none": (), "drawn": ("telemetry",), "camera": ("camera", "telemetry"
 STATES = ("idle", "driven")
 TARGET_RATIO = 1 / 8
 VIEW_SIZE = (640, 480)
+GLASS_SOURCES = (("video", "JPEG camera"), ("drawn", "drawn view"))
 
 
 def _cpu_s(pid: int) -> float:
@@ -186,32 +191,104 @@ FRAME_TIMES = """async ([scene, size, frames, warmup]) => {
 }"""
 
 
-def measure_browser(scene: dict[str, Any], frames: int, warmup: int) -> dict[str, Any]:
-    """Frame times [ms] of the robot's-eye view at VIEW_SIZE in headless Chromium: {draw, whole, renderer}."""
+@contextmanager
+def chromium_page() -> Iterator[tuple[Any, list[str]]]:
+    """A tab of headless Chromium (Debian's, as the suite's) at 1280x800, and the JavaScript errors it raises."""
     from playwright.sync_api import sync_playwright
 
-    from benchmarks.feedback import CHROMIUM_ARGS, CHROMIUM_PATH, static_server
-    from middleware.browser_modules import import_map_text
+    from benchmarks.feedback import CHROMIUM_ARGS, CHROMIUM_PATH
 
-    with static_server() as url, sync_playwright() as playwright:
+    with sync_playwright() as playwright:
         browser = playwright.chromium.launch(executable_path=CHROMIUM_PATH, args=CHROMIUM_ARGS)
         try:
             page = browser.new_context(viewport={"width": 1280, "height": 800}).new_page()
             errors: list[str] = []
             page.on("pageerror", lambda error: errors.append(str(error)))
-            page.goto(f"{url}/lib/")
-            page.evaluate("(text) => { const map = document.createElement('script'); map.type = 'importmap';"
-                          " map.textContent = text; document.head.append(map); }", import_map_text("/"))
-            answer: dict[str, Any] = page.evaluate(FRAME_TIMES, [scene, list(VIEW_SIZE), frames, warmup])
-            if errors:
-                raise RuntimeError(f"JavaScript errors while drawing: {errors}")
+            yield page, errors
         finally:
             browser.close()
+
+
+def measure_browser(scene: dict[str, Any], frames: int, warmup: int) -> dict[str, Any]:
+    """Frame times [ms] of the robot's-eye view at VIEW_SIZE in headless Chromium: {draw, whole, renderer}."""
+    from benchmarks.feedback import static_server
+    from middleware.browser_modules import import_map_text
+
+    with static_server() as url, chromium_page() as (page, errors):
+        page.goto(f"{url}/lib/")
+        page.evaluate("(text) => { const map = document.createElement('script'); map.type = 'importmap';"
+                      " map.textContent = text; document.head.append(map); }", import_map_text("/"))
+        answer: dict[str, Any] = page.evaluate(FRAME_TIMES, [scene, list(VIEW_SIZE), frames, warmup])
+        if errors:
+            raise RuntimeError(f"JavaScript errors while drawing: {errors}")
     return answer
 
 
+# Each frame the console's camera panel puts on its canvas, stamped one animation frame later (when it is on the
+# glass) with the capture time of what it shows: the pose's for a drawn frame, the camera's for a video frame.
+GLASS_LISTENER = """() => {
+  window.glassSamples = [];
+  document.querySelector('camera-panel').addEventListener('camera-frame-shown', ({ detail }) => {
+    requestAnimationFrame(() => window.glassSamples.push(
+      { source: detail.source, capture_unix_s: detail.capture_unix_s, glass_unix_s: Date.now() / 1000 }));
+  });
+}"""
+
+
+def measure_glass(window_s: float) -> dict[str, list[float]]:
+    """Capture-to-glass delays [ms] in a student's console in headless Chromium, the JPEG camera's for window_s, then
+    the drawn view's for window_s, on one lab (skill server, middleware) started for it: {"video": [...], "drawn":
+    [...]}."""
+    from benchmarks.lab_under_test import PASSWORD, LabUnderTest
+
+    lab = LabUnderTest(users=1)
+    delays: dict[str, list[float]] = {}
+    try:
+        with chromium_page() as (page, errors):
+            page.goto(f"{lab.middleware.url}/login")
+            page.fill("#username", lab.usernames[0])
+            page.fill("#password", PASSWORD)
+            page.get_by_role("button", name="Log in").click()
+            page.locator('[data-field="username"]').first.wait_for(state="attached")
+            page.goto(f"{lab.middleware.url}/lab/lab-1")
+            page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached", timeout=30_000)
+            page.evaluate(GLASS_LISTENER)
+            for source, _name in GLASS_SOURCES:
+                if source == "drawn":
+                    page.locator('[data-field="camera-source"]').select_option("drawn")
+                    page.locator('camera-panel[data-frame-source="drawn"]').wait_for(state="attached")
+                page.wait_for_timeout(1000)  # the first frames of a source: its socket and renderer warming
+                page.evaluate("() => { window.glassSamples = []; }")
+                page.wait_for_timeout(window_s * 1000)
+                samples = page.evaluate("() => window.glassSamples")
+                delays[source] = [1000 * (s["glass_unix_s"] - s["capture_unix_s"]) for s in samples
+                                  if s["source"] == source]
+                if not delays[source]:
+                    raise RuntimeError(f"no {source} frame reached the canvas in {window_s} s")
+            if errors:
+                raise RuntimeError(f"JavaScript errors in the console: {errors}")
+    finally:
+        lab.stop()
+    return delays
+
+
+def glass_rows(delays: dict[str, list[float]]) -> list[Measurement]:
+    """p50 and p99 of each source's capture-to-glass, the drawn view's beside the JPEG camera's as its floor."""
+    scenario = "a pose to the glass, headless Chromium"
+    rows = []
+    for q in (50, 99):
+        video = percentile_ms([ms / 1000 for ms in delays["video"]], q)
+        for source, name in GLASS_SOURCES:
+            rows.append(Measurement(
+                scenario, f"capture to glass, {name}, p{q}", percentile_ms([ms / 1000 for ms in delays[source]], q),
+                "ms", "-", floor=video if source == "drawn" else None,
+                note=f"{len(delays[source])} frames" + (", the pose's capture time" if source == "drawn" else "")))
+    return rows
+
+
 def server_rows(measured: dict[str, dict[str, dict[str, float]]], quick: bool, load: float) -> list[Measurement]:
-    """Per state: each viewer's server CPU beside the unwatched robot, and the drawn view's share of the camera's."""
+    """Per state: each viewer's server CPU beside the unwatched robot, the drawn view's share of the camera's, and what
+    each view costs above the unwatched robot (its marginal cost) with the drawn view's share of the camera's."""
     rows = []
     for state in STATES:
         figures = measured[state]
@@ -223,12 +300,16 @@ def server_rows(measured: dict[str, dict[str, dict[str, float]]], quick: bool, l
             rows.append(Measurement(scenario, f"server CPU, {name}", split["server"], "cores", "-", floor=headless,
                                     note=f"skill server {split['robot']:.3f} + worker {split['worker']:.3f}"))
         ratio = figures["drawn"]["server"] / figures["camera"]["server"]
-        watched = figures["camera"]["server"] - headless
         rows.append(Measurement(scenario, "server CPU, drawn view / JPEG camera", ratio, "ratio", "<= 1/8",
                                 passed=None if quick else ratio <= TARGET_RATIO, note=f"load average {load:.1f}"))
-        rows.append(Measurement(scenario, "watching's own CPU, drawn / JPEG (above unwatched)",
-                                (figures["drawn"]["server"] - headless) / watched if watched > 0 else None, "ratio",
-                                "-"))
+        marginal = {viewer: figures[viewer]["server"] - headless for viewer in ("drawn", "camera")}
+        for viewer, name in (("drawn", "drawn view"), ("camera", "JPEG camera")):
+            rows.append(Measurement(scenario, f"marginal server CPU, {name} (minus unwatched)", marginal[viewer],
+                                    "cores", "-", floor=headless))
+        share = marginal["drawn"] / marginal["camera"] if marginal["camera"] > 0 else None
+        rows.append(Measurement(scenario, "marginal server CPU, drawn view / JPEG camera", share, "ratio", "<= 1/8",
+                                passed=None if quick or share is None else share <= TARGET_RATIO,
+                                note="what the view itself costs the server"))
     return rows
 
 
@@ -247,16 +328,21 @@ def browser_rows(frames: dict[str, Any]) -> list[Measurement]:
 def run(quick: bool, output: Path) -> list[Measurement]:
     window_s, settle_s = (0.5, 0.5) if quick else (10.0, 2.0)
     frames, warmup = (10, 3) if quick else (300, 30)
+    glass_window_s = 2.0 if quick else 30.0
     measured, scene = measure_servers(window_s, settle_s)
     load = os.getloadavg()[0]
     browser = measure_browser(scene, frames, warmup)
-    rows = server_rows(measured, quick, load) + browser_rows(browser)
-    print_table("The robot's-eye view drawn by the browser: server CPU per watched robot, and browser frame time", rows)
+    glass = measure_glass(glass_window_s)
+    rows = server_rows(measured, quick, load) + browser_rows(browser) + glass_rows(glass)
+    print_table("The robot's-eye view drawn by the browser: server CPU per watched robot, browser frame time, and a "
+                "pose's capture to glass", rows)
     output.mkdir(parents=True, exist_ok=True)
     write_json(output / "browser_view.json", rows, {
         "quick": quick, "window_s": window_s, "frames": frames, "warmup_frames": warmup, "load_average": load,
         "webgl_renderer": browser["renderer"], "measured": measured,
         "frame_times_ms": {key: [round(ms, 3) for ms in browser[key]] for key in ("draw", "whole")},
+        "glass_window_s": glass_window_s,
+        "capture_to_glass_ms": {source: [round(ms, 3) for ms in delays] for source, delays in glass.items()},
         "cpu_count": os.cpu_count()})
     return rows
 
