@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 from skill_server.goals import EventKind, GoalFeedback, GoalStatus
 from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
@@ -75,8 +76,9 @@ class StepSequence(SkillController):
 
     def step_feedback(self, tick: TickInput, step: GoalFeedback, progress: float) -> GoalFeedback:
         """The sequence's feedback from its step's."""
-        return feedback_for(tick, f"{self.current_step}:{step.state}", progress, step.distance_error_m,
-                            step.heading_error_rad, step_index=float(self._index), **dict(step.values))
+        feedback = feedback_for(tick, f"{self.current_step}:{step.state}", progress, step.distance_error_m,
+                                step.heading_error_rad, step_index=float(self._index), **dict(step.values))
+        return replace(feedback, planned_path=step.planned_path)  # the path ahead of a go-to-goal step
 
     def step_failed(self, outcome: Outcome) -> Outcome:
         """How the sequence ends when a step did not succeed."""

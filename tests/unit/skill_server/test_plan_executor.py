@@ -194,3 +194,16 @@ def test_battery_below_reads_the_charge_the_skills_see() -> None:
     assert final.status is GoalStatus.SUCCEEDED, final.message
     assert messages(sequencer, goal_id, EventKind.STEP_STARTED) == [
         "line 1: if battery_below 0.3: no, else", "line 4: enough", "line 6: wait until battery_below 0.5 at most 1 s"]
+
+
+def test_the_planned_path_of_a_go_to_reaches_the_watchers_through_a_plan_and_a_round_trip(
+        lab: tuple[World, Sequencer]) -> None:
+    world, sequencer = lab
+    plan_id = start(sequencer, SkillLine(1, 1, "go_to_goal", (("goal_x_m", 1.5), ("goal_y_m", 0.5))))
+    world.step_for(0.5)
+    in_plan = sequencer.goals.get(plan_id)
+    assert in_plan is not None and in_plan.feedback.planned_path[-1] == (1.5, 0.5)
+    trip = sequencer.activate(TOKEN, "round_trip", {"goal_x_m": 1.0, "goal_y_m": -0.5}, preempt=True).goal
+    world.step_for(0.5)
+    in_trip = sequencer.goals.get(trip.goal_id)
+    assert in_trip is not None and in_trip.feedback.planned_path[-1] == (1.0, -0.5)
