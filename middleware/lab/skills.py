@@ -14,6 +14,7 @@ from middleware.errors import ApiError
 from middleware.lab.panels import robot_panels
 from middleware.lab.schemas import GOAL_ID_PATTERN, NAME_PATTERN
 from middleware.models import Role
+from middleware.plans.services import console_skill_panels
 from middleware.robots.catalog import camera_picture_of
 from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.messages import goal_dict, map_dict
@@ -63,8 +64,10 @@ def panels(robot_name: str) -> ResponseReturnValue:
     except RobotUnavailable:
         skills = None
     personal = robot_registry().is_personal_name(robot_name)
+    panels = robot_panels(robot_name, skills, personal, camera_picture_of(get_session(), robot_name))
+    panels += console_skill_panels(get_session(), _user_id(), robot_name)  # the user's plans used as skills
     return jsonify({"robot": robot_name, "skills_available": skills is not None, "personal": personal,
-                    "panels": robot_panels(robot_name, skills, personal, camera_picture_of(get_session(), robot_name))})
+                    "panels": panels})
 
 
 @blueprint.post("/api/robots/<robot_name>/skills/<skill>/goals")

@@ -149,6 +149,17 @@ def api_share(plan_id: int) -> ResponseReturnValue:
     return _plan_answer(plan_id)
 
 
+@blueprint.put("/api/plans/<int:plan_id>/skill")
+@login_required
+def api_use_as_skill(plan_id: int) -> ResponseReturnValue:
+    """Shows my plan as a panel in my consoles ({"console_skill": true}) or stops ({"console_skill": false})."""
+    body = json_body()
+    if not isinstance(body.get("console_skill"), bool):
+        raise InvalidField("console_skill", "console_skill must be true or false.")
+    services.use_as_skill(get_session(), current_user, plan_id, bool(body["console_skill"]))
+    return _plan_answer(plan_id)
+
+
 @blueprint.get("/api/plans/<int:plan_id>/export")
 @login_required
 def api_export(plan_id: int) -> ResponseReturnValue:

@@ -203,6 +203,26 @@ def share_plan(session: Session, user: User, plan_id: int, course_id: int | None
     return plan
 
 
+def use_as_skill(session: Session, user: User, plan_id: int, enabled: bool) -> StoredPlan:
+    """Shows user's plan as a panel of its own in their consoles (or stops showing it)."""
+    plan = owned_plan(session, user, plan_id)
+    plan.console_skill = enabled
+    session.flush()
+    return plan
+
+
+def console_skill_panels(session: Session, user_id: int, robot_name: str) -> list[dict[str, object]]:
+    """The panel descriptors of user_id's plans used as skills, for the console of robot_name: a Run button that
+    runs the plan's latest version there, and its line progress."""
+    plans = session.scalars(select(StoredPlan).where(StoredPlan.owner_id == user_id, StoredPlan.console_skill)
+                            .order_by(StoredPlan.name).limit(20))
+    return [{"id": f"plan-{plan.id}", "kind": "plan", "title": f"Plan {plan.name}", "channel": None,
+             "help": f"Your plan {plan.name} as a skill: Run starts its latest version on {robot_name}; the line "
+                     "running shows below.",
+             "tab": "navigate", "plan_id": plan.id, "plan_name": plan.name, "skill": f"plan:{plan.name}",
+             "run_url": f"/api/plans/{plan.id}/runs", "editor_url": f"/plans/{plan.id}"} for plan in plans]
+
+
 def visible_plans(session: Session, user: User) -> list[StoredPlan]:
     """user's own plans, then the plans shared with their courses, newest first."""
     query = select(StoredPlan).where(or_(StoredPlan.owner_id == user.id, _shared_with(user)))
@@ -222,7 +242,7 @@ def plan_dict(session: Session, user: User, plan: StoredPlan, version: PlanVersi
     course = session.get(Course, plan.shared_course_id) if plan.shared_course_id is not None else None
     body: dict[str, object] = {
         "id": plan.id, "name": plan.name, "owner": owner.username if owner else None,
-        "mine": plan.owner_id == user.id, "latest_version": plan.latest_version,
+        "mine": plan.owner_id == user.id, "latest_version": plan.latest_version, "console_skill": plan.console_skill,
         "shared_with": None if course is None else {"id": course.id, "code": course.code, "title": course.title},
         "updated_at": plan.updated_at.isoformat(),
     }

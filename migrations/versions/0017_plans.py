@@ -27,6 +27,7 @@ def upgrade() -> None:
                   sa.ForeignKey("courses.id", name=op.f("fk_plans_shared_course_id_courses"), ondelete="SET NULL"),
                   nullable=True),
         sa.Column("latest_version", sa.Integer(), nullable=False),
+        sa.Column("console_skill", sa.Boolean(), server_default=sa.false(), nullable=False),
         sa.Column("created_at", sa.DateTime(timezone=True), nullable=False),
         sa.Column("updated_at", sa.DateTime(timezone=True), nullable=False),
         sa.PrimaryKeyConstraint("id", name=op.f("pk_plans")),

@@ -79,3 +79,32 @@ def test_the_demo_student_fixes_a_plan_and_tries_it_on_the_practice_robot(
         page.screenshot(path=str(ARTIFACTS_DIR / "plans-editor-phone.png"), full_page=True)
     finally:
         practice_manager(live_server.app).shutdown()
+
+
+def test_a_plan_used_as_a_skill_is_a_console_panel_that_runs_it_with_its_line_progress(
+        page, live_server: LiveServer) -> None:
+    from tests.e2e.test_panels import open_console, show_tab_of, wait_for_control
+
+    open_console(page, live_server)
+    plan = page.evaluate("""async () => {
+        const csrf = document.querySelector('meta[name="csrf-token"]').content;
+        const headers = {"Content-Type": "application/json", "X-CSRFToken": csrf, Accept: "application/json"};
+        const made = await fetch("/api/plans", {method: "POST", headers,
+          body: JSON.stringify({name: "two-steps", text: 'say "one"\\ndrive 0.1 0 for 2s\\n'})});
+        return (await made.json()).plan;
+    }""")
+    page.goto(f"{live_server.url}/plans/{plan['id']}")
+    page.get_by_label("Use as a skill").check()
+    page.locator("[data-field=check-status]", has_text="now a panel in your consoles").wait_for()
+    page.goto(f"{live_server.url}/lab/lab-1")
+    wait_for_control(page)
+    show_tab_of(page, f"plan-{plan['id']}")
+    frame = page.locator(f'section[data-panel-id="plan-{plan["id"]}"]')
+    frame.get_by_role("heading", name="Plan two-steps").wait_for()
+    panel = frame.locator("plan-panel")
+    panel.get_by_role("button", name="Run").click()
+    panel.locator("[data-field=plan-status]", has_text="Running line 2").wait_for(timeout=15_000)
+    page.locator("plan-panel[data-status=succeeded]").wait_for(timeout=30_000)
+    assert panel.locator("[data-field=plan-status]").text_content() == "SUCCEEDED"
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS_DIR / "plans-console-skill.png"))

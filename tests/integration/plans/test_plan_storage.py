@@ -154,3 +154,26 @@ def test_hostile_fields_are_refused_naming_them_and_change_nothing(plans_lab: Pl
     assert api(ann, "GET", "/api/plans/99999")[0] == 404
     assert api(ann, "GET", "/api/plans/99999999999")[0] == 404
     assert _plans_rows(plans_lab) == before
+
+
+def test_a_plan_used_as_a_skill_is_a_panel_of_its_owners_consoles_only(plans_lab: PlansLab) -> None:
+    ann, bob = plans_lab.client("student1"), plans_lab.client("student2")
+    status, body = api(ann, "POST", "/api/plans", {"name": "as-skill", "text": GOOD})
+    plan_id = body["plan"]["id"]
+    assert body["plan"]["console_skill"] is False
+    before = _plans_rows(plans_lab)
+    status, body = api(ann, "PUT", f"/api/plans/{plan_id}/skill", {"console_skill": "yes"})
+    assert status == 400 and body["error"]["field"] == "console_skill"
+    assert api(bob, "PUT", f"/api/plans/{plan_id}/skill", {"console_skill": True})[0] == 404
+    assert _plans_rows(plans_lab) == before
+    status, body = api(ann, "PUT", f"/api/plans/{plan_id}/skill", {"console_skill": True})
+    assert status == 200 and body["plan"]["console_skill"] is True
+    status, body = api(ann, "GET", "/api/robots/lab-1/panels")
+    panel = next(p for p in body["panels"] if p["kind"] == "plan")
+    assert panel["id"] == f"plan-{plan_id}" and panel["run_url"] == f"/api/plans/{plan_id}/runs"
+    assert panel["skill"] == "plan:as-skill" and panel["tab"] == "navigate"
+    status, body = api(bob, "GET", "/api/robots/lab-1/panels")
+    assert not [p for p in body["panels"] if p["kind"] == "plan"]
+    assert api(ann, "PUT", f"/api/plans/{plan_id}/skill", {"console_skill": False})[1]["plan"]["console_skill"] is False
+    status, body = api(ann, "GET", "/api/robots/lab-1/panels")
+    assert not [p for p in body["panels"] if p["kind"] == "plan"]

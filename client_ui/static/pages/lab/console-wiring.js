@@ -495,8 +495,12 @@ export class ConsoleWiring {
   async #activate(entry, { skill, parameters, preempt }) {
     const base = `/api/robots/${encodeURIComponent(this.#robotName)}`;
     try {
-      const answer = await fetchJson(`${base}/skills/${encodeURIComponent(skill)}/goals`, {
-        method: "POST", body: { parameters, preempt: Boolean(preempt) } });
+      // A plan used as a skill runs through the plans API, on this robot; any other skill is activated.
+      const runUrl = entry.descriptor.run_url;
+      const answer = runUrl
+        ? await fetchJson(runUrl, { method: "POST", body: { target: this.#robotName } })
+        : await fetchJson(`${base}/skills/${encodeURIComponent(skill)}/goals`, {
+          method: "POST", body: { parameters, preempt: Boolean(preempt) } });
       this.#followGoal(entry, answer.goal);
     } catch (error) {
       entry.panel.error = { code: error.code ?? "network", message: error.message, field: error.field ?? null };

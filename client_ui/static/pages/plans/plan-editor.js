@@ -97,6 +97,8 @@ function showPlan(plan) {
     ? `Your plan, version ${plan.version} of ${plan.latest_version}. ${shared}`
     : `${plan.owner}'s plan, shared with you to read and run: copy it to change it. Version ${plan.version}.`;
   root.closest("main").querySelector("[data-field=plan-name]").textContent = plan.name;
+  const skillBox = root.querySelector("input[name=console_skill]");
+  if (skillBox) skillBox.checked = Boolean(plan.console_skill);
   const shareSelect = root.querySelector("[data-field=share-course]");
   if (shareSelect) shareSelect.value = plan.shared_with ? String(plan.shared_with.id) : "";
   showErrors([]);
@@ -145,6 +147,20 @@ async function share() {
     showPlan({ ...plan });
     checkStatus.textContent = plan.shared_with ? `Shared with ${plan.shared_with.code}.` : "No longer shared.";
   } catch (error) {
+    checkStatus.textContent = error.message;
+  }
+}
+
+async function useAsSkill(event) {
+  const box = event.currentTarget;
+  const wanted = box.checked;
+  try {
+    await fetchJson(`/api/plans/${planId}/skill`, { method: "PUT", body: { console_skill: wanted } });
+    checkStatus.textContent = wanted
+      ? "This plan is now a panel in your consoles (the Navigate view): Run runs its latest version there."
+      : "This plan is no longer a panel in your consoles.";
+  } catch (error) {
+    box.checked = !wanted;
     checkStatus.textContent = error.message;
   }
 }
@@ -331,6 +347,7 @@ button("save")?.addEventListener("click", save);
 button("copy").addEventListener("click", copy);
 button("share")?.addEventListener("click", share);
 button("delete")?.addEventListener("click", remove);
+root.querySelector("input[name=console_skill]")?.addEventListener("change", useAsSkill);
 button("try").addEventListener("click", () => startRun("practice"));
 button("run").addEventListener("click", () => startRun(robotSelect.value));
 button("cancel").addEventListener("click", cancel);
