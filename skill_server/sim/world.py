@@ -424,7 +424,7 @@ class World:
         self._deadman_armed = False
         self._deadman_stopped = False
         self._battery = Battery(self.spec.battery, self.spec.max_linear_mps / self.spec.wheel_radius_m)
-        self._gate.note_battery(self._battery.state.empty)
+        self._drain_battery(0.0, spawn, 0.0, 0.0)  # the first snapshot already says whether it charges
         self._frame_pacer.restart()
         self._odometry = WheelOdometry(self.spec, spawn, self._odometry_rng)
         self._apply_wheel_speeds()

@@ -109,3 +109,16 @@ def test_telemetry_carries_the_battery(student_client: LabClient) -> None:
             assert set(battery) == {"charge", "charging", "empty"} and 0.0 <= battery["charge"] <= 1.0
             return
     raise AssertionError("no telemetry message")
+
+
+def test_the_course_page_offers_the_setting_and_saves_it(live_server: LiveServer) -> None:
+    teacher = tutor(live_server, "form-limits-tutor")
+    course_id = make_course(live_server.app, "LOW3", {"form-limits-tutor": "tutor"})
+    _, _, page = teacher.request("GET", f"/courses/{course_id}")
+    assert 'name="students_set_watchdog"' in page and 'name="students_set_velocity"' in page
+    token = teacher.csrf_token(f"/courses/{course_id}")
+    status, _, _ = teacher.request("POST", f"/courses/{course_id}/settings", {
+        "csrf_token": token, "title": "Course LOW3", "students_set_velocity": "no", "students_set_watchdog": "yes"})
+    assert status == 303
+    status, body = api(teacher, "GET", f"/api/courses/{course_id}")
+    assert (body["course"]["students_set_velocity"], body["course"]["students_set_watchdog"]) == (False, True)

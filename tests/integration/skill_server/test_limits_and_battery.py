@@ -84,22 +84,26 @@ def test_a_lower_ceiling_clamps_a_drive_and_a_skill(fresh_server: SkillServer,
     assert max(s.commanded_linear_mps for s in seen) == pytest.approx(0.2), "a skill obeys the ceiling too"
 
 
+def distance_driven_until_the_deadman_stops(server: SkillServer, robot: robot_pb2_grpc.RobotStub,
+                                            sequence: int) -> float:
+    """Drives at 0.3 m/s with one command and waits for the deadman: how far the robot went (by the true pose,
+    which no polling gap blurs: the ramps up and down cancel, so it is 0.3 m/s times the timeout)."""
+    start = server.world.snapshot.ground_truth
+    drive(robot, sequence, 0.3)
+    snapshots_until(server, lambda s: s.last_applied_sequence == sequence and s.deadman_stopped
+                    and s.commanded_linear_mps == 0.0)
+    end = server.world.snapshot.ground_truth
+    return math.hypot(end.x_m - start.x_m, end.y_m - start.y_m)
+
+
 def test_the_watchdog_stops_the_base_after_the_timeout_set(fresh_server: SkillServer,
                                                            controlled: robot_pb2_grpc.RobotStub) -> None:
     assert set_limits(controlled, watchdog_s=0.5).watchdog_s == 0.5
     info = controlled.GetRobotInfo(robot_pb2.GetRobotInfoRequest(), timeout=DEADLINE_S)
     assert info.deadman_timeout_s == 0.5
-    drive(controlled, 1, 0.3)
-    seen = snapshots_until(fresh_server, lambda s: s.last_applied_sequence == 1 and s.deadman_stopped)
-    applied_s = next(s.sim_time_s for s in seen if s.last_applied_sequence == 1)
-    stopped_s = seen[-1].sim_time_s
-    assert 0.5 <= stopped_s - applied_s <= 0.6, f"stopped {stopped_s - applied_s:.3f} s after the command"
-
+    assert distance_driven_until_the_deadman_stops(fresh_server, controlled, 1) == pytest.approx(0.15, abs=0.03)
     assert set_limits(controlled, watchdog_s=1.5).watchdog_s == 1.5
-    drive(controlled, 2, 0.3)
-    seen = snapshots_until(fresh_server, lambda s: s.last_applied_sequence == 2 and s.deadman_stopped)
-    applied_s = next(s.sim_time_s for s in seen if s.last_applied_sequence == 2)
-    assert 1.5 <= seen[-1].sim_time_s - applied_s <= 1.6
+    assert distance_driven_until_the_deadman_stops(fresh_server, controlled, 2) == pytest.approx(0.45, abs=0.03)
 
 
 @pytest.mark.parametrize(
@@ -175,9 +179,9 @@ def test_the_battery_drains_with_motion_empties_aborts_the_goal_and_recharges_at
                       "duration_s": robot_pb2.ParameterValue(double_value=10.0)}
         goal = robot.ActivateSkill(robot_pb2.ActivateSkillRequest(token=TOKEN, skill="direct_control",
                                                                   parameters=parameters), timeout=DEADLINE_S).goal
-        half = snapshots_until(server, lambda s: s.battery.charge < 0.5)[-1]
-        assert not half.battery.empty and half.battery.charge > 0.4
-        snapshots_until(server, lambda s: s.battery.empty)
+        charges = [s.battery.charge for s in snapshots_until(server, lambda s: s.battery.empty)]
+        assert charges == sorted(charges, reverse=True), "driving only drains"
+        assert charges[0] > 0.9 and any(0.1 < charge < 0.9 for charge in charges) and charges[-1] == 0.0
         deadline = time.monotonic() + DEADLINE_S
         state = robot.GetGoal(robot_pb2.GetGoalRequest(goal_id=goal.goal_id), timeout=DEADLINE_S)
         while state.status != robot_pb2.GOAL_STATUS_ABORTED and time.monotonic() < deadline:
