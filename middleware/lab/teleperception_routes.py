@@ -8,6 +8,7 @@ each read), so an open exercise page is the switch and an unwatched robot pays n
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 from typing import TypeVar
 
 from flask import Blueprint, Response, abort, jsonify, render_template, request
@@ -25,6 +26,8 @@ from protos.telelab.v1 import robot_pb2
 
 blueprint = Blueprint("teleperception", __name__)
 Choice = TypeVar("Choice")
+READINGS_PER_ANSWER = 600  # the contract's page size (GetPerceptionReadings)
+MAX_EXPORTED_SCANS = 2400  # what the robot keeps
 
 SENSORS = {"both": robot_pb2.EVIDENCE_SENSOR_UNSPECIFIED, "sonar": robot_pb2.EVIDENCE_SENSOR_SONAR,
            "laser": robot_pb2.EVIDENCE_SENSOR_LASER}
@@ -90,15 +93,21 @@ def reset(robot_name: str) -> ResponseReturnValue:
 
 
 def _readings(link: RobotLink) -> tuple[list[robot_pb2.PerceptionScan], SensorAngles]:
+    scans: list[robot_pb2.PerceptionScan] = []
     try:
         info = link.info()
-        scans = list(link.perception_readings().scans)
+        while True:
+            page = link.perception_readings(scans[-1].index if scans else 0).scans
+            scans.extend(page)
+            # A short page was all the robot had; readings arriving while it is read do not keep the export going.
+            if len(page) < READINGS_PER_ANSWER or len(scans) >= MAX_EXPORTED_SCANS:
+                break
     except (CommandRefused, RobotUnavailable) as error:
         raise refusal_error(error) from None
     return scans, SensorAngles(info)
 
 
-def _download(body: str | bytes, robot_name: str, suffix: str, mimetype: str) -> Response:
+def _download(body: str | bytes | Iterator[str], robot_name: str, suffix: str, mimetype: str) -> Response:
     safe = re.sub(r"[^A-Za-z0-9_-]", "_", robot_name)[:64]
     return Response(body, mimetype=mimetype, headers={
         "Content-Disposition": f'attachment; filename="teleperception-{safe}.{suffix}"', "Cache-Control": "no-store"})

@@ -9,6 +9,7 @@ robot, so every viewer (the student, observers, a tutor) sees the same one.
 
 from __future__ import annotations
 
+import itertools
 import threading
 import time
 from collections import deque
@@ -23,6 +24,7 @@ from skill_server.skills.evidence_grid import PARTS, SENSORS, EvidenceGrid
 WATCH_S = 10.0  # [s] of wall-clock time a read keeps the grid accumulating
 MIN_PERIOD_S = 0.1  # [s] of sim time between readings integrated (10 Hz; sensors are read at 20 Hz)
 MAX_KEPT_SCANS = 2400  # raw readings kept for export: 4 minutes at 10 Hz
+MAX_SCANS_PER_ANSWER = 600  # about 0.5 MB: a reader pages through the rest with after_index
 MOVING_MPS, TURNING_RADPS = 0.01, 0.03  # odometry's speeds above which a reading belongs to the moving part
 
 
@@ -114,7 +116,7 @@ class Teleperception:
             self._by_part = dict.fromkeys(PARTS, 0)
             self._version += 1
 
-    def scans_after(self, index: int) -> list[PerceptionScan]:
-        """The readings kept (the last MAX_KEPT_SCANS since the last reset) numbered above index, oldest first."""
+    def scans_after(self, index: int, limit: int = MAX_SCANS_PER_ANSWER) -> list[PerceptionScan]:
+        """The oldest limit readings kept (the last MAX_KEPT_SCANS since the last reset) numbered above index."""
         with self._lock:
-            return [scan for scan in self._scans if scan.index > index]
+            return list(itertools.islice((scan for scan in self._scans if scan.index > index), limit))

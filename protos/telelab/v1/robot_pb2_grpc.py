@@ -365,7 +365,8 @@ class RobotServicer:
 
     def GetPerceptionReadings(self, request, context):
         """The raw readings the grid integrated (the last 2400 since the last reset, 10 per second), numbered above
-        after_index: the odometry pose at capture, the times, the part and both sensors' ranges.
+        after_index, oldest first and at most 600 an answer (ask again after the last index for more): the odometry
+        pose at capture, the times, the part and both sensors' ranges.
         """
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
         context.set_details('Method not implemented!')

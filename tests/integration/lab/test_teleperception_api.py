@@ -122,3 +122,29 @@ def test_a_students_own_robot_grid_is_refused_to_everyone_else(live_server, prac
     status, body = _api(ann, "GET", "/api/robots/practice-ann/evidence")
     assert status == 200 and body["evidence"]["accumulating"], body
     assert ann.request("GET", "/lab/practice-ann/teleperception")[0] == 200
+
+
+def test_the_export_pages_through_the_robots_readings_until_a_short_page() -> None:
+    """A stand-in link (the real robot would need a minute of readings for a second page) answering pages of 600."""
+    from middleware.lab import teleperception_routes
+    from protos.telelab.v1 import robot_pb2
+
+    class PagedLink:
+        def __init__(self, kept: int) -> None:
+            self.kept, self.asked = kept, []
+
+        def info(self) -> robot_pb2.RobotInfo:
+            return robot_pb2.RobotInfo()
+
+        def perception_readings(self, after_index: int = 0) -> robot_pb2.PerceptionReadings:
+            self.asked.append(after_index)
+            last = min(self.kept, after_index + teleperception_routes.READINGS_PER_ANSWER)
+            return robot_pb2.PerceptionReadings(scans=[robot_pb2.PerceptionScan(index=i)
+                                                       for i in range(after_index + 1, last + 1)])
+
+    link = PagedLink(1300)
+    scans, _ = teleperception_routes._readings(link)  # type: ignore[arg-type]
+    assert [s.index for s in scans] == list(range(1, 1301)) and link.asked == [0, 600, 1200]
+    link = PagedLink(1200)
+    scans, _ = teleperception_routes._readings(link)  # type: ignore[arg-type]
+    assert len(scans) == 1200 and link.asked == [0, 600, 1200]

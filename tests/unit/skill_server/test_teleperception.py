@@ -85,3 +85,14 @@ def test_a_reset_forgets_grid_counts_and_readings_but_numbering_goes_on() -> Non
     assert set(state.view.cells) == {255}
     perception.observe(snapshot(0.2, Pose2D(), laser=(8.0, 8.0, 2.2, 8.0, 8.0)))
     assert [s.index for s in perception.scans_after(0)] == [2]
+
+
+def test_the_readings_are_answered_in_pages_of_at_most_the_limit() -> None:
+    perception = Teleperception(grid(), clock=lambda: 0.0)
+    perception.watch()
+    for step in range(7):
+        perception.observe(snapshot(0.2 * step, Pose2D(), laser=(8.0, 8.0, 2.0 + 0.01 * step, 8.0, 8.0)))
+    first = perception.scans_after(0, limit=3)
+    assert [s.index for s in first] == [1, 2, 3]
+    assert [s.index for s in perception.scans_after(first[-1].index, limit=3)] == [4, 5, 6]
+    assert [s.index for s in perception.scans_after(6, limit=3)] == [7]
