@@ -156,7 +156,7 @@ class World:
         self._autonomy = autonomy
 
     def observe_snapshots(self, observer: Callable[[RobotSnapshot], None]) -> None:
-        """Hands observer every snapshot the loop publishes, in the loop (call before start(); keep it cheap)."""
+        """Hands observer every snapshot the loop publishes from now on, in the loop (keep it cheap)."""
         self._snapshot_observers.append(observer)
 
     def run_in_loop(self, action: Callable[[], T]) -> T:
