@@ -81,6 +81,17 @@ def test_only_the_controller_may_reset_the_grid_and_then_it_starts_again(student
         queue.close()
 
 
+def test_a_tutor_may_reset_the_grid_during_a_students_turn(student_client: LabClient, live_server) -> None:
+    tutor = _client(live_server, "tutor9", "tutor")
+    queue = take_control(student_client)
+    try:
+        wait_for_readings(student_client, 3)
+        status, body = _api(tutor, "DELETE", "/api/robots/lab-1/evidence")
+        assert status == 200 and sum(body["evidence"]["counts"][p] for p in ("static", "moving")) <= 1, body
+    finally:
+        queue.close()
+
+
 def test_the_readings_export_as_csv_and_as_mcap_that_read_back(student_client: LabClient) -> None:
     wait_for_readings(student_client, 6)
     status, headers, raw_csv = download(student_client, "/api/robots/lab-1/readings.csv")

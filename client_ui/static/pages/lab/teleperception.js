@@ -186,6 +186,7 @@ async function loadZone() {
 }
 
 function wireZone() {
+  canvas.classList.add("is-marking");
   canvas.addEventListener("pointerdown", (event) => {
     if (!view) return;
     dragStart = pointerWorld(event);
