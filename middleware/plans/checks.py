@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 
 from middleware.plans.steps import (
     CONDITION_KINDS,
+    MAX_ERRORS,
     MAX_EXPANDED_STEPS,
     MAX_PLAN_DURATION_S,
     MAX_REPEAT,
@@ -35,6 +36,7 @@ from middleware.teaching.command_form import (
 DIRECT_CONTROL = "direct_control"  # its schema gives the robot's velocity ceilings for drive and set
 MAX_PARAMETERS = 32
 OBSTACLE_RANGE_M = (0.05, 8.0)  # the laser's reach
+BATTERY_RANGE = (0.01, 1.0)  # a fraction of full; below 0 is never true, and the skill server refuses it
 WATCHDOG_RANGE_S = (0.1, 5.0)
 MIN_SPEED_MPS, MIN_TURN_RATE_RADPS = 0.05, 0.1
 
@@ -199,7 +201,7 @@ def condition_schema(kind: str) -> Mapping[str, object] | None:
     if kind == "obstacle_within":
         return {"type": "double", "unit": "m", "minimum": OBSTACLE_RANGE_M[0], "maximum": OBSTACLE_RANGE_M[1]}
     if kind == "battery_below":
-        return {"type": "double", "unit": "", "minimum": 0.0, "maximum": 1.0}
+        return {"type": "double", "unit": "", "minimum": BATTERY_RANGE[0], "maximum": BATTERY_RANGE[1]}
     return None
 
 
@@ -281,6 +283,17 @@ def plan_totals(steps: Sequence[Step], path: str = "steps") -> list[PlanError]:
                                 f"run at most {MAX_PLAN_DURATION_S:,.0f} s."))
             break
     return errors
+
+
+class TooManyErrors(Exception):
+    """MAX_ERRORS problems are found: reading stops (a hostile plan costs no more than a bad one)."""
+
+
+def add_error(errors: list[PlanError], error: PlanError) -> None:
+    """Adds error; TooManyErrors once there are MAX_ERRORS."""
+    errors.append(error)
+    if len(errors) >= MAX_ERRORS:
+        raise TooManyErrors()
 
 
 def place_error(line: int, column: int, field: str, message: str) -> PlanError:

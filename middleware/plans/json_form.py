@@ -11,7 +11,6 @@ from middleware.plans.checks import StepProblem, place_error, shown
 from middleware.plans.steps import (
     FORMAT,
     MAX_DEPTH,
-    MAX_ERRORS,
     MAX_STEPS,
     Condition,
     DriveStep,
@@ -86,7 +85,10 @@ def plan_from_json(doc: object, skills: SkillSchemas) -> Plan:
         if "steps" not in doc:
             reader.report(0, 0, "steps", "A plan needs its steps: a list of commands.")
         else:
-            steps = reader.block(doc["steps"], "steps", 0)
+            try:
+                steps = reader.block(doc["steps"], "steps", 0)
+            except checks.TooManyErrors:
+                raise PlanInvalid(reader.errors) from None
     if not reader.errors:
         reader.errors += checks.plan_totals(steps)
     plan = Plan(tuple(steps))
@@ -113,9 +115,8 @@ class _Reader:
         self.count = 0
 
     def report(self, line: int, column: int, field: str, message: str) -> None:
-        """Adds a problem (at most MAX_ERRORS are kept)."""
-        if len(self.errors) < MAX_ERRORS:
-            self.errors.append(place_error(line, column, field, message))
+        """Adds a problem; at MAX_ERRORS reading stops (TooManyErrors)."""
+        checks.add_error(self.errors, place_error(line, column, field, message))
 
     def unknown_keys(self, value: Mapping[object, object], allowed: tuple[str, ...], path: str, line: int,
                      column: int) -> bool:

@@ -11,7 +11,6 @@ from middleware.plans.aliases import ALIASES, Alias, parameter_for_key
 from middleware.plans.checks import StepProblem, place_error
 from middleware.plans.steps import (
     MAX_DEPTH,
-    MAX_ERRORS,
     MAX_LINES,
     MAX_TEXT_BYTES,
     Condition,
@@ -63,8 +62,11 @@ def parse_plan_text(text: str, skills: SkillSchemas) -> Plan:
         raise PlanInvalid([place_error(0, 0, "text", f"The plan has {len(lines):,} lines; a plan has at most "
                                                      f"{MAX_LINES} lines.")])
     parser = _Parser(skills)
-    parser.tokens = Tokenizer(parser.report).read(lines)
-    steps = parser.block("steps", 0, None)
+    try:
+        parser.tokens = Tokenizer(parser.report).read(lines)
+        steps = parser.block("steps", 0, None)
+    except checks.TooManyErrors:
+        raise PlanInvalid(parser.errors) from None
     if not parser.errors:
         parser.errors += checks.plan_totals(steps)
     plan = Plan(tuple(steps))
@@ -85,9 +87,8 @@ class _Parser:
         self.errors: list[PlanError] = []
 
     def report(self, line: int, column: int, message: str, field: str = "text") -> None:
-        """Adds a problem (at most MAX_ERRORS are kept)."""
-        if len(self.errors) < MAX_ERRORS:
-            self.errors.append(place_error(line, column, field, message))
+        """Adds a problem; at MAX_ERRORS reading stops (TooManyErrors)."""
+        checks.add_error(self.errors, place_error(line, column, field, message))
 
     def _at(self, token: Token, field: str, message: str) -> _Reported:
         self.report(token.line, token.column, message, field)

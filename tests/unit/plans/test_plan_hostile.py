@@ -68,13 +68,12 @@ def test_a_hostile_text_is_refused_with_its_place(skills: SkillSchemas, name: st
 
 
 def test_a_megabyte_is_refused_before_it_is_read(skills: SkillSchemas) -> None:
-    started = time.perf_counter()
     for text in ("say \"x\"\n" * 150_000, "(" * 1_048_576, "é" * 40_000, "\ud800" * 70_000):
         with pytest.raises(PlanInvalid) as refused:
             parse_plan_text(text, skills)
+        assert len(refused.value.errors) == 1  # read, "(" alone would be 50 errors
         assert refused.value.field == "text"
         assert "a plan has at most 65,536 bytes (UTF-8)" in refused.value.message
-    assert time.perf_counter() - started < 1.0
 
 
 def test_more_than_500_lines_are_refused_before_they_are_read(skills: SkillSchemas) -> None:
@@ -84,14 +83,20 @@ def test_more_than_500_lines_are_refused_before_they_are_read(skills: SkillSchem
     assert len(parse_plan_text("say \"x\"\n" * 500, skills).steps) == 500
 
 
-def test_the_worst_text_within_the_size_limit_is_read_quickly(skills: SkillSchemas) -> None:
+def test_the_worst_text_within_the_size_limit_is_read_in_one_linear_pass(skills: SkillSchemas) -> None:
     worst = [("say \"" + "\\\"" * 30 + "\"\n") * 400, ("go_to 1 2 " + "speed=0.3 " * 600 + "\n") * 10,
-             ("(" * 120 + "\n") * 500, "repeat 2 { " * 5000]
+             ("(" * 120 + "\n") * 500, "repeat 2 { " * 5000, "go_to 1 2 " + "x=1 " * 16_000,
+             "if not obstacle_within 0.5 { say \"x\" } else { say \"y\" }\n" * 400]
     for text in worst:
         started = time.perf_counter()
         with contextlib.suppress(PlanInvalid):
             parse_plan_text(text[:65_000], skills)
-        assert time.perf_counter() - started < 2.0
+        # a guard against reading that grows faster than the text, not a benchmark: unloaded, each takes < 0.3 s
+        assert time.perf_counter() - started < 10.0
+    with pytest.raises(PlanInvalid) as refused:
+        parse_plan_text("(" * 65_000, skills)
+    assert len(refused.value.errors) == 50
+    assert refused.value.errors[-1].column == 50  # reading stopped at the fiftieth problem
 
 
 def test_anything_but_a_string_is_refused_as_text(skills: SkillSchemas) -> None:
@@ -208,15 +213,14 @@ def test_json_nesting_stops_at_eight_blocks(skills: SkillSchemas) -> None:
 
 
 def test_json_steps_stop_at_500_and_errors_at_50(skills: SkillSchemas) -> None:
-    started = time.perf_counter()
     with pytest.raises(PlanInvalid) as refused:
         plan_from_json({"steps": [DRIVE] * 1_000_000}, skills)
-    assert refused.value.errors[0].field == "steps[500]"
+    assert [e.field for e in refused.value.errors] == ["steps[500]"]
     assert "at most 500 steps" in refused.value.message
     with pytest.raises(PlanInvalid) as refused:
         plan_from_json({"steps": [{"kind": "say"}] * 400}, skills)
     assert len(refused.value.errors) == 50
-    assert time.perf_counter() - started < 2.0
+    assert refused.value.errors[-1].field == "steps[49].text"
 
 
 def test_json_errors_carry_the_steps_line_and_column(skills: SkillSchemas) -> None:

@@ -27,6 +27,7 @@ from middleware.plans import (
     plan_to_json,
     plan_to_text,
 )
+from middleware.teaching.command_form import SkillSchemas
 from tests.unit.plans.catalogue import catalogue_schemas
 
 SKILLS = catalogue_schemas()
@@ -49,9 +50,9 @@ def value_of(schema: Mapping[str, object]) -> st.SearchStrategy[object]:
 
 
 @st.composite
-def skill_steps(draw: st.DrawFn) -> Step:
-    name = draw(st.sampled_from(sorted(SKILLS)))
-    schemas: Sequence[Mapping[str, object]] = SKILLS[name]
+def skill_steps(draw: st.DrawFn, skills: SkillSchemas) -> Step:
+    name = draw(st.sampled_from(sorted(skills)))
+    schemas: Sequence[Mapping[str, object]] = skills[name]
     chosen = draw(st.lists(st.sampled_from(schemas), unique_by=lambda s: s["name"], max_size=len(schemas))) \
         if schemas else []
     parameters = tuple((str(s["name"]), draw(value_of(s))) for s in chosen)
@@ -63,20 +64,24 @@ durations = st.floats(0.001, 600.0, allow_nan=False).filter(lambda d: d > 0)
 conditions = st.one_of(
     st.builds(Condition, st.just("goal_reached"), st.none(), st.booleans()),
     st.builds(Condition, st.just("obstacle_within"), st.floats(0.05, 8.0), st.booleans()),
-    st.builds(Condition, st.just("battery_below"), st.floats(0.0, 1.0), st.booleans()),
+    st.builds(Condition, st.just("battery_below"), st.floats(0.01, 1.0), st.booleans()),
 )
 say_texts = st.text(st.characters(blacklist_categories=("Cc", "Cs", "Zl", "Zp", "Cf")), min_size=1, max_size=200) \
     .filter(lambda t: t.strip() != "")
-simple_steps = st.one_of(
-    skill_steps(),
-    st.builds(DriveStep, st.floats(-0.5, 0.5), st.floats(-1.5, 1.5), st.floats(0.001, 5.0)),
-    st.builds(WaitStep, st.none(), st.floats(0.001, 5.0)),
-    st.builds(WaitStep, conditions, st.none() | st.floats(0.001, 600.0)),
-    st.builds(SetStep, st.just("max_speed"), st.floats(0.05, 0.5)),
-    st.builds(SetStep, st.just("max_turn_rate"), st.floats(0.1, 1.5)),
-    st.builds(SetStep, st.just("watchdog"), st.floats(0.1, 5.0)),
-    st.builds(SayStep, say_texts),
-)
+
+
+def simple_steps(skills: SkillSchemas) -> st.SearchStrategy[Step]:
+    """Every step kind but the blocks, with values the language accepts."""
+    return st.one_of(
+        skill_steps(skills),
+        st.builds(DriveStep, st.floats(-0.5, 0.5), st.floats(-1.5, 1.5), st.floats(0.001, 5.0)),
+        st.builds(WaitStep, st.none(), st.floats(0.001, 5.0)),
+        st.builds(WaitStep, conditions, st.none() | st.floats(0.001, 600.0)),
+        st.builds(SetStep, st.just("max_speed"), st.floats(0.05, 0.5)),
+        st.builds(SetStep, st.just("max_turn_rate"), st.floats(0.1, 1.5)),
+        st.builds(SetStep, st.just("watchdog"), st.floats(0.1, 5.0)),
+        st.builds(SayStep, say_texts),
+    )
 
 
 def blocks(children: st.SearchStrategy[Step]) -> st.SearchStrategy[Step]:
@@ -89,8 +94,13 @@ def blocks(children: st.SearchStrategy[Step]) -> st.SearchStrategy[Step]:
     )
 
 
-plans = st.lists(st.recursive(simple_steps, blocks, max_leaves=20), min_size=1, max_size=8) \
-    .map(lambda steps: Plan(tuple(steps)))
+def plans_of(skills: SkillSchemas) -> st.SearchStrategy[Plan]:
+    """Plans of up to 8 steps and 20 leaves using the given skills."""
+    return st.lists(st.recursive(simple_steps(skills), blocks, max_leaves=20), min_size=1, max_size=8) \
+        .map(lambda steps: Plan(tuple(steps)))
+
+
+plans = plans_of(SKILLS)
 
 
 def accepted(plan: Plan) -> Plan | None:
