@@ -108,3 +108,38 @@ def test_a_plan_used_as_a_skill_is_a_console_panel_that_runs_it_with_its_line_pr
     assert panel.locator("[data-field=plan-status]").text_content() == "SUCCEEDED"
     ARTIFACTS_DIR.mkdir(exist_ok=True)
     page.screenshot(path=str(ARTIFACTS_DIR / "plans-console-skill.png"))
+
+
+def test_a_tutor_shares_a_plan_and_a_student_reads_it_and_copies_it(page, chromium, live_server: LiveServer) -> None:
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from tests.conftest import STUDENT_PASSWORD, make_course
+    from tests.e2e.test_lessons import log_in
+
+    with session_factory(live_server.app)() as session:
+        create_user(session, "tutor7", "tutor", STUDENT_PASSWORD)
+        session.commit()
+    make_course(live_server.app, "ROB7", {"tutor7": "tutor", "student1": "student"})
+    log_in(page, live_server, "tutor7")
+    page.goto(f"{live_server.url}/plans")
+    page.get_by_label("Name").first.fill("for-my-class")
+    page.get_by_role("button", name="Create").click()
+    page.wait_for_url("**/plans/*")
+    page.get_by_label("Share with a course I teach").select_option(label="ROB7 · Course ROB7")
+    page.get_by_role("button", name="Share", exact=True).click()
+    page.locator("[data-field=check-status]", has_text="Shared with ROB7").wait_for()
+
+    context = chromium.new_context(viewport={"width": 1280, "height": 800})
+    student = context.new_page()
+    try:
+        log_in(student, live_server, "student1")
+        student.goto(f"{live_server.url}/plans")
+        student.locator("[data-slot=shared] a", has_text="for-my-class").click()
+        student.locator("[data-field=plan-about]", has_text="shared with you to read and run").wait_for()
+        assert student.get_by_role("button", name="Save", exact=True).count() == 0
+        assert student.get_by_label("The plan's text, one command a line").get_attribute("readonly") is not None
+        student.get_by_role("button", name="Copy to my plans").click()
+        student.locator("[data-field=plan-about]", has_text="Your plan").wait_for()
+        assert student.get_by_role("button", name="Save", exact=True).count() == 1
+    finally:
+        context.close()
