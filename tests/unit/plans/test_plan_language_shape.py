@@ -11,8 +11,8 @@ from middleware.teaching.command_form import CommandInvalid, check_parameter, pa
 from tests.test_architecture import imports_in
 
 PLANS = Path(__file__).resolve().parents[3] / "middleware" / "plans"
-LANGUAGE_MODULES = ("__init__", "language", "steps", "checks", "tokens", "text_form", "text_writer", "json_form",
-                    "summary", "aliases", "proto_form")
+LANGUAGE_MODULES = ("__init__", "language", "steps", "checks", "tokens", "text_form", "text_commands", "text_writer",
+                    "json_form", "summary", "aliases", "proto_form")
 FORBIDDEN = ("flask", "flask_login", "grpc", "sqlalchemy", "skill_server", "middleware.db", "middleware.models",
              "middleware.robots", "middleware.access")
 
