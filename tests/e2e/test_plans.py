@@ -143,3 +143,32 @@ def test_a_tutor_shares_a_plan_and_a_student_reads_it_and_copies_it(page, chromi
         assert student.get_by_role("button", name="Save", exact=True).count() == 1
     finally:
         context.close()
+
+
+def test_the_plan_pages_pure_helpers_work_in_the_page(page, live_server: LiveServer) -> None:
+    from tests.e2e.test_lessons import log_in
+
+    log_in(page, live_server)
+    page.goto(f"{live_server.url}/plans")
+    results = page.evaluate("""async () => {
+        const trace = await import('/static/pages/plans/plan-trace.js');
+        const panel = await import('/static/panels/plan-panel/plan-panel.js');
+        let points = trace.addSample([], {x_m: 0, y_m: 0});
+        points = trace.addSample(points, {x_m: 0.005, y_m: 0});  // under 1 cm: replaces the last point
+        points = trace.addSample(points, {x_m: 0.5, y_m: 0});
+        points = trace.addSample(points, {x_m: NaN, y_m: 0});
+        return {
+          points: points.length,
+          apart: trace.endErrorCm([{x_m: 0, y_m: 0}], [{x_m: 0.03, y_m: 0.04}]),
+          none: trace.endErrorCm([], [{x_m: 0, y_m: 0}]),
+          line: trace.lineOf({values: {line: 3}, state: "line 3: drive"}),
+          lineFromState: trace.lineOf({values: {}, state: "line 7: wait"}),
+          aborted: trace.endStateWords({status: "aborted", error_code: "TIMEOUT",
+                                        message: "line 4: the condition did not hold in 10 s"}),
+          succeeded: trace.endStateWords({status: "succeeded", message: ""}),
+          running: panel.planGoalWords({status: "executing"}, {values: {line: 2}, state: "line 2: drive"}),
+        };
+    }""")
+    assert results == {"points": 2, "apart": 5.0, "none": None, "line": 3, "lineFromState": 7,
+                       "aborted": "ABORTED at line 4 (TIMEOUT): the condition did not hold in 10 s",
+                       "succeeded": "SUCCEEDED", "running": "Running line 2: drive"}
