@@ -31,7 +31,7 @@ from middleware.teaching.command_form import SkillSchemas
 from tests.unit.plans.catalogue import catalogue_schemas
 
 SKILLS = catalogue_schemas()
-PROPERTY_SETTINGS = settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+PROPERTY_SETTINGS = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
 def value_of(schema: Mapping[str, object]) -> st.SearchStrategy[object]:
