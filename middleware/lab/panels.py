@@ -69,7 +69,9 @@ def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | Non
     chat_help = ("Your personal practice robot: nobody else reads this chat; notes to yourself."
                  if personal else "Talk with the others connected to this robot.")
     repositories = [
-        DynamicRepository("camera", "camera", "Camera", f"{base}/camera", "The robot's camera, live.", "drive",
+        DynamicRepository("camera", "camera", "Camera", f"{base}/camera",
+                          "What the robot sees: its camera's video, or the view your browser draws from its pose.",
+                          "drive",
                           (("picture", {"kind": camera_picture[0] or robot_name, "default": camera_picture[1]}),)),
         DynamicRepository("drive", "drive", "Drive", f"{base}/drive",
                           "Direct control: arrow keys, the pad or a gamepad.", "drive"),
@@ -81,7 +83,8 @@ def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | Non
                           "navigate"),
         DynamicRepository("lab-view", "lab-view", "3D lab view", f"{base}/telemetry",
                           "The lab in 3D, drawn by your browser: the robot at its odometry pose, its laser hits and "
-                          "sonar cones, the goal. Drag to turn it.", "navigate"),
+                          "sonar cones, the goal and the path planned to it, the map on the floor. Drag to turn it.",
+                          "navigate"),
         DynamicRepository("sonar", "sonar", "Sonar", f"{base}/telemetry", "The ring of sonars, nearest echo each.",
                           "sense"),
         DynamicRepository("laser", "laser", "Laser", f"{base}/telemetry", "The 180-degree laser scan ahead.", "sense"),
