@@ -43,15 +43,20 @@ def parse_plan_text(text: str, skills: SkillSchemas) -> Plan:
         parser.tokens = Tokenizer(parser.report).read(lines)
         steps = parser.block("steps", 0, None)
     except checks.TooManyErrors:
-        raise PlanInvalid(parser.errors) from None
+        raise PlanInvalid(_in_reading_order(parser.errors)) from None
     if not parser.errors:
         parser.errors += checks.plan_totals(steps)
     plan = Plan(tuple(steps))
     if not parser.errors:
         parser.errors += check_written_form(plan)
     if parser.errors:
-        raise PlanInvalid(parser.errors)
+        raise PlanInvalid(_in_reading_order(parser.errors))
     return plan
+
+
+def _in_reading_order(errors: list[PlanError]) -> list[PlanError]:
+    """The tokenizer's errors and the parser's by line and column, as a reader meets them."""
+    return sorted(errors, key=lambda error: (error.line, error.column))
 
 
 class _Parser:

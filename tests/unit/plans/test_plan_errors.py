@@ -139,6 +139,13 @@ def test_every_bad_line_is_reported_in_one_pass(skills: SkillSchemas) -> None:
                                  "message": "line 1, column 7: goal_x_m must be between -50 and 50 m; got 120."}
 
 
+def test_errors_come_in_reading_order_whoever_found_them(skills: SkillSchemas) -> None:
+    with pytest.raises(PlanInvalid) as refused:
+        parse_plan_text("go_to 99 0\nsay 'x'\nturn_to 9\ngo_to 1 ;", skills)
+    assert [(e.line, e.column) for e in refused.value.errors] == [(1, 7), (2, 5), (2, 7), (3, 9), (4, 9)]
+    assert refused.value.field == "steps[0].parameters.goal_x_m"
+
+
 def test_a_bad_block_header_still_has_its_block_checked(skills: SkillSchemas) -> None:
     with pytest.raises(PlanInvalid) as refused:
         parse_plan_text("repeat many {\n  go_to 99 0\n}\nif obstacle_within 99 {\n  say 3\n}", skills)
