@@ -36,7 +36,7 @@ from middleware.teaching.command_form import (
 DIRECT_CONTROL = "direct_control"  # its schema gives the robot's velocity ceilings for drive and set
 MAX_PARAMETERS = 32
 OBSTACLE_RANGE_M = (0.05, 8.0)  # the laser's reach
-BATTERY_RANGE = (0.01, 1.0)  # a fraction of full; below 0 is never true, and the skill server refuses it
+BATTERY_RANGE = (0.01, 1.0)  # a fraction of full; below 0 is never true, and the skill server refuses 0
 WATCHDOG_RANGE_S = (0.1, 5.0)
 MIN_SPEED_MPS, MIN_TURN_RATE_RADPS = 0.05, 0.1
 
@@ -67,8 +67,7 @@ def shown(value: object) -> str:
     if isinstance(value, float):
         return f"{value:g}"
     if isinstance(value, int):
-        text = str(value) if abs(value) < 10**30 else "a number too large"
-        return text
+        return str(value) if abs(value) < 10**30 else "a number too large"
     if isinstance(value, str):
         return repr(value[:40] + ("..." if len(value) > 40 else ""))
     if value is None:
