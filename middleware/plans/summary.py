@@ -76,6 +76,6 @@ def plan_summary(plan: Plan) -> dict[str, object]:
     bound = duration_bound_s(plan.steps)
     return {
         "steps": expanded_count(plan.steps),
-        "max_duration_s": bound,
+        "max_duration_s": None if bound is None else round(bound, 6),  # 20.56, not 20.560000000000002
         "skills": sorted({step.skill for step in walk(plan.steps) if isinstance(step, SkillStep)}),
     }

@@ -16,6 +16,7 @@ from middleware.plans import (
     SetStep,
     SkillStep,
     WaitStep,
+    is_plan_name,
     parse_plan_text,
     plan_from_json,
     plan_summary,
@@ -187,6 +188,19 @@ def test_the_written_text_uses_the_short_commands_and_degrees(skills: SkillSchem
     assert plan_to_text(plan) == ("go_to 1.2 0.5 speed_mps=0.3\nturn_to 90deg\nfollow_wall left 0.4 for 20s\n"
                                   "go_to_goal goal_y_m=1 goal_x_m=2\nif not obstacle_within 0.5 {\n  wait 2s\n}\n"
                                   "set watchdog 0.5s\nsay \"a \\\"b\\\"\"\n")
+
+
+def test_the_summary_bound_is_not_float_noise(skills: SkillSchemas) -> None:
+    plan = parse_plan_text("repeat 4 {\n  drive 0.2 0 for 2s\n  drive 0 0.5 for 3.14s\n}", skills)
+    assert plan_summary(plan)["max_duration_s"] == 20.56
+
+
+@pytest.mark.parametrize(("name", "valid"), [
+    ("patrol", True), ("Lap-2_b", True), ("a" * 64, True), ("", False), ("a" * 65, False), ("two words", False),
+    ("plan:x", False), ("é", False), ("１", False), ("../x", False), (None, False), (7, False),
+])
+def test_a_plan_name_is_letters_digits_dash_and_underscore(name: object, valid: bool) -> None:
+    assert is_plan_name(name) is valid
 
 
 def test_plans_compare_by_what_they_do_not_where_they_were_written(skills: SkillSchemas) -> None:
