@@ -24,7 +24,7 @@ def test_the_student_lowers_the_speed_ceiling_in_the_panel_and_reads_its_answer(
     watchdog = panel.locator('input[name="watchdog_s"]')
     assert watchdog.is_disabled(), "a student in no course may not change the watchdog"
     speed = panel.locator('input[name="max_linear_mps"]')
-    assert not speed.is_disabled()
+    assert not speed.is_disabled() and panel.locator('[data-field="limits-observing"]').is_hidden()
 
     speed.focus()
     page.keyboard.type("0.9")
@@ -53,3 +53,28 @@ def test_the_student_lowers_the_speed_ceiling_in_the_panel_and_reads_its_answer(
     speed.fill("0.5")
     page.keyboard.press("Enter")
     panel.locator('[data-current="max_linear_mps"]').filter(has_text="0.50").wait_for()
+
+
+def test_an_observer_sees_the_settings_read_only(app, live_server: LiveServer, chromium, page) -> None:
+    from middleware.auth.services import create_user
+    from middleware.db import session_factory
+    from tests.conftest import STUDENT_PASSWORD
+
+    with session_factory(app)() as session:
+        create_user(session, "student2", "student", STUDENT_PASSWORD)
+        session.commit()
+    open_console(page, live_server, "student1")
+    wait_for_control(page)
+    second_context = chromium.new_context(viewport={"width": 390, "height": 844})
+    second = second_context.new_page()
+    try:
+        open_console(second, live_server, "student2")
+        second.locator('queue-panel[data-role="waiting"]').wait_for()
+        show_tab_of(second, "low-level")
+        panel = second.locator("low-level-panel")
+        panel.locator('[data-field="limits-observing"]').wait_for()
+        panel.locator('[data-current="max_linear_mps"]').filter(has_text="0.").wait_for()
+        assert panel.locator('input[name="max_linear_mps"]').is_disabled()
+        assert panel.locator('button[data-action="save-limits"]').is_disabled()
+    finally:
+        second_context.close()

@@ -88,7 +88,7 @@ export class ConsoleWiring {
     queue: (descriptor, panel) => this.#queue(descriptor, panel),
     chat: (descriptor, panel) => connectChat(this.#robotPath, panel),
     pings: (descriptor, panel) => this.#pings(descriptor, panel),
-    limits: (descriptor, panel) => this.#limits(panel),
+    limits: (descriptor, panel) => this.#limits(descriptor, panel),
   };
 
   /** Connect one placed panel to the feeds its module declared. */
@@ -424,8 +424,9 @@ export class ConsoleWiring {
     playTurnTone();
   }
 
-  /** The robot's low-level settings: read once the console starts, changed when the panel asks. */
-  #limits(panel) {
+  /** The robot's low-level settings: read once the console starts and again whenever control changes hands (the
+   *  robot then resets them), changed when the panel asks. */
+  #limits(descriptor, panel) {
     const url = `/api/robots/${encodeURIComponent(this.#robotName)}/limits`;
     panel.addEventListener("limits-change", async ({ detail }) => {
       try {
@@ -434,14 +435,25 @@ export class ConsoleWiring {
         panel.error = { code: error.code ?? "network", message: error.message, field: error.field ?? null };
       }
     });
-    this.#starters.push(async () => {
+    const load = async () => {
       try {
         panel.limits = await fetchJson(url);
       } catch (error) {
         panel.error = { code: error.code ?? "network", message: `The limits could not be read: ${error.message}`,
           field: null };
       }
-    });
+    };
+    const queuePath = `${this.#robotPath}/queue`;
+    if (this.#channels.has(queuePath)) { // the turn panel's socket, never one of its own (opening it joins the queue)
+      let controlling = null;
+      this.#listen(queuePath, descriptor.id, (message) => {
+        if (message.type !== "queue" || message.is_controller === controlling) return;
+        controlling = message.is_controller;
+        panel.observing = !controlling;
+        load();
+      });
+    }
+    this.#starters.push(load);
   }
 
   #pings(descriptor, panel) {

@@ -2,7 +2,8 @@
 // timeout in force, with inputs for the ones this user may change (the server says which: role and course).
 // In: `telemetry` (a {"type": "telemetry", battery: {charge, charging, empty}} message), `message` (status/error
 //     JSON of the socket), `limits` ({limits: {...}, may_change: [...], message?}: the API's answer),
-//     `error` ({code, message, field} or null: a refusal, shown next to its field).
+//     `error` ({code, message, field} or null: a refusal, shown next to its field), `observing` (true while someone
+//     else has the turn: the inputs are read-only, as the server would refuse them).
 // Out: "limits-change" (detail {field: value, ...}: only the fields the person filled in).
 // The server checks every value (range, permission, control); the browser only sends what was typed.
 
@@ -47,6 +48,10 @@ export class LowLevelPanel extends PanelElement {
   #errors = new Map();     // name -> error line
   #formError;
   #answer;
+  #save;
+  #observingNote;
+  #mayChange = new Set();
+  #observing = false;
 
   build() {
     this.classList.add("panel");
@@ -57,7 +62,10 @@ export class LowLevelPanel extends PanelElement {
       SETTINGS.map((setting) => this.#field(setting)),
       this.#formError = h("p", { class: "low-level__error", "data-field": "limits-error", role: "alert", hidden: true }),
       h("div", { class: "low-level__actions" },
-        h("button", { type: "submit", class: "button button--primary", "data-action": "save-limits", text: "Save" })));
+        this.#save = h("button", { type: "submit", class: "button button--primary", "data-action": "save-limits",
+          text: "Save" }),
+        this.#observingNote = h("span", { class: "low-level__note", "data-field": "limits-observing", hidden: true,
+          text: "You are observing: the settings are the controller's to change." })));
     this.#form.addEventListener("submit", (event) => {
       event.preventDefault();
       this.#submit();
@@ -139,12 +147,26 @@ export class LowLevelPanel extends PanelElement {
       if (Number.isFinite(low)) input.min = String(low);
       if (Number.isFinite(high)) input.max = String(high);
       input.placeholder = fixed(limits[setting.name], setting.decimals);
-      input.disabled = !mayChange.has(setting.name);
       this.#notes.get(setting.name).hidden = mayChange.has(setting.name);
       if (answer?.message) input.value = "";
     }
+    this.#mayChange = mayChange;
+    this.#applyAccess();
     this.#clearErrors();
     this.#answer.textContent = answer?.message ?? "";
+  }
+
+  /** True while someone else has the turn. */
+  set observing(observing) {
+    this.ensureBuilt();
+    this.#observing = Boolean(observing);
+    this.#applyAccess();
+  }
+
+  #applyAccess() {
+    for (const [name, input] of this.#inputs) input.disabled = this.#observing || !this.#mayChange.has(name);
+    this.#save.disabled = this.#observing || this.#mayChange.size === 0;
+    this.#observingNote.hidden = !this.#observing;
   }
 
   /** A refusal: next to its field when it names one of them, else under the form. */
