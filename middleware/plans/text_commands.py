@@ -144,19 +144,19 @@ class CommandReader:
             raise self.at(head, f"{path}.parameters.{missing[0]}",
                           f"{head.text} needs {', '.join(missing)}, as in {alias.example}.")
         parameters: list[tuple[str, object]] = []
+        seen: set[str] = set()
         failed = False
         for name, key, token in pairs:
-            field = f"{path}.parameters.{name}"
+            at = key if name in seen or name not in schema else token  # a name's problem at the name
             try:
-                if name in dict(parameters) or name not in schema:
-                    token = key
-                if name in dict(parameters):
+                if name in seen:
                     raise StepProblem(f"parameters.{name}", f"{name} is given twice.")
+                seen.add(name)
                 unit = str(schema[name].get("unit") or "") if name in schema else ""
-                value = self.number(token, unit, name, field)
-                parameters.append((name, checks.skill_parameter(skill, schema, name, value, token.written)))
+                value = self.number(at, unit, name, f"{path}.parameters.{name}")
+                parameters.append((name, checks.skill_parameter(skill, schema, name, value, at.written)))
             except StepProblem as problem:
-                self.report(token.line, token.column, problem.message, f"{path}.{problem.field}")
+                self.report(at.line, at.column, problem.message, f"{path}.{problem.field}")
                 failed = True
             except Reported:
                 failed = True

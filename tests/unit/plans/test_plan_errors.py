@@ -17,6 +17,7 @@ ERRORS = [
     ("go_to 1 2 warp=9", 1, 11, "steps[0].parameters.warp", "go_to_goal has no parameter 'warp'"),
     ("go_to 1 2 sped=0.3", 1, 11, "steps[0].parameters.sped", "(did you mean speed_mps?)"),
     ("go_to 1 2 goal_x_m=3", 1, 11, "steps[0].parameters.goal_x_m", "goal_x_m is given twice"),
+    ("go_to 99 2 goal_x_m=3", 1, 7, "steps[0].parameters.goal_x_m", "goal_x_m must be between -50 and 50 m; got 99."),
     ("go_to 1", 1, 1, "steps[0].parameters.goal_y_m", "go_to needs goal_y_m, as in go_to 1.2 0.5"),
     ("go_to 1 2 3", 1, 11, "steps[0]", "go_to takes at most 2 values without a name"),
     ("go_to speed=0.3 1 2", 1, 17, "steps[0]", "values without a name come first"),
@@ -137,6 +138,14 @@ def test_every_bad_line_is_reported_in_one_pass(skills: SkillSchemas) -> None:
                              "field": "steps[0].parameters.goal_x_m"}
     assert body["errors"][0] == {"line": 1, "column": 7, "field": "steps[0].parameters.goal_x_m",
                                  "message": "line 1, column 7: goal_x_m must be between -50 and 50 m; got 120."}
+
+
+def test_a_parameter_given_twice_is_named_even_when_its_first_value_was_wrong(skills: SkillSchemas) -> None:
+    with pytest.raises(PlanInvalid) as refused:
+        parse_plan_text("go_to 99 2 goal_x_m=3", skills)
+    assert [(e.column, e.field) for e in refused.value.errors] == [
+        (7, "steps[0].parameters.goal_x_m"), (12, "steps[0].parameters.goal_x_m")]
+    assert "goal_x_m is given twice" in refused.value.errors[1].message
 
 
 def test_errors_come_in_reading_order_whoever_found_them(skills: SkillSchemas) -> None:
