@@ -131,8 +131,8 @@ def _a(noun: str) -> str:
 def skill_schema(skill: str, skills: SkillSchemas) -> dict[str, Mapping[str, object]]:
     """The skill's parameters by name, or a StepProblem naming the skills the robot has."""
     if not SKILL_NAME.fullmatch(skill) or skill not in skills:
-        raise StepProblem("skill", f"This robot has no skill {shown(skill)}{did_you_mean(skill, skills)}; "
-                                   f"it has {', '.join(sorted(skills)) or 'none'}.")
+        raise StepProblem("skill", f"No skill {shown(skill)} that a plan can run{did_you_mean(skill, skills)}; a plan "
+                                   f"runs the skills that drive the wheels: {', '.join(sorted(skills)) or 'none'}.")
     return {str(p.get("name")): p for p in skills[skill]}
 
 

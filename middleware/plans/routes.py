@@ -27,7 +27,7 @@ blueprint = Blueprint("plans", __name__)
 
 
 def _skills() -> dict[str, list[dict[str, object]]]:
-    return reference_skills(current_user.id)
+    return reference_skills(current_user.id, motor_only=True)
 
 
 def _plan_answer(plan_id: int, status: int = 200, version: int | None = None) -> ResponseReturnValue:

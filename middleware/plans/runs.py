@@ -60,7 +60,7 @@ def run_plan(user_id: int, username: str, name: str, document: dict[str, object]
     else:
         robot = robot_commands().for_user(request.target, user_id, field="target")
     try:
-        plan = plan_from_json(document, skill_schemas(robot.link))
+        plan = plan_from_json(document, skill_schemas(robot.link, motor_only=True))
         if request.from_dock and request.target == PRACTICE_TARGET:
             robot.return_to_dock()
         goal = robot.run_plan(name, plan_to_proto(plan), preempt=True)

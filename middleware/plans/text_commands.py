@@ -60,8 +60,9 @@ class CommandReader:
         joined = f"{name}_{tokens[0].text}" if tokens and tokens[0].kind is Kind.WORD else ""
         hint = f" (did you mean {joined}, with _?)" if joined in known else checks.did_you_mean(name, known)
         raise self.at(head, f"{path}.skill", f"{name[:40]!r} is not a command or a skill of this robot"
-                                             f"{hint}; commands: {', '.join(COMMANDS)}; "
-                                             f"skills: {', '.join(sorted(self.skills)) or 'none'}.")
+                                             f"{hint}; commands: {', '.join(COMMANDS)}; skills a plan can "
+                                             f"run (those that drive the wheels): "
+                                             f"{', '.join(sorted(self.skills)) or 'none'}.")
 
     def _units_apart(self, tokens: list[Token], path: str) -> None:
         """Refuses 90 deg (a unit standing apart from its number) with the way to write it."""

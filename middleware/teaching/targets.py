@@ -18,9 +18,11 @@ from middleware.teaching.practice_robots import practice_manager
 PRACTICE_TARGET = "practice"
 
 
-def skill_schemas(link: RobotLink) -> dict[str, list[dict[str, object]]]:
-    """The robot's skills and their parameter schemas, as command_form.parse_command takes them."""
-    return {s.name: [parameter_schema_dict(p) for p in s.parameters] for s in link.skills()}
+def skill_schemas(link: RobotLink, motor_only: bool = False) -> dict[str, list[dict[str, object]]]:
+    """The robot's skills and their parameter schemas, as command_form.parse_command takes them (motor_only: the
+    skills that drive the wheels, the only ones a plan runs)."""
+    return {s.name: [parameter_schema_dict(p) for p in s.parameters] for s in link.skills()
+            if s.motor or not motor_only}
 
 
 def resolve_target(target: object, user_id: int) -> Commander:
@@ -79,7 +81,8 @@ def reference_catalog(user_id: int | None = None) -> list[dict[str, object]]:
     for link in links:
         try:
             return [{"name": s.name, "title": s.title, "help": s.help, "direct_drive": s.direct_drive,
-                     "parameters": [parameter_schema_dict(p) for p in s.parameters]} for s in link.skills()]
+                     "motor": s.motor, "parameters": [parameter_schema_dict(p) for p in s.parameters]}
+                    for s in link.skills()]
         except RobotUnavailable:
             continue
     raise ApiError(503, "no_robot_to_check", "No robot answers now, so the skills cannot be checked. "
@@ -94,6 +97,7 @@ def authoring_catalog(user_id: int | None = None) -> list[dict[str, object]] | N
         return None
 
 
-def reference_skills(user_id: int | None = None) -> dict[str, list[dict[str, object]]]:
-    """The skill schemas to check lessons and tours against (see reference_catalog)."""
-    return {str(entry["name"]): entry["parameters"] for entry in reference_catalog(user_id)}  # type: ignore[misc]
+def reference_skills(user_id: int | None = None, motor_only: bool = False) -> dict[str, list[dict[str, object]]]:
+    """The skill schemas to check lessons and tours against (see reference_catalog); motor_only: plans'."""
+    return {str(entry["name"]): entry["parameters"] for entry in reference_catalog(user_id)  # type: ignore[misc]
+            if entry["motor"] or not motor_only}

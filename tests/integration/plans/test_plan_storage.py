@@ -56,6 +56,16 @@ def test_a_plan_with_errors_is_refused_with_every_error_on_its_line_and_nothing_
     assert _plans_rows(plans_lab) == before
 
 
+def test_a_skill_that_does_not_drive_the_wheels_is_refused_where_it_is_written(plans_lab: PlansLab) -> None:
+    """The skill server runs only motor skills in a plan, so Check says so on the line, not the run later."""
+    ann = plans_lab.client("student1")
+    status, body = api(ann, "POST", "/api/plans/check", {"text": 'say "map it"\nenvironment_modelling\n'})
+    assert status == 200 and body["valid"] is False
+    (error,) = body["errors"]
+    assert error["line"] == 2 and "skills a plan can run" in error["message"]
+    assert "go_to_goal" in error["message"] and "environment_modelling" not in error["message"].split(":", 2)[-1]
+
+
 def test_a_private_plan_is_a_404_to_another_student_and_a_shared_one_is_read_only(plans_lab: PlansLab) -> None:
     ann, bob, tutor = (plans_lab.client(name) for name in ("student1", "student2", "tutor1"))
     status, body = api(ann, "POST", "/api/plans", {"name": "mine", "text": GOOD})

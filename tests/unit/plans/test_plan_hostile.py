@@ -138,7 +138,7 @@ HOSTILE_JSON = [
     ("infinity", step(**{**DRIVE, "duration_s": math.inf}), "steps[0].duration_s", "must be a finite number"),
     ("a zero duration", step(**{**DRIVE, "duration_s": 0}), "steps[0].duration_s", "more than 0 s"),
     ("an unknown skill", step(kind="skill", skill="self_destruct"), "steps[0].skill",
-     "this robot has no skill 'self_destruct'"),
+     "no skill 'self_destruct' that a plan can run"),
     ("a skill name with control characters", step(kind="skill", skill="go\x00to"), "steps[0].skill",
      "no skill 'go\\x00to'"),
     ("parameters not an object", step(kind="skill", skill="go_to_goal", parameters=[1, 2]), "steps[0].parameters",
