@@ -37,6 +37,7 @@ from skill_server.sim.drive_gate import DriveAck, MotionLimits
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.laser import LaserSpec
 from skill_server.sim.pacing import SimTimePacer
+from skill_server.sim.placement import check_placement
 from skill_server.sim.robot_model import TELEBOT
 from skill_server.sim.scene_description import SceneDescription
 from skill_server.sim.scenes import FloorPatch
@@ -193,14 +194,22 @@ class Robot:
         The ids of the goals that were running, and the dock.
         """
         dock = self.world.scene.spawn
+        return self._carry_to(token, dock), dock
 
+    def place(self, token: str, pose: Pose2D) -> list[str]:
+        """Places the robot at pose (supervisory), refused with InvalidParameter unless its body fits there on the
+        floor: every goal ends, odometry restarts there. The ids of the goals that were running."""
+        check_placement(self.world.scene, pose, self.world.spec.body_radius_m)
+        return self._carry_to(token, pose)
+
+    def _carry_to(self, token: str, pose: Pose2D) -> list[str]:
         def carry() -> list[str]:
             self.sequencer.check_supervisory_token(token)
             ended = self.sequencer.running_goal_ids()
-            self.world.set_pose(dock)
+            self.world.set_pose(pose)
             return ended
 
-        return self.world.run_in_loop(carry), dock
+        return self.world.run_in_loop(carry)
 
     def _drive_over_motor_goal(self, token: str, sequence: int, linear_mps: object,
                                angular_radps: object) -> DriveAck:

@@ -52,6 +52,11 @@ def rate_from_proto(field: str, requested: float, default: float, maximum: float
     return requested
 
 
+def pose_from_proto(pose: robot_pb2.Pose2D) -> Pose2D:
+    """A pose as the robot core takes it (checked there)."""
+    return Pose2D(pose.x_m, pose.y_m, pose.theta_rad)
+
+
 def pose_to_proto(pose: Pose2D) -> robot_pb2.Pose2D:
     return robot_pb2.Pose2D(x_m=pose.x_m, y_m=pose.y_m, theta_rad=pose.theta_rad)
 

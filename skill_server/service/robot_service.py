@@ -159,6 +159,15 @@ class RobotService(robot_pb2_grpc.RobotServicer):
             ended, dock = self._robot.return_to_dock(request.token)
             return robot_pb2.ReturnToDockResponse(ended_goal_ids=ended, dock=convert.pose_to_proto(dock))
 
+    def PlaceRobot(self, request: robot_pb2.PlaceRobotRequest,
+                   context: grpc.ServicerContext) -> robot_pb2.PlaceRobotResponse:
+        """Places the robot at a pose clear of walls and obstacles (supervisory); every goal ends, odometry restarts
+        there. INVALID_ARGUMENT names the field at fault."""
+        with domain_errors(context):
+            pose = convert.pose_from_proto(request.pose)
+            ended = self._robot.place(request.token, pose)
+            return robot_pb2.PlaceRobotResponse(ended_goal_ids=ended, pose=convert.pose_to_proto(pose))
+
     def GetTrackRun(self, request: robot_pb2.GetTrackRunRequest,
                     context: grpc.ServicerContext) -> robot_pb2.TrackRun:
         """The track run now; is_track is false in scenes without a track."""

@@ -553,6 +553,22 @@ class ReturnToDockResponse(_message.Message):
     dock: Pose2D
     def __init__(self, ended_goal_ids: _Optional[_Iterable[str]] = ..., dock: _Optional[_Union[Pose2D, _Mapping]] = ...) -> None: ...
 
+class PlaceRobotRequest(_message.Message):
+    __slots__ = ("token", "pose")
+    TOKEN_FIELD_NUMBER: _ClassVar[int]
+    POSE_FIELD_NUMBER: _ClassVar[int]
+    token: str
+    pose: Pose2D
+    def __init__(self, token: _Optional[str] = ..., pose: _Optional[_Union[Pose2D, _Mapping]] = ...) -> None: ...
+
+class PlaceRobotResponse(_message.Message):
+    __slots__ = ("ended_goal_ids", "pose")
+    ENDED_GOAL_IDS_FIELD_NUMBER: _ClassVar[int]
+    POSE_FIELD_NUMBER: _ClassVar[int]
+    ended_goal_ids: _containers.RepeatedScalarFieldContainer[str]
+    pose: Pose2D
+    def __init__(self, ended_goal_ids: _Optional[_Iterable[str]] = ..., pose: _Optional[_Union[Pose2D, _Mapping]] = ...) -> None: ...
+
 class OccupancyGrid(_message.Message):
     __slots__ = ("resolution_m", "origin_x_m", "origin_y_m", "width_cells", "height_cells", "cells", "scans_integrated", "sim_time_s")
     RESOLUTION_M_FIELD_NUMBER: _ClassVar[int]

@@ -104,6 +104,11 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockRequest.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockResponse.FromString,
                 _registered_method=True)
+        self.PlaceRobot = channel.unary_unary(
+                '/telelab.v1.Robot/PlaceRobot',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PlaceRobotRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PlaceRobotResponse.FromString,
+                _registered_method=True)
         self.StreamLocalization = channel.unary_stream(
                 '/telelab.v1.Robot/StreamLocalization',
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamLocalizationRequest.SerializeToString,
@@ -266,6 +271,15 @@ class RobotServicer:
     def ReturnToDock(self, request, context):
         """Carries the robot back to its dock (the scene's spawn pose): every goal ends, odometry restarts there,
         the map is kept. Supervisory, like ClearMap.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def PlaceRobot(self, request, context):
+        """Places the robot at a pose of its scene's floor clear of walls and obstacles (supervisory, token as ReturnToDock):
+        every goal ends, odometry restarts at the pose. INVALID_ARGUMENT names the field (not finite, off the floor,
+        the body overlapping a wall or obstacle).
         """
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
         context.set_details('Method not implemented!')
@@ -444,6 +458,11 @@ def add_RobotServicer_to_server(servicer, server):
                     servicer.ReturnToDock,
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockRequest.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockResponse.SerializeToString,
+            ),
+            'PlaceRobot': grpc.unary_unary_rpc_method_handler(
+                    servicer.PlaceRobot,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PlaceRobotRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PlaceRobotResponse.SerializeToString,
             ),
             'StreamLocalization': grpc.unary_stream_rpc_method_handler(
                     servicer.StreamLocalization,
@@ -884,6 +903,33 @@ class Robot:
             '/telelab.v1.Robot/ReturnToDock',
             protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockRequest.SerializeToString,
             protos_dot_telelab_dot_v1_dot_robot__pb2.ReturnToDockResponse.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def PlaceRobot(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/PlaceRobot',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.PlaceRobotRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.PlaceRobotResponse.FromString,
             options,
             channel_credentials,
             insecure,

@@ -240,3 +240,41 @@ def test_supervisory_actions_take_an_empty_token_only_while_nobody_has_control(
     with pytest.raises(grpc.RpcError) as refused:
         controlled.ClearMap(robot_pb2.ClearMapRequest(token="a-guess"), timeout=DEADLINE_S)
     assert refused.value.code() == grpc.StatusCode.PERMISSION_DENIED
+
+
+def place(robot: robot_pb2_grpc.RobotStub, x_m: float, y_m: float, theta_rad: float = 0.0,
+          token: str = TOKEN) -> robot_pb2.PlaceRobotResponse:
+    """PlaceRobot at (x_m, y_m, theta_rad)."""
+    pose = robot_pb2.Pose2D(x_m=x_m, y_m=y_m, theta_rad=theta_rad)
+    return robot.PlaceRobot(robot_pb2.PlaceRobotRequest(token=token, pose=pose), timeout=DEADLINE_S)
+
+
+def test_placing_the_robot_ends_every_goal_and_restarts_odometry_at_the_pose(
+        controlled: robot_pb2_grpc.RobotStub) -> None:
+    going = activate(controlled, "go_to_goal", goal_x_m=-1.5, goal_y_m=1.0).goal
+    with pytest.raises(grpc.RpcError) as refused:
+        place(controlled, 0.5, -0.4, token="")
+    assert refused.value.code() == grpc.StatusCode.PERMISSION_DENIED, "an empty token while someone controls"
+    placed = place(controlled, 0.5, -0.4, 1.2)
+    assert list(placed.ended_goal_ids) == [going.goal_id]
+    after = newest_telemetry(controlled)
+    for pose in (after.ground_truth, after.odometry.pose):
+        assert math.hypot(pose.x_m - 0.5, pose.y_m + 0.4) < 0.02
+        assert abs(pose.theta_rad - 1.2) < 0.02
+    state = controlled.GetGoal(robot_pb2.GetGoalRequest(goal_id=going.goal_id), timeout=DEADLINE_S)
+    assert state.status in (robot_pb2.GOAL_STATUS_ABORTED, robot_pb2.GOAL_STATUS_CANCELED)
+
+
+def test_a_placement_off_the_floor_or_into_a_wall_is_refused_naming_the_field(
+        controlled: robot_pb2_grpc.RobotStub) -> None:
+    info = controlled.GetRobotInfo(robot_pb2.GetRobotInfoRequest(), timeout=DEADLINE_S)
+    obstacle = min(info.scene_boxes, key=lambda box: math.hypot(box.center_x_m, box.center_y_m))  # on the floor
+    for (x_m, y_m, theta_rad), field in (((math.nan, 0.0, 0.0), "pose.x_m"), ((0.0, 0.0, math.inf), "pose.theta_rad"),
+                                         ((0.0, 1e6, 0.0), "pose.y_m"),
+                                         ((obstacle.center_x_m, obstacle.center_y_m, 0.0), "pose")):
+        with pytest.raises(grpc.RpcError) as refused:
+            place(controlled, x_m, y_m, theta_rad)
+        assert refused.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+        assert dict(refused.value.trailing_metadata() or ())["field"] == field, refused.value.details()
+    after = newest_telemetry(controlled)
+    assert math.hypot(after.ground_truth.x_m, after.ground_truth.y_m) < 0.02, "nothing moved on refusal"
