@@ -5,12 +5,12 @@ It owns the controller token (the known-token fast path, a database re-read when
 re-sending it to a robot that restarted and forgot it), sequence numbering, the deadman-friendly held
 drive, and the one map from a robot's refusal to the error a person or API client sees. Nothing else in
 the middleware calls a RobotLink command method (drive, activate_skill, cancel_goal, clear_map,
-return_to_dock, reset_evidence_grid, set_controller, set_limits, get_limits, run_plan):
+return_to_dock, place_robot, reset_evidence_grid, set_controller, set_limits, get_limits, run_plan):
 tests/test_architecture.py checks it.
 
-Supervisory actions (clearing the map, the return to the dock) are the controller's, or a tutor's or an
-admin's at any time: those go out under whatever token the robot obeys now ("" while nobody has control),
-so a tutor acts without taking anyone's turn.
+Supervisory actions (clearing the map, the return to the dock, placing the robot) are the controller's, or a
+tutor's or an admin's at any time: those go out under whatever token the robot obeys now ("" while nobody has
+control), so a tutor acts without taking anyone's turn.
 
 The stale-token rule, the same for every source: a command goes out under the token this process last
 knew; if the robot refuses it as not the controller's, the token is read again from its source (the
@@ -196,6 +196,11 @@ class Commander:
     def return_to_dock(self) -> robot_pb2.ReturnToDockResponse:
         """Carries the robot to its dock: every goal ends, odometry restarts at the dock."""
         return self._as_controller(self.link.return_to_dock)
+
+    def place_robot(self, pose: robot_pb2.Pose2D) -> robot_pb2.PlaceRobotResponse:
+        """Places the robot at pose (refused naming the field unless it fits there): every goal ends, odometry
+        restarts at the pose."""
+        return self._as_controller(lambda token: self.link.place_robot(token, pose))
 
     def reset_evidence(self) -> robot_pb2.EvidenceGrid:
         """Forgets the robot's teleperception evidence grid and readings (for every viewer); the emptied grid."""

@@ -4,8 +4,11 @@ the skills of the robot it runs on; the page follows the goal's channel for the 
 telemetry for the trace.
 
 The practice robot runs in the scene of the lab robot named beside it (restarted in that scene when it runs
-another), and may be carried to its dock first, the scene's spawn pose, where a lab robot starts its day. It is
-not placed at the lab robot's current pose: no RPC places a robot anywhere but at its dock.
+another) and starts where that lab robot stands now: at its odometry pose, read server-side from a short pose-only
+telemetry stream (the frame the student's lab run will be measured in), through PlaceRobot. Asked "from the dock",
+it is carried to its dock instead, the scene's spawn pose, where a lab robot starts its day. When the lab robot
+does not answer, or its pose is no place to stand (odometry drifted into a wall), the practice robot starts at its
+dock and the answer's start says why. Without a lab robot beside it, it starts where it stands.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.messages import goal_dict
 from middleware.teaching.practice_robots import practice_manager
 from middleware.teaching.targets import PRACTICE_TARGET, skill_schemas
+from protos.telelab.v1 import robot_pb2
 
 
 @dataclass(frozen=True)
@@ -30,13 +34,46 @@ class RunRequest:
     from_dock: bool
 
 
-def lab_scene(robot_name: str, user_id: int) -> str | None:
-    """The scene a lab robot runs, if it answers (None otherwise: the practice robot keeps its own)."""
+@dataclass(frozen=True)
+class LabRobotNow:
+    """The lab robot beside the practice robot: its name, scene and odometry pose (None when it did not answer)."""
+
+    name: str
+    scene: str | None
+    pose: robot_pb2.Pose2D | None
+
+
+def lab_robot_now(robot_name: str, user_id: int) -> LabRobotNow:
+    """The scene a lab robot runs and where it stands, if it answers."""
     link = robot_commands().require(robot_name, user_id, field="beside")
     try:
-        return link.info(max_age_s=5.0).scene_name or None
+        return LabRobotNow(robot_name, link.info(max_age_s=5.0).scene_name or None, link.odometry_pose())
     except RobotUnavailable:
-        return None
+        return LabRobotNow(robot_name, None, None)
+
+
+def start_practice_robot(robot: Commander, from_dock: bool, beside: LabRobotNow | None) -> dict[str, object]:
+    """Places the practice robot where its run starts; where that is ("lab_robot", "dock" or "here") and a
+    sentence for the page."""
+    if from_dock:
+        robot.return_to_dock()
+        return {"at": "dock", "message": "Starts at its dock."}
+    if beside is None:
+        return {"at": "here", "message": "Starts where it stands."}
+    if beside.pose is None:
+        reason = f"{beside.name} did not answer"
+    else:
+        pose = beside.pose
+        try:
+            robot.place_robot(pose)
+            return {"at": "lab_robot", "message": f"Starts where {beside.name} stands now "
+                                                  f"(x {pose.x_m:.2f} m, y {pose.y_m:.2f} m)."}
+        except CommandRefused as refused:
+            if refused.code != "invalid_field":
+                raise
+            reason = f"{beside.name}'s pose is no place to stand ({refused.message})"
+    robot.return_to_dock()
+    return {"at": "dock", "message": f"Starts at its dock: {reason}."}
 
 
 def practice_commander(user_id: int, username: str, scene: str | None) -> Commander:
@@ -54,22 +91,25 @@ def practice_commander(user_id: int, username: str, scene: str | None) -> Comman
 def run_plan(user_id: int, username: str, name: str, document: dict[str, object], request: RunRequest
              ) -> dict[str, object]:
     """Starts the plan on the requested robot; the goal, and where the page follows it and cancels it."""
-    if request.target == PRACTICE_TARGET:
-        scene = lab_scene(request.beside, user_id) if request.beside else None
-        robot = practice_commander(user_id, username, scene)
+    practice = request.target == PRACTICE_TARGET
+    start: dict[str, object] | None = None
+    beside: LabRobotNow | None = None
+    if practice:
+        beside = lab_robot_now(request.beside, user_id) if request.beside else None
+        robot = practice_commander(user_id, username, beside.scene if beside else None)
     else:
         robot = robot_commands().for_user(request.target, user_id, field="target")
     try:
         plan = plan_from_json(document, skill_schemas(robot.link, motor_only=True))
-        if request.from_dock and request.target == PRACTICE_TARGET:
-            robot.return_to_dock()
+        if practice:
+            start = start_practice_robot(robot, request.from_dock, beside)
         goal = robot.run_plan(name, plan_to_proto(plan), preempt=True)
     except (CommandRefused, RobotUnavailable) as error:
         raise refusal_error(error) from None
     answer = goal_dict(goal)
     goal_id = str(answer["goal_id"])
     robot_name = robot.robot_name
-    return {"robot": robot_name, "practice": request.target == PRACTICE_TARGET, "goal": answer,
+    return {"robot": robot_name, "practice": practice, "start": start, "goal": answer,
             "goal_channel": f"/ws/robots/{robot_name}/goals/{goal_id}",
             "telemetry_channel": f"/ws/robots/{robot_name}/telemetry",
             "cancel_url": f"/api/robots/{robot_name}/goals/{goal_id}",

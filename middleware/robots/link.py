@@ -151,6 +151,25 @@ class RobotLink:
         """Carries the robot to its dock; the goals that ended and the dock's pose."""
         return self._call(self._stub.ReturnToDock, robot_pb2.ReturnToDockRequest(token=token))
 
+    def place_robot(self, token: str, pose: robot_pb2.Pose2D) -> robot_pb2.PlaceRobotResponse:
+        """Places the robot at pose; the goals that ended and the pose."""
+        return self._call(self._stub.PlaceRobot, robot_pb2.PlaceRobotRequest(token=token, pose=pose))
+
+    def odometry_pose(self) -> robot_pb2.Pose2D:
+        """Where the robot's odometry says it stands now (what a run on it is measured in): the first message of a
+        pose-only telemetry stream of its own, which is fresh whether or not anyone watches the robot.
+        RobotUnavailable when it does not answer within the call deadline."""
+        stream = self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(pose_only=True),
+                                            timeout=self.rpc_timeout_s)
+        try:
+            return next(iter(stream)).odometry.pose
+        except grpc.RpcError as error:
+            raise _translate(error) from None
+        except StopIteration:
+            raise RobotUnavailable(f"{self.name} sent no telemetry.") from None
+        finally:
+            stream.cancel()
+
     def get_goal(self, goal_id: str) -> robot_pb2.GoalState:
         """A running goal or one that ended recently."""
         return self._call(self._stub.GetGoal, robot_pb2.GetGoalRequest(goal_id=goal_id))

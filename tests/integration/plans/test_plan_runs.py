@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from middleware.robots.processes import SkillServerProcess
 from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_test_app
 from tests.integration.lab.test_skills_api import take_control
 from tests.integration.plans.conftest import PlansLab, api
@@ -111,11 +112,11 @@ def test_the_practice_robot_reports_the_line_running_and_the_failing_line(plans_
 
 
 @pytest.fixture
-def fresh_lab(tmp_path: Path) -> Iterator[LiveServer]:
+def fresh_lab_and_robot(tmp_path: Path) -> Iterator[tuple[LiveServer, SkillServerProcess]]:
     """A lab whose lab-1 is a skill server of its own, fresh at its dock in the lab scene (the session's robot
-    has been moved by other tests), on SQLite."""
+    has been moved by other tests), on SQLite; and lab-1's process."""
     from middleware.access.coordinator import access_coordinator
-    from middleware.robots.processes import SkillServerProcess, wait_until_serving
+    from middleware.robots.processes import wait_until_serving
     from middleware.robots.registry import robot_registry
     from middleware.teaching.practice_robots import practice_manager
 
@@ -127,7 +128,7 @@ def fresh_lab(tmp_path: Path) -> Iterator[LiveServer]:
         wait_until_serving(robot.address)
         app = make_test_app(f"sqlite:///{tmp_path / 'fresh.sqlite3'}", f"lab-1={robot.address}", tmp_path)
         server = LiveServer(app)
-        yield server
+        yield server, robot
     finally:
         if server is not None:
             server.stop()
@@ -136,6 +137,12 @@ def fresh_lab(tmp_path: Path) -> Iterator[LiveServer]:
             access_coordinator(app).stop_ticker()
             robot_registry(app).close()
         robot.stop()
+
+
+@pytest.fixture
+def fresh_lab(fresh_lab_and_robot: tuple[LiveServer, SkillServerProcess]) -> LiveServer:
+    """The lab of fresh_lab_and_robot."""
+    return fresh_lab_and_robot[0]
 
 
 def test_the_predicted_end_point_agrees_with_the_lab_robot_within_5_cm(fresh_lab: LiveServer) -> None:
@@ -182,3 +189,44 @@ def test_a_plan_on_a_lab_robot_ends_when_its_user_goes_away(plans_lab: PlansLab)
     print(f"the plan ended {ended_after_s:.1f} s after its user left (grace {grace_s} s)")
     assert goal["status"] == "aborted" and goal["error_code"] == "CONTROL_REVOKED", goal
     assert ended_after_s <= grace_s + 5.0, "the plan outlived its user's presence by more than the grace"
+
+
+def test_the_practice_robot_starts_where_the_lab_robot_stands_now(fresh_lab: LiveServer) -> None:
+    ann = LabClient(fresh_lab.url)
+    assert ann.login("student1", STUDENT_PASSWORD) == 302
+    queue = take_control(ann)
+    status, moved = api(ann, "POST", f"/api/plans/{_create(ann, 'corner', SQUARE_CORNER)}/runs", {"target": "lab-1"})
+    assert status == 202, moved
+    assert wait_for_end(ann, moved)["status"] == "succeeded"
+    lab = latest_pose(ann, "lab-1")
+    still_id = _create(ann, "still", "wait 3s\n")
+    status, tried = api(ann, "POST", f"/api/plans/{still_id}/runs", {"target": "practice", "beside": "lab-1",
+                                                                     "from_dock": False})
+    assert status == 202, tried
+    assert tried["start"]["at"] == "lab_robot", tried["start"]
+    practice = latest_pose(ann, tried["robot"])
+    apart_m = math.hypot(practice["x_m"] - lab["x_m"], practice["y_m"] - lab["y_m"])
+    turned_rad = abs(math.remainder(practice["theta_rad"] - lab["theta_rad"], math.tau))
+    print(f"lab-1 at {lab}, the practice robot starts at {practice}: {apart_m * 100:.1f} cm, {turned_rad:.3f} rad")
+    assert apart_m <= 0.02 and turned_rad <= 0.02
+    # "Start at the dock", the alternative, still carries it back there, away from where lab-1 stands.
+    status, docked = api(ann, "POST", f"/api/plans/{still_id}/runs", {"target": "practice", "beside": "lab-1",
+                                                                      "from_dock": True})
+    assert status == 202 and docked["start"]["at"] == "dock", docked
+    at_dock = latest_pose(ann, docked["robot"])
+    assert math.hypot(at_dock["x_m"] - lab["x_m"], at_dock["y_m"] - lab["y_m"]) > 0.5
+    queue.close()
+
+
+
+def test_a_lab_robot_that_does_not_answer_leaves_the_practice_robot_at_its_dock(
+        fresh_lab_and_robot: tuple[LiveServer, SkillServerProcess]) -> None:
+    server, lab_robot = fresh_lab_and_robot
+    ann = LabClient(server.url)
+    assert ann.login("student1", STUDENT_PASSWORD) == 302
+    plan_id = _create(ann, "still", "wait 1s\n")
+    lab_robot.stop()
+    status, tried = api(ann, "POST", f"/api/plans/{plan_id}/runs",
+                        {"target": "practice", "beside": "lab-1", "from_dock": False})
+    assert status == 202, tried
+    assert tried["start"] == {"at": "dock", "message": "Starts at its dock: lab-1 did not answer."}
