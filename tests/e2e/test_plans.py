@@ -1,7 +1,7 @@
 """The plans journey in Chromium as the demo student: write a plan with an error, see it marked on its line, fix
-it, save it, try it on the practice robot, and see its trace drawn and its end state; run it on lab-1 once the turn
-is held, its trace beside the prediction; the seeded plans listed; and the editor at phone width. Screenshots in
-test-artifacts/."""
+it, save it, try it on the practice robot (from where lab-1 stands now), and see its trace drawn and its end
+state; run it on lab-1 once the turn is held, its trace beside the prediction; the seeded plans listed; and the
+editor at phone width. Screenshots in test-artifacts/."""
 
 from __future__ import annotations
 
@@ -51,7 +51,10 @@ def test_the_demo_student_fixes_a_plan_and_tries_it_on_the_practice_robot(
         page.get_by_role("button", name="Save", exact=True).click()
         page.locator("[data-field=check-status]", has_text="Saved as version 2").wait_for()
 
+        assert page.get_by_role("radio", name="where lab-1 stands now").is_checked()
+        assert page.get_by_role("radio", name="at the dock").count() == 1
         page.get_by_role("button", name="Try on my practice robot").click()
+        page.locator("[data-field=start]", has_text="Practice robot: Starts where lab-1 stands now").wait_for()
         page.locator("[data-field=end-state][data-status]").wait_for(timeout=120_000)
         end_state = page.locator("[data-field=end-state]")
         assert end_state.get_attribute("data-status") == "succeeded", end_state.text_content()

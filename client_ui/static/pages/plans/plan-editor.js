@@ -17,6 +17,8 @@ const versionSelect = root.querySelector("[data-field=version]");
 const nameInput = root.querySelector("input[name=name]");
 const robotSelect = root.querySelector("[data-field=robot]");
 const turnLine = root.querySelector("[data-field=turn]");
+const startLine = root.querySelector("[data-field=start]");
+const startRobotName = root.querySelector("[data-field=start-robot]");
 const progressLine = root.querySelector("[data-field=progress]");
 const endStateLine = root.querySelector("[data-field=end-state]");
 const endErrorLine = root.querySelector("[data-field=end-error]");
@@ -289,17 +291,24 @@ function follow(answer, kind, label) {
   });
 }
 
+// Without a lab robot to stand beside, the practice robot starts at its dock as it always did.
+function practiceStartsAtDock() {
+  return (root.querySelector("input[name=practice_start]:checked")?.value ?? "dock") === "dock";
+}
+
 async function startRun(target) {
   if (!(await check())) return;
   const robotName = robotSelect?.value ?? "";
   const practice = target === "practice";
   const body = practice
-    ? { target, beside: robotName || null, from_dock: root.querySelector("input[name=from_dock]").checked }
+    ? { target, beside: robotName || null, from_dock: practiceStartsAtDock() }
     : { target };
   progressLine.textContent = practice ? "Starting on your practice robot…" : `Starting on ${robotName}…`;
   endStateLine.textContent = "";
+  startLine.textContent = "";
   try {
     const answer = await fetchJson(`/api/plans/${planId}/runs`, { method: "POST", body });
+    if (answer.start) startLine.textContent = `Practice robot: ${answer.start.message}`;
     follow(answer, practice ? "predicted" : "real", practice ? "Practice robot" : answer.robot);
   } catch (error) {
     progressLine.textContent = error.message;
@@ -353,6 +362,7 @@ button("run").addEventListener("click", () => startRun(robotSelect.value));
 button("cancel").addEventListener("click", cancel);
 button("queue").addEventListener("click", queueForRobot);
 robotSelect?.addEventListener("change", () => { loadScene(robotSelect.value); button("run").hidden = true;
+  if (startRobotName) startRobotName.textContent = robotSelect.value;
   state.queue?.close(); turnLine.textContent = ""; });
 window.addEventListener("resize", draw);
 if (robotSelect?.value) loadScene(robotSelect.value); else draw();
