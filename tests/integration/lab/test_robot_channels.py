@@ -22,6 +22,23 @@ def receive_json(ws, timeout_s: float = 5.0) -> dict:
     raise AssertionError("no text message arrived")
 
 
+def steady_telemetry(ws, steady_s: float = 0.3, within_s: float = 5.0) -> dict:
+    """The newest telemetry once its applied sequence has not changed for steady_s (a new controller's token takes
+    effect at the robot's next tick, later than that under load)."""
+    deadline = time.monotonic() + within_s
+    message = next_telemetry(ws)
+    since = time.monotonic()
+    while time.monotonic() < deadline:
+        time.sleep(0.05)
+        newest = next_telemetry(ws)
+        if newest["last_applied_sequence"] != message["last_applied_sequence"]:
+            since = time.monotonic()
+        message = newest
+        if time.monotonic() - since >= steady_s:
+            return message
+    raise AssertionError(f"the applied sequence did not settle within {within_s} s")
+
+
 def next_telemetry(ws) -> dict:
     """The newest telemetry message: older ones queued in the socket are skipped."""
     newest = None
@@ -200,8 +217,7 @@ def test_malformed_drive_messages_are_refused_and_the_robot_does_not_move(
     telemetry = student_client.websocket("/ws/robots/lab-1/telemetry")
     drive = student_client.websocket("/ws/robots/lab-1/drive")
     assert receive_json(drive)["type"] == "ready"
-    time.sleep(0.3)  # joining handed the robot a new controller token; let telemetry show it
-    settled = next_telemetry(telemetry)
+    settled = steady_telemetry(telemetry)  # joining handed the robot a new controller token; let telemetry show it
     drive.send(message)
     error = receive_json(drive)
     assert error["type"] == "error" and error["field"] == field and error["message"]
