@@ -251,7 +251,8 @@ FIELDS = (
     "robot", "role", "rubric", "scene", "skill", "slug", "start", "starts_at", "steps", "summary", "target",
     "task_kind", "task_points", "task_topics", "text", "title", "tolerance", "topics", "turn_length_s", "type",
     "tz", "unit", "user", "user_id", "username", "value", "video", "video_name", "week", "x_m", "y_m",
-    "beside", "from_dock", "version", "console_skill",  # the plans' (issue 16), last so the others keep their hostile values
+    # the plans' (issue 16), last so the others keep their hostile values
+    "beside", "from_dock", "version", "console_skill",
 )
 INT64_PAST = ("9223372036854775808", "18446744073709551616", "1" * 40)
 HOSTILE_TEXT = ("\ud800", "a\udfffb", "\x00", "²", "٣", "1" * 5000, "x" * 100_000, "<script>alert(1)</script>",
