@@ -85,6 +85,14 @@ class WebSocketClient(simple_websocket.Client):
         self.connected = self._handle_events()  # what came with the handshake's answer
         super()._thread()
 
+    def close(self, reason=None, message=None) -> None:
+        """A close that races the server's: the reader thread may close the socket between the library's
+        `connected` check and its send, which surfaced as OSError (EBADF) instead of ConnectionClosed."""
+        try:
+            super().close(reason=reason, message=message)
+        except OSError as error:
+            raise simple_websocket.ConnectionClosed(self.close_reason, self.close_message) from error
+
 
 class Browser:
     """A logged-in user: cookies, CSRF token, WebSockets with the session."""

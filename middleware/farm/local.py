@@ -22,16 +22,18 @@ class LocalProcessFarm:
 
     backend = "local"
 
-    def __init__(self, capacity: int | None = None, exit_with_owner: bool = False) -> None:
-        self._exit_with_owner = exit_with_owner  # robots of the farm owner process (farm/owner.py) end with it
+    def __init__(self, capacity: int | None = None) -> None:
         self._capacity = robots_per_host(host_cores(), available_memory_mb()) if capacity is None else capacity
         self._processes: dict[str, SkillServerProcess] = {}
         self._starting: set[str] = set()
         self._lock = threading.Lock()
         self._meter = CpuMeter()
+        self._closed = False
 
     def start(self, spec: RobotSpec) -> FarmRobot:
         with self._lock:
+            if self._closed:
+                raise FarmUnavailable("The lab is shutting down; no robot starts now.")
             running = self._processes.get(spec.name)
             if running is not None and running.controller_token == spec.controller_token:
                 return self._describe(running)
@@ -45,8 +47,10 @@ class LocalProcessFarm:
             self._starting.add(spec.name)
         if running is not None:
             running.stop()
+        # Its robots end with this process (the web process, or the farm owner of farm/owner.py): nothing
+        # else can reach them, and a robot left behind would hold a core until the host restarts.
         process = SkillServerProcess(spec.name, spec.scene, echo=False, controller_token=spec.controller_token,
-                                     exit_with_parent=self._exit_with_owner)
+                                     exit_with_parent=True)
         try:
             process.serve()
         except SkillServerStartError as error:
@@ -56,7 +60,12 @@ class LocalProcessFarm:
             with self._lock:
                 self._starting.discard(spec.name)
         with self._lock:
-            self._processes[spec.name] = process
+            closed = self._closed
+            if not closed:
+                self._processes[spec.name] = process
+        if closed:  # the farm closed while this robot started: nobody would ever stop it
+            process.stop()
+            raise FarmUnavailable("The lab is shutting down; no robot starts now.")
         return self._describe(process)
 
     def find(self, name: str) -> FarmRobot | None:
@@ -80,6 +89,8 @@ class LocalProcessFarm:
         return Capacity(self._capacity, running, hosts=1)
 
     def close(self) -> None:
+        with self._lock:
+            self._closed = True
         for name in list(self._processes):
             self.stop(name)
 

@@ -46,7 +46,7 @@ def serve_owner() -> None:
     from middleware.farm.local import LocalProcessFarm
 
     launcher_pid = int(os.environ[LAUNCHER_VARIABLE])
-    farm = LocalProcessFarm(exit_with_owner=True)
+    farm = LocalProcessFarm()
     _owned.append(farm)
 
     def leave(*_args: object) -> None:

@@ -48,6 +48,7 @@ class SkillServerProcess:
     stopping: bool = False
     restarts: int = 0
     _watcher: threading.Thread | None = field(default=None, repr=False)
+    _guard: threading.Lock = field(default_factory=threading.Lock, repr=False)  # stopping vs a (re)start
 
     def start(self, port: int = 0) -> None:
         """Starts the process and waits for the line that gives its address."""
@@ -57,8 +58,11 @@ class SkillServerProcess:
             command += ["--parent-pid", str(os.getpid())]
         # A new session: Ctrl-C reaches only the parent, which then stops the children in order.
         environment = {**os.environ, CONTROLLER_TOKEN_VARIABLE: self.controller_token}
-        self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                        start_new_session=True, env=environment)
+        with self._guard:  # a stop() that came first wins: no process starts after it
+            if self.stopping:
+                raise SkillServerStartError(f"The skill server of {self.name} was stopped while it started.")
+            self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                            start_new_session=True, env=environment)
         deadline = time.monotonic() + START_TIMEOUT_S
         assert self.process.stdout is not None
         while time.monotonic() < deadline:
@@ -100,25 +104,29 @@ class SkillServerProcess:
         print(f"[{self.name}] skill server exited with code {code}; restarting it", flush=True)
         self.restarts += 1
         time.sleep(RESTART_PAUSE_S)
-        if not self.stopping:
+        try:
             self.start(port=int(self.address.rsplit(":", 1)[1]))
+        except SkillServerStartError as error:
+            print(f"[{self.name}] {error}", flush=True)
 
     def stop(self, timeout_s: float = 5.0) -> None:
         """Asks the process to stop (SIGTERM), then kills it if it does not."""
-        self.stopping = True
-        if self.process is None:
+        with self._guard:
+            self.stopping = True
+            process = self.process
+        if process is None:
             return
-        if self.process.poll() is None:
-            self.process.send_signal(signal.SIGTERM)
+        if process.poll() is None:
+            process.send_signal(signal.SIGTERM)
             try:
-                self.process.wait(timeout_s)
+                process.wait(timeout_s)
             except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
+                process.kill()
+                process.wait()
         if self._watcher is not None and self._watcher is not threading.current_thread():
             self._watcher.join(timeout_s)
-        elif self._watcher is None and self.process.stdout is not None:
-            self.process.stdout.close()  # a start that failed: no watcher ever read (and closed) the pipe
+        elif self._watcher is None and process.stdout is not None:
+            process.stdout.close()  # a start that failed: no watcher ever read (and closed) the pipe
 
 
 def wait_until_serving(address: str, timeout_s: float = START_TIMEOUT_S) -> None:
