@@ -75,6 +75,14 @@ def trusted_proxies(env: dict[str, str]) -> int:
     return int(raw)
 
 
+def prediction_cap(env: dict[str, str]) -> int:
+    """TELELAB_PREDICTION_CAP: how many plan predictions (fast robots, a core each) one web process runs at once."""
+    raw = env.get("TELELAB_PREDICTION_CAP", "2").strip()
+    if not raw.isascii() or not raw.isdigit() or int(raw) > 64:
+        raise ConfigError(f"TELELAB_PREDICTION_CAP must be a whole number from 0 to 64, not {raw!r}.")
+    return int(raw)
+
+
 def from_environment(instance_dir: Path, environ: dict[str, str] | None = None) -> dict[str, object]:
     """The Flask config mapping built from TELELAB_* variables."""
     env = dict(os.environ if environ is None else environ)
@@ -97,6 +105,7 @@ def from_environment(instance_dir: Path, environ: dict[str, str] | None = None) 
         "SESSION_COOKIE_SECURE": secure_cookie,
         "REMEMBER_COOKIE_SECURE": secure_cookie,
         "TRUSTED_PROXIES": trusted_proxies(env),
+        "PREDICTION_CAP": prediction_cap(env),
         "SESSION_LIFETIME": timedelta(hours=_positive_number(env, "TELELAB_SESSION_HOURS", "8")),
         "SESSION_IDLE_TIMEOUT": idle,
         "PERMANENT_SESSION_LIFETIME": idle,  # the cookie's expiry slides with use, like the idle timeout

@@ -2,14 +2,23 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
-from skill_server.errors import MissingControllerToken, NoMap, NotController, ResourceBusy, UnknownGoal
+from skill_server.errors import (
+    InvalidParameter,
+    MissingControllerToken,
+    NoMap,
+    NotController,
+    ResourceBusy,
+    UnknownGoal,
+)
 from skill_server.goals import EventKind, Goal, GoalBook, GoalSnapshot, GoalStatus
 from skill_server.plans.executor import PlanObserver, PlanRunner
+from skill_server.plans.steps import DriveWatchdog, WatchdogChange
 from skill_server.plans.validation import CheckedPlan
 from skill_server.sim.drive_gate import BATTERY_EMPTY_MESSAGE
 from skill_server.sim.robot_model import RobotSpec
@@ -66,6 +75,7 @@ class Sequencer:
         self._tracker: PoseTracker | None = None  # built at the first tick once the floor plan is known
         self._tracker_built = False
         self.plan_observer: PlanObserver | None = None  # told when each plan's skill line starts (benchmarks)
+        self.drive_watchdog: DriveWatchdog | None = None  # what a plan's `set watchdog` sets (attach_sequencer)
 
     # ---- requests (loop thread) ------------------------------------------------------------------
 
@@ -87,7 +97,7 @@ class Sequencer:
         self._check_token(token)
         skill = f"{PLAN_GOAL_PREFIX}{plan.plan.name}"
         holder = self._free_or_preempting(skill, True, preempt)
-        runner = PlanRunner(plan, self.registry, self.perception, self.spec, self.plan_observer)
+        runner = PlanRunner(plan, self.registry, self.perception, self.spec, self.plan_observer, self.drive_watchdog)
         return self._start(skill, True, {"steps": plan.expanded_steps}, runner, holder, f"Plan {plan.plan.name}")
 
     def _free_or_preempting(self, skill: str, motor: bool, preempt: bool) -> tuple[Goal, SkillController] | None:
@@ -328,6 +338,34 @@ class Sequencer:
             raise NotController("this request's controller token is not the robot's current controller")
 
 
+class WorldWatchdog:
+    """The world's drive watchdog as a plan sets it: through the world's SetLimits path, under the token of the
+    controller the plan runs for, so the value is the one GetLimits reports and a new controller resets it."""
+
+    def __init__(self, world: Any) -> None:
+        self._world = world
+
+    def change(self, watchdog_s: float, previous: WatchdogChange | None) -> WatchdogChange | None:
+        """Sets the watchdog (the plan was checked: watchdog_s is in range); None when nobody has control."""
+        token = self._world.controller_token
+        if not token or (previous is not None and previous.token != token):
+            return None
+        replaced_s = self._world.limits.watchdog_s if previous is None else previous.previous_s
+        try:
+            self._world.set_limits(token, 0.0, 0.0, watchdog_s)
+        except (InvalidParameter, MissingControllerToken, NotController):
+            return None
+        return WatchdogChange(token, replaced_s, watchdog_s)
+
+    def restore(self, change: WatchdogChange) -> None:
+        """Gives back the replaced value if the plan's controller still holds the robot and nobody changed it since
+        (a new controller starts from the robot's own settings anyway)."""
+        if self._world.controller_token != change.token or self._world.limits.watchdog_s != change.set_s:
+            return
+        with contextlib.suppress(InvalidParameter, MissingControllerToken, NotController):  # the controller changed
+            self._world.set_limits(change.token, 0.0, 0.0, change.previous_s)  # in between: its own settings hold
+
+
 def attach_sequencer(world: Any, registry: SkillRegistry | None = None, goals: GoalBook | None = None) -> Sequencer:
     """Builds a sequencer for a world's robot and sensors and lets the world's loop tick it."""
     info = world.describe()
@@ -340,6 +378,7 @@ def attach_sequencer(world: Any, registry: SkillRegistry | None = None, goals: G
     sequencer = Sequencer(info.spec, sensors, registry or default_registry(info.spec), goals or GoalBook(),
                           lambda: world.controller_token, lambda: world.drive_version)
     sequencer.perception.floor_plan = getattr(world, "scene", None)
+    sequencer.drive_watchdog = WorldWatchdog(world)
     sequencer.start_pose_tracking()  # before the loop runs: building it takes about 40 ms
     world.attach_autonomy(sequencer)
     return sequencer

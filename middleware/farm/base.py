@@ -29,11 +29,16 @@ class FarmFull(Refused):
 
 @dataclass(frozen=True)
 class RobotSpec:
-    """A simulated robot to start: its name, scene and the controller token it obeys from the start."""
+    """A simulated robot to start: its name, scene and the controller token it obeys from the start.
+
+    fast robots step their world as fast as the host allows instead of in real time (a plan's prediction, which
+    nobody watches live); they are throwaway: never restarted, and they end with the process that asked for them.
+    """
 
     name: str
     scene: str
     controller_token: str = ""
+    fast: bool = False
 
 
 @dataclass(frozen=True)

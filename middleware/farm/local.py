@@ -50,7 +50,7 @@ class LocalProcessFarm:
         # Its robots end with this process (the web process, or the farm owner of farm/owner.py): nothing
         # else can reach them, and a robot left behind would hold a core until the host restarts.
         process = SkillServerProcess(spec.name, spec.scene, echo=False, controller_token=spec.controller_token,
-                                     exit_with_parent=True)
+                                     exit_with_parent=True, fast=spec.fast, restart=not spec.fast)
         try:
             process.serve()
         except SkillServerStartError as error:

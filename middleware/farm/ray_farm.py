@@ -46,14 +46,14 @@ def prepare_for(address: str) -> None:
 class RobotActor:
     """One robot in the cluster: its skill server as a child process of the actor, on the node's address."""
 
-    def __init__(self, name: str, scene: str, controller_token: str) -> None:
+    def __init__(self, name: str, scene: str, controller_token: str, fast: bool = False) -> None:
         import ray
 
         self._restarted = ray.get_runtime_context().was_current_actor_reconstructed
         self._host = ray.util.get_node_ip_address()
         self._node = ray.get_runtime_context().get_node_id()
         self._server = SkillServerProcess(name, scene, restart=False, echo=False, controller_token=controller_token,
-                                          host=self._host, exit_with_parent=True)
+                                          host=self._host, exit_with_parent=True, fast=fast)
         self._server.serve()  # SkillServerStartError fails the actor's creation; the farm says so
         self._meter = CpuMeter()
         self._stopping = False
@@ -110,11 +110,14 @@ class RayFarm:
         if capacity.free <= 0:
             raise FarmFull(f"The lab's Ray farm runs as many simulated robots as its {capacity.hosts} host(s) can "
                            f"({capacity.robots}). Try again when a robot is stopped, or add a robot host.")
+        # A fast robot (a prediction) is owned by this process, not detached: Ray ends it with its owner, and never
+        # restarts it. It steps flat out for the seconds a prediction lasts; placement declares the usual share, so a
+        # busy node still takes it (a whole core would leave it waiting behind the class's robots).
         actor = self._actor_class.options(
-            name=ACTOR_PREFIX + spec.name, namespace=NAMESPACE, lifetime="detached", max_restarts=-1,
-            num_cpus=HEADLESS_ROBOT_CPU_SHARE, memory=RAY_ROBOT_MEMORY_MB * 2**20, scheduling_strategy="SPREAD",
-            get_if_exists=True,
-        ).remote(spec.name, spec.scene, spec.controller_token)
+            name=ACTOR_PREFIX + spec.name, namespace=NAMESPACE, lifetime=None if spec.fast else "detached",
+            max_restarts=0 if spec.fast else -1, num_cpus=HEADLESS_ROBOT_CPU_SHARE,
+            memory=RAY_ROBOT_MEMORY_MB * 2**20, scheduling_strategy="SPREAD", get_if_exists=True,
+        ).remote(spec.name, spec.scene, spec.controller_token, spec.fast)
         try:
             return self._robot(ray.get(actor.describe.remote(), timeout=START_TIMEOUT_S))
         except Exception as error:  # noqa: BLE001 - Ray raises several kinds; none may leave an actor behind

@@ -37,7 +37,7 @@ DIRECT_CONTROL = "direct_control"  # its schema gives the robot's velocity ceili
 MAX_PARAMETERS = 32
 OBSTACLE_RANGE_M = (0.05, 8.0)  # the laser's reach
 BATTERY_RANGE = (0.01, 1.0)  # a fraction of full; below 0 is never true, and the skill server refuses 0
-WATCHDOG_RANGE_S = (0.1, 5.0)
+WATCHDOG_RANGE_S = (0.2, 5.0)  # the base's drive watchdog: what SetLimits accepts (README, Low-level commands)
 MIN_SPEED_MPS, MIN_TURN_RATE_RADPS = 0.05, 0.1
 
 # unit -> (what it measures, factor to the base unit); a value's unit must measure what its parameter measures

@@ -7,7 +7,7 @@ robot): with none answering, saving is refused with a sentence (503 no_robot_to_
 
 from __future__ import annotations
 
-from flask import Blueprint, Response, abort, jsonify, render_template, request
+from flask import Blueprint, Response, abort, current_app, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
@@ -15,12 +15,15 @@ from middleware.accounts.web import json_body
 from middleware.auth.schemas import InvalidField
 from middleware.courses.services import list_courses
 from middleware.db import get_session
+from middleware.lab.limits import WATCHDOG_FIELD, changeable_fields
 from middleware.models import Role
 from middleware.plans import schemas, services
-from middleware.plans.language import PlanInvalid
-from middleware.plans.runs import RunRequest, run_plan
+from middleware.plans.language import PlanInvalid, plan_from_json
+from middleware.plans.predictions import PredictionRequest, prediction_slots, prediction_stream
+from middleware.plans.runs import RunRequest, check_settings_permitted, lab_robot_now, run_plan
 from middleware.plans.services import PlanRefused
 from middleware.robots.registry import robot_registry
+from middleware.teaching.practice_robots import practice_manager
 from middleware.teaching.targets import reference_skills
 
 blueprint = Blueprint("plans", __name__)
@@ -28,6 +31,10 @@ blueprint = Blueprint("plans", __name__)
 
 def _skills() -> dict[str, list[dict[str, object]]]:
     return reference_skills(current_user.id, motor_only=True)
+
+
+def _may_set_watchdog() -> bool:
+    return WATCHDOG_FIELD in changeable_fields(get_session(), current_user)
 
 
 def _plan_answer(plan_id: int, status: int = 200, version: int | None = None) -> ResponseReturnValue:
@@ -205,5 +212,34 @@ def api_run(plan_id: int) -> ResponseReturnValue:
     run = RunRequest(schemas.run_target(body.get("target")),
                      None if beside in (None, "") else schemas.run_target(beside, "beside"),
                      schemas.flag(body.get("from_dock"), "from_dock"))
-    answer = run_plan(current_user.id, current_user.username, plan.name, services.stored_document(version), run)
+    answer = run_plan(current_user.id, current_user.username, plan.name, services.stored_document(version), run,
+                      _may_set_watchdog())
     return jsonify({**answer, "plan_id": plan.id, "version": version.version}), 202
+
+
+@blueprint.post("/api/plans/<int:plan_id>/predictions")
+@login_required
+def api_predict(plan_id: int) -> ResponseReturnValue:
+    """Predicts the plan in fast mode on a throwaway copy of a lab robot ({"beside": lab robot, "from_dock": bool,
+    "version"?}): a stream of JSON lines (application/x-ndjson), progress then the end (middleware.plans.predictions).
+    What the request gets wrong is refused as JSON before the stream starts."""
+    body = json_body()
+    dbs = get_session()
+    plan = services.readable_plan(dbs, current_user, plan_id)
+    version = services.plan_version(dbs, plan, schemas.optional_version(body.get("version")))
+    beside_name = body.get("beside")
+    beside_name = None if beside_name in (None, "") else schemas.run_target(beside_name, "beside")
+    from_dock = schemas.flag(body.get("from_dock"), "from_dock")
+    document = services.stored_document(version)
+    check_settings_permitted(plan_from_json(document, _skills()), _may_set_watchdog())
+    app = current_app._get_current_object()  # type: ignore[attr-defined]
+    slots = prediction_slots(app)
+    slots.check(current_user.id)
+    beside = lab_robot_now(beside_name, current_user.id) if beside_name else None
+    manager = practice_manager()
+    prediction = PredictionRequest(current_user.id, plan.name, document, (beside.scene if beside else None)
+                                   or manager.scene, beside, from_dock)
+    response = Response(prediction_stream(manager.farm, slots, prediction), mimetype="application/x-ndjson")
+    response.headers["Cache-Control"] = "no-store"
+    response.headers["X-Accel-Buffering"] = "no"  # nginx passes each line on as it comes
+    return response

@@ -16,7 +16,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from middleware.access.commands import Commander, refusal_error, robot_commands
-from middleware.plans.language import plan_from_json
+from middleware.errors import ApiError
+from middleware.plans.language import IfStep, Plan, RepeatStep, SetStep, plan_from_json
 from middleware.plans.proto_form import plan_to_proto
 from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.messages import goal_dict
@@ -32,6 +33,30 @@ class RunRequest:
     target: str
     beside: str | None
     from_dock: bool
+
+
+def watchdog_lines(plan: Plan) -> list[int]:
+    """The lines of the plan's `set watchdog` steps, blocks included."""
+    found: list[int] = []
+    pending = list(plan.steps)
+    while pending:
+        step = pending.pop(0)
+        if isinstance(step, SetStep) and step.setting == "watchdog":
+            found.append(step.line)
+        elif isinstance(step, RepeatStep):
+            pending.extend(step.body)
+        elif isinstance(step, IfStep):
+            pending.extend((*step.then, *step.otherwise))
+    return sorted(found)
+
+
+def check_settings_permitted(plan: Plan, may_set_watchdog: bool) -> None:
+    """403 not_permitted naming the first `set watchdog` line when the user may not set the robot's watchdog."""
+    lines = [] if may_set_watchdog else watchdog_lines(plan)
+    if lines:
+        raise ApiError(403, "not_permitted", f"Line {lines[0]}: your course does not let students set the watchdog "
+                       "(the time the base keeps a drive command); remove the line or ask your tutor to allow it "
+                       "on the course's page.", "watchdog_s")
 
 
 @dataclass(frozen=True)
@@ -88,9 +113,10 @@ def practice_commander(user_id: int, username: str, scene: str | None) -> Comman
     return robot_commands().for_user(running.name, user_id, field="target")
 
 
-def run_plan(user_id: int, username: str, name: str, document: dict[str, object], request: RunRequest
-             ) -> dict[str, object]:
-    """Starts the plan on the requested robot; the goal, and where the page follows it and cancels it."""
+def run_plan(user_id: int, username: str, name: str, document: dict[str, object], request: RunRequest,
+             may_set_watchdog: bool) -> dict[str, object]:
+    """Starts the plan on the requested robot; the goal, and where the page follows it and cancels it.
+    A `set watchdog` line is refused (403) unless may_set_watchdog."""
     practice = request.target == PRACTICE_TARGET
     start: dict[str, object] | None = None
     beside: LabRobotNow | None = None
@@ -101,6 +127,7 @@ def run_plan(user_id: int, username: str, name: str, document: dict[str, object]
         robot = robot_commands().for_user(request.target, user_id, field="target")
     try:
         plan = plan_from_json(document, skill_schemas(robot.link, motor_only=True))
+        check_settings_permitted(plan, may_set_watchdog)
         if practice:
             start = start_practice_robot(robot, request.from_dock, beside)
         goal = robot.run_plan(name, plan_to_proto(plan), preempt=True)

@@ -195,6 +195,10 @@ class RobotLink:
         """A telemetry stream of its own, ground truth included (for graders; never forwarded to browsers)."""
         return self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=rate_hz))
 
+    def stream_poses(self, rate_hz: float) -> ServerStream[robot_pb2.Telemetry]:
+        """A pose-only telemetry stream of its own (odometry and times), at rate_hz of the robot's sim time."""
+        return self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=rate_hz, pose_only=True))
+
     def get_map(self) -> robot_pb2.OccupancyGrid:
         """The occupancy grid built so far."""
         return self._call(self._stub.GetMap, robot_pb2.GetMapRequest())

@@ -43,6 +43,7 @@ class SkillServerProcess:
     controller_token: str = ""  # obeyed from the start, and again after a restart
     host: str = "127.0.0.1"  # the address it listens on
     exit_with_parent: bool = False  # the server stops when this process dies (a farm actor killed)
+    fast: bool = False  # its world steps as fast as possible (`--fast`), not in real time
     address: str = ""
     process: subprocess.Popen[str] | None = None
     stopping: bool = False
@@ -56,6 +57,8 @@ class SkillServerProcess:
                    "--scene", self.scene, "--host", self.host]
         if self.exit_with_parent:
             command += ["--parent-pid", str(os.getpid())]
+        if self.fast:
+            command.append("--fast")
         # A new session: Ctrl-C reaches only the parent, which then stops the children in order.
         environment = {**os.environ, CONTROLLER_TOKEN_VARIABLE: self.controller_token}
         with self._guard:  # a stop() that came first wins: no process starts after it

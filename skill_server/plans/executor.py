@@ -2,7 +2,9 @@
 plan's lines, each naming its line in feedback, events and failures.
 
 Skill lines build the skill's controller through the registry, as ActivateSkill does; every wheel command goes
-out through the sequencer's own limits after the plan's `set` limits. The plan's sim time is capped.
+out through the sequencer's own limits after the plan's `set` limits. `set watchdog S` sets the base's drive
+watchdog (the time a direct drive command lasts without a newer one, as SetLimits sets it) for the rest of the plan,
+given back when the plan ends however it ends. The plan's sim time is capped.
 """
 
 from __future__ import annotations
@@ -13,7 +15,16 @@ from dataclasses import dataclass, replace
 
 from skill_server.goals import EventKind, GoalFeedback, GoalStatus
 from skill_server.plans.model import DriveLine, IfLine, PlanLine, RepeatLine, SayLine, SetLine, SkillLine, WaitLine
-from skill_server.plans.steps import Instant, PlanSettings, TimedDrive, Wait, condition_holds, describe_condition
+from skill_server.plans.steps import (
+    DriveWatchdog,
+    Instant,
+    PlanSettings,
+    TimedDrive,
+    Wait,
+    WatchdogChange,
+    condition_holds,
+    describe_condition,
+)
 from skill_server.plans.validation import CheckedPlan
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.skills.base import (
@@ -50,11 +61,13 @@ class PlanContext:
     """What the lines of one plan share: the robot, the settings in force, the last skill's result."""
 
     def __init__(self, registry: SkillRegistry, perception: Perception, spec: RobotSpec,
-                 observer: PlanObserver | None) -> None:
+                 observer: PlanObserver | None, watchdog: DriveWatchdog | None = None) -> None:
         self.registry = registry
         self.perception = perception
         self.settings = PlanSettings(spec.max_linear_mps, spec.max_angular_radps)
         self.observer = observer
+        self.watchdog = watchdog
+        self.watchdog_change: WatchdogChange | None = None  # the base's watchdog as this plan set it
         self.goal_reached = False  # the last skill line ended reaching its goal
         self.line = 0  # the line running now
         self.starts_left = STEPS_STARTED_PER_TICK
@@ -70,8 +83,18 @@ class PlanContext:
         elif line.setting == "max_turn_rate":
             self.settings.max_angular_radps = line.value
         else:
-            self.settings.watchdog_s = line.value
+            change = self.watchdog.change(line.value, self.watchdog_change) if self.watchdog is not None else None
+            if change is None:
+                return "the watchdog was not changed: this robot has no controller to set it for"
+            self.watchdog_change = change
+            return f"the base's drive watchdog set to {line.value:g} s until the plan ends"
         return f"{line.setting} set to {line.value:g}"
+
+    def give_back_watchdog(self) -> None:
+        """The plan ended: the base's watchdog is what it was before the plan's first `set watchdog`."""
+        change, self.watchdog_change = self.watchdog_change, None
+        if change is not None and self.watchdog is not None:
+            self.watchdog.restore(change)
 
 
 class PlanBlock(StepSequence):
@@ -107,7 +130,7 @@ class PlanBlock(StepSequence):
 
 
 class LineRunner(SkillController):
-    """One leaf line: its controller, its line in feedback and failures, the watchdog and a skill's time limit."""
+    """One leaf line: its controller, its line in feedback and failures, and a skill's time limit."""
 
     def __init__(self, context: PlanContext, line: PlanLine, what: str, build: Callable[[], SkillController],
                  started_message: str | None = None, duration_s: float = 0.0) -> None:
@@ -156,10 +179,6 @@ class LineRunner(SkillController):
         if self._duration_s > 0 and elapsed_s >= self._duration_s - 1e-9:
             self._context.goal_reached = False
             return 0.0, 0.0, succeeded(f"line {number}: ran for {self._duration_s:g} s"), reported
-        watchdog_s = self._context.settings.watchdog_s
-        if watchdog_s is not None and elapsed_s > watchdog_s:
-            return 0.0, 0.0, aborted("WATCHDOG", f"line {number}: the step ran past the plan's watchdog of "
-                                                 f"{watchdog_s:g} s"), reported
         return step.linear_mps, step.angular_radps, None, reported
 
     def stop(self) -> None:
@@ -242,10 +261,10 @@ class PlanRunner(SkillController):
     """A whole plan as one motor goal: its top block, the plan's limits on the wheels, and its time cap."""
 
     def __init__(self, checked: CheckedPlan, registry: SkillRegistry, perception: Perception, spec: RobotSpec,
-                 observer: PlanObserver | None = None) -> None:
+                 observer: PlanObserver | None = None, watchdog: DriveWatchdog | None = None) -> None:
         super().__init__()
         self._name = checked.plan.name
-        self._context = PlanContext(registry, perception, spec, observer)
+        self._context = PlanContext(registry, perception, spec, observer, watchdog)
         self._block = PlanBlock(block_steps(checked.plan.steps, self._context), self._context)
         self._started_s: float | None = None
 
@@ -273,8 +292,10 @@ class PlanRunner(SkillController):
         return linear, angular, None, feedback
 
     def stop(self) -> None:
-        """Releases the line running now (the plan was cancelled, preempted or ended)."""
+        """Releases the line running now and gives the base's watchdog back (the plan was cancelled, preempted or
+        ended)."""
         self._block.stop()
+        self._context.give_back_watchdog()
 
     def position(self) -> str:
         """The line running now: a cancel, a preemption or a revoked control names it."""

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 from skill_server.goals import GoalFeedback
 from skill_server.plans.model import PlanCondition
@@ -26,7 +27,27 @@ class PlanSettings:
 
     max_linear_mps: float
     max_angular_radps: float
-    watchdog_s: float | None = None  # every later step must end within this, or the plan ends WATCHDOG
+
+
+@dataclass(frozen=True)
+class WatchdogChange:
+    """A plan's `set watchdog`: the controller it was set for, the value it replaced and the value it set."""
+
+    token: str
+    previous_s: float
+    set_s: float
+
+
+class DriveWatchdog(Protocol):
+    """The base's drive watchdog (the deadman timeout of direct drive commands, as SetLimits sets it), as a plan
+    sets it for its controller and gives it back; called in the world's loop thread."""
+
+    def change(self, watchdog_s: float, previous: WatchdogChange | None) -> WatchdogChange | None:
+        """Sets the watchdog for the controller in force (previous: the plan's earlier change, whose replaced
+        value is kept); None when nobody controls the robot."""
+
+    def restore(self, change: WatchdogChange) -> None:
+        """Gives back the value the plan replaced, unless the controller or the watchdog changed since."""
 
 
 def condition_holds(condition: PlanCondition, tick: TickInput, goal_reached: bool) -> bool:

@@ -22,6 +22,7 @@ from skill_server.plans.model import (
     SkillLine,
     WaitLine,
 )
+from skill_server.sim.drive_gate import MAX_WATCHDOG_S, MIN_WATCHDOG_S
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.skills.base import TickInput
 from skill_server.skills.registry import SkillRegistry
@@ -160,12 +161,15 @@ class _Checker:
 
     def setting(self, step: SetLine) -> None:
         ceilings = {"max_speed": (self.spec.max_linear_mps, "m/s"),
-                    "max_turn_rate": (self.spec.max_angular_radps, "rad/s"), "watchdog": (MAX_DURATION_S, "s")}
+                    "max_turn_rate": (self.spec.max_angular_radps, "rad/s"), "watchdog": (MAX_WATCHDOG_S, "s")}
         if step.setting not in ceilings:
             self.fault(step, "setting", f"the setting must be one of: {', '.join(SETTINGS)}; got {step.setting!r}")
             return
         ceiling, unit = ceilings[step.setting]
-        self.number(step, "value", step.value, 0.0, ceiling, unit, above=True)
+        if step.setting == "watchdog":  # the base's drive watchdog: the range SetLimits accepts
+            self.number(step, "value", step.value, MIN_WATCHDOG_S, ceiling, unit)
+        else:
+            self.number(step, "value", step.value, 0.0, ceiling, unit, above=True)
 
     def duration(self, step: PlanLine, duration_s: float, *, required: bool) -> None:
         if duration_s == 0 and not required:

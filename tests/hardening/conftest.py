@@ -15,7 +15,7 @@ UNREACHABLE_ROBOTS = "lab-1=127.0.0.1:9,course-a=127.0.0.1:9"
 
 def seeded_lab(database_url: str, tmp_path: Path):
     """The app on database_url, migrated, with the demo accounts, course, tests, tours and lesson; CSRF off so
-    hostile bodies reach the views, no practice robots (starting one would spawn a skill server)."""
+    hostile bodies reach the views, no practice robots and no predictions (starting one would spawn a skill server)."""
     from middleware import create_app
     from middleware.config import parse_robots
     from middleware.db import upgrade_to_head
@@ -25,7 +25,8 @@ def seeded_lab(database_url: str, tmp_path: Path):
     upgrade_to_head(database_url)
     app = create_app({
         "DATABASE_URL": database_url, "SECRET_KEY": secrets.token_hex(16), "ROBOTS": parse_robots(UNREACHABLE_ROBOTS),
-        "TESTING": True, "WTF_CSRF_ENABLED": False, "PRACTICE_CAP": 0, "ROBOT_RPC_TIMEOUT_S": 0.2,
+        "TESTING": True, "WTF_CSRF_ENABLED": False, "PRACTICE_CAP": 0, "PREDICTION_CAP": 0,
+        "ROBOT_RPC_TIMEOUT_S": 0.2,
     })
     app.instance_path = str(tmp_path / "instance")
     passwords = {name: password for name, _role, password in ensure_demo_accounts(app)}

@@ -114,6 +114,7 @@ ROUTES = (
     "POST /api/plans/<int:plan_id>/copy",
     "GET /api/plans/<int:plan_id>/export",
     "POST /api/plans/<int:plan_id>/runs",
+    "POST /api/plans/<int:plan_id>/predictions",
     "PUT /api/plans/<int:plan_id>/share",
     "PUT /api/plans/<int:plan_id>/skill",
     "POST /api/plans/check",

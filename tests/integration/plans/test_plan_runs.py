@@ -146,14 +146,17 @@ def fresh_lab(fresh_lab_and_robot: tuple[LiveServer, SkillServerProcess]) -> Liv
 
 
 def test_the_predicted_end_point_agrees_with_the_lab_robot_within_5_cm(fresh_lab: LiveServer) -> None:
+    """The prediction ("Try on my practice robot": a copy of lab-1 in fast mode) against lab-1 in real time."""
+    from tests.integration.plans.test_plan_predictions import predict
+
     ann = LabClient(fresh_lab.url)
     assert ann.login("student1", STUDENT_PASSWORD) == 302
     plan_id = _create(ann, "corner", SQUARE_CORNER)
-    status, predicted = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "practice", "beside": "lab-1",
-                                                                        "from_dock": True})
-    assert status == 202, predicted
-    assert wait_for_end(ann, predicted)["status"] == "succeeded"
-    predicted_end = latest_pose(ann, predicted["robot"])
+    predicted = predict(ann, plan_id, {"beside": "lab-1", "from_dock": False})[-1]
+    assert predicted["type"] == "end" and predicted["goal"]["status"] == "succeeded", predicted
+    assert predicted["start"]["at"] == "lab_robot", predicted["start"]
+    assert predicted["wall_s"] < predicted["sim_time_s"], "the prediction ran in fast mode"
+    predicted_end = predicted["trace"][-1]
     queue = take_control(ann)
     start = latest_pose(ann, "lab-1")
     status, real = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "lab-1"})
@@ -164,7 +167,8 @@ def test_the_predicted_end_point_agrees_with_the_lab_robot_within_5_cm(fresh_lab
     moved_m = math.hypot(real_end["x_m"] - start["x_m"], real_end["y_m"] - start["y_m"])
     assert moved_m > 0.5, "the plan must move the robot for the comparison to mean anything"
     error_m = math.hypot(predicted_end["x_m"] - real_end["x_m"], predicted_end["y_m"] - real_end["y_m"])
-    print(f"predicted end {predicted_end}, lab end {real_end}, apart {error_m * 100:.1f} cm")
+    print(f"predicted end {predicted_end} ({predicted['sim_time_s']:.1f} s of plan in {predicted['wall_s']:.2f} s), "
+          f"lab end {real_end}, apart {error_m * 100:.1f} cm")
     assert error_m <= 0.05, f"the end points are {error_m * 100:.1f} cm apart"
 
 

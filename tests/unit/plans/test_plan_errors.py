@@ -59,6 +59,9 @@ ERRORS = [
     ("wait_until goal_reached speed=1", 1, 25, "steps[0]", "wait_until takes a condition and maybe a timeout"),
     ("set max_speed 2", 1, 15, "steps[0].value", "max_speed must be between 0.05 and 0.5 m/s; got 2."),
     ("set watchdog 0.5m", 1, 14, "steps[0].value", "watchdog is a time in s"),
+    # the base's drive watchdog: the range SetLimits accepts (README, Low-level commands)
+    ("set watchdog 0.1s", 1, 14, "steps[0].value", "watchdog must be between 0.2 and 5 s; got 0.1s."),
+    ("set watchdog 6s", 1, 14, "steps[0].value", "watchdog must be between 0.2 and 5 s; got 6s."),
     ("set turbo 1", 1, 5, "steps[0].setting", "'turbo' is not a setting"),
     ("set max_speed", 1, 1, "steps[0]", "set takes a setting and a value"),
     ("say hello", 1, 5, "steps[0].text", 'say takes one text in double quotes: say "hello".'),

@@ -79,7 +79,7 @@ def simple_steps(skills: SkillSchemas) -> st.SearchStrategy[Step]:
         st.builds(WaitStep, conditions, st.none() | st.floats(0.001, 600.0)),
         st.builds(SetStep, st.just("max_speed"), st.floats(0.05, 0.5)),
         st.builds(SetStep, st.just("max_turn_rate"), st.floats(0.1, 1.5)),
-        st.builds(SetStep, st.just("watchdog"), st.floats(0.1, 5.0)),
+        st.builds(SetStep, st.just("watchdog"), st.floats(0.2, 5.0)),
         st.builds(SayStep, say_texts),
     )
 

@@ -16,6 +16,7 @@ from skill_server.plans import executor
 from skill_server.plans.model import (
     DriveLine,
     IfLine,
+    InvalidPlan,
     Plan,
     PlanCondition,
     PlanLine,
@@ -120,13 +121,48 @@ def test_a_drive_into_a_wall_stops_short_and_aborts_naming_its_line(lab: tuple[W
     assert abs(world.snapshot.odometry.linear_mps) < 0.01
 
 
-def test_the_watchdog_ends_a_step_that_runs_past_it(lab: tuple[World, Sequencer]) -> None:
+def test_set_watchdog_sets_the_bases_drive_watchdog_until_the_plan_ends(lab: tuple[World, Sequencer]) -> None:
+    """`set watchdog` means what SetLimits' watchdog means (the time a direct drive lasts without a newer one), not
+    a time limit on the plan's steps: a drive four times longer succeeds, and the value in force comes back after."""
     world, sequencer = lab
-    goal_id = start(sequencer, SetLine(1, 1, "watchdog", 0.5), WaitLine(2, 1, None, 0.3),
-                    WaitLine(3, 1, None, 2.0))
-    final = run(world, sequencer, goal_id)
-    assert (final.status, final.error_code) == (GoalStatus.ABORTED, "WATCHDOG")
-    assert final.message.startswith("line 3: the step ran past the plan's watchdog of 0.5 s")
+    world.set_limits(TOKEN, 0.0, 0.0, 2.0)
+    goal_id = start(sequencer, SetLine(1, 1, "watchdog", 0.5), DriveLine(2, 1, 0.2, 0.0, 2.0))
+    goal = sequencer.goals.get(goal_id)
+    assert goal is not None
+    seen = set()
+    while not goal.status.is_terminal:
+        world.step_for(0.1)
+        seen.add(world.limits.watchdog_s)
+    assert goal.status is GoalStatus.SUCCEEDED, goal.snapshot().message
+    assert 0.5 in seen, seen
+    assert world.limits.watchdog_s == 2.0, "the watchdog in force before the plan comes back when it ends"
+
+
+def test_a_cancelled_plan_gives_the_watchdog_back_and_a_new_controller_keeps_its_own(
+        lab: tuple[World, Sequencer]) -> None:
+    world, sequencer = lab
+    world.set_limits(TOKEN, 0.0, 0.0, 1.5)
+    goal_id = start(sequencer, SetLine(1, 1, "watchdog", 0.3), SetLine(2, 1, "watchdog", 4.0),
+                    WaitLine(3, 1, None, 30.0))
+    world.step_for(0.5)
+    assert world.limits.watchdog_s == 4.0
+    assert sequencer.cancel(TOKEN, goal_id).status is GoalStatus.CANCELED
+    assert world.limits.watchdog_s == 1.5, "two `set watchdog` lines: the value before the first comes back"
+    # The turn passes while a plan holds the watchdog: the new controller starts from the robot's own settings.
+    start(sequencer, SetLine(1, 1, "watchdog", 0.3), WaitLine(2, 1, None, 30.0))
+    world.step_for(0.3)
+    assert world.limits.watchdog_s == 0.3
+    world.set_controller("someone-else")
+    world.step_for(0.3)
+    assert world.limits.watchdog_s == 1000.0  # the fixture's robot setting, not the first controller's 1.5
+
+
+def test_a_watchdog_outside_what_setlimits_accepts_is_refused_naming_its_line(lab: tuple[World, Sequencer]) -> None:
+    _world, sequencer = lab
+    for value in (0.1, 5.5):
+        with pytest.raises(InvalidPlan) as refused:
+            start(sequencer, SetLine(3, 2, "watchdog", value))
+        assert "watchdog" in str(refused.value) or "value" in str(refused.value), refused.value
 
 
 def test_a_wait_whose_condition_never_holds_times_out(lab: tuple[World, Sequencer]) -> None:

@@ -1,0 +1,237 @@
+"""A plan's prediction ("Try on my practice robot"): the plan run in fast mode on a throwaway simulated copy of the
+lab robot, its odometry trace streamed to the page as it grows, then the outcome.
+
+The copy is a robot of the farm started for this request alone (RobotSpec fast: its world steps as fast as the host
+allows, not in real time), in the scene the lab robot runs, placed where the lab robot's odometry says it stands now
+(PlaceRobot) or at its dock, exactly as the practice robot was placed (runs.start_practice_robot). Its plan goes
+through access/commands.py under the token the copy was started with. The copy never outlives the request: it is
+stopped in the stream's `finally` (a page that goes away closes the stream at the next message), the stream itself
+ends after PREDICTION_WALL_S, and a farm robot ends with the process that started it.
+
+Everything a person can get wrong is refused before the stream starts, as JSON (the lab robot, the version, the
+plan's settings, the cap); what goes wrong once it runs (the farm is full, the copy did not start) is the stream's
+last message, {"type": "error", ...}.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import secrets
+import threading
+import time
+from collections.abc import Callable, Generator, Iterator
+from contextlib import suppress
+from dataclasses import dataclass, field
+
+from flask import Flask
+
+from middleware.access.commands import owned_robot, refusal_error
+from middleware.errors import ApiError, Refused
+from middleware.farm.base import FarmUnavailable, RobotFarm, RobotSpec
+from middleware.plans.language import plan_from_json
+from middleware.plans.proto_form import plan_to_proto
+from middleware.plans.runs import LabRobotNow, start_practice_robot
+from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
+from middleware.robots.messages import FINAL_GOAL_STATUSES, goal_dict
+from middleware.teaching.targets import skill_schemas
+from protos.telelab.v1 import robot_pb2
+
+log = logging.getLogger(__name__)
+_EXTENSION_KEY = "telelab.predictions"
+
+PREDICTION_WALL_S = 120.0  # the stream ends, and the copy stops, after this long whatever the plan does
+PROGRESS_PERIOD_S = 0.1  # how often the page hears the line running and the trace's new points
+TRACE_RATE_HZ = 50.0  # odometry samples per second of sim time (the most StreamTelemetry sends)
+TRACE_STEP_M = 0.01  # a trace point once the robot moved 1 cm
+MAX_TRACE_POINTS = 5000
+PREDICTION_PREFIX = "predict-"
+
+
+@dataclass(frozen=True)
+class PredictionRequest:
+    """What a prediction runs: whose, which plan, in which scene, beside which lab robot and from where."""
+
+    user_id: int
+    plan_name: str
+    document: dict[str, object]
+    scene: str
+    beside: LabRobotNow | None
+    from_dock: bool
+
+
+@dataclass
+class PredictionSlots:
+    """This process's predictions: at most cap at once (each steps a world flat out, a core), one per user."""
+
+    cap: int
+    _running: set[int] = field(default_factory=set)
+    _lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def check(self, user_id: int) -> None:
+        """A 409 when user_id has a prediction running here or the process runs as many as it may."""
+        with self._lock:
+            self._refusal(user_id)
+
+    def take(self, user_id: int) -> None:
+        """Holds a slot for user_id (refused as check() is)."""
+        with self._lock:
+            self._refusal(user_id)
+            self._running.add(user_id)
+
+    def release(self, user_id: int) -> None:
+        """Gives user_id's slot back."""
+        with self._lock:
+            self._running.discard(user_id)
+
+    def _refusal(self, user_id: int) -> None:
+        if user_id in self._running:
+            raise ApiError(409, "busy", "A prediction of yours is running already: wait for its outcome.")
+        if len(self._running) >= self.cap:
+            raise ApiError(409, "busy", "The lab is predicting as many plans as it can right now. Try again in a "
+                                        "few seconds.")
+
+
+def prediction_slots(app: Flask) -> PredictionSlots:
+    """The prediction slots of app (made at the first prediction, from PREDICTION_CAP)."""
+    slots = app.extensions.get(_EXTENSION_KEY)
+    if slots is None:
+        slots = app.extensions.setdefault(_EXTENSION_KEY, PredictionSlots(int(app.config.get("PREDICTION_CAP", 2))))
+    return slots
+
+
+class TraceRecorder:
+    """The copy's odometry poses, read from a pose-only telemetry stream of its own on a thread of its own."""
+
+    def __init__(self, link: RobotLink) -> None:
+        self._stream = link.stream_poses(TRACE_RATE_HZ)
+        self._lock = threading.Lock()
+        self._points: list[dict[str, float]] = []
+        self._thread = threading.Thread(target=self._read, name=f"trace-{link.name}", daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        with suppress(Exception):  # the stream ends when the copy stops or the recorder closes it
+            for message in self._stream:
+                self.add(message.odometry.pose)
+
+    def add(self, pose: robot_pb2.Pose2D) -> None:
+        """Adds a pose: the newest point moves with the robot until it is TRACE_STEP_M from the one before it, then
+        stays, and the next pose starts a new point (a robot at rest adds nothing)."""
+        point = {"x_m": round(pose.x_m, 4), "y_m": round(pose.y_m, 4), "theta_rad": round(pose.theta_rad, 4)}
+        if not all(math.isfinite(v) for v in point.values()):
+            return
+        with self._lock:
+            points = self._points
+            floating = len(points) >= 2 and math.hypot(points[-1]["x_m"] - points[-2]["x_m"],
+                                                       points[-1]["y_m"] - points[-2]["y_m"]) < TRACE_STEP_M
+            if floating or len(points) >= MAX_TRACE_POINTS:
+                points[-1] = point
+            else:
+                points.append(point)
+
+    def points(self) -> list[dict[str, float]]:
+        """The trace so far."""
+        with self._lock:
+            return list(self._points)
+
+    def close(self) -> None:
+        """Stops reading."""
+        with suppress(Exception):
+            self._stream.cancel()
+        self._thread.join(2.0)
+
+
+def run_prediction(farm: RobotFarm, slots: PredictionSlots, request: PredictionRequest
+                   ) -> Generator[dict[str, object], None, None]:
+    """The prediction's messages: progress while the copy starts and the plan runs, then the end (or an error).
+
+    The copy is stopped in `finally`, whether the plan ended, the page went away (the generator is closed) or
+    something failed.
+    """
+    name = f"{PREDICTION_PREFIX}{secrets.token_hex(6)}"
+    token = secrets.token_urlsafe(32)
+    link: RobotLink | None = None
+    recorder: TraceRecorder | None = None
+    started = False
+    try:
+        slots.take(request.user_id)
+    except ApiError as refused:
+        yield {"type": "error", **refused.to_dict()}
+        return
+    try:
+        where = f" of {request.beside.name}" if request.beside else ""
+        yield {"type": "progress", "phase": "starting",
+               "message": f"Starting a simulated copy{where} in the scene {request.scene}…"}
+        robot = farm.start(RobotSpec(name, request.scene, token, fast=True))
+        started = True
+        link = RobotLink(name, robot.address, rpc_timeout_s=5.0)
+        copy = owned_robot(link, token)
+        plan = plan_from_json(request.document, skill_schemas(link, motor_only=True))
+        start = start_practice_robot(copy, request.from_dock, request.beside)
+        recorder = TraceRecorder(link)
+        begun = time.monotonic()
+        goal = copy.run_plan(request.plan_name, plan_to_proto(plan), preempt=True)
+        yield {"type": "started", "start": start, "goal": goal_dict(goal)}
+        final = yield from _follow(copy.goal_state, goal.goal_id, recorder, begun)
+        if final is None:
+            with suppress(CommandRefused, RobotUnavailable):
+                copy.cancel(goal.goal_id)
+            yield {"type": "error", "code": "prediction_too_long",
+                   "message": f"The prediction ran past {PREDICTION_WALL_S:.0f} s and was stopped: shorten the plan "
+                              "or run it on the lab robot.", "trace": recorder.points()}
+            return
+        recorder.add(link.odometry_pose())  # where it came to rest: the end point the lab run is compared with
+        answer = goal_dict(final)
+        feedback = answer.get("feedback")
+        sim_s = feedback.get("sim_time_s") if isinstance(feedback, dict) else None
+        yield {"type": "end", "goal": answer, "trace": recorder.points(), "start": start,
+               "wall_s": round(time.monotonic() - begun, 3), "sim_time_s": sim_s}
+    except (CommandRefused, RobotUnavailable) as error:
+        yield {"type": "error", **refusal_error(error).to_dict()}
+    except Refused as refused:  # the farm full or away, the plan not valid on the copy's skills
+        yield {"type": "error", **refused.to_dict()}
+    finally:
+        if recorder is not None:
+            recorder.close()
+        if link is not None:
+            link.close()
+        if started or farm.find(name) is not None:
+            try:
+                farm.stop(name)
+            except FarmUnavailable as error:
+                log.warning("the prediction robot %s was not stopped: %s", name, error)
+        slots.release(request.user_id)
+
+
+def prediction_stream(farm: RobotFarm, slots: PredictionSlots, request: PredictionRequest) -> Iterator[bytes]:
+    """run_prediction's messages as JSON lines."""
+    messages = run_prediction(farm, slots, request)
+    try:
+        for message in messages:
+            yield json.dumps(message, allow_nan=False).encode() + b"\n"
+    finally:
+        messages.close()  # the page went away: the copy stops now, not when the generator is collected
+
+
+def _follow(goal_state: Callable[[str], robot_pb2.GoalState], goal_id: str, recorder: TraceRecorder, begun: float
+            ) -> Generator[dict[str, object], None, robot_pb2.GoalState | None]:
+    """Progress messages (the line running, the trace's new points) until the goal ends; its final state, or None
+    when the wall-time bound passed first. A generator whose return value is the final state."""
+    sent = 0
+    while time.monotonic() - begun < PREDICTION_WALL_S:
+        state = goal_state(goal_id)
+        answer = goal_dict(state)
+        if answer["status"] in FINAL_GOAL_STATUSES:
+            return state
+        points = recorder.points()
+        feedback = answer.get("feedback") if isinstance(answer.get("feedback"), dict) else {}
+        assert isinstance(feedback, dict)
+        # From the last point sent on: it may have moved since (the robot crept less than a trace step).
+        since = max(0, sent - 1)
+        yield {"type": "progress", "phase": "running", "feedback": feedback, "trace_from": since,
+               "trace": points[since:]}
+        sent = len(points)
+        time.sleep(PROGRESS_PERIOD_S)
+    return None
