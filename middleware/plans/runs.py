@@ -91,8 +91,9 @@ def start_practice_robot(robot: Commander, from_dock: bool, beside: LabRobotNow 
         pose = beside.pose
         try:
             robot.place_robot(pose)
+            x_m, y_m = round(pose.x_m, 2) + 0.0, round(pose.y_m, 2) + 0.0  # + 0.0: no "-0.00"
             return {"at": "lab_robot", "message": f"Starts where {beside.name} stands now "
-                                                  f"(x {pose.x_m:.2f} m, y {pose.y_m:.2f} m)."}
+                                                  f"(x {x_m:.2f} m, y {y_m:.2f} m)."}
         except CommandRefused as refused:
             if refused.code != "invalid_field":
                 raise

@@ -64,6 +64,54 @@ export async function fetchJson(url, { method = "GET", body, signal } = {}) {
   return payload;
 }
 
+/**
+ * A POST whose answer is a stream of JSON lines (application/x-ndjson): onMessage(message) for each line as it
+ * comes; resolves when the stream ends. A refusal before the stream is thrown as fetchJson throws it; aborting
+ * signal closes the stream (the server then stops what it was doing for this request).
+ */
+export async function fetchJsonLines(url, { body, signal } = {}, onMessage = () => {}) {
+  let response;
+  try {
+    response = await fetch(url, {
+      method: "POST",
+      headers: { Accept: "application/x-ndjson", "Content-Type": "application/json", "X-CSRFToken": csrfToken() },
+      body: JSON.stringify(body ?? {}),
+      credentials: "same-origin",
+      signal,
+    });
+  } catch (networkError) {
+    if (networkError.name === "AbortError") throw networkError;
+    throw new ApiError(0, "network", "The lab server cannot be reached. Check your connection and try again.");
+  }
+  if (!response.ok || !response.body) {
+    const payload = await response.json().catch(() => null);
+    const error = payload?.error;
+    throw new ApiError(response.status, error?.code ?? "http_" + response.status,
+      error?.message ?? `The server answered ${response.status} ${response.statusText}.`, error?.field ?? null, payload);
+  }
+  const reader = response.body.pipeThrough(new TextDecoderStream()).getReader();
+  let pending = "";
+  for (;;) {
+    let chunk;
+    try {
+      chunk = await reader.read();
+    } catch (streamError) {
+      if (streamError.name === "AbortError") throw streamError;
+      throw new ApiError(0, "network", "The connection to the lab server was lost before the answer ended.");
+    }
+    if (chunk.done) break;
+    pending += chunk.value;
+    const lines = pending.split("\n");
+    pending = lines.pop();
+    for (const line of lines) {
+      const message = parseJsonMessage(line);
+      if (message) onMessage(message);
+    }
+  }
+  const last = parseJsonMessage(pending);
+  if (last) onMessage(last);
+}
+
 /** ws:// or wss:// URL for a same-origin path, matching how the page was loaded. */
 export function socketUrl(path) {
   const scheme = location.protocol === "https:" ? "wss:" : "ws:";

@@ -1,7 +1,7 @@
 // The plan editor: write and check a plan (errors marked on their lines), save it as a version, copy, share,
-// export; try it on the practice robot and run it on a lab robot during one's turn, each run's trace drawn on
-// the map with its line progress and its end state.
-import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
+// export; predict it (a fast simulated copy of the lab robot, its trace streamed as it grows) and run it on a lab
+// robot during one's turn, each trace drawn on the map with its line progress and its end state.
+import { Channel, fetchJson, fetchJsonLines, parseJsonMessage } from "../../lib/transport.js";
 import { h } from "../../lib/dom.js";
 import { boxCorners, fitView, sceneBounds, worldToCanvas } from "../../lib/map-geometry.js";
 import { addSample, endErrorCm, endStateWords, isFinal, lineOf } from "./plan-trace.js";
@@ -237,6 +237,12 @@ async function loadScene(robotName) {
 
 // --- runs --------------------------------------------------------------------------------------
 
+function showLine(label, feedback) {
+  const line = lineOf(feedback);
+  if (line && line !== state.runningLine) { state.runningLine = line; renderGutter(); }
+  if (line) progressLine.textContent = `${label}: running line ${line}: ${String(feedback.state ?? "").replace(/^line \d+:\s*/, "")}`;
+}
+
 function setRunning(running) {
   button("cancel").hidden = !running;
   button("try").disabled = running;
@@ -253,6 +259,7 @@ function finish(run, goal) {
   state.runningLine = null;
   renderGutter();
   setRunning(false);
+  if (run.prediction) { draw(); return; }  // its whole trace came with the stream's end
   // One more telemetry sample lands the trace where the robot stopped.
   setTimeout(() => { run.goalChannel.close(); run.telemetry.close(); draw(); }, 600);
 }
@@ -276,11 +283,7 @@ function follow(answer, kind, label) {
     const message = parseJsonMessage(event.detail);
     if (!message || run.finished) return;
     const feedback = message.type === "goal_feedback" ? message.feedback : message.goal?.feedback;
-    if (feedback) {
-      const line = lineOf(feedback);
-      if (line && line !== state.runningLine) { state.runningLine = line; renderGutter(); }
-      if (line) progressLine.textContent = `${label}: running line ${line}: ${feedback.state.replace(/^line \d+:\s*/, "")}`;
-    }
+    if (feedback) showLine(label, feedback);
     if (message.type === "goal" && isFinal(message.goal?.status)) finish(run, message.goal);
   });
   run.goalChannel.addEventListener("statechange", (event) => {
@@ -291,25 +294,74 @@ function follow(answer, kind, label) {
   });
 }
 
-// Without a lab robot to stand beside, the practice robot starts at its dock as it always did.
+// Without a lab robot to stand beside, the prediction starts at the dock.
 function practiceStartsAtDock() {
   return (root.querySelector("input[name=practice_start]:checked")?.value ?? "dock") === "dock";
+}
+
+// The prediction: the plan in fast mode on a throwaway simulated copy of the lab robot, streamed as JSON lines
+// (the line running and the trace's new points, then the end). Cancel closes the stream; the server stops the copy.
+function onPrediction(run, message) {
+  if (message.type === "progress" && message.phase === "starting") {
+    progressLine.textContent = `${run.label}: ${message.message}`;
+  } else if (message.type === "started") {
+    startLine.textContent = `${run.label} on a fast simulated copy: ${message.start?.message ?? ""}`;
+    progressLine.textContent = `${run.label}: running…`;
+  } else if (message.type === "progress") {
+    const from = Number.isInteger(message.trace_from) ? message.trace_from : state.traces.predicted.length;
+    state.traces.predicted = [...state.traces.predicted.slice(0, from), ...(message.trace ?? [])].slice(-5000);
+    if (message.feedback) showLine(run.label, message.feedback);
+    draw();
+  } else if (message.type === "end") {
+    state.traces.predicted = message.trace ?? state.traces.predicted;
+    finish(run, message.goal);
+    if (message.sim_time_s != null && message.wall_s != null) {
+      startLine.textContent += ` ${Number(message.sim_time_s).toFixed(1)} s of plan predicted in ${Number(message.wall_s).toFixed(1)} s.`;
+    }
+  } else if (message.type === "error") {
+    run.finished = true;
+    progressLine.textContent = `${run.label}: ${message.error?.message ?? "the prediction failed."}`;
+    if (message.trace) state.traces.predicted = message.trace;
+    setRunning(false);
+    draw();
+  }
+}
+
+async function predict() {
+  if (!(await check())) return;
+  const robotName = robotSelect?.value ?? "";
+  const run = { label: "Prediction", prediction: true, finished: false, abort: new AbortController() };
+  state.run = run;
+  state.traces.predicted = [];
+  draw();
+  progressLine.textContent = "Prediction: starting…";
+  endStateLine.textContent = "";
+  delete endStateLine.dataset.status;
+  startLine.textContent = "";
+  setRunning(true);
+  try {
+    await fetchJsonLines(`/api/plans/${planId}/predictions`,
+      { body: { beside: robotName || null, from_dock: practiceStartsAtDock() }, signal: run.abort.signal },
+      (message) => onPrediction(run, message));
+    if (!run.finished) {
+      progressLine.textContent = "Prediction: the answer ended early; try again.";
+      setRunning(false);
+    }
+  } catch (error) {
+    run.finished = true;
+    progressLine.textContent = error.name === "AbortError" ? "Prediction: cancelled." : `Prediction: ${error.message}`;
+    setRunning(false);
+  }
 }
 
 async function startRun(target) {
   if (!(await check())) return;
   const robotName = robotSelect?.value ?? "";
-  const practice = target === "practice";
-  const body = practice
-    ? { target, beside: robotName || null, from_dock: practiceStartsAtDock() }
-    : { target };
-  progressLine.textContent = practice ? "Starting on your practice robot…" : `Starting on ${robotName}…`;
+  progressLine.textContent = `Starting on ${robotName}…`;
   endStateLine.textContent = "";
-  startLine.textContent = "";
   try {
-    const answer = await fetchJson(`/api/plans/${planId}/runs`, { method: "POST", body });
-    if (answer.start) startLine.textContent = `Practice robot: ${answer.start.message}`;
-    follow(answer, practice ? "predicted" : "real", practice ? "Practice robot" : answer.robot);
+    const answer = await fetchJson(`/api/plans/${planId}/runs`, { method: "POST", body: { target } });
+    follow(answer, "real", answer.robot);
   } catch (error) {
     progressLine.textContent = error.message;
     setRunning(false);
@@ -318,6 +370,7 @@ async function startRun(target) {
 
 async function cancel() {
   if (!state.run) return;
+  if (state.run.prediction) { state.run.abort.abort(); return; }
   try {
     await fetchJson(state.run.answer.cancel_url, { method: "DELETE" });
   } catch (error) {
@@ -357,7 +410,7 @@ button("copy").addEventListener("click", copy);
 button("share")?.addEventListener("click", share);
 button("delete")?.addEventListener("click", remove);
 root.querySelector("input[name=console_skill]")?.addEventListener("change", useAsSkill);
-button("try").addEventListener("click", () => startRun("practice"));
+button("try").addEventListener("click", predict);
 button("run").addEventListener("click", () => startRun(robotSelect.value));
 button("cancel").addEventListener("click", cancel);
 button("queue").addEventListener("click", queueForRobot);
