@@ -60,9 +60,11 @@ class SkillController:
 
 
 def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | None,
-                 personal: bool = False, camera_picture: tuple[str, str] = ("", "video")) -> list[dict[str, object]]:
+                 personal: bool = False, camera_picture: tuple[str, str] = ("", "video"),
+                 picture_chosen: str | None = None) -> list[dict[str, object]]:
     """Every panel of the console of robot_name, in the order they are placed (personal: a practice robot;
-    camera_picture: the robot's kind and the picture an admin chose as its camera panel's default)."""
+    camera_picture: the robot's kind and the picture an admin chose as its camera panel's default;
+    picture_chosen: the picture this user last chose for robots of that kind, which wins over the default)."""
     base = f"/ws/robots/{robot_name}"
     turn_help = ("Your personal practice robot: only you see it, so you control it whenever you are here."
                  if personal else "Who controls the robot and who waits.")
@@ -72,7 +74,8 @@ def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | Non
         DynamicRepository("camera", "camera", "Camera", f"{base}/camera",
                           "What the robot sees: its camera's video, or the view your browser draws from its pose.",
                           "drive",
-                          (("picture", {"kind": camera_picture[0] or robot_name, "default": camera_picture[1]}),)),
+                          (("picture", {"kind": camera_picture[0] or robot_name, "default": camera_picture[1],
+                                        "chosen": picture_chosen}),)),
         DynamicRepository("drive", "drive", "Drive", f"{base}/drive",
                           "Direct control: arrow keys, the pad or a gamepad.", "drive"),
         DynamicRepository("queue", "queue", "Turn", f"{base}/queue", turn_help, "drive"),

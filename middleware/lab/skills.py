@@ -15,7 +15,8 @@ from middleware.lab.panels import robot_panels
 from middleware.lab.schemas import GOAL_ID_PATTERN, NAME_PATTERN
 from middleware.models import Role
 from middleware.plans.services import console_skill_panels
-from middleware.robots.catalog import camera_picture_of
+from middleware.preferences.stored import chosen_camera_picture
+from middleware.robots.catalog import CAMERA_PICTURES, camera_picture_of
 from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.messages import goal_dict, map_dict
 from middleware.robots.registry import robot_registry
@@ -64,7 +65,9 @@ def panels(robot_name: str) -> ResponseReturnValue:
     except RobotUnavailable:
         skills = None
     personal = robot_registry().is_personal_name(robot_name)
-    panels = robot_panels(robot_name, skills, personal, camera_picture_of(get_session(), robot_name))
+    kind, default_picture = camera_picture_of(get_session(), robot_name)
+    chosen = chosen_camera_picture(get_session(), _user_id(), kind, CAMERA_PICTURES)
+    panels = robot_panels(robot_name, skills, personal, (kind, default_picture), chosen)
     panels += console_skill_panels(get_session(), _user_id(), robot_name)  # the user's plans used as skills
     return jsonify({"robot": robot_name, "skills_available": skills is not None, "personal": personal,
                     "panels": panels})

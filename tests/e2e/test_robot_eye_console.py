@@ -162,7 +162,8 @@ def test_the_admins_default_picture_shows_first_and_the_persons_choice_is_rememb
     page, chromium, live_server: LiveServer, demo_accounts
 ) -> None:
     """The admin makes the drawn view the first picture of the lab's robots on the robots page; a student's console
-    opens with it (no video socket at all), the student switches to the video, and a reload keeps the video."""
+    opens with it (no video socket at all), the student switches to the video, and a reload keeps the video, as
+    does the student's other browser: the choice is kept with the account."""
     admin = chromium.new_context(viewport={"width": 1280, "height": 800}).new_page()
     try:
         log_in(admin, live_server, "admin", demo_accounts["admin"])
@@ -183,11 +184,21 @@ def test_the_admins_default_picture_shows_first_and_the_persons_choice_is_rememb
 
         choose_source(page, "video")
         page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached")
+        wait_for(lambda: page.evaluate("fetch('/api/me/preferences/camera-picture').then((r) => r.json())")
+                 == {"value": {"lab": "video"}}, 5, "the choice was not kept with the account")
         page.reload()
         page.locator('[data-connection="camera"][data-phase="open"]').wait_for()
         page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached")
         assert page.locator("camera-panel").get_attribute("data-source") == "video"
         page.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-console-remembered-video.png"))
+        other_browser = chromium.new_context(**PHONE).new_page()  # the same student's phone
+        try:
+            open_console(other_browser, live_server)
+            other_browser.locator('[data-connection="camera"][data-phase="open"]').wait_for()
+            assert other_browser.locator("camera-panel").get_attribute("data-source") == "video"
+            other_browser.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-console-remembered-on-a-phone.png"))
+        finally:
+            other_browser.context.close()
     finally:
         admin.goto(f"{live_server.url}/admin/robots")
         row = admin.locator('#kind-pictures tr[data-kind="lab"]')

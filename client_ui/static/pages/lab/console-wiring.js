@@ -8,7 +8,7 @@ import { ApiError, Channel, fetchJson, parseJsonMessage } from "../../lib/transp
 import { DriveSession } from "../../lib/drive-session.js";
 import { connectChat } from "./chat-session.js";
 import { GUESS_FIELDS, goalParameterNames } from "../../lib/panel-descriptors.js";
-import { bindFeedback } from "./feedback-wiring.js";
+import { bindFeedback, savePictureChoice } from "./feedback-wiring.js";
 import { playTurnTone } from "./turn-tone.js";
 
 const FINAL_GOAL_STATES = new Set(["succeeded", "canceled", "aborted"]);
@@ -19,26 +19,6 @@ const PING_EVERY_MS = 1000;
 const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
 const BOOKINGS_REFRESH_MS = 60 * 1000;
 const DRAWN_PICTURE_STATUS = "video off: picture drawn by this browser from the robot's odometry pose";
-const PICTURE_CHOICE_PREFIX = "telelab.camera-picture."; // + the robot's kind: this browser's last choice
-
-/** This browser's saved picture choice ("video" | "drawn") under key, or null (none, unreadable, or storage off). */
-function savedPictureChoice(key) {
-  try {
-    const value = window.localStorage.getItem(key);
-    return value === "video" || value === "drawn" ? value : null;
-  } catch {
-    return null;
-  }
-}
-
-function savePictureChoice(key, source) {
-  try {
-    window.localStorage.setItem(key, source);
-  } catch {
-    // Storage off (a private window, a full quota): the choice holds for this page only.
-  }
-}
-
 function isStatusOrError(message) {
   return message?.type === "status" || message?.type === "error";
 }
@@ -197,9 +177,11 @@ export class ConsoleWiring {
     const path = descriptor.channel ?? `${this.#robotPath}/camera`;
     const name = path.split("/").pop();
     const open = () => this.#openCamera(descriptor, panel, path);
-    // The picture first shown: this browser's last choice for robots of this kind, else the admin's default.
-    const choiceKey = `${PICTURE_CHOICE_PREFIX}${descriptor.picture?.kind ?? this.#robotName}`;
-    const initial = savedPictureChoice(choiceKey) ?? (descriptor.picture?.default === "drawn" ? "drawn" : "video");
+    // The picture first shown: this person's last choice for robots of this kind, else the admin's default.
+    const kind = descriptor.picture?.kind ?? this.#robotName;
+    const chosen = descriptor.picture?.chosen;
+    const initial = chosen === "video" || chosen === "drawn" ? chosen
+      : (descriptor.picture?.default === "drawn" ? "drawn" : "video");
     panel.source = initial;
     if (initial === "drawn") {
       this.#status.update(name, { phase: "off", reason: DRAWN_PICTURE_STATUS });
@@ -208,7 +190,7 @@ export class ConsoleWiring {
     }
     // While the picture is drawn here the video socket is closed: a robot nobody watches renders nothing.
     panel.addEventListener("camera-source-change", ({ detail }) => {
-      if (!detail.fallback) savePictureChoice(choiceKey, detail.source); // not a choice: this browser cannot draw
+      if (!detail.fallback) savePictureChoice(kind, detail.source); // not a choice: this browser cannot draw
       const channel = this.#channels.get(path);
       if (detail.source === "drawn" && channel) {
         this.#channels.delete(path);

@@ -5,6 +5,9 @@ import { fetchJson } from "../../lib/transport.js";
 
 export const FEEDBACK_PREFERENCE = "/api/me/preferences/camera-feedback";
 export const FILL_PREFERENCE = "/api/me/preferences/camera-feedback-fill";
+// The picture this person chose per robot kind, {"<kind>": "video" | "drawn"}: kept with the account, so that
+// their other browsers (the lab's PC, their phone) open with it too. The page gets it with the panel descriptor.
+export const PICTURE_PREFERENCE = "/api/me/preferences/camera-picture";
 
 function save(url, value) {
   fetchJson(url, { method: "PUT", body: { value } }).catch((error) => {
@@ -22,4 +25,15 @@ export function bindFeedback(panel) {
     .catch(() => {}); // no saved choice: the edges are continued
   panel.addEventListener("camera-feedback-change", ({ detail }) => save(FEEDBACK_PREFERENCE, Boolean(detail.enabled)));
   panel.addEventListener("camera-feedback-fill-change", ({ detail }) => save(FILL_PREFERENCE, String(detail.fill)));
+}
+
+/** Saves source ("video" | "drawn") as this person's picture for robots of kind, keeping their other kinds' choices. */
+export async function savePictureChoice(kind, source) {
+  try {
+    const stored = (await fetchJson(PICTURE_PREFERENCE))?.value;
+    const choices = stored && typeof stored === "object" && !Array.isArray(stored) ? stored : {};
+    await fetchJson(PICTURE_PREFERENCE, { method: "PUT", body: { value: { ...choices, [kind]: source } } });
+  } catch (error) {
+    console.warn("the picture choice was not saved:", error.message); // it still holds on this page
+  }
 }
