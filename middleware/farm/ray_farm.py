@@ -97,6 +97,9 @@ class RayFarm:
         self._lock = threading.Lock()
         self._connected_pid: int | None = None
         self._actor_class: Any = None
+        # The handles of this process's fast robots: Ray ends an actor that is not detached once no handle to it is
+        # left, so the farm holds each until stop() (and the process's end ends them all).
+        self._owned: dict[str, Any] = {}
 
     def start(self, spec: RobotSpec) -> FarmRobot:
         ray = self._ray()
@@ -119,7 +122,10 @@ class RayFarm:
             memory=RAY_ROBOT_MEMORY_MB * 2**20, scheduling_strategy="SPREAD", get_if_exists=True,
         ).remote(spec.name, spec.scene, spec.controller_token, spec.fast)
         try:
-            return self._robot(ray.get(actor.describe.remote(), timeout=START_TIMEOUT_S))
+            robot = self._robot(ray.get(actor.describe.remote(), timeout=START_TIMEOUT_S))
+            if spec.fast:
+                self._owned[spec.name] = actor
+            return robot
         except Exception as error:  # noqa: BLE001 - Ray raises several kinds; none may leave an actor behind
             ray.kill(actor, no_restart=True)
             log.warning("robot %s did not start on the Ray farm: %s", spec.name, error)
@@ -146,12 +152,14 @@ class RayFarm:
         try:
             actor = ray.get_actor(ACTOR_PREFIX + name, namespace=NAMESPACE)
         except ValueError:
+            self._owned.pop(name, None)
             return False
         try:
             ray.get(actor.stop.remote(), timeout=CALL_TIMEOUT_S)
         except Exception as error:  # noqa: BLE001 - the actor is killed whatever its stop did
             log.info("robot %s did not stop cleanly (%s); killing its actor", name, error.__class__.__name__)
         ray.kill(actor, no_restart=True)
+        self._owned.pop(name, None)
         return True
 
     def robots(self) -> list[FarmRobot]:

@@ -101,6 +101,21 @@ def prediction_slots(app: Flask) -> PredictionSlots:
     return slots
 
 
+def add_trace_point(points: list[dict[str, float]], x_m: float, y_m: float, theta_rad: float) -> None:
+    """Adds a pose to a trace: its newest point moves with the robot until it is TRACE_STEP_M from the one before
+    it, then stays, and the next pose starts a new point (a robot at rest adds nothing); at most MAX_TRACE_POINTS,
+    the last one following the robot. A pose that is not finite is left out."""
+    point = {"x_m": round(x_m, 4), "y_m": round(y_m, 4), "theta_rad": round(theta_rad, 4)}
+    if not all(math.isfinite(v) for v in point.values()):
+        return
+    floating = len(points) >= 2 and math.hypot(points[-1]["x_m"] - points[-2]["x_m"],
+                                               points[-1]["y_m"] - points[-2]["y_m"]) < TRACE_STEP_M
+    if floating or len(points) >= MAX_TRACE_POINTS:
+        points[-1] = point
+    else:
+        points.append(point)
+
+
 class TraceRecorder:
     """The copy's odometry poses, read from a pose-only telemetry stream of its own on a thread of its own."""
 
@@ -117,19 +132,9 @@ class TraceRecorder:
                 self.add(message.odometry.pose)
 
     def add(self, pose: robot_pb2.Pose2D) -> None:
-        """Adds a pose: the newest point moves with the robot until it is TRACE_STEP_M from the one before it, then
-        stays, and the next pose starts a new point (a robot at rest adds nothing)."""
-        point = {"x_m": round(pose.x_m, 4), "y_m": round(pose.y_m, 4), "theta_rad": round(pose.theta_rad, 4)}
-        if not all(math.isfinite(v) for v in point.values()):
-            return
+        """Adds a pose to the trace (add_trace_point)."""
         with self._lock:
-            points = self._points
-            floating = len(points) >= 2 and math.hypot(points[-1]["x_m"] - points[-2]["x_m"],
-                                                       points[-1]["y_m"] - points[-2]["y_m"]) < TRACE_STEP_M
-            if floating or len(points) >= MAX_TRACE_POINTS:
-                points[-1] = point
-            else:
-                points.append(point)
+            add_trace_point(self._points, pose.x_m, pose.y_m, pose.theta_rad)
 
     def points(self) -> list[dict[str, float]]:
         """The trace so far."""
@@ -178,16 +183,14 @@ def run_prediction(farm: RobotFarm, slots: PredictionSlots, request: PredictionR
         if final is None:
             with suppress(CommandRefused, RobotUnavailable):
                 copy.cancel(goal.goal_id)
-            yield {"type": "error", "code": "prediction_too_long",
-                   "message": f"The prediction ran past {PREDICTION_WALL_S:.0f} s and was stopped: shorten the plan "
-                              "or run it on the lab robot.", "trace": recorder.points()}
+            too_long = ApiError(409, "prediction_too_long", f"The prediction ran past {PREDICTION_WALL_S:.0f} s and "
+                                "was stopped: shorten the plan, or run it on the lab robot.")
+            yield {"type": "error", **too_long.to_dict(), "trace": recorder.points()}
             return
         recorder.add(link.odometry_pose())  # where it came to rest: the end point the lab run is compared with
-        answer = goal_dict(final)
-        feedback = answer.get("feedback")
-        sim_s = feedback.get("sim_time_s") if isinstance(feedback, dict) else None
-        yield {"type": "end", "goal": answer, "trace": recorder.points(), "start": start,
-               "wall_s": round(time.monotonic() - begun, 3), "sim_time_s": sim_s}
+        yield {"type": "end", "goal": goal_dict(final), "trace": recorder.points(), "start": start,
+               "wall_s": round(time.monotonic() - begun, 3),
+               "sim_time_s": round(final.ended_sim_s - final.accepted_sim_s, 3)}  # the plan's time, predicted
     except (CommandRefused, RobotUnavailable) as error:
         yield {"type": "error", **refusal_error(error).to_dict()}
     except Refused as refused:  # the farm full or away, the plan not valid on the copy's skills
@@ -197,11 +200,11 @@ def run_prediction(farm: RobotFarm, slots: PredictionSlots, request: PredictionR
             recorder.close()
         if link is not None:
             link.close()
-        if started or farm.find(name) is not None:
-            try:
+        try:
+            if started or farm.find(name) is not None:  # a start that failed half-way may have left it
                 farm.stop(name)
-            except FarmUnavailable as error:
-                log.warning("the prediction robot %s was not stopped: %s", name, error)
+        except FarmUnavailable as error:
+            log.warning("the prediction robot %s was not stopped: %s", name, error)
         slots.release(request.user_id)
 
 

@@ -69,3 +69,35 @@ def test_a_robot_ends_with_the_web_process_that_started_it() -> None:
         if web_process.stdout is not None:
             web_process.stdout.close()
     assert _gone_within("orphan-check", 10)
+
+
+def test_a_fast_robot_steps_faster_than_real_time_and_is_never_restarted() -> None:
+    """RobotSpec(fast=True), a plan's prediction: its world runs flat out, and a throwaway robot that dies stays
+    dead (its request is over)."""
+    from middleware.robots.link import RobotLink
+
+    farm = LocalProcessFarm(capacity=1)
+    try:
+        robot = farm.start(RobotSpec("fast-check", "empty", "token", fast=True))
+        link = RobotLink("fast-check", robot.address, rpc_timeout_s=5.0)
+        stream = link.stream_poses(10.0)
+        first = next(iter(stream)).sim_time_s
+        began = time.monotonic()
+        latest = first
+        for message in stream:  # read as they come for a second of wall time
+            latest = message.sim_time_s
+            if time.monotonic() - began > 1.0:
+                break
+        stream.cancel()
+        link.close()
+        ratio = (latest - first) / (time.monotonic() - began)
+        print(f"the fast robot ran {ratio:.1f} times faster than real time")
+        assert ratio > 2.0
+        pids = _skill_servers_named("fast-check")
+        assert len(pids) == 1
+        subprocess.run(["kill", "-9", pids[0]], check=True)
+        time.sleep(2.5)  # more than the farm's restart pause
+        assert _skill_servers_named("fast-check") == [], "a fast robot was restarted"
+    finally:
+        farm.close()
+    assert _gone_within("fast-check", 10)

@@ -120,6 +120,31 @@ def test_a_killed_robot_actor_is_restarted_and_obeys_its_controller_again(farm: 
         _drives(again.address, "someone-else", 3)
 
 
+def test_a_fast_robot_is_owned_by_its_process_and_never_restarted(farm: RayFarm) -> None:
+    """RobotSpec(fast=True), a plan's prediction: an actor of the process that started it (not detached, so it ends
+    with that process; the farm holds its handle meanwhile), whose world runs faster than real time, and which stays
+    dead when killed."""
+    import ray
+
+    robot = farm.start(RobotSpec("prediction-check", "empty", "owner-token", fast=True))
+    time.sleep(1.0)  # Ray ends an actor that is not detached when its last handle goes: the farm holds it
+    actor = ray.get_actor(ACTOR_PREFIX + "prediction-check", namespace=NAMESPACE)
+    link = RobotLink("probe", robot.address, rpc_timeout_s=5.0)
+    stream = link.stream_poses(10.0)
+    first = latest = next(iter(stream)).sim_time_s
+    began = time.monotonic()
+    for message in stream:  # read as they come for a second of wall time
+        latest = message.sim_time_s
+        if time.monotonic() - began > 1.0:
+            break
+    stream.cancel()
+    link.close()
+    assert (latest - first) / (time.monotonic() - began) > 2.0, "the fast robot ran in real time"
+    ray.kill(actor, no_restart=False)
+    time.sleep(5.0)
+    assert farm.find("prediction-check") is None, "a fast robot's actor was restarted"
+
+
 def test_draining_a_node_moves_its_robots_to_the_other(cluster: Cluster) -> None:
     """Runs on its own node, added and drained here, so the other tests keep both of theirs."""
     spare = cluster.add_node(num_cpus=2, node_ip_address="127.0.0.1", resources={"spare": 1})
