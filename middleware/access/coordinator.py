@@ -109,13 +109,9 @@ class AccessCoordinator:
             self.hooks.check_in(session, robot_name, user_id, self.clock())
         return self.apply(round_robin.join, robot_name, user_id)
 
-    def heartbeat(self, robot_name: str, user_id: int, silent_s: float = 0.0) -> bool:
-        """The user is still connected: their client was last heard silent_s ago (the grace counts from then)."""
-        with self._sessions() as session, session.begin():
-            return round_robin.heartbeat(session, robot_name, user_id, self.clock() - timedelta(seconds=silent_s))
-
     def note_heard(self, robot_name: str, user_id: int, silent_s: float = 0.0) -> None:
-        """heartbeat() without a write now: the seat's time is written with this process's next batch."""
+        """The user is still connected: their client was last heard silent_s ago (the grace counts from then),
+        written with this process's next batch of seat times."""
         self.heard.note(robot_name, user_id, self.clock() - timedelta(seconds=silent_s))
 
     def tick(self, robot_name: str) -> QueueState:

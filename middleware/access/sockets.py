@@ -54,14 +54,12 @@ class ChannelSeat:
         self._coordinator.start_ticker()
         self._coordinator.join(self.robot_name, self.user_id)
 
-    def keep(self, ws: WebSocket, *, now: bool = False) -> None:
-        """Tells the queue when ws's client was last heard (at most every HEARTBEAT_INTERVAL_S): in memory, written
-        with the process's next batch; with now, written at once (a database write: run it on the pool)."""
+    def keep(self, ws: WebSocket, *, closing: bool = False) -> None:
+        """Tells the queue when ws's client was last heard (at most every HEARTBEAT_INTERVAL_S, and always when the
+        socket is closing, so that a reload keeps the whole grace): in memory, written with the process's next
+        batch, whose times are the clients' own, so a class closing its consoles at once costs one write."""
         at = time.monotonic()
-        if now:
-            self._coordinator.heartbeat(self.robot_name, self.user_id, ws.silent_s())
-            self._heartbeat_at = at
-        elif at - self._heartbeat_at >= HEARTBEAT_INTERVAL_S:
+        if closing or at - self._heartbeat_at >= HEARTBEAT_INTERVAL_S:
             self._coordinator.note_heard(self.robot_name, self.user_id, ws.silent_s())
             self._heartbeat_at = at
 
@@ -193,8 +191,7 @@ def queue_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
                     last_sent, last_sent_at = shown, now
         finally:
             stop_watching()
-            await work(lambda: seat.keep(live, now=True))  # a closing frame was heard just now: a reload keeps
-            # the whole grace
+            seat.keep(live, closing=True)
 
     return report
 

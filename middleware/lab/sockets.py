@@ -133,9 +133,8 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
                     "robot_rtt_ms": round(result.round_trip_ms, 3),
                 }))
         finally:
-            # The stop goes first: the seat's heartbeat is a database write that can wait behind others.
             await work(_stop_quietly, robot, sequence_base + last_sequence + 1)
-            await work(lambda: seat.keep(live, now=True))
+            seat.keep(live, closing=True)
 
     return drive
 

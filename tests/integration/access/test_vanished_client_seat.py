@@ -7,6 +7,7 @@ import base64
 import os
 import socket
 import time
+from datetime import timedelta
 
 from middleware.access.coordinator import access_coordinator
 from middleware.auth.services import create_user
@@ -64,3 +65,29 @@ def test_a_vanished_client_loses_its_seat_within_the_grace_and_a_quiet_one_keeps
     finally:
         quiet.close()
         vanished.close()
+
+
+def test_a_closed_socket_s_seat_counts_its_grace_from_the_close(live_server, student_client) -> None:
+    """A reload closes the console's sockets: the close is heard, and written with the process's next batch of seat
+    times (one write for a whole class closing at once), so the grace counts from the close."""
+    from sqlalchemy import select
+
+    from middleware.access.coordinator import HEARD_WRITE_S
+    from middleware.models import QueueEntry
+
+    app = live_server.app
+    coordinator = access_coordinator(app)
+    queue_socket = student_client.websocket("/ws/robots/lab-1/queue")
+    assert receive_json(queue_socket)["type"] == "queue"
+    time.sleep(1.0)  # less than a heartbeat interval after the socket's first word
+    closed_at = coordinator.clock()
+    queue_socket.close()
+    deadline = time.monotonic() + HEARD_WRITE_S + 2.0
+    while True:
+        with session_factory(app)() as session:
+            heard = session.scalar(select(QueueEntry.last_seen_at).where(QueueEntry.robot_name == "lab-1"))
+        assert heard is not None, "the seat was dropped at the close"
+        if heard.replace(tzinfo=None) >= closed_at.replace(tzinfo=None) - timedelta(seconds=0.5):
+            break
+        assert time.monotonic() < deadline, f"the close was not written: last heard {heard}, closed {closed_at}"
+        time.sleep(0.1)
