@@ -7,6 +7,7 @@ phone size. Screenshots in test-artifacts/."""
 from __future__ import annotations
 
 import re
+import time
 
 import pytest
 
@@ -110,6 +111,34 @@ def test_the_demo_student_fixes_a_plan_and_tries_it_on_the_practice_robot(
         # The same prediction on a phone: progress, outcome and trace, the map within the screen's width.
         try_and_see_the_prediction(page, "plans-predicted-phone.png")
         assert page.evaluate("document.documentElement.scrollWidth") <= 390, "the map scrolls sideways on a phone"
+
+        # A long prediction shows the line running while it runs; Cancel stops it, and its robot with it.
+        editor.fill('say "spin"\ndrive 0 0.3 for 120s\n')
+        page.get_by_role("button", name="Save", exact=True).click()
+        page.locator("[data-field=check-status]", has_text="Saved as version 3").wait_for()
+        page.get_by_role("button", name="Try on my practice robot").click()
+        page.locator("[data-field=progress]", has_text="Prediction: running line 2: drive 0 m/s 0.3 rad/s").wait_for(
+            timeout=60_000)
+        assert page.locator(".plan-code__line--running[data-line='2']").count() == 1
+        page.screenshot(path=str(ARTIFACTS_DIR / "plans-predicting-phone.png"))
+        page.get_by_role("button", name="Cancel").click()
+        page.locator("[data-field=progress]", has_text="Prediction: cancelled.").wait_for()
+        assert not page.get_by_role("button", name="Cancel").is_visible()
+        farm = practice_manager(live_server.app).farm
+        deadline = time.monotonic() + 15
+        while any(r.name.startswith("predict-") for r in farm.robots()) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert not any(r.name.startswith("predict-") for r in farm.robots()), "the cancelled prediction's robot runs on"
+
+        # A plan that fails is predicted ABORTED at its line.
+        editor.fill('drive 0.1 0 for 1s\nwait_until obstacle_within 0.05 timeout 1s\n')
+        page.get_by_role("button", name="Save", exact=True).click()
+        page.locator("[data-field=check-status]", has_text="Saved as version 4").wait_for()
+        page.get_by_role("button", name="Try on my practice robot").click()
+        page.locator("[data-field=end-state][data-status]").wait_for(timeout=120_000)
+        aborted = page.locator("[data-field=end-state]").text_content()
+        assert aborted.startswith("Prediction: ABORTED at line 2 (TIMEOUT): obstacle_within 0.05 did not hold"), aborted
+        page.screenshot(path=str(ARTIFACTS_DIR / "plans-predicted-aborted-phone.png"))
     finally:
         practice_manager(live_server.app).shutdown()
 
