@@ -92,6 +92,7 @@ async function check() {
 function showPlan(plan) {
   text.value = plan.text;
   state.latest = plan.latest_version;
+  state.saved = { text: plan.text, version: plan.version };
   versionSelect.replaceChildren(...plan.versions.map((v) => h("option", { value: v.version,
     selected: v.version === plan.version }, `${v.version}${v.version === plan.latest_version ? " (latest)" : ""}`)));
   const shared = plan.shared_with ? `Shared with ${plan.shared_with.code}.` : "Not shared.";
@@ -306,6 +307,7 @@ function onPrediction(run, message) {
     progressLine.textContent = `${run.label}: ${message.message}`;
   } else if (message.type === "started") {
     startLine.textContent = `${run.label} on a fast simulated copy: ${message.start?.message ?? ""}`;
+    if (run.unsaved) startLine.textContent += ` It runs version ${run.unsaved}, as saved: save to predict your changes.`;
     progressLine.textContent = `${run.label}: running…`;
   } else if (message.type === "progress") {
     const from = Number.isInteger(message.trace_from) ? message.trace_from : state.traces.predicted.length;
@@ -330,7 +332,8 @@ function onPrediction(run, message) {
 async function predict() {
   if (!(await check())) return;
   const robotName = robotSelect?.value ?? "";
-  const run = { label: "Prediction", prediction: true, finished: false, abort: new AbortController() };
+  const run = { label: "Prediction", prediction: true, finished: false, abort: new AbortController(),
+    unsaved: state.saved && text.value.trim() !== state.saved.text.trim() ? state.saved.version : null };
   state.run = run;
   state.traces.predicted = [];
   draw();
@@ -341,7 +344,8 @@ async function predict() {
   setRunning(true);
   try {
     await fetchJsonLines(`/api/plans/${planId}/predictions`,
-      { body: { beside: robotName || null, from_dock: practiceStartsAtDock() }, signal: run.abort.signal },
+      { body: { beside: robotName || null, from_dock: practiceStartsAtDock(), version: state.saved?.version ?? null },
+        signal: run.abort.signal },
       (message) => onPrediction(run, message));
     if (!run.finished) {
       progressLine.textContent = "Prediction: the answer ended early; try again.";
@@ -360,7 +364,8 @@ async function startRun(target) {
   progressLine.textContent = `Starting on ${robotName}…`;
   endStateLine.textContent = "";
   try {
-    const answer = await fetchJson(`/api/plans/${planId}/runs`, { method: "POST", body: { target } });
+    const answer = await fetchJson(`/api/plans/${planId}/runs`,
+      { method: "POST", body: { target, version: state.saved?.version ?? null } });
     follow(answer, "real", answer.robot);
   } catch (error) {
     progressLine.textContent = error.message;
