@@ -57,3 +57,12 @@ def test_session_limits_and_proxy_trust_have_sane_defaults(tmp_path: Path) -> No
 def test_bad_session_and_proxy_settings_name_the_setting(tmp_path: Path, name: str, value: str) -> None:
     with pytest.raises(ConfigError, match=name):
         from_environment(tmp_path, {"TELELAB_SECRET_KEY": "k", name: value})
+
+
+def test_the_prediction_cap_defaults_to_two_and_names_itself_when_wrong(tmp_path: Path) -> None:
+    assert from_environment(tmp_path, {"TELELAB_SECRET_KEY": "k"})["PREDICTION_CAP"] == 2
+    none = from_environment(tmp_path, {"TELELAB_SECRET_KEY": "k", "TELELAB_PREDICTION_CAP": " 0 "})
+    assert none["PREDICTION_CAP"] == 0
+    for wrong in ("-1", "65", "two", "1.5", "٣", ""):
+        with pytest.raises(ConfigError, match="TELELAB_PREDICTION_CAP"):
+            from_environment(tmp_path, {"TELELAB_SECRET_KEY": "k", "TELELAB_PREDICTION_CAP": wrong})
