@@ -143,8 +143,8 @@ def test_the_demo_student_fixes_a_plan_and_tries_it_on_the_practice_robot(
         # Unsaved changes: the prediction says it runs the version as saved.
         editor.fill('wait 0.5s\n')
         page.get_by_role("button", name="Try on my practice robot").click()
-        page.locator("[data-field=start]", has_text="It runs version 4, as saved: save to predict your changes.").wait_for(
-            timeout=60_000)
+        unsaved_note = "It runs version 4, as saved: save to predict your changes."
+        page.locator("[data-field=start]", has_text=unsaved_note).wait_for(timeout=60_000)
         page.locator("[data-field=end-state][data-status]").wait_for(timeout=120_000)
     finally:
         practice_manager(live_server.app).shutdown()
