@@ -29,13 +29,18 @@ ZONE_RUBRIC = [[0.5, 1.0], [0.7, 0.5], [0.85, 0.25]]  # bounds on 1 - IoU
 WALL_PREFIX = "wall"
 
 
+def is_wall(name: str) -> bool:
+    """Whether a scene box or body of this name is a wall (the room's edge), not an obstacle of the exercise."""
+    return name.startswith(WALL_PREFIX)
+
+
 def scene_obstacles(info: robot_pb2.RobotInfo) -> dict[str, Any]:
     """The task's truth from the robot's description: its obstacle boxes and the room's bounds (walls included)."""
     boxes = [{"name": b.name, "center_x_m": b.center_x_m, "center_y_m": b.center_y_m, "half_x_m": b.half_x_m,
               "half_y_m": b.half_y_m, "yaw_rad": b.yaw_rad} for b in info.scene_boxes]
     corners = [corner for box in boxes for corner in _corners(box)]
     xs, ys = [c[0] for c in corners] or [0.0], [c[1] for c in corners] or [0.0]
-    return {"obstacles": [b for b in boxes if not str(b["name"]).startswith(WALL_PREFIX)],
+    return {"obstacles": [b for b in boxes if not is_wall(str(b["name"]))],
             "bounds": [min(xs), min(ys), max(xs), max(ys)]}
 
 

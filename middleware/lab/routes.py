@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from datetime import UTC, datetime
 
 from flask import Blueprint, abort, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
+from middleware.assessment.hidden_obstacles import hides_obstacles, info_without_obstacles, scene_without_obstacles
+from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.lab.skills import SUPERVISOR_ROLES
 from middleware.robots.link import RobotUnavailable
@@ -63,12 +66,16 @@ ROBOT_INFO_MAX_AGE_S = 1.0
 @blueprint.get("/api/robots/<robot_name>")
 @login_required
 def robot_description(robot_name: str) -> ResponseReturnValue:
-    """The robot's name, whether it answers, and its figures (null while it does not answer)."""
-    link = robot_commands().require(robot_name, int(current_user.get_id()))
+    """The robot's name, whether it answers, and its figures (null while it does not answer); the scene's obstacle
+    boxes left out during the user's obstacle-zone test (middleware/assessment/hidden_obstacles.py)."""
+    user_id = int(current_user.get_id())
+    link = robot_commands().require(robot_name, user_id)
     try:
         info: dict[str, object] | None = robot_info_dict(link.info(max_age_s=ROBOT_INFO_MAX_AGE_S))
     except RobotUnavailable:
         info = None
+    if info is not None and hides_obstacles(get_session(), user_id, datetime.now(UTC)):
+        info = info_without_obstacles(info)
     title = robot_registry().title(robot_name)
     return jsonify({"name": robot_name, "title": title, "online": info is not None, "info": info})
 
@@ -82,14 +89,19 @@ SCENE_RECHECK_S = 5.0
 def robot_scene(robot_name: str) -> ResponseReturnValue:
     """The robot's static world for the browser's 3D views, to whoever may see the robot (its camera's rule).
 
-    The version is the ETag: a page that holds it gets 304 Not Modified and keeps its copy.
+    The version is the ETag: a page that holds it gets 304 Not Modified and keeps its copy. During the user's
+    obstacle-zone test the obstacles are left out, under a version of its own (assessment/hidden_obstacles.py).
     """
-    link = robot_commands().require(robot_name, int(current_user.get_id()))
+    user_id = int(current_user.get_id())
+    link = robot_commands().require(robot_name, user_id)
     try:
         scene = link.scene(max_age_s=SCENE_RECHECK_S)
     except RobotUnavailable as error:
         raise ApiError(503, "robot_offline", f"{error} Try again in a moment.") from None
-    response = jsonify(scene_dict(scene))
-    response.set_etag(scene.version)
+    body = scene_dict(scene)
+    if hides_obstacles(get_session(), user_id, datetime.now(UTC)):
+        body = scene_without_obstacles(body)
+    response = jsonify(body)
+    response.set_etag(str(body["version"]))
     response.headers["Cache-Control"] = "private, no-cache"  # kept by the browser, but asked again each time
     return response.make_conditional(request)

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import math
+from datetime import UTC, datetime
 
 from flask import Blueprint, jsonify, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import Commander, refusal_error, robot_commands
+from middleware.assessment.hidden_obstacles import MAP_REFUSAL, OBSTACLES_HIDDEN, hides_obstacles
 from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.lab.panels import robot_panels
@@ -157,9 +159,12 @@ def return_to_dock(robot_name: str) -> ResponseReturnValue:
 def occupancy_map(robot_name: str) -> ResponseReturnValue:
     """The occupancy grid built by environment modelling so far, or {"map": null} with a sentence before any.
 
-    Having no map yet is the normal state of a fresh robot, not a missing resource, so it is no 404.
+    Having no map yet is the normal state of a fresh robot, not a missing resource, so it is no 404. During the
+    user's obstacle-zone test it is refused: environment modelling may have drawn the floor plan into it.
     """
     link = robot_commands().require(robot_name, _user_id())
+    if hides_obstacles(get_session(), _user_id(), datetime.now(UTC)):
+        raise ApiError(403, OBSTACLES_HIDDEN, MAP_REFUSAL)
     try:
         grid = link.get_map()
     except CommandRefused as error:

@@ -4,6 +4,7 @@ command path), a goal's updates and the localization estimate."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import functools
 import logging
 from datetime import UTC, datetime
@@ -11,17 +12,20 @@ from datetime import UTC, datetime
 import grpc
 from flask import current_app
 from flask_login import current_user
+from simple_websocket import ConnectionClosed
 
 from middleware.access.commands import Commander, refusal_error, robot_commands
 from middleware.access.graded_runs import graded_run_started_at
 from middleware.access.sockets import ChannelSeat, open_robot_channel
+from middleware.assessment.hidden_obstacles import CAMERA_REFUSAL, OBSTACLES_HIDDEN, hides_obstacles
 from middleware.auth.schemas import InvalidField
 from middleware.db import session_factory
-from middleware.lab.delay import viewer_delay
+from middleware.lab.delay import ViewerDelay, viewer_delay
 from middleware.lab.schemas import GOAL_ID_PATTERN, DriveLimits, parse_drive_message
 from middleware.live.loop import Continuation, blocking_work
 from middleware.live.wire import LiveSocket
 from middleware.realtime import (
+    CLOSE_FORBIDDEN,
     CLOSE_NOT_FOUND,
     CLOSE_TRY_AGAIN_LATER,
     Channels,
@@ -33,6 +37,7 @@ from middleware.realtime import (
     relay_stream,
     send_json,
 )
+from middleware.robots.fanout import FanoutHub
 from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
 from middleware.robots.messages import FINAL_GOAL_STATUSES, goal_update_message
 
@@ -44,13 +49,48 @@ DRIVE_MESSAGES_PER_S = 50
 RECEIVE_WAIT_S = 2.0
 
 
+ZONE_TEST_RECHECK_S = 2.0  # how soon an obstacle-zone test begun while the camera is open closes it
+
+
+def obstacles_hidden_from(user_id: int) -> bool:
+    """Whether user_id's obstacle-zone test is in progress now (a database read; see assessment/hidden_obstacles)."""
+    with session_factory(current_app)() as session:
+        return hides_obstacles(session, user_id, datetime.now(UTC))
+
+
+def camera_relay(ws: WebSocket, hub: FanoutHub[bytes], delay: ViewerDelay | None = None) -> Continuation | None:
+    """A camera's frames for the current user, refused while their obstacle-zone test is in progress (the picture
+    shows the obstacles), and closed with the same sentence when one begins while they watch."""
+    user_id = int(current_user.get_id())
+    if obstacles_hidden_from(user_id):
+        refuse(ws, CLOSE_FORBIDDEN, OBSTACLES_HIDDEN, CAMERA_REFUSAL)
+        return None
+    work = blocking_work()
+
+    async def relay(live: LiveSocket) -> None:
+        async def close_when_a_zone_test_begins() -> None:
+            while not await work(obstacles_hidden_from, user_id):
+                await asyncio.sleep(ZONE_TEST_RECHECK_S)
+            with contextlib.suppress(ConnectionClosed):
+                await live.send(as_json({"type": "error", "code": OBSTACLES_HIDDEN, "message": CAMERA_REFUSAL,
+                                         "field": None}))
+            await live.close(CLOSE_FORBIDDEN, CAMERA_REFUSAL[:120])
+
+        watcher = asyncio.ensure_future(close_when_a_zone_test_begins())
+        try:
+            await relay_stream(live, hub, delay=delay)
+        finally:
+            watcher.cancel()
+
+    return relay
+
+
 def camera_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
-    """Camera frames, packed once per frame for every viewer."""
+    """Camera frames, packed once per frame for every viewer (none during the viewer's obstacle-zone test)."""
     link = open_robot_channel(ws, robot_name)
     if link is None:
         return None
-    delay = viewer_delay(robot_name)
-    return lambda live: relay_stream(live, link.camera, delay=delay)
+    return camera_relay(ws, link.camera, viewer_delay(robot_name))
 
 
 def telemetry_channel(ws: WebSocket, robot_name: str) -> Continuation | None:

@@ -11,8 +11,9 @@ from flask_login import current_user, login_required
 
 from middleware.access.commands import refusal_error
 from middleware.errors import ApiError
+from middleware.lab.sockets import camera_relay
 from middleware.live.loop import Continuation
-from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, refuse, relay_stream
+from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, refuse
 from middleware.robots.link import RobotUnavailable
 from middleware.teaching.command_form import parse_command
 from middleware.teaching.practice_robots import practice_manager, practice_name
@@ -92,12 +93,12 @@ def goal(target_name: str, goal_id: str) -> ResponseReturnValue:
 
 
 def camera_channel(ws: WebSocket) -> Continuation | None:
-    """The camera of the user's own practice robot."""
+    """The camera of the user's own practice robot (none during their obstacle-zone test, as every camera)."""
     robot = practice_manager().get(_user_id())
     if robot is None:
         refuse(ws, CLOSE_NOT_FOUND, "no_practice_robot", "Start your practice robot first.")
         return None
-    return lambda live: relay_stream(live, robot.link.camera)
+    return camera_relay(ws, robot.link.camera)
 
 
 def register(sock: Channels) -> None:
