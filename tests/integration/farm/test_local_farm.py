@@ -7,6 +7,7 @@ import subprocess
 import sys
 import threading
 import time
+import uuid
 
 import pytest
 
@@ -29,46 +30,48 @@ def _gone_within(name: str, seconds: float) -> bool:
 
 
 def test_a_start_that_finishes_after_close_stops_its_robot() -> None:
+    name = f"late-{uuid.uuid4().hex[:8]}"  # a robot of this run alone, whatever another run left behind
     farm = LocalProcessFarm(capacity=2)
     outcome: list[BaseException] = []
 
     def start() -> None:
         try:
-            farm.start(RobotSpec("late-start", "empty", "token"))
+            farm.start(RobotSpec(name, "empty", "token"))
         except BaseException as error:  # noqa: BLE001 - handed to the test
             outcome.append(error)
 
     starter = threading.Thread(target=start)
     starter.start()
     deadline = time.monotonic() + 30
-    while not _skill_servers_named("late-start") and time.monotonic() < deadline:
+    while not _skill_servers_named(name) and time.monotonic() < deadline:
         time.sleep(0.02)
-    assert _skill_servers_named("late-start"), "the robot's process never started"
+    assert _skill_servers_named(name), "the robot's process never started"
     farm.close()
     starter.join(60)
     assert len(outcome) == 1 and isinstance(outcome[0], FarmUnavailable)
     assert farm.robots() == []
-    assert _gone_within("late-start", 10)
+    assert _gone_within(name, 10)
     with pytest.raises(FarmUnavailable, match="shutting down"):
         farm.start(RobotSpec("after-close", "empty", "token"))
 
 
 def test_a_robot_ends_with_the_web_process_that_started_it() -> None:
+    name = f"orphan-{uuid.uuid4().hex[:8]}"
     web_process = subprocess.Popen(
         [sys.executable, "-c", "import time; from middleware.farm.local import LocalProcessFarm; "
                                "from middleware.farm.base import RobotSpec; "
-                               "LocalProcessFarm(capacity=1).start(RobotSpec('orphan-check', 'empty', 't')); "
+                               f"LocalProcessFarm(capacity=1).start(RobotSpec('{name}', 'empty', 't')); "
                                "print('started', flush=True); time.sleep(600)"],
         stdout=subprocess.PIPE, text=True)
     try:
         assert web_process.stdout is not None and web_process.stdout.readline().strip() == "started"
-        assert _skill_servers_named("orphan-check")
+        assert _skill_servers_named(name)
     finally:
         web_process.kill()
         web_process.wait()
         if web_process.stdout is not None:
             web_process.stdout.close()
-    assert _gone_within("orphan-check", 10)
+    assert _gone_within(name, 10)
 
 
 def test_a_fast_robot_steps_faster_than_real_time_and_is_never_restarted() -> None:
