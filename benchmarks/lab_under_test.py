@@ -10,6 +10,7 @@ import threading
 import time
 from http.cookiejar import CookieJar
 from pathlib import Path
+from unittest import mock
 from urllib.parse import urlencode
 from urllib.request import HTTPCookieProcessor, HTTPRedirectHandler, Request, build_opener
 
@@ -19,6 +20,7 @@ from flask import Flask
 from flask_sock import Sock
 
 from middleware import create_app
+from middleware.auth import services
 from middleware.auth.services import create_user
 from middleware.config import parse_robots
 from middleware.db import session_factory, upgrade_to_head
@@ -150,7 +152,11 @@ class LabUnderTest:
         self.app = create_app({"DATABASE_URL": database_url, "SECRET_KEY": secrets.token_hex(16),
                                "ROBOTS": parse_robots(f"lab-1={self.robot.address}")})
         self.app.instance_path = str(self.folder / "instance")
-        with session_factory(self.app)() as session:
+        # Every user gets the same scrypt hash of PASSWORD, computed once (as web_tier.py's students): a hash costs
+        # about 0.1 s, and each login still checks one on the server, as it does in use.
+        one_hash = services.hash_password(PASSWORD)
+        with (session_factory(self.app)() as session,
+              mock.patch.object(services, "generate_password_hash", lambda *_args, **_kwargs: one_hash)):
             for index in range(users):
                 create_user(session, f"bench{index}", "student", PASSWORD)
             session.commit()

@@ -45,7 +45,7 @@ def relay(address: str, ready, stop, received) -> None:
     link.close()
 
 
-def measure(address: str, robot_pid: int, workers: int, window_s: float) -> dict[str, float]:
+def measure(address: str, robot_pid: int, workers: int, window_s: float, settle_s: float) -> dict[str, float]:
     """CPU shares (of one core) of the robot and of the workers while `workers` processes relay its streams."""
     context = multiprocessing.get_context("spawn")
     stop = context.Event()
@@ -58,7 +58,7 @@ def measure(address: str, robot_pid: int, workers: int, window_s: float) -> dict
     for ready in readies:
         if not ready.wait(60):
             raise RuntimeError("a relaying worker did not start")
-    time.sleep(1.0)  # the streams are open and flowing
+    time.sleep(settle_s)  # the streams are open and flowing
     pids = [process.pid for process in processes if process.pid is not None]
     robot_before, workers_before = _cpu_s(robot_pid), [_cpu_s(pid) for pid in pids]
     started = time.perf_counter()
@@ -76,12 +76,12 @@ def measure(address: str, robot_pid: int, workers: int, window_s: float) -> dict
 def run(quick: bool, output: Path) -> list[Measurement]:
     from middleware.robots.processes import SkillServerProcess
 
-    window_s = 1.0 if quick else 15.0
+    window_s, settle_s = (0.5, 0.5) if quick else (15.0, 1.0)
     robot = SkillServerProcess("sticky", "lab", echo=False)
     robot.serve()
     try:
         assert robot.process is not None
-        measured = {workers: measure(robot.address, robot.process.pid, workers, window_s)
+        measured = {workers: measure(robot.address, robot.process.pid, workers, window_s, settle_s)
                     for workers in WORKER_COUNTS}
     finally:
         robot.stop()
