@@ -19,6 +19,7 @@ const PING_EVERY_MS = 1000;
 const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
 const BOOKINGS_REFRESH_MS = 60 * 1000;
 const DRAWN_PICTURE_STATUS = "video off: picture drawn by this browser from the robot's odometry pose";
+const WITHHELD_CAMERA_STATUS = { phase: "off", reason: "off during your obstacle-zone test (it would show the obstacles)" };
 function isStatusOrError(message) {
   return message?.type === "status" || message?.type === "error";
 }
@@ -205,8 +206,10 @@ export class ConsoleWiring {
 
   #openCamera(descriptor, panel, path) {
     const camera = this.#channel(path, { binary: true });
+    let withheld = false; // refused during the viewer's obstacle-zone test: on purpose, not a fault
     camera.addEventListener("statechange", ({ detail }) => {
       if (this.#channels.get(path) === camera) panel.connected = detail.phase === "open";
+      if (withheld && detail.phase === "closed") this.#status.update(path.split("/").pop(), WITHHELD_CAMERA_STATUS);
     });
     camera.addEventListener("message", ({ detail }) => {
       if (detail instanceof ArrayBuffer) {
@@ -216,6 +219,7 @@ export class ConsoleWiring {
       const message = parseJsonMessage(detail);
       if (!message) this.#layout.notify(descriptor.id, "Ignored a message that could not be read.");
       else if (isStatusOrError(message)) this.#guard(descriptor.id, () => { panel.message = message; });
+      if (message?.type === "error" && message.code === "obstacles_hidden") withheld = true;
       if (message?.type === "status" && typeof message.robot_online === "boolean") this.#showOnline(message.robot_online);
     });
   }
@@ -237,7 +241,7 @@ export class ConsoleWiring {
     const load = async () => {
       try {
         const scene = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/scene`);
-        panel.note = "";
+        panel.note = String(scene?.obstacles_hidden ?? ""); // the obstacles left out during an obstacle-zone test
         this.#guard(descriptor.id, () => { panel.scene = scene; });
       } catch (error) {
         panel.note = `The lab's description could not be loaded: ${error.message}`;
@@ -256,7 +260,8 @@ export class ConsoleWiring {
       },
       fail: (error) => {
         panel.grid = null;
-        panel.note = `The map could not be loaded: ${error.message}`;
+        // A map withheld during an obstacle-zone test is no fault: its sentence says why and until when.
+        panel.note = error.code === "obstacles_hidden" ? error.message : `The map could not be loaded: ${error.message}`;
       },
     });
   }

@@ -1,7 +1,7 @@
 // <camera-panel>: draws the robot's camera stream, or the view this browser draws from the robot's pose, on a canvas
 // and shows the frame rate and the picture's age; its words say which of the two the picture is.
 // In: `robotName` (string), `frame` (ArrayBuffer from the camera socket), `message` (status/error
-// JSON from the server), `connected` (bool: is the camera socket open), and for the feedback layer
+// JSON from the server; the error `obstacles_hidden` puts its sentence in place of the picture), `connected` (bool: is the camera socket open), and for the feedback layer
 // `info` (RobotInfo: camera size and field of view), `driveReady` / `driveSent` (the drive socket's
 // "ready" and every message sent on it), `feedbackEnabled` (bool), `feedbackFill` ("edges" | "black": what
 // fills the view the frame does not cover), `telemetry` (its laser scan sets the depth the zoom assumes; while the
@@ -25,6 +25,7 @@ import { registerPanel } from "../registry.js";
 
 const FPS_WINDOW_MS = 1000;
 const SOURCES = ["video", "drawn"];
+const WITHHELD_CODE = "obstacles_hidden"; // the camera's refusal during the viewer's obstacle-zone test
 // What the panel calls its picture, by source: a drawn picture is neither video nor live.
 const WORDS = {
   video: { age: "video age ", delay: "video delay ", waiting: "Waiting for video…" },
@@ -58,6 +59,7 @@ export class CameraPanel extends PanelElement {
   #drawnProblem = "";
   #drawing = false;       // a drawn frame is being made
   #nextPose = null;       // the newest telemetry not drawn yet: it replaces any older one waiting
+  #withheld = false;      // the server refused the video (an obstacle-zone test): its sentence stays
   #poseTimer = 0;
   #frameCap = new FrameCap();
   #ageLabel;
@@ -142,7 +144,7 @@ export class CameraPanel extends PanelElement {
   /** While the socket is down the last frame stays, dimmed, so nobody mistakes it for live video. */
   set connected(isConnected) {
     this.ensureBuilt();
-    if (this.#source !== "video") return; // the video socket's state says nothing of a picture drawn here
+    if (this.#source !== "video" || this.#withheld) return; // nothing to say of a picture drawn here, or withheld
     this.#stage.classList.toggle("camera__stage--stale", !isConnected);
     if (!isConnected && this.#lastHeader) {
       this.#placeholder.textContent = "Video paused: the camera connection is down.";
@@ -238,6 +240,7 @@ export class CameraPanel extends PanelElement {
     this.ensureBuilt();
     if (!scene?.camera || scene.version === this.#scene?.version) return;
     this.#scene = scene;
+    if (scene.obstacles_hidden) this.#showMessage(String(scene.obstacles_hidden), false); // the drawn picture's too
     this.#drawn?.dispose();
     this.#drawn = null;
     this.#sourceSelect.querySelector('option[value="drawn"]').disabled = false;
@@ -308,9 +311,26 @@ export class CameraPanel extends PanelElement {
         this.#placeholder.hidden = false;
         this.#stage.classList.add("camera__stage--stale");
       }
+    } else if (message?.type === "error" && message.code === WITHHELD_CODE) {
+      this.#withhold(message.message);
     } else if (message?.type === "error") {
       this.#showMessage(message.message || "The camera stream reported an error.", true);
     }
+  }
+
+  /** The server withholds the picture (the viewer's obstacle-zone test): its sentence stands where the picture
+   *  was, and the last frame goes, since it shows what the test hides. */
+  #withhold(text) {
+    this.#withheld = true;
+    this.#bitmap?.close();
+    this.#bitmap = null;
+    this.#pending = null;
+    this.#lastHeader = null;
+    this.#canvas.getContext("2d")?.clearRect(0, 0, this.#canvas.width, this.#canvas.height);
+    this.#placeholder.textContent = text;
+    this.#placeholder.hidden = false;
+    this.#stage.classList.add("camera__stage--stale");
+    this.dataset.withheld = WITHHELD_CODE; // for tools and tests
   }
 
   #applyLabel() {
@@ -370,6 +390,10 @@ export class CameraPanel extends PanelElement {
   }
 
   #draw(bitmap, header) {
+    if (this.#withheld && !header.drawn_here) { // a video frame decoded after the refusal came
+      bitmap.close();
+      return;
+    }
     const canvas = this.#canvas;
     if (canvas.width !== bitmap.width || canvas.height !== bitmap.height) {
       canvas.width = bitmap.width;
