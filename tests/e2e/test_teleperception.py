@@ -71,7 +71,8 @@ def css_point(canvas, x_m: float, y_m: float) -> tuple[float, float]:
     return box["x"] + (x_m + 4.5) / 9.0 * box["width"], box["y"] + (3.5 - y_m) / 7.0 * box["height"]
 
 
-def test_a_student_marks_the_obstacle_zone_on_the_grid_and_is_graded_on_it(page, live_server: LiveServer) -> None:
+def obstacle_zone_exam(live_server: LiveServer) -> int:
+    """An obstacle-zone test on lab-1, open now, set by tutor1 for a course of student1; its id."""
     from datetime import UTC, datetime, timedelta
 
     from middleware.auth.services import create_user
@@ -91,11 +92,15 @@ def test_a_student_marks_the_obstacle_zone_on_the_grid_and_is_graded_on_it(page,
         "opens_at": (now - timedelta(minutes=1)).isoformat(), "closes_at": (now + timedelta(hours=1)).isoformat(),
         "duration_s": 900, "task_points": 10, "robot_name": "lab-1"})
     assert status == 201, created
+    return int(created["exam"]["id"])
 
+
+def test_a_student_marks_the_obstacle_zone_on_the_grid_and_is_graded_on_it(page, live_server: LiveServer) -> None:
+    exam_id = obstacle_zone_exam(live_server)
     open_console(page, live_server, "student1")  # the drive socket gives the student the robot
     attempt = page.evaluate("""(examId) => fetch(`/api/exams/${examId}/attempts`, {method: "POST", headers: {
         "X-CSRFToken": document.querySelector('meta[name="csrf-token"]').content}}).then((r) => r.json())""",
-                            created["exam"]["id"])["attempt"]
+                            exam_id)["attempt"]
     page.goto(f"{live_server.url}/assessment/attempts/{attempt['id']}")
     page.get_by_test_id("zone-exercise-link").click()
     page.wait_for_url(re.compile(r".*/lab/lab-1/teleperception\?attempt=\d+"))

@@ -7,39 +7,18 @@ a reload brings the video and the obstacles back."""
 from __future__ import annotations
 
 import re
-from datetime import UTC, datetime, timedelta
 
 import pytest
 
-from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LabClient, LiveServer, make_course
+from tests.conftest import ARTIFACTS_DIR, LiveServer
 from tests.e2e.test_lab_view import three_installed  # noqa: F401 - the fixture: fail clearly without three.js
 from tests.e2e.test_panels import open_console, show_tab_of, wait_for, wait_for_control
-from tests.integration.bookings.conftest import api
+from tests.e2e.test_teleperception import obstacle_zone_exam
 
 pytestmark = pytest.mark.e2e
 
 WITHHELD = 'camera-panel[data-withheld="obstacles_hidden"]'
 CRATE_TOP = (2.5, 1.4, 0.5)  # the lab scene's crate (0.60, 0.40, 0.20): brown from above, where the floor is grey
-
-
-def zone_exam(live_server: LiveServer) -> int:
-    """An obstacle-zone test on lab-1 for student1's course, open now; its id."""
-    from middleware.auth.services import create_user
-    from middleware.db import session_factory
-
-    with session_factory(live_server.app)() as session:
-        create_user(session, "tutor1", "tutor", STUDENT_PASSWORD)
-        session.commit()
-    course_id = make_course(live_server.app, "TZ1", {"tutor1": "tutor", "student1": "student"})
-    tutor = LabClient(live_server.url)
-    assert tutor.login("tutor1", STUDENT_PASSWORD) == 302
-    now = datetime.now(UTC)
-    status, created = api(tutor, "POST", f"/api/courses/{course_id}/exams", {
-        "title": "Find the obstacles", "kind": "experimental", "task_kind": "obstacle_zone",
-        "opens_at": (now - timedelta(minutes=1)).isoformat(), "closes_at": (now + timedelta(hours=1)).isoformat(),
-        "duration_s": 900, "task_points": 10, "robot_name": "lab-1"})
-    assert status == 201, created
-    return int(created["exam"]["id"])
 
 
 def crate_seen(page) -> bool:
@@ -62,7 +41,7 @@ def look_from_above(page) -> None:
 def test_during_a_zone_test_the_console_shows_neither_video_nor_obstacles(
         page, live_server: LiveServer, width: int, height: int) -> None:
     ARTIFACTS_DIR.mkdir(exist_ok=True)
-    exam_id = zone_exam(live_server)
+    exam_id = obstacle_zone_exam(live_server)
     page.set_viewport_size({"width": width, "height": height})
     open_console(page, live_server, "student1")  # the drive socket gives the student the robot
     wait_for_control(page)
