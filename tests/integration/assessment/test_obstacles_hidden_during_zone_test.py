@@ -168,3 +168,30 @@ def test_the_obstacles_come_back_when_the_attempts_deadline_passes(app, client_a
         camera.close()
     finally:
         drive.close()
+
+
+def test_the_students_practice_robot_hides_the_obstacles_too(app, live_server, client_as, course_people) -> None:
+    from middleware.teaching.practice_robots import practice_manager
+
+    student = client_as("student1")
+    exam_id = zone_exam(client_as("tutor1"), course_people["course"])
+    practice_manager(live_server.app).cap = 2
+    status, started = api(student, "POST", "/api/practice")
+    assert status == 201, started
+    name = started["name"]
+    drive = student.websocket("/ws/robots/lab-1/drive")
+    try:
+        assert receive_json(drive)["type"] == "ready"
+        status, full = api(student, "GET", f"/api/robots/{name}/scene")
+        assert status == 200 and obstacle_names(full), full  # the practice robot runs the lab scene
+        status, answer = api(student, "POST", f"/api/exams/{exam_id}/attempts")
+        assert status == 201, answer
+        status, hidden = api(student, "GET", f"/api/robots/{name}/scene")
+        assert status == 200 and not obstacle_names(hidden) and hidden["obstacles_hidden"]
+        for path in (f"/ws/robots/{name}/camera", "/ws/practice/camera"):
+            ws = student.websocket(path)
+            assert first_error(ws)["code"] == "obstacles_hidden", path
+            assert closed_with(ws) == 4403, path
+    finally:
+        drive.close()
+        practice_manager(live_server.app).shutdown()
