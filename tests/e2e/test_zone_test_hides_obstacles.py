@@ -61,6 +61,9 @@ def test_during_a_zone_test_the_console_shows_neither_video_nor_obstacles(
         placeholder = shown.locator(f'{WITHHELD} [data-field="camera-placeholder"]')
         assert placeholder.is_visible()
         assert placeholder.inner_text().startswith("No camera during your obstacle-zone test"), placeholder.inner_text()
+    # The console open before the test reads the scene again when its camera is refused: its views drop the obstacles.
+    wait_for(lambda: (page.locator("lab-view").get_attribute("data-scene-version") or "").endswith(
+        "-obstacles-hidden"), 10, "the console open before the test kept the full scene")
     shown_camera = console.locator("camera-panel")
     shown_camera.scroll_into_view_if_needed()
     console.screenshot(path=str(ARTIFACTS_DIR / f"zone-test-camera-{width}.png"))
@@ -74,6 +77,11 @@ def test_during_a_zone_test_the_console_shows_neither_video_nor_obstacles(
     assert not crate_seen(console), "the 3D view drew the crate during the test"
     view.scroll_into_view_if_needed()
     console.screenshot(path=str(ARTIFACTS_DIR / f"zone-test-lab-view-{width}.png"))
+    show_tab_of(console, "map")  # the lab model drawn from the robot's description: the walls only, and why no map
+    console.locator('map-panel [data-field="map-note"]').filter(has_text="No map during your obstacle-zone test")\
+        .wait_for()
+    console.locator("map-panel").scroll_into_view_if_needed()
+    console.screenshot(path=str(ARTIFACTS_DIR / f"zone-test-map-{width}.png"))
 
     tests.locator("#submit").click()
     tests.locator("#score").wait_for()

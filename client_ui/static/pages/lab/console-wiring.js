@@ -43,6 +43,7 @@ export class ConsoleWiring {
   #lastMapCells = null;
   #cameras = [];                // camera panels: the feedback layer follows the drive session
   #starters = [];
+  #sceneLoaders = [];           // each scene-drawing panel's load(), to read the scene again
   #lastSeat = null;
 
   constructor({ root, robotName, robotPath, status, layout }) {
@@ -219,7 +220,10 @@ export class ConsoleWiring {
       const message = parseJsonMessage(detail);
       if (!message) this.#layout.notify(descriptor.id, "Ignored a message that could not be read.");
       else if (isStatusOrError(message)) this.#guard(descriptor.id, () => { panel.message = message; });
-      if (message?.type === "error" && message.code === "obstacles_hidden") withheld = true;
+      if (message?.type === "error" && message.code === "obstacles_hidden" && !withheld) {
+        withheld = true;
+        this.#obstaclesWithheld();
+      }
       if (message?.type === "status" && typeof message.robot_online === "boolean") this.#showOnline(message.robot_online);
     });
   }
@@ -249,6 +253,14 @@ export class ConsoleWiring {
       }
     };
     this.#starters.push(load);
+    this.#sceneLoaders.push(load);
+  }
+
+  /** The camera was refused for an obstacle-zone test begun while this page was open: the scene and the robot's
+   *  description are read again, so the views drawn here drop the obstacles too. */
+  #obstaclesWithheld() {
+    for (const load of this.#sceneLoaders) load();
+    this.#loadRobot();
   }
 
   /** The map panel: the occupancy grid and, when there is none, why. */
