@@ -21,7 +21,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from middleware.accounts.services import forbidden
-from middleware.assessment import obstacle_zone
+from middleware.assessment import hidden_obstacles, obstacle_zone
 from middleware.assessment.bank import questions_of
 from middleware.assessment.grading import ItemResult, grade_question
 from middleware.assessment.policy import get_attempt, get_exam, student_course
@@ -94,12 +94,18 @@ def _run_until_deadline(exam: Exam, attempt: Attempt, deadline: datetime) -> lis
     return _run_source(robot_name, as_utc(attempt.started_at), deadline)
 
 
+def _is_zone_test(exam: Exam) -> bool:
+    return exam.kind == "experimental" and (exam.task or {}).get("kind") == obstacle_zone.TASK_KIND
+
+
 def _finalise(session: Session, exam: Exam, attempt: Attempt, at: datetime, by: str,
               trace: list[list[float]] | None) -> None:
     if trace is None and by == "deadline":
         trace = _run_until_deadline(exam, attempt, at)  # whichever worker recorded, and whether it lived
     if trace is not None:
         attempt.trace = trace[-MAX_TRACE_SAMPLES:]
+    if _is_zone_test(exam):
+        hidden_obstacles.announce_change(session, attempt.user_id)  # the obstacles come back at once
     results = grade_attempt(session, exam, attempt.answers or {}, attempt.trace)
     attempt.results = [r.to_dict() for r in results]
     attempt.auto_score = round(sum(r.points for r in results), 4)
@@ -173,6 +179,8 @@ def start_attempt(session: Session, actor: User, exam_id: int, now: datetime,
     except IntegrityError:
         raise Refused(409, "attempt_in_progress", "An attempt at this test is already in progress.",
                       "exam_id") from None
+    if _is_zone_test(exam):
+        hidden_obstacles.announce_change(session, actor.id)
     return attempt
 
 
@@ -210,7 +218,7 @@ def _items(exam: Exam) -> set[str]:
     items = {str(i) for i in exam.question_ids or []}
     if exam.kind == "experimental" and exam.task and exam.task.get("kind") == "report_pose":
         items.add("report")
-    if exam.kind == "experimental" and exam.task and exam.task.get("kind") == obstacle_zone.TASK_KIND:
+    if _is_zone_test(exam):
         items.add(obstacle_zone.ZONE_ITEM)
     return items
 

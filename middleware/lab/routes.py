@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from datetime import UTC, datetime
 
-from flask import Blueprint, abort, jsonify, render_template, request
+from flask import Blueprint, abort, current_app, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
-from middleware.assessment.hidden_obstacles import hides_obstacles, info_without_obstacles, scene_without_obstacles
+from middleware.assessment.hidden_obstacles import hiding_book, info_without_obstacles, scene_without_obstacles
 from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.lab.skills import SUPERVISOR_ROLES
@@ -74,7 +73,7 @@ def robot_description(robot_name: str) -> ResponseReturnValue:
         info: dict[str, object] | None = robot_info_dict(link.info(max_age_s=ROBOT_INFO_MAX_AGE_S))
     except RobotUnavailable:
         info = None
-    if info is not None and hides_obstacles(get_session(), user_id, datetime.now(UTC)):
+    if info is not None and hiding_book(current_app).hides(user_id, get_session()):
         info = info_without_obstacles(info)
     title = robot_registry().title(robot_name)
     return jsonify({"name": robot_name, "title": title, "online": info is not None, "info": info})
@@ -99,7 +98,7 @@ def robot_scene(robot_name: str) -> ResponseReturnValue:
     except RobotUnavailable as error:
         raise ApiError(503, "robot_offline", f"{error} Try again in a moment.") from None
     body = scene_dict(scene)
-    if hides_obstacles(get_session(), user_id, datetime.now(UTC)):
+    if hiding_book(current_app).hides(user_id, get_session()):
         body = scene_without_obstacles(body)
     response = jsonify(body)
     response.set_etag(str(body["version"]))

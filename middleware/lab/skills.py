@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import math
-from datetime import UTC, datetime
 
-from flask import Blueprint, jsonify, request
+from flask import Blueprint, current_app, jsonify, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import Commander, refusal_error, robot_commands
-from middleware.assessment.hidden_obstacles import MAP_REFUSAL, OBSTACLES_HIDDEN, hides_obstacles
+from middleware.assessment.hidden_obstacles import MAP_REFUSAL, OBSTACLES_HIDDEN, hiding_book
 from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.lab.panels import robot_panels
@@ -163,7 +162,7 @@ def occupancy_map(robot_name: str) -> ResponseReturnValue:
     user's obstacle-zone test it is refused: environment modelling may have drawn the floor plan into it.
     """
     link = robot_commands().require(robot_name, _user_id())
-    if hides_obstacles(get_session(), _user_id(), datetime.now(UTC)):
+    if hiding_book(current_app).hides(_user_id(), get_session()):
         raise ApiError(403, OBSTACLES_HIDDEN, MAP_REFUSAL)
     try:
         grid = link.get_map()

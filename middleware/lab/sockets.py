@@ -17,7 +17,7 @@ from simple_websocket import ConnectionClosed
 from middleware.access.commands import Commander, refusal_error, robot_commands
 from middleware.access.graded_runs import graded_run_started_at
 from middleware.access.sockets import ChannelSeat, open_robot_channel
-from middleware.assessment.hidden_obstacles import CAMERA_REFUSAL, OBSTACLES_HIDDEN, hides_obstacles
+from middleware.assessment.hidden_obstacles import CAMERA_REFUSAL, OBSTACLES_HIDDEN, hiding_book
 from middleware.auth.schemas import InvalidField
 from middleware.db import session_factory
 from middleware.lab.delay import ViewerDelay, viewer_delay
@@ -53,9 +53,8 @@ ZONE_TEST_RECHECK_S = 2.0  # how soon an obstacle-zone test begun while the came
 
 
 def obstacles_hidden_from(user_id: int) -> bool:
-    """Whether user_id's obstacle-zone test is in progress now (a database read; see assessment/hidden_obstacles)."""
-    with session_factory(current_app)() as session:
-        return hides_obstacles(session, user_id, datetime.now(UTC))
+    """Whether user_id's obstacle-zone test is in progress now (this process's book; assessment/hidden_obstacles)."""
+    return hiding_book(current_app).hides(user_id)
 
 
 def camera_relay(ws: WebSocket, hub: FanoutHub[bytes], delay: ViewerDelay | None = None) -> Continuation | None:
