@@ -202,7 +202,10 @@ class Capacity:
     def measure(self, users: int) -> Step:
         """Runs `users` users, waits for them to settle, and measures one window."""
         if len(self.cookies) < users:  # logins hash passwords: done before the window, once for both worker counts
-            self.cookies += log_in(self.server.url, self.names[len(self.cookies):users])
+            try:
+                self.cookies += log_in(self.server.url, self.names[len(self.cookies):users])
+            except RuntimeError as error:  # say why: the server's own last words
+                raise RuntimeError(f"{error}; the server's last output:\n{''.join(self.server.output[-60:])}") from None
         opened = self.load.ask("users", (self.server.port, self.cookies[:users]), 300)
         time.sleep(SETTLE_S if self.step_s > QUICK_STEP_S else 0.5)
         before, machine = [cpu_seconds(pid) for pid in self.pids], machine_ticks()
