@@ -24,13 +24,13 @@ def camera_picture(client, robot_name: str) -> dict:
 def test_an_admin_makes_the_drawn_view_the_default_for_a_kind_and_the_console_hears_it(client_as,
                                                                                       course_people) -> None:
     admin, student = client_as("admin1"), client_as("student1")
-    assert camera_picture(student, "lab-1") == {"kind": "lab", "default": "video"}
+    assert camera_picture(student, "lab-1") == {"kind": "lab", "default": "video", "chosen": None}
     status, kinds = api(admin, "GET", "/api/admin/robot-kinds")
     assert status == 200 and {"kind": "lab", "camera_picture": "video"} in kinds["kinds"]
 
     status, answer = api(admin, "PUT", "/api/admin/robot-kinds/lab/picture", {"picture": "drawn"})
     assert (status, answer) == (200, {"kind": "lab", "camera_picture": "drawn"})
-    assert camera_picture(student, "lab-1") == {"kind": "lab", "default": "drawn"}
+    assert camera_picture(student, "lab-1") == {"kind": "lab", "default": "drawn", "chosen": None}
 
     # The robots page's form says the same and sets it back.
     _, _, page = admin.request("GET", "/admin/robots")
@@ -39,7 +39,7 @@ def test_an_admin_makes_the_drawn_view_the_default_for_a_kind_and_the_console_he
     token = admin.csrf_token("/admin/robots")
     status, _, _ = admin.request("POST", "/admin/robot-kinds/lab/picture", {"picture": "video", "csrf_token": token})
     assert status == 303
-    assert camera_picture(student, "lab-1") == {"kind": "lab", "default": "video"}
+    assert camera_picture(student, "lab-1") == {"kind": "lab", "default": "video", "chosen": None}
     _, _, page = admin.request("GET", "/admin/robots")
     assert "now show the robot&#39;s video" in page or "now show the robot's video" in page
 
