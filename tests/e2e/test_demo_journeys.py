@@ -73,6 +73,7 @@ def test_the_demo_student_books_a_slot_and_finds_every_kind_of_test(
 
 def open_header_link(page, name: str) -> None:
     """Follows a link of the site header as a person does: on a phone it is behind the "Menu" button."""
+    page.wait_for_load_state("domcontentloaded")  # site-menu.js has folded the menu on a phone by then
     link = page.locator(".site-header").get_by_role("link", name=name)
     if link.is_hidden():
         page.locator(".site-header").get_by_text("Menu", exact=True).click()

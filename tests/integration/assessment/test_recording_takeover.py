@@ -30,6 +30,13 @@ def _experimental_exam(app, course_people) -> int:
         return exam.id
 
 
+def _stored_trace(factory, attempt_id: int) -> list:
+    from middleware.models.assessment import Attempt
+
+    with factory() as session:
+        return list(session.get(Attempt, attempt_id).trace or [])
+
+
 def test_a_recording_whose_worker_died_is_taken_over_and_the_whole_run_is_graded(app, client_as,
                                                                                    course_people) -> None:
     from middleware.assessment import attempts, recorder
@@ -44,9 +51,12 @@ def test_a_recording_whose_worker_died_is_taken_over_and_the_whole_run_is_graded
     status, answer = api(student, "POST", f"/api/exams/{exam_id}/attempts")
     assert status == 201, answer
     attempt_id = answer["attempt"]["id"]
-    time.sleep(2.5)  # at least one flush
-    recorder.stop(attempt_id)  # the recording worker dies: its recorder stops, its claim stays behind
     factory = session_factory(app)
+    time.sleep(2.5)  # samples for at least one flush
+    flushed_by = time.monotonic() + 15  # a loaded machine flushes later, not never
+    while not _stored_trace(factory, attempt_id) and time.monotonic() < flushed_by:
+        time.sleep(0.2)
+    recorder.stop(attempt_id)  # the recording worker dies: its recorder stops, its claim stays behind
     with factory() as session, session.begin():
         died_at = datetime.now(UTC) - timedelta(seconds=recorder.STALE_S + 1)
         session.execute(update(Attempt).where(Attempt.id == attempt_id)
