@@ -13,10 +13,11 @@ from sqlalchemy.orm import Session
 
 from middleware.access.round_robin import AccessPolicy
 from middleware.bookings.services import priority_user_id as booking_priority
-from middleware.db import make_engine, upgrade_to_head
+from middleware.db import make_engine
 from middleware.models import Booking, User
 from middleware.models.teaching import GuidedSession, Tour
 from middleware.teaching.tours import with_guided_priority
+from tests.conftest import migrate_to_head
 from tests.database.test_round_robin import ROBOT, T0, TURN_S, Lab
 
 
@@ -56,7 +57,7 @@ class ClassLab(Lab):
 
 @pytest.fixture
 def lab(database_url: str) -> Iterator[ClassLab]:
-    upgrade_to_head(database_url)
+    migrate_to_head(database_url)
     engine = make_engine(database_url)
     yield ClassLab(engine)
     engine.dispose()

@@ -7,14 +7,15 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from middleware.auth.services import create_user
-from middleware.db import make_engine, upgrade_to_head
+from middleware.db import make_engine
 from middleware.demo_course import DEMO_QUESTIONS, seed_demo_course
 from middleware.models import Course, CourseMembership
 from middleware.models.assessment import Exam, Question
+from tests.conftest import migrate_to_head
 
 
 def test_the_demo_course_seeds_once(database_url: str) -> None:
-    upgrade_to_head(database_url)
+    migrate_to_head(database_url)
     engine = make_engine(database_url)
     try:
         with Session(engine) as session:

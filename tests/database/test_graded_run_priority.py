@@ -14,11 +14,12 @@ from sqlalchemy.orm import Session
 from middleware.access.graded_runs import with_graded_run_priority
 from middleware.access.round_robin import AccessPolicy
 from middleware.bookings.services import priority_user_id as booking_priority
-from middleware.db import make_engine, upgrade_to_head
+from middleware.db import make_engine
 from middleware.models import Course, CourseMembership, User
 from middleware.models.assessment import Attempt, Exam
 from middleware.models.experiment import TRIAL_OPEN, Trial
 from middleware.teaching.tours import with_guided_priority
+from tests.conftest import migrate_to_head
 from tests.database.test_round_robin import ROBOT, T0, TURN_S, Lab
 
 HOLD_MIN = 10
@@ -73,7 +74,7 @@ class RunLab(Lab):
 
 @pytest.fixture
 def lab(database_url: str) -> Iterator[RunLab]:
-    upgrade_to_head(database_url)
+    migrate_to_head(database_url)
     engine = make_engine(database_url)
     yield RunLab(engine)
     engine.dispose()

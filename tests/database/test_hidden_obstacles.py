@@ -17,16 +17,17 @@ from middleware.assessment.hidden_obstacles import (
     info_without_obstacles,
     scene_without_obstacles,
 )
-from middleware.db import make_engine, upgrade_to_head
+from middleware.db import make_engine
 from middleware.models import Course, User
 from middleware.models.assessment import Attempt, Exam
+from tests.conftest import migrate_to_head
 
 NOW = datetime(2026, 11, 26, 12, 0, tzinfo=UTC)
 
 
 @pytest.fixture
 def session(database_url: str) -> Iterator[Session]:
-    upgrade_to_head(database_url)
+    migrate_to_head(database_url)
     engine = make_engine(database_url)
     with Session(engine) as opened:
         yield opened

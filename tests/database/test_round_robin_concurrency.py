@@ -18,8 +18,9 @@ from sqlalchemy.orm import Session
 
 from middleware.access import round_robin
 from middleware.access.round_robin import AccessPolicy
-from middleware.db import make_engine, upgrade_to_head
+from middleware.db import make_engine
 from middleware.models import QueueEntry, RobotControl, User
+from tests.conftest import migrate_to_head
 
 ROBOT = "lab-1"
 WORKERS = 3
@@ -60,7 +61,7 @@ def _worker(database_url: str, user_ids: list[int], seed: int, started: float, r
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_concurrent_workers_never_produce_two_controllers(database_url: str, seed: int) -> None:
-    upgrade_to_head(database_url)
+    migrate_to_head(database_url)
     engine = make_engine(database_url)
     with Session(engine) as session:
         users = [User(username=f"user{i}", role="student", password_hash="x") for i in range(6)]

@@ -18,11 +18,11 @@ def seeded_lab(database_url: str, tmp_path: Path):
     hostile bodies reach the views, no practice robots and no predictions (starting one would spawn a skill server)."""
     from middleware import create_app
     from middleware.config import parse_robots
-    from middleware.db import upgrade_to_head
     from middleware.lab_runner import ensure_demo_accounts, seed_demo_course
     from middleware.teaching.demo_content import seed_demo_content
+    from tests.conftest import migrate_to_head
 
-    upgrade_to_head(database_url)
+    migrate_to_head(database_url)
     app = create_app({
         "DATABASE_URL": database_url, "SECRET_KEY": secrets.token_hex(16), "ROBOTS": parse_robots(UNREACHABLE_ROBOTS),
         "TESTING": True, "WTF_CSRF_ENABLED": False, "PRACTICE_CAP": 0, "PREDICTION_CAP": 0,

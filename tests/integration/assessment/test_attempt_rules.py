@@ -14,10 +14,11 @@ from sqlalchemy.orm import Session
 from middleware.assessment import attempts, bank, recommendations, review
 from middleware.assessment.attempts import TimeUp
 from middleware.assessment.schemas import parse_exam, parse_question
-from middleware.db import make_engine, upgrade_to_head
+from middleware.db import make_engine
 from middleware.errors import Refused
 from middleware.models import Course, CourseMembership, User
 from middleware.models.assessment import Attempt
+from tests.conftest import migrate_to_head
 
 T0 = datetime(2026, 5, 4, 9, 0, tzinfo=UTC)
 
@@ -25,7 +26,7 @@ T0 = datetime(2026, 5, 4, 9, 0, tzinfo=UTC)
 @pytest.fixture
 def world(database_url: str):
     """A course with a tutor, two students, one other tutor; two questions; a session."""
-    upgrade_to_head(database_url)
+    migrate_to_head(database_url)
     engine = make_engine(database_url)
     session = Session(engine, expire_on_commit=False)
     people = {}

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, migrate_to_head
 
 ROOT = Path(__file__).resolve().parents[3]
 REFUSED_WITHIN_S = 10.0  # a worker keeps a verdict RECHECK_S (1 s); the margin is for a loaded machine
@@ -33,11 +33,11 @@ def workers(database_url: str, tmp_path: Path) -> Iterator[tuple[LiveServer, str
     from middleware import create_app
     from middleware.access.coordinator import access_coordinator
     from middleware.auth.services import create_user
-    from middleware.db import session_factory, upgrade_to_head
+    from middleware.db import session_factory
     from middleware.robots.registry import robot_registry
 
     secret = secrets.token_hex(16)
-    upgrade_to_head(database_url)
+    migrate_to_head(database_url)
     app = create_app({"DATABASE_URL": database_url, "SECRET_KEY": secret, "ROBOTS": (), "TESTING": True})
     with session_factory(app)() as session:
         create_user(session, "student1", "student", STUDENT_PASSWORD)
@@ -172,10 +172,10 @@ def test_the_session_cookie_is_secure_whenever_the_request_came_over_https(
     tmp_path: Path, trusted_proxies: int, headers: dict[str, str], base_url: str, secure: bool
 ) -> None:
     from middleware import create_app
-    from middleware.db import session_factory, upgrade_to_head
+    from middleware.db import session_factory
 
     url = f"sqlite:///{tmp_path / 'cookies.sqlite3'}"
-    upgrade_to_head(url)
+    migrate_to_head(url)
     app = create_app({"DATABASE_URL": url, "SECRET_KEY": "k" * 32, "ROBOTS": (), "TRUSTED_PROXIES": trusted_proxies})
     response = app.test_client().get("/login", headers=headers, base_url=base_url)
     session_factory(app).kw["bind"].dispose()

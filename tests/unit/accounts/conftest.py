@@ -7,14 +7,15 @@ from collections.abc import Iterator
 import pytest
 from sqlalchemy.orm import Session, sessionmaker
 
-from middleware.db import make_engine, upgrade_to_head
+from middleware.db import make_engine
+from tests.conftest import migrate_to_head
 from tests.unit.bookings.conftest import People, seed
 
 
 @pytest.fixture
 def factory(database_url: str) -> Iterator[sessionmaker[Session]]:
     """Sessions on a migrated database."""
-    upgrade_to_head(database_url)
+    migrate_to_head(database_url)
     engine = make_engine(database_url)
     yield sessionmaker(bind=engine, expire_on_commit=False)
     engine.dispose()

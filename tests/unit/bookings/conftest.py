@@ -8,8 +8,9 @@ from dataclasses import dataclass
 import pytest
 from sqlalchemy.orm import Session, sessionmaker
 
-from middleware.db import make_engine, upgrade_to_head
+from middleware.db import make_engine
 from middleware.models import Course, CourseMembership, User
+from tests.conftest import migrate_to_head
 
 
 @dataclass
@@ -48,7 +49,7 @@ def seed(session: Session) -> People:
 @pytest.fixture
 def factory(database_url: str) -> Iterator[sessionmaker[Session]]:
     """Sessions on a migrated database (SQLite and PostgreSQL)."""
-    upgrade_to_head(database_url)
+    migrate_to_head(database_url)
     engine = make_engine(database_url)
     yield sessionmaker(bind=engine, expire_on_commit=False)
     engine.dispose()
