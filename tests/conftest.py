@@ -187,10 +187,30 @@ def skill_server_address() -> Iterator[str]:
         robot.stop()
 
 
+# The scrypt hash of STUDENT_PASSWORD per test account, made once per session by the product's own hash_password
+# (about 0.1 s each); per username, so that two accounts of one test never share a hash, as with create_user.
+_student_password_hashes: dict[str, str] = {}
+
+
+def add_test_account(session, username: str, role: str):
+    """An account (a User, flushed) with STUDENT_PASSWORD, as create_user(session, username, role, STUDENT_PASSWORD)
+    makes it, without hashing the password again in every test. Tests of create_user itself call create_user."""
+    from middleware.auth.schemas import clean_role, clean_username
+    from middleware.auth.services import hash_password
+    from middleware.models import User
+
+    name = clean_username(username)
+    if name not in _student_password_hashes:
+        _student_password_hashes[name] = hash_password(STUDENT_PASSWORD)
+    user = User(username=name, role=clean_role(role).value, password_hash=_student_password_hashes[name])
+    session.add(user)
+    session.flush()
+    return user
+
+
 def make_test_app(database_url: str, robots: str, tmp_path: Path):
     """The app on a migrated database with a known student account."""
     from middleware import create_app
-    from middleware.auth.services import create_user
     from middleware.config import parse_robots
     from middleware.db import session_factory
 
@@ -203,7 +223,7 @@ def make_test_app(database_url: str, robots: str, tmp_path: Path):
     })
     app.instance_path = str(tmp_path / "instance")
     with session_factory(app)() as session:
-        create_user(session, "student1", "student", STUDENT_PASSWORD)
+        add_test_account(session, "student1", "student")
         session.commit()
     return app
 
@@ -250,12 +270,11 @@ class LiveServer:
 @contextmanager
 def served_lab(robots: str, tmp_path: Path) -> Iterator[LiveServer]:
     """The app on a fresh SQLite database with student1 and tutor1, wired to robots ('name=host:port,...'), served."""
-    from middleware.auth.services import create_user
     from middleware.db import session_factory
 
     application = make_test_app(f"sqlite:///{tmp_path / 'lab.sqlite3'}", robots, tmp_path)
     with session_factory(application)() as session:
-        create_user(session, "tutor1", "tutor", STUDENT_PASSWORD)
+        add_test_account(session, "tutor1", "tutor")
         session.commit()
     server = LiveServer(application)
     try:

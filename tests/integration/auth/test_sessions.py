@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, migrate_to_head
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, migrate_to_head
 
 ROOT = Path(__file__).resolve().parents[3]
 REFUSED_WITHIN_S = 10.0  # a worker keeps a verdict RECHECK_S (1 s); the margin is for a loaded machine
@@ -32,7 +32,6 @@ def workers(database_url: str, tmp_path: Path) -> Iterator[tuple[LiveServer, str
     """Worker 1 served in this process, worker 2 a `telelab web` process; same database and secret key."""
     from middleware import create_app
     from middleware.access.coordinator import access_coordinator
-    from middleware.auth.services import create_user
     from middleware.db import session_factory
     from middleware.robots.registry import robot_registry
 
@@ -40,8 +39,8 @@ def workers(database_url: str, tmp_path: Path) -> Iterator[tuple[LiveServer, str
     migrate_to_head(database_url)
     app = create_app({"DATABASE_URL": database_url, "SECRET_KEY": secret, "ROBOTS": (), "TESTING": True})
     with session_factory(app)() as session:
-        create_user(session, "student1", "student", STUDENT_PASSWORD)
-        create_user(session, "admin1", "admin", STUDENT_PASSWORD)
+        add_test_account(session, "student1", "student")
+        add_test_account(session, "admin1", "admin")
         session.commit()
     first = LiveServer(app)
     port = _free_port()

@@ -8,7 +8,7 @@ from urllib.request import HTTPCookieProcessor, Request, build_opener
 
 import pytest
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account
 
 ROLES = {"student1": "student", "student2": "student", "tutor1": "tutor", "tutor2": "tutor", "admin1": "admin"}
 
@@ -18,14 +18,13 @@ def course_people(app) -> dict[str, int]:
     """student1 and student2 in course ROB1 (tutor1), tutor2 tutoring ROB2, and admin1; name -> id."""
     from sqlalchemy import select
 
-    from middleware.auth.services import create_user
     from middleware.db import session_factory
     from middleware.models import Course, CourseMembership, User
 
     with session_factory(app)() as session:
         for name, role in ROLES.items():
             if name != "student1":
-                create_user(session, name, role, STUDENT_PASSWORD)
+                add_test_account(session, name, role)
         course = Course(code="ROB1", title="Robotics 1", booking_allowance_min=120)
         other = Course(code="ROB2", title="Robotics 2", booking_allowance_min=60)
         session.add_all([course, other])

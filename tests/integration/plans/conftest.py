@@ -11,7 +11,7 @@ from urllib.request import Request
 
 import pytest
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_course, make_test_app
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, make_course, make_test_app
 
 PEOPLE = {"student2": "student", "student3": "student", "tutor1": "tutor", "tutor2": "tutor", "admin1": "admin"}
 
@@ -35,7 +35,6 @@ class PlansLab:
 def plans_lab(database_url: str, tmp_path: Path, skill_server_address: str) -> Iterator[PlansLab]:
     """The app on database_url (SQLite, then PostgreSQL) with the people above, served."""
     from middleware.access.coordinator import access_coordinator
-    from middleware.auth.services import create_user
     from middleware.db import session_factory
     from middleware.robots.registry import robot_registry
     from middleware.teaching.practice_robots import practice_manager
@@ -43,7 +42,7 @@ def plans_lab(database_url: str, tmp_path: Path, skill_server_address: str) -> I
     app = make_test_app(database_url, f"lab-1={skill_server_address}", tmp_path)
     with session_factory(app)() as session:
         for name, role in PEOPLE.items():
-            create_user(session, name, role, STUDENT_PASSWORD)
+            add_test_account(session, name, role)
         session.commit()
     course = make_course(app, "ROB1", {"student1": "student", "student2": "student", "tutor1": "tutor"})
     other = make_course(app, "ROB2", {"student3": "student", "tutor2": "tutor"})

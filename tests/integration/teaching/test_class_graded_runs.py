@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_course, make_test_app
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, make_course, make_test_app
 from tests.integration.teaching.test_class_sessions import _wait_until_ready
 from tests.integration.teaching.test_practice_console_and_uploads import _api
 
@@ -22,7 +22,7 @@ def small_class(tmp_path: Path, skill_server_address: str) -> Iterator[tuple[Liv
     from middleware.access.coordinator import access_coordinator
     from middleware.assessment import bank
     from middleware.assessment.schemas import parse_exam
-    from middleware.auth.services import create_user, find_user
+    from middleware.auth.services import find_user
     from middleware.db import session_factory
     from middleware.robots.registry import robot_registry
     from middleware.teaching.practice_robots import practice_manager
@@ -30,7 +30,7 @@ def small_class(tmp_path: Path, skill_server_address: str) -> Iterator[tuple[Liv
     app = make_test_app(f"sqlite:///{tmp_path / 'class.sqlite3'}", f"lab-1={skill_server_address}", tmp_path)
     with session_factory(app)() as session:
         for name, role in (("tutor1", "tutor"), ("ann", "student"), ("bob", "student")):
-            create_user(session, name, role, STUDENT_PASSWORD)
+            add_test_account(session, name, role)
         session.commit()
     course_id = make_course(app, "ROB101", {"tutor1": "tutor", "ann": "student", "bob": "student"})
     now = datetime.now(UTC)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_course, make_test_app
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, make_course, make_test_app
 from tests.integration.teaching.test_practice_console_and_uploads import CHANNELS, _api, refusal
 
 STUDENTS = [f"s{i:02}" for i in range(1, 11)]
@@ -20,7 +20,6 @@ STUDENTS = [f"s{i:02}" for i in range(1, 11)]
 def class_lab(database_url: str, tmp_path: Path, skill_server_address: str) -> Iterator[tuple[LiveServer, int]]:
     """The app with tutor1 teaching a course of 10 students, tutor2 teaching nothing, and an empty course."""
     from middleware.access.coordinator import access_coordinator
-    from middleware.auth.services import create_user
     from middleware.db import session_factory
     from middleware.robots.registry import robot_registry
     from middleware.teaching.practice_robots import practice_manager
@@ -28,9 +27,9 @@ def class_lab(database_url: str, tmp_path: Path, skill_server_address: str) -> I
     app = make_test_app(database_url, f"lab-1={skill_server_address}", tmp_path)
     with session_factory(app)() as session:
         for name in ["tutor1", "tutor2"]:
-            create_user(session, name, "tutor", STUDENT_PASSWORD)
+            add_test_account(session, name, "tutor")
         for name in STUDENTS:
-            create_user(session, name, "student", STUDENT_PASSWORD)
+            add_test_account(session, name, "student")
         session.commit()
     course_id = make_course(app, "ROB101", {"tutor1": "tutor", **dict.fromkeys(STUDENTS, "student")})
     make_course(app, "EMPTY1", {"tutor1": "tutor"})
