@@ -258,7 +258,10 @@ class LiveServer:
         self._server = make_threaded_server(app, "127.0.0.1", 0)
         self.app = app
         self.url = f"http://127.0.0.1:{self._server.server_port}"
-        self._thread = threading.Thread(target=self._server.serve_forever, daemon=True)
+        # shutdown() waits for the serving loop to look up (every 0.5 s by default: 0.25 s per test on average);
+        # a request wakes the loop at once either way.
+        self._thread = threading.Thread(target=self._server.serve_forever, kwargs={"poll_interval": 0.05},
+                                        daemon=True)
         self._thread.start()
 
     def stop(self) -> None:
