@@ -16,7 +16,10 @@ class OdometryNoise:
     """How wrong the wheel encoders are."""
 
     scale_error_std: float = 0.004  # a fixed per-wheel calibration error, drawn once per seed
-    increment_noise_std: float = 0.02  # multiplicative noise on every wheel-angle increment
+    increment_noise_std: float = 0.02  # multiplicative noise on a wheel-angle increment of reference_dt_s
+    # The drift a distance gathers must not depend on how often the loop reads the wheels: a longer increment gets
+    # proportionally less relative noise (independent noise sums: the std scales with the root of the count).
+    reference_dt_s: float = 1.0 / 60.0
 
 
 @dataclass(frozen=True)
@@ -49,7 +52,8 @@ class WheelOdometry:
             return self.reading
         last_left, last_right = self._last_angles_rad
         self._last_angles_rad = (left_angle_rad, right_angle_rad)
-        jitter = self._rng.normal(0.0, self._noise.increment_noise_std, 2).tolist()
+        jitter_std = self._noise.increment_noise_std * math.sqrt(self._noise.reference_dt_s / dt_s)
+        jitter = self._rng.normal(0.0, jitter_std, 2).tolist()
         left_m = (left_angle_rad - last_left) * self._spec.wheel_radius_m * self._scale_left * (1.0 + jitter[0])
         right_m = (right_angle_rad - last_right) * self._spec.wheel_radius_m * self._scale_right * (1.0 + jitter[1])
         distance_m = (left_m + right_m) / 2.0
