@@ -204,7 +204,7 @@ def localization_scenario(quick: bool, rows: list[Row], readings_only: bool = Fa
     truth = bench.world.snapshot.ground_truth
     offset = 0.5 / math.sqrt(2.0)
     bench.activate("localization", initial_x_m=truth.x_m + offset, initial_y_m=truth.y_m - offset,
-                   initial_theta_rad=truth.theta_rad + 0.1)
+                   initial_theta_rad=math.remainder(truth.theta_rad + 0.1, 2 * math.pi))
     position_errors, heading_errors, durations, odometry_drift = [], [], [], [0.0]
     position_std, heading_std = [], []
     drive_s = 15.0 if quick else 120.0  # quick: 5 s of samples after the 10 s of convergence
