@@ -41,7 +41,7 @@ import numpy as np
 from benchmarks.report import Measurement, print_table, write_json
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.laser import LaserSpec
-from skill_server.sim.world import World
+from skill_server.sim.world import PHYSICS_DT_S, PHYSICS_STEPS_PER_TICK, World
 
 ROOT = Path(__file__).resolve().parent.parent
 STATIC_DIR = ROOT / "client_ui" / "static"
@@ -57,8 +57,8 @@ MOTIONS: dict[str, tuple[float, float]] = {
     "backward": (-0.25, 0.0),
     "forward + turn left": (0.25, 0.75),
 }
-TICK_HZ = 60  # the world's control rate (4 physics steps of 1/240 s)
-COMMAND_EVERY_TICKS = 3  # 20 Hz, as the console repeats a held command
+TICK_HZ = round(1.0 / (PHYSICS_DT_S * PHYSICS_STEPS_PER_TICK))  # the world's control rate
+COMMAND_EVERY_TICKS = TICK_HZ // 20  # 20 Hz, as the console repeats a held command
 IDLE_BEFORE_S = 0.5
 HOLD_S = 4.0
 IDLE_AFTER_S = 1.0

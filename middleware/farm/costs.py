@@ -1,8 +1,8 @@
 """What one simulated robot costs, measured, and how many a host holds from its cores and memory.
 
 The figures are measured by `telelab bench --only farm` (the robots-per-core scenario): a headless robot in
-the lab scene, stepping in real time with nobody watching. Placement on Ray declares them as the robot's
-resources, and the local farm divides the host by them.
+the lab scene, stepping in real time, driven and watched as a student's console does. Placement on Ray declares
+them as the robot's resources, and the local farm divides the host by them.
 """
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ import os
 from pathlib import Path
 
 # Measured by benchmarks/farm.py on the 2-core development machine (its records in benchmarks/results/): a headless
-# robot being driven used 5.0-5.9 % of a core and 96 MB (its skill server), 239 MB as a Ray actor with it; parked
-# (nobody using it) 0.3-0.9 %. The farm plans for robots in use; rounded up.
+# robot driven and watched through its 30 Hz pose stream used 5.5-6.5 % of a core and 99 MB (its skill server),
+# 247 MB as a Ray actor with it; parked (nobody using it) 0.3-0.8 %. The farm plans for robots in use.
 HEADLESS_ROBOT_CPU_SHARE = 0.06
 ROBOT_MEMORY_MB = 100
 RAY_ROBOT_MEMORY_MB = 250

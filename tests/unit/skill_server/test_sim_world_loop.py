@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 
 import pytest
@@ -54,3 +55,25 @@ def test_stopping_wakes_waiting_readers_and_refuses_later_commands() -> None:
     assert world.wait_for_snapshot(world.snapshot.tick, timeout_s=5.0) is None
     with pytest.raises(WorldStopped):
         world.reset(seed=1)
+
+
+def _wait_with_a_drive_arriving(duration_s: float, tick_on_drive: bool) -> float:
+    """How long the world waits for its next tick (duration_s) when a drive arrives after 50 ms."""
+    with World("empty", realtime=False) as world:
+        world.set_controller(TOKEN)
+        timer = threading.Timer(0.05, lambda: world.drive(TOKEN, 1, 0.2, 0.0))
+        timer.start()
+        began = time.monotonic()
+        world._serve_commands_for(duration_s, tick_on_drive=tick_on_drive)
+        timer.join()
+        return time.monotonic() - began
+
+
+def test_a_new_drive_target_ends_the_wait_for_the_next_tick() -> None:
+    """Control runs at 40 Hz: a drive arriving mid-period is not left waiting up to 25 ms for its tick."""
+    assert _wait_with_a_drive_arriving(5.0, tick_on_drive=True) < 2.0
+
+
+def test_without_tick_on_drive_the_wait_lasts_its_whole_duration() -> None:
+    """Right after an early tick the loop is a tick ahead of the wall clock: it must not run further ahead."""
+    assert _wait_with_a_drive_arriving(0.4, tick_on_drive=False) >= 0.4
