@@ -12,6 +12,8 @@ The same students (and their logins) serve both worker counts: one database, one
 The load runs in one process of its own on asyncio (benchmarks/load_client.py: keep-alive HTTP and WebSockets framed
 by hand), so its work does not share the server's interpreter. Its CPU is measured at every step and reported beside
 the figures: 3 % of one core at 100 users and 7-8 % at 400 (polls and telemetry together) in the first runs here.
+It also measures how late its own loop wakes (a 10 ms sleep, again and again): a reply waits that long in the load
+process before it is timed, so a p99 far above that lateness is the server's.
 On a 2-core machine the load generator and the two workers share the cores, so the 2-worker figure carries the
 generator's share: it is reported, not subtracted, beside the share of the machine's cores busy in each window (the
 lab's robot, PostgreSQL, the kernel's loopback traffic and any neighbour's work included).
@@ -64,6 +66,8 @@ class _Load:
         self.port = 0
         self.tasks: list[asyncio.Future] = []
         self.latencies: list[float] = []
+        self.lag_probe: asyncio.Future | None = None
+        self.loop_lags: list[float] = []  # how late this process's own loop woke: a late loop delays every reply
         self.errors = self.messages = self.watching = self.lost = 0
         self._phases = random.Random(0)
 
@@ -124,9 +128,21 @@ class _Load:
             user.close()
 
 
+LAG_PROBE_S = 0.01
+
+
+async def _probe_lag(load: _Load) -> None:
+    loop = asyncio.get_running_loop()
+    while True:
+        asked = loop.time()
+        await asyncio.sleep(LAG_PROBE_S)
+        load.loop_lags.append(loop.time() - asked - LAG_PROBE_S)
+
+
 async def _obey(commands, reports) -> None:
     load = _Load()
     loop = asyncio.get_running_loop()
+    load.lag_probe = asyncio.ensure_future(_probe_lag(load))
     while True:
         command, argument = await loop.run_in_executor(None, commands.get)
         if command == "users":
@@ -139,11 +155,12 @@ async def _obey(commands, reports) -> None:
                 await asyncio.sleep(0.1)
             reports.put(("users", {"watching": load.watching, "wanted": wanted}))
         elif command == "measure":
-            load.latencies, load.errors, load.messages, load.lost = [], 0, 0, 0
+            load.latencies, load.loop_lags, load.errors, load.messages, load.lost = [], [], 0, 0, 0
             cpu, wall = time.process_time(), time.perf_counter()
             await asyncio.sleep(argument)
             elapsed = time.perf_counter() - wall
-            reports.put(("measured", {"latencies": load.latencies, "errors": load.errors, "lost": load.lost,
+            reports.put(("measured", {"latencies": load.latencies, "loop_lags": load.loop_lags,
+                                      "errors": load.errors, "lost": load.lost,
                                       "telemetry_hz": load.messages / elapsed / max(load.watching, 1),
                                       "cpu_share": (time.process_time() - cpu) / elapsed}))
         else:
@@ -178,6 +195,7 @@ class Step:
     cores_per_worker: tuple[float, ...]  # how the kernel's accepts spread the users shows here
     machine_busy: float  # share of all the machine's cores busy (the lab, its robot, PostgreSQL, the load, neighbours)
     load_average: tuple[float, float]  # 1-minute, at the window's start and end
+    load_loop_late_p99_ms: float  # the load process's own loop woke this late: replies waited as long in it
 
     @property
     def held(self) -> bool:
@@ -218,12 +236,13 @@ class Capacity:
         step = Step(self.workers, users, percentile_ms(latencies, 50), percentile_ms(latencies, 99), len(latencies),
                     measured["errors"], measured["lost"] + max(0, opened["wanted"] - opened["watching"]),
                     measured["telemetry_hz"], measured["cpu_share"], cores, per_worker, busy,
-                    (average_before, load_average()))
+                    (average_before, load_average()), percentile_ms(measured["loop_lags"], 99))
         self.steps.append(step)
         print(f"{self.workers} worker(s), {users} users: p50 {step.p50_ms:.1f} ms, p99 {step.p99_ms:.1f} ms, "
               f"{step.errors} errors, {step.sockets_lost} sockets lost, workers {cores:.2f} cores "
               f"({' + '.join(f'{share:.2f}' for share in per_worker)}), machine {busy * 100:.0f} % busy, load "
-              f"{step.load_cpu_share * 100:.0f} % of a core, load average {step.load_average[1]:.2f}", flush=True)
+              f"{step.load_cpu_share * 100:.0f} % of a core, load average {step.load_average[1]:.2f}, "
+              f"load loop late p99 {step.load_loop_late_p99_ms:.1f} ms", flush=True)
         return step
 
     def close(self) -> threading.Thread:
@@ -304,7 +323,8 @@ def _summary(steps: list[Step]) -> str:
                      f"(load gen {step.load_cpu_share * 100:.0f} %, workers "
                      f"{' + '.join(f'{share:.2f}' for share in step.cores_per_worker)} cores, "
                      f"machine {step.machine_busy * 100:.0f} % busy, "
-                     f"load avg {step.load_average[1]:.2f})" for step in steps)
+                     f"load avg {step.load_average[1]:.2f}, load loop late p99 {step.load_loop_late_p99_ms:.0f} ms)"
+                     for step in steps)
 
 
 def search(workers: int, database_url: str, names: list[str], cookies: list[str], quick: bool) -> tuple[
