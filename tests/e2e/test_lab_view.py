@@ -155,7 +155,9 @@ def open_floor_point(grid: dict, x_m: float, y_m: float) -> tuple[float, float]:
         if value < 50 and 0.8 <= math.hypot(cx - x_m, cy - y_m) <= 1.5 and all(
                 (round(cx + dx, 3), round(cy + dy, 3)) in free for dx, dy in around):
             return cx, cy
-    raise AssertionError("the map shows no open floor 0.8-1.5 m from the robot")
+    near = [math.hypot(cx - x_m, cy - y_m) for cx, cy, value in cells if value < 50]
+    raise AssertionError(f"the map shows no open floor 0.8-1.5 m from the robot at ({x_m:.2f}, {y_m:.2f}): "
+                         f"{len(near)} free cells, {sum(0.8 <= d <= 1.5 for d in near)} of them 0.8-1.5 m away")
 
 
 def test_the_lab_view_draws_the_map_on_the_floor_and_the_path_planned_to_a_goal(page, live_server: LiveServer) -> None:
@@ -169,7 +171,10 @@ def test_the_lab_view_draws_the_map_on_the_floor_and_the_path_planned_to_a_goal(
     view.scroll_into_view_if_needed()
     page.locator("lab-view[data-map-cells]").wait_for(state="attached", timeout=20_000)
     view.locator('[data-field="lab-view-summary"]').filter(has_text="on the floor").wait_for()
-    grid = page.evaluate("fetch('/api/robots/lab-1/map').then((r) => r.json()).then((answer) => answer.map)")
+    # An empty map is drawn on the floor too: wait, as a person would, for the map to hold some scans.
+    fetch_map = "fetch('/api/robots/lab-1/map').then((r) => r.json()).then((answer) => answer.map)"
+    wait_for(lambda: (page.evaluate(fetch_map) or {}).get("scans_integrated", 0) >= 1, 20, "the map holds no scans")
+    grid = page.evaluate(fetch_map)
     assert view.get_attribute("data-map-cells") == f"{grid['width_cells']} {grid['height_cells']}"
     x, y, _ = drawn_pose(page)
     free = open_floor_point(grid, x, y)
