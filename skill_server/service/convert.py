@@ -366,7 +366,7 @@ def localization_to_proto(
         update.navigation_source = navigation.source
     if estimate is None:
         return update
-    pose = estimate.pose
+    pose = estimate.pose_at(odometry)
     update.active = True
     update.converged = estimate.converged
     update.estimate.CopyFrom(pose_to_proto(pose))

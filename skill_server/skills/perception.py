@@ -9,6 +9,7 @@ from skill_server.sim.geometry import Pose2D
 from skill_server.sim.scenes import SceneSpec
 from skill_server.skills.environment_model import EnvironmentModel, PublishedGrid
 from skill_server.skills.obstacles import ObstacleMap
+from skill_server.skills.scan_matching import compose, relative
 
 
 @dataclass(frozen=True)
@@ -25,6 +26,14 @@ class LocalizationEstimate:
     odometry: Pose2D | None = None  # the odometry reading pose was moved on to (readers extrapolate from it)
     residual_rms_m: float = 0.0  # RMS distance of the scan's echoes to the map at the estimate
     particle_std_m: float = 0.0  # the cloud's own spread, hypot(x, y), before the map-mismatch term
+
+    def pose_at(self, odometry: Pose2D) -> Pose2D:
+        """The estimate moved on to a later odometry reading: the filter publishes during a tick from the previous
+        tick's readings, so a reader beside a newer snapshot (its truth, its odometry) compares at the same instant.
+        """
+        if self.odometry is None:
+            return self.pose
+        return compose(self.pose, relative(self.odometry, odometry))
 
 
 @dataclass(frozen=True)
