@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -12,6 +13,7 @@ from skill_server.sim.robot_model import RobotSpec
 from skill_server.skills.base import Outcome, SkillController, TickInput, feedback_for, succeeded
 from skill_server.skills.go_to_goal import COORD_LIMIT_M, GoToGoal
 from skill_server.skills.orientation import OrientationControl
+from skill_server.skills.scan_matching import compose, relative
 
 ROUND_TRIP = "round_trip"
 
@@ -31,6 +33,8 @@ class StepSequence(SkillController):
         self._index = -1
         self._current: SkillController | None = None
         self._start_pose: Pose2D | None = None
+        self._start_source = ""
+        self._start_odometry: Pose2D | None = None
 
     @property
     def current_step(self) -> str:
@@ -40,7 +44,9 @@ class StepSequence(SkillController):
     def control(self, tick: TickInput) -> tuple[float, float, Outcome | None, GoalFeedback]:
         """Ticks the current step; moves on when it succeeds."""
         if self._start_pose is None:
-            self._start_pose = tick.pose
+            self._start_pose, self._start_source, self._start_odometry = tick.pose, tick.pose_source, tick.odometry.pose
+        elif tick.pose_source != self._start_source:
+            self._place_start_again(tick)
         while True:
             if self._current is None:
                 self._advance(tick)
@@ -103,6 +109,18 @@ class StepSequence(SkillController):
         _, factory = self._steps[self._index]
         self.step_started()
         self._current = factory(self._start_pose)
+
+    def _place_start_again(self, tick: TickInput) -> None:
+        """Another pose took over the steering (localization converged, or tracking against the floor plan began
+        or was lost): the start's coordinates were in the other one's frame, which can be off by all the drift
+        gathered before the start. At the first tick of the new frame the start is placed in it by the odometry
+        since the start, which adds only the drift of those moments. Steps built later go back there."""
+        assert self._start_pose is not None and self._start_odometry is not None
+        start = compose(tick.pose, relative(tick.odometry.pose, self._start_odometry))
+        moved_m = math.hypot(start.x_m - self._start_pose.x_m, start.y_m - self._start_pose.y_m)
+        self.announce(EventKind.STEP_STARTED, f"steering by {tick.pose_source} now, not {self._start_source}: "
+                                              f"the start is placed again, {moved_m:.2f} m from before")
+        self._start_pose, self._start_source, self._start_odometry = start, tick.pose_source, tick.odometry.pose
 
 
 def round_trip_description(spec: RobotSpec) -> SkillDescription:
