@@ -173,7 +173,8 @@ class Localization(SkillController):
         if self._converged:
             self._relocalizer.trusted()
             return
-        step = self._relocalizer.after_update(self._lookup(), self._model.log_odds < 0, tick.odometry.pose)
+        step = self._relocalizer.after_update(self._lookup(), self._model.log_odds < 0, tick.odometry.pose,
+                                              self._estimate)
         if step.announcement:
             self.announce(EventKind.STEP_STARTED, step.announcement)
         if step.found is not None:

@@ -46,4 +46,4 @@ def test_the_stream_compares_the_estimate_with_the_truth_of_the_same_instant_whi
             streamed.append(localization_to_proto(snapshot, estimate).heading_error_rad)
     one_tick_rad = 1.0 * world.tick_dt_s
     assert np.median(raw) > 0.5 * one_tick_rad, "the raw estimate trails the turn by about a tick"
-    assert np.median(streamed) < 0.5 * np.median(raw), f"streamed {np.median(streamed):.4f} rad, raw {np.median(raw):.4f}"
+    assert np.median(streamed) < 0.5 * np.median(raw), f"streamed {np.median(streamed):.4f}, raw {np.median(raw):.4f}"
