@@ -210,6 +210,41 @@ def test_clicking_the_map_sends_the_robot_there_with_go_to_goal(page, live_serve
     assert go.locator("progress").evaluate("(bar) => bar.value") == pytest.approx(1.0)
 
 
+def steering_pose(panel) -> tuple[float, float, str]:
+    """(x, y, source) of the pose a skill panel says the skill steers by."""
+    text = panel.locator('[data-field="skill-pose"]').text_content() or ""
+    match = re.match(r"\((-?[\d.]+), (-?[\d.]+)\) m, -?\d+° by (.+)$", text)
+    assert match, f"the panel does not show the pose the skill steers by: {text!r}"
+    return float(match.group(1)), float(match.group(2)), match.group(3)
+
+
+def test_a_round_trip_goes_out_and_comes_back_to_where_it_started(page, live_server: LiveServer) -> None:
+    open_console(page, live_server)
+    wait_for_control(page)
+    x0, y0 = odometry(page, "x"), odometry(page, "y")
+    candidates = [(0.0, 0.0), (0.8, 0.3), (-0.6, 0.4)]
+    goal_x, goal_y = max(candidates, key=lambda c: min(math.hypot(c[0] - x0, c[1] - y0), 0.9))
+    show_tab_of(page, "skill-round_trip")
+    panel = page.locator('skill-panel[data-skill="round_trip"]')
+    panel.locator('input[name="goal_x_m"]').fill(f"{goal_x:.2f}")
+    panel.locator('input[name="goal_y_m"]').fill(f"{goal_y:.2f}")
+    panel.locator('button[data-action="activate"]').click()
+    wait_for_status(page, "round_trip", "executing")
+    wait_for(lambda: "by" in (panel.locator('[data-field="skill-pose"]').text_content() or ""), 5, "no feedback")
+    start_x, start_y, _ = steering_pose(panel)
+    page.locator('skill-panel[data-skill="round_trip"][data-status="succeeded"]').wait_for(timeout=SKILL_TIMEOUT_MS)
+    events = panel.locator('[data-field="skill-events"]').text_content() or ""
+    assert "step 2/3: back to the start" in events and "step 3/3: turning to the start heading" in events, events
+    panel.screenshot(path=str(ARTIFACTS_DIR / "round-trip-done.png"))
+    end_x, end_y, source = steering_pose(panel)
+    placed_again = re.search(r"the start is placed again, ([\d.]+) m from before", events)
+    # Back where it started, by the pose it steers by (the display rounds to 1 cm); when another pose took over the
+    # steering on the way, the start was placed again in its frame, and the event says by how much.
+    allowed_m = 0.03 + 0.015 + (float(placed_again.group(1)) if placed_again else 0.0)
+    assert math.hypot(end_x - start_x, end_y - start_y) <= allowed_m, (
+        f"started at ({start_x}, {start_y}), ended at ({end_x}, {end_y}) by {source}")
+
+
 def test_a_busy_robot_offers_to_preempt_and_deactivating_reports_the_error_left(
     page, live_server: LiveServer
 ) -> None:
