@@ -235,6 +235,8 @@ def test_a_round_trip_goes_out_and_comes_back_to_where_it_started(page, live_ser
     page.locator('skill-panel[data-skill="round_trip"][data-status="succeeded"]').wait_for(timeout=SKILL_TIMEOUT_MS)
     events = panel.locator('[data-field="skill-events"]').text_content() or ""
     assert "step 2/3: back to the start" in events and "step 3/3: turning to the start heading" in events, events
+    state = panel.locator('[data-field="skill-state"]').text_content() or ""
+    assert state.startswith("turning to the start heading: "), f"the step and its state read as {state!r}"
     panel.screenshot(path=str(ARTIFACTS_DIR / "round-trip-done.png"))
     end_x, end_y, source = steering_pose(panel)
     placed_again = re.search(r"the start is placed again, ([\d.]+) m from before", events)

@@ -23,7 +23,8 @@ const STATUS_WORDS = {
 
 /** A skill's state word for people: "goal_blocked" -> "goal blocked". */
 export function stateWords(state) {
-  return String(state).replaceAll("_", " ");
+  // A complex skill's state is "step:its state" ("back to the start:driving"): read as "back to the start: driving".
+  return String(state).replaceAll("_", " ").replace(/:(?=\S)/g, ": ");
 }
 
 function fixed(value, decimals) {
