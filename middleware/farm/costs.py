@@ -12,7 +12,8 @@ from pathlib import Path
 
 # Measured by benchmarks/farm.py on the 2-core development machine (its records in benchmarks/results/): a headless
 # robot driven and watched through its 30 Hz pose stream used 5.5-6.5 % of a core and 99 MB (its skill server),
-# 247 MB as a Ray actor with it; parked (nobody using it) 0.3-0.8 %. The farm plans for robots in use.
+# 247 MB as a Ray actor with it; parked (nobody using it) 0.3-0.8 %. The farm plans for robots in use. On a host
+# about 30 % slower the same robot used 6.0-7.6 %: the figure is the host's, measured before sizing one.
 HEADLESS_ROBOT_CPU_SHARE = 0.06
 ROBOT_MEMORY_MB = 100
 RAY_ROBOT_MEMORY_MB = 250
