@@ -37,7 +37,7 @@ import grpc
 
 from benchmarks.report import Measurement, print_table, write_json
 from middleware.farm.base import RobotFarm, RobotSpec
-from middleware.farm.costs import HEADLESS_ROBOT_CPU_SHARE, host_cores
+from middleware.farm.costs import host_cores, robot_cpu_share
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 
 SCENE = "lab"
@@ -203,8 +203,8 @@ def measure_backend(backend: str, make: Callable[[], RobotFarm], counts: list[in
                 Measurement(scenario, "poses received per watched robot", pose_hz, "Hz", f">= {WATCH_HZ * 0.9:g}",
                             WATCH_HZ, None if quick else pose_hz >= WATCH_HZ * 0.9),
                 Measurement(scenario, "CPU share per driven and watched robot, mean", share, "core",
-                            f"<= {HEADLESS_ROBOT_CPU_SHARE}", HEADLESS_ROBOT_CPU_SHARE,
-                            None if quick else share <= HEADLESS_ROBOT_CPU_SHARE),
+                            f"<= {robot_cpu_share()}", robot_cpu_share(),
+                            None if quick else share <= robot_cpu_share()),
                 Measurement(scenario, "CPU share per parked robot, mean", parked_share, "core", "<= 0.01",
                             PARKED_CPU_TARGET, None if quick else parked_share <= PARKED_CPU_TARGET),
                 Measurement(scenario, "wake: drive -> moving, max of 5", max(wakes), "s", "<= 0.2", WAKE_TARGET_S,

@@ -10,7 +10,7 @@ from __future__ import annotations
 import threading
 
 from middleware.farm.base import Capacity, FarmFull, FarmRobot, FarmUnavailable, RobotSpec
-from middleware.farm.costs import available_memory_mb, host_cores, robots_per_host
+from middleware.farm.costs import available_memory_mb, host_cores, robot_cpu_share, robots_per_host
 from middleware.farm.load import CpuMeter, resident_mb
 from middleware.robots.processes import SkillServerProcess, SkillServerStartError
 
@@ -22,8 +22,10 @@ class LocalProcessFarm:
 
     backend = "local"
 
-    def __init__(self, capacity: int | None = None) -> None:
-        self._capacity = robots_per_host(host_cores(), available_memory_mb()) if capacity is None else capacity
+    def __init__(self, capacity: int | None = None, cpu_share: float | None = None) -> None:
+        share = robot_cpu_share() if cpu_share is None else cpu_share
+        self._capacity = robots_per_host(host_cores(), available_memory_mb(), cpu_share=share) \
+            if capacity is None else capacity
         self._processes: dict[str, SkillServerProcess] = {}
         self._starting: set[str] = set()
         self._lock = threading.Lock()

@@ -18,7 +18,7 @@ import threading
 from typing import Any, cast
 
 from middleware.farm.base import Capacity, FarmFull, FarmRobot, FarmUnavailable, RobotSpec
-from middleware.farm.costs import HEADLESS_ROBOT_CPU_SHARE, RAY_ROBOT_MEMORY_MB, robots_per_host
+from middleware.farm.costs import RAY_ROBOT_MEMORY_MB, robot_cpu_share, robots_per_host
 from middleware.farm.load import CpuMeter, cpu_seconds, resident_mb
 from middleware.robots.processes import SkillServerProcess, SkillServerStartError
 
@@ -92,8 +92,9 @@ class RayFarm:
 
     backend = "ray"
 
-    def __init__(self, address: str) -> None:
+    def __init__(self, address: str, cpu_share: float | None = None) -> None:
         self.address = address
+        self._cpu_share = robot_cpu_share() if cpu_share is None else cpu_share  # placement declares it
         self._lock = threading.Lock()
         self._connected_pid: int | None = None
         self._actor_class: Any = None
@@ -118,7 +119,7 @@ class RayFarm:
         # busy node still takes it (a whole core would leave it waiting behind the class's robots).
         actor = self._actor_class.options(
             name=ACTOR_PREFIX + spec.name, namespace=NAMESPACE, lifetime=None if spec.fast else "detached",
-            max_restarts=0 if spec.fast else -1, num_cpus=HEADLESS_ROBOT_CPU_SHARE,
+            max_restarts=0 if spec.fast else -1, num_cpus=self._cpu_share,
             memory=RAY_ROBOT_MEMORY_MB * 2**20, scheduling_strategy="SPREAD", get_if_exists=True,
         ).remote(spec.name, spec.scene, spec.controller_token, spec.fast)
         try:
@@ -175,7 +176,8 @@ class RayFarm:
         nodes = [node for node in ray.nodes() if node.get("Alive")]
         # A node's CPUs and "memory" resource are what Ray may give actors already (the operator's and Ray's own
         # reserve are taken out).
-        robots = sum(min(robots_per_host(node["Resources"].get("CPU", 0.0), float("inf"), reserve=False),
+        robots = sum(min(robots_per_host(node["Resources"].get("CPU", 0.0), float("inf"), reserve=False,
+                                         cpu_share=self._cpu_share),
                          int(node["Resources"].get("memory", 0.0) / 2**20 / RAY_ROBOT_MEMORY_MB)) for node in nodes)
         return Capacity(robots, len(self._names()), hosts=len(nodes))
 

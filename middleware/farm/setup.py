@@ -9,6 +9,7 @@ from flask import Flask, current_app
 
 from middleware.config import ConfigError
 from middleware.farm.base import RobotFarm
+from middleware.farm.costs import robot_cpu_share
 from middleware.farm.pool_robots import PoolKeeper
 
 _EXTENSION_KEY = "telelab.farm"
@@ -23,6 +24,7 @@ def build_farm(environ: dict[str, str] | None = None) -> RobotFarm:
     backend = env.get("TELELAB_FARM", "local").strip().lower()
     if backend not in BACKENDS:
         raise ConfigError(f"TELELAB_FARM must be one of {', '.join(BACKENDS)}, not {backend!r}.")
+    cpu_share = robot_cpu_share(env)
     if backend == "local":
         from middleware.farm.owner import ADDRESS_VARIABLE, KEY_VARIABLE, SharedLocalFarm
 
@@ -30,14 +32,14 @@ def build_farm(environ: dict[str, str] | None = None) -> RobotFarm:
             return SharedLocalFarm(env[ADDRESS_VARIABLE], env.get(KEY_VARIABLE, ""))
         from middleware.farm.local import LocalProcessFarm
 
-        return LocalProcessFarm()
+        return LocalProcessFarm(cpu_share=cpu_share)
     address = env.get("TELELAB_RAY_ADDRESS", "").strip()
     if not address or ":" not in address:
         raise ConfigError("TELELAB_RAY_ADDRESS must give the Ray head as host:port when TELELAB_FARM=ray "
                           "(`telelab up --farm ray` starts a local one).")
     from middleware.farm.ray_farm import RayFarm
 
-    return RayFarm(address)
+    return RayFarm(address, cpu_share=cpu_share)
 
 
 def init_app(app: Flask, farm: RobotFarm | None = None) -> RobotFarm:
