@@ -76,9 +76,11 @@ class HidingBook:
         self._read_at = -float("inf")
 
     def hides(self, user_id: int, session: Session | None = None) -> bool:
-        """Whether user_id's obstacle-zone test is in progress (as read at most RECHECK_S ago). session: the caller's
-        (a request's), so that the read takes no second connection; no lock is held while it reads, so a pool
-        that is busy never waits on this book."""
+        """Whether user_id's obstacle-zone test is in progress: "no" as read at most RECHECK_S ago, "yes" read now
+        for that user alone (a student who submits and reloads at once must not be refused by a reading older than
+        the announcement of the end; only students in a test pay the read). session: the caller's (a request's), so
+        that the read takes no second connection; no lock is held while it reads, so a pool that is busy never
+        waits on this book."""
         now = datetime.now(UTC)
         with self._lock:
             due = time.monotonic() - self._read_at >= self._recheck_s
@@ -97,13 +99,18 @@ class HidingBook:
         if user_id not in users:
             return False
         deadline = users[user_id]
-        return deadline is None or deadline > now
+        if deadline is not None and deadline <= now:
+            return False
+        if due or user_id in self._read(session, now, user_id):
+            return True
+        self.forget()  # it ended and the announcement has not come yet: everyone's reading is as old
+        return False
 
-    def _read(self, session: Session | None, now: datetime) -> dict[int, datetime | None]:
+    def _read(self, session: Session | None, now: datetime, user_id: int | None = None) -> dict[int, datetime | None]:
         if session is not None:
-            return users_hiding_obstacles(session, now)
+            return users_hiding_obstacles(session, now, user_id)
         with self._sessions() as own:
-            return users_hiding_obstacles(own, now)
+            return users_hiding_obstacles(own, now, user_id)
 
     def forget(self, _key: str | None = None) -> None:
         """The next question reads the table again (an attempt started or ended somewhere)."""
