@@ -6,8 +6,9 @@ Rules, stated once:
 - multiple: full marks for exactly the keyed set; otherwise (right picks - wrong picks) / keyed picks, never
   below 0, so ticking every box earns nothing.
 - numeric: |answer - value| <= tolerance (bounds included; a 1e-9 relative slack absorbs float noise). When the
-  question has a unit the answer must give one of the same quantity (m, cm, mm; rad, deg; s, ms; m/s, cm/s),
-  converted before comparing; a missing or unknown unit scores 0 and says so. NaN and infinities score 0.
+  question has a unit, a bare number is read in that unit (the page says so); a unit given must be of the same
+  quantity (m, cm, mm; rad, deg; s, ms; m/s, cm/s) and is converted before comparing; an unknown unit or one of
+  another quantity scores 0 and says so. NaN and infinities score 0.
 - text: accepted answers compared after trimming, collapsing spaces and (unless case_sensitive) case folding.
 """
 
@@ -118,9 +119,7 @@ def _grade_numeric(spec: dict[str, Any], answer: object) -> tuple[float, str]:
     if value is None:
         return 0.0, "The answer is not a number."
     expected_unit = str(spec.get("unit") or "")
-    if expected_unit:
-        if not unit.strip():
-            return 0.0, f"Give the unit (the answer is in {expected_unit})."
+    if expected_unit and unit.strip():
         converted = convert(value, unit, expected_unit)
         if converted is None:
             return 0.0, f"{unit.strip()} is not a unit of the same quantity as {expected_unit}."

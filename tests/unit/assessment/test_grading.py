@@ -26,10 +26,10 @@ TEXT = {"accepted": ["Dead reckoning", "odometry"], "case_sensitive": False}
     ("multiple", MULTIPLE, [9], 0),
     ("numeric", NUMERIC, {"value": "0.55", "unit": "m"}, 2), ("numeric", NUMERIC, {"value": "0.45", "unit": "m"}, 2),
     ("numeric", NUMERIC, {"value": "0.5501", "unit": "m"}, 0), ("numeric", NUMERIC, {"value": "55", "unit": "cm"}, 2),
-    ("numeric", NUMERIC, {"value": "0,5", "unit": "m"}, 2), ("numeric", NUMERIC, {"value": "0.5", "unit": ""}, 0),
-    ("numeric", NUMERIC, {"value": "0.5", "unit": "s"}, 0), ("numeric", NUMERIC, {"value": "", "unit": "m"}, 0),
+    ("numeric", NUMERIC, {"value": "0,5", "unit": "m"}, 2), ("numeric", NUMERIC, {"value": "0.5", "unit": "s"}, 0), ("numeric", NUMERIC, {"value": "", "unit": "m"}, 0),
     ("numeric", NUMERIC, {"value": "nan", "unit": "m"}, 0), ("numeric", NUMERIC, {"value": "inf", "unit": "m"}, 0),
     ("numeric", {"value": 90, "tolerance": 1, "unit": "deg"}, {"value": str(math.pi / 2), "unit": "rad"}, 2),
+    ("numeric", NUMERIC, {"value": "0.5", "unit": "furlong"}, 0),
     ("text", TEXT, "  dead   RECKONING ", 2), ("text", TEXT, "odometer", 0), ("text", TEXT, "", 0),
     ("text", TEXT, "   ", 0),
 ])
@@ -37,6 +37,14 @@ def test_every_question_type_is_graded_with_its_edge_cases(kind, spec, answer, p
     result = grade_question("1", kind, spec, 2.0, answer)
     assert result.points == points, result.feedback
     assert result.max_points == 2.0
+
+
+@pytest.mark.parametrize("answer", [{"value": "0.52", "unit": ""}, {"value": "0.52", "unit": "  "}, {"value": "0.52"},
+                                    "0.52"])
+def test_a_bare_number_is_read_in_the_question_s_own_unit(answer: object) -> None:
+    result = grade_question("1", "numeric", NUMERIC, 2.0, answer)
+    assert (result.points, result.feedback) == (2.0, "Correct (0.5 ± 0.05 m).")
+    assert grade_question("1", "numeric", NUMERIC, 2.0, {"value": "52"}).points == 0  # 52 m, not 52 cm
 
 
 def test_empty_answers_say_so() -> None:

@@ -54,6 +54,8 @@ function isAnswered(fieldset) {
   const answer = pair[1];
   if (Array.isArray(answer)) return answer.length > 0;
   if (answer === null) return false;
+  // A numeric answer is its value (a bare number is read in the question's unit); a report needs every coordinate.
+  if (typeof answer === "object" && "value" in answer) return String(answer.value).trim() !== "";
   if (typeof answer === "object") return Object.values(answer).every((part) => String(part).trim() !== "");
   return String(answer).trim() !== "";
 }
