@@ -3,11 +3,14 @@
 "Mobile robotics (demo)": taught by the demo `tutor`, with the demo `student` enrolled, a weekly booking
 allowance and a turn length; a small question bank; an open practice quiz, a timed theoretical test and an
 experimental test on lab-1, both open now for a long window; and the course's lab survey (every course has
-one). Everything goes through the courses and assessment services, so the seed obeys the same validation
-as a tutor's forms.
+one), already answered by three demo classmates (disabled accounts that exist for their answers alone), so the
+tutor sees its charts (shown from MIN_RESPONDENTS answers on) while the demo student can still answer it.
+Everything goes through the courses and assessment services, so the seed obeys the same validation as a
+tutor's forms.
 
 The course's code marks the seed as done: a start that finds the course changes nothing, so what the tutor
 has since changed (a student removed, a test edited or deleted) is never undone, and nothing is duplicated.
+The classmates' accounts mark theirs: a course seeded before them gets them once.
 """
 
 from __future__ import annotations
@@ -19,9 +22,10 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.assessment import bank
-from middleware.assessment.schemas import parse_exam, parse_question
-from middleware.auth.services import find_user
+from middleware.accounts.services import set_active_by_name
+from middleware.assessment import bank, survey
+from middleware.assessment.schemas import SURVEY_ITEMS, parse_exam, parse_question, parse_survey
+from middleware.auth.services import create_user, find_user, generate_password
 from middleware.courses import services as courses
 from middleware.courses.schemas import CourseSettings
 from middleware.models import Course, Role
@@ -53,6 +57,12 @@ DEMO_QUESTIONS: list[dict[str, Any]] = [
     {"kind": "text", "prompt": "Which skill keeps a set distance to a wall (two words)?",
      "accepted": ["wall following", "wall-following", "wall_following"], "topics": ["wall following"]},
 ]
+# The lab survey's answers of the demo classmates: ratings 1-5 in SURVEY_ITEMS' order, and a comment.
+DEMO_SURVEY_ANSWERS: dict[str, tuple[tuple[int, ...], str]] = {
+    "demo-classmate-1": ((5, 4, 4, 3, 5, 4, 4), "Driving the robot from home made the odometry lesson concrete."),
+    "demo-classmate-2": ((4, 4, 2, 4, 4, 3, 5), "Booking a slot was hard in the week before the test."),
+    "demo-classmate-3": ((4, 5, 3, 4, 5, 4, 4), ""),
+}
 QUIZ_QUESTIONS = (0, 1, 3)  # indices into DEMO_QUESTIONS
 TIMED_QUESTIONS = (0, 2, 4, 5)
 QUIZ_TITLE = "Practice quiz: sensors and odometry"
@@ -75,9 +85,9 @@ def seed_demo_course(session: Session, now: datetime | None = None) -> DemoCours
     seeded. The demo `student` is enrolled when the account exists.
     """
     existing = session.scalar(select(Course.id).where(Course.code == DEMO_COURSE_CODE))
-    if existing is not None:
-        return DemoCourse(existing, [])
     tutor = find_user(session, "tutor")
+    if existing is not None:
+        return DemoCourse(existing, _survey_classmates(session, tutor, existing))
     if tutor is None or tutor.role != Role.TUTOR:
         return DemoCourse(None, [])
     now = now or datetime.now(UTC)
@@ -94,6 +104,7 @@ def seed_demo_course(session: Session, now: datetime | None = None) -> DemoCours
         bank.create_exam(session, tutor, course.id, parse_exam(data))
         added.append(label)
     added.append("the lab survey")
+    added += _survey_classmates(session, tutor, course.id)
     added += seed_demo_plans(session, course.id)
     return DemoCourse(course.id, added)
 
@@ -109,6 +120,21 @@ def _demo_exams(ids: list[int], now: datetime) -> list[tuple[str, dict[str, Any]
         "title": EXPERIMENTAL_TITLE, "kind": "experimental", **window, "duration_s": 600, "max_attempts": 3,
         "robot_name": DEMO_ROBOT, "task_kind": "reach_point", "x_m": 1.5, "y_m": 1.5, "task_points": 10,
         "task_topics": ["navigation"],
-        "instructions": f"Take control of {DEMO_ROBOT} and bring it to the orange tile at (1.5, 1.5) m, by driving "
-                        "or with go-to-goal, then submit. The mark is the robot's true distance to it."}
+        "instructions": f"The target is the orange tile. Take control of {DEMO_ROBOT} and drive it there or use "
+                        "go-to-goal. The mark is the robot's true distance to the target."}
     return [("practice quiz", quiz), ("timed test", timed), (f"experimental test on {DEMO_ROBOT}", experimental)]
+
+
+def _survey_classmates(session: Session, tutor: Any, course_id: int) -> list[str]:
+    """Three classmates enrolled, their survey answered, their accounts then disabled; nothing when their accounts
+    exist (seeded before, whatever the tutor did with them since) or the demo tutor is gone."""
+    if tutor is None or tutor.role != Role.TUTOR or any(find_user(session, name) for name in DEMO_SURVEY_ANSWERS):
+        return []
+    names = [item for item, _label in SURVEY_ITEMS]
+    for username, (ratings, comments) in DEMO_SURVEY_ANSWERS.items():
+        classmate = create_user(session, username, Role.STUDENT, generate_password())
+        courses.enrol(session, tutor, course_id, username)
+        survey.submit_survey(session, classmate, course_id, *parse_survey(
+            {"ratings": dict(zip(names, ratings, strict=True)), "comments": comments}))
+        set_active_by_name(session, username, False)
+    return [f"the lab survey answered by {len(DEMO_SURVEY_ANSWERS)} demo classmates"]

@@ -77,7 +77,7 @@ def hub() -> ResponseReturnValue:
         if not entry["teaches"] and view.my_role == "student":
             groups: dict[str, list[Any]] = {"open": [], "upcoming": [], "done": []}
             for exam in bank.list_exams(dbs, view.id):
-                mine = attempts.my_attempts(dbs, current_user.id, exam.id)
+                mine = review.my_marked_attempts(dbs, current_user.id, exam.id)
                 state = window_state(exam, now)
                 used_up = exam.max_attempts is not None and len(mine) >= exam.max_attempts \
                     and all(a.status == "submitted" for a in mine)
@@ -322,7 +322,7 @@ def exam_page(exam_id: int) -> ResponseReturnValue:
     if not teaches:
         bank.student_course(dbs, current_user, exam.course_id)
     rows = review.list_attempts(dbs, current_user, exam_id, now) if teaches else None
-    mine = None if teaches else attempts.my_attempts(dbs, current_user.id, exam_id)
+    mine = None if teaches else review.my_marked_attempts(dbs, current_user.id, exam_id)
     return render_template("assessment/exam.html", exam=review.exam_dict(exam, now), rows=rows, mine=mine,
                            teaches=teaches, course=dbs.get(Course, exam.course_id), css=CSS)
 

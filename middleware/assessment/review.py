@@ -11,7 +11,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.assessment.attempts import _items, settle, settle_due
+from middleware.assessment.attempts import _items, my_attempts, settle, settle_due
 from middleware.assessment.bank import list_exams, managed_exam, question_dict, questions_of
 from middleware.assessment.policy import may_teach, readable_attempt, teaching_course
 from middleware.courses.schemas import csv_safe
@@ -39,6 +39,23 @@ def final_score(attempt: Attempt, reviews: list[AttemptReview]) -> float | None:
     if attempt.status != "submitted":
         return None
     return round(sum(float(r["points"]) for r in final_results(attempt, reviews)), 4)
+
+
+@dataclass(frozen=True)
+class MarkedAttempt:
+    """One of a student's attempts as their lists show it: the mark is the final one (after any override)."""
+
+    id: int
+    status: str
+    started_at: datetime
+    score: float | None
+    max_score: float | None
+
+
+def my_marked_attempts(session: Session, user_id: int, exam_id: int) -> list[MarkedAttempt]:
+    """A student's attempts at an exam, newest first, each with its final mark (None while in progress)."""
+    return [MarkedAttempt(a.id, a.status, a.started_at, final_score(a, reviews_of(session, a.id)), a.max_score)
+            for a in my_attempts(session, user_id, exam_id)]
 
 
 def item_labels(questions: list[Question]) -> dict[str, str]:
@@ -86,6 +103,16 @@ def attempt_view(session: Session, actor: User, attempt_id: int, now: datetime) 
     }
 
 
+def task_goal(task: dict[str, Any], robot_name: str | None) -> str:
+    """The task's goal in one sentence, stated once by the page; the tutor's instructions add to it."""
+    robot = robot_name or "the robot"
+    if task.get("kind") == "reach_point":
+        return f"Bring {robot} to ({task.get('x_m')}, {task.get('y_m')}) m, then submit."
+    if task.get("kind") == "wall_following":
+        return f"Follow the wall at {task.get('distance_m')} m, then submit."
+    return ""
+
+
 def exam_dict(exam: Exam, now: datetime) -> dict[str, Any]:
     """An exam as lists show it (no keys)."""
     from middleware.assessment.attempts import window_state
@@ -94,6 +121,7 @@ def exam_dict(exam: Exam, now: datetime) -> dict[str, Any]:
     if exam.task:
         task = {k: v for k, v in exam.task.items() if k in ("kind", "instructions", "points", "x_m", "y_m",
                                                              "distance_m", "rubric")}
+        task["goal"] = task_goal(exam.task, exam.robot_name)
     return {"id": exam.id, "course_id": exam.course_id, "title": exam.title, "kind": exam.kind,
             "opens_at": as_utc(exam.opens_at).isoformat() if exam.opens_at else None,
             "closes_at": as_utc(exam.closes_at).isoformat() if exam.closes_at else None,

@@ -31,8 +31,8 @@ def test_seeding_twice_gives_one_course_with_its_people_and_tests(app, demo_acco
     added = seed_demo_course(app)
     assert any(DEMO_COURSE_TITLE in item for item in added) and "the demo student enrolled" in added
     first = _counts(app)
-    assert first == {"courses": 1, "members": [("student", 1), ("tutor", 1)], "questions": len(DEMO_QUESTIONS),
-                     "exams": ["experimental", "quiz", "theory"]}
+    assert first == {"courses": 1, "members": [("student", 4), ("tutor", 1)], "questions": len(DEMO_QUESTIONS),
+                     "exams": ["experimental", "quiz", "theory"]}  # the demo student and 3 survey classmates
     assert seed_demo_course(app) == []
     assert _counts(app) == first
 
@@ -94,4 +94,39 @@ def test_seeding_leaves_what_the_tutor_changed_since(app, demo_accounts) -> None
         unenrol(session, find_user(session, "tutor"), course_id, find_user(session, "student").id)
         session.commit()
     assert seed_demo_course(app) == []
-    assert _counts(app)["members"] == [("tutor", 1)]
+    assert _counts(app)["members"] == [("student", 3), ("tutor", 1)]
+
+
+def test_the_demo_tutor_sees_the_survey_charts_and_the_demo_student_may_still_answer(app, demo_accounts) -> None:
+    from middleware.assessment import survey
+    from middleware.auth.services import find_user
+    from middleware.db import session_factory
+    from middleware.demo_course import DEMO_SURVEY_ANSWERS
+    from middleware.demo_course import seed_demo_course as seed
+    from middleware.lab_runner import seed_demo_course
+
+    seed_demo_course(app)
+    with session_factory(app)() as session:
+        course_id = seed(session).course_id
+        results = survey.results(session, find_user(session, "tutor"), course_id)
+        assert results.respondents == survey.MIN_RESPONDENTS and not results.hidden
+        assert [item.total for item in results.items] == [len(DEMO_SURVEY_ANSWERS)] * len(results.items)
+        assert not survey.has_answered(session, find_user(session, "student").id, course_id)
+        assert not any(find_user(session, name).is_active for name in DEMO_SURVEY_ANSWERS)  # nobody logs in as them
+
+
+def test_a_demo_course_seeded_before_the_classmates_gets_them_once(app, demo_accounts, monkeypatch) -> None:
+    import middleware.demo_course as demo
+    from middleware.assessment import survey
+    from middleware.auth.services import find_user
+    from middleware.db import session_factory
+    from middleware.lab_runner import seed_demo_course
+
+    with monkeypatch.context() as older:  # what an older `telelab up` seeded: the course, no classmates
+        older.setattr(demo, "_survey_classmates", lambda *_args: [])
+        assert seed_demo_course(app)
+    assert seed_demo_course(app) == [f"the lab survey answered by {len(demo.DEMO_SURVEY_ANSWERS)} demo classmates"]
+    assert seed_demo_course(app) == []
+    with session_factory(app)() as session:
+        course_id = demo.seed_demo_course(session).course_id
+        assert survey.results(session, find_user(session, "tutor"), course_id).respondents == 3
