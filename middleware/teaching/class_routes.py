@@ -46,7 +46,7 @@ def _actor() -> User:
 
 def _session_dict(course_id: int) -> dict[str, object]:
     opened, seats = class_sessions.seats(get_session(), _actor(), course_id)
-    counts = {state: sum(1 for seat in seats if seat.state == state) for state in ("starting", "ready", "failed")}
+    counts = {state: sum(1 for seat in seats if seat.state == state) for state in ("starting", "ready", "failed", "stopped")}
     return {"course_id": course_id, "open": opened is not None, "scene": opened.scene if opened else None,
             "booking_id": opened.booking_id if opened else None,
             "started_at": opened.started_at.isoformat() if opened else None,
@@ -102,9 +102,10 @@ def _my_seat_dict() -> dict[str, object]:
         return {"open": False}
     course, seat = found
     name = practice_name(current_user.username, seat.user_id)
+    state = class_sessions.my_seat_state(get_session(), _actor(), seat)
     return {"open": True, "course": {"id": course.id, "code": course.code, "title": course.title},
-            "state": seat.state, "message": seat.message, "robot": name,
-            "console_url": url_for("lab.console", robot_name=name) if seat.state == "ready" else None}
+            "state": state, "message": seat.message if state == seat.state else "", "robot": name,
+            "console_url": url_for("lab.console", robot_name=name) if state == "ready" else None}
 
 
 @blueprint.get("/class")
@@ -119,3 +120,13 @@ def student_page() -> ResponseReturnValue:
 def my_seat() -> ResponseReturnValue:
     """The open class session the user has a seat in, and their robot's state."""
     return jsonify(_my_seat_dict())
+
+
+@blueprint.post("/api/class-session/robot")
+@login_required
+def restart_my_robot() -> ResponseReturnValue:
+    """Starts the user's class robot again after they stopped it (or it was lost), in the background."""
+    class_session_id = class_sessions.restart_my_robot(get_session(), _actor())
+    sessions, manager, user_id = session_factory(current_app), practice_manager(), _actor().id
+    after_commit(lambda: class_sessions.prestart_robots(sessions, manager, class_session_id, only_user_id=user_id))
+    return jsonify(_my_seat_dict()), 202

@@ -106,11 +106,16 @@ def start_session(session: Session, actor: User, course_id: int, manager: Practi
     return opened
 
 
-def prestart_robots(sessions: Callable[[], Session], manager: PracticeManager, class_session_id: int) -> None:
-    """Starts every seat's robot in the background, a few at a time, recording each outcome on its seat."""
+def prestart_robots(sessions: Callable[[], Session], manager: PracticeManager, class_session_id: int,
+                    only_user_id: int | None = None) -> None:
+    """Starts every seat's robot (or only_user_id's) in the background, a few at a time, recording each outcome on
+    its seat."""
     with sessions() as session:
-        seats = session.execute(select(ClassSeat.user_id, User.username).join(User, User.id == ClassSeat.user_id)
-                                .where(ClassSeat.session_id == class_session_id)).all()
+        query = (select(ClassSeat.user_id, User.username).join(User, User.id == ClassSeat.user_id)
+                 .where(ClassSeat.session_id == class_session_id))
+        if only_user_id is not None:
+            query = query.where(ClassSeat.user_id == only_user_id)
+        seats = session.execute(query).all()
         scene = session.scalar(select(ClassSession.scene).where(ClassSession.id == class_session_id)) or "lab"
 
     def start_one(user_id: int, username: str) -> None:
@@ -132,6 +137,20 @@ def prestart_robots(sessions: Callable[[], Session], manager: PracticeManager, c
     threading.Thread(target=start_all, name=f"class-{class_session_id}-start", daemon=True).start()
 
 
+def restart_my_robot(session: Session, actor: User) -> int:
+    """Marks the actor's seat starting again when their class robot no longer runs (they stopped it, or it was
+    lost); the class session's id, whose robot the caller starts once this is committed. 409 while it runs."""
+    found = my_seat(session, actor)
+    if found is None:
+        raise Refused(409, "no_class_session", "No class session is open for your courses now.")
+    _course, seat = found
+    if live_state(seat.state, _robot_runs(session, seat.session_id, actor.id)) in ("starting", "ready"):
+        raise Refused(409, "robot_running", "Your robot is running or starting already.")
+    seat.state, seat.message, seat.updated_at = "starting", "", utc_now()
+    session.flush()
+    return seat.session_id
+
+
 def end_session(session: Session, actor: User, course_id: int) -> list[int]:
     """Ends the course's open session and marks its seats stopped; the owners whose robots the caller stops once
     this is committed."""
@@ -147,16 +166,39 @@ def end_session(session: Session, actor: User, course_id: int) -> list[int]:
     return list(owners)
 
 
+STOPPED_WHILE_OPEN = "The robot was stopped; the student can start it again from their class page."
+
+
+def live_state(stored: str, running: bool) -> str:
+    """A seat's state as it is now: a seat whose robot started but runs no more (its student stopped it, or the
+    farm lost it) is stopped, whatever its start recorded."""
+    return "stopped" if stored == "ready" and not running else stored
+
+
+def _running_owners(session: Session, class_session_id: int) -> set[int]:
+    return set(session.scalars(select(PersonalRobotRecord.owner_id).where(
+        PersonalRobotRecord.class_session_id == class_session_id, PersonalRobotRecord.address != "")))
+
+
+def _robot_runs(session: Session, class_session_id: int, user_id: int) -> bool:
+    return user_id in _running_owners(session, class_session_id)
+
+
 def seats(session: Session, actor: User, course_id: int) -> tuple[ClassSession | None, list[SeatView]]:
-    """The course's open session and its seats, for its tutors and admins."""
+    """The course's open session and its seats as they are now, for its tutors and admins."""
     course = managed_course(session, actor, course_id)
     opened = open_session(session, course.id)
     if opened is None:
         return None, []
     rows = session.execute(select(ClassSeat, User.username).join(User, User.id == ClassSeat.user_id)
                            .where(ClassSeat.session_id == opened.id).order_by(User.username)).all()
-    return opened, [SeatView(seat.user_id, username, seat.state, seat.message, practice_name(username, seat.user_id))
-                    for seat, username in rows]
+    running = _running_owners(session, opened.id)
+    views = []
+    for seat, username in rows:
+        state = live_state(seat.state, seat.user_id in running)
+        message = STOPPED_WHILE_OPEN if state != seat.state else seat.message
+        views.append(SeatView(seat.user_id, username, state, message, practice_name(username, seat.user_id)))
+    return opened, views
 
 
 def my_seat(session: Session, actor: User) -> tuple[Course, ClassSeat] | None:
@@ -168,6 +210,11 @@ def my_seat(session: Session, actor: User) -> tuple[Course, ClassSeat] | None:
         return None
     seat, course_id = row
     return get_course(session, course_id), seat
+
+
+def my_seat_state(session: Session, actor: User, seat: ClassSeat) -> str:
+    """The actor's seat's state as it is now (see live_state)."""
+    return live_state(seat.state, _robot_runs(session, seat.session_id, actor.id))
 
 
 def _students(session: Session, course: Course) -> list[User]:

@@ -4,25 +4,39 @@ import { fetchJson } from "../../lib/transport.js";
 const root = document.getElementById("my-class");
 const statusLine = root.querySelector("[data-field=status]");
 const consoleLink = root.querySelector("[data-action=console]");
+const restartButton = root.querySelector("[data-action=restart]");
+let timer = null;
 
 function render(seat) {
   root.dataset.state = seat.open ? seat.state : "none";
+  clearTimeout(timer);
   consoleLink.hidden = !seat.console_url;
+  restartButton.hidden = !(seat.open && (seat.state === "stopped" || seat.state === "failed"));
   if (seat.console_url) consoleLink.href = seat.console_url;
   if (!seat.open) {
     statusLine.textContent = "No class session is open for your courses now. Your tutor starts one in class.";
-    return setTimeout(refresh, 10000);
+    timer = setTimeout(refresh, 10000);
+    return;
   }
   const course = `${seat.course.code} · ${seat.course.title}`;
   const words = {
     starting: `Class session of ${course}: your robot ${seat.robot} is starting…`,
     ready: `Class session of ${course}: your robot ${seat.robot} is ready.`,
     failed: `Class session of ${course}: your robot did not start. ${seat.message} Tell your tutor.`,
-    stopped: `The class session of ${course} has ended.`,
+    stopped: `Class session of ${course}: your robot ${seat.robot} is stopped. Start it again to go on.`,
   };
   statusLine.textContent = words[seat.state];
-  return setTimeout(refresh, seat.state === "starting" ? 1000 : 5000);
+  timer = setTimeout(refresh, seat.state === "starting" ? 1000 : 5000);
 }
+
+restartButton.addEventListener("click", async () => {
+  restartButton.disabled = true;
+  try { render(await fetchJson("/api/class-session/robot", { method: "POST" })); } catch (error) {
+    statusLine.textContent = error.message;
+  } finally {
+    restartButton.disabled = false;
+  }
+});
 
 async function refresh() {
   try { render(await fetchJson("/api/class-session")); } catch (error) { statusLine.textContent = error.message; }

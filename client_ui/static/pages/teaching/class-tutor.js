@@ -34,10 +34,11 @@ function render(state) {
   endButton.hidden = !state.open;
   table.hidden = !state.open;
   rows.replaceChildren(...state.seats.map(seatRow));
-  const { starting, ready, failed } = state.counts;
+  const { starting, ready, failed, stopped } = state.counts;
   summary.textContent = state.open
     ? `Class session open (${state.scene}): ${ready} of ${state.seats.length} robots ready`
-      + (starting ? `, ${starting} starting` : "") + (failed ? `, ${failed} did not start` : "") + "."
+      + (starting ? `, ${starting} starting` : "") + (failed ? `, ${failed} did not start` : "")
+      + (stopped ? `, ${stopped} stopped` : "") + "."
     : "No class session is open for this course.";
   clearTimeout(timer);
   if (state.open) timer = setTimeout(refresh, starting ? 1000 : 5000);
