@@ -1,4 +1,7 @@
-"""Serving the app: a threaded WSGI server (one thread per connection, so WebSockets do not starve)."""
+"""Serving the app: Werkzeug's threaded server (`telelab web`) or gunicorn's threaded workers (`telelab up`).
+
+A request thread serves an HTTP request, or a WebSocket only while its channel's checks run: then the socket is
+handed to the process's channel loop (live/loop.py), so an open socket holds no thread."""
 
 from __future__ import annotations
 
