@@ -102,7 +102,7 @@ def cmd_users_list(_args: argparse.Namespace) -> int:
 
 
 def cmd_web(args: argparse.Namespace) -> int:
-    """Serves the middleware (threaded; one thread per connection, WebSockets included)."""
+    """Serves the middleware on Werkzeug's threaded server (an open WebSocket holds no thread: live/loop.py)."""
     from middleware.serve import serve_forever
 
     serve_forever(_app(), args.host, args.port)
