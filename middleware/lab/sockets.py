@@ -93,12 +93,13 @@ def camera_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
 
 
 def telemetry_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
-    """Odometry, sonar and laser readings."""
+    """Odometry, sonar and laser readings, and where the robot truly stands for the camera drawn in the browser;
+    never that to a user in a graded run on the robot (their drawn camera gives way to the server's)."""
     link = open_robot_channel(ws, robot_name)
     if link is None:
         return None
     delay = viewer_delay(robot_name)
-    return lambda live: relay_stream(live, link.telemetry, delay=delay)
+    return truth_hidden_in_graded_runs(robot_name, link.telemetry, True, delay)
 
 
 def measured_round_trip_ms(link: RobotLink) -> float | None:
@@ -235,8 +236,15 @@ def localization_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     link = open_robot_channel(ws, robot_name)
     if link is None:
         return None
+    return truth_hidden_in_graded_runs(robot_name, link.localization, sees_ground_truth())
+
+
+def truth_hidden_in_graded_runs(robot_name: str, hub: FanoutHub, shown: bool,
+                                delay: ViewerDelay | None = None) -> Continuation:
+    """Relays hub's messages packed (with the truth, without it): the first while shown and the user is in no
+    graded run on the robot, the second from the moment one begins (checked every GRADED_RUN_RECHECK_S)."""
     user_id = int(current_user.get_id())
-    truth = [sees_ground_truth() and not in_graded_run(robot_name, user_id)]
+    truth = [shown and not in_graded_run(robot_name, user_id)]
     work = blocking_work()
 
     async def relay(live: LiveSocket) -> None:
@@ -247,7 +255,7 @@ def localization_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
 
         watcher = asyncio.ensure_future(hide_truth_when_a_graded_run_begins())
         try:
-            await relay_stream(live, link.localization, choose=lambda versions: versions[0 if truth[0] else 1])
+            await relay_stream(live, hub, choose=lambda versions: versions[0 if truth[0] else 1], delay=delay)
         finally:
             watcher.cancel()
 

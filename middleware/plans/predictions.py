@@ -2,8 +2,8 @@
 lab robot, its odometry trace streamed to the page as it grows, then the outcome.
 
 The copy is a robot of the farm started for this request alone (RobotSpec fast: its world steps as fast as the host
-allows, not in real time), in the scene the lab robot runs, placed where the lab robot's odometry says it stands now
-(PlaceRobot) or at its dock, exactly as the practice robot was placed (runs.start_practice_robot). Its plan goes
+allows, not in real time), in the scene the lab robot runs, placed where the lab robot truly stands now (PlaceRobot)
+or at its dock, exactly as the practice robot was placed (runs.start_practice_robot). Its plan goes
 through access/commands.py under the token the copy was started with. The copy never outlives the request: it is
 stopped in the stream's `finally` (a page that goes away closes the stream at the next message), the stream itself
 ends after PREDICTION_WALL_S, and a farm robot ends with the process that started it.

@@ -4,15 +4,19 @@ the skills of the robot it runs on; the page follows the goal's channel for the 
 telemetry for the trace.
 
 The practice robot runs in the scene of the lab robot named beside it (restarted in that scene when it runs
-another) and starts where that lab robot stands now: at its odometry pose, read server-side from a short pose-only
-telemetry stream (the frame the student's lab run will be measured in), through PlaceRobot. Asked "from the dock",
-it is carried to its dock instead, the scene's spawn pose, where a lab robot starts its day. When the lab robot
-does not answer, or its pose is no place to stand (odometry drifted into a wall), the practice robot starts at its
-dock and the answer's start says why. Without a lab robot beside it, it starts where it stands.
+another) and starts where that lab robot truly stands now (read server-side from one telemetry message, never sent
+to the page), through PlaceRobot: where its camera shows it, among the obstacles it really has around it, not at
+its odometry pose, which after minutes of driving may be a metre off and inside a crate. When the lab robot's
+odometry is more than DRIFT_NOTED_M off, the start's sentence says so and names the ways back (localize it, or
+return it to its dock), since a run on it then goes that far astray. Asked "from the dock", it is carried to its
+dock instead, the scene's spawn pose, where a lab robot starts its day. When the lab robot does not answer, the
+practice robot starts at its dock and the answer's start says why. Without a lab robot beside it, it starts where
+it stands.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from middleware.access.commands import Commander, refusal_error, robot_commands
@@ -61,20 +65,37 @@ def check_settings_permitted(plan: Plan, may_set_watchdog: bool) -> None:
 
 @dataclass(frozen=True)
 class LabRobotNow:
-    """The lab robot beside the practice robot: its name, scene and odometry pose (None when it did not answer)."""
+    """The lab robot beside the practice robot: its name, scene, where it truly stands (None when it did not
+    answer) and how far its odometry is off that."""
 
     name: str
     scene: str | None
     pose: robot_pb2.Pose2D | None
+    odometry_off_m: float = 0.0
 
 
 def lab_robot_now(robot_name: str, user_id: int) -> LabRobotNow:
-    """The scene a lab robot runs and where it stands, if it answers."""
+    """The scene a lab robot runs and where it truly stands, if it answers: a copy started there sees what its
+    camera sees, where its drifted odometry may stand in a crate."""
     link = robot_commands().require(robot_name, user_id, field="beside")
     try:
-        return LabRobotNow(robot_name, link.info(max_age_s=5.0).scene_name or None, link.odometry_pose())
+        odometry, standing = link.poses_now()
+        off_m = math.hypot(odometry.x_m - standing.x_m, odometry.y_m - standing.y_m)
+        return LabRobotNow(robot_name, link.info(max_age_s=5.0).scene_name or None, standing, off_m)
     except RobotUnavailable:
         return LabRobotNow(robot_name, None, None)
+
+
+DRIFT_NOTED_M = 0.2  # odometry further off than this is worth a sentence: the run on the lab robot will differ
+
+
+def drift_note(beside: LabRobotNow) -> str:
+    """Why a run on the drifted lab robot will not go where this one goes, and the ways back; "" when it will."""
+    if beside.odometry_off_m < DRIFT_NOTED_M:
+        return ""
+    return (f" {beside.name}'s odometry is {beside.odometry_off_m:.1f} m off where it stands, so a run on it goes "
+            "that far astray: localize it (Localization on the console's Navigate tab) or return it to its dock "
+            "first.")
 
 
 def start_practice_robot(robot: Commander, from_dock: bool, beside: LabRobotNow | None) -> dict[str, object]:
@@ -93,7 +114,7 @@ def start_practice_robot(robot: Commander, from_dock: bool, beside: LabRobotNow 
             robot.place_robot(pose)
             x_m, y_m = round(pose.x_m, 2) + 0.0, round(pose.y_m, 2) + 0.0  # + 0.0: no "-0.00"
             return {"at": "lab_robot", "message": f"Starts where {beside.name} stands now "
-                                                  f"(x {x_m:.2f} m, y {y_m:.2f} m)."}
+                                                  f"(x {x_m:.2f} m, y {y_m:.2f} m).{drift_note(beside)}"}
         except CommandRefused as refused:
             if refused.code != "invalid_field":
                 raise

@@ -159,10 +159,20 @@ class RobotLink:
         """Where the robot's odometry says it stands now (what a run on it is measured in): the first message of a
         pose-only telemetry stream of its own, which is fresh whether or not anyone watches the robot.
         RobotUnavailable when it does not answer within the call deadline."""
-        stream = self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(pose_only=True),
+        return self._first_telemetry(pose_only=True).odometry.pose
+
+    def poses_now(self) -> tuple[robot_pb2.Pose2D, robot_pb2.Pose2D]:
+        """(odometry, where the robot truly stands) now, from the first message of a telemetry stream of its own
+        (the truth is for the middleware's own choices, such as where a copy of the robot starts; never forwarded
+        to a student). RobotUnavailable when it does not answer within the call deadline."""
+        telemetry = self._first_telemetry(pose_only=False)
+        return telemetry.odometry.pose, telemetry.ground_truth
+
+    def _first_telemetry(self, pose_only: bool) -> robot_pb2.Telemetry:
+        stream = self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(pose_only=pose_only),
                                             timeout=self.rpc_timeout_s)
         try:
-            return next(iter(stream)).odometry.pose
+            return next(iter(stream))
         except grpc.RpcError as error:
             raise _translate(error) from None
         except StopIteration:

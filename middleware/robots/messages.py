@@ -54,32 +54,34 @@ def limits_dict(limits: robot_pb2.Limits) -> dict[str, float]:
             "max_watchdog_s": limits.max_watchdog_s}
 
 
-def pack_telemetry(telemetry: robot_pb2.Telemetry) -> str:
-    """A telemetry text message; the ground truth stays in the middleware (it is for grading)."""
+def pack_telemetry(telemetry: robot_pb2.Telemetry) -> tuple[str, str]:
+    """The telemetry message twice, packed once each: with `camera_pose` (where the robot truly stands, which a
+    camera drawn in the browser needs: a camera shows the world as it is) and with `camera_pose` null (for a
+    viewer in a graded run, whose drawn camera gives way to the server's). Nothing else of the truth leaves."""
     odometry = telemetry.odometry
-    return json.dumps(
-        {
-            "type": "telemetry",
-            "tick": telemetry.tick,
-            "sim_time_s": telemetry.sim_time_s,
-            "capture_unix_s": telemetry.capture_unix_s,
-            "last_applied_sequence": telemetry.last_applied_sequence,
-            "deadman_stopped": telemetry.deadman_stopped,
-            "battery": battery_dict(telemetry.battery),
-            "odometry": {
-                "pose": pose_dict(odometry.pose),
-                "linear_mps": odometry.linear_mps,
-                "angular_radps": odometry.angular_radps,
-            },
-            "sonar": {"ranges_m": [round(r, 4) for r in telemetry.sonar.ranges_m]},
-            "laser": {
-                "angle_min_rad": telemetry.laser.angle_min_rad,
-                "angle_increment_rad": telemetry.laser.angle_increment_rad,
-                "ranges_m": [round(r, 4) for r in telemetry.laser.ranges_m],
-            },
+    message = {
+        "type": "telemetry",
+        "tick": telemetry.tick,
+        "sim_time_s": telemetry.sim_time_s,
+        "capture_unix_s": telemetry.capture_unix_s,
+        "last_applied_sequence": telemetry.last_applied_sequence,
+        "deadman_stopped": telemetry.deadman_stopped,
+        "battery": battery_dict(telemetry.battery),
+        "odometry": {
+            "pose": pose_dict(odometry.pose),
+            "linear_mps": odometry.linear_mps,
+            "angular_radps": odometry.angular_radps,
         },
-        separators=(",", ":"),
-    )
+        "sonar": {"ranges_m": [round(r, 4) for r in telemetry.sonar.ranges_m]},
+        "laser": {
+            "angle_min_rad": telemetry.laser.angle_min_rad,
+            "angle_increment_rad": telemetry.laser.angle_increment_rad,
+            "ranges_m": [round(r, 4) for r in telemetry.laser.ranges_m],
+        },
+    }
+    compact = (",", ":")
+    return (json.dumps({**message, "camera_pose": pose_dict(telemetry.ground_truth)}, separators=compact),
+            json.dumps({**message, "camera_pose": None}, separators=compact))
 
 
 def robot_info_dict(info: robot_pb2.RobotInfo) -> dict[str, object]:

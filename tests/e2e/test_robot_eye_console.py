@@ -1,7 +1,8 @@
-"""The camera panel's picture drawn by the browser (three.js, from the robot's scene and its odometry pose) in
+"""The camera panel's picture drawn by the browser (three.js, from the robot's scene and where it stands) in
 Debian's Chromium against the real three tiers: the person switches to it, the video socket closes (the robot
 renders nothing for this viewer), the picture follows the robot, the motion preview and an added delay work on it
-as on the video, and the person switches back. While drawn, the panel's words call it a picture, not video; on a
+as on the video, it does not move with odometry's drift, a graded run turns it to the video, and the person
+switches back. While drawn, the panel's words call it a picture, not video; on a
 phone it draws at most 15 frames a second, and where WebGL is missing the page says so and shows the video."""
 
 from __future__ import annotations
@@ -52,8 +53,8 @@ FAST_POSES = """async ([selector, hz, seconds]) => {
   await new Promise((resolve) => {
     const timer = setInterval(() => {
       sent += 1;
-      panel.telemetry = { type: "telemetry", capture_unix_s: Date.now() / 1000,
-        odometry: { pose: { x_m: 0.01 * (sent % 50), y_m: 0, theta_rad: 0.03 * sent } } };
+      const pose = { x_m: 0.01 * (sent % 50), y_m: 0, theta_rad: 0.03 * sent };
+      panel.telemetry = { type: "telemetry", capture_unix_s: Date.now() / 1000, odometry: { pose }, camera_pose: pose };
       if (performance.now() - start >= seconds * 1000) {
         clearInterval(timer);
         resolve();
@@ -64,6 +65,28 @@ FAST_POSES = """async ([selector, hz, seconds]) => {
   panel.removeEventListener("camera-frame-shown", onFrame);
   renders.disconnect();
   return { sent, drawn, seconds: (performance.now() - start) / 1000 };
+}"""
+
+
+# Draws three frames with the camera panel's own DrawnView from the robot's scene: the same camera pose with the
+# odometry a metre apart, then the camera pose a metre on; [first two equal, third differs].
+DRIFTED_FRAMES = """async () => {
+  const { DrawnView } = await import("/static/panels/camera-panel/drawn-view.js");
+  const scene = await (await fetch("/api/robots/lab-1/scene")).json();
+  const { view } = await DrawnView.create(scene, 1);
+  const pixels = async (odometry, standing) => {
+    const frame = await view.frameFrom({ capture_unix_s: 0, odometry: { pose: odometry }, camera_pose: standing });
+    const canvas = new OffscreenCanvas(frame.bitmap.width, frame.bitmap.height);
+    const context = canvas.getContext("2d");
+    context.drawImage(frame.bitmap, 0, 0);
+    return Array.from(context.getImageData(0, 0, canvas.width, canvas.height).data).join();
+  };
+  const standing = { x_m: 0, y_m: 0, theta_rad: 0 };
+  const first = await pixels(standing, standing);
+  const drifted = await pixels({ x_m: 1, y_m: 0.5, theta_rad: 0.3 }, standing);
+  const moved = await pixels(standing, { x_m: 1, y_m: 0.5, theta_rad: 0.3 });
+  view.dispose();
+  return [first === drifted, first !== moved];
 }"""
 
 
@@ -93,7 +116,7 @@ def test_the_picture_drawn_here_follows_the_robot_and_the_video_socket_closes(pa
     camera_line = page.locator('[data-connection="camera"][data-phase="off"]')
     camera_line.wait_for()
     assert " ".join(camera_line.inner_text().split()) == (
-        "Camera: video off: picture drawn by this browser from the robot's odometry pose")
+        "Camera: video off: picture drawn by this browser from where the robot stands")
     danger = "rgb(177, 38, 27)"  # --danger in app.css: the colour of a socket that failed
     assert camera_line.locator(".connection__text").evaluate("e => getComputedStyle(e).color") != danger
     assert camera_line.locator(".connection__dot").evaluate("e => getComputedStyle(e).backgroundColor") != danger
@@ -119,6 +142,22 @@ def test_the_picture_drawn_here_follows_the_robot_and_the_video_socket_closes(pa
     wait_for(lambda: abs(number(page, "heading-rad") - heading) > 0.2, 5, "the robot did not turn")
     wait_for(lambda: canvas_pixels(page) != before, 5, "the drawn picture did not follow the turn")
     page.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-console-drawn-turned.png"))
+
+    # Drawn where the robot truly stands, whatever its odometry says (issue 34, item 11): a metre of drift in the
+    # odometry changes nothing in the picture; a metre in where it stands does.
+    same_with_drift, moved_changes = page.evaluate(DRIFTED_FRAMES)
+    assert same_with_drift, "the drawn picture moved with the odometry"
+    assert moved_changes, "the drawn picture did not move with the robot"
+
+    # A graded run withholds where the robot stands: the panel turns to the server's camera and says why.
+    page.evaluate("""() => { document.querySelector("camera-panel").telemetry = { type: "telemetry",
+      capture_unix_s: Date.now() / 1000, odometry: { pose: { x_m: 0, y_m: 0, theta_rad: 0 } }, camera_pose: null }; }""")
+    page.locator('camera-panel[data-source="video"]').wait_for(state="attached")
+    page.get_by_text("During your graded run the picture is the robot's own camera video").wait_for()
+    page.locator('[data-connection="camera"][data-phase="open"]').wait_for()
+    page.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-console-graded-run-video.png"))
+    page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached")
+    choose_source(page, "drawn")
 
     choose_source(page, "video")
     page.locator('[data-connection="camera"][data-phase="open"]').wait_for()

@@ -1,6 +1,7 @@
 """During an experimental attempt the robot's-eye view drawn by the browser reads nothing a student could take the
 robot's true pose from (issue 17, item 4): its inputs are the scene route (the static world), and the telemetry
-channel, on its own socket or on the page's link (/ws/link), whose only pose is odometry's. Checked on the real
+channel, on its own socket or on the page's link (/ws/link), whose only pose is odometry's once the attempt began
+(outside graded runs it also carries `camera_pose`, where the robot stands, for the drawn camera). Checked on the real
 skill server while the student drives through the attempt, with the teaching mode set to show students the ground
 truth elsewhere (the localization panel), so no role rule hides a leak here.
 
@@ -78,11 +79,13 @@ def test_the_drawn_views_inputs_carry_only_odometry_during_an_attempt(app, clien
         assert status == 200
         drive = student.websocket("/ws/robots/lab-1/drive")
         assert receive_json(drive)["type"] == "ready"
+
+        telemetry = student.websocket("/ws/robots/lab-1/telemetry")
+        before = [json.loads(text) for text in texts_for(telemetry, 0.5)]
         status, answer = api(student, "POST", f"/api/exams/{exam_id}/attempts")
         assert status == 201, answer
         attempt_id = answer["attempt"]["id"]
-
-        telemetry = student.websocket("/ws/robots/lab-1/telemetry")
+        texts_for(telemetry, 1.5)  # the socket open before the attempt hears of it within GRADED_RUN_RECHECK_S
         link = student.websocket("/ws/link")
         link.send(json.dumps({"type": "subscribe", "sub": 1, "path": "/ws/robots/lab-1/telemetry"}))
         driver = threading.Thread(target=drive_for, args=(drive, 2.0, 0.2, 0.4, 1))
@@ -106,7 +109,12 @@ def test_the_drawn_views_inputs_carry_only_odometry_during_an_attempt(app, clien
     assert status == 200 and scene_during == scene_before
     assert set(pose_paths(scene_during)) == {"spawn"} and not truth_keys(scene_during)
 
+    # Before the attempt the drawn camera is told where the robot stands (a camera shows the world as it is); once
+    # it begins, on both sockets, it is not: the panel shows the server's camera instead (issue 34, item 11).
+    shown = [message for message in before if message.get("type") == "telemetry"]
+    assert shown and all(message["camera_pose"].keys() >= POSE_KEYS for message in shown)
     for name, messages in (("telemetry socket", direct), ("link", linked)):
+        assert all(message.get("camera_pose") is None for message in messages), f"the {name} sent the camera pose"
         poses = [message for message in messages if message.get("type") == "telemetry"]
         assert len(poses) >= 10, f"the {name} brought {len(poses)} telemetry messages in 2 s"
         for message in messages:

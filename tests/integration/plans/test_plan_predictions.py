@@ -13,6 +13,7 @@ from urllib.request import Request
 import pytest
 
 from middleware.plans.predictions import PREDICTION_PREFIX
+from middleware.robots.registry import robot_registry
 from tests.conftest import LabClient, LiveServer
 from tests.integration.lab.test_skills_api import take_control
 from tests.integration.plans.conftest import PlansLab, api
@@ -81,13 +82,16 @@ def test_a_prediction_starts_where_the_lab_robot_stands_now(plans_lab: PlansLab)
     assert status == 202, moved
     assert wait_for_end(ann, moved)["status"] == "succeeded"
     queue.close()
-    lab = latest_pose(ann, "lab-1")
+    odometry, standing = robot_registry(plans_lab.server.app).get("lab-1").poses_now()
     messages = predict(ann, _create(ann, "still", "wait 1s\n"), {"beside": "lab-1", "from_dock": False})
     end = messages[-1]
     assert end["type"] == "end" and end["start"]["at"] == "lab_robot", end
     first = end["trace"][0]
-    apart_m = math.hypot(first["x_m"] - lab["x_m"], first["y_m"] - lab["y_m"])
-    assert apart_m <= 0.02, f"the copy started {apart_m * 100:.1f} cm from lab-1"
+    # Where lab-1 truly stands (its camera shows it there), not its odometry pose (issue 34, item 11).
+    apart_m = math.hypot(first["x_m"] - standing.x_m, first["y_m"] - standing.y_m)
+    drift_m = math.hypot(odometry.x_m - standing.x_m, odometry.y_m - standing.y_m)
+    print(f"lab-1's odometry is {drift_m * 100:.1f} cm off; the copy started {apart_m * 100:.1f} cm from it")
+    assert apart_m <= 0.02, f"the copy started {apart_m * 100:.1f} cm from where lab-1 stands"
 
 
 def test_a_prediction_stops_when_its_page_goes_away(plans_lab: PlansLab) -> None:

@@ -18,7 +18,7 @@ const SCENE_RETRY_MS = 5000;
 const PING_EVERY_MS = 1000;
 const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
 const BOOKINGS_REFRESH_MS = 60 * 1000;
-const DRAWN_PICTURE_STATUS = "video off: picture drawn by this browser from the robot's odometry pose";
+const DRAWN_PICTURE_STATUS = "video off: picture drawn by this browser from where the robot stands";
 const WITHHELD_CAMERA_STATUS = { phase: "off", reason: "off during your obstacle-zone test (it would show the obstacles)" };
 function isStatusOrError(message) {
   return message?.type === "status" || message?.type === "error";

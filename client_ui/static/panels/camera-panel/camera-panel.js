@@ -5,7 +5,8 @@
 // `info` (RobotInfo: camera size and field of view), `driveReady` / `driveSent` (the drive socket's
 // "ready" and every message sent on it), `feedbackEnabled` (bool), `feedbackFill` ("edges" | "black": what
 // fills the view the frame does not cover), `telemetry` (its laser scan sets the depth the zoom assumes; while the
-// picture is drawn here, its odometry pose is where the view is drawn from), `scene` (the robot's scene
+// picture is drawn here, its `camera_pose`, where the robot truly stands, is where the view is drawn from; null in
+// a graded run, when the panel turns to the video), `scene` (the robot's scene
 // description: offers the picture drawn by this browser), `source` ("video" | "drawn").
 // Out: `camera-feedback-change` {enabled} when the person turns the motion preview on or off,
 // `camera-feedback-fill-change` {fill} when they choose the fill, `camera-source-change` {source} when they
@@ -25,6 +26,8 @@ import { registerPanel } from "../registry.js";
 
 const FPS_WINDOW_MS = 1000;
 const SOURCES = ["video", "drawn"];
+const TRUTH_WITHHELD = "During your graded run the picture is the robot's own camera video: a picture drawn here "
+  + "would need where the robot truly stands, which stays on the server until the run ends.";
 const WITHHELD_CODE = "obstacles_hidden"; // the camera's refusal during the viewer's obstacle-zone test
 // What the panel calls its picture, by source: a drawn picture is neither video nor live.
 const WORDS = {
@@ -57,6 +60,7 @@ export class CameraPanel extends PanelElement {
   #scene = null;
   #drawn = null;          // DrawnView, once made
   #drawnProblem = "";
+  #videoNote = "";        // why the video shows though the person chose the drawn picture (a graded run)
   #drawing = false;       // a drawn frame is being made
   #nextPose = null;       // the newest telemetry not drawn yet: it replaces any older one waiting
   #withheld = false;      // the server refused the video (an obstacle-zone test): its sentence stays
@@ -203,9 +207,16 @@ export class CameraPanel extends PanelElement {
   }
 
   /** A telemetry message: its laser scan tells how far away what the camera sees is; while the picture is drawn
-   *  here, its odometry pose is where the next frame is drawn from. */
+   *  here, its camera pose (where the robot truly stands) is where the next frame is drawn from. */
   set telemetry(message) {
     this.#feedback.setScan(message?.laser);
+    if (this.#source === "drawn" && message && "camera_pose" in message && !message.camera_pose) {
+      this.source = "video";
+      this.#videoNote = TRUTH_WITHHELD; // a graded run: the truth stays on the server, and so does the camera
+      this.#showMessage(TRUTH_WITHHELD, false);
+      this.emit("camera-source-change", { source: "video", fallback: true });
+      return;
+    }
     if (this.#source !== "drawn" || !this.#drawn) return;
     this.#nextPose = message;
     this.#drawSoon();
@@ -252,6 +263,7 @@ export class CameraPanel extends PanelElement {
     this.ensureBuilt();
     if (!SOURCES.includes(source)) return;
     this.#source = source;
+    this.#videoNote = "";
     this.#sourceSelect.value = source;
     this.dataset.source = source;
     this.#nextPose = null;
@@ -305,7 +317,7 @@ export class CameraPanel extends PanelElement {
     if (message?.type === "status" && !("robot_online" in message)) return;
     if (message?.type === "status") {
       const offline = message.robot_online === false;
-      this.#showMessage(message.message || (offline ? "The robot is offline." : ""), offline);
+      this.#showMessage(message.message || (offline ? "The robot is offline." : this.#videoNote), offline);
       this.#placeholder.textContent = offline ? "No video: the robot is offline." : WORDS.video.waiting;
       if (offline) {
         this.#placeholder.hidden = false;
@@ -335,7 +347,7 @@ export class CameraPanel extends PanelElement {
 
   #applyLabel() {
     this.#canvas?.setAttribute("aria-label", this.#source === "drawn"
-      ? `The view of ${this.#robotName || "the robot"}, drawn by this browser from its odometry pose`
+      ? `The view of ${this.#robotName || "the robot"}, drawn by this browser from where it stands`
       : `Live camera of ${this.#robotName || "the robot"}`);
   }
 

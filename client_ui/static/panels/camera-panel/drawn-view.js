@@ -1,7 +1,9 @@
 // The camera panel's second source: the robot's-eye view drawn by this browser from the robot's scene description
-// and each telemetry message's odometry pose (never the true pose), as frames with the same header a video frame
-// carries (pose at capture, last applied command, capture time), so the motion preview, the video-delay figure
-// and any added delay treat both sources alike. three.js is loaded only when this source is first chosen.
+// and each telemetry message's `camera_pose`, where the robot truly stands (a camera shows the world as it is, so
+// a drawn picture never drifts with odometry; the middleware withholds it in graded runs, and the panel then shows
+// the server's video), as frames with the same header a video frame carries (odometry pose at capture, last
+// applied command, capture time), so the motion preview, the video-delay figure and any added delay treat both
+// sources alike. three.js is loaded only when this source is first chosen.
 
 const MAX_SCALE = 2; // up to twice the camera's own resolution (640 x 480 for the Telebot) where the screen has it
 
@@ -35,11 +37,12 @@ export class DrawnView {
     }
   }
 
-  /** The frame for one telemetry message, {bitmap, header}, or null when it carries no pose. */
+  /** The frame for one telemetry message, {bitmap, header}, or null when it carries no camera pose. */
   async frameFrom(telemetry) {
-    const pose = telemetry?.odometry?.pose;
-    if (![pose?.x_m, pose?.y_m, pose?.theta_rad].every(Number.isFinite)) return null;
-    this.#renderer.render(pose);
+    const standing = telemetry?.camera_pose;
+    if (![standing?.x_m, standing?.y_m, standing?.theta_rad].every(Number.isFinite)) return null;
+    const pose = telemetry.odometry?.pose ?? null;
+    this.#renderer.render(standing);
     // Taken in the same task as the draw: the canvas still holds it.
     const bitmap = await createImageBitmap(this.#canvas);
     this.#sequence += 1;
