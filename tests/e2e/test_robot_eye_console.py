@@ -149,6 +149,17 @@ def test_the_picture_drawn_here_follows_the_robot_and_the_video_socket_closes(pa
     assert same_with_drift, "the drawn picture moved with the odometry"
     assert moved_changes, "the drawn picture did not move with the robot"
 
+    # The odometry panel says how far its numbers are off where the robot stands, and the ways back.
+    note = page.evaluate("""() => {
+      const panel = document.querySelector("odometry-panel");
+      panel.telemetry = { type: "telemetry", odometry: { pose: { x_m: 1.0, y_m: 0.45, theta_rad: 0 } },
+        camera_pose: { x_m: 0.1, y_m: 0.0, theta_rad: 0 } };
+      const line = panel.querySelector('[data-field="drift"]');
+      return line.hidden ? "" : line.textContent;
+    }""")
+    assert note.startswith("These numbers are 1.0 m off where the robot stands") and "Localize it" in note \
+        and "Return to the dock" in note, note
+
     # A graded run withholds where the robot stands: the panel turns to the server's camera and says why.
     page.evaluate("""() => { document.querySelector("camera-panel").telemetry = { type: "telemetry",
       capture_unix_s: Date.now() / 1000, odometry: { pose: { x_m: 0, y_m: 0, theta_rad: 0 } }, camera_pose: null }; }""")
