@@ -18,6 +18,7 @@ from middleware.db import get_session
 blueprint = Blueprint("auth", __name__)
 
 WRONG_CREDENTIALS = "Wrong username or password. Check both and try again."
+DISABLED_ACCOUNT = "This account is disabled. Ask your tutor or the lab's administrator to enable it again."
 SESSION_RENEW_S = 300
 
 
@@ -71,7 +72,8 @@ def login_submit() -> ResponseReturnValue:
                 {"Retry-After": str(outcome.blocked_seconds)})
     user = outcome.user
     if user is None:
-        return render_template("auth/login.html", error=WRONG_CREDENTIALS, username=username, next_url=next_url), 401
+        error = DISABLED_ACCOUNT if outcome.disabled else WRONG_CREDENTIALS
+        return render_template("auth/login.html", error=error, username=username, next_url=next_url), 401
     sessions.begin(user)
     return redirect(next_url or url_for("lab.index"))
 

@@ -68,13 +68,19 @@ def find_user(session: Session, username: str) -> User | None:
     return session.scalar(select(User).where(User.username == name))
 
 
-def authenticate(session: Session, username: str, password: str) -> User | None:
-    """The active account whose password matches, or None; costs one hash either way."""
+def matching_account(session: Session, username: str, password: str) -> User | None:
+    """The account whose password matches, active or disabled, or None; costs one hash either way."""
     user = find_user(session, username)
-    if user is None or not user.is_active:
+    if user is None:
         check_password_hash(_DUMMY_HASH, password)
         return None
     return user if check_password_hash(user.password_hash, password) else None
+
+
+def authenticate(session: Session, username: str, password: str) -> User | None:
+    """The active account whose password matches, or None; costs one hash either way."""
+    user = matching_account(session, username, password)
+    return user if user is not None and user.is_active else None
 
 
 @dataclass(frozen=True)
@@ -83,6 +89,7 @@ class LoginOutcome:
 
     user: User | None
     blocked_seconds: int | None = None
+    disabled: bool = False  # the password was right but the account is disabled (told only to who knows it)
 
 
 def log_in(session: Session, username: str, password: str, address: str, now: datetime) -> LoginOutcome:
@@ -91,12 +98,12 @@ def log_in(session: Session, username: str, password: str, address: str, now: da
     blocked = throttle.seconds_blocked(session, username, address, now)
     if blocked is not None:
         return LoginOutcome(None, blocked)
-    user = authenticate(session, username, password)
-    if user is None:
+    account = matching_account(session, username, password)
+    if account is None or not account.is_active:
         throttle.record_failure(session, username, address, now)
-    else:
-        throttle.record_success(session, username, address)
-    return LoginOutcome(user)
+        return LoginOutcome(None, disabled=account is not None)
+    throttle.record_success(session, username, address)
+    return LoginOutcome(account)
 
 
 def hash_password(password: str) -> str:
