@@ -61,8 +61,9 @@ MAX_MESSAGE_BYTES = 4096
 DEFAULT_MESSAGES_PER_S = 10
 # A link carries a page's channels: the drive channel's 50 a second and the others' few.
 LINK_MESSAGES_PER_S = 80
-# Open sockets per user in one process: a console tab holds about eight, so a few tabs fit; each socket costs
-# a thread, so a script opening thousands is refused (429) before the handshake.
+# Open sockets per user in one process: a console tab holds one link (`/ws/link`), so many tabs fit. An open socket
+# costs no thread (live/loop.py serves it) but its buffers, its pings and its login checks, and each handshake holds
+# a request thread while its checks run, so a script opening thousands is refused (429) before the handshake.
 MAX_SOCKETS_PER_USER = 40
 # How long a user closed for flooding a channel is refused on it: reconnecting buys no fresh allowance.
 FLOOD_COOL_DOWN_S = 10.0
@@ -81,7 +82,7 @@ class InboundQueue:
     included), and at most per_s wait. Past either, everything waiting is dropped and `overflow` says why: the
     socket is then closed, not left to queue work.
 
-    simple_websocket's reader thread appends; the channel's handler pops.
+    The socket's reader on the channel loop appends (live.wire.Inbox); the channel's handler pops.
     """
 
     def __init__(self, per_s: int) -> None:
