@@ -90,3 +90,27 @@ def test_the_settings_page_lists_every_setting_the_code_reads() -> None:
 
     assert read - documented == set(), "settings the code reads that docs/operator-guide/configuration.md omits"
     assert documented - read - settings_read_by(["tests"]) == set(), "settings documented that nothing reads"
+
+
+def where_to_change_rows() -> list[tuple[str, str]]:
+    """The rows of the top-level README's *Where to change what* table: (what to change, where)."""
+    section = (ROOT / "README.md").read_text().split("## Where to change what", 1)[1]
+    rows = [[cell.strip() for cell in line.strip().strip("|").split("|")] for line in section.splitlines()
+            if line.startswith("|") and not line.startswith("|---")]
+    return [(what, where) for what, where in rows[1:]]
+
+
+def test_the_readme_answers_where_the_up_arrow_and_a_new_sensor_panel_are_changed() -> None:
+    rows = dict(where_to_change_rows())
+
+    assert any("up arrow" in what for what in rows) and any("new sensor" in what for what in rows)
+
+
+@pytest.mark.parametrize("what, where", where_to_change_rows(), ids=lambda cell: cell[:40])
+def test_every_name_the_where_to_change_table_gives_is_in_a_file_it_names(what: str, where: str) -> None:
+    spans = re.findall(r"`([^`]+)`", where)
+    files = [ROOT / s for s in spans if "/" in s and (ROOT / s).is_file()]
+    names = [s for s in spans if re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", s) and not s.startswith("TELELAB_")]
+
+    missing = [name for name in names if not any(name in f.read_text() for f in files)]
+    assert not missing, f"'{what}': {missing} are in none of {[str(f.relative_to(ROOT)) for f in files]}"
