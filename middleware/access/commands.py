@@ -2,8 +2,8 @@
 tour step, practice robot, demo recorder).
 
 It owns the controller token (the known-token fast path, a database re-read when the robot refuses it,
-re-sending it to a robot that restarted and forgot it), sequence numbering, the deadman-friendly held
-drive, and the one map from a robot's refusal to the error a person or API client sees. Nothing else in
+re-sending it to a robot that restarted and forgot it), sequence numbering and the deadman-friendly held
+drive; a robot's refusal or absence is already a `Refused` (robots/refusals.py), so it passes. Nothing else in
 the middleware calls a RobotLink command method (drive, activate_skill, cancel_goal, clear_map,
 return_to_dock, place_robot, reset_evidence_grid, set_controller, set_limits, get_limits, run_plan):
 tests/test_architecture.py checks it.
@@ -26,8 +26,9 @@ from typing import Protocol, TypeVar
 
 from flask import Flask, current_app
 
-from middleware.errors import ApiError
-from middleware.robots.link import CommandRefused, DriveResult, RobotLink, RobotUnavailable
+from middleware.errors import ApiError, Refused
+from middleware.robots.link import DriveResult, RobotLink
+from middleware.robots.refusals import NOT_CONTROLLER_MESSAGE, STALE_TOKEN_CODES, CommandRefused, RobotUnavailable
 from middleware.robots.registry import RobotRegistry
 from protos.telelab.v1 import robot_pb2
 
@@ -37,23 +38,6 @@ _EXTENSION_KEY = "telelab.commands"
 
 MAX_DRIVE_HOLD_S = 10.0  # direct_control's own limit; a longer hold is renewed by its sender
 MIN_DRIVE_HOLD_S = 0.1
-STALE_TOKEN_CODES = frozenset({"not_controller", "unauthenticated"})
-STATUS_OF_REFUSAL = {"invalid_field": 400, "not_found": 404, "not_controller": 403, "unauthenticated": 403,
-                     "not_possible_now": 409}
-NOT_CONTROLLER_MESSAGE = "You are observing: someone else has control. Wait for your turn."
-
-
-def refusal_error(error: CommandRefused | RobotUnavailable, not_found_code: str = "unknown_skill") -> ApiError:
-    """The error a person or API client sees for a robot's refusal or absence (the one map)."""
-    if isinstance(error, RobotUnavailable):
-        return ApiError(503, "robot_offline", f"{error} Try again in a moment.")
-    if error.code == "not_possible_now":
-        return ApiError(409, "busy", error.message, error.field)
-    if error.code in STALE_TOKEN_CODES:
-        return ApiError(403, "not_controller", NOT_CONTROLLER_MESSAGE, error.field if isinstance(error, NotController)
-                        else None)
-    code = not_found_code if error.code == "not_found" else error.code
-    return ApiError(STATUS_OF_REFUSAL.get(error.code, 400), code, error.message, error.field)
 
 
 class NotController(CommandRefused):
@@ -61,6 +45,7 @@ class NotController(CommandRefused):
 
     def __init__(self, field: str | None = None) -> None:
         super().__init__("not_controller", NOT_CONTROLLER_MESSAGE, field)
+        self.field = field
 
 
 class TokenSource(Protocol):
@@ -145,14 +130,22 @@ def hand_over(link: RobotLink, token: str) -> bool:
     return True
 
 
+# (robot name, user id) -> why the user may only drive the robot by hand now (an open delay trial), or None.
+HandDrivingRule = Callable[[str, int], str | None]
+
+
 class Commander:
     """One user's commands to one robot, under the token its source gives, with the stale-token rule.
 
-    field names the robot in the request that asked (a refusal as an observer names it).
+    field names the robot in the request that asked (a refusal as an observer names it). hand_only, when given,
+    says why the user may only drive by hand now: a motor skill other than direct control, a plan, a placement
+    or a return to the dock is then refused, whatever sent it.
     """
 
-    def __init__(self, link: RobotLink, tokens: TokenSource, field: str | None = None) -> None:
+    def __init__(self, link: RobotLink, tokens: TokenSource, field: str | None = None,
+                 hand_only: Callable[[], str | None] | None = None) -> None:
         self.link, self._tokens, self._field = link, tokens, field
+        self._hand_only = hand_only
 
     @property
     def robot_name(self) -> str:
@@ -168,15 +161,23 @@ class Commander:
         return self._as_controller(lambda token: self.link.drive(token, sequence, linear_mps, angular_radps))
 
     def stop(self) -> DriveResult:
-        """A zero drive, which preempts any motor goal at once."""
-        return self.drive(self.link.next_sequence(), 0.0, 0.0)
+        """A zero drive, which preempts any motor goal at once; numbered again above the robot's when another
+        process sent this token a newer sequence (the robot ignored the first as older)."""
+        sequence = self.link.next_sequence()
+        result = self.drive(sequence, 0.0, 0.0)
+        if result.applied_sequence > sequence:
+            result = self.drive(self.link.next_sequence(), 0.0, 0.0)
+        return result
 
     def activate(self, skill: str, parameters: dict[str, object], preempt: bool) -> robot_pb2.GoalState:
         """Starts a skill as a goal."""
+        if skill != "direct_control" and any(s.name == skill and s.motor for s in self.link.skills()):
+            self._refuse_unless_by_hand_allowed()
         return self._as_controller(lambda token: self.link.activate_skill(token, skill, parameters, preempt))
 
     def run_plan(self, name: str, plan: robot_pb2.PlanBlock, preempt: bool) -> robot_pb2.GoalState:
         """Starts a checked plan as one motor goal "plan:<name>"."""
+        self._refuse_unless_by_hand_allowed()
         return self._as_controller(lambda token: self.link.run_plan(token, name, plan, preempt))
 
     def hold_drive(self, linear_mps: float, angular_radps: float, hold_s: float) -> robot_pb2.GoalState:
@@ -195,11 +196,13 @@ class Commander:
 
     def return_to_dock(self) -> robot_pb2.ReturnToDockResponse:
         """Carries the robot to its dock: every goal ends, odometry restarts at the dock."""
+        self._refuse_unless_by_hand_allowed()
         return self._as_controller(self.link.return_to_dock)
 
     def place_robot(self, pose: robot_pb2.Pose2D) -> robot_pb2.PlaceRobotResponse:
         """Places the robot at pose (refused naming the field unless it fits there): every goal ends, odometry
         restarts at the pose."""
+        self._refuse_unless_by_hand_allowed()
         return self._as_controller(lambda token: self.link.place_robot(token, pose))
 
     def reset_evidence(self) -> robot_pb2.EvidenceGrid:
@@ -219,6 +222,11 @@ class Commander:
         """A goal's state (reading needs no control)."""
         return self.link.get_goal(goal_id)
 
+    def _refuse_unless_by_hand_allowed(self) -> None:
+        reason = self._hand_only() if self._hand_only is not None else None
+        if reason:
+            raise Refused(409, "hand_driving_only", reason, self._field)
+
     def _as_controller(self, call: Callable[[str], T]) -> T:
         token = self._tokens.token(fresh=False)
         if token is None:
@@ -226,7 +234,7 @@ class Commander:
         try:
             return call(token)
         except CommandRefused as refused:
-            if refused.code not in STALE_TOKEN_CODES:
+            if refused.reason not in STALE_TOKEN_CODES:
                 raise
             fresh = self._tokens.token(fresh=True)
             if fresh is None:
@@ -239,8 +247,8 @@ class Commander:
 class RobotCommands:
     """Finds the robots a user may reach and gives their commands the right token source."""
 
-    def __init__(self, registry: RobotRegistry, coordinator: Seats) -> None:
-        self._registry, self._coordinator = registry, coordinator
+    def __init__(self, registry: RobotRegistry, coordinator: Seats, hand_rules: tuple[HandDrivingRule, ...] = ()) -> None:
+        self._registry, self._coordinator, self._hand_rules = registry, coordinator, hand_rules
 
     def reachable(self, robot_name: str, user_id: int | None) -> RobotLink | None:
         """The robot's link if user_id may see it: any lab robot, a personal robot for its owner only."""
@@ -260,10 +268,14 @@ class RobotCommands:
     def for_user(self, robot_name: str, user_id: int, field: str = "robot_name") -> Commander:
         """The user's commands to the robot (a 404 if they may not see it)."""
         link = self.require(robot_name, user_id, field)
+        hand_only = self._hand_only(robot_name, user_id)
         personal = self._registry.personal(robot_name)
         if personal is not None:
-            return Commander(link, OwnerToken(link, lambda: personal.token), field)
-        return Commander(link, SeatTokens(self._coordinator, robot_name, user_id), field)
+            return Commander(link, OwnerToken(link, lambda: personal.token), field, hand_only)
+        return Commander(link, SeatTokens(self._coordinator, robot_name, user_id), field, hand_only)
+
+    def _hand_only(self, robot_name: str, user_id: int) -> Callable[[], str | None]:
+        return lambda: next((reason for rule in self._hand_rules if (reason := rule(robot_name, user_id))), None)
 
 
     def for_supervision(self, robot_name: str, user_id: int, supervisor: bool,
@@ -273,7 +285,8 @@ class RobotCommands:
         commander = self.for_user(robot_name, user_id, field)
         if not supervisor or self._registry.personal(robot_name) is not None or commander.is_controller():
             return commander
-        return Commander(commander.link, SupervisorTokens(self._coordinator, robot_name), field)
+        return Commander(commander.link, SupervisorTokens(self._coordinator, robot_name), field,
+                         self._hand_only(robot_name, user_id))
 
 
 def owned_robot(link: RobotLink, token: str) -> Commander:
@@ -283,9 +296,11 @@ def owned_robot(link: RobotLink, token: str) -> Commander:
     return Commander(link, OwnerToken(link, lambda: token))
 
 
-def init_app(app: Flask, registry: RobotRegistry, coordinator: Seats) -> None:
-    """Creates app's command path over its registry and access coordinator."""
-    app.extensions[_EXTENSION_KEY] = RobotCommands(registry, coordinator)
+def init_app(app: Flask, registry: RobotRegistry, coordinator: Seats,
+             hand_rules: tuple[HandDrivingRule, ...] = ()) -> None:
+    """Creates app's command path over its registry and access coordinator, with the rules that may keep a user to
+    driving by hand."""
+    app.extensions[_EXTENSION_KEY] = RobotCommands(registry, coordinator, hand_rules)
 
 
 def robot_commands(app: Flask | None = None) -> RobotCommands:

@@ -6,10 +6,9 @@ from flask import Blueprint, jsonify, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
-from middleware.access.commands import refusal_error, robot_commands
+from middleware.access.commands import robot_commands
 from middleware.db import get_session
 from middleware.lab.limits import UNITS, changeable_fields, check_permitted, parse_limits_request
-from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.messages import limits_dict
 
 blueprint = Blueprint("limits", __name__)
@@ -24,10 +23,7 @@ def _user_id() -> int:
 def limits(robot_name: str) -> ResponseReturnValue:
     """The limits in force, their ranges, and which of them this user may change (anyone who may watch the robot)."""
     robot = robot_commands().for_user(robot_name, _user_id())
-    try:
-        answer = robot.limits()
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error) from None
+    answer = robot.limits()
     return jsonify({"limits": limits_dict(answer), "may_change": list(changeable_fields(get_session(), current_user))})
 
 
@@ -40,10 +36,7 @@ def set_limits(robot_name: str) -> ResponseReturnValue:
     values = parse_limits_request(request.get_json(silent=True))
     permitted = changeable_fields(get_session(), current_user)
     check_permitted(values, permitted)
-    try:
-        answer = robot.set_limits(values.get("max_linear_mps", 0.0), values.get("max_angular_radps", 0.0),
-                                  values.get("watchdog_s", 0.0))
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error) from None
+    answer = robot.set_limits(values.get("max_linear_mps", 0.0), values.get("max_angular_radps", 0.0),
+                              values.get("watchdog_s", 0.0))
     saved = ", ".join(f"{name} {value:g} {UNITS[name]}" for name, value in values.items())
     return jsonify({"limits": limits_dict(answer), "may_change": list(permitted), "message": f"Saved: {saved}."})

@@ -11,7 +11,6 @@ from flask_login import current_user, login_required
 from middleware.access.commands import robot_commands
 from middleware.assessment.hidden_obstacles import hiding_book, info_without_obstacles, scene_without_obstacles
 from middleware.db import get_session
-from middleware.errors import ApiError
 from middleware.lab.skills import SUPERVISOR_ROLES
 from middleware.robots.link import RobotUnavailable
 from middleware.robots.messages import robot_info_dict
@@ -93,10 +92,7 @@ def robot_scene(robot_name: str) -> ResponseReturnValue:
     """
     user_id = int(current_user.get_id())
     link = robot_commands().require(robot_name, user_id)
-    try:
-        scene = link.scene(max_age_s=SCENE_RECHECK_S)
-    except RobotUnavailable as error:
-        raise ApiError(503, "robot_offline", f"{error} Try again in a moment.") from None
+    scene = link.scene(max_age_s=SCENE_RECHECK_S)
     body = scene_dict(scene)
     if hiding_book(current_app).hides(user_id, get_session()):
         body = scene_without_obstacles(body)

@@ -8,7 +8,7 @@ from flask import Blueprint, current_app, jsonify, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
-from middleware.access.commands import Commander, refusal_error, robot_commands
+from middleware.access.commands import Commander, robot_commands
 from middleware.assessment.hidden_obstacles import MAP_REFUSAL, OBSTACLES_HIDDEN, hiding_book
 from middleware.db import get_session
 from middleware.errors import ApiError
@@ -19,7 +19,7 @@ from middleware.plans.services import console_skill_panels
 from middleware.preferences.stored import chosen_camera_picture
 from middleware.robots.catalog import CAMERA_PICTURES, camera_picture_of
 from middleware.robots.link import CommandRefused, RobotUnavailable
-from middleware.robots.messages import goal_dict, map_dict
+from middleware.robots.messages import FINAL_GOAL_STATUSES, goal_dict, map_dict
 from middleware.robots.registry import robot_registry
 
 blueprint = Blueprint("skills", __name__)
@@ -82,10 +82,7 @@ def activate(robot_name: str, skill: str) -> ResponseReturnValue:
     if not NAME_PATTERN.fullmatch(skill):
         raise ApiError(404, "unknown_skill", "There is no skill by that name.", "skill")
     parameters, preempt = parse_activation(request.get_json(silent=True))
-    try:
-        goal = robot.activate(skill, parameters, preempt)
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error) from None
+    goal = robot.activate(skill, parameters, preempt)
     return jsonify({"goal": goal_dict(goal)}), 202
 
 
@@ -95,15 +92,26 @@ def _goal_id(goal_id: str) -> str:
     return goal_id
 
 
+@blueprint.get("/api/robots/<robot_name>/goals")
+@login_required
+def running_goals(robot_name: str) -> ResponseReturnValue:
+    """The robot's running goals, whoever started them (a console opened again, a tour's step, another tab): its
+    panels show them as their own. Observers may read them too; none while the robot does not answer."""
+    link = robot_commands().require(robot_name, _user_id())
+    try:
+        goals = link.goals()
+    except RobotUnavailable:
+        return jsonify({"goals": [], "robot_online": False})
+    running = [goal for goal in map(goal_dict, goals) if goal["status"] not in FINAL_GOAL_STATUSES]
+    return jsonify({"goals": running, "robot_online": True})
+
+
 @blueprint.get("/api/robots/<robot_name>/goals/<goal_id>")
 @login_required
 def goal(robot_name: str, goal_id: str) -> ResponseReturnValue:
     """A goal's state (observers may read it too)."""
     robot = robot_commands().for_user(robot_name, _user_id())
-    try:
-        state = robot.goal_state(_goal_id(goal_id))
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error, "unknown_goal") from None
+    state = robot.goal_state(_goal_id(goal_id))
     return jsonify({"goal": goal_dict(state)})
 
 
@@ -113,10 +121,7 @@ def cancel(robot_name: str, goal_id: str) -> ResponseReturnValue:
     """Cancels a goal; its message reports the error left."""
     robot = robot_commands().for_user(robot_name, _user_id())
     goal_id = _goal_id(goal_id)
-    try:
-        state = robot.cancel(goal_id)
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error, "unknown_goal") from None
+    state = robot.cancel(goal_id)
     return jsonify({"goal": goal_dict(state)})
 
 
@@ -130,10 +135,7 @@ def _supervision(robot_name: str) -> Commander:
 def clear_map(robot_name: str) -> ResponseReturnValue:
     """Forgets the robot's map (supervisory): a map gone wrong would otherwise mislead every later user."""
     robot = _supervision(robot_name)
-    try:
-        ended = robot.clear_map()
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error) from None
+    ended = robot.clear_map()
     return jsonify({"map": None, "ended_goal_ids": ended,
                     "message": "The map was cleared. Activate Environment modelling to build a new one."})
 
@@ -143,10 +145,7 @@ def clear_map(robot_name: str) -> ResponseReturnValue:
 def return_to_dock(robot_name: str) -> ResponseReturnValue:
     """Carries the robot back to its dock (supervisory): the way out of a drifted pose or a robot stuck on a wall."""
     robot = _supervision(robot_name)
-    try:
-        answer = robot.return_to_dock()
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error) from None
+    answer = robot.return_to_dock()
     dock = answer.dock
     return jsonify({"ended_goal_ids": list(answer.ended_goal_ids),
                     "dock": {"x_m": dock.x_m, "y_m": dock.y_m, "theta_rad": dock.theta_rad},
@@ -166,10 +165,8 @@ def occupancy_map(robot_name: str) -> ResponseReturnValue:
         raise ApiError(403, OBSTACLES_HIDDEN, MAP_REFUSAL)
     try:
         grid = link.get_map()
-    except CommandRefused as error:
-        if error.code == "not_possible_now":
-            return jsonify({"map": None, "message": "No map yet: activate Environment modelling to build one."})
-        raise refusal_error(error) from None
-    except RobotUnavailable as error:
-        raise refusal_error(error) from None
+    except CommandRefused as refused:
+        if refused.reason != "not_possible_now":
+            raise
+        return jsonify({"map": None, "message": "No map yet: activate Environment modelling to build one."})
     return jsonify({"map": map_dict(grid)})

@@ -14,7 +14,7 @@ from flask import current_app
 from flask_login import current_user
 from simple_websocket import ConnectionClosed
 
-from middleware.access.commands import Commander, refusal_error, robot_commands
+from middleware.access.commands import Commander, robot_commands
 from middleware.access.graded_runs import graded_run_started_at
 from middleware.access.sockets import ChannelSeat, open_robot_channel
 from middleware.assessment.hidden_obstacles import CAMERA_REFUSAL, OBSTACLES_HIDDEN, hiding_book
@@ -117,8 +117,8 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
         return None
     try:
         info = link.info()
-    except RobotUnavailable as error:
-        refuse(ws, CLOSE_TRY_AGAIN_LATER, "robot_offline", f"{error} Try again in a moment.")
+    except RobotUnavailable as offline:
+        refuse(ws, CLOSE_TRY_AGAIN_LATER, offline.code, offline.message)
         return None
     user_id = int(current_user.get_id())
     seat = ChannelSeat(robot_name, user_id)
@@ -159,8 +159,7 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
                 try:
                     result = await work(robot.drive, sequence_base + command.sequence, command.linear_mps,
                                         command.angular_radps)
-                except (CommandRefused, RobotUnavailable) as error:
-                    refused = refusal_error(error)
+                except (CommandRefused, RobotUnavailable) as refused:
                     await live.send(as_json({"type": "error", "code": refused.code, "message": refused.message,
                                              "field": refused.field}))
                     continue

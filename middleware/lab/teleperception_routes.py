@@ -15,11 +15,11 @@ from flask import Blueprint, Response, abort, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
-from middleware.access.commands import refusal_error, robot_commands
+from middleware.access.commands import robot_commands
 from middleware.errors import ApiError
 from middleware.lab.perception_export import SensorAngles, readings_csv, readings_mcap
 from middleware.lab.skills import SUPERVISOR_ROLES, _supervision
-from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
+from middleware.robots.link import RobotLink
 from middleware.robots.messages import map_dict
 from middleware.robots.registry import robot_registry
 from protos.telelab.v1 import robot_pb2
@@ -72,10 +72,7 @@ def evidence(robot_name: str) -> ResponseReturnValue:
     """?sensor=both|sonar|laser&part=both|static|moving: the chosen layers of the robot's evidence grid."""
     link = robot_commands().require(robot_name, _user_id())
     sensor, part = _choice("sensor", SENSORS), _choice("part", PARTS)
-    try:
-        answer = link.evidence_grid(sensor, part)
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error) from None
+    answer = link.evidence_grid(sensor, part)
     return jsonify({"evidence": evidence_dict(answer)})
 
 
@@ -84,26 +81,20 @@ def evidence(robot_name: str) -> ResponseReturnValue:
 def reset(robot_name: str) -> ResponseReturnValue:
     """Forgets the evidence grid and the readings (supervisory: the controller, or a tutor or admin at any time)."""
     robot = _supervision(robot_name)
-    try:
-        answer = robot.reset_evidence()
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error) from None
+    answer = robot.reset_evidence()
     return jsonify({"evidence": evidence_dict(answer), "message": "The evidence grid was reset: readings gather "
                                                                   "again from now."})
 
 
 def _readings(link: RobotLink) -> tuple[list[robot_pb2.PerceptionScan], SensorAngles]:
     scans: list[robot_pb2.PerceptionScan] = []
-    try:
-        info = link.info()
-        while True:
-            page = link.perception_readings(scans[-1].index if scans else 0).scans
-            scans.extend(page)
-            # A short page was all the robot had; readings arriving while it is read do not keep the export going.
-            if len(page) < READINGS_PER_ANSWER or len(scans) >= MAX_EXPORTED_SCANS:
-                break
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error) from None
+    info = link.info()
+    while True:
+        page = link.perception_readings(scans[-1].index if scans else 0).scans
+        scans.extend(page)
+        # A short page was all the robot had; readings arriving while it is read do not keep the export going.
+        if len(page) < READINGS_PER_ANSWER or len(scans) >= MAX_EXPORTED_SCANS:
+            break
     return scans, SensorAngles(info)
 
 

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 from flask import Flask
 
-from middleware.access.commands import owned_robot, refusal_error
+from middleware.access.commands import owned_robot
 from middleware.errors import ApiError, Refused
 from middleware.farm.base import FarmUnavailable, RobotFarm, RobotSpec
 from middleware.plans.language import plan_from_json
@@ -191,9 +191,7 @@ def run_prediction(farm: RobotFarm, slots: PredictionSlots, request: PredictionR
         yield {"type": "end", "goal": goal_dict(final), "trace": recorder.points(), "start": start,
                "wall_s": round(time.monotonic() - begun, 3),
                "sim_time_s": round(final.ended_sim_s - final.accepted_sim_s, 3)}  # the plan's time, predicted
-    except (CommandRefused, RobotUnavailable) as error:
-        yield {"type": "error", **refusal_error(error).to_dict()}
-    except Refused as refused:  # the farm full or away, the plan not valid on the copy's skills
+    except Refused as refused:  # the robot refused or away, the farm full or away, the plan invalid on the copy
         yield {"type": "error", **refused.to_dict()}
     finally:
         if recorder is not None:

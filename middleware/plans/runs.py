@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from middleware.access.commands import Commander, refusal_error, robot_commands
+from middleware.access.commands import Commander, robot_commands
 from middleware.errors import ApiError
 from middleware.plans.language import IfStep, Plan, RepeatStep, SetStep, plan_from_json
 from middleware.plans.proto_form import plan_to_proto
@@ -147,14 +147,11 @@ def run_plan(user_id: int, username: str, name: str, document: dict[str, object]
         robot = practice_commander(user_id, username, beside.scene if beside else None)
     else:
         robot = robot_commands().for_user(request.target, user_id, field="target")
-    try:
-        plan = plan_from_json(document, skill_schemas(robot.link, motor_only=True))
-        check_settings_permitted(plan, may_set_watchdog)
-        if practice:
-            start = start_practice_robot(robot, request.from_dock, beside)
-        goal = robot.run_plan(name, plan_to_proto(plan), preempt=True)
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error) from None
+    plan = plan_from_json(document, skill_schemas(robot.link, motor_only=True))
+    check_settings_permitted(plan, may_set_watchdog)
+    if practice:
+        start = start_practice_robot(robot, request.from_dock, beside)
+    goal = robot.run_plan(name, plan_to_proto(plan), preempt=True)
     answer = goal_dict(goal)
     goal_id = str(answer["goal_id"])
     robot_name = robot.robot_name

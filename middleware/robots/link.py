@@ -14,6 +14,7 @@ import grpc
 
 from middleware.robots.fanout import FanoutHub
 from middleware.robots.messages import pack_camera_frame, pack_localization, pack_telemetry
+from middleware.robots.refusals import CommandRefused, RobotUnavailable
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 
 # gRPC reconnects a channel by itself; these bound how long a restarted robot stays unnoticed.
@@ -33,18 +34,6 @@ class ServerStream(Iterator[Message], Protocol):
 
     def cancel(self) -> bool:
         """Ends the stream (the iteration then raises grpc.RpcError CANCELLED)."""
-
-
-class RobotUnavailable(Exception):
-    """The skill server did not answer in time, or refused for a reason the caller cannot fix."""
-
-
-class CommandRefused(Exception):
-    """The skill server refused a command; field names the offending input when it is one."""
-
-    def __init__(self, code: str, message: str, field: str | None = None) -> None:
-        super().__init__(message)
-        self.code, self.message, self.field = code, message, field
 
 
 @dataclass(frozen=True)
@@ -140,7 +129,8 @@ class RobotLink:
 
     def cancel_goal(self, token: str, goal_id: str) -> robot_pb2.GoalState:
         """Cancels a goal; the answer says the error left."""
-        return self._call(self._stub.CancelGoal, robot_pb2.CancelGoalRequest(token=token, goal_id=goal_id))
+        return self._call(self._stub.CancelGoal, robot_pb2.CancelGoalRequest(token=token, goal_id=goal_id),
+                          not_found_code="unknown_goal")
 
     def clear_map(self, token: str) -> list[str]:
         """Forgets the robot's environment model; the ids of the mapping and localization goals that ended."""
@@ -180,9 +170,13 @@ class RobotLink:
         finally:
             stream.cancel()
 
+    def goals(self) -> list[robot_pb2.GoalState]:
+        """The running goals and those kept after their end, oldest first."""
+        return list(self._call(self._stub.ListGoals, robot_pb2.ListGoalsRequest()).goals)
+
     def get_goal(self, goal_id: str) -> robot_pb2.GoalState:
         """A running goal or one that ended recently."""
-        return self._call(self._stub.GetGoal, robot_pb2.GetGoalRequest(goal_id=goal_id))
+        return self._call(self._stub.GetGoal, robot_pb2.GetGoalRequest(goal_id=goal_id), not_found_code="unknown_goal")
 
     async def watch_goal(self, goal_id: str) -> AsyncGenerator[robot_pb2.GoalUpdate, None]:
         """The goal's updates until it ends, read on the running asyncio loop without a thread of its own (a stream
@@ -252,12 +246,17 @@ class RobotLink:
         return True
 
     def reserve_sequences(self) -> int:
-        """A base above every sequence sent so far; a new driver numbers its commands base+1, base+2..."""
+        """A base above every sequence sent so far, by this process or any other: a new driver numbers its
+        commands base+1, base+2... The robot ignores a sequence not above the last one of the same token, and a
+        console reconnected to another worker keeps its token, so the base is the wall clock in milliseconds
+        (shared by every process and host), which outruns any console's numbering (at most 50 commands a second)."""
         with self._sequence_lock:
+            pass
             return self._highest_sequence
 
     def next_sequence(self) -> int:
-        """A sequence number above every one sent so far, for a single command (a stop, a cue)."""
+        """A sequence number above every one this process sent or saw acknowledged, for a single command (a stop,
+        a cue)."""
         with self._sequence_lock:
             self._highest_sequence += 1
             return self._highest_sequence
@@ -276,6 +275,8 @@ class RobotLink:
         started = time.perf_counter()
         ack = self._call(self._stub.Drive, command)
         round_trip_ms = (time.perf_counter() - started) * 1000
+        with self._sequence_lock:  # a newer sequence in force was sent by another process: number above it
+            self._highest_sequence = max(self._highest_sequence, ack.applied_sequence)
         return DriveResult(ack.applied_sequence, ack.linear_mps, ack.angular_radps, round_trip_ms)
 
     def get_limits(self) -> robot_pb2.Limits:
@@ -309,11 +310,11 @@ class RobotLink:
     def _open_telemetry(self) -> Iterator[object]:
         return self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=10))
 
-    def _call(self, method, request):
+    def _call(self, method, request, not_found_code: str = "unknown_skill"):
         try:
             reply = method(request, timeout=self.rpc_timeout_s)
         except grpc.RpcError as error:
-            translated = _translate(error)
+            translated = _translate(error, not_found_code)
             if isinstance(translated, RobotUnavailable) and self.unreachable_since is None:
                 self.unreachable_since = time.monotonic()
             raise translated from None
@@ -344,7 +345,7 @@ def answers_at(name: str, address: str, rpc_timeout_s: float = 1.0) -> bool:
         link.close()
 
 
-def _translate(error: grpc.RpcError) -> Exception:
+def _translate(error: grpc.RpcError, not_found_code: str = "unknown_skill") -> CommandRefused | RobotUnavailable:
     code = error.code()
     details = error.details() or ""
     if code in _REFUSAL_CODES:
@@ -352,7 +353,7 @@ def _translate(error: grpc.RpcError) -> Exception:
         if code == grpc.StatusCode.INVALID_ARGUMENT:
             trailing = dict(error.trailing_metadata() or ())
             field = trailing.get("field") or details.split(" ", 1)[0]
-        return CommandRefused(_REFUSAL_CODES[code], details, field)
+        return CommandRefused(_REFUSAL_CODES[code], details, field, not_found_code)
     if code == grpc.StatusCode.DEADLINE_EXCEEDED:
         return RobotUnavailable("The robot did not answer in time.")
     return RobotUnavailable("The robot is not reachable right now.")

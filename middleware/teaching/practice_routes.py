@@ -9,12 +9,10 @@ from flask import Blueprint, jsonify, render_template, request, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
-from middleware.access.commands import refusal_error
 from middleware.errors import ApiError
 from middleware.lab.sockets import camera_relay
 from middleware.live.loop import Continuation
 from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, refuse
-from middleware.robots.link import RobotUnavailable
 from middleware.teaching.command_form import parse_command
 from middleware.teaching.practice_robots import practice_manager, practice_name
 from middleware.teaching.targets import PRACTICE_TARGET, execute, goal_state, resolve_target, skill_schemas
@@ -76,10 +74,7 @@ def command() -> ResponseReturnValue:
     if not isinstance(body, dict):
         raise ApiError(400, "invalid_field", 'Send a JSON object: {"command": {...}}.', "body")
     target = resolve_target(PRACTICE_TARGET, _user_id())
-    try:
-        schemas = skill_schemas(target.link)
-    except RobotUnavailable as error:
-        raise refusal_error(error) from None
+    schemas = skill_schemas(target.link)
     return jsonify(execute(target, parse_command(body.get("command"), schemas), received_at)), 202
 
 

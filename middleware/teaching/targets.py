@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import time
 
-from middleware.access.commands import MAX_DRIVE_HOLD_S, Commander, refusal_error, robot_commands
+from middleware.access.commands import MAX_DRIVE_HOLD_S, Commander, robot_commands
 from middleware.errors import ApiError
-from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
+from middleware.robots.link import RobotLink, RobotUnavailable
 from middleware.robots.messages import goal_dict, parameter_schema_dict
 from middleware.robots.registry import robot_registry
 from middleware.teaching.command_form import RobotCommand
@@ -47,16 +47,13 @@ def execute(robot: Commander, command: RobotCommand, received_at: float,
     """
     goal: dict[str, object] | None = None
     applied: int | None = None
-    try:
-        if command.kind == "stop":
-            applied = robot.stop().applied_sequence
-        elif command.kind == "drive":
-            goal = goal_dict(robot.hold_drive(command.linear_mps, command.angular_radps, hold_s))
-        else:
-            goal = goal_dict(robot.activate(command.skill, dict(command.parameters), preempt=True))
-        acked_at = time.perf_counter()
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error) from None
+    if command.kind == "stop":
+        applied = robot.stop().applied_sequence
+    elif command.kind == "drive":
+        goal = goal_dict(robot.hold_drive(command.linear_mps, command.angular_radps, hold_s))
+    else:
+        goal = goal_dict(robot.activate(command.skill, dict(command.parameters), preempt=True))
+    acked_at = time.perf_counter()
     return {"robot": robot.robot_name, "command": command.to_dict(), "goal": goal, "applied_sequence": applied,
             "middleware_to_ack_ms": round((acked_at - received_at) * 1000, 3),
             "acked_unix_ms": round(time.time() * 1000, 3)}
@@ -64,10 +61,7 @@ def execute(robot: Commander, command: RobotCommand, received_at: float,
 
 def goal_state(robot: Commander, goal_id: str) -> dict[str, object]:
     """A goal's state on the robot."""
-    try:
-        return goal_dict(robot.goal_state(goal_id))
-    except (CommandRefused, RobotUnavailable) as error:
-        raise refusal_error(error, not_found_code="unknown_goal") from None
+    return goal_dict(robot.goal_state(goal_id))
 
 
 def reference_catalog(user_id: int | None = None) -> list[dict[str, object]]:
