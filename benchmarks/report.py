@@ -222,7 +222,35 @@ def render_table(records: list[tuple[str, dict[str, Any]]]) -> str:
     lines += ["", "Runs:", ""]
     lines += [f"- `{name}`: {_cell(record['label'])}; {_cell(record['machine'])} ({_cell(record['source'])})"
               for name, record in records if name in used]
+    lines += render_history(records)
     return "\n".join(lines) + "\n"
+
+
+def figure_histories(records: list[tuple[str, dict[str, Any]]]) -> dict[tuple[str, str, str], list[tuple[str, str]]]:
+    """(benchmark, scenario, figure with its unit) -> [(date, measured)] of every run that measured it, oldest
+    first, for the figures more than one run measured."""
+    history: dict[tuple[str, str, str], list[tuple[str, str]]] = {}
+    for _name, record in records:
+        for benchmark, run in record["benchmarks"].items():
+            for row in run["rows"]:
+                figure = f"{row['figure']} [{row['unit']}]" if row["unit"] else row["figure"]
+                measured = _figure(row["measured"], row.get("measured_range"))
+                history.setdefault((benchmark, row["scenario"], figure), []).append((record["date"], measured))
+    order = [module.rsplit(".", 1)[-1] for module in BENCHMARKS]
+    known = sorted(history, key=lambda key: order.index(key[0]) if key[0] in order else len(order))
+    return {key: history[key] for key in known if len(history[key]) > 1}
+
+
+def render_history(records: list[tuple[str, dict[str, Any]]]) -> list[str]:
+    """RESULTS.md's history: each figure more than one run measured, with each run's value and date."""
+    lines = ["", "## History", "",
+             "Each figure that more than one recorded run measured, every run's value with its date, oldest first",
+             "(each record in `benchmarks/results/` says the machine and what changed).", "",
+             "| benchmark | scenario | figure | measured (date), oldest first |", "| --- | --- | --- | --- |"]
+    for (benchmark, scenario, figure), runs in figure_histories(records).items():
+        values = ", ".join(f"{measured} ({date})" for date, measured in runs)
+        lines.append("| " + " | ".join(_cell(cell) for cell in (benchmark, scenario, figure, values)) + " |")
+    return lines
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -115,3 +115,16 @@ def test_a_label_already_recorded_is_refused(tmp_path: Path) -> None:
     report.record_run(run, "same", tmp_path / "results", date="2026-12-01")
     with pytest.raises(ValueError, match="exists already"):
         report.record_run(run, "same", tmp_path / "results", date="2026-12-01")
+
+
+def test_the_history_keeps_every_run_of_a_figure_with_its_date_and_the_table_only_the_latest(tmp_path: Path) -> None:
+    results = tmp_path / "results"
+    for day, measured in (("2026-12-01", 6.0), ("2026-12-02", 5.0), ("2026-12-03", 4.0)):
+        report.record_run(_write_run(tmp_path / day, [_row("activation", measured, measured < 5.5)]), f"run {day}",
+                          results, date=day)
+    latest, history = report.render_table(report.load_records(results)).split("## History")
+
+    assert "| latency | activation | p50 [ms] | 4 | 1 | <= 5 | pass | 2026-12-03-run-2026-12-03 |" in latest
+    assert "| 6 |" not in latest and "| 5 |" not in latest
+    assert "| latency | activation | p50 [ms] | 6 (2026-12-01), 5 (2026-12-02), 4 (2026-12-03) |" in history
+
