@@ -114,3 +114,17 @@ def test_every_name_the_where_to_change_table_gives_is_in_a_file_it_names(what: 
 
     missing = [name for name in names if not any(name in f.read_text() for f in files)]
     assert not missing, f"'{what}': {missing} are in none of {[str(f.relative_to(ROOT)) for f in files]}"
+
+
+README_LINES = 200  # a README states what a reader needs and the rules; guides and figures live elsewhere
+FRONT_PAGE_LINES = 100
+
+
+@pytest.mark.parametrize("readme", [d for d in documents() if d.name == "README.md"],
+                         ids=lambda p: str(p.relative_to(ROOT)))
+def test_a_readme_stays_short(readme: Path) -> None:
+    limit = FRONT_PAGE_LINES if readme.parent == ROOT else README_LINES
+    lines = len(readme.read_text().splitlines())
+
+    assert lines <= limit, (f"{readme.relative_to(ROOT)} has {lines} lines (at most {limit}): move guides to docs/, "
+                            "figures to benchmarks/results/, an area's details to its own README")
