@@ -40,9 +40,13 @@ DEMO_VIDEO := instance/lessons/demo-first-moves.webm
 run: $(RUN_STAMP) $(THREE_STAMP) $(if $(wildcard $(DEMO_VIDEO)),,ffmpeg)
 	$(VENV)/bin/telelab up
 
+# The suite's files run in parallel processes, one per logical core by default (TEST_PROCESSES=0 runs them in this one);
+# tests/conftest.py says what each process has of its own and which files share one. Collection order is kept.
+TEST_PROCESSES ?= logical
+
 test: $(TEST_STAMP) $(THREE_STAMP) chromium ffmpeg nginx
 	$(VENV)/bin/mypy
-	$(PY) -m pytest
+	$(PY) -m pytest -n $(TEST_PROCESSES) --dist loadfile --no-loadscope-reorder
 
 chromium:
 	@command -v chromium >/dev/null 2>&1 || { \
@@ -66,7 +70,8 @@ nginx:
 protos: $(TEST_STAMP)
 	$(PY) protos/generate.py
 
-bench: $(TEST_STAMP)
+# The browser benchmarks draw the console's views (three.js) in Debian's Chromium.
+bench: $(TEST_STAMP) $(THREE_STAMP) chromium
 	$(VENV)/bin/telelab bench
 
 # mypy checks what pyproject.toml's [tool.mypy] files lists (middleware, skill_server, protos).

@@ -448,6 +448,32 @@ def demo_accounts(app) -> dict[str, str]:
     return {name: password for name, _role, password in ensure_demo_accounts(app)}
 
 
+# `make test` runs the files in parallel processes (pytest-xdist, --dist loadfile): each file runs whole, in its
+# order, in one process, and each process has its own session fixtures (lab-1, Chromium, the migrated templates).
+# Files that share something of the machine's rather than of the process's run in one process, one after another:
+# Ray's clusters (a Ray started without an address joins the newest cluster on the machine, and a failed start stops
+# every Ray of the machine).
+SAME_PROCESS_FILES = {
+    "tests/integration/farm/test_ray_farm.py": "ray",
+    "tests/integration/benchmarks/test_farm_benchmark_smoke.py": "ray",
+}
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log):
+    """--dist loadfile, with the files of SAME_PROCESS_FILES put together."""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class LoadFileSharingMachineResources(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            path = super()._split_scope(nodeid)
+            return SAME_PROCESS_FILES.get(path, path)
+
+    return LoadFileSharingMachineResources(config, log)
+
+
 EXIT_GRACE_S = 60
 _exit_status = {"code": 0}
 

@@ -1,0 +1,37 @@
+"""What the Makefile's targets do on a fresh clone, read from `make --dry-run` (nothing is installed or run)."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+from types import SimpleNamespace
+
+from tests import conftest
+
+ROOT = Path(__file__).resolve().parent.parent
+VENDOR_LOCK = "client_ui/static/vendor/package-lock.json"
+
+
+def dry_run(*arguments: str) -> str:
+    """The commands `make` would run, as if three.js had never been installed (its lock file newer than the stamp)."""
+    result = subprocess.run(["make", "--dry-run", f"--what-if={VENDOR_LOCK}", *arguments], cwd=ROOT,
+                            capture_output=True, text=True, timeout=60, check=True)
+    return result.stdout
+
+
+def test_make_bench_installs_three_js_and_chromium_for_the_browser_benchmarks() -> None:
+    commands = dry_run("bench")
+    assert "npm ci" in commands, commands
+    assert "apt-get install -y -qq chromium" in commands, commands
+    assert commands.rstrip().endswith("telelab bench"), commands
+
+
+def test_make_test_runs_the_files_in_parallel_processes_with_rays_files_in_one() -> None:
+    pytest_line = next(line for line in dry_run("test").splitlines() if " -m pytest" in line)
+    assert "--dist loadfile" in pytest_line and " -n " in pytest_line, pytest_line
+    config = SimpleNamespace(getvalue={"dist": "loadfile", "tx": ["2*popen"]}.__getitem__)
+    scheduler = conftest.pytest_xdist_make_scheduler(config, None)
+    assert scheduler._split_scope("tests/integration/farm/test_ray_farm.py::test_a") == scheduler._split_scope(
+        "tests/integration/benchmarks/test_farm_benchmark_smoke.py::test_b")
+    assert scheduler._split_scope("tests/unit/plans/test_plan_text.py::test_a") == "tests/unit/plans/test_plan_text.py"
+    assert scheduler._split_scope("tests/e2e/test_turns.py::test_a") == "tests/e2e/test_turns.py"
