@@ -8,6 +8,7 @@ import time
 import pytest
 
 from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer, make_course
+from tests.e2e.test_panels import wait_for
 
 pytestmark = pytest.mark.e2e
 
@@ -269,10 +270,24 @@ def test_a_tour_shows_the_panels_it_names_by_their_titles(chromium, live_server:
         page.locator("[data-field=step-panel]", has_text="Go to goal").wait_for(timeout=15_000)
         assert page.locator(".panel-frame--current").get_attribute("data-panel-id") == "skill-go_to_goal"
         assert "max_error_m" not in page.locator("#tour").text_content()
+        # The panel the step points at comes into view and shows the tour's goal, not Idle (issue 34, item 15).
+        skill = page.locator('skill-panel[data-skill="go_to_goal"]')
+        skill.locator('[data-field="skill-status"]').filter(has_text=re.compile(r"^(Running|Succeeded)$")).wait_for(
+            timeout=10_000)
+        wait_for(lambda: in_view(page, ".panel-frame--current"), 5, "the step's panel is not on the screen: "
+                 + str(page.locator(".panel-frame--current").evaluate(
+                     "(e) => [e.getBoundingClientRect().top, e.getBoundingClientRect().height, innerHeight, scrollY]")))
+        page.screenshot(path=str(ARTIFACTS_DIR / f"tour-step-panel-in-view-{size['width']}.png"))
     finally:
         context.close()
         practice_manager(live_server.app).shutdown()
     assert not errors, errors
+
+
+def in_view(page, selector: str) -> bool:
+    """Whether the element's top (its title) is on the screen."""
+    return page.locator(selector).evaluate(
+        "(e) => { const r = e.getBoundingClientRect(); return r.top >= 0 && r.top + 40 <= innerHeight; }")
 
 
 def test_the_tour_editor_offers_panels_by_their_titles(page, live_server: LiveServer) -> None:

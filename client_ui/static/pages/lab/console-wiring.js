@@ -13,6 +13,7 @@ import { playTurnTone } from "./turn-tone.js";
 
 const FINAL_GOAL_STATES = new Set(["succeeded", "canceled", "aborted"]);
 const MAP_POLL_MS = 2000;
+const GOALS_POLL_MS = 2000; // a goal started elsewhere (another tab, a tour's step, a console opened again) shows
 const ACTION_NOTE_MS = 10000; // "back at its dock" stays this long before the map's polls speak again
 const SCENE_RETRY_MS = 5000;
 const PING_EVERY_MS = 1000;
@@ -474,7 +475,13 @@ export class ConsoleWiring {
   #skill(descriptor, panel) {
     panel.descriptor = descriptor;
     if (descriptor.schema?.some((parameter) => parameter.name === GUESS_FIELDS.x)) this.#followPose(descriptor, panel);
-    const entry = { descriptor, panel, goalChannel: null, goalNames: goalParameterNames(descriptor.schema) };
+    const entry = { descriptor, panel, goalChannel: null, goalId: null, goalNames: goalParameterNames(descriptor.schema) };
+    if (!this.#skills.length) {
+      this.#starters.push(() => {
+        this.#adoptRunningGoals();
+        setInterval(() => this.#adoptRunningGoals(), GOALS_POLL_MS);
+      });
+    }
     this.#skills.push(entry);
     const base = `/api/robots/${encodeURIComponent(this.#robotName)}`;
     panel.addEventListener("skill-activate", ({ detail }) => this.#activate(entry, detail));
@@ -518,9 +525,27 @@ export class ConsoleWiring {
     }
   }
 
+  /** The robot's running goals, whoever started them: each skill panel shows and follows its skill's, so a panel
+   *  never says Idle while its skill runs. */
+  async #adoptRunningGoals() {
+    const shown = this.#skills.filter((entry) => this.#layout.isShown(entry.descriptor.id));
+    if (document.visibilityState !== "visible" || !shown.length) return;
+    let answer;
+    try {
+      answer = await fetchJson(`/api/robots/${encodeURIComponent(this.#robotName)}/goals`);
+    } catch {
+      return; // the next look tries again; the robot's line already says when it does not answer
+    }
+    for (const goal of answer?.goals ?? []) {
+      const entry = this.#skills.find((candidate) => candidate.descriptor.skill === goal.skill);
+      if (entry && entry.goalId !== goal.goal_id) this.#followGoal(entry, goal);
+    }
+  }
+
   /** Show a goal and follow it on its socket until it ends. */
   #followGoal(entry, goal) {
     const { descriptor, panel } = entry;
+    entry.goalId = goal?.goal_id ?? null;
     this.#guard(descriptor.id, () => { panel.goal = goal; });
     entry.goalChannel?.close("a newer goal replaced it");
     if (!goal?.goal_id || FINAL_GOAL_STATES.has(goal.status)) return;

@@ -61,6 +61,13 @@ export async function showRobotPanels(host, robotName, wanted) {
       for (const frame of grid.querySelectorAll(".panel-frame")) {
         frame.classList.toggle("panel-frame--current", frame.dataset.panelId === id);
       }
+      // The step points at it: it comes into view (the least scroll that shows it, its title first when it is
+      // taller than the screen), never left below the fold.
+      const current = grid.querySelector(".panel-frame--current");
+      const box = current?.getBoundingClientRect();
+      if (box && (box.top < 0 || box.bottom > innerHeight)) {
+        current.scrollIntoView({ block: box.height > innerHeight ? "start" : "nearest", behavior: "smooth" });
+      }
     },
   };
 }

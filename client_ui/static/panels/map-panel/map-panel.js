@@ -505,8 +505,9 @@ export class MapPanel extends PanelElement {
     if (poses.odometry) parts.push(`Robot at (${fixed(poses.odometry.x_m)}, ${fixed(poses.odometry.y_m)}) m by odometry`);
     const loc = this.#localization;
     if (poses.localized) {
-      parts.push(`localized at (${fixed(poses.localized.x_m)}, ${fixed(poses.localized.y_m)}) m`
-        + `${loc.converged ? ", converged" : ", converging"}`
+      // "Localized" only once it converged: before, the localization panel may be saying the guess does not fit.
+      const at = `(${fixed(poses.localized.x_m)}, ${fixed(poses.localized.y_m)}) m`;
+      parts.push((loc.converged ? `localized at ${at}, converged` : `estimate at ${at}, not converged yet`)
         + (Number.isFinite(loc.position_error_m) ? `, ${fixed(loc.position_error_m, 2)} m from the true pose` : ""));
     }
     if (poses.tracked) {
