@@ -18,7 +18,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterable
 from functools import wraps
-from typing import Any
+from typing import Any, Protocol
 from urllib.parse import urlsplit
 
 from flask import Flask, Response, current_app, request
@@ -31,7 +31,6 @@ from middleware import events
 from middleware.auth.session_records import ACCOUNTS_TOPIC, forget_verdicts
 from middleware.db import get_session, session_factory
 from middleware.errors import ApiError
-from middleware.lab.delay import DelayQueue, ViewerDelay, apply_viewer_delay, capture_time_s
 from middleware.live.codes import (  # noqa: F401 - the channels import the codes from here
     CLOSE_FORBIDDEN,
     CLOSE_GOING_AWAY,
@@ -45,7 +44,7 @@ from middleware.live.link import LINK_PATH, CoolingDown, Declared, Link, Recordi
 from middleware.live.loop import Continuation, channel_loop, recheck_logins
 from middleware.live.wire import LiveSocket, PendingSocket, accept_websocket, wait_at_most
 from middleware.robots.fanout import FanoutHub
-from middleware.validation import TolerantResponse
+from middleware.validation import TolerantResponse, check_path_arguments
 
 STREAM_POLL_S = 0.5
 # A live client answers each ping, so it is heard at least this often; one that does not answer by the next
@@ -260,6 +259,7 @@ class Channels(Sock):
                 rule = request.url_rule
                 if rule is None or rule.rule == LINK_PATH or rule.rule not in self.declared:
                     raise NotFound()
+                check_path_arguments(request.view_args)  # as before_request does for a socket of its own
                 wait_s = self.floods.wait_s(rule.rule, user_id)
                 if wait_s > 0:
                     raise CoolingDown("This channel was closed for too many messages; try again in "
@@ -333,6 +333,37 @@ def init_app(app: Flask, channels: Iterable[ChannelDeclarations],
     return sock
 
 
+class ViewerHold(Protocol):
+    """A viewer's hold on a robot's stream (the experiment's injected delay): messages kept back until their time."""
+
+    def update(self, ws: Any, online: bool) -> bool:
+        """Reads what is in force (a change is announced with ws.send); whether messages are held now."""
+
+    def push(self, message: bytes | str, now_s: float) -> None:
+        """Holds message until its time."""
+
+    def pop_due(self, now_s: float) -> list[bytes | str]:
+        """The held messages whose time has come, oldest first."""
+
+    def seconds_until_next(self, now_s: float) -> float | None:
+        """How long until the next release, or None when nothing is held."""
+
+
+ViewerHolds = Callable[[str, int], ViewerHold]  # (robot name, user id) -> that viewer's hold on the robot's streams
+_HOLDS_KEY = "telelab.viewer_holds"
+
+
+def hold_viewers_with(app: Flask, holds: ViewerHolds) -> None:
+    """Makes holds the hook every robot stream of app asks for its viewer's hold (composed in create_app)."""
+    app.extensions[_HOLDS_KEY] = holds
+
+
+def viewer_hold(robot_name: str, user_id: int) -> ViewerHold | None:
+    """user_id's hold on robot_name's streams by the composed hook, or None when the app composed none."""
+    holds: ViewerHolds | None = current_app.extensions.get(_HOLDS_KEY)
+    return None if holds is None else holds(robot_name, user_id)
+
+
 def _logins_ended(key: str | None) -> None:
     """A login of user key (None: anyone's) ended in some worker. This process's verdicts on it go first: kept up
     to RECHECK_S, a verdict from just before would let the next request in, and answer each socket's check yes."""
@@ -379,18 +410,17 @@ def open_channel(ws: WebSocket) -> bool:
 
 
 async def relay_stream(ws: LiveSocket, hub: FanoutHub, choose: Callable[[Any], Any] | None = None,
-                       delay: ViewerDelay | None = None) -> None:
+                       hold: ViewerHold | None = None) -> None:
     """Sends the hub's newest message whenever there is one, and status changes, until the socket closes.
 
     choose picks this viewer's version of a message packed in several versions (e.g. with or without
-    the ground truth). delay, when given, holds each message until its capture time + the viewer's injected
-    delay (middleware/lab/delay.py); a change of delay is announced as {"type": "status", "injected_delay_s"}.
+    the ground truth). hold, when given, keeps messages back until their time (the viewer's injected delay, by
+    the hook create_app composes: `viewer_hold`).
     A viewer that reads slower than the stream skips to the newest message.
     """
     watch = channel_loop().watch(hub)
     news = watch.join()
     subscription = hub.subscribe()
-    held = DelayQueue(0.0)
     announcer = _Announcer(ws)
     try:
         # A closed hub returns at once: looping on it would spin a core until the viewer leaves.
@@ -400,20 +430,20 @@ async def relay_stream(ws: LiveSocket, hub: FanoutHub, choose: Callable[[Any], A
             if status is not None:
                 await ws.send(json.dumps({"type": "status", "robot_online": status.online,
                                           "message": status.message}, separators=(",", ":")))
-            delay_s = apply_viewer_delay(announcer, delay, held, hub.status_with_version()[0].online)
+            holding = hold is not None and hold.update(announcer, hub.status_with_version()[0].online)
             message = subscription.next_message(0)
             if message is not None:
                 message = message if choose is None else choose(message)
-                if delay_s > 0 or len(held):  # after a delay ends, the held ones go first
-                    held.push(message, capture_time_s(message), time.time())
+                if holding and hold is not None:
+                    hold.push(message, time.time())
                 else:
                     ws.send_latest(message)
-            for due in held.pop_due(time.time()):
+            for due in hold.pop_due(time.time()) if hold is not None else ():
                 ws.send_latest(due)
             while await ws.receive(timeout=0) is not None:
                 pass  # nothing is expected from viewers; drop it so it cannot pile up
             if message is None:
-                wait_s = held.seconds_until_next(time.time())
+                wait_s = hold.seconds_until_next(time.time()) if hold is not None else None
                 await wait_at_most(news, STREAM_POLL_S if wait_s is None else min(wait_s, STREAM_POLL_S))
         if hub.closed:
             await ws.close(CLOSE_GOING_AWAY, "The lab is shutting down; reload the page in a moment.")
@@ -423,7 +453,7 @@ async def relay_stream(ws: LiveSocket, hub: FanoutHub, choose: Callable[[Any], A
 
 
 class _Announcer:
-    """What apply_viewer_delay announces on: the socket's non-waiting write."""
+    """What a hold announces on: the socket's non-waiting write."""
 
     def __init__(self, ws: LiveSocket) -> None:
         self.send = ws.write

@@ -8,8 +8,14 @@
   the view would have done with it, so no view can store it.
 - Query strings, urlencoded forms and path arguments: the same text rule.
 - Numeric strings and dates: `decimal_int()` (ASCII digits only, bounded; never `str.isdigit()`, which
-  accepts '²') and `within_calendar()` (years 1900-9000: a week, a time zone or an ISO week away still has a date)
-  for the areas' schemas.
+  accepts '²', nor `int()` on text, which refuses 4 300 digits with a ValueError), `whole_number()` (the same,
+  refused naming the field) and `within_calendar()` (years 1900-9000: a week, a time zone or an ISO week away
+  still has a date) for the areas' schemas.
+- WebSocket messages: `parse_message()` gives each channel a JSON object whose `type` is one it takes, by the
+  rules of JSON bodies, or InvalidInput naming the field; the channel answers that message with an error and
+  stays open.
+- Text that cannot be stored is refused naming its line and column when it has several lines (a plan, a cue
+  track), so the writer finds it.
 - Showing stored text: what is already stored and cannot be encoded (a lone surrogate kept in a JSON column
   before this layer existed) is shown with U+FFFD in its place by the response's encoding, never a 500.
   Templates escape as always; a view that builds a `Response` itself uses `printable()`.
@@ -64,6 +70,27 @@ def unstorable(text: str) -> bool:
     return _UNSTORABLE.search(text) is not None
 
 
+def unstorable_place(text: str) -> str:
+    """Where text's first unstorable character is and what it is, for a sentence: "line 3, column 7: a NUL"
+    ("column 7: ..." for one line)."""
+    found = _UNSTORABLE.search(text)
+    if found is None:
+        return ""
+    start = found.start()
+    line = text.count("\n", 0, start) + 1
+    column = start - (text.rfind("\n", 0, start) + 1) + 1
+    what = "a NUL" if found.group() == "\x00" else "a lone surrogate"
+    place = f"line {line}, column {column}" if "\n" in text else f"column {column}"
+    return f"{place}: {what}"
+
+
+def refuse_unstorable(field: str, text: str) -> None:
+    """InvalidInput naming field and the place of the first character that cannot be stored, if text has one."""
+    if unstorable(text):
+        raise InvalidInput(field, f"{field} holds a character that cannot be stored ({unstorable_place(text)}); "
+                                  "remove it.")
+
+
 def printable(text: str) -> str:
     """text with every unstorable character replaced by U+FFFD, for showing what is already stored."""
     return _UNSTORABLE.sub(_PLACEHOLDER, text) if unstorable(text) else text
@@ -80,6 +107,14 @@ def decimal_int(value: object, low: int = INT64_MIN, high: int = INT64_MAX) -> i
     return value if low <= value <= high else None
 
 
+def whole_number(value: object, field: str, low: int, high: int) -> int:
+    """decimal_int(value, low, high), or InvalidInput naming field and the range."""
+    number = decimal_int(value, low, high)
+    if number is None:
+        raise InvalidInput(field, f"{field} must be a whole number from {low} to {high}.")
+    return number
+
+
 def within_calendar(moment: date | datetime) -> bool:
     """Whether moment is far enough from the calendar's edges for the arithmetic the lab does on dates."""
     day = moment.date() if isinstance(moment, datetime) else moment  # a zone's offset is far less than the margin
@@ -94,8 +129,7 @@ def check_json(value: Any) -> None:
         if depth > MAX_JSON_DEPTH:
             raise InvalidInput(field, f"The JSON is nested more than {MAX_JSON_DEPTH} levels deep.")
         if isinstance(item, str):
-            if unstorable(item):
-                raise InvalidInput(field, f"{field} holds a character that cannot be stored (a lone surrogate or NUL).")
+            refuse_unstorable(field, item)
         elif isinstance(item, bool) or item is None:
             continue
         elif isinstance(item, int):
@@ -107,7 +141,7 @@ def check_json(value: Any) -> None:
         elif isinstance(item, dict):
             for key, inner in item.items():
                 name = key if field == "body" else f"{field}.{key}"
-                if unstorable(key):
+                if not isinstance(key, str) or unstorable(key):
                     raise InvalidInput(field, f"A name in {field} holds a character that cannot be stored.")
                 pending.append((inner, name, depth + 1))
         elif isinstance(item, list):
@@ -123,6 +157,27 @@ def loads_checked(data: str | bytes) -> Any:
         raise InvalidInput("body", f"The JSON is nested more than {MAX_JSON_DEPTH} levels deep.") from None
     check_json(value)
     return value
+
+
+def parse_message(raw: object, types: tuple[str, ...], max_chars: int) -> dict[str, Any]:
+    """A WebSocket text message: a JSON object of at most max_chars characters, checked as a JSON body is, whose
+    `type` is one of types; otherwise InvalidInput naming the field ("message", "type" or the one at fault)."""
+    expected = " or ".join(repr(kind) for kind in types)
+    if not isinstance(raw, str) or len(raw) > max_chars:
+        raise InvalidInput("message", f"Send JSON text of at most {max_chars} characters.")
+    try:
+        message = loads_checked(raw)
+    except InvalidInput as refused:
+        raise InvalidInput("message" if refused.field in (None, "body") else str(refused.field),
+                           refused.message.replace("The JSON", "The message")) from None
+    except ValueError:
+        raise InvalidInput("message", f'The message is not JSON: send {{"type": {expected}, ...}}.') from None
+    if not isinstance(message, dict):
+        raise InvalidInput("message", f'The message must be a JSON object: {{"type": {expected}, ...}}.')
+    kind = message.get("type")
+    if not isinstance(kind, str) or kind not in types:
+        raise InvalidInput("type", f"type must be {expected}.")
+    return message
 
 
 class CheckedJSONProvider(DefaultJSONProvider):
@@ -149,12 +204,17 @@ def _check_request_text() -> None:
         sources.append(request.form)  # multipart forms are read by their views (uploads raise the size limit)
     for source in sources:
         for name, value in source.items(multi=True):
-            if unstorable(name) or unstorable(value):
-                field = printable(name)
-                raise InvalidInput(field, f"{field} holds a character that cannot be stored (a NUL).")
-    for name, value in (request.view_args or {}).items():
-        if isinstance(value, str) and unstorable(value):
-            raise InvalidInput(name, f"{name} holds a character that cannot be stored (a NUL).")
+            field = printable(name)
+            refuse_unstorable(field, name)
+            refuse_unstorable(field, value)
+    check_path_arguments(request.view_args)
+
+
+def check_path_arguments(arguments: dict[str, Any] | None) -> None:
+    """A rule's path arguments (a request's, or a channel's opened on a link): text only that can be stored."""
+    for name, value in (arguments or {}).items():
+        if isinstance(value, str):
+            refuse_unstorable(name, value)
 
 
 def init_app(app: Flask) -> None:

@@ -4,7 +4,6 @@ channel keeps for its user, and the checks every robot channel makes."""
 from __future__ import annotations
 
 import asyncio
-import json
 import time
 import weakref
 
@@ -20,6 +19,7 @@ from middleware.live.wire import LiveSocket
 from middleware.models import User
 from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, as_json, refuse
 from middleware.robots.link import RobotLink
+from middleware.validation import InvalidInput, parse_message
 
 HEARTBEAT_INTERVAL_S = 2.0
 REFRESH_INTERVAL_S = 1.0  # how often a seat is looked at (a turn ending); a change wakes the socket at once
@@ -131,13 +131,9 @@ def seat_message(coordinator: AccessCoordinator, robot_name: str, user_id: int,
 def parse_queue_action(raw: object) -> str:
     """The action named by a queue message, or ValueError with a sentence."""
     try:
-        message = json.loads(raw) if isinstance(raw, str) and len(raw) <= 256 else None
-    except ValueError:
-        message = None
-    action = message.get("type") if isinstance(message, dict) else None
-    if action not in {"pass", "leave", "join"}:
-        raise ValueError("type must be 'pass', 'leave' or 'join'.")
-    return action
+        return str(parse_message(raw, ("pass", "leave", "join"), 256)["type"])
+    except InvalidInput as invalid:
+        raise ValueError(invalid.message) from None
 
 
 def queue_channel(ws: WebSocket, robot_name: str) -> Continuation | None:

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import json
 import unicodedata
 from dataclasses import dataclass
 
 from middleware.auth.schemas import InvalidField
+from middleware.validation import parse_message
 
 MAX_BODY_CHARS = 500
 MAX_COMMAND_CHARS = 4096
@@ -45,18 +45,8 @@ class ChatCommand:
 
 
 def parse_chat_command(raw: object) -> ChatCommand:
-    """A ChatCommand from one WebSocket text message, or InvalidField naming what is wrong."""
-    if not isinstance(raw, str) or len(raw) > MAX_COMMAND_CHARS:
-        raise InvalidField("message", f"Send chat commands as JSON text of at most {MAX_COMMAND_CHARS} characters.")
-    try:
-        message = json.loads(raw)
-    except ValueError:
-        raise InvalidField("message", "The message is not valid JSON.") from None
-    if not isinstance(message, dict):
-        raise InvalidField("message", "The message must be a JSON object.")
-    kind = message.get("type")
-    if kind == "say":
+    """A ChatCommand from one WebSocket text message, or a refusal (InvalidField, InvalidInput) naming the field."""
+    message = parse_message(raw, ("say", "delete"), MAX_COMMAND_CHARS)
+    if message["type"] == "say":
         return ChatCommand("say", body=clean_body(message.get("body")))
-    if kind == "delete":
-        return ChatCommand("delete", message_id=clean_message_id(message.get("id")))
-    raise InvalidField("type", "type must be 'say' or 'delete'.")
+    return ChatCommand("delete", message_id=clean_message_id(message.get("id")))

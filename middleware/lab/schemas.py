@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from dataclasses import dataclass
 
 from middleware.auth.schemas import InvalidField
+from middleware.validation import InvalidInput, parse_message
 
 NAME_PATTERN = re.compile(r"^[a-z][a-z0-9_]{0,63}$")  # skills and their parameters
 GOAL_ID_PATTERN = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
@@ -44,17 +44,11 @@ def _finite_within(message: dict[str, object], field: str, limit: float, unit: s
 
 def parse_drive_message(raw: object, limits: DriveLimits, previous_sequence: int) -> DriveRequest:
     """A DriveRequest from one WebSocket message, or InvalidField naming what is wrong."""
-    if not isinstance(raw, str) or len(raw) > MAX_MESSAGE_CHARS:
-        raise InvalidField("message", f"Send drive commands as JSON text of at most {MAX_MESSAGE_CHARS} characters.")
     try:
-        message = json.loads(raw)
-    except ValueError:
-        raise InvalidField("message", "The message is not valid JSON.") from None
-    if not isinstance(message, dict):
-        raise InvalidField("message", "The message must be a JSON object.")
-    kind = message.get("type")
-    if kind not in {"drive", "stop"}:
-        raise InvalidField("type", "type must be 'drive' or 'stop'.")
+        message = parse_message(raw, ("drive", "stop"), MAX_MESSAGE_CHARS)
+    except InvalidInput as invalid:  # the drive channel answers InvalidField, as its other checks raise
+        raise InvalidField(invalid.field or "message", invalid.message) from None
+    kind = message["type"]
     sequence = message.get("sequence")
     if isinstance(sequence, bool) or not isinstance(sequence, int) or not 1 <= sequence <= MAX_SEQUENCE:
         raise InvalidField("sequence", f"sequence must be a whole number from 1 to {MAX_SEQUENCE}.")

@@ -8,5 +8,7 @@ CLOSE_NOT_FOUND = 4404
 CLOSE_TRY_AGAIN_LATER = 1013
 CLOSE_GOING_AWAY = 1001
 CLOSE_SERVICE_RESTART = 1012  # this worker is leaving (a rolling restart): the client reconnects to another
+# A channel whose handler failed (RFC 6455's "internal error"); on a link, that channel alone.
+CLOSE_SERVER_FAILED = 1011
 # A client over its inbound limits (RFC 6455's "policy violation").
 CLOSE_TOO_MANY_MESSAGES = 1008

@@ -17,6 +17,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import logging
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -25,10 +27,22 @@ from flask import Flask
 from simple_websocket import ConnectionClosed
 from werkzeug.exceptions import HTTPException
 
-from middleware.live.codes import CLOSE_NOT_FOUND, CLOSE_TRY_AGAIN_LATER
+from middleware.errors import Refused
+from middleware.live.codes import (
+    CLOSE_FORBIDDEN,
+    CLOSE_NOT_FOUND,
+    CLOSE_NOT_LOGGED_IN,
+    CLOSE_SERVER_FAILED,
+    CLOSE_TRY_AGAIN_LATER,
+)
 from middleware.live.loop import Continuation
 from middleware.live.wire import Inbox, LiveSocket
+from middleware.validation import InvalidInput, decimal_int, parse_message
 
+log = logging.getLogger(__name__)
+_REFUSAL_CLOSE_CODES = {401: CLOSE_NOT_LOGGED_IN, 403: CLOSE_FORBIDDEN, 429: CLOSE_TRY_AGAIN_LATER,
+                        503: CLOSE_TRY_AGAIN_LATER}
+_CHANNEL_NUMBER = re.compile(r"[0-9]+")  # ASCII digits only: '²'.isdigit() is true
 MAX_SUBSCRIPTIONS = 24  # a console subscribes about ten
 MAX_SUB_ID = 2**31 - 1
 MAX_PATH_LENGTH = 256
@@ -144,18 +158,18 @@ class Link:
         if isinstance(raw, bytes):
             return self._error("A link takes text messages only.", "message")
         head, _, payload = raw.partition(" ")
-        if head.isdigit() and head != "0":
-            entry = self._subs.get(int(head))
+        if _CHANNEL_NUMBER.fullmatch(head):
+            sub = decimal_int(head, 1, MAX_SUB_ID)
+            if sub is None:
+                return self._error(f"A channel's number is a whole number from 1 to {MAX_SUB_ID}.", "sub")
+            entry = self._subs.get(sub)
             if entry is not None:  # a message to a channel closed meanwhile is dropped
                 entry[0].admit(payload)
             return None
         try:
-            message = json.loads(raw)
-        except ValueError:
-            message = None
-        if not isinstance(message, dict) or message.get("type") not in {"subscribe", "unsubscribe"}:
-            return self._error("type must be 'subscribe' or 'unsubscribe', or the message must start with a "
-                               "channel's number.", "type")
+            message = parse_message(raw, ("subscribe", "unsubscribe"), len(raw))
+        except InvalidInput as refused:
+            return self._error(refused.message, refused.field or "message")
         sub = message.get("sub")
         if not isinstance(sub, int) or isinstance(sub, bool) or not 0 < sub <= MAX_SUB_ID:
             return self._error(f"sub must be a whole number from 1 to {MAX_SUB_ID}.", "sub")
@@ -186,6 +200,13 @@ class Link:
         except CoolingDown as cooling:
             self._subs.pop(sub, None)
             return self._closed(sub, CLOSE_TRY_AGAIN_LATER, str(cooling))
+        except Refused as refused:  # the path's text (a NUL), or an opener's refusal: this channel's, not the link's
+            self._subs.pop(sub, None)
+            return self._closed(sub, _REFUSAL_CLOSE_CODES.get(refused.status, CLOSE_NOT_FOUND), refused.message)
+        except Exception:
+            self._subs.pop(sub, None)
+            log.exception("opening a channel on a link failed")
+            return self._closed(sub, CLOSE_SERVER_FAILED, "The server failed on this channel; try again.")
         channel = SubSocket(self.live, sub, self._make_inbound(declared.messages_per_s))
         channel.on_overflow = lambda: self._on_overflow(rule)
         self.live.write(control({"type": "subscribed", "sub": sub}))
@@ -204,6 +225,9 @@ class Link:
             await continuation(channel)  # type: ignore[arg-type]
         except ConnectionClosed:
             pass
+        except Exception:  # as on a socket of its own: this channel ends with 1011, the link and the others stay
+            log.exception("a channel on a link failed")
+            channel.begin_close(CLOSE_SERVER_FAILED, "The server failed on this channel; reload the page.")
         finally:
             await channel.close(channel.close_reason if not channel.connected else 1000, channel.close_message)
             self._subs.pop(channel.sub, None)

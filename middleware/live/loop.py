@@ -22,7 +22,7 @@ from typing import Any
 from flask import Flask
 from simple_websocket import ConnectionClosed
 
-from middleware.live.codes import CLOSE_GOING_AWAY, CLOSE_SERVICE_RESTART
+from middleware.live.codes import CLOSE_GOING_AWAY, CLOSE_SERVER_FAILED, CLOSE_SERVICE_RESTART
 from middleware.live.wire import LiveSocket
 
 log = logging.getLogger(__name__)
@@ -80,7 +80,7 @@ class ChannelLoop:
             except Exception:
                 log.exception("a channel failed")
                 with contextlib.suppress(Exception):
-                    await ws.close(1011, "The server failed on this channel; reload the page.")
+                    await ws.close(CLOSE_SERVER_FAILED, "The server failed on this channel; reload the page.")
             finally:
                 self._sockets.discard(ws)
                 self._by_user.get(user_id, set()).discard(ws)

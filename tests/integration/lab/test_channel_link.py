@@ -79,7 +79,7 @@ def test_each_channel_is_refused_with_its_own_code_and_the_link_stays_open(stude
     ws.send(json.dumps({"type": "subscribe", "sub": 7, "path": "/ws/link"}))
     _, closed = _until(ws, lambda sub, m: sub == 0 and _control(m).get("type") == "closed")
     assert _control(closed)["code"] == 4404  # a link inside a link is no channel
-    for hostile, field in (("{]", "type"), (json.dumps({"type": "subscribe", "sub": -1, "path": "/ws/x"}), "sub"),
+    for hostile, field in (("{]", "message"), (json.dumps({"type": "subscribe", "sub": -1, "path": "/ws/x"}), "sub"),
                            (json.dumps({"type": "subscribe", "sub": 8, "path": 42}), "path")):
         ws.send(hostile)
         _, error = _until(ws, lambda sub, m: sub == 0 and _control(m).get("type") == "error")
