@@ -11,9 +11,12 @@ when it raises.
 
 from __future__ import annotations
 
+import sqlite3
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 from alembic import command
 from alembic.config import Config as AlembicConfig
@@ -25,10 +28,20 @@ MIGRATIONS_DIR = Path(__file__).resolve().parent.parent / "migrations"
 _EXTENSION_KEY = "telelab.db"
 
 
+SQLITE_BUSY_TIMEOUT_S = 15
+_WRITES = ("INSERT", "UPDATE", "DELETE", "REPLACE")
+
+
+class WriteLockHeld(RuntimeError):
+    """This thread already holds SQLite's write lock on another connection: the write it tried would wait for
+    itself for the whole busy timeout and then fail with "database is locked"."""
+
+
 def make_engine(url: str) -> Engine:
-    """An engine for url; SQLite gets foreign keys on and a busy timeout for concurrent threads."""
+    """An engine for url; SQLite gets foreign keys on, a busy timeout for concurrent threads, and the single-writer
+    guard (one unit of work per thread)."""
     if url.startswith("sqlite"):
-        engine = create_engine(url, connect_args={"timeout": 15, "check_same_thread": False})
+        engine = create_engine(url, connect_args={"timeout": SQLITE_BUSY_TIMEOUT_S, "check_same_thread": False})
 
         @event.listens_for(engine, "connect")
         def _sqlite_pragmas(dbapi_connection, _record) -> None:
@@ -37,8 +50,38 @@ def make_engine(url: str) -> Engine:
             cursor.execute("PRAGMA journal_mode=WAL")
             cursor.close()
 
+        event.listen(engine, "before_cursor_execute", _one_writer_per_thread)
         return engine
     return create_engine(url, pool_pre_ping=True)
+
+
+_writing = threading.local()
+
+
+def _one_writer_per_thread(connection, _cursor, statement: str, _parameters, _context, _executemany) -> None:
+    """Refuses at once a write from a thread whose other connection holds SQLite's write lock.
+
+    SQLite has one writer at a time; a thread that writes through a second session while its first one (the
+    request's) holds the lock waits for itself for the busy timeout, stalling every other writer of the database
+    meanwhile, and then fails. Such a place must write in the first session (one unit of work) or after its
+    commit; this names it in the traceback instead of a 15 s stall.
+    """
+    if not statement.lstrip()[:7].upper().startswith(_WRITES):
+        return
+    mine = connection.connection  # this checkout of a pooled connection (it lets go of it when checked in)
+    holders: dict[str, Any] = _writing.__dict__.setdefault("holders", {})
+    database = str(connection.engine.url)  # a thread may write to two databases (tests make many apps)
+    holder = holders.get(database)
+    if holder is not None and holder is not mine:
+        try:
+            held = holder.dbapi_connection is not None and holder.dbapi_connection.in_transaction
+        except sqlite3.ProgrammingError:  # closed
+            held = False
+        if held:
+            raise WriteLockHeld("This thread writes through a second database connection while its first one holds "
+                                "SQLite's write lock: write in the first session (one unit of work) or after it "
+                                "commits.")
+    holders[database] = mine
 
 
 def init_app(app: Flask) -> None:

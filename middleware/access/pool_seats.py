@@ -1,18 +1,24 @@
 """Waiting for any robot of a kind, as a user sees it: join, claim a free robot now, leave, and the expected wait.
 
 The binding itself is the round-robin rule's (access/pools.py); this module runs it for the pool's robots at
-once when a user joins, so a free robot is bound within the request, and estimates the wait otherwise.
+once when a user joins, so a free robot is bound within the request, and estimates the wait otherwise. Everything
+runs in the caller's unit of work (the request's session), so a claim is one transaction: free, locked and taken.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
-from middleware.access import pools
+from sqlalchemy.orm import Session
+
+from middleware.access import pools, round_robin
 from middleware.access.coordinator import AccessCoordinator
 from middleware.access.round_robin import QueueState
-from middleware.db import session_factory
+from middleware.db import unit_of_work
 from middleware.errors import Refused
+from middleware.locking import lock_user
 from middleware.robots.registry import robot_registry
 
 
@@ -57,16 +63,19 @@ class PoolFull(Refused):
 
 
 class PoolSeats:
-    """Pool operations over one app's access coordinator."""
+    """Pool operations in the caller's unit of work: every read and write goes through its session (with SQLite a
+    second connection writing while that session holds the write lock would wait for it the whole busy timeout);
+    robots are handed their new tokens through after_commit, once the change is committed."""
 
-    def __init__(self, coordinator: AccessCoordinator) -> None:
+    def __init__(self, coordinator: AccessCoordinator, session: Session,
+                 after_commit: Callable[[Callable[[], None]], None]) -> None:
         self._coordinator = coordinator
-        self._sessions = session_factory(coordinator.app)
+        self._session = session
+        self._after_commit = after_commit
 
     def robots(self, kind: str) -> list[str]:
         """The kind's enabled robots; a 404 naming the field when the kind has none (an unknown pool)."""
-        with self._sessions() as session:
-            names = pools.robots_of_kind(session, kind)
+        names = pools.robots_of_kind(self._session, kind)
         if not names:
             raise Refused(404, "unknown_pool", f"There is no pool of robots of kind {kind[:32]!r}.", "kind")
         return names
@@ -74,53 +83,72 @@ class PoolSeats:
     def join(self, kind: str, user_id: int) -> PoolSeat:
         """Waits for any robot of kind (or refreshes the wait); bound at once when one is free."""
         names = self.robots(kind)
-        already = self._bound(kind, user_id)
-        if already is None:
-            with self._sessions() as session, session.begin():
-                pools.join(session, kind, user_id, self._coordinator.now())
+        if self._bound(kind, user_id) is None:
+            pools.join(self._session, kind, user_id, self._coordinator.now())
             self._settle(names, user_id)
         return self.seat(kind, user_id)
 
     def claim(self, kind: str, user_id: int) -> PoolSeat:
-        """A free robot of kind now, or PoolFull (409, with the expected wait) and nothing changed."""
+        """A free robot of kind now, or PoolFull (409, with the expected wait) and nothing changed.
+
+        One step: each robot that looks free is locked (its control row) and settled, and the user takes it only if
+        it is still free under the lock, so of two students claiming the last robot at once one gets it and the
+        other is refused; a claim never queues anyone.
+        """
         names = self.robots(kind)
+        lock_user(self._session, user_id)  # the same student claiming twice at once takes one robot
         if self._bound(kind, user_id) is None:
-            states = self._states(names)
-            if not any(self._is_free(state) for state in states.values()):
-                raise PoolFull(kind, len(self._online(names)), self._wait_for(states, 1))
-        return self.join(kind, user_id)
+            online = self._online(names)
+            states = self._states(online)
+            now, policy = self._coordinator.now(), self._coordinator.policy
+            for name in [n for n in online if self._is_free(states[n])]:
+                if not self._is_free(self._run(round_robin.tick, name, policy, now)):
+                    continue  # taken meanwhile, or bound to a pool waiter who was first
+                self._run(round_robin.join, name, user_id, policy, now)
+                return self.seat(kind, user_id)
+            raise PoolFull(kind, len(online), self._wait_for(self._states(online), 1))
+        return self.seat(kind, user_id)
 
     def leave(self, kind: str, user_id: int) -> None:
         """Stops waiting for kind (a seat already bound on a robot is that robot's to leave)."""
         self.robots(kind)
-        with self._sessions() as session, session.begin():
-            pools.leave(session, kind, user_id)
+        pools.leave(self._session, kind, user_id)
 
     def seat(self, kind: str, user_id: int) -> PoolSeat:
         """Where user_id stands for kind now."""
         names = self.robots(kind)
         online = self._online(names)
         bound = self._bound(kind, user_id)
-        with self._sessions() as session, session.begin():
-            waiting = pools.waiting(session, kind, self._coordinator.now(), self._coordinator.policy.grace_s)
+        waiting = pools.waiting(self._session, kind, self._coordinator.now(), self._coordinator.policy.grace_s)
         if bound is not None:
             return PoolSeat(kind, bound, 0, len(waiting), len(online), 0.0)
         if user_id not in waiting:
             return PoolSeat(kind, None, -1, len(waiting), len(online), None)
         position = waiting.index(user_id) + 1
         return PoolSeat(kind, None, position, len(waiting), len(online),
-                        self._wait_for(self._states(names), position))
+                        self._wait_for(self._states(online), position))
+
+    def _run(self, operation: Callable[..., QueueState], *args: object) -> QueueState:
+        """A round-robin operation (robot, ..., policy, now) in the caller's session; the robot gets its token after
+        the commit."""
+        state = operation(self._session, *args)
+
+        def hand_token() -> None:
+            self._coordinator.sync_token(state)
+
+        self._after_commit(hand_token)
+        return state
 
     def _bound(self, kind: str, user_id: int) -> str | None:
-        with self._sessions() as session:
-            return pools.bound_robot(session, kind, user_id)
+        return pools.bound_robot(self._session, kind, user_id)
 
     def _online(self, names: list[str]) -> list[str]:
         registry = robot_registry(self._coordinator.app)
         return [n for n in names if (link := registry.get(n)) is not None and link.is_online()]
 
-    def _states(self, names: list[str]) -> dict[str, QueueState]:
-        return {name: self._coordinator.snapshot(name) for name in self._online(names)}
+    def _states(self, online: list[str]) -> dict[str, QueueState]:
+        """The robots' queues as stored (read beside the session, unlocked: for estimates and a first look)."""
+        return {name: self._coordinator.snapshot(name) for name in online}
 
     @staticmethod
     def _is_free(state: QueueState) -> bool:
@@ -129,11 +157,12 @@ class PoolSeats:
     def _settle(self, names: list[str], user_id: int) -> None:
         """Ticks the kind's robots that could bind a waiter now (free, or at their turn's end) until one has bound
         user_id; the others are the background ticker's (a heartbeat of every waiter must not lock every robot)."""
-        states, now = self._states(names), self._coordinator.now()
+        online, now, policy = self._online(names), self._coordinator.now(), self._coordinator.policy
+        states = self._states(online)
         ready = [name for name, state in states.items()
                  if self._is_free(state) or (state.turn_ends_at is not None and state.turn_ends_at <= now)]
         for name in sorted(ready, key=lambda n: not self._is_free(states[n])):
-            state = self._coordinator.tick(name)
+            state = self._run(round_robin.tick, name, policy, now)
             if user_id == state.controller_id or user_id in state.waiting_ids:
                 return
 
@@ -155,3 +184,14 @@ class PoolSeats:
         frees.sort()
         rounds, index = divmod(position - 1, len(frees))
         return frees[index] + rounds * turn_s
+
+
+@contextmanager
+def pool_seats_of(coordinator: AccessCoordinator) -> Iterator[PoolSeats]:
+    """PoolSeats in a unit of work of its own (a script, a test): committed when the block ends, then the robots
+    are handed their tokens."""
+    later: list[Callable[[], None]] = []
+    with unit_of_work(coordinator.app) as session:
+        yield PoolSeats(coordinator, session, later.append)
+    for callback in later:
+        callback()

@@ -10,6 +10,7 @@ the user ended in another process (forget_verdicts, on the ACCOUNTS_TOPIC announ
 from __future__ import annotations
 
 import hashlib
+import logging
 import secrets
 import threading
 import time
@@ -17,12 +18,14 @@ from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
 from sqlalchemy import Connection, event, inspect, select, update
+from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, object_session
 
 from middleware import events
 from middleware.models import LoginSession, User
 from middleware.models.accounts import as_utc
 
+log = logging.getLogger(__name__)
 RECHECK_S = 1.0
 # Announced (middleware/events.py) with the user's id when logins of the user end, so every worker's sockets of
 # that user check their login at once instead of on their next periodic check.
@@ -70,10 +73,23 @@ def is_open(session: Session, key: str, user_id: int, limits: SessionLimits, now
     if now >= as_utc(row.created_at) + limits.lifetime or now >= last_seen + limits.idle:
         return _forget(digest)
     if now - last_seen >= TOUCH_EVERY:
-        row.last_seen_at = now
+        _touch(session, digest, now)
     with _lock:
         _verdicts[digest] = (user_id, time.monotonic())
     return True
+
+
+def _touch(session: Session, digest: str, now: datetime) -> None:
+    """Writes the login's last_seen_at in a transaction of its own, committed at once, before the request writes
+    anything: in the request's session the touch held SQLite's write lock until the request ended, so a write of
+    the request through another connection (a pool's, a seat's) waited for it the whole busy timeout. Bookkeeping:
+    when the database is too busy, the next request touches it again."""
+    with Session(session.get_bind()) as own:
+        try:
+            own.execute(update(LoginSession).where(LoginSession.key_hash == digest).values(last_seen_at=now))
+            own.commit()
+        except OperationalError:
+            log.warning("a login's last-seen time was not written (the database is busy); the next request will")
 
 
 def end_session(session: Session, key: str, now: datetime) -> None:

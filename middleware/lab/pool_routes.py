@@ -28,7 +28,7 @@ blueprint = Blueprint("pools", __name__)
 def _seats() -> PoolSeats:
     coordinator = access_coordinator()
     coordinator.start_ticker()  # turns must end and pool waiters be bound while people wait
-    return PoolSeats(coordinator)
+    return PoolSeats(coordinator, get_session(), after_commit)  # the request's unit of work
 
 
 def _user_id() -> int:

@@ -33,7 +33,7 @@ def pool_lab(tmp_path, skill_server_address: str) -> Iterator[LiveServer]:
 def test_a_student_waits_for_any_robot_of_a_kind_and_an_admin_reads_the_pools(page, chromium,
                                                                                pool_lab: LiveServer) -> None:
     from middleware.access.coordinator import access_coordinator
-    from middleware.access.pool_seats import PoolSeats
+    from middleware.access.pool_seats import pool_seats_of
     from middleware.auth.services import create_user, find_user
     from middleware.db import session_factory
 
@@ -43,8 +43,8 @@ def test_a_student_waits_for_any_robot_of_a_kind_and_an_admin_reads_the_pools(pa
             create_user(session, name, role, STUDENT_PASSWORD)
         session.commit()
         bob, cy = find_user(session, "bob").id, find_user(session, "cy").id
-    seats = PoolSeats(access_coordinator(app))
-    taken = {seats.claim("sim", bob).robot_name, seats.claim("sim", cy).robot_name}
+    with pool_seats_of(access_coordinator(app)) as seats:
+        taken = {seats.claim("sim", bob).robot_name, seats.claim("sim", cy).robot_name}
     assert taken == {"sim-1", "sim-2"}
 
     phone = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
