@@ -98,6 +98,9 @@ class AccessCoordinator:
         online = self._robot_online(robot_name)
         with self._sessions() as session, session.begin():
             state = operation(session, robot_name, *args, self.policy, self.clock(), online)
+        if state.announced:  # this process's pages read it again at once; the bus tells the others (and us) soon
+            self._announced += 1
+            self._seen.pop(robot_name, None)
         self._known_controllers[robot_name] = (state.controller_id, state.token)
         if online:
             self.sync_token(state)

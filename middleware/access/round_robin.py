@@ -49,6 +49,7 @@ class QueueState:
     turn_ends_at: datetime | None
     faulted: bool
     token_changed: bool = False
+    announced: bool = False  # what a queue page shows changed (announced on the event bus)
 
 
 @dataclass(frozen=True)
@@ -102,12 +103,14 @@ def _seen(control: RobotControl, entries: list[QueueEntry]) -> tuple[object, ...
 
 
 def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: datetime,
-            robot_online: bool, entries: list[QueueEntry] | None = None) -> QueueState:
+            robot_online: bool, entries: list[QueueEntry] | None = None, seen_before: tuple[object, ...] | None = None
+            ) -> QueueState:
     """Applies the rule to the locked row: drops users gone past grace, grants, rotates, pauses on faults; a change
-    is announced on the event bus (topic "queue", the robot's name) for every worker's queue pages."""
+    is announced on the event bus (topic "queue", the robot's name) for every worker's queue pages. seen_before is
+    the queue as it stood before the caller's own change (a join, a leave), so that change is announced too."""
     token_before = control.token
     entries = _entries(session, control.robot_name) if entries is None else entries
-    seen_before = _seen(control, entries)
+    seen_before = _seen(control, entries) if seen_before is None else seen_before
     cutoff = now - timedelta(seconds=policy.grace_s)
     for gone in [e for e in entries if _as_utc(e.last_seen_at) < cutoff]:
         session.delete(gone)
@@ -168,7 +171,8 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
                 control.turn_ends_at = None  # the pool waiter went (or another robot took them): no one to hand to
     control.updated_at = now
     session.flush()
-    if _seen(control, _entries(session, control.robot_name)) != seen_before:
+    announced = _seen(control, _entries(session, control.robot_name)) != seen_before
+    if announced:
         events.announce(session, QUEUE_TOPIC, control.robot_name)
     return QueueState(
         robot_name=control.robot_name,
@@ -178,6 +182,7 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
         turn_ends_at=_as_utc(control.turn_ends_at),
         faulted=control.faulted,
         token_changed=control.token != token_before,
+        announced=announced,
     )
 
 
@@ -199,15 +204,15 @@ def join(session: Session, robot_name: str, user_id: int, policy: AccessPolicy, 
          robot_online: bool = True) -> QueueState:
     """Connects a user to the robot: a new seat at the end, or the same seat refreshed (a reload)."""
     control = lock_robot(session, robot_name)
-    entry = session.scalar(
-        select(QueueEntry).where(QueueEntry.robot_name == robot_name, QueueEntry.user_id == user_id)
-    )
+    entries = _entries(session, robot_name)
+    seen_before = _seen(control, entries)
+    entry = next((e for e in entries if e.user_id == user_id), None)
     if entry is None:
         session.add(QueueEntry(robot_name=robot_name, user_id=user_id, enqueued_at=now, last_seen_at=now))
     else:
         entry.last_seen_at = now
     session.flush()
-    return _settle(session, control, policy, now, robot_online)
+    return _settle(session, control, policy, now, robot_online, seen_before=seen_before)
 
 
 def heartbeat(session: Session, robot_name: str, user_id: int, now: datetime) -> bool:
@@ -221,9 +226,10 @@ def leave(session: Session, robot_name: str, user_id: int, policy: AccessPolicy,
           robot_online: bool = True) -> QueueState:
     """Takes the user out of the queue; control passes on if they held it."""
     control = lock_robot(session, robot_name)
+    seen_before = _seen(control, _entries(session, robot_name))
     session.execute(delete(QueueEntry).where(QueueEntry.robot_name == robot_name, QueueEntry.user_id == user_id))
     session.flush()
-    return _settle(session, control, policy, now, robot_online)
+    return _settle(session, control, policy, now, robot_online, seen_before=seen_before)
 
 
 def pass_turn(session: Session, robot_name: str, user_id: int, policy: AccessPolicy, now: datetime,
