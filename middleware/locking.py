@@ -61,6 +61,18 @@ def lock_user(session: Session, user_id: int) -> None:
     session.execute(select(User.id).where(User.id == user_id).with_for_update())
 
 
+CHAT_ROOM_LOCKS = 0x7E1E_C4A7  # the namespace of the advisory locks that order a chat room's messages
+
+
+def lock_chat_room(session: Session, robot_name: str) -> None:
+    """Holds the room's lock until the transaction ends, so its messages take their ids in the order they commit:
+    a reader that saw id n has seen every committed id below it, and its cursor never passes one in flight."""
+    if _is_sqlite(session):
+        return  # one writer at a time: ids are already taken in commit order
+    session.execute(text("SELECT pg_advisory_xact_lock(:space, hashtext(:room))"),
+                    {"space": CHAT_ROOM_LOCKS, "room": robot_name})
+
+
 class ClusterElection:
     """Elects one process of the cluster to run a periodic job: the holder of a PostgreSQL advisory lock, taken on
     a connection of its own and held while that connection lives. A process that dies closes its connection, and

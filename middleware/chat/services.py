@@ -12,7 +12,7 @@ from sqlalchemy.orm import Session
 from middleware import events
 from middleware.chat.schemas import clean_body
 from middleware.errors import Refused
-from middleware.locking import lock_user
+from middleware.locking import lock_chat_room, lock_user
 from middleware.models import ChatMessage, User
 
 RATE_LIMIT_MESSAGES = 5
@@ -69,6 +69,7 @@ def post_message(session: Session, robot_name: str, user: User, body: object, no
         raise ChatRefused(429, "rate_limited", f"You can send {RATE_LIMIT_MESSAGES} messages every "
                           f"{RATE_LIMIT_WINDOW.seconds} seconds; wait a moment and send it again.", "body")
     message = ChatMessage(robot_name=robot_name, user_id=user.id, body=text, created_at=now)
+    lock_chat_room(session, robot_name)  # ids in commit order: the live cursor never passes one still in flight
     session.add(message)
     session.flush()
     events.announce(session, "chat", robot_name)
