@@ -251,7 +251,7 @@ class RobotLink:
         console reconnected to another worker keeps its token, so the base is the wall clock in milliseconds
         (shared by every process and host), which outruns any console's numbering (at most 50 commands a second)."""
         with self._sequence_lock:
-            pass
+            self._highest_sequence = max(self._highest_sequence, time.time_ns() // 1_000_000)
             return self._highest_sequence
 
     def next_sequence(self) -> int:
