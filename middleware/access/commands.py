@@ -247,7 +247,8 @@ class Commander:
 class RobotCommands:
     """Finds the robots a user may reach and gives their commands the right token source."""
 
-    def __init__(self, registry: RobotRegistry, coordinator: Seats, hand_rules: tuple[HandDrivingRule, ...] = ()) -> None:
+    def __init__(self, registry: RobotRegistry, coordinator: Seats,
+                 hand_rules: tuple[HandDrivingRule, ...] = ()) -> None:
         self._registry, self._coordinator, self._hand_rules = registry, coordinator, hand_rules
 
     def reachable(self, robot_name: str, user_id: int | None) -> RobotLink | None:

@@ -40,6 +40,12 @@ def taught_student_ids(actor: User) -> Select[int] | None:
     return taught  # empty for a student: nobody is a tutor member through them
 
 
+def taught_course_ids(actor: User) -> Select[int]:
+    """The ids of the courses actor is a tutor member of, as a subquery (an admin's own memberships only)."""
+    return select(CourseMembership.course_id).where(CourseMembership.user_id == actor.id,
+                                                    CourseMembership.role == "tutor")
+
+
 def shares_authorship(session: Session, actor: User, author_id: int | None) -> bool:
     """True when actor may change work written by author_id: an admin, the author (a tutor), or a tutor of a
     course the author tutors too. Work with no author (the demo content) is the admins'."""

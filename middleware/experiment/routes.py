@@ -18,6 +18,7 @@ from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
 from middleware.experiment import services
 from middleware.experiment.progress import TrackRunNow, finished_in_trial, progress_view, track_route
+from middleware.experiment.trial_rules import FEEDBACK_PREFERENCE_KEY
 from middleware.lab.delay import delay_book
 from middleware.models import User, UserPreference
 from middleware.models.accounts import utc_now
@@ -29,7 +30,6 @@ from middleware.robots.registry import robot_registry
 blueprint = Blueprint("experiment", __name__)
 log = logging.getLogger(__name__)
 T = TypeVar("T")
-FEEDBACK_PREFERENCE_KEY = "camera-feedback"
 
 
 def _actor() -> User:
@@ -98,6 +98,22 @@ def _restart_run_after_commit(session: Session, trial: Trial) -> None:
     after_commit(restart)
 
 
+def _stop_motor_goal_after_commit(trial: Trial) -> None:
+    """Once the trial is begun, a go-to-goal or plan its student started before stops (a zero drive preempts any
+    motor goal): from then on the student drives by hand, and the command path refuses the rest."""
+    robot_name, user_id = trial.robot_name, trial.user_id
+
+    def stop() -> None:
+        robot = robot_commands().for_user(robot_name, user_id)
+        try:
+            if robot.is_controller():
+                robot.stop()
+        except (RobotUnavailable, CommandRefused) as error:
+            log.warning("%s was not stopped at the start of a trial: %s", robot_name, error)
+
+    after_commit(stop)
+
+
 def _run_progress(trial: Trial) -> dict[str, object]:
     """The trial's run as the page shows it while the student drives."""
     try:
@@ -133,17 +149,19 @@ def page() -> ResponseReturnValue:
 @login_required
 def state() -> ResponseReturnValue:
     """The student's trial in progress with its run now, their video delay (the trial's, on its robot; else a
-    tutor's), their last recorded trial, and, while no trial is in progress, the robots that run a track (the page
-    polls this at 2 Hz during a trial)."""
+    tutor's), their last trial ended (recorded or given up), and, while no trial is in progress, the robots that
+    run a track and the courses a trial may count for (the page polls this at 2 Hz during a trial)."""
     session = get_session()
     actor = _actor()
     trial = services.current_trial(session, actor)
-    last = services.last_completed_trial(session, actor)
+    last = services.last_finished_trial(session, actor)
     return jsonify({
         "trial": _trial_dict(trial) if trial else None,
         "run": _run_progress(trial) if trial else None,
         "last_trial": _trial_dict(last) if last else None,
         "robots": track_robots(actor.id) if trial is None else [],
+        "courses": [{"id": c.id, "code": c.code, "title": c.title}
+                    for c in services.student_courses(session, actor)] if trial is None else [],
         "delay_s": trial.delay_s if trial else services.get_video_delay(session, actor.id),
     })
 
@@ -160,10 +178,12 @@ def start_trial() -> ResponseReturnValue:
 
     def action(session: Session) -> Trial:
         open_before = services.current_trial(session, _actor())
-        trial = services.assign_trial(session, _actor(), robot_name, robots[robot_name])
+        trial = services.assign_trial(session, _actor(), robot_name, robots[robot_name],
+                                      course_id=body.get("course_id"))
         _set_feedback_preference(session, trial.user_id, trial.feedback)
         if open_before is None:
             _restart_run_after_commit(session, trial)
+            _stop_motor_goal_after_commit(trial)
         return trial
 
     return jsonify({"trial": _trial_dict(_run(action))}), 201

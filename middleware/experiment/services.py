@@ -16,10 +16,10 @@ from dataclasses import dataclass
 from sqlalchemy import select
 
 from middleware import events
-from middleware.courses.authority import taught_student_ids, teaches_student
+from middleware.courses.authority import taught_course_ids, teaches_student
 from middleware.errors import Refused
 from middleware.lab.delay import parse_delay_s
-from middleware.models import Role, User
+from middleware.models import Course, CourseMembership, Role, User
 from middleware.models.access import RobotControl
 from middleware.models.accounts import utc_now
 from middleware.models.experiment import TRIAL_OPEN, Trial, VideoDelay
@@ -77,10 +77,30 @@ def current_trial(session, student: User) -> Trial | None:
                           .order_by(Trial.id.desc()).limit(1))
 
 
-def last_completed_trial(session, student: User) -> Trial | None:
-    """The student's most recently recorded trial, if any."""
-    return session.scalar(select(Trial).where(Trial.user_id == student.id, Trial.status == "completed")
+def last_finished_trial(session, student: User) -> Trial | None:
+    """The student's most recently ended trial, recorded or given up, if any (the page says which)."""
+    return session.scalar(select(Trial).where(Trial.user_id == student.id, Trial.status != TRIAL_OPEN)
                           .order_by(Trial.id.desc()).limit(1))
+
+
+def student_courses(session, student: User) -> list[Course]:
+    """The courses student is enrolled in as a student, by code (a trial counts for one of them)."""
+    return list(session.scalars(select(Course).join(CourseMembership, CourseMembership.course_id == Course.id)
+                                .where(CourseMembership.user_id == student.id, CourseMembership.role == "student")
+                                .order_by(Course.code)))
+
+
+def trial_course_id(session, student: User, course_id: object) -> int | None:
+    """The course a new trial counts for: the one named (it must be the student's), else the student's only course;
+    None for a student of no course. A student of several courses must name one."""
+    mine = {course.id for course in student_courses(session, student)}
+    if course_id is None and len(mine) <= 1:
+        return next(iter(mine), None)
+    if course_id is None:
+        raise Refused(400, "invalid_field", "Choose the course this trial counts for.", "course_id")
+    if isinstance(course_id, bool) or not isinstance(course_id, int) or course_id not in mine:
+        raise Refused(400, "invalid_field", "Choose one of your courses.", "course_id")
+    return course_id
 
 
 def may_restart_run(session, student: User, robot_name: str) -> bool:
@@ -103,19 +123,21 @@ def choose_condition(done: Iterable[tuple[str, float, bool]], courses: Sequence[
 
 
 def assign_trial(session, student: User, robot_name: str, robot_scene: str,
-                 rng: random.Random | None = None) -> Trial:
-    """Assigns the student a random condition on the robot's course; its delay is on their video of that robot
-    while the trial is open (the delay book reads open trials)."""
+                 rng: random.Random | None = None, course_id: object = None) -> Trial:
+    """Assigns the student a random condition on the robot's course, counted for their class course (see
+    trial_course_id); its delay is on their video of that robot while the trial is open (the delay book reads
+    open trials)."""
     existing = current_trial(session, student)
     if existing is not None:
         return existing
     if robot_scene not in COURSES:
         raise Refused(409, "not_a_course", f"The robot {robot_name} does not run a course scene.", "robot_name")
+    class_course_id = trial_course_id(session, student, course_id)
     done = [(t.course, t.delay_s, t.feedback) for t in session.scalars(
         select(Trial).where(Trial.user_id == student.id, Trial.status == "completed"))]
     course, delay, feedback = choose_condition(done, [robot_scene], rng or random.SystemRandom())
-    trial = Trial(user_id=student.id, robot_name=robot_name, course=course, delay_s=delay, feedback=feedback,
-                  status=TRIAL_OPEN, errors=0, created_at=utc_now())
+    trial = Trial(user_id=student.id, course_id=class_course_id, robot_name=robot_name, course=course,
+                  delay_s=delay, feedback=feedback, status=TRIAL_OPEN, errors=0, created_at=utc_now())
     session.add(trial)
     session.flush()
     events.announce(session, DELAYS_TOPIC, str(student.id))
@@ -164,13 +186,13 @@ def abandon_trial(session, student: User, trial_id: int) -> Trial:
 
 
 def class_trials(session, actor: User) -> list[tuple[Trial, str]]:
-    """The completed trials of the students actor teaches (every one for an admin), with their usernames."""
+    """The completed trials that count for the courses actor teaches (every one for an admin), with their
+    usernames: a student in two courses is read by each course's tutors for that course's trials only."""
     _require_teacher(actor)
     query = (select(Trial, User.username).join(User, User.id == Trial.user_id)
              .where(Trial.status == "completed").order_by(Trial.id))
-    taught = taught_student_ids(actor)
-    if taught is not None:
-        query = query.where(Trial.user_id.in_(taught))
+    if actor.role != Role.ADMIN:
+        query = query.where(Trial.course_id.in_(taught_course_ids(actor)))
     rows = session.execute(query)
     return [(trial, username) for trial, username in rows]
 

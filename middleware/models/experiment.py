@@ -40,6 +40,9 @@ class Trial(Base):
 
     id: Mapped[int] = mapped_column(primary_key=True)
     user_id: Mapped[int] = mapped_column(ForeignKey("users.id", ondelete="CASCADE"), index=True)
+    # The class course the trial counts for (its tutors read it); None for a student of no course (admins read it).
+    course_id: Mapped[int | None] = mapped_column(ForeignKey("courses.id", ondelete="SET NULL"), index=True,
+                                                  nullable=True)
     robot_name: Mapped[str] = mapped_column(String(64))
     course: Mapped[str] = mapped_column(String(16))
     delay_s: Mapped[float] = mapped_column(Float)

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Callable
 
 from flask import Blueprint, jsonify, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy import select
+from sqlalchemy.orm import Session
 
 from middleware.db import get_session
 from middleware.errors import ApiError
@@ -19,6 +21,19 @@ blueprint = Blueprint("preferences", __name__)
 
 KEY_PATTERN = re.compile(r"^[a-z][a-z0-9-]{0,63}$")
 MAX_VALUE_BYTES = 8 * 1024
+# key -> (session, user id) -> why the user cannot change it now, or None (an open delay trial sets the preview)
+PreferenceLock = Callable[[Session, int], str | None]
+_LOCKS: dict[str, PreferenceLock] = {}
+
+
+def lock_preference(key: str, lock: PreferenceLock) -> None:
+    """Makes key's value fixed for a user while lock gives a reason (the composition root adds the locks)."""
+    _LOCKS[key] = lock
+
+
+def _locked_because(key: str) -> str | None:
+    lock = _LOCKS.get(key)
+    return lock(get_session(), int(current_user.get_id())) if lock is not None else None
 
 
 def _key(key: str) -> str:
@@ -36,9 +51,10 @@ def _find(key: str) -> UserPreference | None:
 @blueprint.get("/api/me/preferences/<key>")
 @login_required
 def read(key: str) -> ResponseReturnValue:
-    """The stored value, or null."""
+    """The stored value, or null, and why it cannot change now (null when it can)."""
     preference = _find(_key(key))
-    return jsonify({"value": json.loads(preference.value_json) if preference else None})
+    return jsonify({"value": json.loads(preference.value_json) if preference else None,
+                    "locked": _locked_because(key)})
 
 
 @blueprint.put("/api/me/preferences/<key>")
@@ -46,6 +62,9 @@ def read(key: str) -> ResponseReturnValue:
 def write(key: str) -> ResponseReturnValue:
     """Stores a JSON value of at most 8 KB."""
     name = _key(key)
+    locked = _locked_because(name)
+    if locked:
+        raise ApiError(409, "preference_locked", locked, "value")
     body = request.get_json(silent=True)
     if not isinstance(body, dict) or "value" not in body:
         raise ApiError(400, "invalid_field", "Send a JSON object with a 'value'.", "value")

@@ -104,17 +104,27 @@ function updateRun(slot, trial, run) {
   }
 }
 
-function recorded(trial) {
-  return h("div", { class: "experiment__recorded", "data-field": "last-trial" },
-    h("p", {}, h("strong", { text: "Trial recorded: " }),
-      `${trial.total_time_s.toFixed(1)} s, ${trial.errors} line contact${trial.errors === 1 ? "" : "s"}.`),
-    condition(trial));
+/** The student's last trial as it ended: recorded with its time, or given up and not counted. */
+function lastTrial(trial) {
+  const outcome = trial.status === "completed"
+    ? [h("strong", { text: "Trial recorded: " }),
+      `${trial.total_time_s.toFixed(1)} s, ${trial.errors} line contact${trial.errors === 1 ? "" : "s"}.`]
+    : [h("strong", { text: "Trial given up: " }), "it is not counted. The next trial draws a condition again."];
+  return h("div", { class: `experiment__recorded experiment__recorded--${trial.status}`, "data-field": "last-trial",
+    "data-status": trial.status }, h("p", {}, ...outcome), condition(trial));
+}
+
+/** The courses a trial may count for: none or one needs no choice; several, a select. */
+function courseChoice(courses) {
+  if (courses.length < 2) return null;
+  return h("select", { name: "course_id", id: "trial-course" },
+    ...courses.map((course) => h("option", { value: String(course.id), text: `${course.code} — ${course.title}` })));
 }
 
 function showStart(slot, state) {
   view.trialId = null;
-  const { robots, last_trial: last } = state;
-  const before = last ? [recorded(last)] : [];
+  const { robots, last_trial: last, courses = [] } = state;
+  const before = last ? [lastTrial(last)] : [];
   if (!robots.length) {
     slot.replaceChildren(...before, h("p", { class: "muted", "data-field": "no-robot",
       text: "No robot runs a course now. `telelab up` starts course-a and course-b; if they are missing, " +
@@ -125,11 +135,13 @@ function showStart(slot, state) {
     ...robots.map((robot) => h("option", {
       value: robot.name, text: `${robot.own ? "Your robot, " : ""}${robot.name} (${robot.scene})` })));
   const start = h("button", { type: "submit", class: "button button--primary",
-    text: last ? "Start the next trial" : "Start a trial" });
-  const form = h("form", { class: "experiment__form" }, h("label", {}, "Robot ", select), start);
+    text: last?.status === "completed" ? "Start the next trial" : "Start a trial" });
+  const course = courseChoice(courses);
+  const form = h("form", { class: "experiment__form" }, h("label", {}, "Robot ", select),
+    ...(course ? [h("label", {}, "Counts for ", course)] : []), start);
   form.addEventListener("submit", (event) => {
     event.preventDefault();
-    act("/api/experiment/trials", { robot_name: select.value });
+    act("/api/experiment/trials", { robot_name: select.value, ...(course ? { course_id: Number(course.value) } : {}) });
   });
   slot.replaceChildren(...before,
     h("p", { text: "Choose a course robot; the delay and the motion preview are drawn for you." }), form);

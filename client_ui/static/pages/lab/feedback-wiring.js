@@ -9,8 +9,13 @@ export const FILL_PREFERENCE = "/api/me/preferences/camera-feedback-fill";
 // their other browsers (the lab's PC, their phone) open with it too. The page gets it with the panel descriptor.
 export const PICTURE_PREFERENCE = "/api/me/preferences/camera-picture";
 
-function save(url, value) {
+function save(url, value, panel) {
   fetchJson(url, { method: "PUT", body: { value } }).catch((error) => {
+    if (error.code === "preference_locked" && panel) { // a delay trial began meanwhile: its setting holds
+      panel.feedbackEnabled = !value;
+      panel.feedbackLocked = error.message;
+      return;
+    }
     console.warn("the motion preview choice was not saved:", error.message);
   });
 }
@@ -18,12 +23,15 @@ function save(url, value) {
 /** Loads and saves this user's "motion preview" choices (on/off, fill). */
 export function bindFeedback(panel) {
   fetchJson(FEEDBACK_PREFERENCE)
-    .then((answer) => { if (typeof answer?.value === "boolean") panel.feedbackEnabled = answer.value; })
+    .then((answer) => {
+      if (typeof answer?.value === "boolean") panel.feedbackEnabled = answer.value;
+      panel.feedbackLocked = answer?.locked ?? null; // a delay trial sets the preview until it ends
+    })
     .catch(() => {}); // no saved choice: the layer stays on
   fetchJson(FILL_PREFERENCE)
     .then((answer) => { if (typeof answer?.value === "string") panel.feedbackFill = answer.value; })
     .catch(() => {}); // no saved choice: the edges are continued
-  panel.addEventListener("camera-feedback-change", ({ detail }) => save(FEEDBACK_PREFERENCE, Boolean(detail.enabled)));
+  panel.addEventListener("camera-feedback-change", ({ detail }) => save(FEEDBACK_PREFERENCE, Boolean(detail.enabled), panel));
   panel.addEventListener("camera-feedback-fill-change", ({ detail }) => save(FILL_PREFERENCE, String(detail.fill)));
 }
 

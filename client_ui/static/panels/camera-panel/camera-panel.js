@@ -52,6 +52,7 @@ export class CameraPanel extends PanelElement {
   #feedback = new FeedbackLayer();
   #bitmap = null;
   #feedbackToggle;
+  #feedbackLock;
   #fillSelect;
   #delayOutput;
   #injectedBadge;
@@ -102,6 +103,8 @@ export class CameraPanel extends PanelElement {
       this.feedbackEnabled = this.#feedbackToggle.checked;
       this.emit("camera-feedback-change", { enabled: this.#feedbackToggle.checked });
     });
+    this.#feedbackLock = h("span", { class: "camera__lock", id: "camera-feedback-lock", "data-field": "feedback-lock",
+      hidden: true });
     this.#fillSelect = h("select", { id: "camera-feedback-fill", "data-field": "feedback-fill" },
       h("option", { value: "edges", text: "continue the picture" }),
       h("option", { value: "black", text: "black" }));
@@ -134,7 +137,8 @@ export class CameraPanel extends PanelElement {
           h("label", { class: "camera__source" }, "Picture: ", this.#sourceSelect)),
         h("p", { class: "camera__feedback" },
           h("label", {}, this.#feedbackToggle, " Move the picture at once with my commands"),
-          h("label", { class: "camera__fill" }, "Where the frame shows nothing: ", this.#fillSelect))),
+          h("label", { class: "camera__fill" }, "Where the frame shows nothing: ", this.#fillSelect),
+          this.#feedbackLock)),
       this.#messageLine,
     );
     this.#applyLabel();
@@ -192,6 +196,16 @@ export class CameraPanel extends PanelElement {
 
   get feedbackEnabled() {
     return this.#feedback.enabled;
+  }
+
+  /** Why the motion preview cannot be switched now (the server's sentence: a delay trial sets it), or null. */
+  set feedbackLocked(reason) {
+    if (!this.#feedbackToggle) return;
+    this.#feedbackToggle.disabled = Boolean(reason);
+    if (reason) this.#feedbackToggle.setAttribute("aria-describedby", "camera-feedback-lock");
+    else this.#feedbackToggle.removeAttribute("aria-describedby");
+    this.#feedbackLock.textContent = reason || "";
+    this.#feedbackLock.hidden = !reason;
   }
 
   /** "edges" or "black"; anything else is ignored (a stale saved choice must not break the view). */
