@@ -179,6 +179,14 @@ def test_a_rolling_restart_of_the_workers_reconnects_the_console_and_keeps_the_p
         page, lab: RunningLab) -> None:
     _log_in(page, lab.url, "student", lab.passwords["student"])
     _open_practice_console(page, lab.url)
+    page.locator("body").click(position={"x": 5, "y": 5})
+    page.keyboard.down("ArrowUp")  # the old workers number some commands first: the new ones must number above
+    try:
+        wait_for(lambda: _drive_pad_figures(page)[0] >= 40, 15, "the console sent no commands before the restart")
+    finally:
+        page.keyboard.up("ArrowUp")
+    time.sleep(0.5)
+    acknowledged_before, _ = _drive_pad_figures(page)
     page.evaluate("""() => {
         window.drivePhases = [];
         const line = document.querySelector('[data-connection="drive"]');
@@ -201,10 +209,23 @@ def test_a_rolling_restart_of_the_workers_reconnects_the_console_and_keeps_the_p
     page.locator("body").click(position={"x": 5, "y": 5})
     page.keyboard.down("ArrowUp")
     try:
+        # The new socket numbers from 1 again: an acknowledgement below the old ones is the new socket's.
+        wait_for(lambda: 1 <= _drive_pad_figures(page)[0] < acknowledged_before, 15,
+                 "no command was acknowledged after the restart")
+        acknowledged, applied = _drive_pad_figures(page)
+        assert applied == acknowledged, f"command {acknowledged} was acknowledged but {applied} is in force"
         wait_for(lambda: abs(odometry(page, "x") - x_before) > 0.02, 15,
                  "the practice robot did not move after the restart")
     finally:
         page.keyboard.up("ArrowUp")
+
+
+def _drive_pad_figures(page) -> tuple[int, int]:
+    """The drive pad's last acknowledged command and the command the robot has in force, as its line reads them
+    (-1 while none)."""
+    figures = page.evaluate("""() => ["ack-sequence", "applied-sequence"].map(
+        (name) => document.querySelector(`drive-pad [data-field="${name}"]`)?.textContent ?? "")""")
+    return tuple(int(figure) if figure.strip().isdigit() else -1 for figure in figures)  # type: ignore[return-value]
 
 
 def test_through_nginx_the_camera_streams_and_a_chat_message_reaches_a_phone(
