@@ -44,7 +44,7 @@ from middleware.live.link import LINK_PATH, CoolingDown, Declared, Link, Recordi
 from middleware.live.loop import Continuation, channel_loop, recheck_logins
 from middleware.live.wire import LiveSocket, PendingSocket, accept_websocket, wait_at_most
 from middleware.robots.fanout import FanoutHub
-from middleware.validation import TolerantResponse, check_path_arguments
+from middleware.validation import TolerantResponse, check_path_arguments, decimal_int
 
 STREAM_POLL_S = 0.5
 # A live client answers each ping, so it is heard at least this often; one that does not answer by the next
@@ -367,7 +367,7 @@ def viewer_hold(robot_name: str, user_id: int) -> ViewerHold | None:
 def _logins_ended(key: str | None) -> None:
     """A login of user key (None: anyone's) ended in some worker. This process's verdicts on it go first: kept up
     to RECHECK_S, a verdict from just before would let the next request in, and answer each socket's check yes."""
-    user_id = int(key) if key and key.isdigit() else None
+    user_id = decimal_int(key, 1) if key else None
     forget_verdicts(user_id)
     recheck_logins(user_id)
 

@@ -23,7 +23,7 @@ from middleware.farm.base import FarmUnavailable, RobotFarm, RobotSpec
 from middleware.models import Robot
 from middleware.models.accounts import utc_now
 from middleware.robots.link import answers_at
-from middleware.validation import InvalidInput
+from middleware.validation import InvalidInput, whole_number
 
 log = logging.getLogger(__name__)
 KEEP_EVERY_S = 2.0
@@ -38,10 +38,7 @@ def clean_pool_request(kind: object, scene: object, count: object) -> tuple[str,
         raise InvalidInput("kind", "kind must be 1 to 24 letters, digits, '-' or '_' (the robots are named kind-1...).")
     if not isinstance(scene, str) or not _SCENE.fullmatch(scene.strip()):
         raise InvalidInput("scene", "scene must name a simulator scene such as 'lab' or 'course-A'.")
-    text = str(count).strip() if isinstance(count, (str, int)) and not isinstance(count, bool) else ""
-    if not text.isdigit() or not 1 <= int(text) <= MAX_POOL_START:
-        raise InvalidInput("count", f"count must be a whole number from 1 to {MAX_POOL_START}.")
-    return kind.strip(), scene.strip(), int(text)
+    return kind.strip(), scene.strip(), whole_number(count, "count", 1, MAX_POOL_START)
 
 
 def start_pool_robots(farm: RobotFarm, sessions: Callable[[], Session], kind: str, scene: str,

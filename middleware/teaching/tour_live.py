@@ -32,6 +32,7 @@ from middleware.models.teaching import GuidedSession, GuidedSessionPresence, Tou
 from middleware.realtime import CLOSE_FORBIDDEN, CLOSE_NOT_FOUND, Channels, WebSocket, as_json, refuse
 from middleware.teaching.authority import may_follow_class
 from middleware.teaching.tours import tour_steps
+from middleware.validation import decimal_int
 
 _changed = threading.Condition()
 _versions: dict[int, int] = {}
@@ -62,8 +63,8 @@ def _heard(key: str | None) -> None:
     if key is None:  # the listener reconnected: anything may have changed
         for session_id in list(_versions):
             notify(session_id)
-    elif key.isdigit():
-        notify(int(key))
+    elif (session_id := decimal_int(key, 1)) is not None:
+        notify(session_id)
 
 
 def _bus_for(db: Session) -> events.EventBus:

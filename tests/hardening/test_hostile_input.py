@@ -254,6 +254,8 @@ FIELDS = (
     "tz", "unit", "user", "user_id", "username", "value", "video", "video_name", "week", "x_m", "y_m",
     # the plans' (issue 16), last so the others keep their hostile values
     "beside", "from_dock", "version", "console_skill",
+    # pools, class sessions, limits (issues 20-30)
+    "count", "max_linear_mps", "max_angular_radps", "watchdog_s",
 )
 INT64_PAST = ("9223372036854775808", "18446744073709551616", "1" * 40)
 HOSTILE_TEXT = ("\ud800", "a\udfffb", "\x00", "²", "٣", "1" * 5000, "x" * 100_000, "<script>alert(1)</script>",
@@ -325,10 +327,11 @@ class Tally:
         self.tried: Counter[str] = Counter()
         self.failures: list[str] = []
 
-    def send(self, client, role: str, method: str, url: str, body: bytes | None, content_type: str | None) -> None:
-        """One request; a 500 (or an exception escaping the app) is recorded."""
+    def send(self, client, role: str, method: str, url: str, body: bytes | None, content_type: str | None):
+        """One request, its answer (None when an exception escaped); a 500 (or that exception) is recorded."""
         self.tried[role] += 1
         mimetype = "text/html"
+        answer = None
         try:
             answer = client.open(url, method=method, data=body, content_type=content_type)
             status, mimetype = answer.status_code, answer.mimetype
@@ -338,6 +341,7 @@ class Tally:
             self.failures.append(f"{role} {method} {url[:300]} body={(body or b'')[:120]!r} -> {status}")
         elif status >= 400 and mimetype == "application/json" and not url.startswith(JSON_PATHS):
             self.failures.append(f"{role} {method} {url[:300]} -> {status} as JSON where a page is asked for")
+        return answer
 
     def record(self, name: str) -> None:
         ARTIFACTS.mkdir(exist_ok=True)
@@ -419,3 +423,71 @@ def test_no_rule_answers_500_to_drawn_hostile_input(hostile_lab, role_clients, r
     one_request()
     tally.record(f"drawn_{role}")
     assert not tally.failures, f"{len(tally.failures)} answers were 500:\n" + "\n".join(tally.failures[:40])
+
+
+# The routes added since the first wave, each with a body (or query) it takes: every field in turn is replaced by
+# each value below, the others kept, so the hostile value reaches that field's own parsing.
+PLAN_TEXT = "drive 0.1 0 for 1s\n"
+EDGE_REQUESTS: tuple[tuple[str, str, str, str, dict[str, object]], ...] = (  # role, method, url, kind, body
+    ("admin", "POST", "/api/admin/pools", "json", {"kind": "hostile", "scene": "lab", "count": 1}),
+    ("admin", "POST", "/admin/pools", "form", {"kind": "hostile", "scene": "lab", "count": "1"}),
+    ("admin", "POST", "/admin/farm/robots/lab-1/stop", "form", {"next": "/admin/farm"}),
+    ("student", "DELETE", "/api/practice", "json", {"target": "practice"}),
+    ("student", "POST", "/api/tours/1/steps/0/run", "json", {"target": "practice"}),
+    ("student", "POST", "/api/tours/1/steps/1/run", "json", {"target": "lab-1"}),
+    ("tutor", "POST", "/api/tours/1/sessions", "json", {"robot": "lab-1", "course_id": 1}),
+    ("tutor", "POST", "/api/tour-sessions/1", "json", {"action": "step", "index": 1, "user": "student"}),
+    ("student", "POST", "/api/plans/check", "json", {"text": PLAN_TEXT}),
+    ("student", "POST", "/api/plans", "json", {"name": "edge", "text": PLAN_TEXT}),
+    ("student", "PUT", "/api/plans/1", "json", {"name": "edge", "text": PLAN_TEXT}),
+    ("student", "POST", "/api/plans/1/copy", "json", {"name": "edge-copy"}),
+    ("student", "PUT", "/api/plans/1/share", "json", {"course_id": 1}),
+    ("student", "PUT", "/api/plans/1/skill", "json", {"console_skill": True}),
+    ("student", "POST", "/api/plans/1/runs", "json", {"target": "practice", "beside": "lab-1", "from_dock": False,
+                                                      "version": 1}),
+    ("student", "POST", "/api/plans/1/predictions", "json", {"beside": "lab-1", "from_dock": False, "version": 1}),
+    ("student", "GET", "/api/plans/1/export", "query", {"format": "txt", "version": "1"}),
+    ("student", "GET", "/api/plans/1", "query", {"version": "1"}),
+    ("tutor", "POST", "/api/courses/1/class-session", "json", {"scene": "lab"}),
+    ("student", "POST", "/api/robots/lab-1/limits", "json", {"max_linear_mps": 0.2, "max_angular_radps": 0.5,
+                                                              "watchdog_s": 1.0}),
+    ("student", "GET", "/api/robots/lab-1/readings.csv", "query", {"sensor": "both", "part": "both"}),
+    ("student", "GET", "/api/robots/lab-1/chat", "query", {"after_id": "1"}),
+    ("student", "PUT", "/api/me/preferences/layout", "json", {"value": {"panels": ["camera"]}}),
+)
+# Wrong for every field above whatever it takes: superscript and Arabic-Indic digits (str.isdigit() accepts them,
+# int() does not), 5 000 digits (int() refuses past 4 300), a lone surrogate, NUL, and the wrong JSON types.
+EDGE_TEXT = ("²", "¹²³", "٣", "1" * 5000, "\ud800", "a\x00b", "lab-1\x00")
+EDGE_JSON: tuple[object, ...] = (*EDGE_TEXT, ["²"], {"type": ["x"]}, 2**63, 1e308)
+
+
+def edge_requests() -> list[tuple[str, str, str, bytes | None, str | None]]:
+    """(role, method, url, body, content type): each field of each EDGE_REQUESTS body, in turn, hostile."""
+    requests: list[tuple[str, str, str, bytes | None, str | None]] = []
+    for role, method, url, kind, body in EDGE_REQUESTS:
+        for field in body:
+            for value in EDGE_JSON if kind == "json" else EDGE_TEXT:
+                changed = {**body, field: value}
+                if kind == "json":
+                    requests.append((role, method, url, json.dumps(changed).encode(), "application/json"))
+                elif kind == "form":
+                    requests.append((role, method, url, form_body(changed), "application/x-www-form-urlencoded"))
+                else:
+                    query = urlencode({k: str(v).encode("utf-8", "surrogatepass") for k, v in changed.items()})
+                    requests.append((role, method, f"{url}?{query}", None, None))
+    return requests
+
+
+def test_each_field_of_the_newer_routes_refuses_hostile_values_naming_the_field(hostile_lab, role_clients) -> None:
+    """isdigit tricks, 5 000 digits, lone surrogates, NUL and wrong JSON types, one field at a time: never a 500,
+    and an API's 400 names the field at fault."""
+    tally = Tally()
+    unnamed: list[str] = []
+    for role, method, url, body, content_type in edge_requests():
+        answer = tally.send(role_clients[role], role, method, url, body, content_type)
+        is_api_400 = answer is not None and answer.status_code == 400 and answer.mimetype == "application/json"
+        if is_api_400 and not (answer.get_json().get("error") or {}).get("field"):
+            unnamed.append(f"{role} {method} {url[:120]} {(body or b'')[:80]!r}: {answer.get_data(as_text=True)[:99]}")
+    tally.record("edge_fields")
+    assert not tally.failures, f"{len(tally.failures)} answers were 500:\n" + "\n".join(tally.failures[:40])
+    assert not unnamed, "400s that name no field:\n" + "\n".join(unnamed[:20])
