@@ -28,10 +28,9 @@ from middleware.chat import sockets as chat_sockets
 from middleware.courses import routes as courses_routes
 from middleware.errors import register_error_handlers
 from middleware.experiment import routes as experiment_routes
-from middleware.experiment import trial_rules
 from middleware.extensions import csrf, login_manager, socket_login_check
 from middleware.farm import setup as farm_setup
-from middleware.lab import limits_routes, pool_routes
+from middleware.lab import delay, limits_routes, pool_routes
 from middleware.lab import routes as lab_routes
 from middleware.lab import skills as lab_skills
 from middleware.lab import sockets as lab_sockets
@@ -106,8 +105,7 @@ def _compose_robot_access(app: Flask) -> None:
     priority = with_graded_run_priority(with_guided_priority(bookings_services.priority_user_id))
     coordinator = access_coordinator.init_app(app, AccessHooks(priority, bookings_services.check_in))
     practice_robots.init_app(app, robots, farm_setup.init_app(app))
-    commands.init_app(app, robots, coordinator, (trial_rules.teleoperation_only(db.session_factory(app)),))
-    preferences_routes.lock_preference(trial_rules.FEEDBACK_PREFERENCE_KEY, trial_rules.feedback_set_by_trial)
+    commands.init_app(app, robots, coordinator)
 
 
 def _register_areas(app: Flask) -> None:
@@ -122,3 +120,4 @@ def _register_areas(app: Flask) -> None:
     app.register_blueprint(lab_teleperception.blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
                             practice_routes.register, tour_live.register], socket_login_check)
+    realtime.hold_viewers_with(app, delay.viewer_hold)

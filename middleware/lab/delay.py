@@ -1,5 +1,4 @@
-"""Injected video delay: every stream that shows one viewer where the robot is (camera, telemetry, localization)
-held until capture time + delay, or arrival + delay for a stream without a capture time (commands are not).
+"""Injected video delay: one viewer's camera and telemetry held until capture time + delay (commands are not).
 
 The thesis added delay with a distant proxy; here the relay does it per viewer. `DelayQueue` is the pure
 part (ordering, bounds); `parse_delay_s` validates a requested delay; `ViewerDelay` follows one viewer's
@@ -206,13 +205,11 @@ def delay_book(app=None) -> DelayBook:
     return book
 
 
-def viewer_delay(robot_name: str) -> ViewerDelay:
-    """The delay of the logged-in viewer of a socket on robot_name, from the process's delay book."""
-    from flask_login import current_user
-
+def viewer_hold(robot_name: str, user_id: int) -> ViewerHold:
+    """user_id's hold on a stream of robot_name, by the process's delay book (realtime.relay_stream's hook,
+    composed in create_app)."""
     book = delay_book()
-    user_id = int(current_user.get_id())
-    return ViewerDelay(lambda: book.delay_of(user_id, robot_name), refresh_s=0.0)  # the book limits the reads
+    return ViewerHold(ViewerDelay(lambda: book.delay_of(user_id, robot_name), refresh_s=0.0))  # the book limits reads
 
 
 def apply_viewer_delay(ws, delay: ViewerDelay | None, held: DelayQueue, online: bool = True) -> float:
@@ -226,3 +223,26 @@ def apply_viewer_delay(ws, delay: ViewerDelay | None, held: DelayQueue, online: 
                             "message": f"An added delay of {value:g} s is on your video." if value else ""},
                            separators=(",", ":")))
     return value
+
+class ViewerHold:
+    """One viewer's injected delay on one stream: the delay in force and the messages held back by it."""
+
+    def __init__(self, delay: ViewerDelay) -> None:
+        self._delay, self._held = delay, DelayQueue(0.0)
+
+    def update(self, ws, online: bool) -> bool:
+        """Reads the delay in force (a change is announced on ws); whether messages are held now (after a delay
+        ends, the held ones go first)."""
+        return apply_viewer_delay(ws, self._delay, self._held, online) > 0 or len(self._held) > 0
+
+    def push(self, message: bytes | str, now_s: float) -> None:
+        """Holds message until its capture time (or now_s) + the delay."""
+        self._held.push(message, capture_time_s(message), now_s)
+
+    def pop_due(self, now_s: float) -> list[bytes | str]:
+        """The held messages whose time has come, oldest first."""
+        return self._held.pop_due(now_s)
+
+    def seconds_until_next(self, now_s: float) -> float | None:
+        """How long until the next release, or None when nothing is held."""
+        return self._held.seconds_until_next(now_s)

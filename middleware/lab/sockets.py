@@ -20,7 +20,6 @@ from middleware.access.sockets import ChannelSeat, open_robot_channel
 from middleware.assessment.hidden_obstacles import CAMERA_REFUSAL, OBSTACLES_HIDDEN, hiding_book
 from middleware.auth.schemas import InvalidField
 from middleware.db import session_factory
-from middleware.lab.delay import ViewerDelay, viewer_delay
 from middleware.lab.schemas import GOAL_ID_PATTERN, DriveLimits, parse_drive_message
 from middleware.live.loop import Continuation, blocking_work
 from middleware.live.wire import LiveSocket
@@ -29,6 +28,7 @@ from middleware.realtime import (
     CLOSE_NOT_FOUND,
     CLOSE_TRY_AGAIN_LATER,
     Channels,
+    ViewerHold,
     WebSocket,
     as_json,
     parse_ping,
@@ -36,6 +36,7 @@ from middleware.realtime import (
     refuse,
     relay_stream,
     send_json,
+    viewer_hold,
 )
 from middleware.robots.fanout import FanoutHub
 from middleware.robots.link import CommandRefused, RobotLink, RobotUnavailable
@@ -57,7 +58,7 @@ def obstacles_hidden_from(user_id: int) -> bool:
     return hiding_book(current_app).hides(user_id)
 
 
-def camera_relay(ws: WebSocket, hub: FanoutHub[bytes], delay: ViewerDelay | None = None) -> Continuation | None:
+def camera_relay(ws: WebSocket, hub: FanoutHub[bytes], hold: ViewerHold | None = None) -> Continuation | None:
     """A camera's frames for the current user, refused while their obstacle-zone test is in progress (the picture
     shows the obstacles), and closed with the same sentence when one begins while they watch."""
     user_id = int(current_user.get_id())
@@ -77,7 +78,7 @@ def camera_relay(ws: WebSocket, hub: FanoutHub[bytes], delay: ViewerDelay | None
 
         watcher = asyncio.ensure_future(close_when_a_zone_test_begins())
         try:
-            await relay_stream(live, hub, delay=delay)
+            await relay_stream(live, hub, hold=hold)
         finally:
             watcher.cancel()
 
@@ -89,7 +90,7 @@ def camera_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     link = open_robot_channel(ws, robot_name)
     if link is None:
         return None
-    return camera_relay(ws, link.camera, viewer_delay(robot_name))
+    return camera_relay(ws, link.camera, viewer_hold(robot_name, int(current_user.get_id())))
 
 
 def telemetry_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
@@ -98,7 +99,8 @@ def telemetry_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     link = open_robot_channel(ws, robot_name)
     if link is None:
         return None
-    return truth_hidden_in_graded_runs(robot_name, link.telemetry, True)
+    hold = viewer_hold(robot_name, int(current_user.get_id()))
+    return truth_hidden_in_graded_runs(robot_name, link.telemetry, True, hold)
 
 
 def measured_round_trip_ms(link: RobotLink) -> float | None:
@@ -237,12 +239,11 @@ def localization_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     return truth_hidden_in_graded_runs(robot_name, link.localization, sees_ground_truth())
 
 
-def truth_hidden_in_graded_runs(robot_name: str, hub: FanoutHub, shown: bool) -> Continuation:
+def truth_hidden_in_graded_runs(robot_name: str, hub: FanoutHub, shown: bool,
+                                hold: ViewerHold | None = None) -> Continuation:
     """Relays hub's messages packed (with the truth, without it): the first while shown and the user is in no
-    graded run on the robot, the second from the moment one begins (checked every GRADED_RUN_RECHECK_S). Every
-    stream relayed here shows where the robot is, so each is held by the viewer's injected delay, as the camera is."""
+    graded run on the robot, the second from the moment one begins (checked every GRADED_RUN_RECHECK_S)."""
     user_id = int(current_user.get_id())
-    delay = viewer_delay(robot_name)
     truth = [shown and not in_graded_run(robot_name, user_id)]
     work = blocking_work()
 
@@ -254,7 +255,7 @@ def truth_hidden_in_graded_runs(robot_name: str, hub: FanoutHub, shown: bool) ->
 
         watcher = asyncio.ensure_future(hide_truth_when_a_graded_run_begins())
         try:
-            await relay_stream(live, hub, choose=lambda versions: versions[0 if truth[0] else 1], delay=delay)
+            await relay_stream(live, hub, choose=lambda versions: versions[0 if truth[0] else 1], hold=hold)
         finally:
             watcher.cancel()
 
