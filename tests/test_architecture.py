@@ -147,6 +147,45 @@ def test_lower_middleware_layers_do_not_import_upward(folder: str, forbidden: tu
     assert not offenders, f"{folder} imports upward: {offenders}"
 
 
+# Plumbing every area stands on; it knows no feature (a feature's hook is handed to it by create_app).
+PLUMBING = ("middleware.realtime", "middleware.live", "middleware.robots", "middleware.db", "middleware.errors",
+            "middleware.events", "middleware.locking", "middleware.validation", "middleware.web")
+# The areas; middleware.auth is not one of them for plumbing: the sockets' login check reads its login records.
+FEATURE_AREAS = ("access", "accounts", "assessment", "bookings", "chat", "courses", "experiment", "farm", "lab",
+                 "plans", "preferences", "teaching")
+
+
+def area_of(module: str) -> str:
+    """middleware.lab.skills -> lab; middleware.realtime -> realtime; the package itself -> middleware."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else parts[0]
+
+
+def test_plumbing_imports_no_feature() -> None:
+    offenders = {module: sorted(t for t in targets if area_of(t) in FEATURE_AREAS)
+                 for module, targets in import_graph(("middleware",)).items() if module.startswith(PLUMBING)}
+    offenders = {module: targets for module, targets in offenders.items() if targets}
+    assert not offenders, f"plumbing knows no feature; create_app hands it the hooks it needs: {offenders}"
+
+
+def mutual_area_imports(graph: dict[str, set[str]]) -> list[tuple[str, str]]:
+    """Pairs of middleware areas that import each other, anywhere in a file (a function-level import counts)."""
+    edges = {(area_of(m), area_of(t)) for m, targets in graph.items() for t in targets
+             if m.startswith("middleware.") and t.startswith("middleware.") and area_of(m) != area_of(t)}
+    return sorted((a, b) for a, b in edges if a < b and (b, a) in edges)
+
+
+def test_no_two_middleware_areas_import_each_other() -> None:
+    assert mutual_area_imports(import_graph(("middleware",))) == [], (
+        "one of the two areas is the lower floor: move the shared rule down, or hand a hook through create_app")
+
+
+def test_the_mutual_import_check_finds_a_pair_through_a_function_level_import() -> None:
+    graph = {"middleware.lab.skills": {"middleware.plans.services"}, "middleware.plans.routes": {"middleware.lab.x"},
+             "middleware.courses.routes": {"middleware.accounts.web"}}
+    assert mutual_area_imports(graph) == [("lab", "plans")]
+
+
 def test_only_the_launcher_command_imports_the_launcher() -> None:
     importers = {file for file, names in imported_modules("middleware").items() if "middleware.lab_runner" in names}
     assert importers <= {"middleware/cli.py"}, f"the launcher only composes; imported by {sorted(importers)}"

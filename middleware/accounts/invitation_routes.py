@@ -5,14 +5,16 @@ from __future__ import annotations
 from flask import flash, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required, logout_user
+from sqlalchemy import select
 
 from middleware.accounts import invitations
 from middleware.accounts.schemas import clean_invitation_days, clean_optional_id
-from middleware.accounts.web import back_url, blueprint, json_body, now
+from middleware.accounts.web import back_url, blueprint
 from middleware.auth import sessions
-from middleware.courses.services import list_courses
 from middleware.db import discard_changes, get_session
 from middleware.errors import Refused, flashed, unless_refused
+from middleware.models import Course
+from middleware.web import json_body, now
 
 
 @blueprint.get("/admin/invitations")
@@ -21,7 +23,7 @@ def invitations_page() -> ResponseReturnValue:
     """Every invitation and the form to invite anyone (admins)."""
     views = invitations.list_invitations(get_session(), current_user, None, now())
     return render_template("accounts/invitations.html", invitations=views, errors={},
-                           courses=list_courses(get_session(), current_user))
+                           courses=get_session().scalars(select(Course).order_by(Course.code)).all())
 
 
 @blueprint.post("/invitations")

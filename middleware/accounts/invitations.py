@@ -15,10 +15,9 @@ from datetime import UTC, datetime, timedelta
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
-from middleware.accounts.services import forbidden
+from middleware.accounts.services import forbidden, is_course_tutor
 from middleware.auth.schemas import InvalidField, clean_new_password, clean_role, clean_username
 from middleware.auth.services import AccountExists, create_user
-from middleware.courses.services import get_course, is_course_tutor
 from middleware.errors import Refused
 from middleware.locking import rows_matched
 from middleware.models import Course, CourseMembership, Invitation, Role, User
@@ -54,7 +53,9 @@ def create_invitation(session: Session, actor: User, role: object, course_id: in
                       lasts: timedelta, now: datetime) -> tuple[Invitation, str]:
     """A new invitation and its token (shown once, as part of the link). The caller commits."""
     invited_role = clean_role(role)
-    course = get_course(session, course_id) if course_id is not None else None
+    course = session.get(Course, course_id) if course_id is not None else None
+    if course_id is not None and course is None:
+        raise Refused(404, "unknown_course", f"There is no course with id {course_id}.", "course_id")
     if actor.role == Role.TUTOR:
         if course is None or not is_course_tutor(session, actor.id, course.id):
             raise forbidden("You can invite people only into a course you teach.")

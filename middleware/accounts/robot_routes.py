@@ -8,11 +8,12 @@ from flask_login import current_user, login_required
 
 from middleware.accounts import robot_admin
 from middleware.accounts.schemas import clean_flag, clean_id
-from middleware.accounts.web import blueprint, json_body
+from middleware.accounts.web import blueprint
 from middleware.db import after_commit, get_session
 from middleware.errors import flashed, unless_refused
 from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.registry import robot_registry
+from middleware.web import json_body
 
 SCENE_RECHECK_S = 5.0  # as the scene route: a robot restarted in another scene is noticed within this
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from datetime import datetime
 
-from sqlalchemy import exists, select
+from sqlalchemy import exists, func, select
 from sqlalchemy.orm import Session, aliased
 
 from middleware.accounts.schemas import clean_throttle_key
@@ -38,6 +38,15 @@ def get_user(session: Session, user_id: int) -> User:
     if user is None:
         raise Refused(404, "unknown_user", f"There is no account with id {user_id}.", "user_id")
     return user
+
+
+def is_course_tutor(session: Session, user_id: int, course_id: int | None) -> bool:
+    """True when user_id is a tutor member of the course (never for no course)."""
+    if course_id is None:
+        return False
+    return session.execute(select(func.count()).select_from(CourseMembership).where(
+        CourseMembership.course_id == course_id, CourseMembership.user_id == user_id,
+        CourseMembership.role == "tutor")).scalar_one() > 0
 
 
 def tutors_student(session: Session, tutor_id: int, student_id: int) -> bool:

@@ -7,9 +7,10 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.accounts import services
-from middleware.accounts.web import blueprint, json_body, now
+from middleware.accounts.web import blueprint
 from middleware.db import get_session
 from middleware.errors import flashed, unless_refused
+from middleware.web import json_body, now
 
 
 @blueprint.post("/admin/throttles/clear")

@@ -11,13 +11,14 @@ from flask_login import current_user, login_required
 
 from middleware.accounts import services
 from middleware.accounts.schemas import clean_flag
-from middleware.accounts.web import blueprint, json_body, now
+from middleware.accounts.web import blueprint
 from middleware.auth import sessions
 from middleware.auth.schemas import InvalidField
 from middleware.auth.services import change_own_password
 from middleware.db import get_session
 from middleware.errors import flashed, unless_refused
 from middleware.models import User
+from middleware.web import json_body, now
 
 # --- own password ---------------------------------------------------------------------------------
 

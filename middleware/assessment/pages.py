@@ -15,13 +15,8 @@ from sqlalchemy.orm import Session
 
 from middleware.assessment import attempts, bank, recommendations, review, survey
 from middleware.assessment.attempts import window_state
-from middleware.assessment.routes import (
-    controls_robot,
-    finish_recording,
-    own_robot,
-    record_after_commit,
-    server_now,
-)
+from middleware.assessment.recording import finish_recording, record_after_commit
+from middleware.assessment.routes import controls_robot, own_robot, server_now
 from middleware.assessment.schemas import (
     AGREEMENT,
     RUBRIC_ROWS,

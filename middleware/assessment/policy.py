@@ -2,26 +2,18 @@
 
 from __future__ import annotations
 
-from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware.accounts.services import forbidden
-from middleware.courses.services import get_course, managed_course
+from middleware.courses.services import get_course, is_student_of, managed_course
 from middleware.errors import Refused
-from middleware.models import Course, CourseMembership, Role, User
+from middleware.models import Course, Role, User
 from middleware.models.assessment import Attempt, Exam
 
 
 def teaching_course(session: Session, actor: User, course_id: int) -> Course:
     """The course when actor teaches it or is an admin; 404 or 403 otherwise."""
     return managed_course(session, actor, course_id)
-
-
-def is_student_of(session: Session, user_id: int, course_id: int) -> bool:
-    """True when user_id is enrolled as a student of the course."""
-    return session.scalar(select(CourseMembership.id).where(
-        CourseMembership.course_id == course_id, CourseMembership.user_id == user_id,
-        CourseMembership.role == "student")) is not None
 
 
 def student_course(session: Session, actor: User, course_id: int) -> Course:

@@ -2,28 +2,28 @@
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Callable
-from datetime import UTC, datetime, timedelta
-from typing import TYPE_CHECKING, Any
+from datetime import UTC, datetime
+from typing import Any
 
-from flask import Blueprint, Flask, Response, current_app, has_app_context, jsonify, request
+from flask import Blueprint, Response, current_app, jsonify, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy.orm import Session
 
+from middleware.access.coordinator import access_coordinator
 from middleware.assessment import attempts, bank, recommendations, review, survey
+from middleware.assessment.recording import finish_recording, record_after_commit, robot_run
 from middleware.assessment.schemas import parse_exam, parse_question, parse_survey
-from middleware.db import after_commit, get_session, session_factory
+from middleware.db import get_session
 from middleware.errors import ApiError
-from middleware.models.accounts import as_utc
-from middleware.models.assessment import Attempt, Exam
-
-if TYPE_CHECKING:
-    from middleware.assessment.recorder import RecordingKeeper
+from middleware.models.assessment import Exam
+from middleware.robots.link import RobotUnavailable
+from middleware.robots.registry import robot_registry
+from middleware.teaching.class_sessions import class_robot
+from middleware.web import json_body
 
 blueprint = Blueprint("assessment", __name__)
-_KEEPER_KEY = "telelab.recording_keeper"
 
 
 def server_now() -> datetime:
@@ -34,8 +34,6 @@ def server_now() -> datetime:
 
 def controls_robot(robot_name: str, user_id: int) -> bool:
     """True when the user controls the robot now (their turn, or their booking's priority gave it to them)."""
-    from middleware.access.coordinator import access_coordinator
-
     try:
         return access_coordinator().controller_token(robot_name, user_id) is not None
     except Exception:  # an unknown robot: nobody controls it
@@ -45,10 +43,6 @@ def controls_robot(robot_name: str, user_id: int) -> bool:
 def own_robot(exam: Exam, user_id: int) -> str | None:
     """The student's own robot in an open class session of the exam's course, when it runs the scene of the
     exam's robot (or that robot does not answer to say): the experimental attempt then runs there."""
-    from middleware.robots.link import RobotUnavailable
-    from middleware.robots.registry import robot_registry
-    from middleware.teaching.class_sessions import class_robot
-
     record = class_robot(get_session(), exam.course_id, user_id)
     if record is None:
         return None
@@ -60,67 +54,10 @@ def own_robot(exam: Exam, user_id: int) -> str | None:
     return record.name if scene in (None, record.scene) else None
 
 
-def start_recording(attempt_id: int, robot_name: str) -> None:
-    """Records the robot's ground truth for the attempt in this process, flushing to the database, unless another
-    process records it (a recording that went quiet is taken over, after the trace stored so far)."""
-    from middleware.assessment import recorder
-    from middleware.robots.registry import robot_registry
-
-    link = robot_registry().get(robot_name)
-    if link is None:
-        return
-    factory = session_factory(current_app._get_current_object())  # type: ignore[attr-defined]
-    key, now = recorder.process_key(), datetime.now(UTC)
-    with factory() as session, session.begin():
-        stored = attempts.claim_recording(session, attempt_id, key, now, now - timedelta(seconds=recorder.STALE_S))
-    if stored is None:
-        return
-
-    def flush(trace: list[list[float]]) -> bool:
-        with factory() as session, session.begin():
-            return attempts.record_trace(session, attempt_id, trace, key, datetime.now(UTC))
-
-    recorder.start(attempt_id, link, flush, stored)
-    recording_keeper(current_app._get_current_object()).start()  # type: ignore[attr-defined]
-
-
-def recording_keeper(app: Flask) -> RecordingKeeper:
-    """The app's keeper of orphaned recordings (made once)."""
-    from middleware.assessment.recorder import STALE_S, RecordingKeeper
-
-    keeper = app.extensions.get(_KEEPER_KEY)
-    if keeper is None:
-        factory = session_factory(app)
-        app_ref = weakref.ref(app)  # the keeper's thread ends with the app (tests make many)
-
-        def find_orphans() -> list[tuple[int, str]] | None:
-            if app_ref() is None:
-                return None
-            with factory() as session:
-                return attempts.orphaned_recordings(session, datetime.now(UTC) - timedelta(seconds=STALE_S))
-
-        def resume(attempt_id: int, robot_name: str) -> None:
-            alive = app_ref()
-            if alive is not None:
-                with alive.app_context():
-                    start_recording(attempt_id, robot_name)
-
-        keeper = app.extensions.setdefault(_KEEPER_KEY, RecordingKeeper(find_orphans, resume))
-    return keeper
-
-
 def run(action: Callable[[Session], Any], status: int = 200) -> tuple[Response, int]:
     """Runs action in the request's unit of work and answers its result as JSON (a refusal is the error
     handler's; a TimeUp keeps the attempt submitted as it stood at the deadline)."""
     return jsonify(action(get_session())), status
-
-
-def json_body() -> dict[str, Any]:
-    """The request's JSON object, or a 400."""
-    data = request.get_json(silent=True)
-    if not isinstance(data, dict):
-        raise ApiError(400, "invalid_field", "Send a JSON object.", "body")
-    return data
 
 
 # --- bank -----------------------------------------------------------------------------------------
@@ -266,14 +203,6 @@ def start_attempt(dbs: Session, exam_id: int) -> Any:
     return attempt
 
 
-def record_after_commit(attempt: Attempt, exam: Exam) -> None:
-    """For an experimental test, starts recording the attempt's robot once the attempt is committed (the recorder
-    writes the trace into the attempt's row from a thread of its own)."""
-    robot_name, attempt_id = attempt.robot_name or exam.robot_name, attempt.id
-    if exam.kind == "experimental" and robot_name:
-        after_commit(lambda: start_recording(attempt_id, robot_name))
-
-
 @blueprint.post("/api/exams/<int:exam_id>/attempts")
 @login_required
 def api_start_attempt(exam_id: int) -> ResponseReturnValue:
@@ -305,51 +234,9 @@ def api_save_answers(attempt_id: int) -> ResponseReturnValue:
     return run(action)
 
 
-def finish_recording(attempt_id: int) -> list[list[float]] | None:
-    """The attempt's run: from the robot's own pose log when it covers the whole attempt (complete, whichever worker
-    recorded and whether it lived), else what this process recorded; None: grade what was stored."""
-    from middleware.assessment import recorder
-    from middleware.assessment.policy import get_attempt, get_exam
-
-    recorded = recorder.stop(attempt_id)
-    session = get_session()
-    attempt = get_attempt(session, attempt_id)
-    exam = get_exam(session, attempt.exam_id)
-    robot_name = attempt.robot_name or exam.robot_name
-    if exam.kind == "experimental" and robot_name:
-        kept = robot_run(robot_name, as_utc(attempt.started_at), datetime.now(UTC))
-        if kept is not None:
-            return kept
-    return recorded
-
-
 @blueprint.record_once
 def _grade_settled_attempts_on_the_robot_s_run(_state: object) -> None:
     attempts.read_runs_from(robot_run)
-
-
-def robot_run(robot_name: str, since: datetime, until: datetime) -> list[list[float]] | None:
-    """[t_s, gx, gy, gth, ox, oy, oth] from the robot's pose log between since and until; None when the robot does
-    not answer, no longer keeps that time (it restarted since), or there is no app to ask it through."""
-    from middleware.assessment.recorder import RATE_HZ
-    from middleware.robots.link import RobotUnavailable
-    from middleware.robots.registry import robot_registry
-
-    if not has_app_context():
-        return None
-    link = robot_registry().get(robot_name)
-    if link is None:
-        return None
-    since_unix_s = since.timestamp()
-    try:
-        log = link.pose_log(since_unix_s, until.timestamp())
-    except RobotUnavailable:
-        return None
-    if not log.oldest_unix_s or log.oldest_unix_s > since_unix_s + 2.0 / RATE_HZ:
-        return None
-    return [[round(s.unix_s - since_unix_s, 3), round(s.ground_truth.x_m, 4), round(s.ground_truth.y_m, 4),
-             round(s.ground_truth.theta_rad, 4), round(s.odometry.x_m, 4), round(s.odometry.y_m, 4),
-             round(s.odometry.theta_rad, 4)] for s in log.samples]
 
 
 @blueprint.post("/api/attempts/<int:attempt_id>/submit")

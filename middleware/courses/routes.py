@@ -13,7 +13,6 @@ from sqlalchemy.orm import Session
 
 from middleware.accounts.invitations import list_invitations
 from middleware.accounts.services import forbidden
-from middleware.accounts.web import json_body, now
 from middleware.auth.schemas import InvalidField
 from middleware.courses import services
 from middleware.courses.schemas import (
@@ -25,6 +24,7 @@ from middleware.courses.schemas import (
 from middleware.db import get_session
 from middleware.errors import unless_refused
 from middleware.models import Role
+from middleware.web import json_body, now
 
 blueprint = Blueprint("courses", __name__)
 

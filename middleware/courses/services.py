@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
-from middleware.accounts.services import forbidden
+from middleware.accounts.services import forbidden, is_course_tutor
 from middleware.auth.schemas import InvalidField, clean_username
 from middleware.auth.services import create_user, generate_password
 from middleware.courses.schemas import CourseSettings, clean_code, clean_title, parse_enrolment_csv
@@ -71,13 +71,11 @@ def get_course(session: Session, course_id: int) -> Course:
     return course
 
 
-def is_course_tutor(session: Session, user_id: int, course_id: int | None) -> bool:
-    """True when user_id is a tutor member of the course (never for no course)."""
-    if course_id is None:
-        return False
-    return session.execute(select(func.count()).select_from(CourseMembership).where(
+def is_student_of(session: Session, user_id: int, course_id: int) -> bool:
+    """True when user_id is enrolled as a student of the course."""
+    return session.scalar(select(CourseMembership.id).where(
         CourseMembership.course_id == course_id, CourseMembership.user_id == user_id,
-        CourseMembership.role == "tutor")).scalar_one() > 0
+        CourseMembership.role == "student")) is not None
 
 
 def managed_course(session: Session, actor: User, course_id: int) -> Course:

@@ -7,8 +7,8 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
+from middleware.access.limits import UNITS, changeable_fields, check_permitted, parse_limits_request
 from middleware.db import get_session
-from middleware.lab.limits import UNITS, changeable_fields, check_permitted, parse_limits_request
 from middleware.robots.messages import limits_dict
 
 blueprint = Blueprint("limits", __name__)

@@ -11,11 +11,10 @@ from flask import Blueprint, Response, abort, current_app, jsonify, render_templ
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
-from middleware.accounts.web import json_body
+from middleware.access.limits import WATCHDOG_FIELD, changeable_fields
 from middleware.auth.schemas import InvalidField
 from middleware.courses.services import list_courses
 from middleware.db import get_session
-from middleware.lab.limits import WATCHDOG_FIELD, changeable_fields
 from middleware.models import Role
 from middleware.plans import schemas, services
 from middleware.plans.language import PlanInvalid, plan_from_json
@@ -25,6 +24,7 @@ from middleware.plans.services import PlanRefused
 from middleware.robots.registry import robot_registry
 from middleware.teaching.practice_robots import practice_manager
 from middleware.teaching.targets import reference_skills
+from middleware.web import json_body
 
 blueprint = Blueprint("plans", __name__)
 

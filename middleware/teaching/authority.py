@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from sqlalchemy.orm import Session
 
-from middleware.assessment.policy import is_student_of
 from middleware.courses.authority import shares_authorship, teaches_course
+from middleware.courses.services import is_student_of
 from middleware.errors import Refused
 from middleware.models import Role, User
 from middleware.models.teaching import GuidedSession

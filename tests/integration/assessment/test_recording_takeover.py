@@ -40,7 +40,7 @@ def _stored_trace(factory, attempt_id: int) -> list:
 def test_a_recording_whose_worker_died_is_taken_over_and_the_whole_run_is_graded(app, client_as,
                                                                                    course_people) -> None:
     from middleware.assessment import attempts, recorder
-    from middleware.assessment.routes import recording_keeper
+    from middleware.assessment.recording import recording_keeper
     from middleware.db import session_factory
     from middleware.models.assessment import Attempt
 

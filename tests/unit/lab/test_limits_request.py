@@ -6,8 +6,8 @@ import math
 
 import pytest
 
+from middleware.access.limits import LIMIT_FIELDS, check_permitted, parse_limits_request
 from middleware.errors import ApiError
-from middleware.lab.limits import LIMIT_FIELDS, check_permitted, parse_limits_request
 
 
 def test_zero_and_absent_values_keep_the_robot_s() -> None:
