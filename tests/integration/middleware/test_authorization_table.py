@@ -250,8 +250,9 @@ def _seed(session: Session) -> dict[str, int]:
     demo = Tour(slug="demo-tour", title="Demo", steps_json=json.dumps(DEMO_TOURS[0]["steps"]))
     lesson = Lesson(slug="shared-lesson", title="Lesson", video_name=VIDEO, cues_vtt=DEMO_CUES,
                     author_id=people["lead_a"].id)
-    session.add_all([tour, demo, lesson, Trial(user_id=people["stu_a"].id, robot_name="lab-1", course="course-A",
-                                                delay_s=1.0, feedback=True, status="completed", total_time_s=42.0)])
+    session.add_all([tour, demo, lesson, Trial(user_id=people["stu_a"].id, course_id=course_a.id, robot_name="lab-1",
+                                                course="course-A", delay_s=1.0, feedback=True, status="completed",
+                                                total_time_s=42.0)])  # a trial that counts for course A
     session.commit()
     return {**{name: user.id for name, user in people.items()}, "course_a": course_a.id, "course_b": course_b.id,
             "tour": tour.id, "demo_tour": demo.id, "lesson": lesson.id}
