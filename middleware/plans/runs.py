@@ -17,11 +17,12 @@ it stands.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from middleware.access.commands import Commander, robot_commands
 from middleware.errors import ApiError
-from middleware.plans.language import IfStep, Plan, RepeatStep, SetStep, plan_from_json
+from middleware.plans.language import Plan, plan_from_json, plan_to_json
 from middleware.plans.proto_form import plan_to_proto
 from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.messages import goal_dict
@@ -39,22 +40,27 @@ class RunRequest:
     from_dock: bool
 
 
-def watchdog_lines(plan: Plan) -> list[int]:
-    """The lines of the plan's `set watchdog` steps, blocks included."""
+def watchdog_lines(plan: Plan | Mapping[str, object]) -> list[int]:
+    """The lines of the plan's `set watchdog` steps, blocks included: of a Plan, or of its canonical JSON as stored
+    (read before any robot is asked for its skills, or started)."""
+    document = plan_to_json(plan) if isinstance(plan, Plan) else plan
     found: list[int] = []
-    pending = list(plan.steps)
+    pending = list(_steps_of(document.get("steps")))
     while pending:
-        step = pending.pop(0)
-        if isinstance(step, SetStep) and step.setting == "watchdog":
-            found.append(step.line)
-        elif isinstance(step, RepeatStep):
-            pending.extend(step.body)
-        elif isinstance(step, IfStep):
-            pending.extend((*step.then, *step.otherwise))
+        step = pending.pop()
+        line = step.get("line")
+        if step.get("kind") == "set" and step.get("setting") == "watchdog" and isinstance(line, int):
+            found.append(line)
+        for block in ("body", "then", "else"):
+            pending.extend(_steps_of(step.get(block)))
     return sorted(found)
 
 
-def check_settings_permitted(plan: Plan, may_set_watchdog: bool) -> None:
+def _steps_of(value: object) -> list[Mapping[str, object]]:
+    return [step for step in value if isinstance(step, Mapping)] if isinstance(value, list) else []
+
+
+def check_settings_permitted(plan: Plan | Mapping[str, object], may_set_watchdog: bool) -> None:
     """403 not_permitted naming the first `set watchdog` line when the user may not set the robot's watchdog."""
     lines = [] if may_set_watchdog else watchdog_lines(plan)
     if lines:
@@ -139,6 +145,7 @@ def run_plan(user_id: int, username: str, name: str, document: dict[str, object]
              may_set_watchdog: bool) -> dict[str, object]:
     """Starts the plan on the requested robot; the goal, and where the page follows it and cancels it.
     A `set watchdog` line is refused (403) unless may_set_watchdog."""
+    check_settings_permitted(document, may_set_watchdog)  # before a practice robot starts for a refused plan
     practice = request.target == PRACTICE_TARGET
     start: dict[str, object] | None = None
     beside: LabRobotNow | None = None
@@ -148,7 +155,6 @@ def run_plan(user_id: int, username: str, name: str, document: dict[str, object]
     else:
         robot = robot_commands().for_user(request.target, user_id, field="target")
     plan = plan_from_json(document, skill_schemas(robot.link, motor_only=True))
-    check_settings_permitted(plan, may_set_watchdog)
     if practice:
         start = start_practice_robot(robot, request.from_dock, beside)
     goal = robot.run_plan(name, plan_to_proto(plan), preempt=True)

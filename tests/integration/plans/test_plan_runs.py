@@ -111,6 +111,23 @@ def test_the_practice_robot_reports_the_line_running_and_the_failing_line(plans_
     assert wait_for_end(ann, answer)["status"] == "canceled"
 
 
+@pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
+def test_a_plan_refused_for_its_watchdog_line_starts_no_practice_robot(plans_lab: PlansLab) -> None:
+    from middleware.db import session_factory
+    from middleware.models import User
+    from middleware.teaching.practice_robots import practice_manager
+
+    ann = plans_lab.client("student1")
+    plan_id = _create(ann, "watchdog-first", 'say "hi"\nrepeat 2 {\n  set watchdog 0.5s\n}\n')
+    status, answer = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "practice", "from_dock": True})
+    assert status == 403 and answer["error"]["message"].startswith("Line 3: "), answer
+    app = plans_lab.server.app
+    with session_factory(app)() as session:
+        ann_id = session.query(User.id).filter_by(username="student1").scalar()
+    assert practice_manager(app).get(ann_id) is None
+    assert not practice_manager(app).farm.robots()
+
+
 @pytest.fixture
 def fresh_lab_and_robot(tmp_path: Path) -> Iterator[tuple[LiveServer, SkillServerProcess]]:
     """A lab whose lab-1 is a skill server of its own, fresh at its dock in the lab scene (the session's robot
