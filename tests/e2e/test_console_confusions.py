@@ -42,6 +42,7 @@ def test_a_timed_wall_following_run_shows_progress_in_plain_words(page, live_ser
     wait_for_control(page)
     page.get_by_role("tab", name="Navigate").click()
     panel = page.locator('skill-panel[data-skill="wall_following"]')
+    panel.locator("[data-field=skill-settings] summary").click()  # the fields set less often are folded
     panel.locator('input[name="duration_s"]').fill("6")
     panel.locator('button[data-action="activate"]').click()
     wait_for_status(page, "wall_following", "executing")

@@ -16,6 +16,17 @@ const FIRST_TAB = "drive";
  * Frames for the panels in `grid`, a menu in `menuHost`.
  * `save(value)` stores the layout (returns a promise); `onSaveError(error)` reports a failed save.
  */
+const HELP_SHOWN_CHARS = 140;
+
+/** A panel's help: whole when short; else its first sentence, the rest a click away (seven skills' paragraphs made
+ *  the Navigate tab four screens tall). */
+function frameHelp(help) {
+  const cut = help.search(/\.\s/);
+  if (help.length <= HELP_SHOWN_CHARS || cut < 0) return h("p", { class: "panel-frame__help", text: help });
+  return h("details", { class: "panel-frame__help" },
+    h("summary", { text: help.slice(0, cut + 1) }), h("p", { text: help.slice(cut + 2) }));
+}
+
 export class ConsoleLayout {
   #grid;
   #menuList;
@@ -150,7 +161,7 @@ export class ConsoleLayout {
         h("h2", { class: "panel-frame__title", id: titleId, text: title }),
         h("div", { class: "panel-frame__tools", role: "group", "aria-label": `Arrange ${title}` },
           buttons.up, buttons.down, buttons.span, buttons.hide)),
-      descriptor.help ? h("p", { class: "panel-frame__help", text: descriptor.help }) : null,
+      descriptor.help ? frameHelp(descriptor.help) : null,
       notice,
       panel);
     const checkbox = h("input", { type: "checkbox", checked: true, id: `show-panel-${id}`, "data-show-panel": id,

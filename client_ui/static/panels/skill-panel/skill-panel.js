@@ -6,9 +6,12 @@
 //     `currentPose` ({x_m, y_m, theta_rad}: keeps a pose guess, initial_*, filled until the person types one).
 // Out: "skill-activate" (detail {skill, parameters, preempt}), "skill-cancel" (detail {skill, goal_id}).
 // The browser's constraint validation gives early hints; the server's verdict is shown next to the field.
+// Compact, so the Navigate tab's seven skills do not fill five screens: the fields a person sets each time (a goal's
+// x/y, a pose guess, else the first parameter) are shown, the others fold under "Settings" (opened by itself when one of them is refused),
+// and the progress and figures appear once a goal runs.
 
 import { h } from "../../lib/dom.js";
-import { GUESS_FIELDS } from "../../lib/panel-descriptors.js";
+import { GUESS_FIELDS, goalParameterNames } from "../../lib/panel-descriptors.js";
 import { parameterLabel, readValue, shortNumber } from "../../lib/parameters.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
@@ -71,6 +74,8 @@ export class SkillPanel extends PanelElement {
   #result;
   #latest;
   #observingNote;
+  #more;
+  #figures;
   #goal = null;
   #currentPose = null;
   #guessEdited = false;
@@ -133,6 +138,7 @@ export class SkillPanel extends PanelElement {
     }
     this.dataset.status = goal.status;
     this.dataset.goalId = String(goal.goal_id ?? "");
+    this.#figures.hidden = false;
     this.#status.textContent = STATUS_WORDS[goal.status] ?? goal.status;
     const active = ACTIVE.has(goal.status);
     this.#cancel.disabled = !active || goal.status === "canceling";
@@ -186,6 +192,7 @@ export class SkillPanel extends PanelElement {
     }
     const entry = error.field ? this.#inputs.get(error.field) : null;
     if (entry) {
+      entry.input.closest("details")?.setAttribute("open", "");
       entry.errorLine.textContent = error.message || "This value was refused.";
       entry.errorLine.hidden = false;
       entry.input.setAttribute("aria-invalid", "true");
@@ -210,7 +217,18 @@ export class SkillPanel extends PanelElement {
     this.classList.add("panel", "skill");
     this.dataset.skill = descriptor.skill;
     this.#form = h("form", { class: "skill__form", onsubmit: (event) => this.#submit(event, false) });
-    for (const parameter of descriptor.schema) this.#form.append(this.#field(parameter));
+    const goal = goalParameterNames(descriptor.schema);
+    const guess = descriptor.schema.some((parameter) => parameter.name === GUESS_FIELDS.x);
+    const everyTime = new Set(guess ? Object.values(GUESS_FIELDS) : goal ? [goal.x, goal.y]
+      : descriptor.schema.slice(0, 1).map((parameter) => parameter.name));
+    const settings = h("div", { class: "skill__settings" });
+    for (const parameter of descriptor.schema) {
+      const shown = everyTime.has(parameter.name);
+      (shown ? this.#form : settings).append(this.#field(parameter, shown));
+    }
+    const folded = descriptor.schema.length - [...everyTime].filter((name) => this.#inputs.has(name)).length;
+    this.#more = folded ? h("details", { class: "skill__more", "data-field": "skill-settings" },
+      h("summary", { text: `Settings (${folded})` }), settings) : null;
     this.#activate = h("button", { type: "submit", class: "button button--primary", "data-action": "activate",
       text: "Activate" });
     this.#cancel = h("button", { type: "button", class: "button button--secondary", "data-action": "cancel",
@@ -230,7 +248,7 @@ export class SkillPanel extends PanelElement {
         title: "Fill the guess with where the robot believes it is now",
         onclick: () => { this.#guessEdited = false; this.#fillGuess(); } }));
     }
-    this.#form.append(this.#formError, this.#observingNote,
+    this.#form.append(...(this.#more ? [this.#more] : []), this.#formError, this.#observingNote,
       h("div", { class: "skill__actions" }, this.#activate, this.#cancel, this.#preempt));
 
     const field = (name) => (this.#fields[name] = h("span", { "data-field": `skill-${name}`, text: "—" }));
@@ -247,17 +265,19 @@ export class SkillPanel extends PanelElement {
       this.#form,
       h("div", { class: "skill__live", "aria-live": "polite" },
         h("p", { class: "skill__line" }, "Status: ", this.#status, " · state ", field("state")),
-        this.#progress,
-        h("dl", { class: "skill__figures" },
-          h("div", {}, h("dt", { text: "Distance error" }), h("dd", {}, field("distance"), " m")),
-          h("div", {}, h("dt", { text: "Heading error" }), h("dd", {}, field("heading"), "°")),
-          h("div", {}, h("dt", { text: "Pose" }), h("dd", {}, field("pose")))),
+        this.#figures = h("div", { hidden: true }, this.#progress,
+          h("dl", { class: "skill__figures" },
+            h("div", {}, h("dt", { text: "Distance error" }), h("dd", {}, field("distance"), " m")),
+            h("div", {}, h("dt", { text: "Heading error" }), h("dd", {}, field("heading"), "°")),
+            h("div", {}, h("dt", { text: "Pose" }), h("dd", {}, field("pose"))))),
         this.#latest, this.#result),
       h("details", { class: "skill__log" }, h("summary", { text: "Events" }), this.#events),
     );
   }
 
-  #field(parameter) {
+  /** A parameter's field; a field shown unfolded keeps its help for screen readers and as its tooltip (its label
+   *  and unit say what it is), so the panel stays short. */
+  #field(parameter, shown = false) {
     const id = `${this.#uid}-${parameter.name}`;
     const helpId = `${id}-help`;
     const errorId = `${id}-error`;
@@ -286,16 +306,19 @@ export class SkillPanel extends PanelElement {
     const numeric = parameter.type === "double" || parameter.type === "int";
     const range = numeric && Number.isFinite(parameter.minimum) && Number.isFinite(parameter.maximum)
       ? ` (${shortNumber(parameter.minimum)} to ${shortNumber(parameter.maximum)})` : "";
+    if (shown) input.title = `${parameter.help ?? ""}${range}`;
     const label = h("label", { for: id }, parameterLabel(parameter.name),
       parameter.unit ? h("span", { class: "skill__unit", text: ` [${parameter.unit}]` }) : null);
     return h("div", { class: `skill__field skill__field--${parameter.type}` },
       label, input,
-      h("p", { class: "skill__help", id: helpId, text: `${parameter.help ?? ""}${range}` }),
+      h("p", { class: shown ? "skill__help visually-hidden" : "skill__help", id: helpId,
+        text: `${parameter.help ?? ""}${range}` }),
       entry.errorLine);
   }
 
   #submit(event, preempt) {
     event.preventDefault();
+    if (this.#more?.querySelector(":invalid")) this.#more.open = true; // a folded field's hint must be seen
     if (!this.#form.reportValidity()) return; // the browser's hint points at the field
     const parameters = {};
     for (const [name, { parameter, input }] of this.#inputs) {
