@@ -8,11 +8,15 @@ from __future__ import annotations
 import contextlib
 import gc
 import logging
+import os
 import signal
 import socket
+import time
+from pathlib import Path
 from typing import Any
 
 from flask import Flask
+from gunicorn.arbiter import Arbiter as _Arbiter  # type: ignore[import-untyped]
 from werkzeug.serving import BaseWSGIServer, make_server
 
 from middleware.realtime import WEBSOCKET_ENDED
@@ -76,27 +80,24 @@ def settle_heap() -> None:
     gc.freeze()
 
 
-GRACEFUL_TIMEOUT_S = 15  # a leaving worker's requests finish within this; its sockets reconnect elsewhere at once
+GRACEFUL_TIMEOUT_S = 15  # a leaving worker's requests and sockets finish within this
+GUNICORN_CONFIG = Path(__file__).resolve().parent.parent / "deploy" / "gunicorn.conf.py"
 
 
-def serve_with_gunicorn(host: str, port: int, workers: int, threads: int = 200) -> None:
-    """Serves create_app() with gunicorn's threaded workers on one port, until SIGINT or SIGTERM.
+def serve_with_gunicorn(host: str, port: int, workers: int) -> None:
+    """Serves create_app() with gunicorn's threaded workers on one port, until SIGINT or SIGTERM, configured by
+    deploy/gunicorn.conf.py (the file a deployment's web hosts use).
 
     Every worker makes its own app after the fork (connections, listeners and the robot links are per process).
-    SIGHUP to this process restarts the workers one generation at a time: new ones start, the old ones close
-    their WebSockets with 1012 (the browser reconnects to a new worker) and finish their requests.
+    SIGHUP to this process restarts the workers one at a time (roll_restarts).
     """
-    from gunicorn.app.base import BaseApplication  # type: ignore[import-untyped]
+    from gunicorn.app.base import Application  # type: ignore[import-untyped]
 
-    options = {"bind": f"{host}:{port}", "workers": workers, "worker_class": "gthread", "threads": threads,
-               "graceful_timeout": GRACEFUL_TIMEOUT_S, "timeout": 60, "keepalive": 5,
-               "post_worker_init": _settle_worker, "worker_exit": _let_go_of_robots,
-               "loglevel": "warning", "proc_name": "telelab"}
-
-    class LabServer(BaseApplication):
+    class LabServer(Application):
         def load_config(self) -> None:
-            for key, value in options.items():
-                self.cfg.set(key, value)
+            self.load_config_from_file(str(GUNICORN_CONFIG))
+            self.cfg.set("bind", [f"{host}:{port}"])
+            self.cfg.set("workers", workers)
 
         def load(self) -> Flask:
             from middleware import create_app
@@ -106,10 +107,35 @@ def serve_with_gunicorn(host: str, port: int, workers: int, threads: int = 200) 
     LabServer().run()
 
 
-def _settle_worker(worker: Any) -> None:
-    """Once the worker's app is made: its start-up heap is settled, and SIGTERM drains its channels."""
+def roll_restarts(arbiter: Any) -> None:
+    """gunicorn's on_starting hook: the master becomes a RollingArbiter (gunicorn takes no arbiter class from a
+    configuration file, and a deployment's bare `gunicorn -c` must restart the same way as `telelab up`)."""
+    arbiter.__class__ = RollingArbiter
+
+
+def settle_worker(worker: Any) -> None:
+    """gunicorn's post_worker_init hook: the worker's start-up heap is settled, SIGTERM drains its channels, and it
+    tells the master it serves (one byte in its heartbeat file, which the master reads)."""
     settle_heap()
     _close_channels_when_leaving(worker)
+    os.write(worker.tmp.fileno(), b"1")
+
+
+def leave_worker(_server: Any, worker: Any) -> None:
+    """gunicorn's worker_exit hook: waits until the worker's sockets have closed (their messages answered), then lets
+    go of the robots. Without the wait the process ended before its closing frames left (clients saw 1006) and
+    with chat lines still unstored."""
+    from middleware.access.coordinator import access_coordinator
+    from middleware.live.loop import wait_for_channels
+    from middleware.robots.registry import robot_registry
+
+    wait_for_channels(GRACEFUL_TIMEOUT_S)
+    app = worker.wsgi
+    if app is None:
+        return  # it never made its app
+    with contextlib.suppress(Exception):  # the worker is leaving either way; a failed close must not hide why
+        access_coordinator(app).stop_ticker()
+        robot_registry(app).close()
 
 
 def _close_channels_when_leaving(worker: Any) -> None:
@@ -122,11 +148,43 @@ def _close_channels_when_leaving(worker: Any) -> None:
     signal.signal(signal.SIGTERM, leave)
 
 
-def _let_go_of_robots(_server: Any, worker: Any) -> None:
-    from middleware.access.coordinator import access_coordinator
-    from middleware.robots.registry import robot_registry
+def serves(worker: Any) -> bool:
+    """Whether a worker has made its app and serves (settle_worker wrote its byte)."""
+    try:
+        return os.fstat(worker.tmp.fileno()).st_size > 0
+    except (OSError, ValueError):
+        return False
 
-    app = worker.wsgi
-    with contextlib.suppress(Exception):  # the worker is leaving either way; a failed close must not hide why
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+
+class RollingArbiter(_Arbiter):
+    """gunicorn's master, except that after a reload (SIGHUP) each old worker is retired only once a new one serves.
+
+    gunicorn's own reload forks the new generation and sends SIGTERM to the old one at once; a new worker then takes
+    seconds to make its app, so consoles found no worker for 1-6 s. Here the old workers keep serving until as many
+    new ones serve (or until `timeout`, should a new one never come up).
+    """
+
+    def manage_workers(self) -> None:
+        retiring: set[int] = self.__dict__.setdefault("_retiring", set())
+        retiring &= set(self.WORKERS)
+        serving = [pid for pid in self.WORKERS if pid not in retiring]
+        for _ in range(self.num_workers - len(serving)):
+            self.spawn_worker()
+        if len(serving) > self.num_workers:
+            self._retire_as_replaced(retiring)
+
+    def _retire_as_replaced(self, retiring: set[int]) -> None:
+        deadline = time.monotonic() + self.cfg.timeout
+        while True:
+            self.reap_workers()
+            retiring &= set(self.WORKERS)
+            serving = {pid: worker for pid, worker in self.WORKERS.items() if pid not in retiring}
+            if len(serving) <= self.num_workers:
+                return
+            ready = sum(1 for worker in serving.values() if serves(worker))
+            if ready > self.num_workers or time.monotonic() > deadline:
+                oldest = min(serving, key=lambda pid: serving[pid].age)
+                self.kill_worker(oldest, signal.SIGTERM)
+                retiring.add(oldest)
+                continue
+            time.sleep(0.05)

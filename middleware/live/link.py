@@ -83,6 +83,7 @@ class SubSocket(Inbox):
     def __init__(self, link: LiveSocket, sub: int, inbound: Any) -> None:
         super().__init__(inbound)
         self._link, self.sub = link, sub
+        link.carried.add(self)
         self.connected = True
         self.close_reason, self.close_message = 1000, ""
         self._prefix = f"{sub} "
@@ -108,6 +109,7 @@ class SubSocket(Inbox):
         return self._link.send_latest(self._framed(data))
 
     def begin_close(self, reason: int, message: str) -> None:
+        self._link.carried.discard(self)
         if self.connected:
             self.connected = False
             self.close_reason, self.close_message = reason, message

@@ -16,6 +16,7 @@ import logging
 import os
 import socket
 import threading
+import time
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -27,6 +28,8 @@ from middleware.live.wire import LiveSocket
 
 log = logging.getLogger(__name__)
 
+DRAIN_WAIT_S = 10.0  # a leaving worker's socket closes once quiet, or after this anyway (within gunicorn's 15 s)
+DRAIN_LOOK_S = 0.02
 WORK_THREADS = 16  # blocking work of all sockets; the database pool (5 + 10 overflow) bounds it anyway
 STREAM_READ_LIMIT = 256 * 1024
 
@@ -127,13 +130,34 @@ class ChannelLoop:
 
     def drain(self) -> None:
         """This worker is leaving: every socket closes with CLOSE_SERVICE_RESTART (its client reconnects to another
-        worker) and new ones are closed at once. Safe from a signal handler."""
+        worker) once the messages it has read are handled and answered, and new ones are closed at once. Safe from
+        a signal handler."""
+        if self.draining:
+            return
         self.draining = True
-        self.loop.call_soon_threadsafe(self._close_all)
+        with contextlib.suppress(RuntimeError):  # the loop closed: the process is ending
+            self.loop.call_soon_threadsafe(self._close_all)
+
+    def wait_drained(self, timeout_s: float) -> bool:
+        """Blocks until every socket of this process has closed (closing frames sent, their channels ended), at
+        most timeout_s; whether they all did. For a leaving worker, before its process ends."""
+        deadline = time.monotonic() + timeout_s
+        while self._sockets and time.monotonic() < deadline:
+            time.sleep(0.05)
+        return not self._sockets
 
     def _close_all(self) -> None:
         for ws in list(self._sockets):
-            asyncio.ensure_future(ws.close(CLOSE_SERVICE_RESTART, "The server is restarting; reconnecting."))
+            asyncio.ensure_future(self._close_when_quiet(ws))
+
+    async def _close_when_quiet(self, ws: LiveSocket) -> None:
+        """Closes ws with CLOSE_SERVICE_RESTART once no message it read waits or is in a handler (at most
+        DRAIN_WAIT_S): a chat line sent just before the restart is stored and answered first. No await comes
+        between the last look and the closing frame, so nothing read in between goes unanswered."""
+        deadline = self.loop.time() + DRAIN_WAIT_S
+        while ws.connected and not ws.quiet() and self.loop.time() < deadline:
+            await asyncio.sleep(DRAIN_LOOK_S)
+        await ws.close(CLOSE_SERVICE_RESTART, "The server is restarting; reconnecting.")
 
 
 def take_connection(raw: socket.socket) -> socket.socket:
@@ -190,10 +214,20 @@ def channel_loop() -> ChannelLoop:
 
 
 def drain_channels() -> None:
-    """Closes every socket of this process with CLOSE_SERVICE_RESTART (a worker leaving)."""
+    """Closes every socket of this process with CLOSE_SERVICE_RESTART once quiet (a worker leaving); returns at once
+    (safe from a signal handler): wait_for_channels waits for it."""
     loop = _loops.get(os.getpid())
     if loop is not None:
         loop.drain()
+
+
+def wait_for_channels(timeout_s: float) -> bool:
+    """Drains this process's sockets and waits until they have all closed, at most timeout_s; whether they did."""
+    loop = _loops.get(os.getpid())
+    if loop is None:
+        return True
+    loop.drain()
+    return loop.wait_drained(timeout_s)
 
 
 def blocking_work() -> Callable[..., Awaitable[Any]]:

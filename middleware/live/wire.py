@@ -125,6 +125,13 @@ class Inbox:
         self.inbound = inbound
         self._arrived = asyncio.Event()
         self.on_overflow = lambda: None
+        self.handling = False  # a message was taken and its handler has not asked for the next one yet
+        self.carried: set[Inbox] = set()  # the channels carried on this socket (a link's)
+
+    def quiet(self) -> bool:
+        """Nothing admitted waits and no handler holds a message, here or on a channel carried here: closing now
+        loses no message the server has read (a leaving worker closes each socket once it is quiet)."""
+        return not self.handling and not len(self.inbound) and all(c.quiet() for c in list(self.carried))
 
     def begin_close(self, reason: int, message: str) -> None:
         """Closes with reason at once (what follows may wait): receive and send raise from now on."""
@@ -139,6 +146,7 @@ class Inbox:
     async def receive(self, timeout: float | None = None) -> str | bytes | None:
         """The next message, or None after timeout s or when nudged; ConnectionClosed once closed and nothing is
         left."""
+        self.handling = False
         self._raise_if_overflowed()
         if not len(self.inbound):
             if not self.connected:
@@ -152,7 +160,9 @@ class Inbox:
                 if not self.connected:
                     raise ConnectionClosed(self.close_reason, self.close_message)
                 return None
-        return self.inbound.pop()
+        message = self.inbound.pop()
+        self.handling = True
+        return message
 
     def nudge(self) -> None:
         """Ends a receive that waits (it returns None): something else needs the channel's attention. On the loop."""
