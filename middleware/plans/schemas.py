@@ -11,7 +11,7 @@ from pathlib import PurePath
 
 from middleware.auth.schemas import InvalidField
 from middleware.plans.language import MAX_TEXT_BYTES, PlanError, PlanInvalid, is_plan_name
-from middleware.validation import InvalidInput, decimal_int, loads_checked, unstorable
+from middleware.validation import InvalidInput, decimal_int, loads_checked, unstorable, unstorable_place
 
 MAX_JSON_FILE_BYTES = 4 * MAX_TEXT_BYTES  # the canonical JSON is wordier than the text it comes from
 EXPORT_FORMATS = ("json", "txt")
@@ -34,7 +34,8 @@ def plan_text(value: object, field: str = "text") -> str:
     if len(value.encode("utf-8", "surrogatepass")) > MAX_TEXT_BYTES:
         raise InvalidField(field, f"A plan's text is at most {MAX_TEXT_BYTES} bytes.")
     if unstorable(value):
-        raise InvalidField(field, "The text holds a character that cannot be stored (a NUL).")
+        raise InvalidField(field, f"The text holds a character that cannot be stored ({unstorable_place(value)}); "
+                                  "remove it.")
     return value
 
 

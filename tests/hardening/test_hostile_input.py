@@ -10,6 +10,7 @@ test-artifacts/hardening-hostile-input.json.
 
 from __future__ import annotations
 
+import io
 import json
 import re
 from collections import Counter
@@ -491,3 +492,27 @@ def test_each_field_of_the_newer_routes_refuses_hostile_values_naming_the_field(
     tally.record("edge_fields")
     assert not tally.failures, f"{len(tally.failures)} answers were 500:\n" + "\n".join(tally.failures[:40])
     assert not unnamed, "400s that name no field:\n" + "\n".join(unnamed[:20])
+
+
+@pytest.mark.parametrize(("role", "url", "body", "field", "place"), [
+    ("student", "/api/plans/check", {"text": 'say "a"\ndrive 0.1 0 for 1s\x00\n'}, "text", "line 2, column 19: a NUL"),
+    ("student", "/api/plans", {"name": "p", "text": 'say "a"\n\nsay "\ud800"\n'}, "text",
+     "line 3, column 6: a lone surrogate"),
+    ("tutor", "/api/lessons/check", {"cues": "WEBVTT\n\n00:00.000 --> 00:01.000\nhi\x00"}, "cues",
+     "line 4, column 3: a NUL"),
+    ("student", "/api/plans/import", {"file": (b'say "a"\n\nsay "b\x00"\n', "p.txt")}, "file",
+     "line 3, column 7: a NUL"),
+    ("student", "/api/plans/import", {"file": (b'say "a"\n\xed\xa0\x80\n', "p.txt")}, "file", "line 2"),
+])
+def test_text_that_cannot_be_stored_is_refused_naming_its_line(role_clients, role, url, body, field, place) -> None:
+    """A plan's text or a cue track holding NUL or a lone surrogate: a 400 naming the field and the line."""
+    if field == "file":
+        content, filename = body["file"]
+        answer = role_clients[role].post(url, data={"file": (io.BytesIO(content), filename)},
+                                         content_type="multipart/form-data")
+    else:
+        raw = json.dumps(body).encode()  # a lone surrogate goes out as the JSON escape a client sends
+        answer = role_clients[role].post(url, data=raw, content_type="application/json")
+    error = answer.get_json()["error"]
+    assert answer.status_code == 400 and error["field"] == field, error
+    assert place in error["message"], error
