@@ -357,6 +357,35 @@ def test_routes_leave_commit_and_rollback_to_the_unit_of_work() -> None:
                            f"for what must follow the commit, or allow-list the view with a reason: {offenders}")
 
 
+# Modules ("path") or functions ("path::function") that commit or roll back sessions of their own, and why; the
+# request's (and a socket's) unit of work is middleware/db.py's alone. A service takes the caller's session and flushes.
+OWN_TRANSACTIONS_ALLOW_LIST = {
+    "middleware/db.py": "the unit of work's owner",
+    "middleware/cli.py": "console commands: each is a unit of work of its own",
+    "middleware/lab_runner.py": "`telelab up` seeds the lab before any request",
+    "middleware/teaching/demo_content.py": "`telelab up` seeds the demo content before any request",
+    "middleware/robots/catalog.py": "the registry seeds the configured robots at start, racing other workers",
+    "middleware/auth/session_records.py": "a login's last_seen_at, committed at once before the request writes",
+    "middleware/teaching/class_sessions.py::_set_seat": "the background start of a class's robots records each "
+                                                        "seat's outcome",
+    "middleware/teaching/practice_robots.py": "a practice robot's row claims its name across workers before the "
+                                              "farm starts it, and its keeper thread stops idle ones",
+    "middleware/farm/pool_robots.py": "a pool robot's row is written once the farm started it, and its keeper "
+                                      "thread restarts lost ones",
+}
+
+
+def test_only_the_unit_of_work_and_named_duties_commit_or_roll_back() -> None:
+    offenders = sorted(f"{path.relative_to(ROOT)}:{line} {function}() calls .{method}()"
+                       for path in (ROOT / "middleware").rglob("*.py")
+                       if str(path.relative_to(ROOT)) not in OWN_TRANSACTIONS_ALLOW_LIST
+                       for function, method, line in transaction_calls(path.read_text())
+                       if f"{path.relative_to(ROOT)}::{function}" not in OWN_TRANSACTIONS_ALLOW_LIST)
+    assert not offenders, ("nothing commits or rolls back a caller's session behind its back: services flush and "
+                           "raise a Refused, the unit of work's owner ends it (a background duty uses "
+                           f"unit_of_work(app) or `with sessions() as s, s.begin()`): {offenders}")
+
+
 def coded_exception_classes() -> list[str]:
     """module.Class of every class in middleware that sets a `code` attribute (self.code = ..., or in its body)."""
     found = []

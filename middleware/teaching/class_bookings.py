@@ -34,56 +34,63 @@ CLASS_BOOKINGS_LOCK = 0x7E1E_C1A5
 def sync_with_bookings(sessions: Callable[[], Session], manager: PracticeManager,
                        now: datetime | None = None) -> tuple[list[int], list[int]]:
     """Opens the class sessions of class bookings whose slot starts within START_AHEAD (or has started), and ends
-    those whose booking ended or was cancelled; (bookings opened, sessions ended)."""
+    those whose booking ended or was cancelled; (bookings opened, sessions ended). Each booking is a unit of work
+    of its own: one that is refused leaves the others' done."""
     now = now or utc_now()
-    opened: list[int] = []
     with sessions() as session:
-        due = session.scalars(select(Booking).where(
+        due = session.scalars(select(Booking.id).where(
             Booking.kind == "class", Booking.course_id.is_not(None), Booking.cancelled_at.is_(None),
             Booking.starts_at <= now + START_AHEAD, Booking.ends_at > now)).all()
-        for booking in due:
-            assert booking.course_id is not None
+    opened = [booking_id for booking_id in due if _open_for_booking(sessions, manager, booking_id)]
+    return opened, _end_finished(sessions, manager, now)
+
+
+def _open_for_booking(sessions: Callable[[], Session], manager: PracticeManager, booking_id: int) -> bool:
+    """Opens the booking's class session unless it has one or its course has an open one; its robots start once
+    it is committed. False when nothing was opened."""
+    try:
+        with sessions() as session, session.begin():
+            booking = session.get(Booking, booking_id)
+            if booking is None or booking.course_id is None:
+                return False
             if (session.scalar(select(ClassSession.id).where(ClassSession.booking_id == booking.id)) is not None
                     or class_sessions.open_session(session, booking.course_id) is not None):
-                continue
+                return False
             tutor = session.get(User, booking.user_id)
             if tutor is None:
-                continue
-            try:
-                started = class_sessions.start_session(session, tutor, booking.course_id, manager,
-                                                       booking_id=booking.id)
-                session.commit()
-            except Refused as refusal:
-                session.rollback()
-                log.warning("the class booking %s did not open its session: %s", booking.id, refusal.message)
-                continue
-            class_sessions.prestart_robots(sessions, manager, started.id)
-            opened.append(booking.id)
-        ended = _end_finished(session, manager, now)
-    return opened, ended
+                return False
+            started_id = class_sessions.start_session(session, tutor, booking.course_id, manager,
+                                                      booking_id=booking.id).id
+    except Refused as refusal:
+        log.warning("the class booking %s did not open its session: %s", booking_id, refusal.message)
+        return False
+    class_sessions.prestart_robots(sessions, manager, started_id)
+    return True
 
 
-def _end_finished(session: Session, manager: PracticeManager, now: datetime) -> list[int]:
-    rows = session.execute(select(ClassSession, Booking).join(Booking, Booking.id == ClassSession.booking_id)
-                           .where(ClassSession.ended_at.is_(None))).all()
+def _end_finished(sessions: Callable[[], Session], manager: PracticeManager, now: datetime) -> list[int]:
+    with sessions() as session:
+        rows = session.execute(select(ClassSession.id, ClassSession.course_id, Booking.id, Booking.user_id,
+                                      Booking.cancelled_at, Booking.ends_at)
+                               .join(Booking, Booking.id == ClassSession.booking_id)
+                               .where(ClassSession.ended_at.is_(None))).all()
     ended = []
-    for opened, booking in rows:
-        if booking.cancelled_at is None and as_utc(booking.ends_at) > now:
-            continue
-        tutor = session.get(User, booking.user_id)
-        if tutor is None:
+    for class_session_id, course_id, booking_id, tutor_id, cancelled_at, ends_at in rows:
+        if cancelled_at is None and as_utc(ends_at) > now:
             continue
         try:
-            owners = class_sessions.end_session(session, tutor, opened.course_id)
-            session.commit()
+            with sessions() as session, session.begin():
+                tutor = session.get(User, tutor_id)
+                owners = None if tutor is None else class_sessions.end_session(session, tutor, course_id)
         except Refused as refusal:  # the booker no longer teaches the course: a tutor ends it by hand
-            session.rollback()
-            log.warning("the class session %s of booking %s was not ended: %s", opened.id, booking.id,
+            log.warning("the class session %s of booking %s was not ended: %s", class_session_id, booking_id,
                         refusal.message)
+            continue
+        if owners is None:
             continue
         for owner_id in owners:
             manager.stop(owner_id)
-        ended.append(opened.id)
+        ended.append(class_session_id)
     return ended
 
 

@@ -98,8 +98,7 @@ def start_session(session: Session, actor: User, course_id: int, manager: Practi
     session.add(opened)
     try:
         session.flush()
-    except IntegrityError:  # another tutor opened it at the same moment
-        session.rollback()
+    except IntegrityError:  # another tutor opened it at the same moment; the unit of work's owner rolls back
         raise Refused(409, "class_session_open", "A class session is open for this course already.") from None
     session.add_all(ClassSeat(session_id=opened.id, user_id=user.id) for user in students)
     session.flush()
