@@ -40,12 +40,20 @@ MAX_DRIVE_HOLD_S = 10.0  # direct_control's own limit; a longer hold is renewed 
 MIN_DRIVE_HOLD_S = 0.1
 
 
-class NotController(CommandRefused):
-    """The user does not control the robot now (they observe, or the turn moved on)."""
+NOBODY_IN_CONTROL_MESSAGE = ("Nobody has control of this robot now: take a turn first (the Turn panel, on the "
+                             "console or on this page, gives you one).")
 
-    def __init__(self, field: str | None = None) -> None:
+
+class NotController(CommandRefused):
+    """The user does not control the robot now (they observe, the turn moved on, or nobody holds it and they have
+    not taken a turn: then the sentence says so, not "someone else has control")."""
+
+    def __init__(self, field: str | None = None, nobody_controls: bool = False) -> None:
         super().__init__("not_controller", NOT_CONTROLLER_MESSAGE, field)
         self.field = field
+        if nobody_controls:
+            self.message = NOBODY_IN_CONTROL_MESSAGE
+            self.args = (self.message,)
 
 
 class TokenSource(Protocol):
@@ -56,6 +64,9 @@ class TokenSource(Protocol):
 
     def resend(self, token: str) -> bool:
         """Hands the robot token again (it restarted and forgot it); False if that failed."""
+
+    def nobody_controls(self) -> bool:
+        """Whether nobody holds the robot now (a refusal then says to take a turn, not that someone else has it)."""
 
 
 class Seats(Protocol):
@@ -89,6 +100,10 @@ class SeatTokens:
         """Re-sends the current controller's token to the robot."""
         return self._coordinator.resend_token(self._robot_name)
 
+    def nobody_controls(self) -> bool:
+        """Whether the robot's seat is free (a database read: only on the way to a refusal)."""
+        return self._coordinator.current_token(self._robot_name) == ""
+
 
 class SupervisorTokens:
     """A supervisor's (tutor's, admin's) token for supervisory actions: whatever token the robot obeys now."""
@@ -104,6 +119,10 @@ class SupervisorTokens:
         """Re-sends the current controller's token to the robot."""
         return self._coordinator.resend_token(self._robot_name)
 
+    def nobody_controls(self) -> bool:
+        """A supervisor acts whoever holds the robot."""
+        return False
+
 
 class OwnerToken:
     """A robot with one controller for its whole life (a practice robot, the demo recorder's robot)."""
@@ -118,6 +137,10 @@ class OwnerToken:
     def resend(self, token: str) -> bool:
         """Hands the robot the owner's token again."""
         return hand_over(self._link, token)
+
+    def nobody_controls(self) -> bool:
+        """The owner always holds it."""
+        return False
 
 
 def hand_over(link: RobotLink, token: str) -> bool:
@@ -230,7 +253,7 @@ class Commander:
     def _as_controller(self, call: Callable[[str], T]) -> T:
         token = self._tokens.token(fresh=False)
         if token is None:
-            raise NotController(self._field)
+            raise NotController(self._field, self._tokens.nobody_controls())
         try:
             return call(token)
         except CommandRefused as refused:
@@ -238,7 +261,7 @@ class Commander:
                 raise
             fresh = self._tokens.token(fresh=True)
             if fresh is None:
-                raise NotController(self._field) from None
+                raise NotController(self._field, self._tokens.nobody_controls()) from None
             if fresh == token and not self._tokens.resend(fresh):
                 raise
         return call(fresh)

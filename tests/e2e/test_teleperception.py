@@ -62,6 +62,30 @@ def test_a_student_opens_the_exercise_sees_the_grid_and_downloads_the_readings(
     assert page.locator('[data-field="error"]').is_hidden()
 
 
+@pytest.mark.parametrize(("width", "height"), [(1280, 800), (390, 844)], ids=["desktop", "phone"])
+def test_the_exercise_takes_a_turn_itself_and_its_buttons_drive_the_robot(
+        page, live_server: LiveServer, width: int, height: int) -> None:
+    """Issue 34, item 16: opened straight from a link, with nobody in control, "Turn in place" was refused as
+    "someone else has control"; the page shows the Turn panel, takes the free robot and the button turns it."""
+    from tests.e2e.test_panels import STUDENT_PASSWORD
+
+    page.set_viewport_size({"width": width, "height": height})
+    page.goto(f"{live_server.url}/login")
+    page.fill("#username", "student1")
+    page.fill("#password", STUDENT_PASSWORD)
+    page.get_by_role("button", name="Log in").click()
+    page.locator('[data-field="username"]').first.wait_for(state="attached")
+    page.goto(f"{live_server.url}/lab/lab-1/teleperception")
+    turn = page.get_by_role("region", name="Turn")
+    turn.get_by_text("You have control").wait_for(timeout=20_000)
+    page.get_by_role("button", name="Turn in place (4 s)").click()
+    page.locator('[data-field="message"]').filter(has_text="Moving: these readings go to part 2.").wait_for()
+    assert page.locator('[data-field="error"]').is_hidden(), page.locator('[data-field="error"]').text_content()
+    wait_for(lambda: counts(page).get("moving", 0) > 0, 15, "no readings were taken while the robot turned")
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS_DIR / f"teleperception-turn-{width}.png"), full_page=True)
+
+
 OBSTACLES = [(2.2, 1.1, 2.8, 1.7), (-2.6, 1.35, -1.8, 1.85), (-1.6, -2.25, -0.4, -1.75), (1.55, -1.75, 2.05, -1.25)]
 
 

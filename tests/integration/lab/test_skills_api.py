@@ -215,9 +215,25 @@ def test_an_observer_cannot_start_skills_and_a_missing_csrf_token_is_refused(
     assert observer.login("observer") == 302
     status, body = api(observer, "POST", "/api/robots/lab-1/skills/orientation_control/goals", {"parameters": {}})
     assert status == 403 and body["error"]["code"] == "not_controller"
+    assert body["error"]["message"].startswith("You are observing: someone else has control")
     status, _, raw = student_client.request("POST", "/api/robots/lab-1/skills/orientation_control/goals", {})
     assert status == 400 and "csrf" in raw.lower()
     queue.close()
+
+
+def test_a_refusal_while_nobody_has_control_says_to_take_a_turn(student_client: LabClient, live_server) -> None:
+    """Issue 34, item 16: with the seat free, a command from someone without a turn was told "someone else has
+    control"; it is told that nobody has, and how to take a turn."""
+    from middleware.access.coordinator import access_coordinator
+
+    deadline = time.monotonic() + 30  # a seat an earlier test held is freed past its grace period
+    while access_coordinator(live_server.app).current_token("lab-1") != "" and time.monotonic() < deadline:
+        time.sleep(0.5)
+    assert access_coordinator(live_server.app).current_token("lab-1") == ""
+    status, body = api(student_client, "POST", "/api/robots/lab-1/skills/orientation_control/goals",
+                       {"parameters": {}})
+    assert status == 403 and body["error"]["code"] == "not_controller", body
+    assert body["error"]["message"].startswith("Nobody has control of this robot now: take a turn first"), body
 
 
 def test_a_turn_moved_on_in_another_process_is_seen_when_the_robot_refuses_the_known_token(

@@ -2,10 +2,13 @@
 // draws the chosen layers with the robot at its odometry pose, resets the grid, exports the raw readings, and, in
 // an obstacle-zone test (?attempt=<id>), lets the student drag rectangles on the grid and save them as the answer.
 // The page never sees where the obstacles really are: the server grades the marks.
+// The robot obeys whoever has the turn: the page shows the console's own Turn panel, whose socket takes a turn as the
+// console's does (so the drive buttons work once the robot is free, and say why not while someone else has it).
 
 import { canvasToWorld, fitView, worldToCanvas, worldTransform } from "../../lib/map-geometry.js";
 import { ApiError, fetchJson } from "../../lib/transport.js";
 import { gridImage } from "../../panels/map-panel/map-panel.js";
+import { showRobotPanels } from "../teaching/robot-panels.js";
 
 const POLL_MS = 1000;
 const ROBOT_RADIUS_M = 0.2;
@@ -224,5 +227,6 @@ root.querySelector("[data-action=reset]").addEventListener("click", resetGrid);
 for (const input of root.querySelectorAll("[name=sonar], [name=laser], [name=part]")) input.addEventListener("change", poll);
 window.addEventListener("resize", draw);
 if (attemptId) wireZone();
+showRobotPanels(root.querySelector("[data-slot=turn]"), robot, ["queue"]);
 poll();
 setInterval(poll, POLL_MS);
