@@ -130,8 +130,8 @@ def leave_worker(_server: Any, worker: Any) -> None:
     from middleware.robots.registry import robot_registry
 
     wait_for_channels(GRACEFUL_TIMEOUT_S)
-    app = worker.wsgi
-    if app is None:
+    app = getattr(worker, "wsgi", None)
+    if not isinstance(app, Flask):
         return  # it never made its app
     with contextlib.suppress(Exception):  # the worker is leaving either way; a failed close must not hide why
         access_coordinator(app).stop_ticker()
