@@ -451,11 +451,20 @@ def demo_accounts(app) -> dict[str, str]:
 # `make test` runs the files in parallel processes (pytest-xdist, --dist loadfile): each file runs whole, in its
 # order, in one process, and each process has its own session fixtures (lab-1, Chromium, the migrated templates).
 # Files that share something of the machine's rather than of the process's run in one process, one after another:
-# Ray's clusters (a Ray started without an address joins the newest cluster on the machine, and a failed start stops
-# every Ray of the machine).
+# Ray's clusters (a Ray started without an address joins a cluster running on the machine, and a failed start stops
+# every Ray of the machine), and labs of several web processes on PostgreSQL (each process's pool holds up to 15 of
+# the server's 100 connections, and two such labs at once would also slow each other's measured steps).
 SAME_PROCESS_FILES = {
     "tests/integration/farm/test_ray_farm.py": "ray",
     "tests/integration/benchmarks/test_farm_benchmark_smoke.py": "ray",
+    **dict.fromkeys([
+        "tests/e2e/test_class_across_workers.py",
+        "tests/e2e/test_lab_with_workers.py",
+        "tests/integration/benchmarks/test_capacity_benchmark_smoke.py",
+        "tests/integration/benchmarks/test_database_load_benchmark_smoke.py",
+        "tests/integration/benchmarks/test_workers_benchmark_smoke.py",
+        "tests/integration/middleware/test_rolling_restart.py",
+    ], "postgresql-labs"),
 }
 
 

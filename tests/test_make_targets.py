@@ -35,3 +35,8 @@ def test_make_test_runs_the_files_in_parallel_processes_with_rays_files_in_one()
         "tests/integration/benchmarks/test_farm_benchmark_smoke.py::test_b")
     assert scheduler._split_scope("tests/unit/plans/test_plan_text.py::test_a") == "tests/unit/plans/test_plan_text.py"
     assert scheduler._split_scope("tests/e2e/test_turns.py::test_a") == "tests/e2e/test_turns.py"
+
+
+def test_the_files_that_share_a_process_exist() -> None:
+    missing = [path for path in conftest.SAME_PROCESS_FILES if not (ROOT / path).is_file()]
+    assert not missing, f"renamed or removed: update tests/conftest.py's SAME_PROCESS_FILES ({missing})"
