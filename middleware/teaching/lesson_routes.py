@@ -25,6 +25,7 @@ from middleware.errors import ApiError, flashed, unless_refused
 from middleware.extensions import csrf
 from middleware.models import User
 from middleware.models.teaching import Lesson
+from middleware.robots.registry import robot_registry
 from middleware.teaching.authority import require_author_rights
 from middleware.teaching.command_form import RobotCommand
 from middleware.teaching.cues import parse_cue_track
@@ -40,12 +41,19 @@ from middleware.teaching.lessons import (
     check_lesson,
     delete_unused_video,
     lesson_dict,
+    place_for_lesson,
     save_lesson,
     stored_cues,
     unused_videos,
     video_dir,
 )
-from middleware.teaching.targets import authoring_catalog, execute, reference_skills, resolve_target
+from middleware.teaching.targets import (
+    PRACTICE_TARGET,
+    authoring_catalog,
+    execute,
+    reference_skills,
+    resolve_target,
+)
 
 blueprint = Blueprint("lessons", __name__)
 PAPER_FIGURES = {"cue_to_robot_ms": [652.88, 543.94], "pause_detection_ms": 15.4}
@@ -89,8 +97,6 @@ def index() -> ResponseReturnValue:
 @login_required
 def play(lesson_id: int) -> ResponseReturnValue:
     """The lesson player."""
-    from middleware.robots.registry import robot_registry
-
     return render_template("teaching/lesson.html", lesson=_lesson(lesson_id), paper=PAPER_FIGURES,
                            lab_robots=robot_registry().names())
 
@@ -259,6 +265,16 @@ def run_cue(lesson_id: int, index: int) -> ResponseReturnValue:
         raise ApiError(404, "unknown_cue", "The lesson has no such cue.", "index")
     result = execute(resolve_target(body.get("target"), _user_id()), cues[index - 1].command, received_at, hold_s)
     return jsonify({**result, "cue": index, "received_unix_ms": round(received_unix_ms, 3)}), 202
+
+
+@blueprint.post("/api/lessons/<int:lesson_id>/start")
+@login_required
+def start_lesson(lesson_id: int) -> ResponseReturnValue:
+    """Places the learner's target where the lesson's video starts (their practice robot: at its dock)."""
+    _lesson(lesson_id)
+    body, _hold_s = _run_body()
+    return jsonify(place_for_lesson(resolve_target(body.get("target"), _user_id()),
+                                    body.get("target") == PRACTICE_TARGET))
 
 
 @blueprint.post("/api/lessons/stop")

@@ -9,6 +9,7 @@ from pathlib import Path
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from middleware.access.commands import Commander
 from middleware.errors import Refused
 from middleware.models.accounts import utc_now
 from middleware.models.teaching import Lesson
@@ -173,3 +174,14 @@ def lesson_dict(lesson: Lesson, with_cues: bool = True) -> dict[str, object]:
         data["cues"] = [c.to_dict() for c in stored_cues(lesson)]
         data["cues_vtt"] = lesson.cues_vtt
     return data
+
+
+def place_for_lesson(robot: Commander, practice: bool) -> dict[str, str]:
+    """Where the robot starts a lesson ("dock" or "here") and a sentence: a lesson's video starts at the dock (the
+    demo's is recorded on a fresh robot there, and a tutor records theirs from it), so the learner's practice robot
+    is carried there and its picture starts as the video's; a lab robot is shared and stays where it stands."""
+    if practice:
+        robot.return_to_dock()
+        return {"at": "dock", "message": "Your practice robot is at its dock, where the lesson's video starts."}
+    return {"at": "here", "message": f"{robot.robot_name} starts where it stands; the video starts at the dock, so "
+                                     "their pictures differ until it is docked (Return to the dock, on its map)."}

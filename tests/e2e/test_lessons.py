@@ -3,12 +3,15 @@ driving a real practice robot, and the pure playback module on its own."""
 
 from __future__ import annotations
 
+import math
 import subprocess
 from pathlib import Path
 
 import pytest
 
+from middleware.access.commands import owned_robot
 from middleware.robots.messages import goal_dict
+from protos.telelab.v1.robot_pb2 import Pose2D
 from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer
 
 pytestmark = pytest.mark.e2e
@@ -71,8 +74,18 @@ def test_the_video_drives_the_practice_robot_by_the_exact_rule(page, live_server
         page.goto(f"{live_server.url}/practice")
         page.get_by_role("button", name="Start my practice robot").click()
         page.wait_for_selector("#practice[data-running=true]", timeout=60000)
+        # Left away from its dock (issue 34, item 14): the lesson carries it back, where its video starts.
+        practice = manager.get(_user_id(live_server, "student1"))
+        _odometry, dock = practice.link.poses_now()
+        owned_robot(practice.link, practice.token).place_robot(Pose2D(x_m=dock.x_m + 1.0, y_m=dock.y_m - 0.8,
+                                                                      theta_rad=dock.theta_rad + 1.2))
         page.goto(f"{live_server.url}/lessons/{lesson_id}")
         page.wait_for_selector("#lesson[data-ready=true]")
+        page.get_by_role("status").filter(has_text="Your practice robot is at its dock, where the lesson's video "
+                                                   "starts.").wait_for(timeout=15_000)
+        _odometry, standing = practice.link.poses_now()
+        assert math.hypot(standing.x_m - dock.x_m, standing.y_m - dock.y_m) < 0.02, standing
+        assert abs(math.remainder(standing.theta_rad - dock.theta_rad, math.tau)) < 0.02, standing
         camera = page.get_by_role("region", name="Camera", exact=True)
         camera.wait_for(timeout=30_000)
         assert page.get_by_role("region", name="Lab model", exact=True).is_visible()

@@ -14,6 +14,7 @@ const logList = root.querySelector("[data-slot=log]");
 const lessonId = Number(root.dataset.lessonId);
 const MAX_LOG = 60;
 const MAX_HOLD_S = 10;
+const START_S = 0.5; // a paused video sought back this near its start starts the lesson again
 
 const series = { cueToAck: [], middlewareToAck: [], pauseDetect: [], pauseToAck: [] };
 let cues = [];
@@ -138,8 +139,23 @@ async function start() {
   on(video, "seeked", () => playback.seekEnd(video.paused, activeIndex()));
   on(video, "waiting", () => playback.buffering());
   on(video, "ended", () => playback.ended());
+  on(video, "seeked", () => { if (video.paused && video.currentTime < START_S) placeAtStart(); });
   root.dataset.ready = "true";
-  showStatus("Press play: the robot follows the video.");
+  await placeAtStart();
+}
+
+/** The robot goes where the video starts (a practice robot: its dock) before the first cue, so its picture and
+ *  the video's begin alike; the server says where it stands. */
+async function placeAtStart() {
+  try {
+    const answer = await fetchJson(`/api/lessons/${lessonId}/start`, { method: "POST",
+      body: { target: targetSelect.value } });
+    root.dataset.startedAt = answer.at;
+    log(answer.message, "start");
+    showStatus(`${answer.message} Press play: the robot follows the video.`);
+  } catch {
+    showStatus("Press play: the robot follows the video."); // e.g. the practice robot is off: the page offers it
+  }
 }
 
 showLessonRobot(root.querySelector("[data-slot=robot-panels]"), targetSelect, video);
