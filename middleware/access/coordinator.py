@@ -124,7 +124,7 @@ class AccessCoordinator:
     def snapshot(self, robot_name: str) -> QueueState:
         """The robot's queue as stored now."""
         with self._sessions() as session:
-            return round_robin.snapshot(session, robot_name)
+            return round_robin.snapshot(session, robot_name, self.clock(), self.policy.grace_s)
 
     def seen_snapshot(self, robot_name: str) -> QueueState:
         """The robot's queue as last read here, read again only after a change was announced (any worker); the

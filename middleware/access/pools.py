@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from datetime import datetime, timedelta
 
-from sqlalchemy import delete, select
+from sqlalchemy import delete, func, select
 from sqlalchemy.orm import Session
 
 from middleware.models import PoolQueueEntry, QueueEntry, Robot
@@ -69,21 +69,36 @@ def waiting(session: Session, kind: str, now: datetime, grace_s: float) -> list[
                                 .order_by(PoolQueueEntry.enqueued_at, PoolQueueEntry.id)))
 
 
+def _servable(session: Session, robot_name: str, now: datetime, grace_s: float):  # noqa: ANN202 - a SQL condition
+    """Which pool entries robot_name could serve: live ones of its kind's queue, not seated on a robot of the kind
+    already; None for a robot without a pool (a personal robot, or one disabled meanwhile)."""
+    kind = session.scalar(select(Robot.kind).where(Robot.name == robot_name, Robot.enabled.is_(True)))
+    if kind is None:
+        return None
+    return ((PoolQueueEntry.kind == kind) & (PoolQueueEntry.last_seen_at >= now - timedelta(seconds=grace_s))
+            & PoolQueueEntry.user_id.not_in(_seated_in_kind(kind)))
+
+
 def next_waiter(session: Session, robot_name: str, now: datetime, grace_s: float,
                 only_user: int | None = None) -> int | None:
     """The first live pool waiter robot_name could serve (one of its kind's queue, not seated on a robot of the
     kind already); only_user restricts the answer to that user (a pool booking's holder)."""
-    kind = session.scalar(select(Robot.kind).where(Robot.name == robot_name, Robot.enabled.is_(True)))
-    if kind is None:
-        return None  # a personal robot, or a robot disabled meanwhile: no pool
-    query = (select(PoolQueueEntry.user_id)
-             .where(PoolQueueEntry.kind == kind,
-                    PoolQueueEntry.last_seen_at >= now - timedelta(seconds=grace_s),
-                    PoolQueueEntry.user_id.not_in(_seated_in_kind(kind)))
+    servable = _servable(session, robot_name, now, grace_s)
+    if servable is None:
+        return None
+    query = (select(PoolQueueEntry.user_id).where(servable)
              .order_by(PoolQueueEntry.enqueued_at, PoolQueueEntry.id).limit(1))
     if only_user is not None:
         query = query.where(PoolQueueEntry.user_id == only_user)
     return session.scalar(query)
+
+
+def waiters_for(session: Session, robot_name: str, now: datetime, grace_s: float) -> int:
+    """How many live pool waiters robot_name could serve (each counts as someone waiting for it)."""
+    servable = _servable(session, robot_name, now, grace_s)
+    if servable is None:
+        return 0
+    return session.scalar(select(func.count()).select_from(PoolQueueEntry).where(servable)) or 0
 
 
 def take(session: Session, robot_name: str, user_id: int, now: datetime) -> bool:

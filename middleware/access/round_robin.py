@@ -50,6 +50,7 @@ class QueueState:
     faulted: bool
     token_changed: bool = False
     announced: bool = False  # what a queue page shows changed (announced on the event bus)
+    pool_waiting: int = 0  # pool waiters this robot could serve while nobody waits for it by name
 
 
 @dataclass(frozen=True)
@@ -60,6 +61,7 @@ class Seat:
     is_controller: bool
     position: int  # 0 for the controller, 1.. for the waiting users, -1 when not in the queue
     queue_size: int
+    pool_waiting: int  # waiting for any robot of this kind: they may take this one's next turn
     turn_remaining_s: float | None  # the controller's countdown; None when the turn has no limit
     estimated_wait_s: float | None  # until this user gets control; 0 for the controller
     warning: bool  # the controller's turn ends soon
@@ -254,10 +256,10 @@ def seat_of(state: QueueState, user_id: int, now: datetime, turn_length_s: float
     if state.controller_id == user_id:
         # Short turns would be "ending soon" from their first second; warn in their last quarter then.
         warn_within_s = min(TURN_WARNING_S, turn_length_s / 4)
-        return Seat(True, True, 0, size, remaining, 0.0,
+        return Seat(True, True, 0, size, state.pool_waiting, remaining, 0.0,
                     remaining is not None and remaining <= warn_within_s, state.faulted)
     if user_id not in state.waiting_ids:
-        return Seat(False, False, -1, size, remaining, None, False, state.faulted)
+        return Seat(False, False, -1, size, state.pool_waiting, remaining, None, False, state.faulted)
     position = state.waiting_ids.index(user_id) + 1
     wait = None
     if state.faulted:
@@ -266,14 +268,17 @@ def seat_of(state: QueueState, user_id: int, now: datetime, turn_length_s: float
         wait = 0.0
     elif remaining is not None:
         wait = remaining + (position - 1) * turn_length_s
-    return Seat(True, False, position, size, remaining, wait, False, state.faulted)
+    return Seat(True, False, position, size, state.pool_waiting, remaining, wait, False, state.faulted)
 
 
-def snapshot(session: Session, robot_name: str) -> QueueState:
-    """The queue as stored, read without locking (for display; changes go through the locked functions)."""
+def snapshot(session: Session, robot_name: str, now: datetime | None = None, grace_s: float = 0.0) -> QueueState:
+    """The queue as stored, read without locking (for display; changes go through the locked functions); with now,
+    the pool waiters the robot could serve while its controller is alone (their number is read as of now)."""
     control = session.get(RobotControl, robot_name)
     entries = _entries(session, robot_name)
     controller_id = control.controller_id if control else None
+    alone = controller_id is not None and all(e.user_id == controller_id for e in entries)
+    pool_waiting = pools.waiters_for(session, robot_name, now, grace_s) if alone and now is not None else 0
     return QueueState(
         robot_name=robot_name,
         controller_id=controller_id,
@@ -281,4 +286,5 @@ def snapshot(session: Session, robot_name: str) -> QueueState:
         waiting_ids=tuple(e.user_id for e in entries if e.user_id != controller_id),
         turn_ends_at=_as_utc(control.turn_ends_at) if control else None,
         faulted=bool(control and control.faulted),
+        pool_waiting=pool_waiting,
     )

@@ -44,8 +44,15 @@ def test_a_student_waits_for_any_robot_of_a_kind_and_an_admin_reads_the_pools(pa
         session.commit()
         bob, cy = find_user(session, "bob").id, find_user(session, "cy").id
     with pool_seats_of(access_coordinator(app)) as seats:
-        taken = {seats.claim("sim", bob).robot_name, seats.claim("sim", cy).robot_name}
+        bobs_robot = seats.claim("sim", bob).robot_name
+        taken = {bobs_robot, seats.claim("sim", cy).robot_name}
     assert taken == {"sim-1", "sim-2"}
+    bobs_desk = chromium.new_context(viewport={"width": 1280, "height": 900})
+    bobs_console = bobs_desk.new_page()
+    log_in(bobs_console, pool_lab, "bob")
+    bobs_console.goto(f"{pool_lab.url}/lab/{bobs_robot}")
+    turn = bobs_console.locator("queue-panel")
+    turn.locator('[data-field="queue-summary"]', has_text="Nobody is waiting").wait_for(timeout=30_000)
 
     phone = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
     student = phone.new_page()
@@ -54,6 +61,11 @@ def test_a_student_waits_for_any_robot_of_a_kind_and_an_admin_reads_the_pools(pa
         student.goto(f"{pool_lab.url}/lab")
         student.get_by_role("link", name="Queue for any sim robot (2 robots)").click()
         student.get_by_role("status").filter(has_text="You are number 1 of 1 waiting for a sim robot.").wait_for()
+        # Bob's turn is now limited by the pool's waiter, and his turn panel counts them among those waiting.
+        turn.locator('[data-field="queue-summary"]', has_text="Others are waiting for a robot of this kind").wait_for()
+        assert turn.locator('[data-field="queue-size"]').inner_text() == "1"
+        assert turn.get_by_role("button", name="Pass the turn").is_visible()
+        turn.screenshot(path=str(ARTIFACTS_DIR / "pool-waiter-controller-turn.png"))
         assert "robots serve this queue" in student.locator("[data-field=wait]").inner_text()
         ARTIFACTS_DIR.mkdir(exist_ok=True)
         student.screenshot(path=str(ARTIFACTS_DIR / "pool-waiting-phone.png"), full_page=True)
@@ -71,3 +83,4 @@ def test_a_student_waits_for_any_robot_of_a_kind_and_an_admin_reads_the_pools(pa
         page.screenshot(path=str(ARTIFACTS_DIR / "pools-admin.png"), full_page=True)
     finally:
         phone.close()
+        bobs_desk.close()

@@ -16,9 +16,10 @@ export function formatDuration(seconds) {
   return `${Math.floor(total / 60)}:${String(total % 60).padStart(2, "0")}`;
 }
 
-/** How many wait for a turn (the queue's size counts the driver too). */
+/** How many wait for a turn: this robot's queue (its size counts the driver too) and those waiting for any robot
+ * of its kind, who may take its next turn. */
 export function waitingCount(seat) {
-  return Math.max(0, Number(seat.queue_size) - (seat.controller ? 1 : 0));
+  return Math.max(0, Number(seat.queue_size) - (seat.controller ? 1 : 0)) + (Number(seat.pool_waiting) || 0);
 }
 
 /** The sentence that says where the user stands, in the same terms as the "Waiting" figure beside it. */
@@ -27,8 +28,13 @@ export function describeSeat(seat) {
   if (seat.faulted) return "The robot is not answering. Your place is kept; the turn clock is stopped.";
   if (!seat.in_queue) return "You are watching without a place in the queue.";
   if (seat.is_controller) {
-    return seat.turn_remaining_s === null ? "You have control. Nobody is waiting, so there is no time limit."
-      : "You have control. Others are waiting: your turn ends when the countdown does.";
+    if (seat.turn_remaining_s !== null) {
+      return waitingCount(seat) > 0 && Number(seat.queue_size) <= 1
+        ? "You have control. Others are waiting for a robot of this kind: your turn ends when the countdown does."
+        : "You have control. Others are waiting: your turn ends when the countdown does.";
+    }
+    return waitingCount(seat) > 0 ? "You have control, with no time limit for now: you go first at this time (a booking or a class)."
+      : "You have control. Nobody is waiting, so there is no time limit.";
   }
   const who = seat.controller ? `${seat.controller} is driving.` : "Nobody is driving.";
   const waiting = waitingCount(seat);
@@ -153,7 +159,7 @@ export class QueuePanel extends PanelElement {
       ? "no limit" : formatDuration(seat.turn_remaining_s);
     this.#fields["estimated-wait"].textContent = seat?.faulted ? "—" : formatDuration(seat?.estimated_wait_s);
     this.querySelector('[data-field="turn-warning"]').hidden = !seat?.warning;
-    this.#buttons.pass.hidden = !(seat?.is_controller && seat.queue_size > 1);
+    this.#buttons.pass.hidden = !(seat?.is_controller && waitingCount(seat) > 0);
     this.#buttons.leave.hidden = !seat?.in_queue;
     this.#buttons.join.hidden = !seat || seat.in_queue;
     this.querySelector(".queue__countdown").hidden = !seat?.is_controller;
