@@ -85,8 +85,9 @@ def lab(skill_server_address: str, tmp_path_factory: pytest.TempPathFactory) -> 
         _let_go(app)
 
 
-@pytest.fixture
+@pytest.fixture(scope="module")
 def student(lab: tuple[LiveServer, int]) -> LabClient:
+    """student1, logged in once for the module (each test's sockets are closed when it ends)."""
     client = LabClient(lab[0].url)
     assert client.login() == 302
     return client
@@ -297,3 +298,19 @@ def test_drawn_control_and_channel_messages_never_end_the_link(student: LabClien
     record.parent.mkdir(exist_ok=True)
     record.write_text(json.dumps({"drawn": drawn, "control_messages": len(HOSTILE_CONTROL),
                                   "channel_messages": len(HOSTILE_CHANNEL), "paths": len(HOSTILE_PATHS)}, indent=1))
+
+
+def test_a_message_past_the_socket_limit_closes_it_as_too_big_not_as_a_failure(student: LabClient) -> None:
+    """Past MAX_MESSAGE_BYTES the socket is closed unread (1009, RFC 6455's 'message too big'), by the bound on what
+    a client may make the server buffer; within it, a channel's own smaller limit is an error on that message."""
+    from simple_websocket import ConnectionClosed
+
+    from middleware.realtime import MAX_MESSAGE_BYTES
+
+    link = _open_link(student)
+    link.ws.send(json.dumps({"type": "subscribe", "sub": 1, "path": "/ws/x", "pad": "x" * MAX_MESSAGE_BYTES}))
+    deadline = time.monotonic() + 10.0
+    with pytest.raises(ConnectionClosed):
+        while time.monotonic() < deadline:
+            link.read(1.0)
+    assert link.ws.close_reason == 1009, (link.ws.close_reason, link.ws.close_message)
