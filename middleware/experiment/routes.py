@@ -17,9 +17,9 @@ from middleware.access.commands import robot_commands
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
 from middleware.experiment import services
+from middleware.experiment.delay import delay_book
 from middleware.experiment.progress import TrackRunNow, finished_in_trial, progress_view, track_route
 from middleware.experiment.trial_rules import FEEDBACK_PREFERENCE_KEY
-from middleware.lab.delay import delay_book
 from middleware.models import User, UserPreference
 from middleware.models.accounts import utc_now
 from middleware.models.experiment import TRIAL_OPEN, Trial
@@ -45,9 +45,9 @@ def _run(action: Callable[[Session], T]) -> T:
 
 
 def _trial_dict(trial: Trial) -> dict[str, object]:
-    return {"id": trial.id, "robot_name": trial.robot_name, "course": trial.course, "delay_s": trial.delay_s,
-            "feedback": trial.feedback, "status": trial.status, "total_time_s": trial.total_time_s,
-            "errors": trial.errors}
+    return {"id": trial.id, "course_id": trial.course_id, "robot_name": trial.robot_name, "course": trial.course,
+            "delay_s": trial.delay_s, "feedback": trial.feedback, "status": trial.status,
+            "total_time_s": trial.total_time_s, "errors": trial.errors}
 
 
 def track_robots(user_id: int) -> list[dict[str, object]]:

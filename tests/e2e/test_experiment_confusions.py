@@ -76,3 +76,25 @@ def test_a_trial_keeps_the_console_to_driving_by_hand_and_a_trial_given_up_says_
     page.screenshot(path=str(ARTIFACTS_DIR / "trial-given-up-desktop.png"), full_page=True)
     page.set_viewport_size(PHONE)
     page.screenshot(path=str(ARTIFACTS_DIR / "trial-given-up-phone.png"), full_page=True)
+
+
+def test_a_student_of_two_courses_chooses_the_course_a_trial_counts_for(
+        page, course_b_lab: tuple[Any, LiveServer]) -> None:  # noqa: F811
+    from tests.conftest import make_course
+
+    _robot, lab = course_b_lab  # student1 is in EXP already
+    other = make_course(lab.app, "ZZ", {"student1": "student"})
+    page.set_viewport_size(PHONE)
+    log_in(page, lab, "student1", STUDENT_PASSWORD)
+    page.goto(f"{lab.url}/experiment")
+    choice = page.get_by_label("Counts for")
+    assert choice.locator("option").all_text_contents() == ["EXP — Course EXP", "ZZ — Course ZZ"]
+    choice.select_option(label="ZZ — Course ZZ")
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS_DIR / "trial-course-choice-phone.png"), full_page=True)
+    page.get_by_role("button", name="Start a trial").click()
+    page.locator('[data-field="run"]').wait_for()
+    trial = json.loads(page.evaluate("fetch('/api/experiment/state').then((r) => r.text())"))["trial"]
+    assert trial["course_id"] == other
+    page.get_by_role("button", name="Give up this trial").click()
+    page.locator('[data-field="last-trial"]', has_text="Trial given up").wait_for()
