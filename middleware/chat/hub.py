@@ -4,7 +4,8 @@ A message posted or deleted is announced on the event bus (middleware/events.py:
 process, or this process's own with SQLite) with its room's name. One thread per process, woken by those
 announcements, reads each announced room that has sockets open here (one query pair per room, however many
 viewers) and puts events on each subscriber's queue. Nothing is polled on a timer. The thread stops when the
-last subscriber leaves.
+last subscriber leaves. A room's cursor is the newest id read: services.post_message takes the id under the room's
+lock (locking.lock_chat_room), so ids are committed in their order and no message still in flight has a lower id.
 """
 
 from __future__ import annotations
