@@ -6,6 +6,7 @@ from __future__ import annotations
 import socket
 import time
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -70,7 +71,7 @@ def test_every_student_gets_a_distinct_robot_nobody_else_reaches_and_ending_stop
     status, opened = _api(tutor, "POST", f"/api/courses/{course_id}/class-session")
     assert status == 201 and opened["open"] and len(opened["seats"]) == 10, opened
     state = _wait_until_ready(tutor, course_id)
-    assert state["counts"] == {"starting": 0, "ready": 10, "failed": 0}, state
+    assert state["counts"] == {"starting": 0, "ready": 10, "failed": 0, "stopped": 0}, state
     assert sorted(seat["robot"] for seat in state["seats"]) == [f"practice-{name}" for name in STUDENTS]
     farm = robot_farm(server.app)
     addresses = {robot.address for robot in farm.robots()}
@@ -92,6 +93,27 @@ def test_every_student_gets_a_distinct_robot_nobody_else_reaches_and_ending_stop
         assert refusal(second, f"/ws/robots/practice-s01/{channel}") == ("unknown_robot", 4404), channel
     status, error = _api(first, "GET", f"/api/courses/{course_id}/class-session")
     assert status == 403  # a student does not see the class's seats
+
+    # Five students stop their robots at once: the tutor's view says so at once (issue 34, item 7: the seats kept
+    # saying "ready" and their links led to a 404), their pages offer a restart, and five restarts at once work.
+    stoppers = [_login(server, name) for name in STUDENTS[:5]]
+    with ThreadPoolExecutor(5) as pool:
+        stopped = list(pool.map(lambda client: _api(client, "DELETE", "/api/practice"), stoppers))
+    assert all(status == 200 and body["stopped"] for status, body in stopped), stopped
+    status, state = _api(tutor, "GET", f"/api/courses/{course_id}/class-session")
+    assert state["counts"] == {"starting": 0, "ready": 5, "failed": 0, "stopped": 5}, state
+    assert {seat["username"] for seat in state["seats"] if seat["state"] == "stopped"} == set(STUDENTS[:5])
+    for client in stoppers:
+        status, seat = _api(client, "GET", "/api/class-session")
+        assert seat["state"] == "stopped" and seat["console_url"] is None, seat
+    with ThreadPoolExecutor(5) as pool:
+        restarted = list(pool.map(lambda client: _api(client, "POST", "/api/class-session/robot"), stoppers))
+    assert all(status == 202 and body["state"] == "starting" for status, body in restarted), restarted
+    state = _wait_until_ready(tutor, course_id)
+    assert state["counts"] == {"starting": 0, "ready": 10, "failed": 0, "stopped": 0}, state
+    status, error = _api(stoppers[0], "POST", "/api/class-session/robot")
+    assert (status, error["error"]["code"]) == (409, "robot_running")
+    assert len({robot.address for robot in farm.robots()}) == 10
 
     # The session's robots are not idle while it is open, whatever their last use.
     manager = practice_manager(server.app)
