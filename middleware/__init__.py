@@ -27,10 +27,11 @@ from middleware.chat import routes as chat_routes
 from middleware.chat import sockets as chat_sockets
 from middleware.courses import routes as courses_routes
 from middleware.errors import register_error_handlers
+from middleware.experiment import delay
 from middleware.experiment import routes as experiment_routes
 from middleware.extensions import csrf, login_manager, socket_login_check
 from middleware.farm import setup as farm_setup
-from middleware.lab import delay, limits_routes, pool_routes
+from middleware.lab import limits_routes, pool_routes
 from middleware.lab import routes as lab_routes
 from middleware.lab import skills as lab_skills
 from middleware.lab import sockets as lab_sockets

@@ -18,7 +18,7 @@ from sqlalchemy import select
 from middleware import events
 from middleware.courses.authority import taught_course_ids, teaches_student
 from middleware.errors import Refused
-from middleware.lab.delay import parse_delay_s
+from middleware.experiment.delay import parse_delay_s
 from middleware.models import Course, CourseMembership, Role, User
 from middleware.models.access import RobotControl
 from middleware.models.accounts import utc_now

@@ -6,7 +6,7 @@ from sqlalchemy import Engine
 from sqlalchemy.orm import Session
 
 from middleware.experiment import services
-from middleware.lab.delay import delay_in_force_s, read_all_delays_s
+from middleware.experiment.delay import delay_in_force_s, read_all_delays_s
 from middleware.models import Course, CourseMembership, User
 
 

@@ -28,7 +28,7 @@ def test_a_message_posted_on_one_worker_reaches_a_socket_on_the_other_at_once(po
     from middleware.auth.services import create_user
     from middleware.db import session_factory
     from middleware.events import bus_of
-    from middleware.lab.delay import delay_book
+    from middleware.experiment.delay import delay_book
 
     robots = f"lab-1={skill_server_address}"
     first = make_test_app(postgres_url, robots, tmp_path / "one")

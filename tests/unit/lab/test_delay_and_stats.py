@@ -11,8 +11,7 @@ import time
 import pytest
 
 from middleware.auth.schemas import InvalidField
-from middleware.experiment.services import CONDITIONS, choose_condition, results_csv, summarise
-from middleware.lab.delay import (
+from middleware.experiment.delay import (
     DelayBook,
     DelayQueue,
     Delays,
@@ -21,6 +20,7 @@ from middleware.lab.delay import (
     delay_in_force_s,
     parse_delay_s,
 )
+from middleware.experiment.services import CONDITIONS, choose_condition, results_csv, summarise
 from middleware.models.experiment import Trial
 
 

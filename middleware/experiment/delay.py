@@ -21,9 +21,12 @@ import time
 from collections import deque
 from collections.abc import Callable
 
+from flask import current_app
 from sqlalchemy import String, literal, select, union_all
 
+from middleware import events
 from middleware.auth.schemas import InvalidField
+from middleware.db import session_factory
 from middleware.models.experiment import MAX_INJECTED_DELAY_S, TRIAL_OPEN, Trial, VideoDelay
 
 DEFAULT_MAX_MESSAGES = 600  # 7 s of 20 Hz telemetry or 30 fps video, with room to spare
@@ -183,11 +186,6 @@ def read_all_delays_s(session) -> Delays:
 
 def delay_book(app=None) -> DelayBook:
     """The delay book of app (or of the current app), made on first use."""
-    from flask import current_app
-
-    from middleware import events
-    from middleware.db import session_factory
-
     app = app or current_app._get_current_object()  # type: ignore[attr-defined]
     book = app.extensions.get(_BOOK_KEY)
     if book is None:
@@ -223,6 +221,7 @@ def apply_viewer_delay(ws, delay: ViewerDelay | None, held: DelayQueue, online: 
                             "message": f"An added delay of {value:g} s is on your video." if value else ""},
                            separators=(",", ":")))
     return value
+
 
 class ViewerHold:
     """One viewer's injected delay on one stream: the delay in force and the messages held back by it."""
