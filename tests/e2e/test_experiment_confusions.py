@@ -38,19 +38,23 @@ def test_a_trial_keeps_the_console_to_driving_by_hand_and_a_trial_given_up_says_
     log_in(page, lab, "student1", STUDENT_PASSWORD)
     page.goto(f"{lab.url}/experiment")
     page.locator('[data-field="last-trial"]', has_text="Trial recorded: 42.0 s, 1 line contact.").wait_for()
+    # The console is open before the trial begins: the preview is a switch until then.
+    console = page.context.new_page()
+    console.goto(f"{lab.url}/lab/course-b")
+    console.locator('queue-panel[data-role="controller"]').wait_for()
+    toggle = console.locator('[data-field="feedback-toggle"]')
+    lock = console.locator('[data-field="feedback-lock"]')
+    assert toggle.is_enabled() and lock.is_hidden()
+
+    page.bring_to_front()
     page.get_by_role("button", name="Start the next trial").click()
     page.locator('[data-field="run"]').wait_for()
     trial = json.loads(page.evaluate("fetch('/api/experiment/state').then((r) => r.text())"))["trial"]
     shown = "on" if trial["feedback"] else "off"
     assert f"Motion preview{shown}" in page.locator('[data-field="condition"]').text_content()
 
-    with page.context.expect_page() as opened:
-        page.get_by_role("link", name="Open the robot's console").click()
-    console = opened.value
-    console.locator('queue-panel[data-role="controller"]').wait_for()
-    toggle = console.locator('[data-field="feedback-toggle"]')
-    lock = console.locator('[data-field="feedback-lock"]')
-    lock.wait_for()
+    console.bring_to_front()
+    lock.wait_for(timeout=10_000)  # the trial's delay reached the open console, and with it the trial's preview
     assert lock.text_content() == f"Your delay trial sets the motion preview {shown} until it is recorded or given up."
     assert toggle.is_disabled() and toggle.is_checked() is (shown == "on")
     console.locator("camera-panel").screenshot(path=str(ARTIFACTS_DIR / "trial-preview-locked-desktop.png"))

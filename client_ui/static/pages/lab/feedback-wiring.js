@@ -20,14 +20,21 @@ function save(url, value, panel) {
   });
 }
 
-/** Loads and saves this user's "motion preview" choices (on/off, fill). */
-export function bindFeedback(panel) {
+/** The saved on/off choice, and whether a delay trial holds it (it sets the preview until it ends). */
+function loadPreview(panel) {
   fetchJson(FEEDBACK_PREFERENCE)
     .then((answer) => {
       if (typeof answer?.value === "boolean") panel.feedbackEnabled = answer.value;
-      panel.feedbackLocked = answer?.locked ?? null; // a delay trial sets the preview until it ends
+      panel.feedbackLocked = answer?.locked ?? null;
     })
     .catch(() => {}); // no saved choice: the layer stays on
+}
+
+/** Loads and saves this user's "motion preview" choices (on/off, fill). */
+export function bindFeedback(panel) {
+  loadPreview(panel);
+  // A delay trial begun or ended while this console is open changes the added delay: read the choice again.
+  panel.addEventListener("camera-injected-delay-change", () => loadPreview(panel));
   fetchJson(FILL_PREFERENCE)
     .then((answer) => { if (typeof answer?.value === "string") panel.feedbackFill = answer.value; })
     .catch(() => {}); // no saved choice: the edges are continued

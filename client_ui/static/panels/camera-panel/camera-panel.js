@@ -9,7 +9,8 @@
 // a graded run, when the panel turns to the video), `scene` (the robot's scene
 // description: offers the picture drawn by this browser), `source` ("video" | "drawn").
 // Out: `camera-feedback-change` {enabled} when the person turns the motion preview on or off,
-// `camera-feedback-fill-change` {fill} when they choose the fill, `camera-source-change` {source} when they
+// `camera-feedback-fill-change` {fill} when they choose the fill, `camera-injected-delay-change` {delay_s} when an
+// added delay begins, changes or ends, `camera-source-change` {source} when they
 // choose where the picture comes from (the wiring closes the video socket while it is drawn here; `fallback` is true
 // when this browser cannot draw it and the video comes back without the person choosing it), and, not bubbling,
 // `camera-frame-shown` {source, capture_unix_s, shown_unix_s} each time a frame is put on the canvas (for tools: the
@@ -400,8 +401,11 @@ export class CameraPanel extends PanelElement {
 
   #showInjectedDelay(seconds) {
     const active = Number.isFinite(seconds) && seconds > 0;
+    const shown = this.#injectedBadge.textContent;
     this.#injectedBadge.hidden = !active;
     this.#injectedBadge.textContent = active ? `Added delay ${seconds.toFixed(1)} s` : "";
+    // A delay begun or ended (a delay trial, a tutor's): the preview's lock may have changed with it.
+    if (this.#injectedBadge.textContent !== shown) this.emit("camera-injected-delay-change", { delay_s: seconds });
   }
 
   #requestDraw() {
