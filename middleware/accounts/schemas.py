@@ -10,7 +10,7 @@ from middleware.auth.throttle import MAX_ADDRESS_LENGTH, MAX_USERNAME_LENGTH
 from middleware.validation import decimal_int
 
 ROBOT_NAME = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
-ROBOT_ADDRESS = re.compile(r"^[A-Za-z0-9.\-\[\]:]{1,250}:\d{1,5}$")
+ROBOT_ADDRESS = re.compile(r"^[A-Za-z0-9.\-\[\]:]{1,250}:[0-9]{1,5}$")
 INVITATION_DAYS_DEFAULT = 7
 INVITATION_DAYS_MAX = 30
 MAX_ID = 2**31 - 1

@@ -9,6 +9,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from middleware.auth.schemas import InvalidField
+from middleware.validation import decimal_int
 
 COURSE_CODE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,31}$")
 TURN_LENGTH_S = (10, 3600)
@@ -35,11 +36,10 @@ def clean_title(value: object) -> str:
 def clean_whole(value: object, field: str, bounds: tuple[int, int], unit: str) -> int:
     """A whole number within bounds (inclusive), from JSON or a form field."""
     low, high = bounds
-    if isinstance(value, str) and re.fullmatch(r"\s*\d{1,9}\s*", value):
-        value = int(value)
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+    number = decimal_int(value, low, high)
+    if number is None or (isinstance(value, str) and value.strip()[:1] in ("+", "-")):
         raise InvalidField(field, f"{field} must be a whole number of {unit} from {low} to {high}.")
-    return value
+    return number
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ TIMING = re.compile(
     r"^(?P<start>(?:\d{1,3}:)?\d{1,3}:\d{1,3}[.,]\d{1,3})[ \t]+-->[ \t]+"
     r"(?P<end>(?:\d{1,3}:)?\d{1,3}:\d{1,3}[.,]\d{1,3})(?P<settings>[ \t].*)?$"
 )
-TIMESTAMP = re.compile(r"^(?:(?P<h>\d{1,3}):)?(?P<m>\d{1,3}):(?P<s>\d{1,3})[.,](?P<ms>\d{1,3})$")
+TIMESTAMP = re.compile(r"^(?:(?P<h>\d{1,3}):)?(?P<m>\d{1,3}):(?P<s>\d{1,3})[.,](?P<ms>\d{1,3})$", re.ASCII)
 
 
 @dataclass(frozen=True)
