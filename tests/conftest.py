@@ -496,9 +496,13 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
 def pytest_unconfigure(config: pytest.Config) -> None:
     """A thread left running by a test (a WebSocket reader, a server) must not keep the run from ending:
     CI would wait out its whole time limit and report nothing. After a grace, name the threads and exit
-    with pytest's own status."""
+    with pytest's own status. A pytest-xdist worker is not watched: it lives on, idle, until the main process ends
+    the run (which kills a worker that has not ended 10 s later)."""
     import faulthandler
     import sys
+
+    if hasattr(config, "workerinput"):
+        return
 
     def leave() -> None:
         threading.Event().wait(EXIT_GRACE_S)

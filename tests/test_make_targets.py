@@ -40,3 +40,12 @@ def test_make_test_runs_the_files_in_parallel_processes_with_rays_files_in_one()
 def test_the_files_that_share_a_process_exist() -> None:
     missing = [path for path in conftest.SAME_PROCESS_FILES if not (ROOT / path).is_file()]
     assert not missing, f"renamed or removed: update tests/conftest.py's SAME_PROCESS_FILES ({missing})"
+
+
+def test_a_parallel_worker_that_has_finished_is_left_for_the_main_process_to_end() -> None:
+    """A worker idles until the whole run ends; the exit watchdog would kill it 60 s after its own last file."""
+    import threading
+
+    before = {thread.ident for thread in threading.enumerate()}
+    conftest.pytest_unconfigure(SimpleNamespace(workerinput={"workerid": "gw0"}))
+    assert not [t.name for t in threading.enumerate() if t.ident not in before and t.name == "exit-watchdog"]
