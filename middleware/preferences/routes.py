@@ -51,10 +51,12 @@ def _find(key: str) -> UserPreference | None:
 @blueprint.get("/api/me/preferences/<key>")
 @login_required
 def read(key: str) -> ResponseReturnValue:
-    """The stored value, or null, and why it cannot change now (null when it can)."""
+    """The stored value, or null; for a key that may be locked, why it cannot change now (null when it can)."""
     preference = _find(_key(key))
-    return jsonify({"value": json.loads(preference.value_json) if preference else None,
-                    "locked": _locked_because(key)})
+    answer = {"value": json.loads(preference.value_json) if preference else None}
+    if key in _LOCKS:
+        answer["locked"] = _locked_because(key)
+    return jsonify(answer)
 
 
 @blueprint.put("/api/me/preferences/<key>")
