@@ -63,8 +63,8 @@ def _heard(key: str | None) -> None:
     if key is None:  # the listener reconnected: anything may have changed
         for session_id in list(_versions):
             notify(session_id)
-    elif (session_id := decimal_int(key, 1)) is not None:
-        notify(session_id)
+    elif (heard_id := decimal_int(key, 1)) is not None:
+        notify(heard_id)
 
 
 def _bus_for(db: Session) -> events.EventBus:
