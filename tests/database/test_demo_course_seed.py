@@ -8,7 +8,7 @@ from sqlalchemy.orm import Session
 
 from middleware.auth.services import create_user
 from middleware.db import make_engine
-from middleware.demo_course import DEMO_QUESTIONS, seed_demo_course
+from middleware.demo_course import DEMO_QUESTIONS, DEMO_SURVEY_ANSWERS, seed_demo_course
 from middleware.models import Course, CourseMembership
 from middleware.models.assessment import Exam, Question
 from tests.conftest import migrate_to_head
@@ -29,6 +29,6 @@ def test_the_demo_course_seeds_once(database_url: str) -> None:
             counts = [session.scalar(select(func.count()).select_from(t))
                       for t in (Course, CourseMembership, Question, Exam)]
         assert first.added and again.added == [] and again.course_id == first.course_id
-        assert counts == [1, 2, len(DEMO_QUESTIONS), 3]
+        assert counts == [1, 2 + len(DEMO_SURVEY_ANSWERS), len(DEMO_QUESTIONS), 3]  # the tutor, the student, classmates
     finally:
         engine.dispose()
