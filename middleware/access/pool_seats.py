@@ -18,7 +18,7 @@ from middleware.access.coordinator import AccessCoordinator
 from middleware.access.round_robin import QueueState
 from middleware.db import unit_of_work
 from middleware.errors import Refused
-from middleware.locking import lock_user
+from middleware.locking import lock_robot_control, lock_user
 from middleware.robots.registry import robot_registry
 
 
@@ -93,10 +93,10 @@ class PoolSeats:
 
         One step: each robot that looks free is locked (its control row) and settled, and the user takes it only if
         it is still free under the lock, so of two students claiming the last robot at once one gets it and the
-        other is refused; a claim never queues anyone.
+        other is refused; a claim never queues anyone. Robots are locked in the kind's order and the user's row after
+        a robot's, as bookings do, so no two transactions wait for each other.
         """
         names = self.robots(kind)
-        lock_user(self._session, user_id)  # the same student claiming twice at once takes one robot
         if self._bound(kind, user_id) is None:
             online = self._online(names)
             states = self._states(online)
@@ -104,7 +104,9 @@ class PoolSeats:
             for name in [n for n in online if self._is_free(states[n])]:
                 if not self._is_free(self._run(round_robin.tick, name, policy, now)):
                     continue  # taken meanwhile, or bound to a pool waiter who was first
-                self._run(round_robin.join, name, user_id, policy, now)
+                lock_user(self._session, user_id)  # the same student claiming twice at once takes one robot
+                if self._bound(kind, user_id) is None:
+                    self._run(round_robin.join, name, user_id, policy, now)
                 return self.seat(kind, user_id)
             raise PoolFull(kind, len(online), self._wait_for(self._states(online), 1))
         return self.seat(kind, user_id)
@@ -161,6 +163,8 @@ class PoolSeats:
         states = self._states(online)
         ready = [name for name, state in states.items()
                  if self._is_free(state) or (state.turn_ends_at is not None and state.turn_ends_at <= now)]
+        for name in ready:  # locked in the kind's order before any is ticked: two joins never wait for each other
+            lock_robot_control(self._session, name)
         for name in sorted(ready, key=lambda n: not self._is_free(states[n])):
             state = self._run(round_robin.tick, name, policy, now)
             if user_id == state.controller_id or user_id in state.waiting_ids:
