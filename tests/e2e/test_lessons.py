@@ -4,6 +4,7 @@ driving a real practice robot, and the pure playback module on its own."""
 from __future__ import annotations
 
 import math
+import shutil
 import subprocess
 from pathlib import Path
 
@@ -33,17 +34,25 @@ def log_in(tab, live_server: LiveServer, username: str = "student1") -> None:
     tab.locator('[data-field="username"]').wait_for()
 
 
+@pytest.fixture(scope="module")
+def pattern_video(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A 10 s test-pattern video made by ffmpeg, once for the module's lessons."""
+    video = tmp_path_factory.mktemp("lesson-video") / "pattern.webm"
+    subprocess.run(["ffmpeg", "-loglevel", "error", "-y", "-f", "lavfi", "-i", "testsrc=size=160x120:rate=10",
+                    "-t", "10", "-c:v", "libvpx", "-b:v", "200k", str(video)], check=True)
+    return video
+
+
 @pytest.fixture
-def lesson_id(live_server: LiveServer) -> int:
-    """A lesson on a 10 s test-pattern video made by ffmpeg, with two cues."""
+def lesson_id(live_server: LiveServer, pattern_video: Path) -> int:
+    """A lesson on the test-pattern video, with two cues."""
     from middleware.db import session_factory
     from middleware.teaching.cues import parse_cue_track
     from middleware.teaching.lessons import LessonDraft, save_lesson, video_dir
 
     folder = video_dir(live_server.app.instance_path)
     folder.mkdir(parents=True, exist_ok=True)
-    subprocess.run(["ffmpeg", "-loglevel", "error", "-y", "-f", "lavfi", "-i", "testsrc=size=160x120:rate=10",
-                    "-t", "10", "-c:v", "libvpx", "-b:v", "200k", str(folder / "pattern.webm")], check=True)
+    shutil.copyfile(pattern_video, folder / "pattern.webm")
     cues, errors = parse_cue_track(TRACK, None)
     assert not errors
     with session_factory(live_server.app)() as session:
