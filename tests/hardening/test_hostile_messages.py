@@ -15,7 +15,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tests.conftest import LabClient, LiveServer, _let_go, make_test_app
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, _let_go, add_test_account, make_test_app
 
 LINK_ERROR_FIELDS = {"message", "type", "sub", "path"}
 # The control messages of /ws/link, each wrong in one way (the JSON text as sent).
@@ -56,6 +56,7 @@ HOSTILE_CHANNEL = (
 )
 RELAYS = ("camera", "telemetry", "localization")
 ANSWERING = ("drive", "queue", "chat")  # the channels that take messages, and answer each wrong one
+VIEWERS = 10
 
 
 @pytest.fixture(scope="module")
@@ -68,6 +69,8 @@ def lab(skill_server_address: str, tmp_path_factory: pytest.TempPathFactory) -> 
     tmp_path = tmp_path_factory.mktemp("hostile-messages")
     app = make_test_app(f"sqlite:///{tmp_path / 'lab.sqlite3'}", f"lab-1={skill_server_address}", tmp_path)
     with session_factory(app)() as session:
+        for index in range(VIEWERS):
+            add_test_account(session, f"viewer{index}", "student")
         tutor_id = session.query(User.id).filter_by(username="student1").scalar()
         tour = Tour(slug="hostile", title="Hostile", author_id=tutor_id,
                     steps_json=json.dumps([{"text": "Look.", "panel": "camera", "condition": {"type": "manual"}}]))
@@ -314,3 +317,35 @@ def test_a_message_past_the_socket_limit_closes_it_as_too_big_not_as_a_failure(s
         while time.monotonic() < deadline:
             link.read(1.0)
     assert link.ws.close_reason == 1009, (link.ws.close_reason, link.ws.close_message)
+
+
+def test_one_pages_hostile_messages_leave_every_other_pages_channels_open(student: LabClient,
+                                                                          lab: tuple[LiveServer, int]) -> None:
+    """Ten people watch lab-1's chat and telemetry while one page sends every hostile message: the shared chat and
+    telemetry keep reaching all ten, and none of their channels closes."""
+    viewers = []
+    for index in range(VIEWERS):
+        client = LabClient(lab[0].url)
+        assert client.login(f"viewer{index}", STUDENT_PASSWORD) == 302
+        link = _open_link(client)
+        _subscribe(link, 1, "/ws/robots/lab-1/chat")
+        _subscribe(link, 2, "/ws/robots/lab-1/telemetry")
+        link.wait(lambda s, text: s == 1 and _decoded(text).get("type") == "history")
+        viewers.append(link)
+    attacker = _open_link(student)
+    _subscribe(attacker, 1, "/ws/robots/lab-1/chat")
+    _subscribe(attacker, 2, "/ws/robots/lab-1/drive")
+    attacker.wait(lambda s, text: s == 1 and _decoded(text).get("type") == "history")
+    for control, message in zip(HOSTILE_CONTROL, HOSTILE_CHANNEL * 2, strict=False):
+        attacker.ws.send(control)
+        attacker.ws.send(f"1 {message}")
+        attacker.ws.send(f"2 {message}")
+        attacker.read_for(0.12)
+    attacker.ws.send(f'1 {json.dumps({"type": "say", "body": "after the storm"})}')
+    attacker.wait(lambda s, text: s == 1 and _decoded(text).get("type") == "sent")
+    for link in viewers:
+        link.wait(lambda s, text: s == 1 and (_decoded(text).get("message") or {}).get("body") == "after the storm")
+        link.taken = set(range(len(link.seen)))
+        link.wait(lambda s, text: s == 2 and _decoded(text).get("type") == "telemetry")
+        assert not link.closed_subs(), link.closed_subs()
+    assert not attacker.closed_subs(), attacker.closed_subs()
