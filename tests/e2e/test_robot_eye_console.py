@@ -164,7 +164,10 @@ def test_the_picture_drawn_here_follows_the_robot_and_the_video_socket_closes(pa
     page.evaluate("""() => { document.querySelector("camera-panel").telemetry = { type: "telemetry",
       capture_unix_s: Date.now() / 1000, odometry: { pose: { x_m: 0, y_m: 0, theta_rad: 0 } }, camera_pose: null }; }""")
     page.locator('camera-panel[data-source="video"]').wait_for(state="attached")
-    page.get_by_text("During your graded run the picture is the robot's own camera video").wait_for()
+    message = page.locator('camera-panel [data-field="camera-message"]')
+    wait_for(lambda: message.is_visible() and (message.text_content() or "").startswith(
+        "During your graded run the picture is the robot's own camera video"), 10,
+        f"the camera panel does not say why: {message.evaluate('(e) => [e.hidden, e.textContent]')}")
     page.locator('[data-connection="camera"][data-phase="open"]').wait_for()
     page.screenshot(path=str(ARTIFACTS_DIR / "robot-eye-console-graded-run-video.png"))
     page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached")

@@ -332,7 +332,8 @@ export class CameraPanel extends PanelElement {
     if (message?.type === "status" && !("robot_online" in message)) return;
     if (message?.type === "status") {
       const offline = message.robot_online === false;
-      this.#showMessage(message.message || (offline ? "The robot is offline." : this.#videoNote), offline);
+      const online = this.#videoNote || message.message; // why the video shows outlasts its "live"
+      this.#showMessage(offline ? message.message || "The robot is offline." : online, offline);
       this.#placeholder.textContent = offline ? "No video: the robot is offline." : WORDS.video.waiting;
       if (offline) {
         this.#placeholder.hidden = false;
