@@ -80,6 +80,11 @@ def test_the_controller_runs_a_skill_and_watches_it_succeed(student_client: LabC
     assert status == 202, body
     goal = body["goal"]
     assert goal["skill"] == "orientation_control" and goal["status"] in {"accepted", "executing"}
+    # Any console of the robot, opened now, finds the running goal to show (issue 34, items 13 and 15).
+    status, running = api(student_client, "GET", "/api/robots/lab-1/goals")
+    assert status == 200 and running["robot_online"], running
+    assert [g["goal_id"] for g in running["goals"] if g["skill"] == "orientation_control"] == [goal["goal_id"]]
+    assert all(g["status"] in {"accepted", "executing", "canceling"} for g in running["goals"]), running
     watch = student_client.websocket(f"/ws/robots/lab-1/goals/{goal['goal_id']}")
     kinds = []
     final = None
@@ -93,6 +98,10 @@ def test_the_controller_runs_a_skill_and_watches_it_succeed(student_client: LabC
     assert "goal_feedback" in kinds or "goal_event" in kinds
     status, body = api(student_client, "GET", f"/api/robots/lab-1/goals/{goal['goal_id']}")
     assert status == 200 and body["goal"]["status"] == "succeeded"
+    status, running = api(student_client, "GET", "/api/robots/lab-1/goals")
+    assert status == 200 and goal["goal_id"] not in {g["goal_id"] for g in running["goals"]}, running
+    status, error = api(student_client, "GET", "/api/robots/lab-9/goals")
+    assert (status, error["error"]["code"]) == (404, "unknown_robot")
     queue.close()
 
 
