@@ -92,6 +92,7 @@ def test_a_student_of_two_courses_chooses_the_course_a_trial_counts_for(
     log_in(page, lab, "student1", STUDENT_PASSWORD)
     page.goto(f"{lab.url}/experiment")
     choice = page.get_by_label("Counts for")
+    choice.wait_for()  # drawn once the page has read the state
     assert choice.locator("option").all_text_contents() == ["EXP — Course EXP", "ZZ — Course ZZ"]
     choice.select_option(label="ZZ — Course ZZ")
     ARTIFACTS_DIR.mkdir(exist_ok=True)
