@@ -20,7 +20,7 @@ from typing import Any
 
 from alembic import command
 from alembic.config import Config as AlembicConfig
-from flask import Flask, Response, g
+from flask import Flask, Response, current_app, g
 from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.orm import Session, sessionmaker
 
@@ -149,8 +149,6 @@ def session_factory(app: Flask) -> sessionmaker[Session]:
 def get_session() -> Session:
     """The current request's session, created on first use."""
     if "db_session" not in g:
-        from flask import current_app
-
         g.db_session = session_factory(current_app)()
     return g.db_session
 

@@ -186,6 +186,32 @@ def test_the_mutual_import_check_finds_a_pair_through_a_function_level_import() 
     assert mutual_area_imports(graph) == [("lab", "plans")]
 
 
+# Modules that import inside functions, and why: a start-up cost or an optional dependency. Nowhere else: an import
+# inside a function hides an import circle from the checks above.
+FUNCTION_LEVEL_IMPORTS_ALLOW_LIST = {
+    "middleware/cli.py": "a command imports only what it runs: `telelab --help` starts without the app",
+    "middleware/lab_runner.py": "`telelab up` imports the app, the farm owner and gunicorn only when it starts them",
+    "middleware/serve.py": "gunicorn and the app are imported where they serve, not by the command configuring them",
+    "middleware/farm/setup.py": "only the farm backend TELELAB_FARM names is imported",
+    "middleware/farm/ray_farm.py": "ray is optional and slow to import: only a lab using the Ray farm imports it",
+    "middleware/events.py": "psycopg is needed only with PostgreSQL",
+}
+
+
+def function_level_imports(source: str) -> list[int]:
+    """Lines of the imports made inside a function of source."""
+    return sorted({node.lineno for function in ast.walk(ast.parse(source))
+                   if isinstance(function, ast.FunctionDef | ast.AsyncFunctionDef)
+                   for node in ast.walk(function) if isinstance(node, ast.Import | ast.ImportFrom)})
+
+
+def test_imports_are_at_module_level_unless_a_start_up_cost_needs_them() -> None:
+    offenders = [f"{path.relative_to(ROOT)}:{line}" for path in sorted((ROOT / "middleware").rglob("*.py"))
+                 if str(path.relative_to(ROOT)) not in FUNCTION_LEVEL_IMPORTS_ALLOW_LIST
+                 for line in function_level_imports(path.read_text())]
+    assert not offenders, f"import at module level (or name the start-up cost with the module): {offenders}"
+
+
 def test_only_the_launcher_command_imports_the_launcher() -> None:
     importers = {file for file, names in imported_modules("middleware").items() if "middleware.lab_runner" in names}
     assert importers <= {"middleware/cli.py"}, f"the launcher only composes; imported by {sorted(importers)}"

@@ -18,6 +18,8 @@ from typing import Any
 import numpy as np
 
 from middleware.errors import Refused
+from middleware.robots.link import RobotUnavailable
+from middleware.robots.registry import robot_registry
 from protos.telelab.v1 import robot_pb2
 
 TASK_KIND = "obstacle_zone"
@@ -108,9 +110,6 @@ def with_scene_truth(task: dict[str, Any] | None, robot_name: str | None) -> dic
     """An obstacle-zone task with its truth read from the robot's scene now; any other task unchanged."""
     if not task or task.get("kind") != TASK_KIND:
         return task
-    from middleware.robots.link import RobotUnavailable
-    from middleware.robots.registry import robot_registry
-
     link = robot_registry().get(robot_name or "")
     if link is None:
         raise Refused(400, "invalid_field", f"There is no robot named {str(robot_name)[:64]!r}.", "robot_name")

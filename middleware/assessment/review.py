@@ -11,7 +11,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.assessment.attempts import _items, my_attempts, settle, settle_due
+from middleware.assessment.attempts import _items, my_attempts, settle, settle_due, window_state
 from middleware.assessment.bank import list_exams, managed_exam, question_dict, questions_of
 from middleware.assessment.policy import may_teach, readable_attempt, teaching_course
 from middleware.courses.schemas import csv_safe
@@ -115,8 +115,6 @@ def task_goal(task: dict[str, Any], robot_name: str | None) -> str:
 
 def exam_dict(exam: Exam, now: datetime) -> dict[str, Any]:
     """An exam as lists show it (no keys)."""
-    from middleware.assessment.attempts import window_state
-
     task = None
     if exam.task:
         task = {k: v for k, v in exam.task.items() if k in ("kind", "instructions", "points", "x_m", "y_m",

@@ -9,7 +9,7 @@ from typing import Any
 
 from middleware.assessment import obstacle_zone
 from middleware.assessment.grading import QUESTION_KINDS, UNITS
-from middleware.assessment.trace_grading import TASK_KINDS
+from middleware.assessment.trace_grading import DEFAULT_RUBRIC, TASK_KINDS
 from middleware.auth.schemas import InvalidField
 from middleware.validation import InvalidInput, decimal_int, loads_checked, within_calendar
 
@@ -203,8 +203,6 @@ def form_rubric(form: dict[str, Any]) -> object:
 def parse_rubric(value: object) -> list[list[float]]:
     """Bands [[error_bound_m, fraction], ...]: bounds positive and increasing, fractions 0-1 and decreasing."""
     if value in (None, "", []):
-        from middleware.assessment.trace_grading import DEFAULT_RUBRIC
-
         return DEFAULT_RUBRIC
     if isinstance(value, str):
         try:

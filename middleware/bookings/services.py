@@ -10,6 +10,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
+from flask import current_app, has_app_context  # config only, never the request
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -37,7 +38,6 @@ def grace_period_s(grace_s: float | None = None) -> float:
     """The no-show grace period: grace_s, else the app's TELELAB_BOOKING_GRACE_S, else 10 minutes."""
     if grace_s is not None:
         return grace_s
-    from flask import current_app, has_app_context  # config only, never the request
 
     if has_app_context():
         return float(current_app.config.get("BOOKING_GRACE_S", DEFAULT_GRACE_S))

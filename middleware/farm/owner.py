@@ -21,7 +21,9 @@ from multiprocessing import AuthenticationError
 from multiprocessing.managers import BaseManager
 from pathlib import Path
 
+from middleware.config import ConfigError
 from middleware.farm.base import Capacity, FarmRobot, FarmUnavailable, RobotSpec
+from middleware.farm.local import LocalProcessFarm
 
 ADDRESS_VARIABLE = "TELELAB_LOCAL_FARM"
 KEY_VARIABLE = "TELELAB_LOCAL_FARM_KEY"
@@ -43,8 +45,6 @@ _FarmManager.register("farm", callable=lambda: _owned[0], exposed=FARM_METHODS)
 
 def serve_owner() -> None:
     """The owner process (`python -m middleware.farm.owner`): the farm, stopped with the process or the launcher."""
-    from middleware.farm.local import LocalProcessFarm
-
     launcher_pid = int(os.environ[LAUNCHER_VARIABLE])
     farm = LocalProcessFarm()
     _owned.append(farm)
@@ -111,8 +111,6 @@ class SharedLocalFarm:
         try:
             key = bytes.fromhex(key_hex)
         except ValueError:
-            from middleware.config import ConfigError
-
             raise ConfigError(f"{KEY_VARIABLE} must be the hex key `telelab up` gave its workers.") from None
         self.address = address
         self._manager = _FarmManager(address=address, authkey=key)

@@ -8,9 +8,11 @@ import time
 from flask import Flask, current_app
 
 from middleware.config import ConfigError
+from middleware.db import session_factory
 from middleware.farm.base import RobotFarm
 from middleware.farm.costs import robot_cpu_share
 from middleware.farm.pool_robots import PoolKeeper
+from middleware.robots.registry import robot_registry
 
 _EXTENSION_KEY = "telelab.farm"
 _KEEPER_KEY = "telelab.pool_keeper"
@@ -44,9 +46,6 @@ def build_farm(environ: dict[str, str] | None = None) -> RobotFarm:
 
 def init_app(app: Flask, farm: RobotFarm | None = None) -> RobotFarm:
     """Gives app its farm (from app.config["FARM"], the argument, or the environment)."""
-    from middleware.db import session_factory
-    from middleware.robots.registry import robot_registry
-
     chosen = farm or app.config.get("FARM") or build_farm()
     app.extensions[_EXTENSION_KEY] = chosen
     keeper = app.extensions[_KEEPER_KEY] = PoolKeeper(chosen, session_factory(app),

@@ -20,7 +20,7 @@ import time
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from flask import Flask
+from flask import Flask, current_app
 from simple_websocket import ConnectionClosed
 
 from middleware.live.codes import CLOSE_GOING_AWAY, CLOSE_SERVER_FAILED, CLOSE_SERVICE_RESTART
@@ -233,8 +233,6 @@ def wait_for_channels(timeout_s: float) -> bool:
 def blocking_work() -> Callable[..., Awaitable[Any]]:
     """For a channel's continuation, made while the channel opens (in its request): `await work(fn, *args)` runs
     fn on the loop's pool in the request's app."""
-    from flask import current_app
-
     return functools.partial(channel_loop().work, current_app._get_current_object())  # type: ignore[attr-defined]
 
 

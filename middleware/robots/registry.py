@@ -26,7 +26,9 @@ from flask import Flask, current_app
 from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import Session
 
+from middleware import events
 from middleware.config import RobotAddress
+from middleware.db import session_factory
 from middleware.robots.catalog import RobotEntry, load_entries, seed_from_config
 from middleware.robots.link import RobotLink
 
@@ -166,9 +168,6 @@ class RobotRegistry:
 
 def init_app(app: Flask) -> RobotRegistry:
     """Creates the registry for app from its ROBOTS setting and the robots table (seeded here)."""
-    from middleware import events
-    from middleware.db import session_factory
-
     sessions = session_factory(app)
     bus = events.bus_of(sessions.kw["bind"])
     refresh_s = float("inf") if bus.shared else float(app.config.get("ROBOTS_REFRESH_S", DEFAULT_REFRESH_S))

@@ -8,9 +8,11 @@ from pathlib import Path
 from flask import Flask
 from sqlalchemy import select
 
+from middleware.db import session_factory
 from middleware.models import User
 from middleware.models.teaching import Lesson, Tour
 from middleware.teaching.cues import parse_cue_track
+from middleware.teaching.demo_video import record_demo_video
 from middleware.teaching.lessons import LessonDraft, save_lesson, video_dir
 from middleware.teaching.tours import save_tour
 
@@ -88,9 +90,6 @@ DEMO_TOURS = [
 
 def seed_demo_content(app: Flask, record_video: bool = True) -> list[str]:
     """Adds the example tours and the demo lesson when missing (the video is recorded if absent)."""
-    from middleware.db import session_factory
-    from middleware.teaching.demo_video import record_demo_video
-
     added: list[str] = []
     cues, errors = parse_cue_track(DEMO_CUES, None)
     assert not errors, errors

@@ -12,6 +12,7 @@ answers anyone else with a 404.
 
 from __future__ import annotations
 
+import atexit
 import logging
 import os
 import re
@@ -29,6 +30,7 @@ from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.orm import Session
 
 from middleware.config import ConfigError
+from middleware.db import session_factory
 from middleware.errors import Refused
 from middleware.farm.base import FarmFull, FarmUnavailable, RobotFarm, RobotSpec
 from middleware.models.accounts import as_utc, utc_now
@@ -386,10 +388,6 @@ def _close_all_at_exit() -> None:
 
 def init_app(app: Flask, registry: RobotRegistry, farm: RobotFarm) -> None:
     """Creates app's manager over farm, from TELELAB_PRACTICE_CAP / TELELAB_PRACTICE_IDLE_S (or PRACTICE_*)."""
-    import atexit
-
-    from middleware.db import session_factory
-
     cap, idle_s = read_limits()
     cap = app.config.get("PRACTICE_CAP", cap)
     manager = PracticeManager(farm, session_factory(app), float(app.config.get("PRACTICE_IDLE_S", idle_s)),

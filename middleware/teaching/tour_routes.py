@@ -9,12 +9,15 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy import select
 
+from middleware.access.coordinator import access_coordinator
 from middleware.accounts.schemas import clean_optional_id
 from middleware.bookings.services import tutored_courses
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
-from middleware.models import User
+from middleware.lab.panels import robot_panels
+from middleware.models import Course, User
 from middleware.models.teaching import GuidedSession, Lesson, Tour
+from middleware.robots.registry import robot_registry
 from middleware.teaching import tour_live as live
 from middleware.teaching.authority import (
     check_class_start,
@@ -72,8 +75,6 @@ def _live(session_id: int) -> GuidedSession:
 @login_required
 def hub() -> ResponseReturnValue:
     """Tours, lessons, practice robot and the free console."""
-    from middleware.robots.registry import robot_registry
-
     session = get_session()
     return render_template(
         "teaching/hub.html", tours=session.scalars(select(Tour).order_by(Tour.title)).all(),
@@ -105,8 +106,6 @@ def edit(tour_id: int | None = None) -> ResponseReturnValue:
 
 def _panel_choices(in_use: list[str]) -> list[tuple[str, str]]:
     """The panels a step may name, with their titles; without a robot to ask, the console's fixed panels."""
-    from middleware.lab.panels import robot_panels
-
     try:
         skills = reference_skills(_user_id())
     except ApiError:
@@ -158,8 +157,6 @@ def run_step(tour_id: int, index: int) -> ResponseReturnValue:
 @login_required
 def start_page(tour_id: int) -> ResponseReturnValue:
     """The tutor chooses a lab robot and one of the courses they teach, and starts the class."""
-    from middleware.robots.registry import robot_registry
-
     _require_tutor()
     actor = _actor()
     return render_template("teaching/tour_lead.html", tour=_tour(tour_id), robots=robot_registry().names(),
@@ -171,10 +168,6 @@ def start_page(tour_id: int) -> ResponseReturnValue:
 def start_live(tour_id: int) -> ResponseReturnValue:
     """Starts a live class: {"robot": name, "course_id": id|null, "override": false} (teaching/authority.py says
     who may)."""
-    from middleware.access.coordinator import access_coordinator
-    from middleware.models import Course
-    from middleware.robots.registry import robot_registry
-
     _require_tutor()
     tour = _tour(tour_id)
     body = request.get_json(silent=True)
@@ -221,8 +214,6 @@ def session_api(session_id: int) -> ResponseReturnValue:
 @login_required
 def session_action(session_id: int) -> ResponseReturnValue:
     """The tutor's actions: {"action": "step", "index": n} | {"action": "control", "user": name|null} | end."""
-    from middleware.access.coordinator import access_coordinator
-
     session = get_session()
     found = _live(session_id)
     require_class_rights(session, _actor(), found)
@@ -259,8 +250,6 @@ def _class_changed(session_id: int, robot_name: str, handover: bool) -> None:
     """Once the change is committed: the robot changes hands now (not at the next tick), and the class's
     sockets are woken (they read it in sessions of their own)."""
     if handover:
-        from middleware.access.coordinator import access_coordinator
-
         try:
             access_coordinator().tick(robot_name)
         except Exception:  # noqa: BLE001 - the ticker applies it shortly anyway
