@@ -56,6 +56,8 @@ DEMO_QUESTIONS: list[dict[str, Any]] = [
      "topics": ["laser", "localization"]},
     {"kind": "text", "prompt": "Which skill keeps a set distance to a wall (two words)?",
      "accepted": ["wall following", "wall-following", "wall_following"], "topics": ["wall following"]},
+    {"kind": "rating", "prompt": "Driving the robot myself made the sensors easier to understand.",
+     "low_label": "Strongly disagree", "high_label": "Strongly agree", "topics": ["sensors"]},
 ]
 # The lab survey's answers of the demo classmates: ratings 1-5 in SURVEY_ITEMS' order, and a comment.
 DEMO_SURVEY_ANSWERS: dict[str, tuple[tuple[int, ...], str]] = {
@@ -63,7 +65,7 @@ DEMO_SURVEY_ANSWERS: dict[str, tuple[tuple[int, ...], str]] = {
     "demo-classmate-2": ((4, 4, 2, 4, 4, 3, 5), "Booking a slot was hard in the week before the test."),
     "demo-classmate-3": ((4, 5, 3, 4, 5, 4, 4), ""),
 }
-QUIZ_QUESTIONS = (0, 1, 3)  # indices into DEMO_QUESTIONS
+QUIZ_QUESTIONS = (0, 1, 3, 6)  # indices into DEMO_QUESTIONS
 TIMED_QUESTIONS = (0, 2, 4, 5)
 QUIZ_TITLE = "Practice quiz: sensors and odometry"
 TIMED_TITLE = "Timed test: mobile robotics basics"

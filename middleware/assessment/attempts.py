@@ -25,7 +25,9 @@ from middleware.assessment import hidden_obstacles, obstacle_zone
 from middleware.assessment.bank import questions_of
 from middleware.assessment.grading import ItemResult, grade_question
 from middleware.assessment.policy import get_attempt, get_exam, student_course
+from middleware.assessment.rating import read_rating
 from middleware.assessment.trace_grading import MAX_TRACE_SAMPLES, grade_task
+from middleware.auth.schemas import InvalidField
 from middleware.errors import Refused
 from middleware.locking import lock_user, rows_matched
 from middleware.models import User
@@ -214,6 +216,13 @@ def _clean_answer(exam_items: set[str], item: str, answer: object, started: date
     return answer
 
 
+def _clean_rating(item: str, answer: object) -> int:
+    try:
+        return read_rating(answer, item)
+    except InvalidField:
+        raise Refused(400, "invalid_field", f"Question {item}: choose a rating from 1 to 5.", item) from None
+
+
 def _items(exam: Exam) -> set[str]:
     items = {str(i) for i in exam.question_ids or []}
     if exam.kind == "experimental" and exam.task and exam.task.get("kind") == "report_pose":
@@ -228,9 +237,12 @@ def save_answers(session: Session, actor: User, attempt_id: int, answers: dict[s
     """Stores answers (item -> answer) in the student's attempt in progress, before its deadline."""
     attempt, exam = _own_open_attempt(session, actor, attempt_id, now)
     items = _items(exam)
+    ratings = {str(q.id) for q in questions_of(session, exam) if q.kind == "rating"}
     merged = dict(attempt.answers or {})
     for item, answer in answers.items():
         merged[str(item)] = _clean_answer(items, str(item), answer, as_utc(attempt.started_at), now)
+        if str(item) in ratings and answer not in (None, ""):
+            merged[str(item)] = _clean_rating(str(item), answer)
     attempt.answers = merged
     session.flush()
     return attempt

@@ -24,7 +24,8 @@ def question_dict(question: Question, with_key: bool = True) -> dict[str, Any]:
     spec = dict(question.spec)
     if not with_key:
         spec = {"choices": spec["choices"]} if "choices" in spec else (
-            {"unit": spec.get("unit", "")} if question.kind == "numeric" else {})
+            {"unit": spec.get("unit", "")} if question.kind == "numeric" else
+            spec if question.kind == "rating" else {})  # a rating's ends are no key
     return {"id": question.id, "kind": question.kind, "prompt": question.prompt, "topics": list(question.topics),
             "points": question.points, **spec}
 

@@ -10,6 +10,8 @@ Rules, stated once:
   quantity (m, cm, mm; rad, deg; s, ms; m/s, cm/s) and is converted before comparing; an unknown unit or one of
   another quantity scores 0 and says so. NaN and infinities score 0.
 - text: accepted answers compared after trimming, collapsing spaces and (unless case_sensitive) case folding.
+- rating: an opinion on the 1-5 scale, not a right or wrong answer: it is stored and shown, and earns nothing
+  out of nothing (0/0), so it never moves a mark.
 """
 
 from __future__ import annotations
@@ -18,9 +20,10 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from middleware.assessment.rating import rating_or_none
 from middleware.validation import decimal_int
 
-QUESTION_KINDS = ("single", "multiple", "numeric", "text")
+QUESTION_KINDS = ("single", "multiple", "numeric", "text", "rating")
 
 # unit -> (quantity, factor to the quantity's base unit)
 UNITS: dict[str, tuple[str, float]] = {
@@ -153,6 +156,10 @@ _GRADERS = {"single": _grade_single, "multiple": _grade_multiple, "numeric": _gr
 def grade_question(item: str, kind: str, spec: dict[str, Any], points: float, answer: object,
                    topics: tuple[str, ...] = ()) -> ItemResult:
     """The mark of one answer to one question (see the module's rules)."""
+    if kind == "rating":
+        rating = rating_or_none(answer)
+        return ItemResult(item, 0.0, 0.0, rating is not None,
+                          "No rating." if rating is None else f"Rated {rating} of 5 (not marked).", topics)
     if kind not in _GRADERS:
         raise ValueError(f"unknown question kind {kind!r}")
     if _empty(answer):

@@ -105,7 +105,8 @@ def _question_form(question: Any) -> dict[str, Any]:
             "value": repr(spec["value"]) if "value" in spec else "",
             "tolerance": repr(spec["tolerance"]) if "tolerance" in spec else "",
             "unit": spec.get("unit", ""), "accepted": "\n".join(spec.get("accepted", [])),
-            "case_sensitive": "1" if spec.get("case_sensitive") else ""}
+            "case_sensitive": "1" if spec.get("case_sensitive") else "",
+            "low_label": spec.get("low_label", ""), "high_label": spec.get("high_label", "")}
 
 
 def _form_question(form: dict[str, Any]) -> QuestionInput:

@@ -64,6 +64,8 @@ def topic_scores(session: Session, user_id: int, course_id: int) -> list[TopicSc
         Exam.course_id == course_id, Attempt.user_id == user_id, Attempt.status == "submitted"))
     for attempt in list(attempts):
         for result in final_results(attempt, reviews_of(session, attempt.id)):
+            if not float(result["max_points"]):  # a rating: an opinion, no measure of a topic
+                continue
             for topic in result.get("topics") or []:
                 pair = totals.setdefault(topic, [0.0, 0.0])
                 pair[0] += float(result["points"])

@@ -9,6 +9,7 @@ from typing import Any
 
 from middleware.assessment import obstacle_zone
 from middleware.assessment.grading import QUESTION_KINDS, UNITS
+from middleware.assessment.rating import read_ends
 from middleware.assessment.trace_grading import DEFAULT_RUBRIC, TASK_KINDS
 from middleware.auth.schemas import InvalidField
 from middleware.validation import InvalidInput, decimal_int, loads_checked, within_calendar
@@ -124,6 +125,8 @@ def parse_question(data: dict[str, Any]) -> QuestionInput:
             raise InvalidField("unit", f"unit must be empty or one of {', '.join(UNITS)}.")
         spec = {"value": _number(data.get("value"), "value"),
                 "tolerance": _number(data.get("tolerance", 0) or 0, "tolerance", 0, 1e9), "unit": unit}
+    elif kind == "rating":
+        spec = read_ends(data)
     else:
         accepted = data.get("accepted")
         if isinstance(accepted, str):

@@ -17,7 +17,7 @@ class Question(Base):
 
     __tablename__ = "assessment_questions"
     __table_args__ = (
-        CheckConstraint("kind IN ('single', 'multiple', 'numeric', 'text')", name="kind_known"),
+        CheckConstraint("kind IN ('single', 'multiple', 'numeric', 'text', 'rating')", name="kind_known"),
         CheckConstraint("points > 0 AND points <= 100", name="points_range"),
     )
 
