@@ -37,6 +37,7 @@ from skill_server.sim.drive_gate import DriveAck, MotionLimits
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.laser import LaserSpec
 from skill_server.sim.pacing import SimTimePacer
+from skill_server.sim.panels import PanelSpec
 from skill_server.sim.placement import check_placement
 from skill_server.sim.robot_model import TELEBOT
 from skill_server.sim.scene_description import SceneDescription
@@ -55,8 +56,8 @@ from skill_server.skills.teleperception import EvidenceState, PerceptionScan, Te
 __all__ = [
     "DEFAULT_CAMERA_FPS", "MAX_CAMERA_FPS", "Activation", "BatterySpec", "BatteryState", "CameraFrame", "DriveAck",
     "FloorPatch", "GoalUpdate", "LaserSpec", "LocalizationEstimate", "MotionLimits", "NavigationPose", "NumberedEvent",
-    "Pose2D", "PublishedGrid", "Robot", "RobotDescription", "RobotSnapshot", "SceneDescription", "SkillEntry",
-    "TrackEvent", "TrackState",
+    "PanelSpec", "Pose2D", "PublishedGrid", "Robot", "RobotDescription", "RobotSnapshot", "SceneDescription",
+    "SkillEntry", "TrackEvent", "TrackState",
     # a plan's shapes, for RunPlan's conversion
     "DriveLine", "IfLine", "InvalidPlan", "Plan", "PlanCondition", "PlanError", "PlanLine", "RepeatLine", "SayLine",
     "SetLine", "SkillLine", "WaitLine",

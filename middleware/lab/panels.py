@@ -1,8 +1,10 @@
-"""The robot agent's abstractions, each describing its own panel (the 2003 paper's visual proxies).
+"""The console's panels, each described by the abstraction it shows (the 2003 paper's visual proxies).
 
-A DynamicRepository stands for a sensor's data, a SkillController for one skill; the console asks
-for their descriptors and places the panels without knowing their insides. A skill that appears on
-the skill server appears here, and so in the console, with no change to either.
+The robot describes its own resources' panels in RobotInfo (camera, odometry, sensors, its map, the drawn lab
+view, the battery): each names its kind, words, view and the robot stream that feeds it, which becomes a channel
+address here. A SkillController stands for one skill the robot lists. The middleware adds only the panels it owns
+itself: driving, the turn, chat and response times (the user's plans used as skills come from plans/). A sensor or
+a skill that appears on the skill server appears in the console with no change here or in the client.
 """
 
 from __future__ import annotations
@@ -10,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from middleware.robots.messages import parameter_schema_dict
+from middleware.robots.messages import panel_descriptor, parameter_schema_dict
 from protos.telelab.v1 import robot_pb2
 
 # The console's views, each fitting one screen: driving (camera beside the pad), navigating (the map beside the
@@ -20,21 +22,20 @@ Tab = Literal["drive", "navigate", "sense", "chat"]
 
 
 @dataclass(frozen=True)
-class DynamicRepository:
-    """A sensor's (or a service's) data with its channel."""
+class MiddlewarePanel:
+    """A panel of something the middleware owns (a socket of its own), not of the robot."""
 
     id: str
     kind: str
     title: str
-    channel: str | None
+    socket: str
     help: str
     tab: Tab
-    extra: tuple[tuple[str, object], ...] = ()  # what this kind of panel needs besides (the camera: its picture)
 
-    def describe(self) -> dict[str, object]:
+    def describe(self, robot_name: str) -> dict[str, object]:
         """The panel descriptor."""
-        return {"id": self.id, "kind": self.kind, "title": self.title, "channel": self.channel, "help": self.help,
-                "tab": self.tab, **dict(self.extra)}
+        return {"id": self.id, "kind": self.kind, "title": self.title,
+                "channel": f"/ws/robots/{robot_name}/{self.socket}", "help": self.help, "tab": self.tab}
 
 
 @dataclass(frozen=True)
@@ -59,48 +60,38 @@ class SkillController:
         }
 
 
-def robot_panels(robot_name: str, skills: list[robot_pb2.SkillDescription] | None,
-                 personal: bool = False, camera_picture: tuple[str, str] = ("", "video"),
-                 picture_chosen: str | None = None) -> list[dict[str, object]]:
-    """Every panel of the console of robot_name, in the order they are placed (personal: a practice robot;
-    camera_picture: the robot's kind and the picture an admin chose as its camera panel's default;
-    picture_chosen: the picture this user last chose for robots of that kind, which wins over the default)."""
-    base = f"/ws/robots/{robot_name}"
+def _controls(personal: bool) -> list[MiddlewarePanel]:
     turn_help = ("Your personal practice robot: only you see it, so you control it whenever you are here."
                  if personal else "Who controls the robot and who waits.")
+    return [MiddlewarePanel("drive", "drive", "Drive", "drive", "Direct control: arrow keys, the pad or a gamepad.",
+                            "drive"),
+            MiddlewarePanel("queue", "queue", "Turn", "queue", turn_help, "drive")]
+
+
+def _talk(personal: bool) -> list[MiddlewarePanel]:
     chat_help = ("Your personal practice robot: nobody else reads this chat; notes to yourself."
                  if personal else "Talk with the others connected to this robot.")
-    repositories = [
-        DynamicRepository("camera", "camera", "Camera", f"{base}/camera",
-                          "What the robot sees: its camera's video, or the view your browser draws from its pose.",
-                          "drive",
-                          (("picture", {"kind": camera_picture[0] or robot_name, "default": camera_picture[1],
-                                        "chosen": picture_chosen}),)),
-        DynamicRepository("drive", "drive", "Drive", f"{base}/drive",
-                          "Direct control: arrow keys, the pad or a gamepad.", "drive"),
-        DynamicRepository("queue", "queue", "Turn", f"{base}/queue", turn_help, "drive"),
-        DynamicRepository("odometry", "odometry", "Odometry", f"{base}/telemetry",
-                          "Position, heading and speeds integrated from the wheels.", "drive"),
-        DynamicRepository("map", "map", "Lab model", f"{base}/localization",
-                          "The lab seen from above: the robot, its readings, the map; click to set a goal.",
-                          "navigate"),
-        DynamicRepository("lab-view", "lab-view", "3D lab view", f"{base}/telemetry",
-                          "The lab in 3D, drawn by your browser: the robot at its odometry pose, its laser hits and "
-                          "sonar cones, the goal and the path planned to it, the map on the floor. Drag to turn it.",
-                          "navigate"),
-        DynamicRepository("sonar", "sonar", "Sonar", f"{base}/telemetry", "The ring of sonars, nearest echo each.",
-                          "sense"),
-        DynamicRepository("laser", "laser", "Laser", f"{base}/telemetry", "The 180-degree laser scan ahead.", "sense"),
-    ]
-    panels = [r.describe() for r in repositories]
+    return [MiddlewarePanel("chat", "chat", "Chat", "chat", chat_help, "chat"),
+            MiddlewarePanel("response-times", "response-times", "Response times", "drive",
+                            "Round trips: browser to middleware, and middleware to the robot.", "sense")]
+
+
+def robot_panels(robot_name: str, info: robot_pb2.RobotInfo | None, skills: list[robot_pb2.SkillDescription] | None,
+                 personal: bool = False, camera_picture: tuple[str, str] = ("", "video"),
+                 picture_chosen: str | None = None) -> list[dict[str, object]]:
+    """Every panel of the console of robot_name, in the order they are placed: the robot's first panel of the
+    drive view (its picture) with the controls beside it, the rest of the robot's panels in its order, its skills,
+    then chat and response times. info and skills are None while the robot does not answer.
+    personal: a practice robot; camera_picture: the robot's kind and the picture an admin chose as its camera
+    panel's default; picture_chosen: the picture this user last chose for robots of that kind, which wins."""
+    own = [panel_descriptor(robot_name, panel) for panel in (info.panels if info is not None else [])]
+    for descriptor in own:
+        if descriptor["kind"] == "camera":
+            descriptor["picture"] = {"kind": camera_picture[0] or robot_name, "default": camera_picture[1],
+                                     "chosen": picture_chosen}
+    lead = next((i + 1 for i, descriptor in enumerate(own) if descriptor["tab"] == "drive"), 0)
+    panels = own[:lead] + [panel.describe(robot_name) for panel in _controls(personal)] + own[lead:]
     for skill in skills or []:
         if not skill.direct_drive:  # a direct-drive skill is what the drive pad does: it gets no panel of its own
             panels.append(SkillController(robot_name, skill).describe())
-    panels += [
-        DynamicRepository("chat", "chat", "Chat", f"{base}/chat", chat_help, "chat").describe(),
-        DynamicRepository("response-times", "response-times", "Response times", f"{base}/drive",
-                          "Round trips: browser to middleware, and middleware to the robot.", "sense").describe(),
-        DynamicRepository("low-level", "low-level", "Low-level commands", f"{base}/telemetry",
-                          "The battery, the velocity ceilings and the watchdog timeout.", "sense").describe(),
-    ]
-    return panels
+    return panels + [panel.describe(robot_name) for panel in _talk(personal)]

@@ -27,6 +27,8 @@ blueprint = Blueprint("skills", __name__)
 MAX_PARAMETERS = 32
 MAX_TEXT_VALUE = 64
 SUPERVISOR_ROLES = (Role.TUTOR, Role.ADMIN)
+ROBOT_SILENT = ("The robot does not answer, so its camera, sensors and skills cannot be listed: driving, the turn "
+                "and chat are here; reload this page once it is back.")
 
 
 def _user_id() -> int:
@@ -62,16 +64,16 @@ def panels(robot_name: str) -> ResponseReturnValue:
     """The descriptors of every panel of the robot's console."""
     link = robot_commands().require(robot_name, _user_id())
     try:
-        skills = link.skills(refresh=True)
+        info, skills = link.info(refresh=True), link.skills(refresh=True)
     except RobotUnavailable:
-        skills = None
+        info, skills = None, None
     personal = robot_registry().is_personal_name(robot_name)
     kind, default_picture = camera_picture_of(get_session(), robot_name)
     chosen = chosen_camera_picture(get_session(), _user_id(), kind, CAMERA_PICTURES)
-    panels = robot_panels(robot_name, skills, personal, (kind, default_picture), chosen)
+    panels = robot_panels(robot_name, info, skills, personal, (kind, default_picture), chosen)
     panels += console_skill_panels(get_session(), _user_id(), robot_name)  # the user's plans used as skills
     return jsonify({"robot": robot_name, "skills_available": skills is not None, "personal": personal,
-                    "panels": panels})
+                    "panels": panels, "notice": "" if info is not None else ROBOT_SILENT})
 
 
 @blueprint.post("/api/robots/<robot_name>/skills/<skill>/goals")

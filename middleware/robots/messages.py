@@ -125,6 +125,21 @@ _PARAMETER_TYPES = {
 }
 
 
+_VIEWS = {robot_pb2.CONSOLE_VIEW_DRIVE: "drive", robot_pb2.CONSOLE_VIEW_NAVIGATE: "navigate",
+          robot_pb2.CONSOLE_VIEW_SENSE: "sense", robot_pb2.CONSOLE_VIEW_CHAT: "chat"}
+_STREAMS = {robot_pb2.ROBOT_STREAM_CAMERA: "camera", robot_pb2.ROBOT_STREAM_TELEMETRY: "telemetry",
+            robot_pb2.ROBOT_STREAM_LOCALIZATION: "localization"}
+
+
+def panel_descriptor(robot_name: str, panel: robot_pb2.PanelDescription) -> dict[str, object]:
+    """A panel the robot describes, as the console places it: its stream becomes the channel of the robot's socket
+    of that name (None for a panel that asks for what it shows); a view the robot leaves unspecified is Sense."""
+    stream = _STREAMS.get(panel.stream)
+    return {"id": panel.id, "kind": panel.kind, "title": panel.title,
+            "channel": f"/ws/robots/{robot_name}/{stream}" if stream else None, "help": panel.help,
+            "tab": _VIEWS.get(panel.view, "sense")}
+
+
 def parameter_schema_dict(schema: robot_pb2.ParameterSchema) -> dict[str, object]:
     """One parameter's schema as the skill panel needs it."""
     kind = _PARAMETER_TYPES.get(schema.type, "string")

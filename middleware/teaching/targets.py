@@ -14,6 +14,7 @@ from middleware.robots.messages import goal_dict, parameter_schema_dict
 from middleware.robots.registry import robot_registry
 from middleware.teaching.command_form import RobotCommand
 from middleware.teaching.practice_robots import practice_manager
+from protos.telelab.v1 import robot_pb2
 
 PRACTICE_TARGET = "practice"
 
@@ -64,15 +65,29 @@ def goal_state(robot: Commander, goal_id: str) -> dict[str, object]:
     return goal_dict(robot.goal_state(goal_id))
 
 
-def reference_catalog(user_id: int | None = None) -> list[dict[str, object]]:
-    """The skills lessons and tours are written for, with titles and parameter schemas, for the authoring forms:
-    the user's practice robot's, else any lab robot's."""
+def _reference_links(user_id: int | None) -> list[RobotLink]:
+    """The robots authoring forms ask: the user's practice robot first, then every lab robot."""
     links: list[RobotLink] = []
     if user_id is not None and (robot := practice_manager().get(user_id)) is not None:
         links.append(robot.link)
     registry = robot_registry()
-    links += [link for name in registry.names() if (link := registry.get(name)) is not None]
-    for link in links:
+    return links + [link for name in registry.names() if (link := registry.get(name)) is not None]
+
+
+def reference_info(user_id: int | None = None) -> robot_pb2.RobotInfo | None:
+    """The description (with its panels) of the first robot that answers among _reference_links, else None."""
+    for link in _reference_links(user_id):
+        try:
+            return link.info()
+        except RobotUnavailable:
+            continue
+    return None
+
+
+def reference_catalog(user_id: int | None = None) -> list[dict[str, object]]:
+    """The skills lessons and tours are written for, with titles and parameter schemas, for the authoring forms:
+    the user's practice robot's, else any lab robot's."""
+    for link in _reference_links(user_id):
         try:
             return [{"name": s.name, "title": s.title, "help": s.help, "direct_drive": s.direct_drive,
                      "motor": s.motor, "parameters": [parameter_schema_dict(p) for p in s.parameters]}

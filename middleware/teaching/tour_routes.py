@@ -27,7 +27,7 @@ from middleware.teaching.authority import (
     require_class_member,
     require_class_rights,
 )
-from middleware.teaching.targets import authoring_catalog, execute, reference_skills, resolve_target
+from middleware.teaching.targets import authoring_catalog, execute, reference_info, reference_skills, resolve_target
 from middleware.teaching.tours import (
     TourInvalid,
     active_session,
@@ -105,12 +105,12 @@ def edit(tour_id: int | None = None) -> ResponseReturnValue:
 
 
 def _panel_choices(in_use: list[str]) -> list[tuple[str, str]]:
-    """The panels a step may name, with their titles; without a robot to ask, the console's fixed panels."""
+    """The panels a step may name, with their titles: a robot's that answers; without one, the middleware's own."""
     try:
         skills = reference_skills(_user_id())
     except ApiError:
         skills = {}
-    return panel_choices(robot_panels("tour", None), skills, in_use)
+    return panel_choices(robot_panels("tour", reference_info(_user_id()), None), skills, in_use)
 
 
 @blueprint.get("/api/tours/<int:tour_id>")

@@ -19,6 +19,7 @@ from skill_server.robot import (
     MotionLimits,
     NavigationPose,
     NumberedEvent,
+    PanelSpec,
     Pose2D,
     PublishedGrid,
     RobotDescription,
@@ -59,6 +60,18 @@ def pose_from_proto(pose: robot_pb2.Pose2D) -> Pose2D:
 
 def pose_to_proto(pose: Pose2D) -> robot_pb2.Pose2D:
     return robot_pb2.Pose2D(x_m=pose.x_m, y_m=pose.y_m, theta_rad=pose.theta_rad)
+
+
+_VIEWS = {"drive": robot_pb2.CONSOLE_VIEW_DRIVE, "navigate": robot_pb2.CONSOLE_VIEW_NAVIGATE,
+          "sense": robot_pb2.CONSOLE_VIEW_SENSE, "chat": robot_pb2.CONSOLE_VIEW_CHAT}
+_STREAMS = {None: robot_pb2.ROBOT_STREAM_UNSPECIFIED, "camera": robot_pb2.ROBOT_STREAM_CAMERA,
+            "telemetry": robot_pb2.ROBOT_STREAM_TELEMETRY, "localization": robot_pb2.ROBOT_STREAM_LOCALIZATION}
+
+
+def panel_to_proto(panel: PanelSpec) -> robot_pb2.PanelDescription:
+    """One resource's panel as the contract describes it."""
+    return robot_pb2.PanelDescription(id=panel.id, kind=panel.kind, title=panel.title, help=panel.help,
+                                      view=_VIEWS[panel.view], stream=_STREAMS[panel.stream])
 
 
 def robot_info_to_proto(robot_name: str, info: RobotDescription) -> robot_pb2.RobotInfo:
@@ -104,6 +117,7 @@ def robot_info_to_proto(robot_name: str, info: RobotDescription) -> robot_pb2.Ro
             )
             for b in info.scene_boxes
         ],
+        panels=[panel_to_proto(panel) for panel in info.panels],
     )
 
 

@@ -9,6 +9,7 @@ from skill_server.sim.camera import CameraSpec
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.laser import LaserSpec
 from skill_server.sim.odometry import OdometryReading
+from skill_server.sim.panels import PanelSpec
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.sim.scenes import SceneBox
 from skill_server.sim.sonar import SonarGeometry
@@ -57,3 +58,4 @@ class RobotDescription:
     sonars: tuple[SonarGeometry, ...]
     laser: LaserSpec
     scene_boxes: tuple[SceneBox, ...]
+    panels: tuple[PanelSpec, ...] = ()  # the resources' panels, in the order a console places them

@@ -23,6 +23,7 @@ from skill_server.sim.geometry import Pose2D, yaw_from_quaternion
 from skill_server.sim.laser import Laser, LaserSpec
 from skill_server.sim.odometry import WheelOdometry
 from skill_server.sim.pacing import SimTimePacer
+from skill_server.sim.panels import TELEBOT_PANELS
 from skill_server.sim.pose_log import PoseLog
 from skill_server.sim.publication import CameraSubscription, Publication
 from skill_server.sim.raycast import StaticSceneCaster
@@ -277,6 +278,7 @@ class World:
             sonars=self._sonar.spec.geometries(),
             laser=self._laser.spec,
             scene_boxes=tuple(self.scene.scene_boxes()),
+            panels=TELEBOT_PANELS,
         )
 
     def describe_scene(self) -> SceneDescription:

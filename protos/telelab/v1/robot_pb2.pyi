@@ -7,6 +7,21 @@ from typing import ClassVar as _ClassVar, Optional as _Optional, Union as _Union
 
 DESCRIPTOR: _descriptor.FileDescriptor
 
+class ConsoleView(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = ()
+    CONSOLE_VIEW_UNSPECIFIED: _ClassVar[ConsoleView]
+    CONSOLE_VIEW_DRIVE: _ClassVar[ConsoleView]
+    CONSOLE_VIEW_NAVIGATE: _ClassVar[ConsoleView]
+    CONSOLE_VIEW_SENSE: _ClassVar[ConsoleView]
+    CONSOLE_VIEW_CHAT: _ClassVar[ConsoleView]
+
+class RobotStream(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = ()
+    ROBOT_STREAM_UNSPECIFIED: _ClassVar[RobotStream]
+    ROBOT_STREAM_CAMERA: _ClassVar[RobotStream]
+    ROBOT_STREAM_TELEMETRY: _ClassVar[RobotStream]
+    ROBOT_STREAM_LOCALIZATION: _ClassVar[RobotStream]
+
 class ParameterType(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = ()
     PARAMETER_TYPE_UNSPECIFIED: _ClassVar[ParameterType]
@@ -65,6 +80,15 @@ class EvidencePart(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     EVIDENCE_PART_UNSPECIFIED: _ClassVar[EvidencePart]
     EVIDENCE_PART_STATIC: _ClassVar[EvidencePart]
     EVIDENCE_PART_MOVING: _ClassVar[EvidencePart]
+CONSOLE_VIEW_UNSPECIFIED: ConsoleView
+CONSOLE_VIEW_DRIVE: ConsoleView
+CONSOLE_VIEW_NAVIGATE: ConsoleView
+CONSOLE_VIEW_SENSE: ConsoleView
+CONSOLE_VIEW_CHAT: ConsoleView
+ROBOT_STREAM_UNSPECIFIED: RobotStream
+ROBOT_STREAM_CAMERA: RobotStream
+ROBOT_STREAM_TELEMETRY: RobotStream
+ROBOT_STREAM_LOCALIZATION: RobotStream
 PARAMETER_TYPE_UNSPECIFIED: ParameterType
 PARAMETER_TYPE_DOUBLE: ParameterType
 PARAMETER_TYPE_INT: ParameterType
@@ -109,7 +133,7 @@ class GetRobotInfoRequest(_message.Message):
     def __init__(self) -> None: ...
 
 class RobotInfo(_message.Message):
-    __slots__ = ("robot_name", "scene_name", "wheel_base_m", "wheel_radius_m", "body_radius_m", "max_linear_mps", "max_angular_radps", "deadman_timeout_s", "camera_hfov_deg", "camera_width_px", "camera_height_px", "sonars", "laser", "scene_boxes")
+    __slots__ = ("robot_name", "scene_name", "wheel_base_m", "wheel_radius_m", "body_radius_m", "max_linear_mps", "max_angular_radps", "deadman_timeout_s", "camera_hfov_deg", "camera_width_px", "camera_height_px", "sonars", "laser", "scene_boxes", "panels")
     ROBOT_NAME_FIELD_NUMBER: _ClassVar[int]
     SCENE_NAME_FIELD_NUMBER: _ClassVar[int]
     WHEEL_BASE_M_FIELD_NUMBER: _ClassVar[int]
@@ -124,6 +148,7 @@ class RobotInfo(_message.Message):
     SONARS_FIELD_NUMBER: _ClassVar[int]
     LASER_FIELD_NUMBER: _ClassVar[int]
     SCENE_BOXES_FIELD_NUMBER: _ClassVar[int]
+    PANELS_FIELD_NUMBER: _ClassVar[int]
     robot_name: str
     scene_name: str
     wheel_base_m: float
@@ -138,7 +163,24 @@ class RobotInfo(_message.Message):
     sonars: _containers.RepeatedCompositeFieldContainer[SonarGeometry]
     laser: LaserGeometry
     scene_boxes: _containers.RepeatedCompositeFieldContainer[SceneBox]
-    def __init__(self, robot_name: _Optional[str] = ..., scene_name: _Optional[str] = ..., wheel_base_m: _Optional[float] = ..., wheel_radius_m: _Optional[float] = ..., body_radius_m: _Optional[float] = ..., max_linear_mps: _Optional[float] = ..., max_angular_radps: _Optional[float] = ..., deadman_timeout_s: _Optional[float] = ..., camera_hfov_deg: _Optional[float] = ..., camera_width_px: _Optional[int] = ..., camera_height_px: _Optional[int] = ..., sonars: _Optional[_Iterable[_Union[SonarGeometry, _Mapping]]] = ..., laser: _Optional[_Union[LaserGeometry, _Mapping]] = ..., scene_boxes: _Optional[_Iterable[_Union[SceneBox, _Mapping]]] = ...) -> None: ...
+    panels: _containers.RepeatedCompositeFieldContainer[PanelDescription]
+    def __init__(self, robot_name: _Optional[str] = ..., scene_name: _Optional[str] = ..., wheel_base_m: _Optional[float] = ..., wheel_radius_m: _Optional[float] = ..., body_radius_m: _Optional[float] = ..., max_linear_mps: _Optional[float] = ..., max_angular_radps: _Optional[float] = ..., deadman_timeout_s: _Optional[float] = ..., camera_hfov_deg: _Optional[float] = ..., camera_width_px: _Optional[int] = ..., camera_height_px: _Optional[int] = ..., sonars: _Optional[_Iterable[_Union[SonarGeometry, _Mapping]]] = ..., laser: _Optional[_Union[LaserGeometry, _Mapping]] = ..., scene_boxes: _Optional[_Iterable[_Union[SceneBox, _Mapping]]] = ..., panels: _Optional[_Iterable[_Union[PanelDescription, _Mapping]]] = ...) -> None: ...
+
+class PanelDescription(_message.Message):
+    __slots__ = ("id", "kind", "title", "help", "view", "stream")
+    ID_FIELD_NUMBER: _ClassVar[int]
+    KIND_FIELD_NUMBER: _ClassVar[int]
+    TITLE_FIELD_NUMBER: _ClassVar[int]
+    HELP_FIELD_NUMBER: _ClassVar[int]
+    VIEW_FIELD_NUMBER: _ClassVar[int]
+    STREAM_FIELD_NUMBER: _ClassVar[int]
+    id: str
+    kind: str
+    title: str
+    help: str
+    view: ConsoleView
+    stream: RobotStream
+    def __init__(self, id: _Optional[str] = ..., kind: _Optional[str] = ..., title: _Optional[str] = ..., help: _Optional[str] = ..., view: _Optional[_Union[ConsoleView, str]] = ..., stream: _Optional[_Union[RobotStream, str]] = ...) -> None: ...
 
 class SonarGeometry(_message.Message):
     __slots__ = ("mount_angle_rad", "cone_half_angle_rad", "min_range_m", "max_range_m")

@@ -118,3 +118,48 @@ def _heading(telemetry) -> float:
         if data["type"] == "telemetry":
             latest = data
     return latest["odometry"]["pose"]["theta_rad"]
+
+
+@pytest.fixture
+def robot_with_a_new_sensor(monkeypatch: pytest.MonkeyPatch) -> Iterator[str]:
+    """A skill server whose robot describes one more sensor, as a robot team would add one to sim/panels.py."""
+    from skill_server.server import create_server
+    from skill_server.sim import world
+    from skill_server.sim.panels import TELEBOT_PANELS, PanelSpec
+
+    bumper = PanelSpec("bumpers", "bumpers", "Bumpers", "Which bumper touched something last.", "sense", "telemetry")
+    monkeypatch.setattr(world, "TELEBOT_PANELS", (*TELEBOT_PANELS, bumper))
+    robot = create_server(port=0, robot_name="lab-9")
+    try:
+        yield robot.address
+    finally:
+        robot.stop()
+
+
+def test_a_new_sensor_gets_a_panel_through_the_contract_and_a_silent_robot_a_console_that_says_so(
+        robot_with_a_new_sensor: str, tmp_path: Path) -> None:
+    from middleware.access.coordinator import access_coordinator
+    from middleware.robots.registry import robot_registry
+
+    robots = f"lab-1={robot_with_a_new_sensor},lab-2=127.0.0.1:1"  # nothing listens on lab-2's port
+    app = make_test_app(f"sqlite:///{tmp_path / 'app.sqlite3'}", robots, tmp_path)
+    server = LiveServer(app)
+    try:
+        client = LabClient(server.url)
+        assert client.login() == 302
+        status, body = api(client, "GET", "/api/robots/lab-1/panels")
+        assert status == 200 and body["notice"] == ""
+        panel = next(p for p in body["panels"] if p["id"] == "bumpers")
+        assert panel == {"id": "bumpers", "kind": "bumpers", "title": "Bumpers",
+                         "channel": "/ws/robots/lab-1/telemetry", "help": "Which bumper touched something last.",
+                         "tab": "sense"}
+        assert {"camera", "odometry", "map", "sonar", "laser"} <= {p["id"] for p in body["panels"]}
+
+        status, body = api(client, "GET", "/api/robots/lab-2/panels")
+        assert status == 200 and not body["skills_available"]
+        assert {p["id"] for p in body["panels"]} == {"drive", "queue", "chat", "response-times"}
+        assert "does not answer" in body["notice"]
+    finally:
+        server.stop()
+        access_coordinator(app).stop_ticker()
+        robot_registry(app).close()

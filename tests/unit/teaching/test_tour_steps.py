@@ -50,8 +50,10 @@ def test_the_demo_tours_are_valid_in_form() -> None:
 def test_panel_choices_name_the_console_panels_and_skills_by_title_and_keep_ids_in_use() -> None:
     from middleware.lab.panels import robot_panels
     from middleware.teaching.tours import panel_choices
+    from tests.unit.lab.test_robot_panels import telebot_info
 
-    choices = dict(panel_choices(robot_panels("r", None), {"wall_following": [], "go_to_goal": []}, ["old-panel"]))
+    described = robot_panels("r", telebot_info(), None)
+    choices = dict(panel_choices(described, {"wall_following": [], "go_to_goal": []}, ["old-panel"]))
     assert choices["map"] == "Lab model" and choices["camera"] == "Camera"
     assert choices["skill-go_to_goal"] == "Go to goal" and choices["skill-wall_following"] == "Wall following"
     assert choices["old-panel"] == "old-panel"
