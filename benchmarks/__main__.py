@@ -12,7 +12,7 @@ from pathlib import Path
 BENCHMARKS = ("benchmarks.latency", "benchmarks.skills", "benchmarks.feedback", "benchmarks.farm",
               "benchmarks.consoles", "benchmarks.workers", "benchmarks.sticky",
               "benchmarks.browser_view", "benchmarks.capacity", "benchmarks.database_load",
-              "benchmarks.plans")
+              "benchmarks.plans", "benchmarks.response_times")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -210,6 +210,16 @@ def chromium_page() -> Iterator[tuple[Any, list[str]]]:
             browser.close()
 
 
+def open_console(page: Any, base_url: str, username: str, password: str, robot: str = "lab-1") -> None:
+    """Logs username in, as a person does, and opens the robot's console."""
+    page.goto(f"{base_url}/login")
+    page.fill("#username", username)
+    page.fill("#password", password)
+    page.get_by_role("button", name="Log in").click()
+    page.locator('[data-field="username"]').first.wait_for(state="attached")
+    page.goto(f"{base_url}/lab/{robot}")
+
+
 def measure_browser(scene: dict[str, Any], frames: int, warmup: int) -> dict[str, Any]:
     """Frame times [ms] of the robot's-eye view at VIEW_SIZE in headless Chromium: {draw, whole, renderer}."""
     from benchmarks.feedback import static_server
@@ -248,12 +258,7 @@ def measure_glass(window_s: float, warmup_s: float = 1.0) -> dict[str, list[floa
     delays: dict[str, list[float]] = {}
     try:
         with chromium_page() as (page, errors):
-            page.goto(f"{lab.middleware.url}/login")
-            page.fill("#username", lab.usernames[0])
-            page.fill("#password", PASSWORD)
-            page.get_by_role("button", name="Log in").click()
-            page.locator('[data-field="username"]').first.wait_for(state="attached")
-            page.goto(f"{lab.middleware.url}/lab/lab-1")
+            open_console(page, lab.middleware.url, lab.usernames[0], PASSWORD)
             page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached", timeout=30_000)
             page.evaluate(GLASS_LISTENER)
             for source, _name in GLASS_SOURCES:

@@ -21,6 +21,7 @@ as an observer), the same token means the robot forgot it (re-send it, then retr
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable
 from typing import Protocol, TypeVar
 
@@ -169,6 +170,8 @@ class Commander:
                  hand_only: Callable[[], str | None] | None = None) -> None:
         self.link, self._tokens, self._field = link, tokens, field
         self._hand_only = hand_only
+        # The paper's second leg: how long this commander's last command spent in its calls to the robot [ms].
+        self.robot_round_trip_ms: float | None = None
 
     @property
     def robot_name(self) -> str:
@@ -251,11 +254,13 @@ class Commander:
             raise Refused(409, "hand_driving_only", reason, self._field)
 
     def _as_controller(self, call: Callable[[str], T]) -> T:
+        self.robot_round_trip_ms = None
+        timed = self._timed(call)
         token = self._tokens.token(fresh=False)
         if token is None:
             raise NotController(self._field, self._tokens.nobody_controls())
         try:
-            return call(token)
+            return timed(token)
         except CommandRefused as refused:
             if refused.reason not in STALE_TOKEN_CODES:
                 raise
@@ -264,7 +269,19 @@ class Commander:
                 raise NotController(self._field, self._tokens.nobody_controls()) from None
             if fresh == token and not self._tokens.resend(fresh):
                 raise
-        return call(fresh)
+        return timed(fresh)
+
+    def _timed(self, call: Callable[[str], T]) -> Callable[[str], T]:
+        """call, adding the time each attempt spends at the robot to robot_round_trip_ms (a retry's too: the
+        person waited for both)."""
+        def attempt(token: str) -> T:
+            started = time.perf_counter()
+            try:
+                return call(token)
+            finally:
+                spent_ms = (time.perf_counter() - started) * 1000
+                self.robot_round_trip_ms = (self.robot_round_trip_ms or 0.0) + spent_ms
+        return attempt
 
 
 class RobotCommands:

@@ -85,7 +85,13 @@ def activate(robot_name: str, skill: str) -> ResponseReturnValue:
         raise ApiError(404, "unknown_skill", "There is no skill by that name.", "skill")
     parameters, preempt = parse_activation(request.get_json(silent=True))
     goal = robot.activate(skill, parameters, preempt)
-    return jsonify({"goal": goal_dict(goal)}), 202
+    return jsonify({"goal": goal_dict(goal), "robot_rtt_ms": _robot_leg_ms(robot)}), 202
+
+
+def _robot_leg_ms(robot: Commander) -> float | None:
+    """The middleware -> skill server time of the command robot just sent, for the console's response times."""
+    spent_ms = robot.robot_round_trip_ms
+    return None if spent_ms is None else round(spent_ms, 3)
 
 
 def _goal_id(goal_id: str) -> str:

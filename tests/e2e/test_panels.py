@@ -101,11 +101,9 @@ def test_every_panel_appears_from_its_descriptor_and_shows_live_data(page, live_
     assert int(page.locator('laser-panel [data-field="laser-hits"]').text_content()) > 0
     show_tab_of(page, "map")
     page.locator('map-panel [data-field="map-summary"]').filter(has_text="Robot at").wait_for()
-    # Pings go out only while the panel is in view (a hidden tab costs the robot nothing), as a person opens it.
+    # The response times are the console's own commands' (tests/e2e/test_response_times.py): none timed yet.
     show_tab_of(page, "response-times")
-    wait_for(lambda: number(page, '[data-field="rtt-client-last"]') >= 0, 15, "no browser round trip measured")
-    wait_for(lambda: number(page, '[data-field="rtt-robot-p95"]') >= 0, 15, "no robot round trip measured")
-    assert number(page, '[data-field="rtt-client-mean"]') >= 0
+    page.locator('response-times-panel [data-field="rtt-skill-count"]').filter(has_text="0").wait_for()
     ARTIFACTS_DIR.mkdir(exist_ok=True)
     page.screenshot(path=str(ARTIFACTS_DIR / "panels-desktop.png"), full_page=True)
     page.screenshot(path=str(ARTIFACTS_DIR / "panels-desktop-viewport.png"))

@@ -315,3 +315,18 @@ def test_the_drive_channel_answers_pings_with_the_robot_round_trip(student_clien
     ack = json.loads(drive.receive(timeout=5))
     assert ack["type"] == "ack" and ack["robot_rtt_ms"] > 0
     drive.close()
+
+
+def test_a_skill_activation_reports_its_robot_leg_within_the_whole_round_trip(student_client: LabClient) -> None:
+    queue = take_control(student_client)
+    legs = []
+    for _ in range(3):
+        started = time.perf_counter()
+        status, body = api(student_client, "POST", "/api/robots/lab-1/skills/orientation_control/goals",
+                           {"parameters": {}, "preempt": True})
+        whole_ms = (time.perf_counter() - started) * 1000
+        assert status == 202, body
+        legs.append((body["robot_rtt_ms"], whole_ms))
+    # The middleware's call to the skill server is part of the round trip the client timed, never more.
+    assert all(0 < robot_ms < whole_ms for robot_ms, whole_ms in legs), legs
+    queue.close()

@@ -6,6 +6,8 @@
 
 import { ApiError, Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
 import { DriveSession } from "../../lib/drive-session.js";
+import { TimingLog } from "../../lib/response-times.js";
+import { timeActivation, timeDriveCommands } from "./timing-wiring.js";
 import { connectChat } from "./chat-session.js";
 import { GUESS_FIELDS, goalParameterNames } from "../../lib/panel-descriptors.js";
 import { bindFeedback, savePictureChoice } from "./feedback-wiring.js";
@@ -16,7 +18,7 @@ const MAP_POLL_MS = 2000;
 const GOALS_POLL_MS = 2000; // a goal started elsewhere (another tab, a tour's step, a console opened again) shows
 const ACTION_NOTE_MS = 10000; // "back at its dock" stays this long before the map's polls speak again
 const SCENE_RETRY_MS = 5000;
-const PING_EVERY_MS = 1000;
+const TIMINGS_SHOWN_EVERY_MS = 500;
 const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
 const BOOKINGS_REFRESH_MS = 60 * 1000;
 const DRAWN_PICTURE_STATUS = "video off: picture drawn by this browser from where the robot stands";
@@ -46,6 +48,7 @@ export class ConsoleWiring {
   #starters = [];
   #sceneLoaders = [];           // each scene-drawing panel's load(), to read the scene again
   #lastSeat = null;
+  #timings = new TimingLog();   // this console's commands, timed for the response-times panel
 
   constructor({ root, robotName, robotPath, status, layout }) {
     this.#root = root;
@@ -70,7 +73,7 @@ export class ConsoleWiring {
     "skill-goals": (descriptor, panel) => this.#skill(descriptor, panel),
     queue: (descriptor, panel) => this.#queue(descriptor, panel),
     chat: (descriptor, panel) => connectChat(this.#robotPath, panel),
-    pings: (descriptor, panel) => this.#pings(descriptor, panel),
+    "response-times": (descriptor, panel) => this.#responseTimes(descriptor, panel),
     limits: (descriptor, panel) => this.#limits(descriptor, panel),
   };
 
@@ -358,6 +361,7 @@ export class ConsoleWiring {
     const channel = this.#channel(path);
     const session = new DriveSession(channel);
     this.#drive = { channel, session };
+    timeDriveCommands(session, this.#timings);
     session.addEventListener("ready", ({ detail }) => this.#cameras.forEach((camera) => { camera.driveReady = detail; }));
     session.addEventListener("sent", ({ detail }) => this.#cameras.forEach((camera) => { camera.driveSent = detail; }));
     return this.#drive;
@@ -456,20 +460,13 @@ export class ConsoleWiring {
     this.#starters.push(load);
   }
 
-  #pings(descriptor, panel) {
-    const { session } = this.#ensureDrive(`${this.#robotPath}/drive`);
-    let supported = true;
-    session.addEventListener("pong", ({ detail }) => {
-      supported = true;
-      panel.sample = { client_ms: detail.client_ms, robot_ms: detail.robot_ms };
-    });
-    session.addEventListener("ping-unsupported", () => {
-      supported = false;
-      panel.unavailable = "This lab server does not answer pings, so response times cannot be measured.";
-    });
-    this.#starters.push(() => setInterval(() => {
-      if (supported && this.#layout.isShown(descriptor.id) && document.visibilityState === "visible") session.ping();
-    }, PING_EVERY_MS));
+  #responseTimes(descriptor, panel) {
+    const show = (always = false) => {
+      const nowMs = performance.now();
+      this.#timings.expire(nowMs);
+      if (always || this.#layout.isShown(descriptor.id)) panel.report = { log: this.#timings, nowMs };
+    };
+    this.#starters.push(() => { show(true); setInterval(show, TIMINGS_SHOWN_EVERY_MS); });
   }
 
   #skill(descriptor, panel) {
@@ -515,10 +512,10 @@ export class ConsoleWiring {
     try {
       // A plan used as a skill runs through the plans API, on this robot; any other skill is activated.
       const runUrl = entry.descriptor.run_url;
-      const answer = runUrl
-        ? await fetchJson(runUrl, { method: "POST", body: { target: this.#robotName } })
-        : await fetchJson(`${base}/skills/${encodeURIComponent(skill)}/goals`, {
-          method: "POST", body: { parameters, preempt: Boolean(preempt) } });
+      const body = runUrl ? { target: this.#robotName } : { parameters, preempt: Boolean(preempt) };
+      const answer = await timeActivation(this.#timings, body, () => (runUrl
+        ? fetchJson(runUrl, { method: "POST", body })
+        : fetchJson(`${base}/skills/${encodeURIComponent(skill)}/goals`, { method: "POST", body })));
       this.#followGoal(entry, answer.goal);
     } catch (error) {
       entry.panel.error = { code: error.code ?? "network", message: error.message, field: error.field ?? null };

@@ -31,6 +31,17 @@ export function trimHistory(samples, nowS, windowS = PLOT_WINDOW_S) {
   return samples.filter((sample) => nowS - sample.t_s <= windowS);
 }
 
+/** How long ago the robot last applied a drive command, as a person reads it; the sequence number itself (wall-clock
+ *  milliseconds on the wire, so that it survives a worker change) means nothing to them. Pure. */
+export function appliedAgo(appliedAtMs, nowMs) {
+  if (!Number.isFinite(appliedAtMs)) return "none since this panel opened";
+  const ago_s = Math.max(0, (nowMs - appliedAtMs) / 1000);
+  if (ago_s < 1) return "just now";
+  if (ago_s < 60) return `${Math.floor(ago_s)} s ago`;
+  if (ago_s < 3600) return `${Math.floor(ago_s / 60)} min ago`;
+  return `${Math.floor(ago_s / 3600)} h ago`;
+}
+
 /** Format a finite number with fixed decimals; "—" for anything else. Avoids printing "-0.00". */
 export function formatNumber(value, decimals) {
   const number = Number(value);
@@ -62,11 +73,13 @@ export class OdometryPanel extends PanelElement {
   #history = [];
   #plotTimer = 0;
   #limits = { max_linear_mps: 0.5, max_angular_radps: 1.5 };
+  #appliedSequence;             // the last applied sequence seen (undefined before the first message)
+  #appliedAtMs = NaN;           // when it changed, by performance.now()
 
   connectedCallback() {
     super.connectedCallback();
     clearInterval(this.#plotTimer);
-    this.#plotTimer = setInterval(() => this.#drawPlot(), PLOT_REDRAW_MS);
+    this.#plotTimer = setInterval(() => { this.#drawPlot(); this.#showApplied(); }, PLOT_REDRAW_MS);
   }
 
   disconnectedCallback() {
@@ -112,7 +125,7 @@ export class OdometryPanel extends PanelElement {
           h("span", { class: "odometry__key odometry__key--turn", text: "turn rate (rad/s)" }),
           h("span", { class: "muted", text: " · last 30 s" }))),
       h("p", { class: "odometry__meta" },
-        "tick ", field("tick"), " · last applied command ", field("last-applied")),
+        "tick ", field("tick"), " · last command applied ", field("last-applied")),
     );
   }
 
@@ -131,7 +144,7 @@ export class OdometryPanel extends PanelElement {
     set("angular", formatNumber(odometry.angular_radps, 2));
     set("angular-deg", formatNumber(Number(odometry.angular_radps) * DEG_PER_RAD, 0));
     set("tick", formatNumber(message?.tick, 0));
-    set("last-applied", formatNumber(message?.last_applied_sequence, 0));
+    this.#noteApplied(message?.last_applied_sequence);
     this.#deadmanNote.hidden = message?.deadman_stopped !== true;
     const drift = driftNote(message);
     if (this.#driftNote.textContent !== drift) this.#driftNote.textContent = drift;
@@ -144,6 +157,19 @@ export class OdometryPanel extends PanelElement {
       if (this.#history.length > 2000) this.#history = trimHistory(this.#history, t_s);
     }
     this.showMessage("");
+  }
+
+  #noteApplied(sequence) {
+    if (!Number.isFinite(Number(sequence)) || sequence === null) return;
+    if (this.#appliedSequence !== undefined && sequence !== this.#appliedSequence) this.#appliedAtMs = performance.now();
+    this.#appliedSequence = sequence;
+    this.#showApplied();
+  }
+
+  #showApplied() {
+    const field = this.#fields.get("last-applied");
+    const text = appliedAgo(this.#appliedAtMs, performance.now());
+    if (field && field.textContent !== text) field.textContent = text;
   }
 
   #drawPlot() {

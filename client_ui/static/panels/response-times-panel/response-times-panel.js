@@ -1,108 +1,105 @@
-// <response-times-panel>: the two legs of the paper's table 1, measured live with pings on the drive socket:
-// client -> middleware (browser round trip minus the robot leg) and middleware -> skill server (the gRPC
-// round trip the middleware reports). Live values, a sparkline of the last samples, mean and p95.
-// In: `sample` ({client_ms, robot_ms}), `unavailable` (a sentence, or "" when pings work). Out: none.
+// <response-times-panel>: the 2003 paper's table 1, measured on this console's own commands. Every skill activation
+// and every drive command is timed over its two legs: browser -> middleware (the whole round trip less the robot's
+// part) and middleware -> skill server (the middleware's call to the robot, which it reports in its answer). Each
+// leg shows minimum, mean, maximum and jitter (the inter-quartile range, as the paper takes it); below, the
+// connection's throughput and its late and lost commands (the paper's bandwidth and packet-loss study).
+// In: `report` ({log: a TimingLog of lib/response-times.js, nowMs}). Out: none. `samples` gives the timed commands.
 
 import { h } from "../../lib/dom.js";
-import { summarize } from "../../lib/stats.js";
+import { LATE_AFTER_MS, LEGS } from "../../lib/response-times.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
 
-const WINDOW = 50;
-const LEGS = [
-  { key: "client", label: "Browser → middleware", colour: "#1d5fc4" },
-  { key: "robot", label: "Middleware → skill server", colour: "#b1261b" },
-];
+const KIND_TITLES = { skill: "Skill activations", drive: "Drive commands" };
+const LEG_LABELS = { total: "Total", client: "Browser → middleware", robot: "Middleware → robot" };
+const FIGURES = [["min", "Min"], ["mean", "Mean"], ["max", "Max"], ["jitter", "Jitter (IQR)"]];
+const THROUGHPUT_WINDOW_MS = 10000;
 
-function swatch(colour) {
-  const element = h("span", { class: "rtt__swatch", "aria-hidden": "true" });
-  element.style.setProperty("--swatch", colour);
-  return element;
-}
-
-function ms(value) {
+/** Milliseconds with one decimal, "—" for none. */
+export function formatMs(value) {
   return Number.isFinite(value) ? value.toFixed(1) : "—";
 }
 
-export class ResponseTimesPanel extends PanelElement {
-  #series = { client: [], robot: [] };
-  #cells = {};
-  #canvas;
-  #note;
+/** Bytes per second as a person reads them. */
+export function formatRate(bytesPerS) {
+  if (!Number.isFinite(bytesPerS)) return "—";
+  return bytesPerS >= 1000 ? `${(bytesPerS / 1000).toFixed(1)} kB/s` : `${Math.round(bytesPerS)} B/s`;
+}
 
-  /** One measurement; both legs in milliseconds. */
-  set sample(sample) {
+export class ResponseTimesPanel extends PanelElement {
+  #cells = new Map();
+  #log = null;
+  #nowMs = 0;
+
+  /** The console's timing log, read at nowMs. */
+  set report({ log, nowMs }) {
     this.ensureBuilt();
-    for (const { key } of LEGS) {
-      const value = Number(sample?.[`${key}_ms`]);
-      if (!Number.isFinite(value) || value < 0) continue;
-      this.#series[key].push(value);
-      if (this.#series[key].length > WINDOW) this.#series[key].shift();
-    }
-    this.#note.hidden = true;
+    this.#log = log;
+    this.#nowMs = nowMs;
     this.scheduleRender();
   }
 
-  set unavailable(text) {
-    this.ensureBuilt();
-    this.#note.textContent = text || "";
-    this.#note.hidden = !text;
+  /** The timed commands, {skill: [...], drive: [...]}, each {total_ms, client_ms, robot_ms, at_ms}. */
+  get samples() {
+    return { skill: this.#log?.samples("skill") ?? [], drive: this.#log?.samples("drive") ?? [] };
+  }
+
+  #cell(field) {
+    const element = h("td", { "data-field": field, text: "—" });
+    this.#cells.set(field, element);
+    return element;
+  }
+
+  #value(field) {
+    const element = h("span", { "data-field": field, text: "—" });
+    this.#cells.set(field, element);
+    return element;
   }
 
   build() {
     this.classList.add("panel", "rtt");
-    const cell = (key, stat) => (this.#cells[`${key}-${stat}`] = h("td", { "data-field": `rtt-${key}-${stat}`, text: "—" }));
-    this.#canvas = h("canvas", { class: "rtt__spark", width: 300, height: 60, role: "img",
-      "aria-label": `Response times of the last ${WINDOW} pings` });
-    this.#note = h("p", { class: "rtt__note", "data-field": "rtt-note", text: "Measuring…" });
+    const table = (kind) => h("table", { class: "rtt__table", "data-kind": kind },
+      h("caption", {}, `${KIND_TITLES[kind]} · `, this.#value(`rtt-${kind}-count`), " timed (ms)"),
+      h("thead", {}, h("tr", {}, h("th", { scope: "col", text: "Round trip" }),
+        FIGURES.map(([, label]) => h("th", { scope: "col", text: label })))),
+      h("tbody", {}, LEGS.map((leg) => h("tr", {},
+        h("th", { scope: "row", text: LEG_LABELS[leg] }),
+        FIGURES.map(([figure]) => this.#cell(`rtt-${kind}-${leg}-${figure}`))))));
     this.append(
       h("h2", { class: "panel__title", text: "Response times" }),
-      h("table", { class: "rtt__table" },
-        h("caption", { class: "visually-hidden", text: `Round trips in milliseconds, over the last ${WINDOW} pings` }),
-        h("thead", {}, h("tr", {}, h("th", { scope: "col", text: "Round trip (ms)" }), h("th", { scope: "col", text: "Now" }),
-          h("th", { scope: "col", text: "Mean" }), h("th", { scope: "col", text: "p95" }))),
-        h("tbody", {}, LEGS.map(({ key, label, colour }) => h("tr", {},
-          h("th", { scope: "row" }, swatch(colour), label),
-          cell(key, "last"), cell(key, "mean"), cell(key, "p95"))))),
-      this.#canvas,
-      this.#note,
-      h("p", { class: "rtt__help muted", text: "Measured with a ping on the drive connection once a second. "
-        + "Browser → middleware is the whole round trip minus the middleware's own call to the robot." }),
+      table("skill"),
+      table("drive"),
+      h("p", { class: "rtt__connection", "data-field": "rtt-connection" },
+        "Throughput ", this.#value("rtt-throughput"), " · ", this.#value("rtt-sent"), " sent · ",
+        this.#value("rtt-late"), ` late (over ${LATE_AFTER_MS / 1000} s) · `, this.#value("rtt-lost"), " lost"),
+      h("p", { class: "rtt__help muted", text: "Timed on your own skill activations and drive commands since this "
+        + "console opened. Browser → middleware is the whole round trip less the middleware's call to the robot; "
+        + "jitter is the spread of the middle half of the round trips." }),
     );
   }
 
   render() {
-    for (const { key } of LEGS) {
-      const summary = summarize(this.#series[key], WINDOW);
-      this.#cells[`${key}-last`].textContent = ms(summary.last);
-      this.#cells[`${key}-mean`].textContent = ms(summary.mean);
-      this.#cells[`${key}-p95`].textContent = ms(summary.p95);
+    const log = this.#log;
+    if (!log) return;
+    const set = (field, text) => {
+      const element = this.#cells.get(field);
+      if (element.textContent !== text) element.textContent = text;
+    };
+    for (const kind of Object.keys(KIND_TITLES)) {
+      const figures = log.figures(kind);
+      set(`rtt-${kind}-count`, String(figures.total.count));
+      for (const leg of LEGS) for (const [figure] of FIGURES) set(`rtt-${kind}-${leg}-${figure}`, formatMs(figures[leg][figure]));
     }
-    const canvas = this.#canvas;
-    const width = Math.round((canvas.clientWidth || 300) * (window.devicePixelRatio || 1));
-    const height = Math.round(width / 5);
-    if (canvas.width !== width || canvas.height !== height) { canvas.width = width; canvas.height = height; }
-    const ctx = canvas.getContext("2d");
-    ctx.clearRect(0, 0, width, height);
-    const top = Math.max(1, ...this.#series.client, ...this.#series.robot) * 1.1;
-    ctx.lineWidth = Math.max(1.5, width / 200);
-    for (const { key, colour } of LEGS) {
-      const values = this.#series[key];
-      ctx.strokeStyle = colour;
-      ctx.beginPath();
-      values.forEach((value, index) => {
-        const x = width - (values.length - 1 - index) * (width / (WINDOW - 1));
-        const y = height - 2 - (value / top) * (height - 4);
-        if (index === 0) ctx.moveTo(x, y);
-        else ctx.lineTo(x, y);
-      });
-      ctx.stroke();
-    }
+    const delivery = log.delivery();
+    set("rtt-throughput", formatRate(log.throughput(this.#nowMs, THROUGHPUT_WINDOW_MS)));
+    set("rtt-sent", String(delivery.sent));
+    set("rtt-late", String(delivery.late));
+    set("rtt-lost", String(delivery.lost));
   }
 }
 
 export const register = registerPanel({
   kind: "response-times", tag: "response-times-panel", element: ResponseTimesPanel,
   stylesheets: [new URL("./response-times-panel.css", import.meta.url)],
-  feeds: [{ service: "pings" }],
+  feeds: [{ service: "response-times" }],
 });

@@ -1,0 +1,104 @@
+// Response times as the 2003 paper's table 1 measures them, kept pure (times are passed in, never read here):
+// each timed command (a skill activation, a drive command) has two legs, browser -> middleware and middleware ->
+// skill server, summed into its total; each leg is summarised by minimum, maximum, mean and jitter, the
+// inter-quartile range of its round trips (the paper's section 2.3, after Cottrell). The connection's throughput
+// and its late and lost messages are the paper's bandwidth and packet-loss measures.
+
+import { legFigures } from "./stats.js";
+
+export const LATE_AFTER_MS = 1000; // the paper's reference for operability: a command answered later is late
+export const LOST_AFTER_MS = 5000; // a command unanswered this long (or when its socket closed) is lost
+export const KINDS = ["skill", "drive"];
+export const LEGS = ["total", "client", "robot"];
+
+/** One timed command: the browser's whole round trip and the middleware's call to the robot within it. */
+export function timedSample(kind, sentMs, answeredMs, robotMs) {
+  const total = answeredMs - sentMs;
+  const robot = Number.isFinite(robotMs) && robotMs >= 0 ? Math.min(robotMs, total) : NaN;
+  return { kind, at_ms: answeredMs, total_ms: total, robot_ms: robot,
+    client_ms: Number.isFinite(robot) ? total - robot : NaN };
+}
+
+/** Commands sent and answered over one console's connections: samples, delivery counts and bytes moved. */
+export class TimingLog {
+  #pending = new Map(); // "kind:id" -> {kind, sentMs, bytes}
+  #samples = { skill: [], drive: [] };
+  #moved = []; // [{atMs, bytes}] for the throughput window
+  #counts = { sent: 0, answered: 0, late: 0, lost: 0 };
+  #cap;
+
+  constructor({ cap = 5000 } = {}) {
+    this.#cap = cap;
+  }
+
+  /** A command of kind left the browser at sentMs, bytes long. */
+  sent(kind, id, sentMs, bytes = 0) {
+    this.#pending.set(`${kind}:${id}`, { kind, sentMs, bytes });
+    this.#counts.sent += 1;
+    this.#moved.push({ atMs: sentMs, bytes });
+  }
+
+  /** Its answer came at answeredMs; robotMs is the middleware's own call to the robot. The sample, or null for an
+   *  answer to nothing pending (a repeat, or one already counted lost). */
+  answered(kind, id, answeredMs, { robotMs = NaN, bytes = 0, timed = true } = {}) {
+    const key = `${kind}:${id}`;
+    const pending = this.#pending.get(key);
+    if (!pending) return null;
+    this.#pending.delete(key);
+    this.#counts.answered += 1;
+    this.#moved.push({ atMs: answeredMs, bytes });
+    if (answeredMs - pending.sentMs > LATE_AFTER_MS) this.#counts.late += 1;
+    if (!timed) return null;
+    const sample = timedSample(kind, pending.sentMs, answeredMs, robotMs);
+    const series = this.#samples[kind];
+    series.push(sample);
+    if (series.length > this.#cap) series.shift();
+    return sample;
+  }
+
+  /** The oldest pending command of kind was answered (an answer that names no command, on an ordered socket). */
+  answeredOldest(kind, answeredMs, options = {}) {
+    let oldest = null;
+    for (const [key, pending] of this.#pending) {
+      if (pending.kind === kind && (!oldest || pending.sentMs < oldest.sentMs)) oldest = { key, ...pending };
+    }
+    if (oldest) this.answered(kind, oldest.key.slice(kind.length + 1), answeredMs, { ...options, timed: false });
+  }
+
+  /** A command of kind never reached its answer (the network failed under it). */
+  lost(kind, id) {
+    if (this.#pending.delete(`${kind}:${id}`)) this.#counts.lost += 1;
+  }
+
+  /** Counts as lost what waited LOST_AFTER_MS by nowMs, or every pending command of kind (its socket closed). */
+  expire(nowMs, kind = null) {
+    for (const [key, pending] of this.#pending) {
+      if ((kind && pending.kind === kind) || nowMs - pending.sentMs >= LOST_AFTER_MS) {
+        this.#pending.delete(key);
+        this.#counts.lost += 1;
+      }
+    }
+  }
+
+  /** The samples of kind, oldest first (at most cap). */
+  samples(kind) {
+    return this.#samples[kind].slice();
+  }
+
+  /** {total, client, robot} figures of kind's samples. */
+  figures(kind) {
+    const series = this.#samples[kind];
+    return Object.fromEntries(LEGS.map((leg) => [leg, legFigures(series.map((sample) => sample[`${leg}_ms`]))]));
+  }
+
+  /** {sent, answered, late, lost, waiting}. */
+  delivery() {
+    return { ...this.#counts, waiting: this.#pending.size };
+  }
+
+  /** Bytes per second moved (requests and answers) over the windowMs before nowMs. */
+  throughput(nowMs, windowMs = 10000) {
+    this.#moved = this.#moved.filter((entry) => nowMs - entry.atMs <= windowMs);
+    return this.#moved.reduce((sum, entry) => sum + entry.bytes, 0) / (windowMs / 1000);
+  }
+}
