@@ -11,12 +11,10 @@ import logging
 import os
 import signal
 import socket
-import time
 from pathlib import Path
 from typing import Any
 
 from flask import Flask
-from gunicorn.arbiter import Arbiter as _Arbiter  # type: ignore[import-untyped]
 from werkzeug.serving import BaseWSGIServer, make_server
 
 from middleware.realtime import WEBSOCKET_ENDED
@@ -110,6 +108,8 @@ def serve_with_gunicorn(host: str, port: int, workers: int) -> None:
 def roll_restarts(arbiter: Any) -> None:
     """gunicorn's on_starting hook: the master becomes a RollingArbiter (gunicorn takes no arbiter class from a
     configuration file, and a deployment's bare `gunicorn -c` must restart the same way as `telelab up`)."""
+    from middleware.rolling_restart import RollingArbiter
+
     arbiter.__class__ = RollingArbiter
 
 
@@ -146,45 +146,3 @@ def _close_channels_when_leaving(worker: Any) -> None:
         drain_channels()
 
     signal.signal(signal.SIGTERM, leave)
-
-
-def serves(worker: Any) -> bool:
-    """Whether a worker has made its app and serves (settle_worker wrote its byte)."""
-    try:
-        return os.fstat(worker.tmp.fileno()).st_size > 0
-    except (OSError, ValueError):
-        return False
-
-
-class RollingArbiter(_Arbiter):
-    """gunicorn's master, except that after a reload (SIGHUP) each old worker is retired only once a new one serves.
-
-    gunicorn's own reload forks the new generation and sends SIGTERM to the old one at once; a new worker then takes
-    seconds to make its app, so consoles found no worker for 1-6 s. Here the old workers keep serving until as many
-    new ones serve (or until `timeout`, should a new one never come up).
-    """
-
-    def manage_workers(self) -> None:
-        retiring: set[int] = self.__dict__.setdefault("_retiring", set())
-        retiring &= set(self.WORKERS)
-        serving = [pid for pid in self.WORKERS if pid not in retiring]
-        for _ in range(self.num_workers - len(serving)):
-            self.spawn_worker()
-        if len(serving) > self.num_workers:
-            self._retire_as_replaced(retiring)
-
-    def _retire_as_replaced(self, retiring: set[int]) -> None:
-        deadline = time.monotonic() + self.cfg.timeout
-        while True:
-            self.reap_workers()
-            retiring &= set(self.WORKERS)
-            serving = {pid: worker for pid, worker in self.WORKERS.items() if pid not in retiring}
-            if len(serving) <= self.num_workers:
-                return
-            ready = sum(1 for worker in serving.values() if serves(worker))
-            if ready > self.num_workers or time.monotonic() > deadline:
-                oldest = min(serving, key=lambda pid: serving[pid].age)
-                self.kill_worker(oldest, signal.SIGTERM)
-                retiring.add(oldest)
-                continue
-            time.sleep(0.05)
