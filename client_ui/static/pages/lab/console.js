@@ -6,7 +6,7 @@
 import { ApiError, fetchJson } from "../../lib/transport.js";
 import { h } from "../../lib/dom.js";
 import { checkPanelList } from "../../lib/panel-descriptors.js";
-import { ConsoleLayout } from "./console-layout.js";
+import { ConsoleLayout } from "../../lib/console/console-layout.js";
 import { ConsoleWiring } from "./console-wiring.js";
 import * as connectionStatus from "../../panels/connection-status/connection-status.js";
 import { loadPanels } from "../../panels/registry.js";
@@ -36,10 +36,11 @@ function fetchPanelList(robotName) {
     .then((answer) => ({ answer }), (error) => ({ error }));
 }
 
-/** Check the answer against the registered kinds; the basic panels, with a problem, when it is unusable. */
+/** Check the answer against the registered kinds; the basic panels, with a problem, when it is unusable. A robot
+ *  that does not answer gets the middleware's own panels and a notice saying why its own are missing. */
 function checkedPanelList({ answer, error }, robotPath, panels) {
   const checked = error ? null : checkPanelList(answer, panels);
-  if (checked) return { entries: checked, problem: "" };
+  if (checked) return { entries: checked, problem: typeof answer.notice === "string" ? answer.notice : "" };
   const why = error instanceof ApiError ? error.message : "it could not be loaded";
   return { entries: checkPanelList({ panels: basicPanels(robotPath) }, panels),
     problem: error ? `The robot's panel list is unavailable (${why}); showing the basic panels.`

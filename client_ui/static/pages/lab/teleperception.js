@@ -8,7 +8,7 @@
 import { canvasToWorld, fitView, worldToCanvas, worldTransform } from "../../lib/map-geometry.js";
 import { ApiError, fetchJson } from "../../lib/transport.js";
 import { gridImage } from "../../panels/map-panel/map-panel.js";
-import { showRobotPanels } from "../teaching/robot-panels.js";
+import { showRobotPanels } from "../../lib/console/robot-panels.js";
 
 const POLL_MS = 1000;
 const ROBOT_RADIUS_M = 0.2;

@@ -4,7 +4,7 @@
 // start it.
 import { h } from "../../lib/dom.js";
 import { fetchJson } from "../../lib/transport.js";
-import { showRobotPanels } from "./robot-panels.js";
+import { showRobotPanels } from "../../lib/console/robot-panels.js";
 
 const LESSON_PANELS = ["camera", "map"];
 

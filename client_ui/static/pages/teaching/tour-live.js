@@ -3,7 +3,7 @@
 // The robot's camera, drive pad and the panels the steps name are the console's own (robot-panels.js): a student
 // handed the robot drives it from here.
 import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
-import { panelTitle, showRobotPanels } from "./robot-panels.js";
+import { panelTitle, showRobotPanels } from "../../lib/console/robot-panels.js";
 
 const root = document.getElementById("live");
 const sessionId = Number(root.dataset.sessionId);

@@ -2,7 +2,7 @@
 // steps name are shown below the step, the current one marked.
 import { fetchJson } from "../../lib/transport.js";
 import { TourEngine, abortableSleep } from "./tour-engine.js";
-import { panelTitle, showRobotPanels } from "./robot-panels.js";
+import { panelTitle, showRobotPanels } from "../../lib/console/robot-panels.js";
 
 const root = document.getElementById("tour");
 const tourId = Number(root.dataset.tourId);

@@ -1,13 +1,13 @@
 // A robot's own console panels on a teaching page (the panels a tour names, a lesson's camera and map): the
 // panel registry and the console's layout and wiring, for the few panels the page asks for, so a panel
 // changed for the console is the same here. The page keeps its own text; this module only places panels.
-import { h } from "../../lib/dom.js";
-import { fetchJson } from "../../lib/transport.js";
-import { checkPanelList } from "../../lib/panel-descriptors.js";
+import { h } from "../dom.js";
+import { fetchJson } from "../transport.js";
+import { checkPanelList } from "../panel-descriptors.js";
 import { loadPanels } from "../../panels/registry.js";
 import * as connectionStatus from "../../panels/connection-status/connection-status.js";
-import { ConsoleLayout } from "../lab/console-layout.js";
-import { ConsoleWiring } from "../lab/console-wiring.js";
+import { ConsoleLayout } from "./console-layout.js";
+import { ConsoleWiring } from "../../pages/lab/console-wiring.js";
 
 /** A panel id in words when the robot does not describe it ("skill-wall_following" -> "Wall following"). */
 export function panelWords(id) {
@@ -36,7 +36,11 @@ export async function showRobotPanels(host, robotName, wanted) {
   try {
     const [{ panels }, answer] = await Promise.all([loadPanels(),
       fetchJson(`/api/robots/${encodeURIComponent(robotName)}/panels`)]);
-    for (const entry of checkPanelList(answer, panels)) {
+    if (typeof answer?.notice === "string" && answer.notice) {
+      problem.textContent = answer.notice; // the robot does not answer: only the middleware's own panels came
+      problem.hidden = false;
+    }
+    for (const entry of checkPanelList(answer, panels) ?? []) {
       if (!entry.ok) continue;
       const { descriptor } = entry;
       titles.set(descriptor.id, descriptor.title);

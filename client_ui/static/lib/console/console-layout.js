@@ -5,8 +5,8 @@
 // in a badge on that tab.
 // The rules of the arrangement are the pure reducer in layout.js; this module only renders it.
 
-import { h } from "../../lib/dom.js";
-import { layoutReducer, normalizeLayout, serializeLayout } from "../../lib/layout.js";
+import { h } from "../dom.js";
+import { layoutReducer, normalizeLayout, serializeLayout } from "../layout.js";
 
 const SAVE_DELAY_MS = 400;
 const TAB_NAMES = { drive: "Drive", navigate: "Navigate", sense: "Sense", chat: "Chat" };
