@@ -16,6 +16,7 @@ from middleware import events
 from middleware.access import round_robin
 from middleware.access.commands import hand_over
 from middleware.access.heard import HeardBook
+from middleware.access.liveness import RobotLiveness
 from middleware.access.round_robin import AccessPolicy, QueueState
 from middleware.db import session_factory
 from middleware.locking import ClusterElection
@@ -78,6 +79,7 @@ class AccessCoordinator:
         self._push_lock = threading.Lock()
         self._stop = threading.Event()
         self._ticker: threading.Thread | None = None
+        self._liveness: RobotLiveness | None = None
         self.election = ClusterElection(self._sessions.kw["bind"], ACCESS_TICKER_LOCK)
         # Each robot's queue as last read, dropped when a change to it is announced (by any worker, through the
         # event bus): pages showing seats read memory, not the table, until something changes.
@@ -93,9 +95,11 @@ class AccessCoordinator:
         """The policy as configured now (tests and admins may change the settings while running)."""
         return policy_for(self.app, self.hooks)
 
-    def apply(self, operation: Callable[..., QueueState], robot_name: str, *args: object) -> QueueState:
-        """Runs one round-robin operation in a transaction of its own, then hands the robot its token."""
-        online = self._robot_online(robot_name)
+    def apply(self, operation: Callable[..., QueueState], robot_name: str, *args: object,
+              online: bool | None = None) -> QueueState:
+        """Runs one round-robin operation in a transaction of its own, then hands the robot its token; online: the
+        robot's last known answer (the ticker's), else the robot is asked now."""
+        online = self._robot_online(robot_name, online)
         with self._sessions() as session, session.begin():
             state = operation(session, robot_name, *args, self.policy, self.clock(), online)
         if state.announced:  # this process's pages read it again at once; the bus tells the others (and us) soon
@@ -218,6 +222,7 @@ class AccessCoordinator:
         if self._ticker is not None:
             return
         self._stop.clear()
+        self._liveness = RobotLiveness(self._answers_now)
         self._ticker = threading.Thread(target=self._tick_forever, name="access-ticker", daemon=True)
         self._ticker.start()
 
@@ -227,24 +232,38 @@ class AccessCoordinator:
         if self._ticker is not None:
             self._ticker.join(5)
             self._ticker = None
+        if self._liveness is not None:
+            self._liveness.close()
+            self._liveness = None
         self.election.resign()
 
     def _tick_forever(self) -> None:
         # Every process with a channel open runs this loop, but only the elected one ticks (PostgreSQL: one per
         # cluster; another takes over within a tick when it dies). Operations of users still run in their process.
+        # A robot's answer is read from its last probe (RobotLiveness): a pass that waited for each robot in turn
+        # held a vanished user's seat one call deadline longer per robot that did not answer.
         interval_s = float(self.app.config["ACCESS_TICK_S"])
-        while not self._stop.wait(interval_s):
+        liveness = self._liveness
+        while liveness is not None and not self._stop.wait(interval_s):
             if not self.election.leads():
                 continue
-            for robot_name in robot_registry(self.app).names():
+            names = robot_registry(self.app).names()
+            liveness.probe(names)
+            for robot_name in names:
+                online = liveness.last(robot_name)
+                if online is None:
+                    continue  # ticked once its first probe answers (within one call deadline)
                 try:
-                    self.tick(robot_name)
+                    self.apply(round_robin.tick, robot_name, online=online)
                 except Exception:  # noqa: BLE001 - one bad tick must not stop the ticker
                     log.exception("access tick of %s failed", robot_name)
 
-    def _robot_online(self, robot_name: str) -> bool:
+    def _answers_now(self, robot_name: str) -> bool:
         link = robot_registry(self.app).get(robot_name)
-        online = link is not None and link.is_online()
+        return link is not None and link.is_online()
+
+    def _robot_online(self, robot_name: str, known: bool | None = None) -> bool:
+        online = self._answers_now(robot_name) if known is None else known
         if not online:
             with self._push_lock:
                 self._pushed_tokens.pop(robot_name, None)  # a restarted robot forgot the token

@@ -34,6 +34,14 @@ def _open_and_vanish(client: LabClient, path: str) -> socket.socket:
     return raw
 
 
+def wait_for_the_seat(coordinator, robot_name: str, vanished_at: float) -> int:
+    """The vanishing client's user id, once it holds robot_name's seat (within 10 s of its handshake)."""
+    while coordinator.snapshot(robot_name).controller_id is None:
+        assert time.monotonic() < vanished_at + 10, "the vanishing client never got its seat"
+        time.sleep(0.05)
+    return coordinator.snapshot(robot_name).controller_id
+
+
 def test_a_vanished_client_loses_its_seat_within_the_grace_and_a_quiet_one_keeps_it(live_server,
                                                                                       student_client) -> None:
     app = live_server.app
@@ -48,10 +56,7 @@ def test_a_vanished_client_loses_its_seat_within_the_grace_and_a_quiet_one_keeps
     vanished = _open_and_vanish(student_client, "/ws/robots/lab-1/queue")
     vanished_at = time.monotonic()
     try:
-        while coordinator.snapshot("lab-1").controller_id is None:
-            assert time.monotonic() < vanished_at + 10, "the vanishing client never got its seat"
-            time.sleep(0.1)
-        vanished_id = coordinator.snapshot("lab-1").controller_id
+        vanished_id = wait_for_the_seat(coordinator, "lab-1", vanished_at)
         quiet_socket = quiet.websocket("/ws/robots/lab-1/queue")  # answers pings, sends nothing
         assert receive_json(quiet_socket)["type"] == "queue"
         while coordinator.snapshot("lab-1").controller_id == vanished_id:
