@@ -453,7 +453,8 @@ def demo_accounts(app) -> dict[str, str]:
 # Files that share something of the machine's rather than of the process's run in one process, one after another:
 # Ray's clusters (a Ray started without an address joins a cluster running on the machine, and a failed start stops
 # every Ray of the machine), and labs of several web processes on PostgreSQL (each process's pool holds up to 15 of
-# the server's 100 connections, and two such labs at once would also slow each other's measured steps).
+# the server's 100 connections, and two such labs at once would also slow each other's measured steps). A group runs
+# at its first file's place, before files that come earlier than its others, so its files leave lab-1 as they found it.
 SAME_PROCESS_FILES = {
     "tests/integration/farm/test_ray_farm.py": "ray",
     "tests/integration/benchmarks/test_farm_benchmark_smoke.py": "ray",
