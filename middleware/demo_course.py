@@ -2,9 +2,10 @@
 
 "Mobile robotics (demo)": taught by the demo `tutor`, with the demo `student` enrolled, a weekly booking
 allowance and a turn length; a small question bank; an open practice quiz, a timed theoretical test and an
-experimental test on lab-1, both open now for a long window; and the course's lab survey (every course has
-one), already answered by three demo classmates (disabled accounts that exist for their answers alone), so the
-tutor sees its charts (shown from MIN_RESPONDENTS answers on) while the demo student can still answer it.
+experimental test on lab-1, both open now for a long window; and the course's lab survey (the demo tutor wrote
+it: the 2003 paper's seven statements and one rated from "Not at all" to "A great deal"), already answered by
+three demo classmates (disabled accounts that exist for their answers alone), so the tutor sees its charts
+(shown from MIN_RESPONDENTS answers on) while the demo student can still answer it.
 Everything goes through the courses and assessment services, so the seed obeys the same validation as a
 tutor's forms.
 
@@ -25,6 +26,7 @@ from sqlalchemy.orm import Session
 from middleware.accounts.services import set_active_by_name
 from middleware.assessment import bank, survey
 from middleware.assessment.schemas import SURVEY_ITEMS, parse_exam, parse_question, parse_survey
+from middleware.assessment.survey_statements import parse_statements
 from middleware.auth.services import create_user, find_user, generate_password
 from middleware.courses import services as courses
 from middleware.courses.schemas import CourseSettings
@@ -59,11 +61,16 @@ DEMO_QUESTIONS: list[dict[str, Any]] = [
     {"kind": "rating", "prompt": "Driving the robot myself made the sensors easier to understand.",
      "low_label": "Strongly disagree", "high_label": "Strongly agree", "topics": ["sensors"]},
 ]
-# The lab survey's answers of the demo classmates: ratings 1-5 in SURVEY_ITEMS' order, and a comment.
+# The survey the demo tutor wrote: the 2003 paper's seven statements and one of their own, with its own ends.
+DEMO_SURVEY_TITLE = "Evaluate the lab"
+DEMO_SURVEY_STATEMENTS = [{"text": text} for _key, text in SURVEY_ITEMS] + [
+    {"text": "Seeing the robot move with the lesson's video helped me learn", "low_label": "Not at all",
+     "high_label": "A great deal"}]
+# The lab survey's answers of the demo classmates: ratings 1-5 in the statements' order, and a comment.
 DEMO_SURVEY_ANSWERS: dict[str, tuple[tuple[int, ...], str]] = {
-    "demo-classmate-1": ((5, 4, 4, 3, 5, 4, 4), "Driving the robot from home made the odometry lesson concrete."),
-    "demo-classmate-2": ((4, 4, 2, 4, 4, 3, 5), "Booking a slot was hard in the week before the test."),
-    "demo-classmate-3": ((4, 5, 3, 4, 5, 4, 4), ""),
+    "demo-classmate-1": ((5, 4, 4, 3, 5, 4, 4, 5), "Driving the robot from home made the odometry lesson concrete."),
+    "demo-classmate-2": ((4, 4, 2, 4, 4, 3, 5, 3), "Booking a slot was hard in the week before the test."),
+    "demo-classmate-3": ((4, 5, 3, 4, 5, 4, 4, 4), ""),
 }
 QUIZ_QUESTIONS = (0, 1, 3, 6)  # indices into DEMO_QUESTIONS
 TIMED_QUESTIONS = (0, 2, 4, 5)
@@ -105,7 +112,8 @@ def seed_demo_course(session: Session, now: datetime | None = None) -> DemoCours
     for label, data in _demo_exams(ids, now):
         bank.create_exam(session, tutor, course.id, parse_exam(data))
         added.append(label)
-    added.append("the lab survey")
+    survey.write_survey(session, tutor, course.id, DEMO_SURVEY_TITLE, parse_statements(DEMO_SURVEY_STATEMENTS))
+    added.append(f"the lab survey the tutor wrote ({len(DEMO_SURVEY_STATEMENTS)} statements)")
     added += _survey_classmates(session, tutor, course.id)
     added += seed_demo_plans(session, course.id)
     return DemoCourse(course.id, added)
@@ -132,11 +140,12 @@ def _survey_classmates(session: Session, tutor: Any, course_id: int) -> list[str
     exist (seeded before, whatever the tutor did with them since) or the demo tutor is gone."""
     if tutor is None or tutor.role != Role.TUTOR or any(find_user(session, name) for name in DEMO_SURVEY_ANSWERS):
         return []
-    names = [item for item, _label in SURVEY_ITEMS]
+    statements = survey.survey_of(session, course_id).statements  # a course seeded before has the fixed seven
     for username, (ratings, comments) in DEMO_SURVEY_ANSWERS.items():
         classmate = create_user(session, username, Role.STUDENT, generate_password())
         courses.enrol(session, tutor, course_id, username)
         survey.submit_survey(session, classmate, course_id, *parse_survey(
-            {"ratings": dict(zip(names, ratings, strict=True)), "comments": comments}))
+            {"ratings": {s.key: rating for s, rating in zip(statements, ratings, strict=False)},
+             "comments": comments}, statements))
         set_active_by_name(session, username, False)
     return [f"the lab survey answered by {len(DEMO_SURVEY_ANSWERS)} demo classmates"]

@@ -20,7 +20,6 @@ from middleware.assessment.routes import controls_robot, own_robot, server_now
 from middleware.assessment.schemas import (
     AGREEMENT,
     RUBRIC_ROWS,
-    SURVEY_ITEMS,
     ExamInput,
     QuestionInput,
     form_choice_numbers,
@@ -29,6 +28,7 @@ from middleware.assessment.schemas import (
     parse_question,
     parse_survey,
 )
+from middleware.assessment.survey_statements import parse_statements, parse_title, statements_text
 from middleware.auth.schemas import InvalidField
 from middleware.courses.services import list_courses
 from middleware.db import get_session
@@ -82,6 +82,7 @@ def hub() -> ResponseReturnValue:
             entry["topics"] = recommendations.topic_scores(dbs, current_user.id, view.id)
             entry["recommendations"] = recommendations.recommend(dbs, current_user.id, view.id, now)
             entry["answered_survey"] = survey.has_answered(dbs, current_user.id, view.id)
+            entry["survey"] = survey.survey_of(dbs, view.id)
         courses.append(entry)
     return render_template("assessment/hub.html", courses=courses, css=CSS, now=now)
 
@@ -424,11 +425,12 @@ def survey_page(course_id: int) -> ResponseReturnValue:
 
     def page(errors: dict[str, str]) -> ResponseReturnValue:
         answered = survey.has_answered(get_session(), current_user.id, course_id)
-        return render_template("assessment/survey.html", course=course, items=SURVEY_ITEMS, answers=AGREEMENT,
-                               errors=errors, form=request.form, answered=answered, css=CSS), 400 if errors else 200
+        return render_template("assessment/survey.html", course=course, survey=survey.survey_of(get_session(),
+                               course_id), answer_names=survey.answer_names, errors=errors, form=request.form,
+                               answered=answered, css=CSS), 400 if errors else 200
 
     def answer() -> ResponseReturnValue:
-        ratings, comments = parse_survey(request.form.to_dict())
+        ratings, comments = parse_survey(request.form.to_dict(), survey.survey_of(get_session(), course_id).statements)
         survey.submit_survey(get_session(), current_user, course_id, ratings, comments)
         flash("Thank you: your answers were recorded.", "success")
         return redirect(url_for("assessment_pages.hub"), 303)
@@ -439,6 +441,32 @@ def survey_page(course_id: int) -> ResponseReturnValue:
         {refused.field if isinstance(refused, InvalidField) else "form": refused.message}))
 
 
+@blueprint.route("/courses/<int:course_id>/survey/edit", methods=["GET", "POST"])
+@login_required
+def survey_editor(course_id: int) -> ResponseReturnValue:
+    """The course's tutor writes its survey: a title and statements, one per line with what 1 and 5 mean."""
+    dbs = get_session()
+    course = bank.teaching_course(dbs, current_user, course_id)
+
+    def page(errors: dict[str, str], form: dict[str, str] | None = None) -> ResponseReturnValue:
+        current = survey.survey_of(dbs, course_id)
+        shown = form or {"title": current.title, "statements": statements_text(current.statements)}
+        return render_template("assessment/survey_edit.html", course=course, survey=current, form=shown,
+                               errors=errors, answered=survey.respondent_count(dbs, course_id),
+                               css=CSS), 400 if errors else 200
+
+    def save() -> ResponseReturnValue:
+        survey.write_survey(dbs, current_user, course_id, parse_title(request.form.get("title")),
+                            parse_statements(request.form.get("statements", "")))
+        flash("The survey is saved: students of the course now rate these statements.", "success")
+        return redirect(url_for("assessment_pages.survey_editor", course_id=course_id), 303)
+
+    if request.method != "POST":
+        return page({})
+    return unless_refused(save, lambda refused: page(
+        {refused.field or "form": refused.message}, request.form.to_dict()))
+
+
 @blueprint.get("/courses/<int:course_id>/survey/results")
 @login_required
 def survey_results(course_id: int) -> ResponseReturnValue:
@@ -447,5 +475,12 @@ def survey_results(course_id: int) -> ResponseReturnValue:
     results = survey.results(dbs, current_user, course_id)
     course = dbs.scalar(select(Course).where(Course.id == course_id))
     return render_template("assessment/survey_results.html", course=course, results=results, items=results.items,
-                           comments=results.comments, min_respondents=survey.MIN_RESPONDENTS, answers=AGREEMENT,
-                           css=CSS)
+                           comments=results.comments, min_respondents=survey.MIN_RESPONDENTS,
+                           answers=_answer_columns(results.items), css=CSS)
+
+
+def _answer_columns(items: list[survey.ItemDistribution]) -> tuple[str, ...]:
+    """The results table's columns: the agreement scale's names when every statement uses it, else 1 to 5."""
+    if all(survey.answer_names(i.low_label, i.high_label) == AGREEMENT for i in items):
+        return AGREEMENT
+    return ("1", "2", "3", "4", "5")

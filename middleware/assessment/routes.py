@@ -15,6 +15,7 @@ from middleware.access.coordinator import access_coordinator
 from middleware.assessment import attempts, bank, recommendations, review, survey
 from middleware.assessment.recording import finish_recording, record_after_commit, robot_run
 from middleware.assessment.schemas import parse_exam, parse_question, parse_survey
+from middleware.assessment.survey_statements import parse_statements, parse_title
 from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.models.assessment import Exam
@@ -309,7 +310,7 @@ def api_survey(course_id: int) -> ResponseReturnValue:
 
     def action(dbs: Session) -> dict[str, Any]:
         bank.student_course(dbs, current_user, course_id)
-        ratings, comments = parse_survey(data)
+        ratings, comments = parse_survey(data, survey.survey_of(dbs, course_id).statements)
         survey.submit_survey(dbs, current_user, course_id, ratings, comments)
         return {"answered": True}
 
@@ -326,5 +327,35 @@ def api_survey_results(course_id: int) -> ResponseReturnValue:
         return {"respondents": answers.respondents, "min_respondents": survey.MIN_RESPONDENTS,
                 "hidden": answers.hidden, "questions": [i.to_dict() for i in answers.items],
                 "comments": answers.comments}
+
+    return run(action)
+
+
+def _survey_dict(form: survey.CourseSurveyForm) -> dict[str, Any]:
+    return {"title": form.title, "written": form.written, "statements": [s.to_dict() for s in form.statements]}
+
+
+@blueprint.get("/api/courses/<int:course_id>/survey/statements")
+@login_required
+def api_survey_statements(course_id: int) -> ResponseReturnValue:
+    """The course's survey as its students rate it (students and tutors of the course, admins)."""
+    def action(dbs: Session) -> dict[str, Any]:
+        if not bank.may_teach(dbs, current_user, course_id):
+            bank.student_course(dbs, current_user, course_id)
+        return _survey_dict(survey.survey_of(dbs, course_id))
+
+    return run(action)
+
+
+@blueprint.put("/api/courses/<int:course_id>/survey/statements")
+@login_required
+def api_write_survey(course_id: int) -> ResponseReturnValue:
+    """{title, statements: [{text, low_label, high_label}]}: the course's tutor writes its survey (409
+    survey_answered once a student has answered)."""
+    data = json_body()
+
+    def action(dbs: Session) -> dict[str, Any]:
+        return _survey_dict(survey.write_survey(dbs, current_user, course_id, parse_title(data.get("title")),
+                                                parse_statements(data.get("statements"))))
 
     return run(action)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
@@ -10,6 +11,13 @@ from typing import Any
 from middleware.assessment import obstacle_zone
 from middleware.assessment.grading import QUESTION_KINDS, UNITS
 from middleware.assessment.rating import read_ends
+from middleware.assessment.survey_statements import (  # noqa: F401  (AGREEMENT, SURVEY_ITEMS: read from here too)
+    AGREEMENT,
+    FIXED_STATEMENTS,
+    SURVEY_ITEMS,
+    Statement,
+    parse_answers,
+)
 from middleware.assessment.trace_grading import DEFAULT_RUBRIC, TASK_KINDS
 from middleware.auth.schemas import InvalidField
 from middleware.validation import InvalidInput, decimal_int, loads_checked, within_calendar
@@ -302,26 +310,7 @@ def parse_exam(data: dict[str, Any]) -> ExamInput:
     return ExamInput(title, kind, opens_at, closes_at, duration_s, max_attempts, ids, task, robot)
 
 
-SURVEY_ITEMS = (
-    ("objectives_clear", "The learning objectives were clear"),
-    ("well_presented", "The course was well presented"),
-    ("lab_accessible", "The lab was easily accessible"),
-    ("corrections_helpful", "The corrected exercises contained helpful comments"),
-    ("system_essential", "The system was essential to the course"),
-    ("system_reliable", "The system was reliable"),
-    ("easy_to_use", "The system was easy to use"),
-)
-AGREEMENT = ("Strongly disagree", "Disagree", "Neutral", "Agree", "Strongly agree")
-
-
-def parse_survey(data: dict[str, Any]) -> tuple[dict[str, int], str]:
-    """Ratings 1-5 for every item, and free comments (up to 4000 characters)."""
-    ratings = {}
-    source = data.get("ratings") if isinstance(data.get("ratings"), dict) else data
-    for key, _label in SURVEY_ITEMS:
-        value = source.get(key)  # type: ignore[union-attr]
-        value = decimal_int(value, 1, 5)
-        if value is None:
-            raise InvalidField(key, "Choose one answer from strongly disagree (1) to strongly agree (5).")
-        ratings[key] = value
-    return ratings, _text(data.get("comments") or "", "comments", 4000, required=False)
+def parse_survey(data: dict[str, Any],
+                 statements: Sequence[Statement] = FIXED_STATEMENTS) -> tuple[dict[str, int], str]:
+    """Ratings 1-5 for every statement of the course's survey (the fixed seven by default), and comments."""
+    return parse_answers(data, statements)

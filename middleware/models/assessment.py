@@ -114,3 +114,17 @@ class SurveyResponse(Base):
     ratings: Mapped[dict[str, int]] = mapped_column(JSON)
     comments: Mapped[str] = mapped_column(Text, default="")
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+
+
+class CourseSurvey(Base):
+    """The survey a course's tutor wrote (statements rated 1-5, labelled ends); a course without one uses the
+    2003 paper's seven statements. Fixed once a student has answered, so answers always match their statements."""
+
+    __tablename__ = "course_surveys"
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    course_id: Mapped[int] = mapped_column(ForeignKey("courses.id", ondelete="CASCADE"), unique=True)
+    title: Mapped[str] = mapped_column(String(120))
+    statements: Mapped[list[dict[str, str]]] = mapped_column(JSON)  # [{key, text, low_label, high_label}]
+    author_id: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+    updated_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)

@@ -61,7 +61,7 @@ def test_the_demo_student_books_a_slot_and_finds_every_kind_of_test(
         page.get_by_role("heading", name="Mobile robotics (demo)").wait_for()
         for title in (QUIZ_TITLE, TIMED_TITLE, EXPERIMENTAL_TITLE):
             assert page.get_by_role("link", name=title).is_visible(), title
-        assert page.get_by_role("link", name="Evaluate the lab (7 questions)").count() == 1
+        assert page.get_by_role("link", name="Evaluate the lab (8 questions)").count() == 1
         page.screenshot(path=str(ARTIFACTS_DIR / f"demo-tests-{size}.png"), full_page=True)
         page.get_by_role("link", name=TIMED_TITLE).click()
         page.get_by_role("button", name="Start").wait_for()
