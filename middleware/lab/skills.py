@@ -13,6 +13,7 @@ from middleware.assessment.hidden_obstacles import MAP_REFUSAL, OBSTACLES_HIDDEN
 from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.lab.panels import robot_panels
+from middleware.lab.response_times import parse_report, record_report
 from middleware.lab.schemas import GOAL_ID_PATTERN, NAME_PATTERN
 from middleware.models import Role
 from middleware.plans.services import console_skill_panels
@@ -92,6 +93,16 @@ def _robot_leg_ms(robot: Commander) -> float | None:
     """The middleware -> skill server time of the command robot just sent, for the console's response times."""
     spent_ms = robot.robot_round_trip_ms
     return None if spent_ms is None else round(spent_ms, 3)
+
+
+@blueprint.put("/api/robots/<robot_name>/response-times")
+@login_required
+def report_response_times(robot_name: str) -> ResponseReturnValue:
+    """The console's response-time figures for the robot (its panel's table), kept for the user's tutor."""
+    robot_commands().require(robot_name, _user_id())
+    figures = parse_report(request.get_json(silent=True))
+    record_report(get_session(), _user_id(), robot_name, figures)
+    return jsonify({"recorded": True})
 
 
 def _goal_id(goal_id: str) -> str:

@@ -12,6 +12,7 @@ from middleware.models.chat import ChatMessage
 from middleware.models.courses import Course, CourseMembership, Invitation, LoginFailure
 from middleware.models.experiment import Trial, VideoDelay  # noqa: F401
 from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord  # noqa: F401
+from middleware.models.lab import ResponseTimeReport  # noqa: F401
 from middleware.models.plans import PlanVersion, StoredPlan
 from middleware.models.preferences import UserPreference
 from middleware.models.robots import Robot, RobotKindSetting

@@ -14,6 +14,7 @@ import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import Any
 
 from sqlalchemy import select, update
 from sqlalchemy.exc import IntegrityError
@@ -24,6 +25,7 @@ from middleware.errors import Refused
 from middleware.models import Course, CourseMembership, User
 from middleware.models.accounts import utc_now
 from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord
+from middleware.models.lab import ResponseTimeReport
 from middleware.teaching.practice_robots import PracticeManager, practice_name
 
 STARTS_AT_ONCE = 8  # robots started in parallel: enough to fill a host's cores, few enough to share them
@@ -42,11 +44,12 @@ class SeatView:
     state: str
     message: str
     robot: str
+    response_times: dict[str, Any] | None = None  # what the student's console measured on the robot
 
     def to_dict(self) -> dict[str, object]:
         """The seat as JSON."""
         return {"user_id": self.user_id, "username": self.username, "state": self.state, "message": self.message,
-                "robot": self.robot}
+                "robot": self.robot, "response_times": self.response_times}
 
 
 def open_session(session: Session, course_id: int) -> ClassSession | None:
@@ -192,12 +195,23 @@ def seats(session: Session, actor: User, course_id: int) -> tuple[ClassSession |
     rows = session.execute(select(ClassSeat, User.username).join(User, User.id == ClassSeat.user_id)
                            .where(ClassSeat.session_id == opened.id).order_by(User.username)).all()
     running = _running_owners(session, opened.id)
+    robots = {seat.user_id: practice_name(username, seat.user_id) for seat, username in rows}
+    measured = _response_times(session, robots)
     views = []
     for seat, username in rows:
         state = live_state(seat.state, seat.user_id in running)
         message = STOPPED_WHILE_OPEN if state != seat.state else seat.message
-        views.append(SeatView(seat.user_id, username, state, message, practice_name(username, seat.user_id)))
+        views.append(SeatView(seat.user_id, username, state, message, robots[seat.user_id],
+                              measured.get(seat.user_id)))
     return opened, views
+
+
+def _response_times(session: Session, robots: dict[int, str]) -> dict[int, dict[str, Any]]:
+    """Each student's latest response-time figures on their class robot (user id -> figures), in one read."""
+    if not robots:
+        return {}
+    reports = session.scalars(select(ResponseTimeReport).where(ResponseTimeReport.user_id.in_(robots)))
+    return {report.user_id: report.figures for report in reports if robots.get(report.user_id) == report.robot_name}
 
 
 def my_seat(session: Session, actor: User) -> tuple[Course, ClassSeat] | None:

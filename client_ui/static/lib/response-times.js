@@ -102,3 +102,34 @@ export class TimingLog {
     return this.#moved.reduce((sum, entry) => sum + entry.bytes, 0) / (windowMs / 1000);
   }
 }
+
+const REPORTED_FIGURES = ["min", "mean", "max", "jitter"];
+
+/** What the console reports of log for the tutor's class view: per kind its count and each leg's figures (null for
+ *  none), the delivery counts and the throughput over the windowMs before nowMs. */
+export function reportOf(log, nowMs, windowMs = 10000) {
+  const report = {};
+  for (const kind of KINDS) {
+    const figures = log.figures(kind);
+    report[kind] = { count: figures.total.count };
+    for (const leg of LEGS) {
+      report[kind][leg] = Object.fromEntries(REPORTED_FIGURES.map((name) => [name,
+        Number.isFinite(figures[leg][name]) ? Math.round(figures[leg][name] * 1000) / 1000 : null]));
+    }
+  }
+  const { sent, late, lost } = log.delivery();
+  return { ...report, delivery: { sent, late, lost }, throughput_bps: log.throughput(nowMs, windowMs) };
+}
+
+const KIND_WORDS = { skill: "skill activations", drive: "drive commands" };
+
+/** One line a tutor reads for a reported kind: "3 skill activations: 80.9–196.2 ms, mean 128.4, jitter 57.7", or
+ *  "no skill activations" when none was timed. Pure. */
+export function reportLine(report, kind) {
+  const timed = report?.[kind];
+  const total = timed?.total;
+  if (!timed?.count || !Number.isFinite(total?.mean)) return `no ${KIND_WORDS[kind]}`;
+  const ms = (value) => (Number.isFinite(value) ? value.toFixed(1) : "—");
+  return `${timed.count} ${KIND_WORDS[kind]}: ${ms(total.min)}–${ms(total.max)} ms, mean ${ms(total.mean)}, `
+    + `jitter ${ms(total.jitter)}`;
+}

@@ -94,3 +94,25 @@ def test_the_odometry_panel_says_how_long_ago_a_command_was_applied_not_its_sequ
     result = run(module_page, """return [NaN, 0, 999, 42500, 125000, 7300000].map((ago) =>
         odometry.appliedAgo(Number.isNaN(ago) ? NaN : 1000000 - ago, 1000000));""")
     assert result == ["none since this panel opened", "just now", "just now", "42 s ago", "2 min ago", "2 h ago"]
+
+
+def test_the_report_a_tutor_reads_carries_the_panel_s_figures_and_none_as_null(module_page) -> None:
+    result = run(module_page, """
+        const log = new rt.TimingLog();
+        log.sent('skill', 1, 0, 100); log.answered('skill', 1, 40, {robotMs: 10, bytes: 300});
+        log.sent('skill', 2, 100, 100); log.answered('skill', 2, 180, {robotMs: 30, bytes: 300});
+        const report = rt.reportOf(log, 1000, 10000);
+        return {report, line: rt.reportLine(report, 'skill'), none: rt.reportLine(report, 'drive'),
+                nothing: rt.reportLine(null, 'skill')};
+    """)
+    report = result["report"]
+    # Totals 40 and 80 ms: Q1 = 50, Q3 = 70; robot legs 10 and 30; browser legs 30 and 50.
+    assert report["skill"] == {"count": 2, "total": {"min": 40, "mean": 60, "max": 80, "jitter": 20},
+                               "client": {"min": 30, "mean": 40, "max": 50, "jitter": 10},
+                               "robot": {"min": 10, "mean": 20, "max": 30, "jitter": 10}}
+    assert report["drive"]["count"] == 0 and report["drive"]["total"] == dict.fromkeys(
+        ["min", "mean", "max", "jitter"])
+    assert report["delivery"] == {"sent": 2, "late": 0, "lost": 0}
+    assert report["throughput_bps"] == pytest.approx(80.0)  # 800 bytes over 10 s
+    assert result["line"] == "2 skill activations: 40.0–80.0 ms, mean 60.0, jitter 20.0"
+    assert result["none"] == "no drive commands" and result["nothing"] == "no skill activations"

@@ -1,5 +1,6 @@
 // The tutor's class session page: start it, follow every student's robot as it starts, end it.
 import { fetchJson } from "../../lib/transport.js";
+import { responseTimesCell } from "./class-response-times.js";
 
 const root = document.getElementById("class-session");
 const api = `/api/courses/${root.dataset.courseId}/class-session`;
@@ -13,6 +14,7 @@ const table = root.querySelector("table");
 const rows = table.querySelector("tbody");
 const STATE_WORDS = { starting: "starting…", ready: "ready", failed: "did not start", stopped: "stopped" };
 let timer = null;
+const legsOpen = new Set(); // user ids whose response-time legs the tutor opened
 
 function seatRow(seat) {
   const row = document.createElement("tr");
@@ -24,6 +26,16 @@ function seatRow(seat) {
     cell.textContent = text;
     row.append(cell);
   }
+  const times = document.createElement("td");
+  times.dataset.label = "Response times";
+  times.dataset.field = "response-times";
+  times.append(...responseTimesCell(seat.response_times));
+  const legs = times.querySelector("details");
+  if (legs) { // the page refreshes every few seconds: a tutor's open "Legs" stays open
+    legs.open = legsOpen.has(seat.user_id);
+    legs.addEventListener("toggle", () => (legs.open ? legsOpen.add(seat.user_id) : legsOpen.delete(seat.user_id)));
+  }
+  row.append(times);
   return row;
 }
 

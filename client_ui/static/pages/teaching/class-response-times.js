@@ -1,0 +1,33 @@
+// A student's response times in the tutor's class view: the figures their console's panel shows (reported by
+// lib/console/timing-report.js), totals on the row and each leg in a table under "Legs".
+
+import { h } from "../../lib/dom.js";
+import { KINDS, LEGS, reportLine } from "../../lib/response-times.js";
+
+const LEG_LABELS = { total: "Total", client: "Browser → middleware", robot: "Middleware → robot" };
+const FIGURES = [["min", "Min"], ["mean", "Mean"], ["max", "Max"], ["jitter", "Jitter (IQR)"]];
+
+function ms(value) {
+  return Number.isFinite(value) ? value.toFixed(1) : "—";
+}
+
+function legsTable(report) {
+  return h("table", { class: "class-rtt__legs" },
+    h("thead", {}, h("tr", {}, h("th", { scope: "col", text: "Round trip (ms)" }),
+      FIGURES.map(([, label]) => h("th", { scope: "col", text: label })))),
+    h("tbody", {}, KINDS.filter((kind) => report[kind]?.count).flatMap((kind) => LEGS.map((leg) => h("tr", {},
+      h("th", { scope: "row", text: `${kind === "skill" ? "Skills" : "Drive"}: ${LEG_LABELS[leg]}` }),
+      FIGURES.map(([figure]) => h("td", { "data-field": `rtt-${kind}-${leg}-${figure}`,
+        text: ms(report[kind][leg][figure]) })))))));
+}
+
+/** The content of a seat's "Response times" cell. */
+export function responseTimesCell(report) {
+  if (!report) return [h("span", { class: "muted", text: "not measured yet" })];
+  const { late, lost } = report.delivery;
+  return [
+    ...KINDS.map((kind) => h("div", { "data-field": `rtt-${kind}-line`, text: reportLine(report, kind) })),
+    h("div", { "data-field": "rtt-delivery", text: `${late} late, ${lost} lost` }),
+    h("details", {}, h("summary", { text: "Legs" }), legsTable(report)),
+  ];
+}
