@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -394,8 +395,6 @@ OWN_TRANSACTIONS_ALLOW_LIST = {
     "middleware/auth/session_records.py": "a login's last_seen_at, committed at once before the request writes",
     "middleware/teaching/class_sessions.py::_set_seat": "the background start of a class's robots records each "
                                                         "seat's outcome",
-    "middleware/teaching/practice_robots.py": "a practice robot's row claims its name across workers before the "
-                                              "farm starts it, and its keeper thread stops idle ones",
     "middleware/farm/pool_robots.py": "a pool robot's row is written once the farm started it, and its keeper "
                                       "thread restarts lost ones",
 }
@@ -444,3 +443,54 @@ def test_every_coded_exception_in_the_middleware_is_a_refused() -> None:
     assert "middleware.errors.Refused" in coded_exception_classes()
     assert not outsiders, ("an error with a stable code subclasses middleware.errors.Refused (status, code, message, "
                            f"field) so the one handler renders it: {outsiders}")
+
+
+STATIC = ROOT / "client_ui" / "static"
+# import ... from "x", import "x", export ... from "x", import("x"): each module an ES module names, as written.
+JS_IMPORT = re.compile(r"""(?:\bimport\s*(?:[\w*${}\s,]+?\s*from\s*)?|\bexport\s*[\w*${}\s,]+?\s*from\s*"""
+                       r"""|\bimport\s*\(\s*)["']([^"']+)["']""")
+
+
+def js_imports(path: Path, text: str | None = None) -> set[Path]:
+    """The static files an ES module under client_ui/static imports (relative or /static/ paths), resolved."""
+    found = set()
+    for name in JS_IMPORT.findall(path.read_text(encoding="utf-8") if text is None else text):
+        if name.startswith("/static/"):
+            found.add((STATIC / name.removeprefix("/static/")).resolve())
+        elif name.startswith("."):
+            found.add((path.parent / name).resolve())
+    return found
+
+
+def cross_page_imports(modules: dict[Path, set[Path]]) -> list[str]:
+    """A page's module importing another page's, or a shared module (lib/, panels/) importing any page's."""
+    pages = (STATIC / "pages").resolve()
+    found = []
+    for module, targets in sorted(modules.items()):
+        own = module.relative_to(pages).parts[0] if module.is_relative_to(pages) else None
+        for target in sorted(targets):
+            if target.is_relative_to(pages) and target.relative_to(pages).parts[0] != own:
+                found.append(f"{module.relative_to(STATIC)} imports {target.relative_to(STATIC)}")
+    return found
+
+
+def test_no_page_imports_another_page() -> None:
+    modules = {path.resolve(): js_imports(path) for path in STATIC.rglob("*.js") if "vendor" not in path.parts}
+    assert not cross_page_imports(modules), (
+        "what two pages share lives in static/lib/ (the console's in lib/console/), never in one page's folder: "
+        f"{cross_page_imports(modules)}")
+
+
+def test_the_cross_page_check_finds_a_page_or_a_library_importing_a_page() -> None:
+    pages = STATIC / "pages"
+    teaching = (pages / "teaching" / "tour.js").resolve()
+    shared = (STATIC / "lib" / "console" / "wiring.js").resolve()
+    text = ('import { a } from "../lab/console.js";\nimport "./own.js";\n'
+            'const b = await import("/static/pages/lab/x.js");')
+    assert js_imports(teaching, text) == {(pages / "lab" / "console.js").resolve(),
+                                          (pages / "teaching" / "own.js").resolve(), (pages / "lab" / "x.js").resolve()}
+    found = cross_page_imports({teaching: js_imports(teaching, text),
+                                shared: {(pages / "lab" / "console.js").resolve()}})
+    assert found == ["lib/console/wiring.js imports pages/lab/console.js",
+                     "pages/teaching/tour.js imports pages/lab/console.js",
+                     "pages/teaching/tour.js imports pages/lab/x.js"]

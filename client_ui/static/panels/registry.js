@@ -12,8 +12,8 @@
 //       the robot's description (GET /api/robots/<r>) set on that property once it is loaded;
 //   {service: "<name>"}
 //       one of the console's exchanges that is more than a socket read (the drive session, skill goals,
-//       the turn queue, chat, the camera's binary stream, the map's polling and targets, response times), named in
-//       pages/lab/console-wiring.js.
+//       the turn queue, chat, the camera's binary stream, the map's polling and targets, response times), which
+//       its module registers in lib/console/feed-services.js (as a panel registers here).
 
 import { elementRegistrar } from "./panel-base.js";
 

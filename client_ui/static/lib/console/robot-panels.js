@@ -7,7 +7,7 @@ import { checkPanelList } from "../panel-descriptors.js";
 import { loadPanels } from "../../panels/registry.js";
 import * as connectionStatus from "../../panels/connection-status/connection-status.js";
 import { ConsoleLayout } from "./console-layout.js";
-import { ConsoleWiring } from "../../pages/lab/console-wiring.js";
+import { ConsoleWiring } from "./console-wiring.js";
 
 /** A panel id in words when the robot does not describe it ("skill-wall_following" -> "Wall following"). */
 export function panelWords(id) {

@@ -7,7 +7,7 @@ import { ApiError, fetchJson } from "../../lib/transport.js";
 import { h } from "../../lib/dom.js";
 import { checkPanelList } from "../../lib/panel-descriptors.js";
 import { ConsoleLayout } from "../../lib/console/console-layout.js";
-import { ConsoleWiring } from "./console-wiring.js";
+import { ConsoleWiring } from "../../lib/console/console-wiring.js";
 import * as connectionStatus from "../../panels/connection-status/connection-status.js";
 import { loadPanels } from "../../panels/registry.js";
 

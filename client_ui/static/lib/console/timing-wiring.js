@@ -1,7 +1,7 @@
 // Feeds the console's TimingLog (lib/response-times.js) from the commands it really sends: each drive command on
 // the drive session, answered by its ack (or, in order, by an error), and each skill activation's request.
 
-import { ApiError } from "../../lib/transport.js";
+import { ApiError } from "../transport.js";
 
 let activations = 0;
 

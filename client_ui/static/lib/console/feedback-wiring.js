@@ -1,7 +1,7 @@
 // Connects a camera panel's feedback layer to the person's saved choice (on by default); the robot's
 // description and the drive session's messages reach the panel through the console wiring.
 
-import { fetchJson } from "../../lib/transport.js";
+import { fetchJson } from "../transport.js";
 
 export const FEEDBACK_PREFERENCE = "/api/me/preferences/camera-feedback";
 export const FILL_PREFERENCE = "/api/me/preferences/camera-feedback-fill";

@@ -1,15 +1,18 @@
 // Wiring of placed panels to their data, by the feeds each panel module declared when it registered
 // (static/panels/registry.js): a socket's messages by type to properties, the robot's description to a
-// property, or a named service below (an exchange that is more than a read: sessions, requests, polling).
+// property, or a feed service (an exchange that is more than a read: sessions, requests, polling) that its module
+// registered in feed-services.js: this module registers those that share the console's state (the drive session,
+// the skills, the maps), chat-session.js the chat. Shared by every page that shows a robot's panels.
 // Sockets are shared by path (one telemetry socket feeds odometry, sonar, laser, map and camera). An
 // unreadable message or a panel that throws on one leaves a notice in that panel's frame.
 
-import { ApiError, Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
-import { DriveSession } from "../../lib/drive-session.js";
-import { TimingLog } from "../../lib/response-times.js";
+import { ApiError, Channel, fetchJson, parseJsonMessage } from "../transport.js";
+import { DriveSession } from "../drive-session.js";
+import { TimingLog } from "../response-times.js";
 import { timeActivation, timeDriveCommands } from "./timing-wiring.js";
-import { connectChat } from "./chat-session.js";
-import { GUESS_FIELDS, goalParameterNames } from "../../lib/panel-descriptors.js";
+import "./chat-session.js";
+import { feedService, registerFeedService } from "./feed-services.js";
+import { GUESS_FIELDS, goalParameterNames } from "../panel-descriptors.js";
 import { bindFeedback, savePictureChoice } from "./feedback-wiring.js";
 import { playTurnTone } from "./turn-tone.js";
 
@@ -59,30 +62,42 @@ export class ConsoleWiring {
     window.addEventListener("online", () => this.#channels.forEach((channel) => channel.retryNow()));
   }
 
-  /** The services a feed may name: `{service: name}` -> what connects the panel. */
-  #services = {
-    "camera-stream": (descriptor, panel) => this.#cameraStream(descriptor, panel),
-    "map-grid": (descriptor, panel) => this.#mapGrid(descriptor, panel),
-    "map-view": (descriptor, panel) => this.#readMap(descriptor, {
-      take: (grid, answer, changed) => { if (changed) panel.map = grid; },
-    }),
-    "goal-target": (descriptor, panel) => this.#goalTarget(panel),
-    "goal-view": (descriptor, panel) => { this.#goalViews.push(panel); },
-    scene: (descriptor, panel) => this.#scene(descriptor, panel),
-    drive: (descriptor, panel) => this.#drivePad(descriptor, panel),
-    "skill-goals": (descriptor, panel) => this.#skill(descriptor, panel),
-    queue: (descriptor, panel) => this.#queue(descriptor, panel),
-    chat: (descriptor, panel) => connectChat(this.#robotPath, panel),
-    "response-times": (descriptor, panel) => this.#responseTimes(descriptor, panel),
-    limits: (descriptor, panel) => this.#limits(descriptor, panel),
-  };
+  // The feed services that share the console's state register here, as any other module registers its own.
+  static {
+    const services = {
+      "camera-stream": (wiring, descriptor, panel) => wiring.#cameraStream(descriptor, panel),
+      "map-grid": (wiring, descriptor, panel) => wiring.#mapGrid(descriptor, panel),
+      "map-view": (wiring, descriptor, panel) => wiring.#readMap(descriptor, {
+        take: (grid, answer, changed) => { if (changed) panel.map = grid; },
+      }),
+      "goal-target": (wiring, descriptor, panel) => wiring.#goalTarget(panel),
+      "goal-view": (wiring, descriptor, panel) => { wiring.#goalViews.push(panel); },
+      scene: (wiring, descriptor, panel) => wiring.#scene(descriptor, panel),
+      drive: (wiring, descriptor, panel) => wiring.#drivePad(descriptor, panel),
+      "skill-goals": (wiring, descriptor, panel) => wiring.#skill(descriptor, panel),
+      queue: (wiring, descriptor, panel) => wiring.#queue(descriptor, panel),
+      "response-times": (wiring, descriptor, panel) => wiring.#responseTimes(descriptor, panel),
+      limits: (wiring, descriptor, panel) => wiring.#limits(descriptor, panel),
+    };
+    for (const [name, connect] of Object.entries(services)) registerFeedService(name, connect);
+  }
+
+  /** The robot's name and the path of its sockets, for the feed services registered elsewhere. */
+  get robotName() {
+    return this.#robotName;
+  }
+
+  get robotPath() {
+    return this.#robotPath;
+  }
 
   /** Connect one placed panel to the feeds its module declared. */
   wire(descriptor, panel, feeds) {
     for (const feed of feeds) {
+      const connect = feed.service ? feedService(feed.service) : null;
       if (feed.socket) this.#socketFeed(descriptor, panel, feed);
       else if (feed.robotInfo) this.#infoFeed(descriptor, panel, feed);
-      else if (this.#services[feed.service]) this.#services[feed.service](descriptor, panel);
+      else if (connect) connect(this, descriptor, panel);
       else throw new Error(`its feed ${JSON.stringify(feed)} is not one this console offers`);
     }
   }

@@ -1,7 +1,9 @@
 // Wires a <chat-panel> to the robot's chat socket: history on every (re)connect, then new messages,
 // deletions and errors; the panel's chat-send / chat-delete events become socket commands.
+// It registers the console's "chat" feed service (feed-services.js).
 
-import { Channel, parseJsonMessage } from "../../lib/transport.js";
+import { Channel, parseJsonMessage } from "../transport.js";
+import { registerFeedService } from "./feed-services.js";
 
 /** Opens the chat channel at `${robotPath}/chat` and connects it to panel; returns the Channel. */
 export function connectChat(robotPath, panel) {
@@ -21,3 +23,5 @@ export function connectChat(robotPath, panel) {
   window.addEventListener("online", () => chat.retryNow());
   return chat;
 }
+
+registerFeedService("chat", (wiring, descriptor, panel) => { connectChat(wiring.robotPath, panel); });
