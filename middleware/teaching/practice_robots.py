@@ -5,6 +5,12 @@ robot on the farm (middleware/farm). Any web worker finds a practice robot by na
 reaches it through its own link, so the robots do not belong to the process that started them. The token is
 given to the robot when it starts and again by the farm after a restart, so nobody else can ever control it.
 
+A start is two steps: the row is claimed in the caller's unit of work (begin_start), and the farm starts the
+robot once that is committed (PendingStart.run, an after_commit hook of the request), so other workers see the
+claim before the robot exists and nothing here commits a request's session. A claim whose start never finished
+(its process died between the commit and the start) is released after START_DEADLINE_S by any keeper, or
+replaced when its owner starts again.
+
 The robot registry resolves `practice-...` names through the manager for their owners only, so a practice
 robot opens in the lab console (/lab/<name>) with every panel, and every robot page, API and channel
 answers anyone else with a 404.
@@ -13,6 +19,7 @@ answers anyone else with a 404.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import logging
 import os
 import re
@@ -25,7 +32,7 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 
 from flask import Flask, current_app
-from sqlalchemy import delete, func, or_, select
+from sqlalchemy import delete, func, or_, select, update
 from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.orm import Session
 
@@ -33,6 +40,7 @@ from middleware.config import ConfigError
 from middleware.db import session_factory
 from middleware.errors import Refused
 from middleware.farm.base import FarmFull, FarmUnavailable, RobotFarm, RobotSpec
+from middleware.locking import rows_matched
 from middleware.models.accounts import as_utc, utc_now
 from middleware.models.farm import ClassSession, PersonalRobotRecord
 from middleware.robots.link import RobotLink, answers_at
@@ -44,7 +52,7 @@ DEFAULT_IDLE_S = 900.0
 PRACTICE_PREFIX = "practice-"
 PLAIN_USERNAME = re.compile(r"^[a-z0-9][a-z0-9_-]{0,22}$")  # fits the 32-character robot names as it is
 TOUCH_EVERY_S = 20.0  # a use is written to the table at most this often per robot and process
-STARTING_FOR_AT_MOST_S = 300.0  # a row without an address older than this is a start that never finished
+START_DEADLINE_S = 120.0  # a claim still without an address this long after it was written is a start that died
 REFIND_AFTER_S = 1.0  # a robot unreachable this long is looked up on the farm again (it may have moved)
 
 
@@ -65,6 +73,35 @@ class PracticeStartFailed(Refused):
 def watched(link: RobotLink) -> bool:
     """Whether someone watches one of the robot's streams now (a console open on it)."""
     return any(hub.viewer_count > 0 for hub in (link.camera, link.telemetry, link.localization))
+
+
+@dataclass(frozen=True)
+class PendingStart:
+    """A claim written in the caller's unit of work, whose robot the farm starts once it is committed; and the
+    robot it replaced (another scene's, or a start that died), stopped first."""
+
+    manager: PracticeManager
+    name: str
+    token: str
+    scene: str
+    replaced: str | None = None
+
+    def run(self) -> PracticeRobot:
+        """Stops the replaced robot and starts the claimed one; Refused when the farm cannot (the claim is
+        released)."""
+        if self.replaced is not None:
+            self.manager.finish_stop(self.replaced)
+        return self.manager.launch(self.name, self.token, self.scene)
+
+    def run_quietly(self) -> None:
+        """run() for an after_commit hook: a start the farm refuses releases its claim, and the page reads the
+        robot off instead of starting."""
+        try:
+            self.run()
+        except Refused as refusal:
+            log.warning("practice robot %s did not start: %s", self.name, refusal.message)
+        except Exception:  # noqa: BLE001 - the request is answered already; the claim is released
+            log.exception("practice robot %s did not start", self.name)
 
 
 @dataclass(frozen=True)
@@ -114,8 +151,10 @@ class PracticeManager:
     """The lab's practice robots: as many as the farm holds (or `cap`), each stopped after `idle_s` unused."""
 
     def __init__(self, farm: RobotFarm, sessions: Callable[[], Session], idle_s: float, cap: int | None = None,
-                 rpc_timeout_s: float = 1.0, scene: str = "lab", clock: Callable[[], datetime] = utc_now) -> None:
+                 rpc_timeout_s: float = 1.0, scene: str = "lab", clock: Callable[[], datetime] = utc_now,
+                 start_deadline_s: float = START_DEADLINE_S) -> None:
         self.farm, self.cap, self.idle_s, self.scene = farm, cap, idle_s, scene
+        self.start_deadline_s = start_deadline_s
         self._sessions = sessions
         self._rpc_timeout_s = rpc_timeout_s
         self._clock = clock
@@ -153,59 +192,109 @@ class PracticeManager:
         capacity = self.farm.capacity().robots
         return capacity if self.cap is None else min(self.cap, capacity)
 
-    def start(self, owner_id: int, username: str, class_session_id: int | None = None,
-              scene: str | None = None) -> PracticeRobot:
-        """owner_id's practice robot, started now if not running; refused when the lab or the farm is full.
+    def starting(self, owner_id: int) -> bool:
+        """Whether owner_id's practice robot is claimed and not started yet (within the start deadline)."""
+        with self._sessions() as session:
+            record = session.scalar(select(PersonalRobotRecord).where(PersonalRobotRecord.owner_id == owner_id))
+            return record is not None and not record.address and not self._start_died(record)
 
-        class_session_id: the robot is the student's in that class session (kept while it is open), running
-        scene (the manager's own by default): a robot already running another scene is replaced.
-        """
+    def begin_start(self, session: Session, owner_id: int, username: str, class_session_id: int | None = None,
+                    scene: str | None = None) -> PendingStart | None:
+        """Claims owner_id's practice robot in session (the caller's unit of work, which commits it); the start to
+        run once committed, or None when the robot runs (in scene, for a class) or is starting already.
+
+        class_session_id: the robot is the student's in that class session (kept while it is open), running scene
+        (the manager's own by default): a robot already running another scene is replaced. Refused when the lab
+        is full; the caller's unit of work then keeps nothing."""
         wanted = scene or self.scene
-        running = self.get(owner_id)
-        if running is not None and (class_session_id is None or self.scene_of(running.name) == wanted):
-            if class_session_id is not None:
-                self._join_class(running.name, class_session_id)
-            return running
-        if running is not None:
-            self.stop(owner_id)
-        name = practice_name(username, owner_id)
-        token = secrets.token_urlsafe(32)
-        self._claim(name, owner_id, username, token, class_session_id, wanted)
+        record = session.scalar(select(PersonalRobotRecord).where(PersonalRobotRecord.owner_id == owner_id))
+        replaced = None
+        if record is not None:
+            in_scene = class_session_id is None or record.scene == wanted
+            if (record.address and in_scene) or (not record.address and not self._start_died(record)):
+                if class_session_id is not None:
+                    record.class_session_id = class_session_id
+                    session.flush()
+                return None
+            replaced = record.name
+            session.delete(record)
+            session.flush()
+        limit = self.limit()
+        if (session.scalar(select(func.count()).select_from(PersonalRobotRecord)) or 0) >= limit:
+            raise PracticeCapReached(f"All {limit} practice robots are in use. Try again in a few minutes, "
+                                     "or watch a lab robot in the meantime.")
+        name, token, now = practice_name(username, owner_id), secrets.token_urlsafe(32), self._clock()
+        session.add(PersonalRobotRecord(name=name, owner_id=owner_id, owner_name=username, scene=wanted, token=token,
+                                        address="", backend=self.farm.backend, started_at=now, last_used_at=now,
+                                        class_session_id=class_session_id))
         try:
-            robot = self.farm.start(RobotSpec(name, wanted, token))
+            session.flush()
+        except IntegrityError:  # another request claimed it first; the caller's unit of work rolls back
+            raise PracticeStartFailed("Your practice robot is starting already; wait a few seconds.") from None
+        self.start_keeper()  # this process releases the claim if its start dies
+        return PendingStart(self, name, token, wanted, replaced)
+
+    def launch(self, name: str, token: str, scene: str) -> PracticeRobot:
+        """Starts the committed claim (name, token) on the farm and records its address; Refused when the farm
+        cannot (the claim is released) or the claim went meanwhile (stopped, or released as a dead start)."""
+        try:
+            robot = self.farm.start(RobotSpec(name, scene, token))
         except (FarmFull, FarmUnavailable) as error:
-            self._release(name)
+            self._release(name, token)
             log.warning("practice robot %s did not start: %s", name, error.message)
             if isinstance(error, FarmFull):
                 raise PracticeCapReached(error.message) from None
             raise PracticeStartFailed("Your practice robot did not start. Try again in a moment.") from None
         except BaseException:
-            self._release(name)
+            self._release(name, token)
             raise
-        with self._sessions() as session:
-            record = session.get(PersonalRobotRecord, name)
-            if record is None:  # stopped by another request while it started
+        with self._sessions() as session, session.begin():
+            recorded = rows_matched(session, update(PersonalRobotRecord).where(
+                PersonalRobotRecord.name == name, PersonalRobotRecord.token == token).values(address=robot.address))
+        started = self.by_name(name) if recorded else None
+        if started is None or started.token != token:
+            if not recorded:  # released meanwhile: nobody's robot
                 self.farm.stop(name)
-                raise PracticeStartFailed("Your practice robot was stopped while it started. Start it again.")
-            record.address = robot.address
-            session.commit()
-        self.start_keeper()
-        started = self.get(owner_id)
-        if started is None:
             raise PracticeStartFailed("Your practice robot was stopped while it started. Start it again.")
         return started
 
-    def stop(self, owner_id: int) -> bool:
-        """Stops owner_id's practice robot; False when there was none."""
-        with self._sessions() as session:
-            record = session.scalar(select(PersonalRobotRecord).where(PersonalRobotRecord.owner_id == owner_id))
-            if record is None:
-                return False
-            name = record.name
-            session.delete(record)
-            session.commit()
+    def start(self, owner_id: int, username: str, class_session_id: int | None = None,
+              scene: str | None = None) -> PracticeRobot:
+        """owner_id's practice robot, claimed and started now if not running (a background duty's start, such as a
+        class's, or a request's that needs the robot at once: a plan run); refused when the lab or the farm is
+        full, or while another start of it is under way."""
+        with self._sessions() as session, session.begin():
+            pending = self.begin_start(session, owner_id, username, class_session_id, scene)
+        if pending is not None:
+            return pending.run()
+        running = self.get(owner_id)
+        if running is None:
+            raise PracticeStartFailed("Your practice robot is starting already; wait a few seconds.")
+        return running
+
+    def begin_stop(self, session: Session, owner_id: int) -> str | None:
+        """Removes owner_id's practice robot's row in session (the caller's unit of work); the robot's name, whose
+        process finish_stop ends once that is committed, or None when there was none."""
+        record = session.scalar(select(PersonalRobotRecord).where(PersonalRobotRecord.owner_id == owner_id))
+        if record is None:
+            return None
+        session.delete(record)
+        session.flush()
+        return record.name
+
+    def finish_stop(self, name: str) -> None:
+        """Ends the robot whose row begin_stop removed (after the commit)."""
         self._forget(name)
         self.farm.stop(name)
+
+    def stop(self, owner_id: int) -> bool:
+        """Stops owner_id's practice robot in a unit of work of its own (background duties); False when there was
+        none."""
+        with self._sessions() as session, session.begin():
+            name = self.begin_stop(session, owner_id)
+        if name is None:
+            return False
+        self.finish_stop(name)
         return True
 
     def stop_named(self, name: str) -> bool:
@@ -256,13 +345,33 @@ class PracticeManager:
             self._keeper = threading.Thread(target=self._keep_forever, name="practice-keeper", daemon=True)
             self._keeper.start()
 
+    def release_dead_starts(self) -> list[str]:
+        """Releases the claims whose start did not finish within START_DEADLINE_S (the process that claimed one
+        died between its commit and the farm's start); their names."""
+        cutoff = self._clock() - timedelta(seconds=self.start_deadline_s)
+        with self._sessions() as session, session.begin():
+            dead = session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.token).where(
+                PersonalRobotRecord.address == "", PersonalRobotRecord.started_at < cutoff)).all()
+            for name, token in dead:
+                session.execute(delete(PersonalRobotRecord).where(PersonalRobotRecord.name == name,
+                                                                  PersonalRobotRecord.token == token))
+        for name, _token in dead:
+            log.warning("practice robot %s: its start did not finish within %.0f s; its claim is released",
+                        name, self.start_deadline_s)
+            with contextlib.suppress(FarmUnavailable):
+                self.farm.stop(name)  # a start that finished after all, too late
+        return [name for name, _ in dead]
+
+    def _start_died(self, record: PersonalRobotRecord) -> bool:
+        return as_utc(record.started_at) < self._clock() - timedelta(seconds=self.start_deadline_s)
+
     def forget_lost(self) -> list[str]:
         """Removes the rows of robots that run nowhere (the local farm's robots end with their process; a start
         that never finished); returns their names.
 
         A robot this process's farm does not know may belong to another process (the web server, while a
         `telelab` command runs): it is lost only if it does not answer at its address either."""
-        stale_start = self._clock() - timedelta(seconds=STARTING_FOR_AT_MOST_S)
+        stale_start = self._clock() - timedelta(seconds=self.start_deadline_s)
         with self._sessions() as session:
             records = session.execute(select(PersonalRobotRecord.name, PersonalRobotRecord.address,
                                              PersonalRobotRecord.started_at)).all()
@@ -309,11 +418,10 @@ class PracticeManager:
             return link
         if robot is None or robot.address == link.address:
             return link
-        with self._sessions() as session:
+        with self._sessions() as session, session.begin():
             record = session.get(PersonalRobotRecord, name)
             if record is not None:
                 record.address = robot.address
-                session.commit()
         return self._link(name, robot.address)
 
     def _touch(self, name: str, force: bool = False) -> None:
@@ -321,45 +429,19 @@ class PracticeManager:
         if not force and now - self._touched_at.get(name, -1e9) < TOUCH_EVERY_S:
             return
         self._touched_at[name] = now
-        with self._sessions() as session:
-            record = session.get(PersonalRobotRecord, name)
-            if record is not None:
-                record.last_used_at = self._clock()
-                session.commit()
-
-    def _join_class(self, name: str, class_session_id: int) -> None:
-        with self._sessions() as session:
-            record = session.get(PersonalRobotRecord, name)
-            if record is not None:
-                record.class_session_id = class_session_id
-                session.commit()
+        with self._sessions() as session, session.begin():  # a use, noted at most every TOUCH_EVERY_S
+            session.execute(update(PersonalRobotRecord).where(PersonalRobotRecord.name == name)
+                            .values(last_used_at=self._clock()))
 
     def scene_of(self, name: str) -> str | None:
         """The scene the practice robot called name runs."""
         with self._sessions() as session:
             return session.scalar(select(PersonalRobotRecord.scene).where(PersonalRobotRecord.name == name))
 
-    def _claim(self, name: str, owner_id: int, username: str, token: str, class_session_id: int | None,
-               scene: str) -> None:
-        """Writes the row that claims the name for owner_id, across workers; refuses when the lab is full."""
-        limit = self.limit()
-        if self.count() >= limit:
-            raise PracticeCapReached(f"All {limit} practice robots are in use. Try again in a few minutes, "
-                                     "or watch a lab robot in the meantime.")
-        now = self._clock()
-        with self._sessions() as session:
-            session.add(PersonalRobotRecord(name=name, owner_id=owner_id, owner_name=username, scene=scene,
-                                            token=token, address="", backend=self.farm.backend, started_at=now,
-                                            last_used_at=now, class_session_id=class_session_id))
-            try:
-                session.commit()
-            except IntegrityError:
-                raise PracticeStartFailed("Your practice robot is starting already; wait a few seconds.") from None
-
-    def _release(self, name: str) -> None:
-        with self._sessions() as session:
-            session.execute(delete(PersonalRobotRecord).where(PersonalRobotRecord.name == name))
-            session.commit()
+    def _release(self, name: str, token: str | None = None) -> None:
+        with self._sessions() as session, session.begin():
+            session.execute(delete(PersonalRobotRecord).where(
+                PersonalRobotRecord.name == name, *([PersonalRobotRecord.token == token] if token else [])))
 
     def _forget(self, name: str) -> None:
         with self._lock:
@@ -372,6 +454,7 @@ class PracticeManager:
         interval_s = min(10.0, max(0.5, self.idle_s / 4))
         while not self._stop.wait(interval_s):
             try:
+                self.release_dead_starts()
                 self.stop_idle()
             except Exception:  # noqa: BLE001 - one failed stop must not end the keeper
                 log.exception("stopping idle practice robots failed")

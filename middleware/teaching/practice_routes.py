@@ -9,6 +9,7 @@ from flask import Blueprint, jsonify, render_template, request, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
+from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
 from middleware.lab.sockets import camera_relay
 from middleware.live.loop import Continuation
@@ -26,12 +27,19 @@ def _user_id() -> int:
 
 
 def status_dict(user_id: int) -> dict[str, object]:
-    """The user's practice robot (or none) and how many slots are taken."""
+    """The user's practice robot (or none, or starting) and how many slots are taken."""
+    robot = practice_manager().get(user_id)
+    if robot is not None:
+        return _answer(robot.name, running=True)
+    return _answer(None, running=False, starting=practice_manager().starting(user_id))
+
+
+def _answer(name: str | None, running: bool, starting: bool = False, **more: object) -> dict[str, object]:
+    # Reads no row of the user's robot: a request that changed it reads what it wrote, not the committed table.
     manager = practice_manager()
-    robot = manager.get(user_id)
-    return {"running": robot is not None, "name": robot.name if robot else None,
-            "console_url": url_for("lab.console", robot_name=robot.name) if robot else None,
-            "in_use": manager.count(), "cap": manager.limit(), "idle_stop_s": manager.idle_s}
+    return {"running": running, "starting": starting, "name": name,
+            "console_url": url_for("lab.console", robot_name=name) if running and name else None,
+            "in_use": manager.count(), "cap": manager.limit(), "idle_stop_s": manager.idle_s, **more}
 
 
 @blueprint.get("/practice")
@@ -52,17 +60,25 @@ def status() -> ResponseReturnValue:
 @blueprint.post("/api/practice")
 @login_required
 def start() -> ResponseReturnValue:
-    """Starts the user's practice robot (or answers the running one)."""
-    practice_manager().start(_user_id(), current_user.username)
-    return jsonify(status_dict(_user_id())), 201
+    """Claims the user's practice robot, which the farm starts once the claim is committed (202: the page follows
+    it to running), or answers the running one (200)."""
+    manager = practice_manager()
+    pending = manager.begin_start(get_session(), _user_id(), current_user.username)
+    if pending is None:
+        return jsonify(status_dict(_user_id())), 200
+    after_commit(pending.run_quietly)
+    return jsonify(_answer(pending.name, running=False, starting=True)), 202
 
 
 @blueprint.delete("/api/practice")
 @login_required
 def stop() -> ResponseReturnValue:
     """Stops the user's practice robot."""
-    stopped = practice_manager().stop(_user_id())
-    return jsonify({**status_dict(_user_id()), "stopped": stopped})
+    manager = practice_manager()
+    name = manager.begin_stop(get_session(), _user_id())
+    if name is not None:
+        after_commit(lambda: manager.finish_stop(name))
+    return jsonify(_answer(None, running=False, stopped=name is not None))
 
 
 @blueprint.post("/api/practice/commands")

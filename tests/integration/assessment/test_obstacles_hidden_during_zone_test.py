@@ -182,7 +182,7 @@ def test_the_students_practice_robot_hides_the_obstacles_too(app, live_server, c
     exam_id = zone_exam(client_as("tutor1"), course_people["course"])
     practice_manager(live_server.app).cap = 2
     status, started = api(student, "POST", "/api/practice")
-    assert status == 201, started
+    assert status == 202, started
     name = started["name"]
     drive = student.websocket("/ws/robots/lab-1/drive")
     try:

@@ -254,7 +254,7 @@ def test_two_web_processes_find_and_drive_the_same_farm_robot(cluster: Cluster, 
             _wait_for(client, process, log)
             assert client.login() == 302
         status, started = _json(clients[0], "POST", "/api/practice")
-        assert status == 201 and started["name"] == "practice-student1", started
+        assert status == 202 and started["name"] == "practice-student1", started
         status, seen = _json(clients[1], "GET", "/api/practice")
         assert status == 200 and seen["running"] and seen["name"] == "practice-student1"
         for client in clients:

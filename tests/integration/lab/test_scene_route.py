@@ -62,7 +62,7 @@ def ann_and_bob(live_server):
     practice_manager(live_server.app).cap = 2
     status, _, _ = ann.request("POST", "/api/practice", headers={
         "X-CSRFToken": ann.csrf_token("/teaching"), "Accept": "application/json"})
-    assert status == 201
+    assert status == 202
     try:
         yield ann, bob
     finally:

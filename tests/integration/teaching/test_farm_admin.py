@@ -27,7 +27,7 @@ def test_an_admin_sees_the_farm_and_stops_a_practice_robot(live_server) -> None:
     admin, ann = _client(live_server, "root", "admin"), _client(live_server, "ann", "student")
     try:
         status, started = _api(ann, "POST", "/api/practice")
-        assert status == 201, started
+        assert status == 202 and started["starting"], started  # started once the claim is committed
         status, farm = _api(admin, "GET", "/api/admin/farm")
         assert status == 200 and farm["backend"] == "local" and farm["capacity"]["running"] == 1
         assert farm["capacity"]["robots"] >= 1 and farm["hosts"][0]["robots"] == 1
@@ -78,7 +78,7 @@ def test_a_telelab_command_beside_the_web_server_leaves_its_local_robots_alone(l
     environment = {**os.environ, "TELELAB_DATABASE_URL": live_server.app.config["DATABASE_URL"],
                    "TELELAB_FARM": "local", "TELELAB_ROBOTS": ""}
     try:
-        assert _api(ann, "POST", "/api/practice")[0] == 201
+        assert _api(ann, "POST", "/api/practice")[0] == 202
 
         def telelab(*args: str) -> subprocess.CompletedProcess[str]:
             return subprocess.run([sys.executable, "-m", "middleware.cli", *args], env=environment,

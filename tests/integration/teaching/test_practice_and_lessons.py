@@ -178,7 +178,7 @@ def test_a_lesson_is_checked_saved_and_drives_only_the_owners_practice_robot(liv
     practice_manager(live_server.app).cap = 1
     try:
         status, started = _api(tutor_client, "POST", "/api/practice")
-        assert status == 201 and started["running"] and started["name"] == "practice-tutor1"
+        assert status == 202 and started["starting"] and started["name"] == "practice-tutor1"
         status, ran = _api(tutor_client, "POST", f"/api/lessons/{lesson['id']}/cues/1/run",
                            {"target": "practice", "hold_s": 2})
         assert status == 202 and ran["goal"]["status"] in {"accepted", "executing"}

@@ -61,7 +61,8 @@ def practice(live_server):
     ann, bob = _client(live_server, "ann"), _client(live_server, "bob")
     practice_manager(live_server.app).cap = 2
     status, started = _api(ann, "POST", "/api/practice")
-    assert status == 201 and started["name"] == "practice-ann" and started["console_url"] == "/lab/practice-ann"
+    assert status == 202 and started["name"] == "practice-ann" and started["starting"]
+    assert _api(ann, "GET", "/api/practice")[1]["console_url"] == "/lab/practice-ann"  # started after the commit
     try:
         yield ann, bob
     finally:

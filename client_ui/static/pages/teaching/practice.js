@@ -7,16 +7,30 @@ const statusLine = root.querySelector("[data-field=status]");
 const startButton = root.querySelector("[data-action=start]");
 const stopButton = root.querySelector("[data-action=stop]");
 const camera = root.querySelector("img");
+const FOLLOW_EVERY_MS = 1000;
 let channel = null;
+let following = null;
+
+function sentence(state, wasStarting) {
+  if (state.running) {
+    return `Your practice robot ${state.name} is running (${state.in_use} of ${state.cap} in use). `
+      + `It stops after ${Math.round(state.idle_stop_s / 60)} minutes unused.`;
+  }
+  if (state.starting) return "Your practice robot is starting…";
+  if (wasStarting) return "Your practice robot did not start. Try again in a moment.";
+  return `Your practice robot is off (${state.in_use} of ${state.cap} in use).`;
+}
 
 function render(state) {
+  const wasStarting = root.dataset.starting === "true";
   root.dataset.running = String(state.running);
-  startButton.hidden = state.running;
+  root.dataset.starting = String(Boolean(state.starting));
+  startButton.hidden = state.running || Boolean(state.starting);
   stopButton.hidden = !state.running;
-  statusLine.textContent = state.running
-    ? `Your practice robot ${state.name} is running (${state.in_use} of ${state.cap} in use). `
-      + `It stops after ${Math.round(state.idle_stop_s / 60)} minutes unused.`
-    : `Your practice robot is off (${state.in_use} of ${state.cap} in use).`;
+  camera.hidden = !state.running;  // an image with no source yet draws as a broken picture
+  statusLine.textContent = sentence(state, wasStarting);
+  clearTimeout(following);
+  if (state.starting) following = setTimeout(follow, FOLLOW_EVERY_MS);
   if (state.running && !channel) channel = attachCamera(camera, "/ws/practice/camera");
   if (!state.running && channel) { channel.close(); channel = null; camera.removeAttribute("src"); }
 }
@@ -31,6 +45,15 @@ async function act(method) {
     root.dataset.error = error.code;
   } finally {
     startButton.disabled = stopButton.disabled = false;
+  }
+}
+
+async function follow() {
+  try {
+    render(await fetchJson("/api/practice"));
+  } catch (error) {
+    statusLine.textContent = error.message;
+    following = setTimeout(follow, FOLLOW_EVERY_MS);
   }
 }
 
