@@ -10,6 +10,7 @@ import { ApiError, Channel, fetchJson, parseJsonMessage } from "../transport.js"
 import { DriveSession } from "../drive-session.js";
 import { TimingLog } from "../response-times.js";
 import { timeActivation, timeDriveCommands } from "./timing-wiring.js";
+import { reportTimings } from "./timing-report.js";
 import "./chat-session.js";
 import { feedService, registerFeedService } from "./feed-services.js";
 import { GUESS_FIELDS, goalParameterNames } from "../panel-descriptors.js";
@@ -481,7 +482,11 @@ export class ConsoleWiring {
       this.#timings.expire(nowMs);
       if (always || this.#layout.isShown(descriptor.id)) panel.report = { log: this.#timings, nowMs };
     };
-    this.#starters.push(() => { show(true); setInterval(show, TIMINGS_SHOWN_EVERY_MS); });
+    this.#starters.push(() => {
+      show(true);
+      setInterval(show, TIMINGS_SHOWN_EVERY_MS);
+      reportTimings(this.#timings, this.#robotName); // for the tutor's class view
+    });
   }
 
   #skill(descriptor, panel) {
