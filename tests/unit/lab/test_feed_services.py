@@ -3,7 +3,6 @@ service a registered panel's feeds name is registered once the console's wiring 
 
 from __future__ import annotations
 
-
 THREE_IMPORT_MAP = """
     const map = document.createElement('script');
     map.type = 'importmap';
