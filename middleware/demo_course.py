@@ -60,7 +60,26 @@ DEMO_QUESTIONS: list[dict[str, Any]] = [
      "accepted": ["wall following", "wall-following", "wall_following"], "topics": ["wall following"]},
     {"kind": "rating", "prompt": "Driving the robot myself made the sensors easier to understand.",
      "low_label": "Strongly disagree", "high_label": "Strongly agree", "topics": ["sensors"]},
+    # The demo lesson "First moves" in three parts, as the 2022 paper's: a comprehension question per part, taken
+    # before and after the video, and after it a rating of each part.
+    {"kind": "single", "prompt": "A drive command of 0.2 m/s and 0 rad/s makes the robot…",
+     "choices": ["Move straight ahead", "Turn on the spot", "Stop"], "correct": 0, "topics": ["part 1: forward"]},
+    {"kind": "numeric", "prompt": "Turning on the spot at 0.8 rad/s for 3 s turns the robot by how much?",
+     "value": 2.4, "tolerance": 0.1, "unit": "rad", "topics": ["part 2: turn"]},
+    {"kind": "single", "prompt": "Go-to-goal needs which parameters?",
+     "choices": ["The goal's x and y", "A duration only", "The wheel speeds"], "correct": 0,
+     "topics": ["part 3: go to goal"]},
+    {"kind": "rating", "prompt": "Part 1 (the robot drove forward with the video) helped me learn.",
+     "topics": ["part 1: forward"]},
+    {"kind": "rating", "prompt": "Part 2 (the robot turned with the video) helped me learn.",
+     "topics": ["part 2: turn"]},
+    {"kind": "rating", "prompt": "Part 3 (the robot went to a goal with the video) helped me learn.",
+     "topics": ["part 3: go to goal"]},
 ]
+LESSON_BEFORE_QUESTIONS = (7, 8, 9)
+LESSON_AFTER_QUESTIONS = (7, 8, 9, 10, 11, 12)
+LESSON_BEFORE_TITLE = "Before the lesson: first moves"
+LESSON_AFTER_TITLE = "After the lesson: first moves"
 # The survey the demo tutor wrote: the 2003 paper's seven statements and one of their own, with its own ends.
 DEMO_SURVEY_TITLE = "Evaluate the lab"
 DEMO_SURVEY_STATEMENTS = [{"text": text} for _key, text in SURVEY_ITEMS] + [
@@ -132,7 +151,10 @@ def _demo_exams(ids: list[int], now: datetime) -> list[tuple[str, dict[str, Any]
         "task_topics": ["navigation"],
         "instructions": f"The target is the orange tile. Take control of {DEMO_ROBOT} and drive it there or use "
                         "go-to-goal. The mark is the robot's true distance to the target."}
-    return [("practice quiz", quiz), ("timed test", timed), (f"experimental test on {DEMO_ROBOT}", experimental)]
+    before = {"title": LESSON_BEFORE_TITLE, "kind": "quiz", "question_ids": [ids[i] for i in LESSON_BEFORE_QUESTIONS]}
+    after = {"title": LESSON_AFTER_TITLE, "kind": "quiz", "question_ids": [ids[i] for i in LESSON_AFTER_QUESTIONS]}
+    return [("practice quiz", quiz), ("timed test", timed), (f"experimental test on {DEMO_ROBOT}", experimental),
+            ("the lesson's test before", before), ("the lesson's test after", after)]
 
 
 def _survey_classmates(session: Session, tutor: Any, course_id: int) -> list[str]:

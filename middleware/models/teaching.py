@@ -72,6 +72,11 @@ class Lesson(Base):
     topics: Mapped[str] = mapped_column(Text, default="", server_default="")  # "a, b": lower-case, for recommendations
     video_name: Mapped[str] = mapped_column(String(128))
     cues_vtt: Mapped[str] = mapped_column(Text)
+    # The comprehension test taken before the video (required: its cues wait for it) and after it.
+    before_exam_id: Mapped[int | None] = mapped_column(ForeignKey("assessment_exams.id", ondelete="SET NULL"),
+                                                       nullable=True)
+    after_exam_id: Mapped[int | None] = mapped_column(ForeignKey("assessment_exams.id", ondelete="SET NULL"),
+                                                      nullable=True)
     author_id: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
     updated_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)

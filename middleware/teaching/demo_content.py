@@ -7,9 +7,12 @@ from pathlib import Path
 
 from flask import Flask
 from sqlalchemy import select
+from sqlalchemy.orm import Session
 
 from middleware.db import session_factory
+from middleware.demo_course import LESSON_AFTER_TITLE, LESSON_BEFORE_TITLE
 from middleware.models import User
+from middleware.models.assessment import Exam
 from middleware.models.teaching import Lesson, Tour
 from middleware.teaching.cues import parse_cue_track
 from middleware.teaching.demo_video import record_demo_video
@@ -108,8 +111,14 @@ def seed_demo_content(app: Flask, record_video: bool = True) -> list[str]:
         if video.exists() and session.scalar(select(Lesson).where(Lesson.slug == "first-moves")) is None:
             draft = LessonDraft("first-moves", "First moves", "The video drives your robot: forward, a turn, "
                                 "then a goal. Pause and the robot stops.", DEMO_VIDEO, cues,
-                                "direct control, navigation, odometry")
+                                "direct control, navigation, odometry", *_lesson_tests(session))
             save_lesson(session, draft, author)
             added.append("lesson first-moves")
         session.commit()
     return added
+
+
+def _lesson_tests(session: Session) -> tuple[int | None, int | None]:
+    """The demo course's tests before and after the demo lesson (None where the course has none)."""
+    return tuple(session.scalar(select(Exam.id).where(Exam.title == title).order_by(Exam.id))  # type: ignore[return-value]
+                 for title in (LESSON_BEFORE_TITLE, LESSON_AFTER_TITLE))

@@ -29,6 +29,13 @@ from middleware.robots.registry import robot_registry
 from middleware.teaching.authority import require_author_rights
 from middleware.teaching.command_form import RobotCommand
 from middleware.teaching.cues import parse_cue_track
+from middleware.teaching.lesson_tests import (
+    check_lesson_tests,
+    lesson_gate,
+    lesson_results,
+    require_before_test,
+    teachable_exams,
+)
 from middleware.teaching.lesson_uploads import (
     DEFAULT_MAX_VIDEO_BYTES,
     MULTIPART_OVERHEAD,
@@ -97,8 +104,30 @@ def index() -> ResponseReturnValue:
 @login_required
 def play(lesson_id: int) -> ResponseReturnValue:
     """The lesson player."""
-    return render_template("teaching/lesson.html", lesson=_lesson(lesson_id), paper=PAPER_FIGURES,
-                           lab_robots=robot_registry().names())
+    lesson = _lesson(lesson_id)
+    return render_template("teaching/lesson.html", lesson=lesson, paper=PAPER_FIGURES,
+                           lab_robots=robot_registry().names(), gate=lesson_gate(get_session(), lesson, _user()))
+
+
+def _user() -> User:
+    return get_session().get(User, _user_id())  # type: ignore[return-value]
+
+
+@blueprint.get("/lessons/<int:lesson_id>/results")
+@login_required
+def results_page(lesson_id: int) -> ResponseReturnValue:
+    """The lesson's test before and after, compared per part (the student's own; the class's for its tutors)."""
+    lesson = _lesson(lesson_id)
+    return render_template("teaching/lesson_results.html", lesson=lesson,
+                           results=lesson_results(get_session(), lesson, _user()))
+
+
+@blueprint.get("/api/lessons/<int:lesson_id>/results")
+@login_required
+def results_api(lesson_id: int) -> ResponseReturnValue:
+    """The comparison per part as JSON: {whose, students, parts: [{part, before, after, change, rating_*}]}."""
+    found = lesson_results(get_session(), _lesson(lesson_id), _user())
+    return jsonify({"whose": found.whose, "students": found.students, "parts": [p.to_dict() for p in found.parts]})
 
 
 @blueprint.get("/lessons/new")
@@ -112,6 +141,7 @@ def edit(lesson_id: int | None = None) -> ResponseReturnValue:
                            videos=available_videos(current_app.instance_path),
                            unused_videos=unused_videos(get_session(), current_app.instance_path),
                            uploaded_video=request.args.get("video"), skills=authoring_catalog(_user_id()),
+                           exams=teachable_exams(get_session(), _user()),
                            max_video_mb=_max_video_bytes() // (1024 * 1024))
 
 
@@ -239,6 +269,7 @@ def save(lesson_id: int | None = None) -> ResponseReturnValue:
     lesson = _editable_lesson(lesson_id)
     draft = check_lesson(request.get_json(silent=True), reference_skills(_user_id()),
                          available_videos(current_app.instance_path))
+    check_lesson_tests(get_session(), _user(), draft.before_exam_id, draft.after_exam_id)
     lesson = save_lesson(get_session(), draft, _user_id(), lesson)
     return jsonify(lesson_dict(lesson)), 200 if lesson_id is not None else 201
 
@@ -260,7 +291,9 @@ def run_cue(lesson_id: int, index: int) -> ResponseReturnValue:
     received_at = time.perf_counter()
     received_unix_ms = time.time() * 1000
     body, hold_s = _run_body()
-    cues = stored_cues(_lesson(lesson_id))
+    lesson = _lesson(lesson_id)
+    require_before_test(get_session(), lesson, _user())
+    cues = stored_cues(lesson)
     if not 1 <= index <= len(cues):
         raise ApiError(404, "unknown_cue", "The lesson has no such cue.", "index")
     result = execute(resolve_target(body.get("target"), _user_id()), cues[index - 1].command, received_at, hold_s)
@@ -271,7 +304,7 @@ def run_cue(lesson_id: int, index: int) -> ResponseReturnValue:
 @login_required
 def start_lesson(lesson_id: int) -> ResponseReturnValue:
     """Places the learner's target where the lesson's video starts (their practice robot: at its dock)."""
-    _lesson(lesson_id)
+    require_before_test(get_session(), _lesson(lesson_id), _user())
     body, _hold_s = _run_body()
     return jsonify(place_for_lesson(resolve_target(body.get("target"), _user_id()),
                                     body.get("target") == PRACTICE_TARGET))

@@ -15,6 +15,7 @@ from middleware.models.accounts import utc_now
 from middleware.models.teaching import Lesson
 from middleware.teaching.command_form import SkillSchemas
 from middleware.teaching.cues import Cue, CueError, parse_cue_track, to_webvtt
+from middleware.validation import decimal_int
 
 VIDEO_NAME = re.compile(r"^[a-z0-9][a-z0-9_-]{0,100}\.(webm|mp4)$")
 SLUG = re.compile(r"^[a-z0-9][a-z0-9-]{0,63}$")
@@ -68,6 +69,8 @@ class LessonDraft:
     video_name: str
     cues: list[Cue]
     topics: str = ""
+    before_exam_id: int | None = None
+    after_exam_id: int | None = None
 
 
 def video_dir(instance_path: str) -> Path:
@@ -136,10 +139,22 @@ def check_lesson(data: object, skills: SkillSchemas, videos: list[str]) -> Lesso
         topics = normalise_topics(data.get("topics"))
     except ValueError as error:
         raise LessonInvalid([CueError(0, "topics", str(error))]) from None
+    before, after = _exam_id(data, "before_exam_id"), _exam_id(data, "after_exam_id")
     cues, errors = parse_cue_track(data.get("cues"), skills)
     if errors:
         raise LessonInvalid(errors)
-    return LessonDraft(slug, title, summary, video, cues, topics)
+    return LessonDraft(slug, title, summary, video, cues, topics, before, after)
+
+
+def _exam_id(data: dict[str, object], name: str) -> int | None:
+    """A test's id, or None for no test ("" or null, as the editor's "No test" sends it)."""
+    value = data.get(name)
+    if value in (None, ""):
+        return None
+    number = decimal_int(value, 1) if isinstance(value, str) else value
+    if isinstance(number, bool) or not isinstance(number, int) or not 1 <= number <= 2**62:
+        raise LessonInvalid([CueError(0, name, f"{name} must name a test by its id, or be empty for none.")])
+    return number
 
 
 def save_lesson(session: Session, draft: LessonDraft, author_id: int | None, lesson: Lesson | None = None) -> Lesson:
@@ -152,6 +167,7 @@ def save_lesson(session: Session, draft: LessonDraft, author_id: int | None, les
         session.add(lesson)
     lesson.slug, lesson.title, lesson.summary, lesson.topics = draft.slug, draft.title, draft.summary, draft.topics
     lesson.video_name, lesson.cues_vtt = draft.video_name, to_webvtt(draft.cues)
+    lesson.before_exam_id, lesson.after_exam_id = draft.before_exam_id, draft.after_exam_id
     lesson.updated_at = utc_now()
     session.flush()
     return lesson
@@ -169,7 +185,8 @@ def lesson_dict(lesson: Lesson, with_cues: bool = True) -> dict[str, object]:
     """JSON-ready form of a lesson."""
     data: dict[str, object] = {"id": lesson.id, "slug": lesson.slug, "title": lesson.title,
                                "summary": lesson.summary, "video_name": lesson.video_name,
-                               "topics": topic_list(lesson.topics)}
+                               "topics": topic_list(lesson.topics), "before_exam_id": lesson.before_exam_id,
+                               "after_exam_id": lesson.after_exam_id}
     if with_cues:
         data["cues"] = [c.to_dict() for c in stored_cues(lesson)]
         data["cues_vtt"] = lesson.cues_vtt

@@ -29,6 +29,6 @@ def test_the_demo_course_seeds_once(database_url: str) -> None:
             counts = [session.scalar(select(func.count()).select_from(t))
                       for t in (Course, CourseMembership, Question, Exam)]
         assert first.added and again.added == [] and again.course_id == first.course_id
-        assert counts == [1, 2 + len(DEMO_SURVEY_ANSWERS), len(DEMO_QUESTIONS), 3]  # the tutor, the student, classmates
+        assert counts == [1, 2 + len(DEMO_SURVEY_ANSWERS), len(DEMO_QUESTIONS), 5]  # the tutor, the student, classmates
     finally:
         engine.dispose()

@@ -65,7 +65,8 @@ function showCues() {
 function values() {
   const data = new FormData(form);
   return { title: data.get("title"), summary: data.get("summary"), topics: data.get("topics"),
-    video_name: data.get("video_name"), cues: data.get("cues") };
+    video_name: data.get("video_name"), cues: data.get("cues"),
+    before_exam_id: data.get("before_exam_id"), after_exam_id: data.get("after_exam_id") };
 }
 
 /** Asks the server what the track holds; lists its cues and every error. */
