@@ -32,7 +32,7 @@ def _milliseconds(value: object, field: str) -> float | None:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) \
             or not 0 <= value <= MAX_MS:
         raise _invalid(field, f"{field} must be a number of milliseconds from 0 to {MAX_MS:.0f}, or null.")
-    return round(float(value), 3)
+    return float(value)  # unrounded, so the tutor's page rounds it as the student's panel did
 
 
 def _count(value: object, field: str) -> int:

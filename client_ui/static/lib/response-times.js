@@ -114,7 +114,7 @@ export function reportOf(log, nowMs, windowMs = 10000) {
     report[kind] = { count: figures.total.count };
     for (const leg of LEGS) {
       report[kind][leg] = Object.fromEntries(REPORTED_FIGURES.map((name) => [name,
-        Number.isFinite(figures[leg][name]) ? Math.round(figures[leg][name] * 1000) / 1000 : null]));
+        Number.isFinite(figures[leg][name]) ? figures[leg][name] : null])); // unrounded: shown as the panel shows it
     }
   }
   const { sent, late, lost } = log.delivery();
