@@ -27,7 +27,7 @@ from middleware.chat import routes as chat_routes
 from middleware.chat import sockets as chat_sockets
 from middleware.courses import routes as courses_routes
 from middleware.errors import register_error_handlers
-from middleware.experiment import delay
+from middleware.experiment import delay, trial_rules
 from middleware.experiment import routes as experiment_routes
 from middleware.extensions import csrf, login_manager, socket_login_check
 from middleware.farm import setup as farm_setup
@@ -106,7 +106,8 @@ def _compose_robot_access(app: Flask) -> None:
     priority = with_graded_run_priority(with_guided_priority(bookings_services.priority_user_id))
     coordinator = access_coordinator.init_app(app, AccessHooks(priority, bookings_services.check_in))
     practice_robots.init_app(app, robots, farm_setup.init_app(app))
-    commands.init_app(app, robots, coordinator)
+    commands.init_app(app, robots, coordinator, (trial_rules.teleoperation_only(db.session_factory(app)),))
+    preferences_routes.lock_preference(trial_rules.FEEDBACK_PREFERENCE_KEY, trial_rules.feedback_set_by_trial)
 
 
 def _register_areas(app: Flask) -> None:

@@ -1,4 +1,5 @@
-"""Injected video delay: one viewer's camera and telemetry held until capture time + delay (commands are not).
+"""Injected video delay: every stream that shows one viewer where the robot is (camera, telemetry, localization)
+held until capture time + delay, or arrival + delay for a stream without a capture time (commands are not).
 
 The thesis added delay with a distant proxy; here the relay does it per viewer. `DelayQueue` is the pure
 part (ordering, bounds); `parse_delay_s` validates a requested delay; `ViewerDelay` follows one viewer's

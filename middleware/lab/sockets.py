@@ -99,8 +99,7 @@ def telemetry_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     link = open_robot_channel(ws, robot_name)
     if link is None:
         return None
-    hold = viewer_hold(robot_name, int(current_user.get_id()))
-    return truth_hidden_in_graded_runs(robot_name, link.telemetry, True, hold)
+    return truth_hidden_in_graded_runs(robot_name, link.telemetry, True)
 
 
 def measured_round_trip_ms(link: RobotLink) -> float | None:
@@ -239,11 +238,12 @@ def localization_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     return truth_hidden_in_graded_runs(robot_name, link.localization, sees_ground_truth())
 
 
-def truth_hidden_in_graded_runs(robot_name: str, hub: FanoutHub, shown: bool,
-                                hold: ViewerHold | None = None) -> Continuation:
+def truth_hidden_in_graded_runs(robot_name: str, hub: FanoutHub, shown: bool) -> Continuation:
     """Relays hub's messages packed (with the truth, without it): the first while shown and the user is in no
-    graded run on the robot, the second from the moment one begins (checked every GRADED_RUN_RECHECK_S)."""
+    graded run on the robot, the second from the moment one begins (checked every GRADED_RUN_RECHECK_S). Every
+    stream relayed here shows where the robot is, so each is held by the viewer's injected delay, as the camera is."""
     user_id = int(current_user.get_id())
+    hold = viewer_hold(robot_name, user_id)
     truth = [shown and not in_graded_run(robot_name, user_id)]
     work = blocking_work()
 
