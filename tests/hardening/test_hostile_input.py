@@ -154,6 +154,7 @@ ROUTES = (
     "POST /api/robots/<robot_name>/dock",
     "GET /api/robots/<robot_name>/limits",
     "POST /api/robots/<robot_name>/limits",
+    "PUT /api/robots/<robot_name>/response-times",
     "GET /api/robots/<robot_name>/panels",
     "GET /api/robots/<robot_name>/scene",
     "POST /api/robots/<robot_name>/skills/<skill>/goals",
