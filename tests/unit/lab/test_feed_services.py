@@ -49,3 +49,12 @@ def test_a_service_registered_twice_is_refused_and_a_new_one_is_found_by_the_wir
     assert "two modules register the feed service \"chat\"" in result["twice"]
     assert result["seen"] == [["lab-9", "/ws/robots/lab-9", "bumpers", "DIV"]]
     assert "is not one this console offers" in result["unknown"]
+
+
+def test_a_service_in_its_own_module_registers_itself_when_imported(module_page) -> None:
+    registered = module_page.evaluate("""async () => {
+        await import('/lib/console/limits-service.js');
+        await import('/lib/console/chat-session.js');
+        return (await import('/lib/console/feed-services.js')).registeredFeedServices();
+    }""")
+    assert registered == ["chat", "limits"]

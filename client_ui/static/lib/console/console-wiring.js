@@ -2,7 +2,8 @@
 // (static/panels/registry.js): a socket's messages by type to properties, the robot's description to a
 // property, or a feed service (an exchange that is more than a read: sessions, requests, polling) that its module
 // registered in feed-services.js: this module registers those that share the console's state (the drive session,
-// the skills, the maps), chat-session.js the chat. Shared by every page that shows a robot's panels.
+// the skills, the maps), chat-session.js the chat, limits-service.js the low-level settings. Shared by every page
+// that shows a robot's panels.
 // Sockets are shared by path (one telemetry socket feeds odometry, sonar, laser, map and camera). An
 // unreadable message or a panel that throws on one leaves a notice in that panel's frame.
 
@@ -12,6 +13,7 @@ import { TimingLog } from "../response-times.js";
 import { timeActivation, timeDriveCommands } from "./timing-wiring.js";
 import { reportTimings } from "./timing-report.js";
 import "./chat-session.js";
+import "./limits-service.js";
 import { feedService, registerFeedService } from "./feed-services.js";
 import { GUESS_FIELDS, goalParameterNames } from "../panel-descriptors.js";
 import { bindFeedback, savePictureChoice } from "./feedback-wiring.js";
@@ -78,7 +80,6 @@ export class ConsoleWiring {
       "skill-goals": (wiring, descriptor, panel) => wiring.#skill(descriptor, panel),
       queue: (wiring, descriptor, panel) => wiring.#queue(descriptor, panel),
       "response-times": (wiring, descriptor, panel) => wiring.#responseTimes(descriptor, panel),
-      limits: (wiring, descriptor, panel) => wiring.#limits(descriptor, panel),
     };
     for (const [name, connect] of Object.entries(services)) registerFeedService(name, connect);
   }
@@ -90,6 +91,21 @@ export class ConsoleWiring {
 
   get robotPath() {
     return this.#robotPath;
+  }
+
+  /** Parsed text messages of the robot's socket at path for panel id (one socket per path, shared). */
+  listen(path, id, onMessage) {
+    return this.#listen(path, id, onMessage);
+  }
+
+  /** Whether the socket at path is open already (a service that must not open one of its own asks first). */
+  hasChannel(path) {
+    return this.#channels.has(path);
+  }
+
+  /** Runs start once every panel is placed (startAll). */
+  onStart(start) {
+    this.#starters.push(start);
   }
 
   /** Connect one placed panel to the feeds its module declared. */
@@ -442,38 +458,6 @@ export class ConsoleWiring {
     void notice.offsetWidth; // restarts the flash animation
     notice.classList.add("turn-notice--flash");
     playTurnTone();
-  }
-
-  /** The robot's low-level settings: read once the console starts and again whenever control changes hands (the
-   *  robot then resets them), changed when the panel asks. */
-  #limits(descriptor, panel) {
-    const url = `/api/robots/${encodeURIComponent(this.#robotName)}/limits`;
-    panel.addEventListener("limits-change", async ({ detail }) => {
-      try {
-        panel.limits = await fetchJson(url, { method: "POST", body: detail });
-      } catch (error) {
-        panel.error = { code: error.code ?? "network", message: error.message, field: error.field ?? null };
-      }
-    });
-    const load = async () => {
-      try {
-        panel.limits = await fetchJson(url);
-      } catch (error) {
-        panel.error = { code: error.code ?? "network", message: `The limits could not be read: ${error.message}`,
-          field: null };
-      }
-    };
-    const queuePath = `${this.#robotPath}/queue`;
-    if (this.#channels.has(queuePath)) { // the turn panel's socket, never one of its own (opening it joins the queue)
-      let controlling = null;
-      this.#listen(queuePath, descriptor.id, (message) => {
-        if (message.type !== "queue" || message.is_controller === controlling) return;
-        controlling = message.is_controller;
-        panel.observing = !controlling;
-        load();
-      });
-    }
-    this.#starters.push(load);
   }
 
   #responseTimes(descriptor, panel) {

@@ -5,7 +5,8 @@
 // feed up here, so a panel asking for a service nobody registered gets a notice, never a blank.
 //
 // A service is connect(wiring, descriptor, panel): `wiring` is the console's ConsoleWiring (robotName, robotPath,
-// channel(), listen(), guard(), onStart(), layout), `descriptor` the panel's descriptor, `panel` its element.
+// listen(), hasChannel(), onStart(); limits-service.js is the model), `descriptor` the panel's descriptor, `panel`
+// its element. A new service is a module here that calls registerFeedService, imported by console-wiring.js.
 
 const services = new Map();
 
