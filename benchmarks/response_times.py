@@ -96,14 +96,15 @@ def activate_and_drive(page: Any, activations: int, drive_s: float) -> list[floa
     page.on("response", note)
     show_panel(page, "skill-orientation_control")
     panel = page.locator('skill-panel[data-skill="orientation_control"]')
-    for _ in range(activations):
+    for done in range(1, activations + 1):
         heading = (page.locator('odometry-panel [data-field="heading-rad"]').text_content() or "0").strip()
         panel.locator('input[name="heading_rad"]').fill(heading)
         panel.locator('button[data-action="activate"]').click()
+        # The panel still says "succeeded" from the last one: wait for this activation's timing, then its end.
+        page.wait_for_function(f"() => document.querySelector('response-times-panel').samples.skill.length >= {done}",
+                               timeout=60_000)
         page.locator('skill-panel[data-skill="orientation_control"][data-status="succeeded"]').wait_for(
             timeout=60_000)
-    page.wait_for_function(f"() => document.querySelector('response-times-panel').samples.skill.length >= "
-                           f"{activations}")
     page.evaluate("document.activeElement && document.activeElement.blur()")
     page.keyboard.down("ArrowDown")
     page.wait_for_timeout(drive_s * 1000)
