@@ -10,6 +10,7 @@ import json
 import math
 import time
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -154,6 +155,13 @@ def test_a_new_sensor_gets_a_panel_through_the_contract_and_a_silent_robot_a_con
                          "channel": "/ws/robots/lab-1/telemetry", "help": "Which bumper touched something last.",
                          "tab": "sense"}
         assert {"camera", "odometry", "map", "sonar", "laser"} <= {p["id"] for p in body["panels"]}
+
+        consoles = [LabClient(server.url) for _ in range(12)]  # a class opening its consoles at once
+        assert all(console.login() == 302 for console in consoles)
+        with ThreadPoolExecutor(len(consoles)) as pool:
+            answers = list(pool.map(lambda console: api(console, "GET", "/api/robots/lab-1/panels"), consoles))
+        assert all(status == 200 for status, _ in answers)
+        assert all([p["id"] for p in answer["panels"]] == [p["id"] for p in body["panels"]] for _, answer in answers)
 
         status, body = api(client, "GET", "/api/robots/lab-2/panels")
         assert status == 200 and not body["skills_available"]
