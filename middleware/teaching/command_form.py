@@ -17,6 +17,9 @@ SKILL_NAME = re.compile(r"^[a-z][a-z0-9_]{0,63}$")
 MAX_LINEAR_MPS = 0.5
 MAX_ANGULAR_RADPS = 1.5
 MAX_TEXT = 64
+MIN_TONE_HZ, MAX_TONE_HZ = 100, 4000
+MIN_SOUND_S, MAX_SOUND_S = 0.05, 5.0
+MAX_CAPTION = 120
 
 # name -> list of parameter schemas as middleware.robots.messages.parameter_schema_dict gives them
 SkillSchemas = Mapping[str, Sequence[Mapping[str, object]]]
@@ -33,13 +36,21 @@ class CommandInvalid(Refused, ValueError):
 
 @dataclass(frozen=True)
 class RobotCommand:
-    """One checked command: kind is 'skill', 'drive' or 'stop'."""
+    """One checked command: kind is 'skill', 'drive', 'stop' or 'sound'."""
 
     kind: str
     skill: str = ""
     parameters: tuple[tuple[str, object], ...] = ()
     linear_mps: float = 0.0
     angular_radps: float = 0.0
+    # A sound (lesson cues only): a tone the robot's speaker plays in the learner's browser, and its caption.
+    frequency_hz: float = 0.0
+    duration_s: float = 0.0
+    caption: str = ""
+
+    def motion(self) -> RobotCommand:
+        """What the robot's base does: a sound is played by the page while the robot stands still."""
+        return RobotCommand("stop") if self.kind == "sound" else self
 
     def to_dict(self) -> dict[str, object]:
         """The canonical JSON form."""
@@ -47,6 +58,9 @@ class RobotCommand:
             return {"skill": self.skill, "parameters": dict(self.parameters)}
         if self.kind == "drive":
             return {"drive": {"linear_mps": self.linear_mps, "angular_radps": self.angular_radps}}
+        if self.kind == "sound":
+            return {"sound": {"frequency_hz": self.frequency_hz, "duration_s": self.duration_s,
+                              "caption": self.caption}}
         return {"stop": True}
 
 
@@ -121,13 +135,35 @@ def parse_skill(skill: object, parameters: object, skills: SkillSchemas | None) 
     return RobotCommand("skill", skill, tuple(checked))
 
 
-def parse_command(value: object, skills: SkillSchemas | None) -> RobotCommand:
-    """A checked command from its JSON form: {"skill", "parameters"}, {"drive": {...}} or {"stop": true}."""
+def parse_sound(sound: object) -> RobotCommand:
+    """A sound: {"frequency_hz", "duration_s", "caption"}; the caption is required, for those who cannot hear it."""
+    if not isinstance(sound, dict) or set(sound) - {"frequency_hz", "duration_s", "caption"}:
+        raise CommandInvalid("sound", "sound takes frequency_hz, duration_s and caption only.")
+    frequency = _number(sound.get("frequency_hz", 880), "sound.frequency_hz")
+    if not MIN_TONE_HZ <= frequency <= MAX_TONE_HZ:
+        raise CommandInvalid("sound.frequency_hz", f"frequency_hz must be between {MIN_TONE_HZ} and {MAX_TONE_HZ} Hz.")
+    duration = _number(sound.get("duration_s", 0.5), "sound.duration_s")
+    if not MIN_SOUND_S <= duration <= MAX_SOUND_S:
+        raise CommandInvalid("sound.duration_s", f"duration_s must be between {MIN_SOUND_S} and {MAX_SOUND_S} s.")
+    caption = sound.get("caption")
+    if not isinstance(caption, str) or not caption.strip() or len(caption.strip()) > MAX_CAPTION:
+        raise CommandInvalid("sound.caption", f"A sound needs a caption of 1 to {MAX_CAPTION} characters, shown to "
+                                              "those who cannot hear it (e.g. \"The robot beeps, high\").")
+    return RobotCommand("sound", frequency_hz=frequency, duration_s=duration, caption=" ".join(caption.split()))
+
+
+def parse_command(value: object, skills: SkillSchemas | None, sounds: bool = False) -> RobotCommand:
+    """A checked command from its JSON form: {"skill", "parameters"}, {"drive": {...}} or {"stop": true}; with
+    sounds (a lesson's cues), also {"sound": {...}}."""
     if not isinstance(value, dict):
         raise CommandInvalid("command", 'A command is a JSON object: {"skill": ...}, {"drive": ...} or {"stop": true}.')
-    kinds = [k for k in ("skill", "drive", "stop") if k in value]
+    kinds = [k for k in ("skill", "drive", "stop", "sound") if k in value]
+    if "sound" in kinds and not sounds:
+        raise CommandInvalid("sound", "Only a lesson's cues play sounds.")
     if len(kinds) != 1:
-        raise CommandInvalid("command", 'A command has exactly one of "skill", "drive" or "stop".')
+        raise CommandInvalid("command", 'A command has exactly one of "skill", "drive", "stop" or "sound".')
+    if kinds == ["sound"] and set(value) == {"sound"}:
+        return parse_sound(value["sound"])
     extra = set(value) - {"skill", "parameters"} if kinds == ["skill"] else set(value) - set(kinds)
     if extra:
         raise CommandInvalid(sorted(extra)[0][:40], f"Unknown key {sorted(extra)[0][:40]!r} in the command.")

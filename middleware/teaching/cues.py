@@ -182,7 +182,7 @@ def _parse_cue(timing: str, body: str, line: int, index: int, skills: SkillSchem
                                                     '{"skill": "go_to_goal", "parameters": {"goal_x_m": 1}}.'))
         return None
     try:
-        command = parse_command(value, skills)
+        command = parse_command(value, skills, sounds=True)
     except CommandInvalid as invalid:
         errors.append(CueError(line + 1, invalid.field, invalid.message))
         return None

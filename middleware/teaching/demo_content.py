@@ -33,7 +33,10 @@ DEMO_CUES = """WEBVTT
 00:00:10.000 --> 00:00:20.000
 {"skill": "go_to_goal", "parameters": {"goal_x_m": 0.5, "goal_y_m": 0.5, "speed_mps": 0.25}}
 
-00:00:21.000 --> 00:00:23.000
+00:00:21.000 --> 00:00:22.500
+{"sound": {"frequency_hz": 880, "duration_s": 0.6, "caption": "The robot beeps: it has reached its goal"}}
+
+00:00:22.500 --> 00:00:23.000
 {"stop": true}
 """
 

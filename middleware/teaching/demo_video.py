@@ -73,7 +73,7 @@ def _record(robot: Commander, ffmpeg: str, path: Path, cues: list[Cue], length_s
             active = None
         if pending and t >= pending[0].start_s:
             active = pending.pop(0)
-            execute(robot, active.command, time.perf_counter(), min(10.0, active.end_s - t))
+            execute(robot, active.command.motion(), time.perf_counter(), min(10.0, active.end_s - t))
         waited = time.monotonic()
         while not latest and time.monotonic() - waited < 10:
             time.sleep(0.05)

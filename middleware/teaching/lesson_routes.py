@@ -296,8 +296,12 @@ def run_cue(lesson_id: int, index: int) -> ResponseReturnValue:
     cues = stored_cues(lesson)
     if not 1 <= index <= len(cues):
         raise ApiError(404, "unknown_cue", "The lesson has no such cue.", "index")
-    result = execute(resolve_target(body.get("target"), _user_id()), cues[index - 1].command, received_at, hold_s)
-    return jsonify({**result, "cue": index, "received_unix_ms": round(received_unix_ms, 3)}), 202
+    command = cues[index - 1].command
+    # A sound cue: the robot stands still (the 2022 paper's third part) while the page plays the tone and its caption.
+    sound = command.to_dict()["sound"] if command.kind == "sound" else None
+    result = execute(resolve_target(body.get("target"), _user_id()), command.motion(), received_at, hold_s)
+    return jsonify({**result, "cue": index, "received_unix_ms": round(received_unix_ms, 3),
+                    **({"sound": sound} if sound else {})}), 202
 
 
 @blueprint.post("/api/lessons/<int:lesson_id>/start")

@@ -46,6 +46,11 @@ def pattern_video(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture
 def lesson_id(live_server: LiveServer, pattern_video: Path) -> int:
     """A lesson on the test-pattern video, with two cues."""
+    return lesson_on_pattern(live_server, pattern_video, TRACK, "pattern", "Pattern")
+
+
+def lesson_on_pattern(live_server: LiveServer, pattern_video: Path, track: str, slug: str, title: str) -> int:
+    """A lesson of the given cue track on the test-pattern video; its id."""
     from middleware.db import session_factory
     from middleware.teaching.cues import parse_cue_track
     from middleware.teaching.lessons import LessonDraft, save_lesson, video_dir
@@ -53,10 +58,10 @@ def lesson_id(live_server: LiveServer, pattern_video: Path) -> int:
     folder = video_dir(live_server.app.instance_path)
     folder.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(pattern_video, folder / "pattern.webm")
-    cues, errors = parse_cue_track(TRACK, None)
+    cues, errors = parse_cue_track(track, None)
     assert not errors
     with session_factory(live_server.app)() as session:
-        lesson = save_lesson(session, LessonDraft("pattern", "Pattern", "", "pattern.webm", cues), None)
+        lesson = save_lesson(session, LessonDraft(slug, title, "", "pattern.webm", cues), None)
         session.commit()
         return lesson.id
 

@@ -23,6 +23,10 @@ export function authoringSkills(doc = document) {
 export function describeCommand(command, skills = []) {
   if (!command || typeof command !== "object") return "No command";
   if (command.stop === true) return "Stop the robot";
+  if (command.sound) {
+    const { frequency_hz: hz = 880, duration_s: seconds = 0.5, caption = "" } = command.sound;
+    return `Play a sound (${shortNumber(hz)} Hz, ${shortNumber(seconds)} s), captioned “${caption}”`;
+  }
   if (command.drive) {
     const { linear_mps: linear = 0, angular_radps: angular = 0 } = command.drive;
     return `Drive at ${shortNumber(linear)} m/s, turning ${shortNumber(angular)} rad/s`;
@@ -44,16 +48,18 @@ export class CommandBuilder {
   #parameterBox;
   #drive;
   #skillPart;
+  #sound;
   #inputs = new Map();
   #id = `command-${++nextId}`;
 
   /** Fills container with the fields; optional adds "No command". */
-  constructor(container, skills, { optional = false, legend = "Command" } = {}) {
+  constructor(container, skills, { optional = false, legend = "Command", sounds = false } = {}) {
     this.#skills = skills.filter((skill) => !skill.direct_drive); // "Drive" is that skill, in fewer words
     const choices = [
       ...(optional ? [["none", "No command"]] : []),
       ...(this.#skills.length ? [["skill", "Run a skill"]] : []),
       ["drive", "Drive"], ["stop", "Stop the robot"],
+      ...(sounds ? [["sound", "Play a sound (the robot stands still)"]] : []),
     ];
     this.#kind = h("select", { id: `${this.#id}-kind`, "data-field": "command-kind" },
       choices.map(([value, text]) => h("option", { value, text })));
@@ -68,12 +74,19 @@ export class CommandBuilder {
       number("linear_mps", MAX_LINEAR_MPS, 0.2, "m/s"), number("angular_radps", MAX_ANGULAR_RADPS, 0, "rad/s"),
       h("p", { class: "muted small", text: `Speeds up to ${MAX_LINEAR_MPS} m/s and ${MAX_ANGULAR_RADPS} rad/s; the `
         + "robot drives until the cue or step ends." }));
+    this.#sound = h("div", { class: "command-builder__sound", hidden: true },
+      h("label", {}, "Pitch [Hz]", h("input", { name: "frequency_hz", type: "number", step: "any", min: "100",
+        max: "4000", value: "880", inputmode: "decimal", "data-sound": "frequency_hz" })),
+      h("label", {}, "Length [s]", h("input", { name: "duration_s", type: "number", step: "any", min: "0.05",
+        max: "5", value: "0.5", inputmode: "decimal", "data-sound": "duration_s" })),
+      h("label", {}, "Caption, shown to those who cannot hear it", h("input", { name: "caption", maxlength: "120",
+        value: "The robot beeps", "data-sound": "caption" })));
     const skillPart = h("div", { class: "command-builder__skill" },
       h("label", { for: this.#skillSelect.id, text: "Skill" }), this.#skillSelect, this.#skillHelp, this.#parameterBox);
     container.append(h("fieldset", { class: "command-builder" },
       h("legend", { text: legend }),
       h("label", { for: this.#kind.id, text: "What the robot does" }), this.#kind,
-      skillPart, this.#drive));
+      skillPart, this.#drive, this.#sound));
     this.#kind.addEventListener("change", () => this.#show());
     this.#skillSelect.addEventListener("change", () => this.#buildParameters());
     this.#skillPart = skillPart;
@@ -86,6 +99,17 @@ export class CommandBuilder {
     const kind = this.#kind.value;
     if (kind === "none") return null;
     if (kind === "stop") return { stop: true };
+    if (kind === "sound") {
+      const [hz, seconds, caption] = this.#sound.querySelectorAll("input");
+      for (const input of [hz, seconds]) {
+        if (!input.checkValidity() || input.value === "") throw this.#invalid(input, input.parentElement.firstChild.textContent);
+      }
+      if (!caption.value.trim()) {
+        caption.focus();
+        throw new Error("Caption: write what the sound is, for those who cannot hear it.");
+      }
+      return { sound: { frequency_hz: Number(hz.value), duration_s: Number(seconds.value), caption: caption.value.trim() } };
+    }
     if (kind === "drive") {
       const drive = {};
       for (const input of this.#drive.querySelectorAll("input")) {
@@ -113,6 +137,7 @@ export class CommandBuilder {
     const kind = this.#kind.value;
     this.#skillPart.hidden = kind !== "skill";
     this.#drive.hidden = kind !== "drive";
+    this.#sound.hidden = kind !== "sound";
   }
 
   #buildParameters() {

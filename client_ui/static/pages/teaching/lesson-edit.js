@@ -16,7 +16,7 @@ const cueList = form.querySelector("[data-slot=cue-list]");
 const cueStart = form.querySelector("[data-field=cue-start]");
 const skills = authoringSkills();
 const trackDetails = form.querySelector("[data-field=track-details]");
-const command = new CommandBuilder(form.querySelector("[data-slot=cue-command]"), skills, { legend: "Command" });
+const command = new CommandBuilder(form.querySelector("[data-slot=cue-command]"), skills, { legend: "Command", sounds: true });
 let checked = { cues: [], errors: [] };
 
 /** 75.25 -> "1:15.3", for people. */

@@ -2,6 +2,7 @@
 // (oncuechange) and media events decide when to send; the commands themselves stay on the server, which
 // runs the stored command of a cue by its number. Latencies are measured from the event's own timestamp.
 import { fetchJson } from "../../lib/transport.js";
+import { playTone, showCaption } from "./lesson-sound.js";
 import { CuePlayback, cueIndexOf, summarize } from "./lesson-playback.js";
 import { showLessonRobot } from "./lesson-robot.js";
 
@@ -10,6 +11,7 @@ const video = root.querySelector("video");
 const trackElement = video.querySelector("track");
 const targetSelect = root.querySelector("[data-field=target]");
 const statusLine = root.querySelector("[data-field=status]");
+const captionLine = root.querySelector("[data-field=sound-caption]");
 const logList = root.querySelector("[data-slot=log]");
 const lessonId = Number(root.dataset.lessonId);
 const MAX_LOG = 60;
@@ -75,6 +77,11 @@ async function run(index, why) {
     const goal = answer.goal ? `goal ${answer.goal.status}` : "applied";
     log(`cue ${index} acknowledged: ${goal} in ${total.toFixed(1)} ms`, "ack");
     root.dataset.lastGoal = answer.goal ? answer.goal.goal_id : "";
+    if (answer.sound) {
+      playTone(answer.sound);
+      showCaption(captionLine, answer.sound);
+      log(`cue ${index}: the robot plays a sound: ${answer.sound.caption}`, "sound");
+    }
     // A drive longer than direct_control's 10 s is renewed while its cue still runs.
     if (cue && "drive" in cue.command && remaining > MAX_HOLD_S && playback.running === index) {
       renewTimer = setTimeout(() => { if (playback.running === index) { playback.running = null; playback.cueChange(index); } },
@@ -109,6 +116,7 @@ function describe(cue) {
   const command = cue.command;
   if ("skill" in command) return command.skill.replaceAll("_", " ");
   if ("drive" in command) return `drive ${command.drive.linear_mps} m/s, ${command.drive.angular_radps} rad/s`;
+  if ("sound" in command) return `sound ${command.sound.frequency_hz} Hz: ${command.sound.caption}`;
   return "stop";
 }
 
