@@ -22,6 +22,7 @@ KINDS = ("skill", "drive")
 LEGS = ("total", "client", "robot")
 FIGURES = ("min", "mean", "max", "jitter")
 SHOWN_DECIMALS = 1
+KIND_NAMES = {"skill": "skill activations", "drive": "drive commands"}
 
 
 def leg_figures(values: list[float]) -> dict[str, float]:
@@ -146,8 +147,8 @@ def rows_of(table: dict, wrong: list[str]) -> list[Measurement]:
         for leg in LEGS:
             figures = table[kind][leg]
             for figure in FIGURES:
-                rows.append(Measurement(f"{kind} ({figures['count']} timed)", f"{leg}, {figure}", figures[figure],
-                                        "ms", "-"))
+                rows.append(Measurement(KIND_NAMES[kind], f"{leg}, {figure}", figures[figure], "ms", "-",
+                                        note=f"{figures['count']} timed"))
     rows.append(Measurement("panel vs table", "figures that disagree", float(len(wrong)), "count", "0",
                             passed=not wrong, note="; ".join(wrong)[:200]))
     return rows
