@@ -166,5 +166,6 @@ async function placeAtStart() {
   }
 }
 
-showLessonRobot(root.querySelector("[data-slot=robot-panels]"), targetSelect, video);
+showLessonRobot(root.querySelector("[data-slot=robot-panels]"), targetSelect, video,
+  root.querySelector("[data-field=readings]"));
 start();
