@@ -180,7 +180,8 @@ FRAME_TIMES = """async ([scene, size, frames, warmup]) => {
   const whole = [];
   for (let i = 0; i < warmup + frames; i += 1) {
     const start = performance.now();
-    const frame = await drawn.frameFrom({ odometry: { pose: poseAt(i) }, camera_pose: poseAt(i), capture_unix_s: Date.now() / 1000 });
+    const frame = await drawn.frameFrom({ odometry: { pose: poseAt(i) }, camera_pose: poseAt(i),
+                                          capture_unix_s: Date.now() / 1000 });
     if (i >= warmup) whole.push(performance.now() - start);
     if (i === 0 && (frame.header.width_px !== size[0] || frame.header.height_px !== size[1])) {
       throw new Error(`drawn at ${frame.header.width_px}x${frame.header.height_px}`);

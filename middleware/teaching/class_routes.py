@@ -46,7 +46,8 @@ def _actor() -> User:
 
 def _session_dict(course_id: int) -> dict[str, object]:
     opened, seats = class_sessions.seats(get_session(), _actor(), course_id)
-    counts = {state: sum(1 for seat in seats if seat.state == state) for state in ("starting", "ready", "failed", "stopped")}
+    states = ("starting", "ready", "failed", "stopped")
+    counts = {state: sum(1 for seat in seats if seat.state == state) for state in states}
     return {"course_id": course_id, "open": opened is not None, "scene": opened.scene if opened else None,
             "booking_id": opened.booking_id if opened else None,
             "started_at": opened.started_at.isoformat() if opened else None,

@@ -162,7 +162,8 @@ def test_the_picture_drawn_here_follows_the_robot_and_the_video_socket_closes(pa
 
     # A graded run withholds where the robot stands: the panel turns to the server's camera and says why.
     page.evaluate("""() => { document.querySelector("camera-panel").telemetry = { type: "telemetry",
-      capture_unix_s: Date.now() / 1000, odometry: { pose: { x_m: 0, y_m: 0, theta_rad: 0 } }, camera_pose: null }; }""")
+      capture_unix_s: Date.now() / 1000, odometry: { pose: { x_m: 0, y_m: 0, theta_rad: 0 } },
+      camera_pose: null }; }""")
     page.locator('camera-panel[data-source="video"]').wait_for(state="attached")
     message = page.locator('camera-panel [data-field="camera-message"]')
     wait_for(lambda: message.is_visible() and (message.text_content() or "").startswith(

@@ -17,7 +17,7 @@ from middleware.robots.registry import robot_registry
 from tests.conftest import LabClient, LiveServer
 from tests.integration.lab.test_skills_api import take_control
 from tests.integration.plans.conftest import PlansLab, api
-from tests.integration.plans.test_plan_runs import SQUARE_CORNER, _create, latest_pose, wait_for_end
+from tests.integration.plans.test_plan_runs import SQUARE_CORNER, _create, wait_for_end
 
 pytestmark = pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
 
