@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import ARTIFACTS_DIR, LiveServer
-from tests.e2e.test_lessons import TRACK, lesson_on_pattern, log_in, pattern_video  # noqa: F401
+from tests.e2e.test_lessons import TRACK, lesson_on_pattern, pattern_video, practice_robot_running  # noqa: F401
 
 pytestmark = pytest.mark.e2e
 READINGS = ("Odometry", "Sonar", "Laser")
@@ -17,16 +17,8 @@ READINGS = ("Odometry", "Sonar", "Laser")
 
 def test_a_learner_shows_the_raw_readings_beside_the_video(page, live_server: LiveServer,
                                                            pattern_video: Path) -> None:  # noqa: F811
-    from middleware.teaching.practice_robots import practice_manager
-
     lesson_id = lesson_on_pattern(live_server, pattern_video, TRACK, "readings", "Readings")
-    manager = practice_manager(live_server.app)
-    manager.cap = 1
-    try:
-        log_in(page, live_server)
-        page.goto(f"{live_server.url}/practice")
-        page.get_by_role("button", name="Start my practice robot").click()
-        page.wait_for_selector("#practice[data-running=true]", timeout=60000)
+    with practice_robot_running(page, live_server):
         page.goto(f"{live_server.url}/lessons/{lesson_id}")
         page.get_by_role("region", name="Camera", exact=True).wait_for(timeout=30_000)
         assert all(page.get_by_role("region", name=n, exact=True).count() == 0 for n in READINGS)
@@ -50,5 +42,3 @@ def test_a_learner_shows_the_raw_readings_beside_the_video(page, live_server: Li
         page.set_viewport_size({"width": 390, "height": 844})
         assert page.evaluate("document.scrollingElement.scrollWidth") <= 390
         page.screenshot(path=str(ARTIFACTS_DIR / "lesson-readings-phone.png"), full_page=True)
-    finally:
-        manager.shutdown()

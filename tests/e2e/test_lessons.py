@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 import shutil
 import subprocess
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -78,7 +80,9 @@ def _wait_for(page, text: str, timeout_ms: float = 15000) -> None:
                            "e.textContent.includes(t))", arg=text, timeout=timeout_ms)
 
 
-def test_the_video_drives_the_practice_robot_by_the_exact_rule(page, live_server: LiveServer, lesson_id: int) -> None:
+@contextmanager
+def practice_robot_running(page, live_server: LiveServer) -> Iterator[object]:
+    """student1 logged in with their practice robot started from its page (one at most); the farm's manager."""
     from middleware.teaching.practice_robots import practice_manager
 
     manager = practice_manager(live_server.app)
@@ -88,6 +92,13 @@ def test_the_video_drives_the_practice_robot_by_the_exact_rule(page, live_server
         page.goto(f"{live_server.url}/practice")
         page.get_by_role("button", name="Start my practice robot").click()
         page.wait_for_selector("#practice[data-running=true]", timeout=60000)
+        yield manager
+    finally:
+        manager.shutdown()
+
+
+def test_the_video_drives_the_practice_robot_by_the_exact_rule(page, live_server: LiveServer, lesson_id: int) -> None:
+    with practice_robot_running(page, live_server) as manager:
         # Left away from its dock (issue 34, item 14): the lesson carries it back, where its video starts.
         practice = manager.get(_user_id(live_server, "student1"))
         _odometry, dock = practice.link.poses_now()
@@ -155,8 +166,6 @@ def test_the_video_drives_the_practice_robot_by_the_exact_rule(page, live_server
         Path(ARTIFACTS_DIR / "lesson-latency.txt").write_text(
             "\n".join(f"{k}: {page.text_content(f'[data-latency={k}]')}"
                       for k in ("cueToAck", "middlewareToAck", "pauseDetect", "pauseToAck")))
-    finally:
-        manager.shutdown()
 
 
 def _user_id(live_server: LiveServer, name: str) -> int:

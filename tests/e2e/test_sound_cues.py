@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import ARTIFACTS_DIR, LiveServer
-from tests.e2e.test_lessons import _wait_for, lesson_on_pattern, log_in, pattern_video  # noqa: F401
+from tests.e2e.test_lessons import _wait_for, lesson_on_pattern, pattern_video, practice_robot_running  # noqa: F401
 
 pytestmark = pytest.mark.e2e
 TRACK = """WEBVTT
@@ -32,17 +32,9 @@ AudioContext.prototype.createOscillator = function () {
 
 def test_a_sound_cue_plays_its_tone_and_shows_its_caption(page, live_server: LiveServer,
                                                          pattern_video: Path) -> None:  # noqa: F811
-    from middleware.teaching.practice_robots import practice_manager
-
     lesson_id = lesson_on_pattern(live_server, pattern_video, TRACK, "sound", "Sound")
-    manager = practice_manager(live_server.app)
-    manager.cap = 1
-    try:
-        page.add_init_script(AUDIO_SPY)
-        log_in(page, live_server)
-        page.goto(f"{live_server.url}/practice")
-        page.get_by_role("button", name="Start my practice robot").click()
-        page.wait_for_selector("#practice[data-running=true]", timeout=60000)
+    page.add_init_script(AUDIO_SPY)
+    with practice_robot_running(page, live_server):
         page.goto(f"{live_server.url}/lessons/{lesson_id}")
         page.wait_for_selector("#lesson[data-ready=true]")
         caption = page.locator('[data-field="sound-caption"]')
@@ -55,5 +47,3 @@ def test_a_sound_cue_plays_its_tone_and_shows_its_caption(page, live_server: Liv
         assert caption.get_attribute("role") == "status"
         assert page.evaluate("window.__tones") == [660]
         page.screenshot(path=str(ARTIFACTS_DIR / "lesson-sound-caption.png"), full_page=True)
-    finally:
-        manager.shutdown()
