@@ -395,8 +395,10 @@ OWN_TRANSACTIONS_ALLOW_LIST = {
     "middleware/auth/session_records.py": "a login's last_seen_at, committed at once before the request writes",
     "middleware/teaching/class_sessions.py::_set_seat": "the background start of a class's robots records each "
                                                         "seat's outcome",
-    "middleware/farm/pool_robots.py": "a pool robot's row is written once the farm started it, and its keeper "
-                                      "thread restarts lost ones",
+    "middleware/farm/pool_robots.py::start_pool_robots": "a pool robot's row is written once the farm started it "
+                                                         "(the admin reads the farm's refusal, such as an unknown "
+                                                         "scene, in the same request)",
+    "middleware/farm/pool_robots.py::stop_pool_robots": "each robot's row goes once the farm stopped it",
 }
 
 

@@ -109,12 +109,11 @@ def keep_pool_robots(farm: RobotFarm, sessions: Callable[[], Session]) -> list[s
                 continue
             running = farm.start(RobotSpec(name, scene or "lab"))
         if running.address != address:
-            with sessions() as session:
+            with sessions() as session, session.begin():  # the keeper's own unit of work, one robot at a time
                 row = session.scalar(select(Robot).where(Robot.name == name))
                 if row is not None:
                     row.address, row.updated_at = running.address, utc_now()
                     events.announce(session, "robots", name)
-                    session.commit()
             changed.append(name)
     return changed
 
