@@ -14,6 +14,7 @@ from middleware.errors import Refused
 from middleware.models.teaching import Lesson
 from middleware.teaching.lesson_tests import check_lesson_tests, lesson_gate, lesson_results, require_before_test
 from tests.integration.assessment.test_attempt_rules import T0, world  # noqa: F401
+from tests.integration.bookings.conftest import client_as, course_people  # noqa: F401
 
 
 def _take(session, student, exam_id: int, answers: dict, at) -> None:
@@ -61,3 +62,38 @@ def test_the_robot_waits_for_the_test_before_and_the_parts_compare(world) -> Non
     assert lesson_results(session, lesson, people["s2"]).students == 0  # another student sees only their own
     assert (lesson_results(session, lesson, tutor).whose, lesson_results(session, lesson, tutor).students) == (
         "class", 1)
+
+
+def test_over_http_the_editor_names_a_bad_test_and_the_cues_wait_for_the_test_before(
+        live_server, client_as, course_people) -> None:  # noqa: F811
+    from pathlib import Path
+
+    from middleware.db import session_factory
+    from middleware.models import User
+    from tests.integration.bookings.conftest import api
+
+    folder = Path(live_server.app.instance_path) / "lessons"
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "clip.webm").write_bytes(b"not really a video")
+    with session_factory(live_server.app)() as session:
+        tutor = session.get(User, course_people["tutor1"])
+        question = bank.add_question(session, tutor, course_people["course"], parse_question(
+            {"kind": "single", "prompt": "?", "choices": ["a", "b"], "correct": 0}))
+        before = bank.create_exam(session, tutor, course_people["course"], parse_exam(
+            {"title": "Before", "kind": "quiz", "question_ids": [question.id]})).id
+        session.commit()
+    tutor_client, student = client_as("tutor1"), client_as("student1")
+    lesson = {"title": "Goal", "video_name": "clip.webm",
+              "cues": 'WEBVTT\n\n00:00:01.000 --> 00:00:02.000\n{"stop": true}\n'}
+    for bad, field in (({"before_exam_id": "abc"}, "before_exam_id"), ({"after_exam_id": 10**9}, "after_exam_id"),
+                       ({"before_exam_id": before, "after_exam_id": before}, "after_exam_id")):
+        status, body = api(tutor_client, "POST", "/api/lessons", {**lesson, **bad})
+        assert status == 400 and body["error"]["field"] == field, body
+    assert api(client_as("tutor2"), "POST", "/api/lessons", {**lesson, "before_exam_id": before})[1]["error"][
+        "field"] == "before_exam_id"  # a tutor of another course
+    status, saved = api(tutor_client, "POST", "/api/lessons", {**lesson, "before_exam_id": str(before)})
+    assert status == 201 and saved["before_exam_id"] == before
+    status, body = api(student, "POST", f"/api/lessons/{saved['id']}/cues/1/run", {"target": "practice"})
+    assert status == 409 and body["error"]["code"] == "before_test_required" and "“Before”" in body["error"]["message"]
+    status, body = api(student, "GET", f"/api/lessons/{saved['id']}/results")
+    assert status == 404 and body["error"]["code"] == "no_tests"  # no test after to compare with
