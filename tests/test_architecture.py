@@ -398,7 +398,6 @@ OWN_TRANSACTIONS_ALLOW_LIST = {
     "middleware/farm/pool_robots.py::start_pool_robots": "a pool robot's row is written once the farm started it "
                                                          "(the admin reads the farm's refusal, such as an unknown "
                                                          "scene, in the same request)",
-    "middleware/farm/pool_robots.py::stop_pool_robots": "each robot's row goes once the farm stopped it",
 }
 
 

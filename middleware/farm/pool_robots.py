@@ -76,20 +76,31 @@ def start_pool_robots(farm: RobotFarm, sessions: Callable[[], Session], kind: st
     return started
 
 
-def stop_pool_robots(farm: RobotFarm, sessions: Callable[[], Session], kind: str) -> list[str]:
-    """Stops the farm's robots of kind and removes their rows (robots the admin added by address stay)."""
-    with sessions() as session:
-        names = list(session.scalars(select(Robot.name).where(Robot.kind == kind, Robot.farm_managed.is_(True))))
-    if not names:
+def remove_pool_rows(session: Session, kind: str) -> list[str]:
+    """Removes the rows of the farm's robots of kind in session (the caller's unit of work; robots the admin added
+    by address stay); their names, whose robots stop_pool_processes ends once that is committed. The row goes first:
+    a keeper never starts again a robot whose row is gone, where it did restart one stopped before its row went."""
+    rows = list(session.scalars(select(Robot).where(Robot.kind == kind, Robot.farm_managed.is_(True))))
+    if not rows:
         raise Refused(404, "unknown_pool", f"The farm runs no robots of kind {kind[:32]!r}.", "kind")
+    for row in rows:
+        session.delete(row)
+        events.announce(session, "robots", row.name)
+    session.flush()
+    return [row.name for row in rows]
+
+
+def stop_pool_processes(farm: RobotFarm, names: list[str]) -> None:
+    """Stops the farm's robots whose rows remove_pool_rows removed (after the commit)."""
     for name in names:
         farm.stop(name)
-        with sessions() as session:
-            row = session.scalar(select(Robot).where(Robot.name == name))
-            if row is not None:
-                session.delete(row)
-                events.announce(session, "robots", name)
-                session.commit()
+
+
+def stop_pool_robots(farm: RobotFarm, sessions: Callable[[], Session], kind: str) -> list[str]:
+    """Stops the farm's robots of kind in a unit of work of its own (the console's `telelab farm stop --pool`)."""
+    with sessions() as session, session.begin():
+        names = remove_pool_rows(session, kind)
+    stop_pool_processes(farm, names)
     return names
 
 

@@ -17,7 +17,7 @@ from middleware.accounts.services import require_admin
 from middleware.db import after_commit, get_session, session_factory
 from middleware.errors import Refused, flashed, unless_refused
 from middleware.farm.base import FarmUnavailable
-from middleware.farm.pool_robots import clean_pool_request, start_pool_robots, stop_pool_robots
+from middleware.farm.pool_robots import clean_pool_request, remove_pool_rows, start_pool_robots, stop_pool_processes
 from middleware.farm.setup import pool_keeper, robot_farm
 from middleware.models import Robot, User
 from middleware.robots.registry import robot_registry
@@ -147,6 +147,18 @@ def _start(kind: object, scene: object, count: object) -> list[str]:
     return started
 
 
+def _stop(kind: str) -> list[str]:
+    require_admin(current_user)
+    stopped, farm, registry = remove_pool_rows(get_session(), kind), robot_farm(), robot_registry()
+
+    def stop_processes() -> None:
+        stop_pool_processes(farm, stopped)
+        registry.refresh()
+
+    after_commit(stop_processes)
+    return stopped
+
+
 @blueprint.post("/admin/pools")
 @login_required
 def admin_start() -> ResponseReturnValue:
@@ -170,9 +182,7 @@ def admin_start() -> ResponseReturnValue:
 def admin_stop(kind: str) -> ResponseReturnValue:
     """Stops the farm's robots of a pool (the form)."""
     def stop() -> ResponseReturnValue:
-        require_admin(current_user)
-        stopped = stop_pool_robots(robot_farm(), session_factory(current_app), kind)
-        after_commit(robot_registry().refresh)
+        stopped = _stop(kind)
         flash(f"Stopped {len(stopped)} robot(s) of {kind}.", "success")
         return redirect(url_for("pools.admin_page"), 303)
 
@@ -193,7 +203,4 @@ def admin_api_start() -> ResponseReturnValue:
 @login_required
 def admin_api_stop(kind: str) -> ResponseReturnValue:
     """Stops the farm's robots of a pool (admins)."""
-    require_admin(current_user)
-    stopped = stop_pool_robots(robot_farm(), session_factory(current_app), kind)
-    after_commit(robot_registry().refresh)
-    return jsonify({"stopped": stopped})
+    return jsonify({"stopped": _stop(kind)})
