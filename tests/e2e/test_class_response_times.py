@@ -64,5 +64,14 @@ def test_a_tutor_sees_each_student_s_response_times_as_the_student_s_panel_shows
         assert "not measured yet" in other.inner_text()
         ARTIFACTS_DIR.mkdir(exist_ok=True)
         page.screenshot(path=str(ARTIFACTS_DIR / "class-response-times-tutor.png"), full_page=True)
+        page.set_viewport_size({"width": 390, "height": 844})
+        row.locator('[data-field="rtt-skill-robot-max"]').scroll_into_view_if_needed()
+        page.screenshot(path=str(ARTIFACTS_DIR / "class-response-times-tutor-phone.png"), full_page=True)
+        wide = page.evaluate("""() => [...document.querySelectorAll('body *')]
+            .filter((e) => e.getBoundingClientRect().right > 391)
+            .map((e) => `${e.tagName}.${e.className}[${e.dataset.field ?? ''}] ${Math.round(e.getBoundingClientRect().right)}`)
+            .slice(0, 6)""")
+        assert page.evaluate("document.documentElement.scrollWidth") <= 390, f"the class view scrolls sideways: {wide}"
+        page.screenshot(path=str(ARTIFACTS_DIR / "class-response-times-tutor-phone.png"), full_page=True)
     finally:
         context.close()
