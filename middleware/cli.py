@@ -160,7 +160,8 @@ def cmd_farm_start(args: argparse.Namespace) -> int:
     if _local_farm_refused(farm, "/admin/pools"):
         return 1
     kind, scene, count = clean_pool_request(args.pool, args.scene, args.count)
-    started = start_pool_robots(farm, session_factory(app), kind, scene, count)
+    with session_factory(app)() as session, session.begin():
+        started = start_pool_robots(farm, session, kind, scene, count)
     print(f"started {', '.join(started)} (kind {kind}, scene {scene})")
     return 0
 

@@ -395,9 +395,6 @@ OWN_TRANSACTIONS_ALLOW_LIST = {
     "middleware/auth/session_records.py": "a login's last_seen_at, committed at once before the request writes",
     "middleware/teaching/class_sessions.py::_set_seat": "the background start of a class's robots records each "
                                                         "seat's outcome",
-    "middleware/farm/pool_robots.py::start_pool_robots": "a pool robot's row is written once the farm started it "
-                                                         "(the admin reads the farm's refusal, such as an unknown "
-                                                         "scene, in the same request)",
 }
 
 

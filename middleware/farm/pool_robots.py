@@ -41,15 +41,14 @@ def clean_pool_request(kind: object, scene: object, count: object) -> tuple[str,
     return kind.strip(), scene.strip(), whole_number(count, "count", 1, MAX_POOL_START)
 
 
-def start_pool_robots(farm: RobotFarm, sessions: Callable[[], Session], kind: str, scene: str,
-                      count: int) -> list[str]:
-    """Starts count more simulated robots of kind on the farm, named kind-N after the names in use, and records
-    each as an enabled lab robot of the kind. A robot the farm refuses (full, unreachable) is not recorded; the
-    refusal is raised after the robots already started are kept."""
-    with sessions() as session:
-        taken = set(session.scalars(select(Robot.name)))
-        other_kind = session.scalar(select(Robot.kind).where(Robot.kind == kind, Robot.farm_managed.is_(True),
-                                                             Robot.scene != scene).limit(1))
+def start_pool_robots(farm: RobotFarm, session: Session, kind: str, scene: str, count: int) -> list[str]:
+    """Starts count more simulated robots of kind on the farm, named kind-N after the names in use, and records each
+    as an enabled lab robot of the kind in session (the caller's unit of work, which commits them). All or none: a
+    refusal (the farm full or unreachable, an unknown scene, a name taken meanwhile) stops the robots this call
+    started, and the caller's unit of work keeps no row."""
+    taken = set(session.scalars(select(Robot.name)))
+    other_kind = session.scalar(select(Robot.kind).where(Robot.kind == kind, Robot.farm_managed.is_(True),
+                                                         Robot.scene != scene).limit(1))
     if other_kind is not None:
         raise Refused(409, "scene_mismatch", f"The farm's robots of kind {kind!r} run another scene; a kind is one "
                       "scene and model, so choose that scene or another kind.", "scene")
@@ -60,19 +59,21 @@ def start_pool_robots(farm: RobotFarm, sessions: Callable[[], Session], kind: st
         if f"{kind}-{number}" not in taken:
             names.append(f"{kind}-{number}")
     started: list[str] = []
-    for name in names:
-        robot = farm.start(RobotSpec(name, scene))
-        with sessions() as session:
+    try:
+        for name in names:
+            robot = farm.start(RobotSpec(name, scene))
+            started.append(name)
             session.add(Robot(name=name, title=f"{kind.capitalize()} {name.rsplit('-', 1)[1]}", address=robot.address,
                               kind=kind, farm_managed=True, scene=scene, enabled=True))
             events.announce(session, "robots", name)
-            try:
-                session.commit()
-            except IntegrityError:  # another admin took the name meanwhile: this robot is nobody's
-                farm.stop(name)
-                raise Refused(409, "robot_exists", f"A robot named {name!r} was added meanwhile; "
-                              f"{len(started)} robot(s) were started. Try again.", "kind") from None
-        started.append(name)
+        session.flush()
+    except IntegrityError:  # another admin took a name meanwhile; the caller's unit of work rolls back
+        stop_pool_processes(farm, started)
+        raise Refused(409, "robot_exists", "A robot of that name was added meanwhile; no robot was started. "
+                      "Try again.", "kind") from None
+    except BaseException:
+        stop_pool_processes(farm, started)
+        raise
     return started
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from flask import Blueprint, current_app, flash, jsonify, redirect, render_template, request, url_for
+from flask import Blueprint, flash, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy import select
@@ -14,7 +14,7 @@ from middleware.access import pools
 from middleware.access.coordinator import access_coordinator
 from middleware.access.pool_seats import PoolSeats
 from middleware.accounts.services import require_admin
-from middleware.db import after_commit, get_session, session_factory
+from middleware.db import after_commit, get_session
 from middleware.errors import Refused, flashed, unless_refused
 from middleware.farm.base import FarmUnavailable
 from middleware.farm.pool_robots import clean_pool_request, remove_pool_rows, start_pool_robots, stop_pool_processes
@@ -141,9 +141,14 @@ def admin_api() -> ResponseReturnValue:
 def _start(kind: object, scene: object, count: object) -> list[str]:
     require_admin(current_user)
     clean_kind, clean_scene, clean_count = clean_pool_request(kind, scene, count)
-    started = start_pool_robots(robot_farm(), session_factory(current_app), clean_kind, clean_scene, clean_count)
-    pool_keeper().start_if_needed()
-    after_commit(robot_registry().refresh)
+    started = start_pool_robots(robot_farm(), get_session(), clean_kind, clean_scene, clean_count)
+    keeper, registry = pool_keeper(), robot_registry()
+
+    def serve_them() -> None:
+        keeper.start_if_needed()  # reads the committed rows
+        registry.refresh()
+
+    after_commit(serve_them)
     return started
 
 

@@ -18,7 +18,8 @@ def test_a_pool_stopped_in_a_rolled_back_unit_of_work_keeps_running_and_the_admi
     farm, sessions = robot_farm(app), session_factory(app)
     admin = _client(live_server, "root", "admin")
     try:
-        started = start_pool_robots(farm, sessions, "uow", "lab", 2)
+        with sessions() as session, session.begin():
+            started = start_pool_robots(farm, session, "uow", "lab", 2)
         with sessions() as session:
             assert remove_pool_rows(session, "uow") == started
             assert sorted(robot.name for robot in farm.robots()) == started  # nothing stops before the commit
