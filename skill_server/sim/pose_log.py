@@ -11,6 +11,7 @@ import threading
 from collections import deque
 
 from skill_server.errors import InvalidParameter
+from skill_server.sim.pacing import SimTimePacer
 from skill_server.sim.snapshots import RobotSnapshot
 
 RATE_HZ = 5.0
@@ -24,15 +25,15 @@ class PoseLog:
     """The last KEEP_S of samples at RATE_HZ."""
 
     def __init__(self, rate_hz: float = RATE_HZ, keep_s: float = KEEP_S) -> None:
-        self._period_s = 1.0 / rate_hz
+        self._pacer = SimTimePacer(1.0 / rate_hz)  # on the wall clock: the rate holds when ticks come unevenly
         self._samples: deque[Sample] = deque(maxlen=int(keep_s * rate_hz))
         self._lock = threading.Lock()
 
     def note(self, snapshot: RobotSnapshot) -> None:
-        """Keeps the snapshot's poses if a period has passed since the last sample (the loop's thread)."""
+        """Keeps the snapshot's poses when the next sample is due (the loop's thread)."""
         at = snapshot.capture_unix_s
         with self._lock:
-            if self._samples and at - self._samples[-1][0] < self._period_s:
+            if not self._pacer.due(at):
                 return
             truth, odometry = snapshot.ground_truth, snapshot.odometry.pose
             self._samples.append((at, truth.x_m, truth.y_m, truth.theta_rad, odometry.x_m, odometry.y_m,

@@ -334,12 +334,16 @@ class World:
         the wall clock, until something can move the robot again (a command wakes the loop at once)."""
         self.parked = True
         last_wall_s = time.monotonic()
+        publish_due_s = last_wall_s + PARKED_PERIOD_S  # on a grid: a late wake-up does not delay the next one
         try:
             while not self._stop.is_set():
-                if self._command_waiting.wait(PARKED_PERIOD_S):
+                if self._command_waiting.wait(max(0.0, publish_due_s - time.monotonic())):
                     self._command_waiting.clear()
                     self._run_pending_commands()
-                ticks = int((time.monotonic() - last_wall_s) / self.tick_dt_s)
+                now_s = time.monotonic()
+                while publish_due_s <= now_s:
+                    publish_due_s += PARKED_PERIOD_S
+                ticks = int((now_s - last_wall_s) / self.tick_dt_s)
                 if ticks:
                     last_wall_s += ticks * self.tick_dt_s
                     self._sim_time_s += ticks * self.tick_dt_s
