@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import unicodedata
 from dataclasses import dataclass
 
@@ -11,6 +12,7 @@ from middleware.validation import parse_message
 MAX_BODY_CHARS = 500
 MAX_COMMAND_CHARS = 4096
 MAX_ID = 2**53
+LINE_KEY = re.compile(r"[A-Za-z0-9_-]{1,64}")
 
 
 def clean_body(value: object) -> str:
@@ -35,18 +37,30 @@ def clean_message_id(value: object, field: str = "id") -> int:
     return value
 
 
+def clean_line_key(value: object) -> str | None:
+    """The key the browser gave a line so it can match the answer to it (echoed, never stored): 1-64 letters,
+    digits, '-' or '_'; None when absent."""
+    if value is None:
+        return None
+    if not isinstance(value, str) or not LINE_KEY.fullmatch(value):
+        raise InvalidField("line", "line must be 1 to 64 letters, digits, '-' or '_'.")
+    return value
+
+
 @dataclass(frozen=True)
 class ChatCommand:
-    """A parsed socket message: say (body) or delete (message_id)."""
+    """A parsed socket message: say (body, checked by the service that stores it, and the line's key) or delete
+    (message_id)."""
 
     kind: str
-    body: str = ""
+    body: object = ""
     message_id: int = 0
+    line: str | None = None
 
 
 def parse_chat_command(raw: object) -> ChatCommand:
     """A ChatCommand from one WebSocket text message, or a refusal (InvalidField, InvalidInput) naming the field."""
     message = parse_message(raw, ("say", "delete"), MAX_COMMAND_CHARS)
     if message["type"] == "say":
-        return ChatCommand("say", body=clean_body(message.get("body")))
+        return ChatCommand("say", body=message.get("body"), line=clean_line_key(message.get("line")))
     return ChatCommand("delete", message_id=clean_message_id(message.get("id")))

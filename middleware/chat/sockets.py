@@ -23,14 +23,17 @@ from middleware.realtime import Channels, WebSocket, as_json, send_json
 IDLE_WAKE_S = 5.0  # the hub nudges a socket when its room has news; this only bounds a lost nudge
 
 
-def _error(code: str, message: str, field: str | None) -> dict[str, object]:
-    return {"type": "error", "code": code, "message": message, "field": field}
+def _error(code: str, message: str, field: str | None, line: str | None = None) -> dict[str, object]:
+    return {"type": "error", "code": code, "message": message, "field": field, "line": line}
 
 
 def _handle(robot_name: str, user_id: int, raw: object) -> dict[str, object] | None:
-    """Carries out a chat command; the answer for its sender, if any."""
+    """Carries out a chat command; the answer for its sender, if any (a say's names its line's key, so the browser
+    knows which line was stored or refused, and that every line without an answer was never read)."""
+    line = None
     try:
         command = parse_chat_command(raw)
+        line = command.line
         with unit_of_work(current_app) as session:  # one message, one transaction
             user = session.get(User, user_id)
             if user is None or not user.is_active:
@@ -41,8 +44,8 @@ def _handle(robot_name: str, user_id: int, raw: object) -> dict[str, object] | N
                 services.delete_message(session, robot_name, user, command.message_id, datetime.now(UTC))
                 sent = None
     except Refused as refused:
-        return _error(refused.code, refused.message, refused.field)
-    return None if sent is None else {"type": "sent", "id": sent}
+        return _error(refused.code, refused.message, refused.field, line)
+    return None if sent is None else {"type": "sent", "id": sent, "line": line}
 
 
 def chat_channel(ws: WebSocket, robot_name: str) -> Continuation | None:

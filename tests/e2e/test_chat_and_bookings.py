@@ -19,6 +19,14 @@ def log_in(tab, live_server: LiveServer, username: str) -> None:
     tab.locator('[data-field="username"]').wait_for()
 
 
+def open_chat(tab, live_server: LiveServer, username: str) -> None:
+    """Logs username in on tab and opens lab-1's console on its Chat tab, ready to send."""
+    log_in(tab, live_server, username)
+    tab.goto(f"{live_server.url}/lab/lab-1")
+    tab.get_by_role("tab", name="Chat").click()
+    tab.locator("#chat-input:enabled").wait_for(timeout=15000)
+
+
 def test_two_students_chat_and_one_books_a_slot(chromium, page, live_server: LiveServer, course_people) -> None:  # noqa: F811
     ARTIFACTS_DIR.mkdir(exist_ok=True)
     other_context = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
@@ -29,12 +37,8 @@ def test_two_students_chat_and_one_books_a_slot(chromium, page, live_server: Liv
     for tab in (page, other):
         tab.on("dialog", lambda dialog: (dialogs.append(dialog.message), dialog.dismiss()))
     try:
-        log_in(page, live_server, "student1")
-        log_in(other, live_server, "student2")
-        for tab in (page, other):
-            tab.goto(f"{live_server.url}/lab/lab-1")
-            tab.get_by_role("tab", name="Chat").click()
-            tab.locator("#chat-input:enabled").wait_for(timeout=15000)
+        open_chat(page, live_server, "student1")
+        open_chat(other, live_server, "student2")
         page.get_by_label("Message to everyone on this robot").fill(HOSTILE)
         page.keyboard.press("Enter")
         received = other.locator('chat-panel [data-field="chat-body"]', has_text=HOSTILE)

@@ -51,6 +51,10 @@ def test_two_sockets_see_each_others_messages(client_as) -> None:
     ({"type": "say", "body": 42}, "body"),
     ({"type": "say", "body": "bell\x07"}, "body"),
     ({"type": "say", "body": "two\nlines"}, "body"),
+    ({"type": "say", "body": "hi", "line": ""}, "line"),
+    ({"type": "say", "body": "hi", "line": 7}, "line"),
+    ({"type": "say", "body": "hi", "line": "x" * 65}, "line"),
+    ({"type": "say", "body": "hi", "line": "<b>"}, "line"),
     ({"type": "shout", "body": "hi"}, "type"),
     ({"type": "delete", "id": "1"}, "id"),
     ("not json", "message"),
@@ -65,6 +69,21 @@ def test_bad_input_is_refused_naming_the_field(client_as, message, field) -> Non
     assert error["field"] == field, error
     ws.close()
     assert api(client, "GET", "/api/robots/lab-1/chat")[1]["messages"] == []
+
+
+def test_each_answer_to_a_line_names_the_key_the_browser_gave_it(client_as) -> None:
+    """The console keeps a line until its answer comes, stored or refused; the key says which line it answers."""
+    ws = client_as("student1").websocket("/ws/robots/lab-1/chat")
+    next_of(ws, "history")
+    for n in range(6):
+        ws.send(json.dumps({"type": "say", "body": f"line {n}", "line": f"k-{n}"}))
+    answers = [next_of(ws, "sent") for _ in range(5)]
+    assert [answer["line"] for answer in answers] == [f"k-{n}" for n in range(5)]
+    refused = next_of(ws, "error")
+    assert refused["code"] == "rate_limited" and refused["line"] == "k-5"
+    ws.send(json.dumps({"type": "say", "body": "", "line": "k-empty"}))
+    assert next_of(ws, "error")["line"] == "k-empty"
+    ws.close()
 
 
 def test_the_rate_limit_holds_five_messages_per_ten_seconds(client_as) -> None:

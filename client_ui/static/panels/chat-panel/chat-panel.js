@@ -1,7 +1,10 @@
 // <chat-panel>: the robot's chat room. In: `history` ({messages, can_moderate}), `message` (one message),
-// `deleted` (an id), `error` ({message, field}), `link` ("open" | "connecting" | "closed").
-// Out: "chat-send" (detail {body}), "chat-delete" (detail {id}) and "panel-attention" on a new message (the
-// console counts it on the Chat tab while another is shown). Text reaches the DOM only as text.
+// `deleted` (an id), `error` ({message, field}), `link` ("open" | "connecting" | "closed"), and the person's own
+// lines not yet stored: `outgoing` ({line, body, state: "sending" | "unsent"}), `acknowledged` ({line, id}: the row
+// stays until message id arrives), `withdrawn` ({line, body}: refused; the text goes back to an empty input).
+// Out: "chat-send" (detail {body}), "chat-resend" (detail {line}), "chat-delete" (detail {id}) and
+// "panel-attention" on a new message (the console counts it on the Chat tab while another is shown).
+// Text reaches the DOM only as text.
 
 import { h } from "../../lib/dom.js";
 import { PanelElement } from "../panel-base.js";
@@ -23,6 +26,8 @@ export class ChatPanel extends PanelElement {
   #errorLine;
   #empty;
   #items = new Map();
+  #pending = new Map(); // line key -> row of a line not yet in the room
+  #awaited = new Map(); // stored id -> line key, until the message itself arrives
   #canModerate = false;
 
   build() {
@@ -71,12 +76,35 @@ export class ChatPanel extends PanelElement {
     return item;
   }
 
+  #pendingRow(line, body, state) {
+    const unsent = state === "unsent";
+    return h("li", { class: `chat__item chat__item--pending${unsent ? " chat__item--unsent" : ""}`, "data-line": line },
+      h("div", { class: "chat__meta" },
+        h("span", { class: "chat__author", text: "You" }),
+        h("span", { class: "chat__status", "data-field": "chat-status",
+          text: unsent ? "Not sent: the connection was lost" : "Sending…" }),
+        unsent && h("button", { type: "button", class: "chat__resend", text: "Send again",
+          onclick: () => this.emit("chat-resend", { line }) })),
+      h("p", { class: "chat__body", "data-field": "chat-pending-body", text: body }));
+  }
+
+  #forget(line) {
+    this.#pending.get(line)?.remove();
+    this.#pending.delete(line);
+    this.#empty.hidden = this.#items.size > 0 || this.#pending.size > 0;
+  }
+
   #append(message) {
     if (this.#items.has(message.id)) return;
     const nearBottom = this.#list.scrollHeight - this.#list.scrollTop - this.#list.clientHeight < 40;
     const row = this.#row(message);
     this.#items.set(message.id, row);
-    this.#list.append(row);
+    const awaited = this.#awaited.get(message.id);
+    if (awaited !== undefined) {
+      this.#awaited.delete(message.id);
+      this.#forget(awaited);
+    }
+    this.#list.insertBefore(row, this.#pending.values().next().value ?? null); // lines still sending stay last
     this.#empty.hidden = true;
     if (nearBottom) this.#list.scrollTop = this.#list.scrollHeight;
   }
@@ -86,9 +114,35 @@ export class ChatPanel extends PanelElement {
     this.#canModerate = Boolean(value?.can_moderate);
     this.#items.clear();
     this.#list.replaceChildren();
+    const pending = [...this.#pending.values()];
+    this.#list.replaceChildren(...pending);
     for (const message of value?.messages ?? []) this.#append(message);
-    this.#empty.hidden = this.#items.size > 0;
+    this.#empty.hidden = this.#items.size > 0 || this.#pending.size > 0;
     this.#list.scrollTop = this.#list.scrollHeight;
+  }
+
+  set outgoing(value) {
+    this.ensureBuilt();
+    if (!value?.line) return;
+    const row = this.#pendingRow(value.line, value.body, value.state);
+    const old = this.#pending.get(value.line);
+    if (old) old.replaceWith(row);
+    else this.#list.append(row);
+    this.#pending.set(value.line, row);
+    this.#empty.hidden = true;
+    this.#list.scrollTop = this.#list.scrollHeight;
+  }
+
+  set acknowledged(value) {
+    this.ensureBuilt();
+    if (this.#items.has(value?.id)) this.#forget(value.line);
+    else if (this.#pending.has(value?.line)) this.#awaited.set(value.id, value.line);
+  }
+
+  set withdrawn(value) {
+    this.ensureBuilt();
+    this.#forget(value?.line);
+    if (!this.#input.value && typeof value?.body === "string") this.#input.value = value.body;
   }
 
   set message(value) {
@@ -103,7 +157,12 @@ export class ChatPanel extends PanelElement {
     this.ensureBuilt();
     this.#items.get(id)?.remove();
     this.#items.delete(id);
-    this.#empty.hidden = this.#items.size > 0;
+    const awaited = this.#awaited.get(id);
+    if (awaited !== undefined) {
+      this.#awaited.delete(id);
+      this.#forget(awaited);
+    }
+    this.#empty.hidden = this.#items.size > 0 || this.#pending.size > 0;
   }
 
   set error(value) {
