@@ -18,6 +18,7 @@ from tests.integration.bookings.conftest import course_people  # noqa: F401
 
 pytestmark = pytest.mark.e2e
 LINE = "sent as the server restarts"
+LINES = ["read before the restart", "sent as the server restarts", "and one more right after"]
 BODIES = 'chat-panel [data-field="chat-body"]'
 
 
@@ -43,39 +44,51 @@ def _stored_copies(app, body: str) -> int:
         return session.scalar(select(func.count()).select_from(ChatMessage).where(ChatMessage.body == body))
 
 
-def _restart_under(server, frame: str, held: list[str]) -> None:
-    """Closes every socket of the server with 1012 (a leaving worker), then lets the line reach it: never read. The
-    server refuses new sockets (1012) until the test lets the new worker serve."""
-    from middleware.live.loop import channel_loop, drain_channels
-
-    drain_channels()
-    deadline = time.monotonic() + 10
-    while channel_loop().open_sockets and time.monotonic() < deadline:
+def _wait_until(condition, timeout_s: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not condition() and time.monotonic() < deadline:
         time.sleep(0.02)
-    held.append((frame, channel_loop().open_sockets))
-    with contextlib.suppress(Exception):  # the connection is closed already: the line is lost to the server either way
-        server.send(frame)
 
 
-def test_a_line_sent_as_the_server_closes_with_1012_is_sent_again_and_stored_once(
+def _write_at_once(tab, lines: list[str]) -> None:
+    """Submits the lines in one task of the page, so that all of them leave before the page can see a close."""
+    tab.evaluate("""(lines) => {
+        const input = document.querySelector("#chat-input");
+        for (const line of lines) { input.value = line; input.form.requestSubmit(); }
+    }""", lines)
+
+
+def test_lines_sent_as_the_server_closes_with_1012_are_sent_again_and_each_stored_once(
         chromium, page, live_server: LiveServer, course_people) -> None:  # noqa: F811
-    from middleware.live.loop import channel_loop
+    """The first line reaches the server before its restart and is answered (it must not go again); the next two
+    reach it only after every socket has closed with 1012 (never read: they must go again)."""
+    from middleware.live.loop import channel_loop, drain_channels
 
     other_context = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
     other = other_context.new_page()
-    held: list[str] = []
-    restarted = False
+    says: list[str] = []
+    open_after_drain: list[int] = []
+    connections: list[object] = []
 
     def route(socket) -> None:
         server = socket.connect_to_server()
+        first = not connections
+        connections.append(socket)
 
         def outbound(frame) -> None:
-            nonlocal restarted
-            if isinstance(frame, str) and _is_say(frame) and not restarted:
-                restarted = True
-                _restart_under(server, frame, held)
-            else:
+            if not (first and isinstance(frame, str) and _is_say(frame)):
                 server.send(frame)
+                return
+            says.append(frame)
+            if len(says) > 1:  # the server closed every socket already: this line is never read
+                with contextlib.suppress(Exception):
+                    server.send(frame)
+                return
+            server.send(frame)
+            _wait_until(lambda: _stored_copies(live_server.app, LINES[0]) == 1)
+            drain_channels()  # a leaving worker: it answers the line it read, then closes with 1012
+            _wait_until(lambda: channel_loop().open_sockets == 0)
+            open_after_drain.append(channel_loop().open_sockets)
 
         socket.on_message(outbound)
 
@@ -83,21 +96,21 @@ def test_a_line_sent_as_the_server_closes_with_1012_is_sent_again_and_stored_onc
         page.route_web_socket("**/ws/link", route)
         open_chat(page, live_server, "student1")
         open_chat(other, live_server, "student2")
-        say(page, LINE)
-        sending = page.locator("chat-panel .chat__item--pending", has_text=LINE)
+        _write_at_once(page, LINES)
+        sending = page.locator("chat-panel .chat__item--pending", has_text=LINES[-1])
         sending.locator('[data-field="chat-status"]', has_text="Sending").wait_for(timeout=15000)
-        assert [sockets for _, sockets in held] == [0], "the line did not go out after every socket had closed"
+        assert len(says) == len(LINES) and open_after_drain == [0], (says, open_after_drain)
         ARTIFACTS_DIR.mkdir(exist_ok=True)
         page.locator("chat-panel").screenshot(path=str(ARTIFACTS_DIR / "chat-line-sending.png"))
         channel_loop().draining = False  # the new worker serves
 
         for tab in (page, other):
-            tab.locator(BODIES, has_text=LINE).first.wait_for(timeout=30000)
+            tab.locator(BODIES, has_text=LINES[-1]).first.wait_for(timeout=30000)
         time.sleep(1.5)  # a second copy would have come by now
         for tab in (page, other):
-            assert tab.locator(BODIES, has_text=LINE).count() == 1
+            assert [text for text in tab.locator(BODIES).all_text_contents() if text in LINES] == LINES
             assert tab.locator("chat-panel .chat__item--pending").count() == 0
-        assert _stored_copies(live_server.app, LINE) == 1
+        assert [_stored_copies(live_server.app, line) for line in LINES] == [1] * len(LINES)
         page.locator("chat-panel").screenshot(path=str(ARTIFACTS_DIR / "chat-line-after-restart.png"))
     finally:
         channel_loop().draining = False
