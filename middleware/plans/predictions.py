@@ -6,7 +6,8 @@ allows, not in real time), in the scene the lab robot runs, placed where the lab
 or at its dock, exactly as the practice robot was placed (runs.start_practice_robot). Its plan goes
 through access/commands.py under the token the copy was started with. The copy never outlives the request: it is
 stopped in the stream's `finally` (a page that goes away closes the stream at the next message), the stream itself
-ends after PREDICTION_WALL_S, and a farm robot ends with the process that started it.
+ends after PREDICTION_WALL_S, and a farm robot ends with the process that started it. The outcome comes after
+the copy is stopped and the user's slot given back, so a page that reads it may predict again at once.
 
 Everything a person can get wrong is refused before the stream starts, as JSON (the lab robot, the version, the
 plan's settings, the cap); what goes wrong once it runs (the farm is full, the copy did not start) is the stream's
@@ -148,62 +149,81 @@ class TraceRecorder:
         self._thread.join(2.0)
 
 
+@dataclass
+class PredictionCopy:
+    """The throwaway robot a prediction runs on and what reads it, as far as they got started."""
+
+    farm: RobotFarm
+    name: str
+    started: bool = False
+    link: RobotLink | None = None
+    recorder: TraceRecorder | None = None
+
+    def stop(self) -> None:
+        """Stops reading the copy and stops the copy (a start that failed half-way may have left it)."""
+        if self.recorder is not None:
+            self.recorder.close()
+        if self.link is not None:
+            self.link.close()
+        try:
+            if self.started or self.farm.find(self.name) is not None:
+                self.farm.stop(self.name)
+        except FarmUnavailable as error:
+            log.warning("the prediction robot %s was not stopped: %s", self.name, error)
+
+
 def run_prediction(farm: RobotFarm, slots: PredictionSlots, request: PredictionRequest
                    ) -> Generator[dict[str, object], None, None]:
     """The prediction's messages: progress while the copy starts and the plan runs, then the end (or an error).
 
-    The copy is stopped in `finally`, whether the plan ended, the page went away (the generator is closed) or
-    something failed.
+    The outcome is the last message, sent once the copy is stopped and the user's slot given back: a page that reads
+    it may predict again at once. The copy is stopped whether the plan ended, the page went away (the generator is
+    closed) or something failed.
     """
-    name = f"{PREDICTION_PREFIX}{secrets.token_hex(6)}"
-    token = secrets.token_urlsafe(32)
-    link: RobotLink | None = None
-    recorder: TraceRecorder | None = None
-    started = False
     try:
         slots.take(request.user_id)
     except ApiError as refused:
         yield {"type": "error", **refused.to_dict()}
         return
+    copy = PredictionCopy(farm, f"{PREDICTION_PREFIX}{secrets.token_hex(6)}")
     try:
-        where = f" of {request.beside.name}" if request.beside else ""
-        yield {"type": "progress", "phase": "starting",
-               "message": f"Starting a simulated copy{where} in the scene {request.scene}…"}
-        robot = farm.start(RobotSpec(name, request.scene, token, fast=True))
-        started = True
-        link = RobotLink(name, robot.address, rpc_timeout_s=5.0)
-        copy = owned_robot(link, token)
-        plan = plan_from_json(request.document, skill_schemas(link, motor_only=True))
-        start = start_practice_robot(copy, request.from_dock, request.beside)
-        recorder = TraceRecorder(link)
-        begun = time.monotonic()
-        goal = copy.run_plan(request.plan_name, plan_to_proto(plan), preempt=True)
-        yield {"type": "started", "start": start, "goal": goal_dict(goal)}
-        final = yield from _follow(copy.goal_state, goal.goal_id, recorder, begun)
-        if final is None:
-            with suppress(CommandRefused, RobotUnavailable):
-                copy.cancel(goal.goal_id)
-            too_long = ApiError(409, "prediction_too_long", f"The prediction ran past {PREDICTION_WALL_S:.0f} s and "
-                                "was stopped: shorten the plan, or run it on the lab robot.")
-            yield {"type": "error", **too_long.to_dict(), "trace": recorder.points()}
-            return
-        recorder.add(link.odometry_pose())  # where it came to rest: the end point the lab run is compared with
-        yield {"type": "end", "goal": goal_dict(final), "trace": recorder.points(), "start": start,
-               "wall_s": round(time.monotonic() - begun, 3),
-               "sim_time_s": round(final.ended_sim_s - final.accepted_sim_s, 3)}  # the plan's time, predicted
+        outcome = yield from _predict(copy, request)
     except Refused as refused:  # the robot refused or away, the farm full or away, the plan invalid on the copy
-        yield {"type": "error", **refused.to_dict()}
+        outcome = {"type": "error", **refused.to_dict()}
     finally:
-        if recorder is not None:
-            recorder.close()
-        if link is not None:
-            link.close()
-        try:
-            if started or farm.find(name) is not None:  # a start that failed half-way may have left it
-                farm.stop(name)
-        except FarmUnavailable as error:
-            log.warning("the prediction robot %s was not stopped: %s", name, error)
-        slots.release(request.user_id)
+        slots.release(request.user_id)  # the prediction is over: the copy's stopping no longer holds the user back
+        copy.stop()
+    yield outcome
+
+
+def _predict(copy: PredictionCopy, request: PredictionRequest
+             ) -> Generator[dict[str, object], None, dict[str, object]]:
+    """Starts the copy, runs the plan on it and follows it: progress messages; returns the outcome's message."""
+    token = secrets.token_urlsafe(32)
+    where = f" of {request.beside.name}" if request.beside else ""
+    yield {"type": "progress", "phase": "starting",
+           "message": f"Starting a simulated copy{where} in the scene {request.scene}…"}
+    robot = copy.farm.start(RobotSpec(copy.name, request.scene, token, fast=True))
+    copy.started = True
+    link = copy.link = RobotLink(copy.name, robot.address, rpc_timeout_s=5.0)
+    owned = owned_robot(link, token)
+    plan = plan_from_json(request.document, skill_schemas(link, motor_only=True))
+    start = start_practice_robot(owned, request.from_dock, request.beside)
+    recorder = copy.recorder = TraceRecorder(link)
+    begun = time.monotonic()
+    goal = owned.run_plan(request.plan_name, plan_to_proto(plan), preempt=True)
+    yield {"type": "started", "start": start, "goal": goal_dict(goal)}
+    final = yield from _follow(owned.goal_state, goal.goal_id, recorder, begun)
+    if final is None:
+        with suppress(CommandRefused, RobotUnavailable):
+            owned.cancel(goal.goal_id)
+        too_long = ApiError(409, "prediction_too_long", f"The prediction ran past {PREDICTION_WALL_S:.0f} s and "
+                            "was stopped: shorten the plan, or run it on the lab robot.")
+        return {"type": "error", **too_long.to_dict(), "trace": recorder.points()}
+    recorder.add(link.odometry_pose())  # where it came to rest: the end point the lab run is compared with
+    return {"type": "end", "goal": goal_dict(final), "trace": recorder.points(), "start": start,
+            "wall_s": round(time.monotonic() - begun, 3),
+            "sim_time_s": round(final.ended_sim_s - final.accepted_sim_s, 3)}  # the plan's time, predicted
 
 
 def prediction_stream(farm: RobotFarm, slots: PredictionSlots, request: PredictionRequest) -> Iterator[bytes]:

@@ -111,6 +111,19 @@ def test_a_prediction_stops_when_its_page_goes_away(plans_lab: PlansLab) -> None
     assert predict(ann, _create(ann, "short", "wait 0.5s\n"), {"from_dock": True})[-1]["type"] == "end"
 
 
+def test_a_page_that_read_the_outcome_predicts_again_at_once(plans_lab: PlansLab) -> None:
+    """The page offers 'Try' again as soon as it reads the outcome, before the answer's end: the outcome comes once
+    the copy is stopped and the slot given back (it came before, and the next try met 409 busy)."""
+    ann = plans_lab.client("student1")
+    plan_id = _create(ann, "quick", "wait 0.2s\n")
+    for attempt in range(3):
+        response = open_prediction(ann, plan_id, {"from_dock": True})
+        outcome = next(message for message in map(json.loads, response) if message["type"] in ("end", "error"))
+        assert outcome["type"] == "end", (attempt, outcome)
+        assert prediction_robots(plans_lab.server) == [], "the outcome came before the copy was stopped"
+        response.close()
+
+
 def test_predictions_are_refused_at_the_edge(plans_lab: PlansLab) -> None:
     ann, bob = plans_lab.client("student1"), plans_lab.client("student2")
     plan_id = _create(ann, "mine", "wait 1s\n")

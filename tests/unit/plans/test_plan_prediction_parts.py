@@ -4,12 +4,20 @@ most the cap at once), and the lines of a plan's `set watchdog` a course may kee
 from __future__ import annotations
 
 import math
+import time
 
 import pytest
 
 from middleware.errors import ApiError
+from middleware.farm.base import FarmUnavailable, RobotSpec
 from middleware.plans.language import parse_plan_text
-from middleware.plans.predictions import MAX_TRACE_POINTS, PredictionSlots, add_trace_point
+from middleware.plans.predictions import (
+    MAX_TRACE_POINTS,
+    PredictionRequest,
+    PredictionSlots,
+    add_trace_point,
+    run_prediction,
+)
 from middleware.plans.runs import check_settings_permitted, watchdog_lines
 from middleware.teaching.command_form import SkillSchemas
 
@@ -52,6 +60,52 @@ def test_a_user_predicts_one_plan_at_a_time_and_the_process_at_most_its_cap() ->
     slots.take(3)
     with pytest.raises(ApiError):
         PredictionSlots(cap=0).check(9)
+
+
+def _slot_free(slots: PredictionSlots, user_id: int) -> bool:
+    try:
+        slots.check(user_id)
+    except ApiError:
+        return False
+    return True
+
+
+class SlowlyStoppingFarm:
+    """A farm whose copy answers nothing (its start fails half-way, leaving the robot) and whose process takes
+    a while to end once it has left the farm's list, as a loaded machine's does."""
+
+    def __init__(self, slots: PredictionSlots) -> None:
+        self.slots, self.listed, self.stopped = slots, set[str](), False
+        self.slot_free_once_unlisted: bool | None = None
+
+    def start(self, spec: RobotSpec) -> None:
+        self.listed.add(spec.name)
+        raise FarmUnavailable("The copy did not answer.")
+
+    def find(self, name: str) -> object | None:
+        return name if name in self.listed else None
+
+    def stop(self, name: str) -> bool:
+        self.listed.discard(name)
+        self.slot_free_once_unlisted = _slot_free(self.slots, 7)
+        time.sleep(0.3)
+        self.stopped = True
+        return True
+
+
+def test_the_outcome_comes_once_the_copy_is_stopped_and_the_slot_given_back() -> None:
+    """A page that reads the outcome (or sees the copy gone) predicts again at once: it was answered 409 busy while
+    the copy's process ended, the slot given back only after it."""
+    slots = PredictionSlots(cap=2)
+    farm = SlowlyStoppingFarm(slots)
+    messages = run_prediction(farm, slots, PredictionRequest(7, "p", {}, "lab", None, True))  # type: ignore[arg-type]
+    assert next(messages)["phase"] == "starting" and not _slot_free(slots, 7)
+    outcome = next(messages)
+    error = outcome["error"]
+    assert outcome["type"] == "error" and isinstance(error, dict) and error["code"] == "farm_unavailable", outcome
+    assert farm.stopped and not farm.listed, "the outcome came before the copy was stopped"
+    assert _slot_free(slots, 7) and farm.slot_free_once_unlisted, "the copy was gone and the user still busy"
+    assert next(messages, None) is None
 
 
 def test_set_watchdog_lines_are_found_in_blocks_and_refused_naming_the_first(skills: SkillSchemas) -> None:
