@@ -5,9 +5,11 @@ that count for the courses they teach."""
 
 from __future__ import annotations
 
+import contextlib
 import time
 
 import pytest
+import simple_websocket
 
 from tests.conftest import STUDENT_PASSWORD, LabClient, add_test_account, make_course, served_lab
 from tests.integration.experiment.test_experiment import (  # noqa: F401 (fixtures)
@@ -108,9 +110,13 @@ def test_the_localization_stream_is_delayed_during_a_trial_as_the_camera_is(cour
     assert student.login() == 302
     trial = _start_trial(student)
     localization = student.websocket("/ws/robots/course-1/localization")
-    assert injected_delays_s(localization, 3.0) == [trial["delay_s"]]
-    _give_up(student, trial)
-    assert injected_delays_s(localization, 3.0 + trial["delay_s"]) == [0.0]
+    try:
+        assert injected_delays_s(localization, 3.0) == [trial["delay_s"]]
+        _give_up(student, trial)
+        assert injected_delays_s(localization, 3.0 + trial["delay_s"]) == [0.0]
+    finally:  # its reader thread kept the run alive a minute after the last test
+        with contextlib.suppress(simple_websocket.ConnectionClosed):
+            localization.close()
 
 
 def test_after_giving_up_the_page_s_state_names_the_trial_given_up_not_the_one_recorded_before(
