@@ -69,7 +69,8 @@ def test_a_tutor_sees_each_student_s_response_times_as_the_student_s_panel_shows
         page.screenshot(path=str(ARTIFACTS_DIR / "class-response-times-tutor-phone.png"), full_page=True)
         wide = page.evaluate("""() => [...document.querySelectorAll('body *')]
             .filter((e) => e.getBoundingClientRect().right > 391)
-            .map((e) => `${e.tagName}.${e.className}[${e.dataset.field ?? ''}] ${Math.round(e.getBoundingClientRect().right)}`)
+            .map((e) => `${e.tagName}.${e.className}[${e.dataset.field ?? ''}] `
+                + `${Math.round(e.getBoundingClientRect().right)}`)
             .slice(0, 6)""")
         assert page.evaluate("document.documentElement.scrollWidth") <= 390, f"the class view scrolls sideways: {wide}"
         page.screenshot(path=str(ARTIFACTS_DIR / "class-response-times-tutor-phone.png"), full_page=True)
