@@ -14,7 +14,9 @@ VENDOR_LOCK = "client_ui/static/vendor/package-lock.json"
 
 def dry_run(*arguments: str) -> str:
     """The commands `make` would run, as if three.js had never been installed (its lock file newer than the stamp)."""
-    result = subprocess.run(["make", "--dry-run", f"--what-if={VENDOR_LOCK}", *arguments], cwd=ROOT,
+    # --no-print-directory: under `make test` (MAKELEVEL 1) make would add "Entering/Leaving directory" lines.
+    command = ["make", "--no-print-directory", "--dry-run", f"--what-if={VENDOR_LOCK}", *arguments]
+    result = subprocess.run(command, cwd=ROOT,
                             capture_output=True, text=True, timeout=60, check=True)
     return result.stdout
 

@@ -5,6 +5,7 @@ lesson-blocked-phone.png, lesson-results-phone.png, lesson-results-tutor-desktop
 from __future__ import annotations
 
 import pytest
+from playwright.sync_api import expect
 
 from tests.conftest import ARTIFACTS_DIR, LiveServer
 from tests.e2e.test_courses_and_invitations import log_in
@@ -45,7 +46,7 @@ def _take(page, live_server: LiveServer, title: str, choice: str, rating: str | 
     page.get_by_label(choice).check()
     if rating:
         page.get_by_role("radiogroup").get_by_label(rating).check()
-    page.wait_for_function("document.getElementById('save-status').textContent === 'Answer saved.'")
+    expect(page.locator("#save-status")).to_have_text("Answer saved.")
     page.get_by_role("button", name="Submit").click()
     page.locator("#score").wait_for()
 

@@ -4,6 +4,7 @@ on a phone and reads the rating back, unmarked. Screenshots: rating-take-phone.p
 from __future__ import annotations
 
 import pytest
+from playwright.sync_api import expect
 
 from tests.conftest import ARTIFACTS_DIR, LiveServer
 from tests.e2e.test_courses_and_invitations import log_in
@@ -60,7 +61,7 @@ def test_tutor_writes_a_rating_and_a_student_rates_it_by_keyboard(chromium, page
     page.keyboard.press("ArrowRight")
     page.keyboard.press("ArrowRight")
     assert group.get_by_label("4").is_checked()
-    page.wait_for_function("document.getElementById('save-status').textContent === 'Answer saved.'")
+    expect(page.locator("#save-status")).to_have_text("Answer saved.")
     assert page.evaluate("document.scrollingElement.scrollWidth") <= 390
     page.screenshot(path=str(ARTIFACTS_DIR / "rating-take-phone.png"), full_page=True)
     page.get_by_role("button", name="Submit").click()
