@@ -83,6 +83,26 @@ def test_student_takes_a_timed_test_and_tutor_overrides_a_mark(chromium, page, a
     page.screenshot(path=str(ARTIFACTS_DIR / "assessment-corrected-phone.png"), full_page=True)
 
 
+def test_an_answer_typed_before_the_page_script_ran_is_saved(
+        page, app, live_server: LiveServer, course_people) -> None:  # noqa: F811
+    """On a slow load a student types before the page's module listens for changes: the answer is saved all the same
+    (the clean-clone suite, loaded, once waited 30 s for an 'Answer saved.' that never came)."""
+    exam_id = _make_test(app, course_people, duration_s=600, numeric_first=True)
+    log_in(page, live_server, "student1")
+    page.goto(f"{live_server.url}/assessment/exams/{exam_id}")
+    held = []
+    page.route("**/pages/assessment/assessment-take.js", lambda route: held.append(route))  # held until typed
+    page.get_by_role("button", name="Start").click()
+    page.get_by_label("Value").fill("5")
+    page.get_by_label("Value").press("Tab")
+    assert held, "the page asked for its script"
+    held[0].continue_()
+    page.unroute("**/pages/assessment/assessment-take.js")
+    page.locator("#save-status", has_text="Answer saved.").wait_for(state="attached")
+    page.reload()
+    assert page.get_by_label("Value").input_value() == "5"
+
+
 def test_unit_is_filled_in_unanswered_questions_are_named_and_the_corrector_counts_as_the_student(
         chromium, page, app, live_server: LiveServer, course_people) -> None:  # noqa: F811
     ARTIFACTS_DIR.mkdir(exist_ok=True)

@@ -80,6 +80,17 @@ form.addEventListener("change", (event) => {
   if (fieldset) save(fieldset);
 });
 
+function edited(field) {
+  if (field.type === "checkbox" || field.type === "radio") return field.checked !== field.defaultChecked;
+  if (field.tagName === "SELECT") return [...field.options].some((option) => option.selected !== option.defaultSelected);
+  return field.value !== field.defaultValue;
+}
+
+// An answer typed while this module was still loading changed the form before anyone listened: save it now.
+for (const fieldset of form.querySelectorAll("fieldset[data-item]")) {
+  if ([...fieldset.querySelectorAll("input, select, textarea")].some(edited)) save(fieldset);
+}
+
 function show() {
   if (remainingS === null) return;
   const left = Math.max(0, remainingS - (performance.now() - syncedAt) / 1000);
