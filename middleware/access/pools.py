@@ -13,9 +13,11 @@ from __future__ import annotations
 
 from datetime import datetime, timedelta
 
-from sqlalchemy import delete, func, select
+from sqlalchemy import delete, func, select, update
+from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
+from middleware.locking import rows_matched
 from middleware.models import PoolQueueEntry, QueueEntry, Robot
 
 
@@ -46,14 +48,21 @@ def bound_robot(session: Session, kind: str, user_id: int) -> str | None:
 
 
 def join(session: Session, kind: str, user_id: int, now: datetime) -> None:
-    """Puts user_id at the end of kind's pool queue, or refreshes their place (a heartbeat)."""
-    entry = session.scalar(select(PoolQueueEntry).where(PoolQueueEntry.kind == kind,
-                                                        PoolQueueEntry.user_id == user_id))
-    if entry is None:
-        session.add(PoolQueueEntry(kind=kind, user_id=user_id, enqueued_at=now, last_seen_at=now))
-    else:
-        entry.last_seen_at = now
-    session.flush()
+    """Puts user_id at the end of kind's pool queue, or refreshes their place (a heartbeat).
+
+    One statement each way, never a read then a write: a robot's rule may bind the waiter (delete the entry) in
+    another transaction between the two, and a waiter bound meanwhile stays bound rather than queued again; the
+    same student joining twice at once leaves one entry.
+    """
+    waiting_entry = (PoolQueueEntry.kind == kind) & (PoolQueueEntry.user_id == user_id)
+    if rows_matched(session, update(PoolQueueEntry).where(waiting_entry).values(last_seen_at=now)):
+        return
+    if bound_robot(session, kind, user_id) is not None:
+        return
+    dialect = postgresql if session.get_bind().dialect.name == "postgresql" else sqlite
+    session.execute(dialect.insert(PoolQueueEntry)
+                    .values(kind=kind, user_id=user_id, enqueued_at=now, last_seen_at=now)
+                    .on_conflict_do_nothing(index_elements=["kind", "user_id"]))
 
 
 def leave(session: Session, kind: str, user_id: int) -> None:

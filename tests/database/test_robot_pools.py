@@ -110,6 +110,24 @@ def test_two_robots_settling_at_once_never_bind_the_same_waiter(engine, users) -
     assert seats == ["sim-1"]
 
 
+def test_a_waiters_heartbeat_while_a_robot_binds_them_keeps_them_bound_once_and_raises_nothing(engine, users) -> None:
+    """The page's heartbeat read "not bound" just before a robot's rule bound the waiter in another transaction
+    (seen as a 500: the heartbeat's UPDATE of the vanished pool entry matched no row)."""
+    pool = Pool(engine)
+    ann = users["ann"]
+    pool.wait(ann, at_s=0)
+    with Session(engine) as heartbeat:
+        heartbeat.begin()
+        assert pools.bound_robot(heartbeat, "sim", ann) is None
+        assert pool.tick("sim-1", at_s=1).controller_id == ann
+        pools.join(heartbeat, "sim", ann, pool.at(1.1))
+        heartbeat.commit()
+    assert pool.waiting(at_s=2) == [], "a bound waiter is not queued again"
+    pool.wait(users["bob"], at_s=3)
+    pool.wait(users["bob"], at_s=4)
+    assert pool.waiting(at_s=5) == [users["bob"]]
+
+
 def test_waiters_are_bound_in_order_unheard_ones_drop_out_and_other_kinds_are_untouched(engine, users) -> None:
     pool = Pool(engine)
     pool.wait(users["ann"], at_s=0)
