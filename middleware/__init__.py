@@ -9,7 +9,7 @@ from flask import Flask, Response, redirect, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user
 
-from middleware import browser_modules, db, realtime, validation
+from middleware import browser_modules, db, i18n, realtime, validation
 from middleware import config as config_module
 from middleware.access import commands
 from middleware.access import coordinator as access_coordinator
@@ -66,6 +66,7 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
         app.config.update(config)
 
     validation.init_app(app)
+    i18n.init_app(app)
     app.add_template_filter(moment_words, "moment")
     db.init_app(app)
     auth_cookies.init_app(app)

@@ -150,10 +150,10 @@ def test_lower_middleware_layers_do_not_import_upward(folder: str, forbidden: tu
 
 # Plumbing every area stands on; it knows no feature (a feature's hook is handed to it by create_app).
 PLUMBING = ("middleware.realtime", "middleware.live", "middleware.robots", "middleware.db", "middleware.errors",
-            "middleware.events", "middleware.locking", "middleware.validation", "middleware.web")
+            "middleware.events", "middleware.locking", "middleware.validation", "middleware.web", "middleware.i18n")
 # The areas; middleware.auth is not one of them for plumbing: the sockets' login check reads its login records.
 FEATURE_AREAS = ("access", "accounts", "assessment", "bookings", "chat", "courses", "experiment", "farm", "lab",
-                 "plans", "preferences", "teaching")
+                 "plans", "preferences", "teaching", "lti", "recordings", "exercises", "analytics", "api")
 
 
 def area_of(module: str) -> str:
