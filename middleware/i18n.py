@@ -1,17 +1,77 @@
 """The page's language: Flask-Babel chooses Spanish or English for each request, so templates and services say
-`_("...")` and the catalogue in middleware/translations/ answers."""
+`_("...")` and the catalogue in middleware/translations/ answers.
+
+The language is, in order: the one the user chose (their `language` preference; before signing in, the one chosen
+on the sign-in page, kept in the session), the one their LMS launched them with (`remember_launch_locale`), the
+browser's Accept-Language, English."""
 
 from __future__ import annotations
 
-from flask import Flask, request
-from flask_babel import Babel
+from flask import Flask, has_request_context, request, session
+from flask_babel import Babel, get_locale  # type: ignore[import-untyped]
+from flask_login import current_user
+from sqlalchemy import select
+
+from middleware.db import get_session
+from middleware.models import UserPreference
 
 LANGUAGES = ("en", "es")
+# Each language in its own words, for the picker.
+LANGUAGE_NAMES = {"en": "English", "es": "Español"}
+# The user's own choice, a preference like any other (PUT /api/me/preferences/language {"value": "es"} sets it too).
+LANGUAGE_PREFERENCE_KEY = "language"
+_CHOSEN_KEY = "language"
+_LAUNCH_KEY = "launch_locale"
+
+
+def supported(locale: object) -> str | None:
+    """The supported language a locale names ("es", "es-ES", "es_419", "EN"), or None."""
+    if not isinstance(locale, str):
+        return None
+    language = locale.strip().replace("_", "-").split("-")[0].lower()
+    return language if language in LANGUAGES else None
+
+
+def remember_launch_locale(locale: str) -> None:
+    """Keeps the locale an LTI launch named (its launch_presentation.locale claim) for this browser session; a
+    language the lab has not is ignored. The user's own choice still comes first."""
+    language = supported(locale)
+    if language is None:
+        session.pop(_LAUNCH_KEY, None)
+    else:
+        session[_LAUNCH_KEY] = language
+
+
+def remember_chosen_language(language: str) -> None:
+    """Keeps a language the person chose in this browser session (before they sign in, or beside their preference)."""
+    chosen = supported(language)
+    if chosen is not None:
+        session[_CHOSEN_KEY] = chosen
+
+
+def _user_choice() -> str | None:
+    if not current_user.is_authenticated:
+        return None
+    text = get_session().scalar(select(UserPreference.value_json).where(
+        UserPreference.user_id == int(current_user.get_id()), UserPreference.key == LANGUAGE_PREFERENCE_KEY))
+    return supported(text.strip('"')) if text else None
 
 
 def _locale() -> str:
-    return request.accept_languages.best_match(LANGUAGES) or LANGUAGES[0]
+    if not has_request_context():
+        return LANGUAGES[0]
+    return (_user_choice() or supported(session.get(_CHOSEN_KEY)) or supported(session.get(_LAUNCH_KEY))
+            or request.accept_languages.best_match(LANGUAGES) or LANGUAGES[0])
+
+
+def current_language() -> str:
+    """The request's language code ("en" or "es")."""
+    return str(get_locale() or LANGUAGES[0]).split("_")[0]
 
 
 def init_app(app: Flask) -> None:
     Babel(app, locale_selector=_locale, default_translation_directories="translations")
+
+    @app.context_processor
+    def _language() -> dict[str, object]:
+        return {"page_language": current_language(), "language_names": LANGUAGE_NAMES}
