@@ -9,10 +9,13 @@ from middleware.models.auth import LoginSession
 from middleware.models.base import Base
 from middleware.models.bookings import Booking
 from middleware.models.chat import ChatMessage
+from middleware.models.class_wall import ClassHand, ClassNotice, ClassTakeover  # noqa: F401
 from middleware.models.courses import Course, CourseMembership, Invitation, LoginFailure
-from middleware.models.experiment import Trial, VideoDelay  # noqa: F401
+from middleware.models.exercises import Exercise, ExerciseCode, ExerciseRun  # noqa: F401
+from middleware.models.experiment import ExperimentProtocol, Participant, Trial, VideoDelay  # noqa: F401
 from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord  # noqa: F401
 from middleware.models.lab import ResponseTimeReport  # noqa: F401
+from middleware.models.lti import LtiContext, LtiGradePassback, LtiIdentity, LtiPlatform  # noqa: F401
 from middleware.models.plans import PlanVersion, StoredPlan
 from middleware.models.preferences import UserPreference
 from middleware.models.robots import Robot, RobotKindSetting
