@@ -1,22 +1,32 @@
 """Latest-wins fan-out of one upstream stream to any number of viewers.
 
-One pump thread per stream pulls from the robot while anyone watches; each message is packed once
-and handed to every viewer. A slow viewer skips to the newest message: it never slows the others
-and never builds a backlog.
+One pump per stream pulls from the robot while anyone watches, as a task on the process's asyncio loop (the channel
+loop of live/loop.py, which serves every WebSocket): no thread per stream, so a worker's threads stay flat however
+many robots its consoles watch. Each message is packed once and handed to every viewer. A slow viewer skips to the
+newest message: it never slows the others and never builds a backlog. Viewers on the loop wait with `listen`;
+viewers on threads of their own (a recorder, the demo video) wait with `Subscription.next_message`.
 """
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import logging
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
 log = logging.getLogger(__name__)
 
 Packed = TypeVar("Packed")
+
+
+def _channel_event_loop() -> asyncio.AbstractEventLoop:
+    from middleware.live.loop import channel_loop  # the loop starts on first use (a forked worker starts its own)
+
+    return channel_loop().loop
 
 
 @dataclass(frozen=True)
@@ -54,15 +64,19 @@ class Subscription(Generic[Packed]):
 
 
 class FanoutHub(Generic[Packed]):
-    """Pumps open_stream() while subscribed, packing each item once with pack()."""
+    """Pumps open_stream() while subscribed, packing each item once with pack().
+
+    open_stream is called on the loop and returns an async iterator (a grpc.aio server-streaming call); cancel(stream)
+    is called on the loop when the pump lets go of it. loop gives the loop the pump runs on (the channel loop)."""
 
     def __init__(
         self,
         name: str,
-        open_stream: Callable[[], Iterator[object]],
+        open_stream: Callable[[], AsyncIterator[object]],
         pack: Callable[[Any], Packed],  # takes what open_stream yields
-        cancel: Callable[[Iterator[object]], None],
+        cancel: Callable[[AsyncIterator[object]], None],
         backoff_s: tuple[float, float] = (0.2, 5.0),
+        loop: Callable[[], asyncio.AbstractEventLoop] = _channel_event_loop,
     ) -> None:
         self.name = name
         self._open_stream = open_stream
@@ -75,14 +89,15 @@ class FanoutHub(Generic[Packed]):
         self._version = 0
         self._status = StreamStatus(True, "connecting")
         self._status_version = 0
-        self._pump: threading.Thread | None = None
-        self._stream: Iterator[object] | None = None
+        self._loop = loop
+        self._pumping: asyncio.AbstractEventLoop | None = None  # the loop a pump is scheduled or running on
+        self._task: asyncio.Task[None] | None = None
         self._closed = False
         self._listeners: list[Callable[[], None]] = []
         self.messages_packed = 0
 
     def listen(self, news: Callable[[], None]) -> None:
-        """Calls news() (from the pump's thread; it must not block) after every new message or status change and
+        """Calls news() (on the pump's loop; it must not block) after every new message or status change and
         when the hub closes: how viewers that are not threads learn of them."""
         with self._lock:
             self._listeners.append(news)
@@ -98,19 +113,25 @@ class FanoutHub(Generic[Packed]):
             if self._closed:
                 raise RuntimeError(f"{self.name} is closed")
             self._subscribers.add(subscription)
-            if self._pump is None:
-                self._pump = threading.Thread(target=self._run, name=f"fanout-{self.name}", daemon=True)
-                self._pump.start()
+            if self._pumping is None:
+                loop = self._pumping = self._loop()
+                asyncio.run_coroutine_threadsafe(self._run(), loop)
         return subscription
 
     def unsubscribe(self, subscription: Subscription[Packed]) -> None:
-        """Removes a viewer; the last one leaving cancels the upstream stream."""
+        """Removes a viewer; the last one leaving cancels the upstream stream (from any thread)."""
         with self._lock:
             self._subscribers.discard(subscription)
             idle = not self._subscribers
-            stream = self._stream
-        if idle and stream is not None:
-            self._cancel(stream)
+        if idle:
+            self._stop_pump()
+
+    def _stop_pump(self) -> None:
+        with self._lock:
+            task, loop = self._task, self._pumping
+        if task is not None and loop is not None:
+            with contextlib.suppress(RuntimeError):  # the loop has stopped: the process is ending
+                loop.call_soon_threadsafe(task.cancel)
 
     @property
     def viewer_count(self) -> int:
@@ -141,15 +162,19 @@ class FanoutHub(Generic[Packed]):
         with self._lock:
             return self._status, self._status_version
 
+    @property
+    def pumping(self) -> bool:
+        """Whether a pump is scheduled or running (someone watches)."""
+        with self._lock:
+            return self._pumping is not None
+
     def close(self) -> None:
         """Stops the pump and wakes every viewer (application shutdown)."""
         with self._lock:
             self._closed = True
-            stream = self._stream
             self._lock.notify_all()
         self._tell_listeners()
-        if stream is not None:
-            self._cancel(stream)
+        self._stop_pump()
 
     def _set_status(self, status: StreamStatus) -> None:
         with self._lock:
@@ -164,22 +189,31 @@ class FanoutHub(Generic[Packed]):
         with self._lock:
             return bool(self._subscribers) and not self._closed
 
-    def _continue_or_retire(self) -> bool:
-        """True to keep pumping; otherwise the pump retires under the lock so subscribe() starts another."""
+    async def _run(self) -> None:
+        """The pump: reads the upstream while anyone watches, reconnecting with a backoff while the robot is away.
+        Cancelled (on its loop) when the last viewer leaves or the hub closes."""
         with self._lock:
-            if self._subscribers and not self._closed:
-                return True
-            self._pump = None
-            return False
+            self._task = asyncio.current_task()
+        try:
+            await self._pump_while_wanted()
+        except asyncio.CancelledError:
+            pass  # the last viewer left, or the hub closed
+        finally:
+            with self._lock:
+                self._task = None
+                again = bool(self._subscribers) and not self._closed  # a viewer came while it was stopping
+                if not again:
+                    self._pumping = None
+            if again:
+                asyncio.ensure_future(self._run())
 
-    def _run(self) -> None:
+    async def _pump_while_wanted(self) -> None:
         backoff_s = self._backoff_min_s
-        while self._continue_or_retire():
+        while self._wanted():
+            stream: AsyncIterator[object] | None = None
             try:
                 stream = self._open_stream()
-                with self._lock:
-                    self._stream = stream
-                for item in stream:
+                async for item in stream:
                     packed = self._pack(item)
                     with self._lock:
                         self._latest = packed
@@ -191,12 +225,14 @@ class FanoutHub(Generic[Packed]):
                     backoff_s = self._backoff_min_s
                     if not self._wanted():
                         break
+            except asyncio.CancelledError:
+                raise
             except Exception as error:  # noqa: BLE001 - any upstream failure means: reconnect later
                 log.info("%s: upstream failed (%s)", self.name, error)
             finally:
-                with self._lock:
-                    self._stream = None
+                if stream is not None:
+                    self._cancel(stream)
             if self._wanted():  # the stream ended while people watch: the robot went away
                 self._set_status(StreamStatus(False, "The robot is not answering; reconnecting."))
-                time.sleep(backoff_s)
+                await asyncio.sleep(backoff_s)
                 backoff_s = min(backoff_s * 2, self._backoff_max_s)

@@ -6,7 +6,7 @@ import asyncio
 import contextlib
 import threading
 import time
-from collections.abc import AsyncGenerator, Iterator
+from collections.abc import AsyncGenerator, AsyncIterator, Iterator
 from dataclasses import dataclass
 from typing import Protocol, TypeVar
 
@@ -195,6 +195,16 @@ class RobotLink:
             self._aio = (loop, channel, robot_pb2_grpc.RobotStub(channel))
         return self._aio[2]
 
+    async def watch_telemetry(self, rate_hz: float) -> AsyncGenerator[robot_pb2.Telemetry, None]:
+        """A telemetry stream of its own, ground truth included (for graders; never forwarded to browsers), read on the
+        running asyncio loop without a thread of its own; leaving the iteration cancels the stream."""
+        call = self._aio_stub().StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=rate_hz))
+        try:
+            async for message in call:
+                yield message
+        finally:
+            call.cancel()
+
     def stream_telemetry(self, rate_hz: float) -> ServerStream[robot_pb2.Telemetry]:
         """A telemetry stream of its own, ground truth included (for graders; never forwarded to browsers)."""
         return self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=rate_hz))
@@ -293,6 +303,7 @@ class RobotLink:
         """Stops the streams and closes the channel."""
         self.camera.close()
         self.telemetry.close()
+        self.localization.close()
         self._closed = True
         self._channel.close()
         if self._aio is not None:
@@ -301,14 +312,15 @@ class RobotLink:
             with contextlib.suppress(RuntimeError):  # its loop has already stopped: nothing is left to close
                 asyncio.run_coroutine_threadsafe(channel.close(), loop)
 
-    def _open_camera(self) -> Iterator[object]:
-        return self._stub.StreamCamera(robot_pb2.StreamCameraRequest(max_fps=15))
+    # The hubs' upstreams: grpc.aio calls on the channel loop (the hub's pump calls these there).
+    def _open_camera(self) -> AsyncIterator[object]:
+        return self._aio_stub().StreamCamera(robot_pb2.StreamCameraRequest(max_fps=15))
 
-    def _open_localization(self) -> Iterator[object]:
-        return self._stub.StreamLocalization(robot_pb2.StreamLocalizationRequest(rate_hz=5, max_particles=200))
+    def _open_localization(self) -> AsyncIterator[object]:
+        return self._aio_stub().StreamLocalization(robot_pb2.StreamLocalizationRequest(rate_hz=5, max_particles=200))
 
-    def _open_telemetry(self) -> Iterator[object]:
-        return self._stub.StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=10))
+    def _open_telemetry(self) -> AsyncIterator[object]:
+        return self._aio_stub().StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=10))
 
     def _call(self, method, request, not_found_code: str = "unknown_skill"):
         try:
@@ -359,7 +371,7 @@ def _translate(error: grpc.RpcError, not_found_code: str = "unknown_skill") -> C
     return RobotUnavailable("The robot is not reachable right now.")
 
 
-def _cancel_call(stream: Iterator[object]) -> None:
+def _cancel_call(stream: AsyncIterator[object]) -> None:
     cancel = getattr(stream, "cancel", None)
     if cancel is not None:
         cancel()

@@ -2,31 +2,32 @@
 
 from __future__ import annotations
 
+import asyncio
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import AsyncIterator
 
 from middleware.robots.fanout import FanoutHub
 
 
 class Upstream:
-    """A stand-in for the robot's gRPC stream (the real one is exercised in the integration tests)."""
+    """A stand-in for the robot's grpc.aio stream (the real one is exercised in the integration tests)."""
 
     def __init__(self) -> None:
         self.opened = 0
         self.cancelled = threading.Event()
         self.packs = 0
 
-    def open(self) -> Iterator[object]:
+    def open(self) -> AsyncIterator[object]:
         self.opened += 1
         return self._messages()
 
-    def _messages(self) -> Iterator[object]:
+    async def _messages(self) -> AsyncIterator[object]:
         n = 0
         while not self.cancelled.is_set():
             n += 1
             yield n
-            time.sleep(0.005)
+            await asyncio.sleep(0.005)
 
     def pack(self, item: object) -> object:
         self.packs += 1
@@ -68,13 +69,13 @@ def test_a_slow_viewer_gets_the_newest_message_and_no_backlog() -> None:
 def test_a_failing_upstream_reports_offline_and_reconnects() -> None:
     attempts = []
 
-    def flaky() -> Iterator[object]:
+    async def flaky() -> AsyncIterator[object]:
         attempts.append(time.monotonic())
         if len(attempts) < 3:
             raise ConnectionError("robot down")
         yield "hello"
         while True:
-            time.sleep(0.01)
+            await asyncio.sleep(0.01)
             yield "again"
 
     hub = FanoutHub("t", flaky, lambda item: item, lambda _s: None, backoff_s=(0.01, 0.05))
@@ -175,3 +176,38 @@ def test_closing_the_hub_ends_an_open_viewer_s_stream_instead_of_spinning() -> N
     hub.close()  # the application shuts down while the tab is still open
     relay.result(2.0)  # type: ignore[attr-defined]  # raises TimeoutError if it kept looping on the closed hub
     assert viewer.closed_with == CLOSE_GOING_AWAY
+
+
+def test_hubs_pump_on_the_channel_loop_so_threads_do_not_grow_with_streams() -> None:
+    """The old hubs ran a pump thread per watched stream (3 per robot: camera, telemetry, localization)."""
+    warm = FanoutHub("warm", Upstream().open, lambda item: item, lambda _s: None)
+    warm.subscribe().next_message(2.0)  # the channel loop and its thread exist from here on
+    before = threading.active_count()
+    upstreams = [Upstream() for _ in range(150)]
+    hubs = [FanoutHub(f"r{i}", u.open, u.pack, u.cancel) for i, u in enumerate(upstreams)]
+    viewers = [hub.subscribe() for hub in hubs]
+    assert all(viewer.next_message(5.0) is not None for viewer in viewers)
+    assert threading.active_count() - before <= 2, [t.name for t in threading.enumerate()]
+    for viewer in viewers:
+        viewer.close()
+    assert all(u.cancelled.wait(3.0) for u in upstreams)
+    for hub in [*hubs, warm]:
+        hub.close()
+
+
+def test_a_viewer_arriving_as_the_last_one_leaves_gets_a_pump_again() -> None:
+    upstream = Upstream()
+    hub = FanoutHub("t", upstream.open, upstream.pack, upstream.cancel)
+    for _ in range(20):
+        viewer = hub.subscribe()
+        assert viewer.next_message(3.0) is not None
+        viewer.close()  # the pump's cancellation is on its way while the next viewer subscribes
+        upstream.cancelled.clear()
+    last = hub.subscribe()
+    assert last.next_message(3.0) is not None
+    last.close()
+    deadline = time.monotonic() + 3.0
+    while hub.pumping and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert not hub.pumping, "the pump retires once nobody watches"
+    hub.close()
