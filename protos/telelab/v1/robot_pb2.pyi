@@ -22,6 +22,14 @@ class RobotStream(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     ROBOT_STREAM_TELEMETRY: _ClassVar[RobotStream]
     ROBOT_STREAM_LOCALIZATION: _ClassVar[RobotStream]
 
+class SkillClass(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = ()
+    SKILL_CLASS_UNSPECIFIED: _ClassVar[SkillClass]
+    SKILL_CLASS_MOTOR: _ClassVar[SkillClass]
+    SKILL_CLASS_PERCEPTIVE: _ClassVar[SkillClass]
+    SKILL_CLASS_SENSORIMOTOR: _ClassVar[SkillClass]
+    SKILL_CLASS_DELIBERATIVE: _ClassVar[SkillClass]
+
 class ParameterType(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = ()
     PARAMETER_TYPE_UNSPECIFIED: _ClassVar[ParameterType]
@@ -52,6 +60,9 @@ class GoalEventKind(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     GOAL_EVENT_KIND_FAILED: _ClassVar[GoalEventKind]
     GOAL_EVENT_KIND_CANCELED: _ClassVar[GoalEventKind]
     GOAL_EVENT_KIND_PREEMPTED: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_WALL_LOST: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_BATTERY_LOW: _ClassVar[GoalEventKind]
+    GOAL_EVENT_KIND_HANDLED: _ClassVar[GoalEventKind]
 
 class FloorPatchKind(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = ()
@@ -89,6 +100,11 @@ ROBOT_STREAM_UNSPECIFIED: RobotStream
 ROBOT_STREAM_CAMERA: RobotStream
 ROBOT_STREAM_TELEMETRY: RobotStream
 ROBOT_STREAM_LOCALIZATION: RobotStream
+SKILL_CLASS_UNSPECIFIED: SkillClass
+SKILL_CLASS_MOTOR: SkillClass
+SKILL_CLASS_PERCEPTIVE: SkillClass
+SKILL_CLASS_SENSORIMOTOR: SkillClass
+SKILL_CLASS_DELIBERATIVE: SkillClass
 PARAMETER_TYPE_UNSPECIFIED: ParameterType
 PARAMETER_TYPE_DOUBLE: ParameterType
 PARAMETER_TYPE_INT: ParameterType
@@ -111,6 +127,9 @@ GOAL_EVENT_KIND_GOAL_REACHED: GoalEventKind
 GOAL_EVENT_KIND_FAILED: GoalEventKind
 GOAL_EVENT_KIND_CANCELED: GoalEventKind
 GOAL_EVENT_KIND_PREEMPTED: GoalEventKind
+GOAL_EVENT_KIND_WALL_LOST: GoalEventKind
+GOAL_EVENT_KIND_BATTERY_LOW: GoalEventKind
+GOAL_EVENT_KIND_HANDLED: GoalEventKind
 FLOOR_PATCH_KIND_UNSPECIFIED: FloorPatchKind
 FLOOR_PATCH_KIND_FLOOR: FloorPatchKind
 FLOOR_PATCH_KIND_PAINT: FloorPatchKind
@@ -237,7 +256,7 @@ class ListSkillsResponse(_message.Message):
     def __init__(self, skills: _Optional[_Iterable[_Union[SkillDescription, _Mapping]]] = ...) -> None: ...
 
 class SkillDescription(_message.Message):
-    __slots__ = ("name", "title", "help", "parameters", "motor", "estimates_pose", "direct_drive")
+    __slots__ = ("name", "title", "help", "parameters", "motor", "estimates_pose", "direct_drive", "skill_class")
     NAME_FIELD_NUMBER: _ClassVar[int]
     TITLE_FIELD_NUMBER: _ClassVar[int]
     HELP_FIELD_NUMBER: _ClassVar[int]
@@ -245,6 +264,7 @@ class SkillDescription(_message.Message):
     MOTOR_FIELD_NUMBER: _ClassVar[int]
     ESTIMATES_POSE_FIELD_NUMBER: _ClassVar[int]
     DIRECT_DRIVE_FIELD_NUMBER: _ClassVar[int]
+    SKILL_CLASS_FIELD_NUMBER: _ClassVar[int]
     name: str
     title: str
     help: str
@@ -252,7 +272,8 @@ class SkillDescription(_message.Message):
     motor: bool
     estimates_pose: bool
     direct_drive: bool
-    def __init__(self, name: _Optional[str] = ..., title: _Optional[str] = ..., help: _Optional[str] = ..., parameters: _Optional[_Iterable[_Union[ParameterSchema, _Mapping]]] = ..., motor: _Optional[bool] = ..., estimates_pose: _Optional[bool] = ..., direct_drive: _Optional[bool] = ...) -> None: ...
+    skill_class: SkillClass
+    def __init__(self, name: _Optional[str] = ..., title: _Optional[str] = ..., help: _Optional[str] = ..., parameters: _Optional[_Iterable[_Union[ParameterSchema, _Mapping]]] = ..., motor: _Optional[bool] = ..., estimates_pose: _Optional[bool] = ..., direct_drive: _Optional[bool] = ..., skill_class: _Optional[_Union[SkillClass, str]] = ...) -> None: ...
 
 class ParameterSchema(_message.Message):
     __slots__ = ("name", "type", "unit", "minimum", "maximum", "default_value", "help", "choices")
@@ -1022,7 +1043,7 @@ class PlanBlock(_message.Message):
     def __init__(self, steps: _Optional[_Iterable[_Union[PlanStep, _Mapping]]] = ...) -> None: ...
 
 class PlanStep(_message.Message):
-    __slots__ = ("line", "column", "skill", "drive", "wait", "repeat", "branch", "set", "say")
+    __slots__ = ("line", "column", "skill", "drive", "wait", "repeat", "branch", "set", "say", "on")
     LINE_FIELD_NUMBER: _ClassVar[int]
     COLUMN_FIELD_NUMBER: _ClassVar[int]
     SKILL_FIELD_NUMBER: _ClassVar[int]
@@ -1032,6 +1053,7 @@ class PlanStep(_message.Message):
     BRANCH_FIELD_NUMBER: _ClassVar[int]
     SET_FIELD_NUMBER: _ClassVar[int]
     SAY_FIELD_NUMBER: _ClassVar[int]
+    ON_FIELD_NUMBER: _ClassVar[int]
     line: int
     column: int
     skill: SkillStep
@@ -1041,7 +1063,18 @@ class PlanStep(_message.Message):
     branch: IfStep
     set: SetStep
     say: SayStep
-    def __init__(self, line: _Optional[int] = ..., column: _Optional[int] = ..., skill: _Optional[_Union[SkillStep, _Mapping]] = ..., drive: _Optional[_Union[DriveStep, _Mapping]] = ..., wait: _Optional[_Union[WaitStep, _Mapping]] = ..., repeat: _Optional[_Union[RepeatStep, _Mapping]] = ..., branch: _Optional[_Union[IfStep, _Mapping]] = ..., set: _Optional[_Union[SetStep, _Mapping]] = ..., say: _Optional[_Union[SayStep, _Mapping]] = ...) -> None: ...
+    on: OnStep
+    def __init__(self, line: _Optional[int] = ..., column: _Optional[int] = ..., skill: _Optional[_Union[SkillStep, _Mapping]] = ..., drive: _Optional[_Union[DriveStep, _Mapping]] = ..., wait: _Optional[_Union[WaitStep, _Mapping]] = ..., repeat: _Optional[_Union[RepeatStep, _Mapping]] = ..., branch: _Optional[_Union[IfStep, _Mapping]] = ..., set: _Optional[_Union[SetStep, _Mapping]] = ..., say: _Optional[_Union[SayStep, _Mapping]] = ..., on: _Optional[_Union[OnStep, _Mapping]] = ...) -> None: ...
+
+class OnStep(_message.Message):
+    __slots__ = ("event", "value", "body")
+    EVENT_FIELD_NUMBER: _ClassVar[int]
+    VALUE_FIELD_NUMBER: _ClassVar[int]
+    BODY_FIELD_NUMBER: _ClassVar[int]
+    event: str
+    value: float
+    body: PlanBlock
+    def __init__(self, event: _Optional[str] = ..., value: _Optional[float] = ..., body: _Optional[_Union[PlanBlock, _Mapping]] = ...) -> None: ...
 
 class SkillStep(_message.Message):
     __slots__ = ("skill", "parameters", "duration_s")
