@@ -17,6 +17,7 @@ from middleware.access import sockets as access_sockets
 from middleware.access.coordinator import AccessHooks
 from middleware.access.graded_runs import with_graded_run_priority
 from middleware.accounts import routes as accounts_routes
+from middleware.api import routes as api_routes
 from middleware.assessment import pages as assessment_pages
 from middleware.assessment import routes as assessment_routes
 from middleware.auth import cookies as auth_cookies
@@ -121,6 +122,7 @@ def _register_areas(app: Flask) -> None:
                       limits_routes.blueprint, plans_routes.blueprint):
         app.register_blueprint(blueprint)
     app.register_blueprint(lab_teleperception.blueprint)
+    app.register_blueprint(api_routes.blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
                             practice_routes.register, tour_live.register], socket_login_check)
     realtime.hold_viewers_with(app, delay.viewer_hold)

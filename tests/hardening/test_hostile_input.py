@@ -66,6 +66,8 @@ ROUTES = (
     "DELETE /api/bookings/<int:booking_id>",
     "GET /api/class-session",
     "POST /api/class-session/robot",
+    "GET /api/docs",
+    "GET /api/openapi.json",
     "GET /api/courses",
     "POST /api/courses",
     "GET /api/courses/<int:course_id>",
