@@ -1,14 +1,16 @@
 """Records what the robot did during an experimental attempt: ground truth and odometry, a few samples a second.
 
-One recorder thread per attempt in progress in this process, reading its own gRPC telemetry stream (the fan-out
-hub's messages carry no ground truth). The samples are stored in the attempt every FLUSH_S, with the time, so
-another worker can grade an attempt it did not record; when a worker dies mid-attempt, another takes the recording
-over once it has been quiet for STALE_S (`RecordingKeeper`), continuing the stored trace. What arrived after the
-dead worker's last flush is a gap in the trace, at most FLUSH_S + STALE_S + CHECK_S long.
+One recorder per attempt in progress in this process, a task on the process's channel loop (live/loop.py) reading
+its own grpc.aio telemetry stream (the fan-out hub's messages carry no ground truth): no thread of its own; its
+flushes to the database run on the loop's shared pool. The samples are stored in the attempt every FLUSH_S, with the
+time, so another worker can grade an attempt it did not record; when a worker dies mid-attempt, another takes the
+recording over once it has been quiet for STALE_S (`RecordingKeeper`), continuing the stored trace. What arrived after
+the dead worker's last flush is a gap in the trace, at most FLUSH_S + STALE_S + CHECK_S long.
 """
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import os
 import socket
@@ -17,8 +19,8 @@ import time
 from collections.abc import Callable
 
 from middleware.assessment.trace_grading import MAX_TRACE_SAMPLES
-from middleware.robots.link import RobotLink, ServerStream
-from protos.telelab.v1 import robot_pb2
+from middleware.live.loop import channel_loop
+from middleware.robots.link import RobotLink
 
 log = logging.getLogger(__name__)
 RATE_HZ = 5.0
@@ -36,17 +38,17 @@ class TraceRecorder:
     """Samples [t_s, gx, gy, gth, ox, oy, oth] from the robot's telemetry until stopped."""
 
     def __init__(self, link: RobotLink, flush: Callable[[list[list[float]]], bool],
-                 initial: list[list[float]] | None = None) -> None:
+                 initial: list[list[float]] | None = None, loop: asyncio.AbstractEventLoop | None = None) -> None:
         self._link, self._flush = link, flush
         self._samples: list[list[float]] = [list(sample) for sample in (initial or [])]
         # A recording taken over goes on from the stored trace's time (the gap while nobody recorded stays a gap).
         self._offset_s = self._samples[-1][0] + 1.0 / RATE_HZ if self._samples else 0.0
         self._lock = threading.Lock()
-        self._stream: ServerStream[robot_pb2.Telemetry] | None = None
         self._stopped = threading.Event()
+        self._ended = threading.Event()
         self._started = time.monotonic()
-        self._thread = threading.Thread(target=self._run, name=f"trace-{link.name}", daemon=True)
-        self._thread.start()
+        self._loop = loop or channel_loop().loop
+        self._future = asyncio.run_coroutine_threadsafe(self._run(), self._loop)
 
     def samples(self) -> list[list[float]]:
         """A copy of the samples so far."""
@@ -54,19 +56,27 @@ class TraceRecorder:
             return [list(s) for s in self._samples]
 
     def stop(self) -> list[list[float]]:
-        """Stops recording and returns every sample."""
+        """Stops recording and returns every sample (waits for the recording to end, unless called on its loop)."""
         self._stopped.set()
-        stream = self._stream
-        if stream is not None:
-            stream.cancel()
-        self._thread.join(timeout=3)
+        try:
+            self._loop.call_soon_threadsafe(self._future.cancel)
+        except RuntimeError:  # the loop has stopped: nothing records any more
+            self._ended.set()
+        if not self._on_own_loop():
+            self._ended.wait(timeout=3)
         return self.samples()
 
-    def _run(self) -> None:
-        last_flush = time.monotonic()
+    def _on_own_loop(self) -> bool:
         try:
-            self._stream = self._link.stream_telemetry(RATE_HZ)
-            for message in self._stream:
+            return asyncio.get_running_loop() is self._loop
+        except RuntimeError:
+            return False
+
+    async def _run(self) -> None:
+        last_flush = time.monotonic()
+        updates = self._link.watch_telemetry(RATE_HZ)
+        try:
+            async for message in updates:
                 if self._stopped.is_set():
                     break
                 truth, odometry = message.ground_truth, message.odometry.pose
@@ -79,11 +89,17 @@ class TraceRecorder:
                     del self._samples[:-MAX_TRACE_SAMPLES]
                 if time.monotonic() - last_flush >= FLUSH_S:
                     last_flush = time.monotonic()
-                    if not self._flush(self.samples()):
+                    # The database write blocks: on the loop's shared pool, never on the loop.
+                    if not await asyncio.get_running_loop().run_in_executor(None, self._flush, self.samples()):
                         break  # the attempt ended elsewhere
-        except Exception as error:  # a cancelled or broken stream ends the recording
+        except asyncio.CancelledError:
+            pass  # stopped
+        except Exception as error:  # a broken stream ends the recording
             if not self._stopped.is_set():
                 log.warning("trace recording on %s stopped: %s", self._link.name, error)
+        finally:
+            await updates.aclose()
+            self._ended.set()
 
 
 _recorders: dict[int, TraceRecorder] = {}

@@ -1,7 +1,7 @@
 """The recording of an experimental attempt's run, from its start to its end: the claim (one process of the cluster
-records an attempt), the recorder's flushes (sessions of its own: it runs on a thread of its own, after the request),
-the keeper that takes over a recording whose process went quiet, and the run read back from the robot's own pose
-log when the attempt is submitted."""
+records an attempt), the recorder's flushes (sessions of their own: it runs after the request, as a task on the
+channel loop, its flushes on the loop's shared pool), the keeper that takes over a recording whose process went
+quiet, and the run read back from the robot's own pose log when the attempt is submitted."""
 
 from __future__ import annotations
 
@@ -67,7 +67,7 @@ def recording_keeper(app: Flask) -> recorder.RecordingKeeper:
 
 def record_after_commit(attempt: Attempt, exam: Exam) -> None:
     """For an experimental test, starts recording the attempt's robot once the attempt is committed (the recorder
-    writes the trace into the attempt's row from a thread of its own)."""
+    writes the trace into the attempt's row from the loop's shared pool)."""
     robot_name, attempt_id = attempt.robot_name or exam.robot_name, attempt.id
     if exam.kind == "experimental" and robot_name:
         after_commit(lambda: start_recording(attempt_id, robot_name))
