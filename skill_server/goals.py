@@ -44,6 +44,9 @@ class EventKind(enum.Enum):
     FAILED = "failed"
     CANCELED = "canceled"
     PREEMPTED = "preempted"
+    WALL_LOST = "wall_lost"  # wall following lost its wall
+    BATTERY_LOW = "battery_low"  # a plan's battery watch saw the charge fall below its threshold
+    HANDLED = "handled"  # a plan's `on` block started: the event and the line it cut short
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ from skill_server.plans.model import (
     DriveLine,
     IfLine,
     InvalidPlan,
+    OnLine,
     Plan,
     PlanCondition,
     PlanError,
@@ -59,8 +60,8 @@ __all__ = [
     "PanelSpec", "Pose2D", "PublishedGrid", "Robot", "RobotDescription", "RobotSnapshot", "SceneDescription",
     "SkillEntry", "TrackEvent", "TrackState",
     # a plan's shapes, for RunPlan's conversion
-    "DriveLine", "IfLine", "InvalidPlan", "Plan", "PlanCondition", "PlanError", "PlanLine", "RepeatLine", "SayLine",
-    "SetLine", "SkillLine", "WaitLine",
+    "DriveLine", "IfLine", "InvalidPlan", "OnLine", "Plan", "PlanCondition", "PlanError", "PlanLine", "RepeatLine",
+    "SayLine", "SetLine", "SkillLine", "WaitLine",
 ]
 
 __all__ += ["EvidenceState", "PerceptionScan"]  # teleperception

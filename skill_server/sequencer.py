@@ -25,6 +25,7 @@ from skill_server.sim.robot_model import RobotSpec
 from skill_server.sim.snapshots import RobotSnapshot
 from skill_server.skills.base import SensorLayout, SkillController, TickInput
 from skill_server.skills.catalog import default_registry
+from skill_server.skills.events import EventManager
 from skill_server.skills.obstacles import ObstacleMap
 from skill_server.skills.perception import NavigationPose, Perception
 from skill_server.skills.pose_tracking import POSE_SOURCE, PoseTracker
@@ -63,6 +64,7 @@ class Sequencer:
         self.registry = registry
         self.goals = goals
         self.perception = Perception()
+        self.events = EventManager()  # every goal's events of this tick, for the plans that react to them
         self._controller_token = controller_token
         self._drive_version = drive_version
         self._motor_since_version = 0  # Drive commands and controller changes older than the motor goal pass
@@ -97,7 +99,8 @@ class Sequencer:
         self._check_token(token)
         skill = f"{PLAN_GOAL_PREFIX}{plan.plan.name}"
         holder = self._free_or_preempting(skill, True, preempt)
-        runner = PlanRunner(plan, self.registry, self.perception, self.spec, self.plan_observer, self.drive_watchdog)
+        runner = PlanRunner(plan, self.registry, self.perception, self.spec, self.plan_observer, self.drive_watchdog,
+                            self.events)
         return self._start(skill, True, {"steps": plan.expanded_steps}, runner, holder, f"Plan {plan.plan.name}")
 
     def _free_or_preempting(self, skill: str, motor: bool, preempt: bool) -> tuple[Goal, SkillController] | None:
@@ -191,6 +194,7 @@ class Sequencer:
     def on_tick(self, snapshot: RobotSnapshot, dt_s: float) -> tuple[float, float] | None:
         """Ticks every running controller; returns the wheel command, or None to leave the wheels alone."""
         self._sim_time_s = snapshot.sim_time_s
+        self.events.new_tick(snapshot.sim_time_s)
         new_scan = snapshot.laser_ranges_m is not self._last_laser
         self._last_laser = snapshot.laser_ranges_m
         tick = TickInput(
@@ -267,6 +271,7 @@ class Sequencer:
         step = controller.tick(tick)
         for kind, message in step.events:
             goal.announce(tick.sim_time_s, kind, message)
+            self.events.publish(goal.skill, kind, message)
         if step.feedback is not None and (
             step.outcome is not None
             or tick.sim_time_s - self._last_feedback_s.get(goal.goal_id, -math.inf) >= FEEDBACK_PERIOD_S - 1e-9

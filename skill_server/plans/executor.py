@@ -5,6 +5,14 @@ Skill lines build the skill's controller through the registry, as ActivateSkill 
 out through the sequencer's own limits after the plan's `set` limits. `set watchdog S` sets the base's drive
 watchdog (the time a direct drive command lasts without a newer one, as SetLimits sets it) for the rest of the plan,
 given back when the plan ends however it ends. The plan's sim time is capped.
+
+`on <event> { body }` arms a handler when the plan reaches it, for the lines after it in its block (their handlers
+are fixed when the block is built: the nearest on of each event wins). A line in scope is cut short in the tick its
+event happens (its controller stopped, its outcome of that tick dropped), the body runs in its place, and the block
+goes on with the next line. obstacle_detected and battery_low are the plan's own watches (the detect_obstacle
+skill's controller, a charge threshold), fresh each time their on line is reached; wall_lost and goal_reached come
+from the line's own skill, localized from a localization goal running beside the plan (the sequencer's
+EventManager). Lines of a body have no handlers, so no event is handled while one runs.
 """
 
 from __future__ import annotations
@@ -14,8 +22,19 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from skill_server.goals import EventKind, GoalFeedback, GoalStatus
-from skill_server.plans.model import DriveLine, IfLine, PlanLine, RepeatLine, SayLine, SetLine, SkillLine, WaitLine
+from skill_server.plans.model import (
+    DriveLine,
+    IfLine,
+    OnLine,
+    PlanLine,
+    RepeatLine,
+    SayLine,
+    SetLine,
+    SkillLine,
+    WaitLine,
+)
 from skill_server.plans.steps import (
+    BatteryWatch,
     DriveWatchdog,
     Instant,
     PlanSettings,
@@ -25,7 +44,7 @@ from skill_server.plans.steps import (
     condition_holds,
     describe_condition,
 )
-from skill_server.plans.validation import CheckedPlan
+from skill_server.plans.validation import EVENTS, CheckedPlan
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.skills.base import (
     Outcome,
@@ -36,6 +55,7 @@ from skill_server.skills.base import (
     feedback_for,
     succeeded,
 )
+from skill_server.skills.events import EventManager
 from skill_server.skills.perception import Perception
 from skill_server.skills.registry import SkillRegistry
 from skill_server.skills.sequence import StepFactory, StepSequence
@@ -55,14 +75,24 @@ class SkillStepTiming:
 
 
 PlanObserver = Callable[[SkillStepTiming], None]
+Handlers = dict[str, OnLine]  # the handler in force for each event, for the lines of a block
+WATCHED_EVENTS = ("obstacle_detected", "battery_low")  # the plan watches these itself; the others come from skills
+# the plan-language name of the skills' events an on can handle (obstacle_detected and battery_low are watched)
+EVENT_OF_KIND = {EventKind.WALL_LOST: "wall_lost", EventKind.GOAL_REACHED: "goal_reached",
+                 EventKind.CONVERGED: "localized"}
 
 
 class PlanContext:
     """What the lines of one plan share: the robot, the settings in force, the last skill's result."""
 
     def __init__(self, registry: SkillRegistry, perception: Perception, spec: RobotSpec,
-                 observer: PlanObserver | None, watchdog: DriveWatchdog | None = None) -> None:
+                 observer: PlanObserver | None, watchdog: DriveWatchdog | None = None,
+                 events: EventManager | None = None) -> None:
         self.registry = registry
+        self.events = events
+        self.watches: dict[int, tuple[OnLine, SkillController | BatteryWatch]] = {}  # armed, by id of the on line
+        self.fired: dict[int, str] = {}  # this tick: the armed watches that fired, what they saw
+        self.happened: dict[str, str] = {}  # this tick: the skills' events beside the plan, by name
         self.perception = perception
         self.settings = PlanSettings(spec.max_linear_mps, spec.max_angular_radps)
         self.observer = observer
@@ -89,6 +119,59 @@ class PlanContext:
             self.watchdog_change = change
             return f"the base's drive watchdog set to {line.value:g} s until the plan ends"
         return f"{line.setting} set to {line.value:g}"
+
+    def arm(self, line: OnLine) -> str:
+        """Reaching an on line: its watch starts afresh (an obstacle already near fires at the next tick)."""
+        event = EVENTS[line.event]
+        value = line.value or event.default
+        if line.event == "obstacle_detected":
+            entry = self.registry.entry(event.skill)
+            watch: SkillController | BatteryWatch = entry.build(
+                entry.description.validate({"warning_distance_m": value}), self.perception)
+            self.watches[id(line)] = (line, watch)
+            return f"watching for an obstacle within {value:g} m until the end of its block"
+        if line.event == "battery_low":
+            self.watches[id(line)] = (line, BatteryWatch(value))
+            return f"watching for the battery below {value:g} until the end of its block"
+        return f"listening for {line.event} until the end of its block"
+
+    def begin_tick(self, tick: TickInput) -> list[tuple[EventKind, str]]:
+        """Ticks the armed watches and reads the events of the goals beside the plan; what fired, to announce."""
+        self.fired, self.happened = {}, {}
+        announced: list[tuple[EventKind, str]] = []
+        for key, (line, watch) in list(self.watches.items()):
+            if isinstance(watch, BatteryWatch):
+                seen = watch.fired(tick)
+                kind = EventKind.BATTERY_LOW
+            else:
+                step = watch.tick(tick)
+                seen = next((m for k, m in step.events if k is EventKind.OBSTACLE_DETECTED), None)
+                kind = EventKind.OBSTACLE_DETECTED
+            if seen is not None:
+                self.fired[key] = seen
+                announced.append((kind, f"{seen} (the on of line {line.line})"))
+        for event in self.events.published() if self.events is not None else ():
+            self.happened.setdefault(EVENT_OF_KIND.get(event.kind, ""), f"{event.skill}: {event.message}")
+        self.happened.pop("", None)
+        return announced
+
+    def happening(self, handlers: Handlers, own: tuple[tuple[EventKind, str], ...]) -> tuple[OnLine, str] | None:
+        """The handler to run now for a line in scope of handlers, and what happened; own: the line's events."""
+        for name, line in handlers.items():
+            if name in WATCHED_EVENTS:
+                seen = self.fired.get(id(line))
+            else:
+                seen = next((m for k, m in own if EVENT_OF_KIND.get(k) == name), self.happened.get(name))
+            if seen is not None:
+                return line, seen
+        return None
+
+    def stop_watches(self) -> None:
+        """The plan ended: the watches' controllers are released."""
+        for _, watch in self.watches.values():
+            if isinstance(watch, SkillController):
+                watch.stop()
+        self.watches.clear()
 
     def give_back_watchdog(self) -> None:
         """The plan ended: the base's watchdog is what it was before the plan's first `set watchdog`."""
@@ -133,16 +216,20 @@ class LineRunner(SkillController):
     """One leaf line: its controller, its line in feedback and failures, and a skill's time limit."""
 
     def __init__(self, context: PlanContext, line: PlanLine, what: str, build: Callable[[], SkillController],
-                 started_message: str | None = None, duration_s: float = 0.0) -> None:
+                 started_message: str | None = None, duration_s: float = 0.0, handlers: Handlers | None = None) -> None:
         super().__init__()
         self._context, self._line, self._what, self._build = context, line, what, build
         self._started_message = started_message if started_message is not None else what
         self._duration_s = duration_s
+        self._handlers = handlers or {}
         self._inner: SkillController | None = None
+        self._handler: tuple[OnLine, PlanBlock] | None = None  # the on body running in this line's place
         self._started_s = 0.0
 
     def control(self, tick: TickInput) -> tuple[float, float, Outcome | None, GoalFeedback]:
-        """Ticks the line's controller and names the line in what it reports."""
+        """Ticks the line's controller (or the on body that cut it short) and names the line in what it reports."""
+        if self._handler is not None:
+            return self._run_handler(tick)
         if self._inner is not None:
             step = self._inner.tick(tick)
         else:
@@ -154,7 +241,34 @@ class LineRunner(SkillController):
             if isinstance(self._line, SkillLine) and self._context.observer is not None:
                 self._context.observer(SkillStepTiming(self._line.line, self._line.skill, step_started_s,
                                                        time.perf_counter()))
+        happening = self._context.happening(self._handlers, step.events) if self._handlers else None
+        if happening is not None:
+            if isinstance(self._line, SkillLine) and step.outcome is not None:
+                self._context.goal_reached = step.outcome.status is GoalStatus.SUCCEEDED and step.outcome.reached
+            return self._start_handler(tick, *happening)
         return self._report(tick, step)
+
+    def _start_handler(self, tick: TickInput, on: OnLine, seen: str) -> tuple[float, float, Outcome | None,
+                                                                              GoalFeedback]:
+        """The event of on happened: this line is cut short and on's body runs in its place."""
+        if self._inner is not None:
+            self._inner.stop()
+        self.announce(EventKind.HANDLED, f"line {self._line.line} cut short by {on.event} ({seen}): the on of line "
+                                         f"{on.line} runs")
+        self._handler = (on, PlanBlock(block_steps(on.body, self._context, {}), self._context))
+        return self._run_handler(tick)
+
+    def _run_handler(self, tick: TickInput) -> tuple[float, float, Outcome | None, GoalFeedback]:
+        assert self._handler is not None
+        on, block = self._handler
+        step = block.tick(tick)
+        for kind, message in step.events:
+            self.announce(kind, message)
+        feedback = step.feedback or GoalFeedback()
+        if step.outcome is not None and step.outcome.status is GoalStatus.SUCCEEDED:
+            return 0.0, 0.0, succeeded(f"line {self._line.line} cut short by {on.event}; the on of line {on.line} "
+                                       "done"), feedback
+        return step.linear_mps, step.angular_radps, step.outcome, feedback
 
     def _report(self, tick: TickInput, step: SkillStep) -> tuple[float, float, Outcome | None, GoalFeedback]:
         number, outcome = self._line.line, step.outcome
@@ -182,9 +296,11 @@ class LineRunner(SkillController):
         return step.linear_mps, step.angular_radps, None, reported
 
     def stop(self) -> None:
-        """Releases what the line's controller holds."""
+        """Releases what the line's controller (or the on body running in its place) holds."""
         if self._inner is not None:
             self._inner.stop()
+        if self._handler is not None:
+            self._handler[1].stop()
 
 
 class BlockLine(SkillController):
@@ -220,39 +336,52 @@ class BlockLine(SkillController):
             self._block.stop()
 
 
-def block_steps(lines: tuple[PlanLine, ...], context: PlanContext) -> list[tuple[str, StepFactory]]:
-    """The step factories of a block's lines (each builds its controller when the line is reached)."""
-    return [(f"line {line.line}", _factory(line, context)) for line in lines]
+def block_steps(lines: tuple[PlanLine, ...], context: PlanContext,
+                handlers: Handlers) -> list[tuple[str, StepFactory]]:
+    """The step factories of a block's lines (each builds its controller when the line is reached); handlers are
+    the on lines in force from the enclosing blocks, and each on line adds its own for the lines after it."""
+    steps: list[tuple[str, StepFactory]] = []
+    for line in lines:
+        steps.append((f"line {line.line}", _factory(line, context, handlers)))
+        if isinstance(line, OnLine):
+            handlers = {**handlers, line.event: line}
+    return steps
 
 
-def _factory(line: PlanLine, context: PlanContext) -> StepFactory:
+def _factory(line: PlanLine, context: PlanContext, handlers: Handlers) -> StepFactory:
     if isinstance(line, SkillLine):
         what = line.skill + (f" for {line.duration_s:g} s" if line.duration_s else "")
         return lambda _: LineRunner(context, line, what, lambda: context.build_skill(line),
-                                    duration_s=line.duration_s)
+                                    duration_s=line.duration_s, handlers=handlers)
     if isinstance(line, DriveLine):
         what = f"drive {line.linear_mps:g} m/s {line.angular_radps:g} rad/s for {line.duration_s:g} s"
         return lambda _: LineRunner(context, line, what,
-                                    lambda: TimedDrive(line.linear_mps, line.angular_radps, line.duration_s))
+                                    lambda: TimedDrive(line.linear_mps, line.angular_radps, line.duration_s),
+                                    handlers=handlers)
     if isinstance(line, WaitLine):
         what = "wait" + (f" until {describe_condition(line.condition)}" if line.condition else "") + (
             f" {'at most ' if line.condition else ''}{line.duration_s:g} s" if line.duration_s else "")
         return lambda _: LineRunner(context, line, what,
-                                    lambda: Wait(line.condition, line.duration_s, lambda: context.goal_reached))
+                                    lambda: Wait(line.condition, line.duration_s, lambda: context.goal_reached),
+                                    handlers=handlers)
     if isinstance(line, SetLine):
         return lambda _: LineRunner(context, line, f"set {line.setting} {line.value:g}",
-                                    lambda: Instant(lambda: context.apply(line)))
+                                    lambda: Instant(lambda: context.apply(line)), handlers=handlers)
     if isinstance(line, SayLine):
-        return lambda _: LineRunner(context, line, "say", lambda: Instant(lambda: "said"), started_message=line.text)
+        return lambda _: LineRunner(context, line, "say", lambda: Instant(lambda: "said"), started_message=line.text,
+                                    handlers=handlers)
+    if isinstance(line, OnLine):
+        return lambda _: LineRunner(context, line, f"on {line.event}", lambda: Instant(lambda: context.arm(line)))
     if isinstance(line, RepeatLine):
-        body = block_steps(line.body, context)
+        body = block_steps(line.body, context, handlers)
         return lambda _: BlockLine(context, line, f"repeat {line.count}", lambda tick: ("", body * line.count))
     assert isinstance(line, IfLine) and line.condition is not None  # validation refuses an if without one
     condition, branches = line.condition, (line.then_block, line.else_block)
 
     def choose(tick: TickInput) -> tuple[str, list[tuple[str, StepFactory]]]:
         holds = condition_holds(condition, tick, context.goal_reached)
-        return (": yes, then" if holds else ": no, else"), block_steps(branches[0] if holds else branches[1], context)
+        chosen = branches[0] if holds else branches[1]
+        return (": yes, then" if holds else ": no, else"), block_steps(chosen, context, handlers)
 
     return lambda _: BlockLine(context, line, f"if {describe_condition(condition)}", choose)
 
@@ -260,12 +389,15 @@ def _factory(line: PlanLine, context: PlanContext) -> StepFactory:
 class PlanRunner(SkillController):
     """A whole plan as one motor goal: its top block, the plan's limits on the wheels, and its time cap."""
 
+    skill_class = "deliberative"  # the paper's task supervisor: it sequences the other skills
+
     def __init__(self, checked: CheckedPlan, registry: SkillRegistry, perception: Perception, spec: RobotSpec,
-                 observer: PlanObserver | None = None, watchdog: DriveWatchdog | None = None) -> None:
+                 observer: PlanObserver | None = None, watchdog: DriveWatchdog | None = None,
+                 events: EventManager | None = None) -> None:
         super().__init__()
         self._name = checked.plan.name
-        self._context = PlanContext(registry, perception, spec, observer, watchdog)
-        self._block = PlanBlock(block_steps(checked.plan.steps, self._context), self._context)
+        self._context = PlanContext(registry, perception, spec, observer, watchdog, events)
+        self._block = PlanBlock(block_steps(checked.plan.steps, self._context, {}), self._context)
         self._started_s: float | None = None
 
     def control(self, tick: TickInput) -> tuple[float, float, Outcome | None, GoalFeedback]:
@@ -277,6 +409,8 @@ class PlanRunner(SkillController):
             return 0.0, 0.0, aborted("TIMEOUT", f"line {context.line}: the plan ran past its limit of "
                                                 f"{MAX_PLAN_S:g} s"), self.last_feedback
         context.starts_left = STEPS_STARTED_PER_TICK
+        for kind, message in context.begin_tick(tick):
+            self.announce(kind, message)
         step = self._block.tick(tick)
         for kind, message in step.events:
             self.announce(kind, message)
@@ -295,6 +429,7 @@ class PlanRunner(SkillController):
         """Releases the line running now and gives the base's watchdog back (the plan was cancelled, preempted or
         ended)."""
         self._block.stop()
+        self._context.stop_watches()
         self._context.give_back_watchdog()
 
     def position(self) -> str:

@@ -94,7 +94,20 @@ class SayLine:
     text: str
 
 
-PlanLine = SkillLine | DriveLine | WaitLine | RepeatLine | IfLine | SetLine | SayLine
+@dataclass(frozen=True)
+class OnLine:
+    """A handler: from the next line to the end of its block, when event happens the line running is cut short,
+    body runs, and the plan goes on with the line after the one cut short. value is the event's threshold (the
+    warning distance of obstacle_detected, the charge of battery_low); 0 takes the event's default."""
+
+    line: int
+    column: int
+    event: str
+    value: float
+    body: tuple[PlanLine, ...]
+
+
+PlanLine = SkillLine | DriveLine | WaitLine | RepeatLine | IfLine | SetLine | SayLine | OnLine
 
 
 @dataclass(frozen=True)

@@ -136,6 +136,22 @@ class Wait(SkillController):
         return 0.0, 0.0, None, feedback
 
 
+class BatteryWatch:
+    """A plan's watch of battery_low: fires when the charge falls below the threshold (at once when it is below
+    already), and again only after it rose back to the threshold."""
+
+    def __init__(self, threshold: float) -> None:
+        self._threshold = threshold
+        self._below = False
+
+    def fired(self, tick: TickInput) -> str | None:
+        """What it saw, in the tick the charge went below the threshold; None otherwise."""
+        charge = float(getattr(tick, BATTERY_FIELD, 1.0))
+        below = charge < self._threshold
+        crossed, self._below = below and not self._below, below
+        return f"battery at {charge:.0%}, below {self._threshold:.0%}" if crossed else None
+
+
 class Instant(SkillController):
     """A line done in no time (a setting, a message): does its action on its first tick and succeeds."""
 

@@ -12,6 +12,7 @@ from skill_server.plans.model import (
     DriveLine,
     IfLine,
     InvalidPlan,
+    OnLine,
     Plan,
     PlanCondition,
     PlanError,
@@ -42,6 +43,28 @@ SETTINGS = ("max_speed", "max_turn_rate", "watchdog")
 
 
 @dataclass(frozen=True)
+class PlanEvent:
+    """An event a plan's `on` reacts to: the skill that publishes it (which the robot must have), and the range and
+    default of its value (None: it takes none)."""
+
+    name: str
+    skill: str
+    value_range: tuple[float, float] | None = None
+    default: float = 0.0
+    unit: str = ""
+
+
+# The same events as the plan language's (middleware/plans/steps.py EVENTS).
+EVENTS: dict[str, PlanEvent] = {event.name: event for event in (
+    PlanEvent("obstacle_detected", "detect_obstacle", (0.05, 3.0), 0.4, "m"),  # detect_obstacle's warning distance
+    PlanEvent("wall_lost", "wall_following"),
+    PlanEvent("goal_reached", ""),
+    PlanEvent("localized", "localization"),
+    PlanEvent("battery_low", "", (0.01, 1.0), 0.2, "(a fraction of full)"),
+)}
+
+
+@dataclass(frozen=True)
 class CheckedPlan:
     """A plan that passed every check; its skill steps carry their validated parameters, defaults filled in."""
 
@@ -62,6 +85,7 @@ class _Checker:
         self.errors: list[PlanError] = []
         self.written = 0
         self.skills: list[str] = []
+        self.in_handler = False  # checking the body of an on
 
     def fault(self, step: PlanLine, field: str, message: str) -> None:
         self.errors.append(PlanError(step.line, step.column, field, message))
@@ -70,7 +94,16 @@ class _Checker:
         """The block with checked steps, and its expanded step count."""
         checked: list[PlanLine] = []
         expanded = 0
-        for step in steps:
+        handled: dict[str, int] = {}  # the block's on lines by event
+        for index, step in enumerate(steps):
+            if isinstance(step, OnLine):
+                if step.event in handled:
+                    self.fault(step, "event", f"{step.event} is handled already on line {handled[step.event]} of "
+                                              "this block")
+                handled.setdefault(step.event, step.line)
+                if index == len(steps) - 1:
+                    self.fault(step, "on", "this on handles nothing: it watches the lines after it in its block, "
+                                           "and none follows")
             self.written += 1
             if self.written > MAX_WRITTEN_STEPS:
                 self.fault(step, "steps", f"a plan holds at most {MAX_WRITTEN_STEPS} steps")
@@ -97,7 +130,7 @@ class _Checker:
             if step.condition is not None:
                 self.condition(step, step.condition)
             return step, 1
-        if isinstance(step, (RepeatLine, IfLine)) and depth >= MAX_DEPTH:
+        if isinstance(step, (RepeatLine, IfLine, OnLine)) and depth >= MAX_DEPTH:
             self.fault(step, "depth", f"blocks nest at most {MAX_DEPTH} deep")
             return step, 0
         if isinstance(step, RepeatLine):
@@ -113,6 +146,8 @@ class _Checker:
             then_block, then_count = self.block(step.then_block, depth + 1)
             else_block, else_count = self.block(step.else_block, depth + 1)
             return replace(step, then_block=then_block, else_block=else_block), 1 + then_count + else_count
+        if isinstance(step, OnLine):
+            return self.handler(step, depth)
         if isinstance(step, SetLine):
             self.setting(step)
             return step, 1
@@ -145,6 +180,30 @@ class _Checker:
             return step
         self.skills.append(step.skill)
         return replace(step, parameters=tuple(checked.items()))
+
+    def handler(self, step: OnLine, depth: int) -> tuple[PlanLine, int]:
+        """An on line: a known event the robot can publish, its value in range, a body holding no on."""
+        event = EVENTS.get(step.event)
+        if self.in_handler:
+            self.fault(step, "on", "an on block cannot hold another on: while a handler runs no event is handled")
+        if event is None:
+            self.fault(step, "event", f"the event must be one of: {', '.join(EVENTS)}; got {step.event!r}")
+        elif event.skill and event.skill not in {entry.description.name for entry in self.registry.entries()}:
+            self.fault(step, "event", f"{step.event} comes from the {event.skill} skill, which this robot does not "
+                                      "have")
+        elif event.name == "battery_low" and not robot_has_battery():
+            self.fault(step, "event", "this robot reports no battery; battery_low cannot happen")
+        elif event.value_range is None:
+            if step.value != 0:
+                self.fault(step, "value", f"{step.event} takes no value; got {step.value}")
+        elif step.value != 0:
+            self.number(step, "value", step.value, event.value_range[0], event.value_range[1], event.unit)
+        if not step.body:
+            self.fault(step, "body", "an on block needs at least one line")
+        outer, self.in_handler = self.in_handler, True
+        body, expanded = self.block(step.body, depth + 1)
+        self.in_handler = outer
+        return replace(step, body=body), 1 + expanded
 
     def condition(self, step: PlanLine, condition: PlanCondition) -> None:
         if condition.kind not in CONDITIONS:

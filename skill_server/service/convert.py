@@ -272,6 +272,7 @@ def skill_to_proto(entry: SkillEntry) -> robot_pb2.SkillDescription:
         motor=entry.motor,
         estimates_pose=entry.estimates_pose,
         direct_drive=entry.direct_drive,
+        skill_class=f"SKILL_CLASS_{entry.skill_class.upper()}",
         parameters=[
             robot_pb2.ParameterSchema(
                 name=p.name,

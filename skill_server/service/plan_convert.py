@@ -8,6 +8,7 @@ from skill_server.robot import (
     DriveLine,
     IfLine,
     InvalidPlan,
+    OnLine,
     Plan,
     PlanCondition,
     PlanError,
@@ -59,7 +60,9 @@ def _line(step: robot_pb2.PlanStep, faults: list[PlanError]) -> PlanLine | None:
         return SetLine(*at, step.set.setting, step.set.value)
     if kind == "say":
         return SayLine(*at, step.say.text)
-    faults.append(PlanError(*at, "kind", "the step has no kind (skill, drive, wait, repeat, branch, set or say)"))
+    if kind == "on":
+        return OnLine(*at, step.on.event, step.on.value, _block(step.on.body, faults))
+    faults.append(PlanError(*at, "kind", "the step has no kind (skill, drive, wait, repeat, branch, set, say or on)"))
     return None
 
 

@@ -74,6 +74,9 @@ class SkillStep:
     outcome: Outcome | None = None
 
 
+SKILL_CLASSES = ("motor", "perceptive", "sensorimotor", "deliberative")
+
+
 class SkillController:
     """Base of every skill: ticked by the world loop, never a thread; motor skills drive the wheels.
 
@@ -82,6 +85,9 @@ class SkillController:
     """
 
     motor: bool = True  # drives the wheels: one motor goal at a time; False for perceptive skills
+    # The 2003 paper's class (SKILL_CLASSES): motor skills act from a command alone, perceptive ones interpret the
+    # sensors, sensorimotor ones choose actions from what they perceive, deliberative ones reason over time.
+    skill_class: str = "motor"
     estimates_pose: bool = False  # ticked first; while it runs the others steer by perception.localizer's pose
     direct_drive: bool = False  # does what Drive commands do; consoles offer the drive pad instead of a panel
     uses_map: bool = False  # builds or reads the environment model: clearing the map ends it

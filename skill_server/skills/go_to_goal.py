@@ -58,6 +58,8 @@ def go_to_goal_description(spec: RobotSpec) -> SkillDescription:
 class GoToGoal(SkillController):
     """Drives to (goal_x_m, goal_y_m) along an A* path over the detect-obstacle grid."""
 
+    skill_class = "sensorimotor"  # chooses its wheel commands from what the sensors report
+
     def __init__(self, goal_x_m: float, goal_y_m: float, speed_mps: float, max_error_m: float,
                  timeout_s: float) -> None:
         super().__init__()

@@ -69,6 +69,7 @@ class Localization(SkillController):
     """Monte Carlo localization with a likelihood field; motion noise grows with the odometry increment."""
 
     motor = False
+    skill_class = "perceptive"
     estimates_pose = True
     uses_map = True
 

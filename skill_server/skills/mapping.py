@@ -51,6 +51,7 @@ class EnvironmentModelling(SkillController):
     """Integrates scans when the robot has moved enough that a scan adds something."""
 
     motor = False
+    skill_class = "deliberative"  # the environment modeller, a deliberative module in the paper
     uses_map = True
 
     def __init__(self, use_sonar: bool, restart: bool, duration_s: float, perception: Perception,

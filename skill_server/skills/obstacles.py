@@ -200,6 +200,7 @@ class DetectObstacle(SkillController):
     """Announces OBSTACLE_DETECTED each time the nearest echo enters the warning distance."""
 
     motor = False
+    skill_class = "perceptive"
 
     def __init__(self, warning_distance_m: float, duration_s: float) -> None:
         super().__init__()

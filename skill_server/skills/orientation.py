@@ -44,6 +44,8 @@ def orientation_description(spec: RobotSpec) -> SkillDescription:
 class OrientationControl(SkillController):
     """Proportional turn to a heading; succeeds once within tolerance and settled."""
 
+    skill_class = "sensorimotor"  # chooses its wheel commands from what the sensors report
+
     def __init__(self, heading_rad: float, tolerance_rad: float, max_angular_radps: float, timeout_s: float) -> None:
         super().__init__()
         self.heading_rad = heading_rad

@@ -29,6 +29,11 @@ class SkillEntry:
         return self.skill.motor
 
     @property
+    def skill_class(self) -> str:
+        """The 2003 paper's class of the skill: motor, perceptive, sensorimotor or deliberative."""
+        return self.skill.skill_class
+
+    @property
     def estimates_pose(self) -> bool:
         """While it runs, the other skills steer by its pose estimate."""
         return self.skill.estimates_pose

@@ -27,6 +27,8 @@ class StepSequence(SkillController):
     below, and may start the next step in the tick the previous one ended (advance_at_once).
     """
 
+    skill_class = "sensorimotor"  # chooses its wheel commands from what the sensors report
+
     def __init__(self, steps: list[tuple[str, StepFactory]]) -> None:
         super().__init__()
         self._steps = steps

@@ -44,6 +44,8 @@ def wall_following_description(spec: RobotSpec) -> SkillDescription:
 class WallFollowing(SkillController):
     """Estimates distance and angle to the wall from three side sonars; steers with a PD-like law."""
 
+    skill_class = "sensorimotor"  # chooses its wheel commands from what the sensors report
+
     def __init__(self, distance_m: float, side: str, speed_mps: float, duration_s: float) -> None:
         super().__init__()
         self._target_m = distance_m
@@ -75,7 +77,7 @@ class WallFollowing(SkillController):
             linear, angular = self._round_the_end(tick, speed)
         else:
             if self._lost_at is not None:
-                self.announce(EventKind.OBSTACLE_DETECTED, "wall found again")
+                self.announce(EventKind.STEP_STARTED, "wall found again")
             self._lost_at, self._had_wall, self._state = None, True, "following"
             error_m = self._distance_m - self._target_m  # > 0: too far, steer toward the wall
             wanted_alpha = max(-0.35, min(0.35, 2.0 * error_m))
@@ -124,7 +126,7 @@ class WallFollowing(SkillController):
         if self._lost_at is None:
             self._lost_at = position
             if self._had_wall:
-                self.announce(EventKind.OBSTACLE_DETECTED, "contour ends; going round it")
+                self.announce(EventKind.WALL_LOST, "contour ends; going round it")
         if not self._had_wall:
             self._state = "searching"
             return speed, 0.0

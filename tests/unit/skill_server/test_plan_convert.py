@@ -60,6 +60,6 @@ def test_shape_faults_are_all_named_by_line() -> None:
                     "goal_x_m": robot_pb2.ParameterValue()}))]))),
         ))
     assert [str(error) for error in refused.value.errors] == [
-        "line 1, column 1: kind: the step has no kind (skill, drive, wait, repeat, branch, set or say)",
+        "line 1, column 1: kind: the step has no kind (skill, drive, wait, repeat, branch, set, say or on)",
         "line 3, column 5: goal_x_m: goal_x_m has no value",
     ]
