@@ -8,7 +8,7 @@ one leave; a leaving worker answers the messages its sockets have read, closes t
 to another worker) and finishes its requests, within graceful_timeout.
 """
 
-from middleware.serve import GRACEFUL_TIMEOUT_S, leave_worker, roll_restarts, settle_worker
+from middleware.serve import GRACEFUL_TIMEOUT_S, leave_worker, prepare_master, settle_worker
 
 worker_class = "gthread"
 threads = 200  # an open WebSocket holds no thread (middleware/live/loop.py); these serve HTTP requests
@@ -18,6 +18,6 @@ keepalive = 5
 loglevel = "warning"
 proc_name = "telelab"
 
-on_starting = roll_restarts
+on_starting = prepare_master  # checks the PostgreSQL connection budget, then restarts workers one at a time
 post_worker_init = settle_worker
 worker_exit = leave_worker

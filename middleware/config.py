@@ -83,11 +83,60 @@ def prediction_cap(env: dict[str, str]) -> int:
     return int(raw)
 
 
+# PostgreSQL connections a web worker may hold: its pool (requests, sockets' work, background duties, the elections'
+# advisory locks) and the event bus's LISTEN connection outside it (middleware/events.py).
+LISTENER_CONNECTIONS = 1
+
+
+def _whole_number(env: dict[str, str], name: str, default: str, low: int, high: int) -> int:
+    raw = env.get(name, default).strip()
+    if not raw.isascii() or not raw.isdigit() or not low <= int(raw) <= high:
+        raise ConfigError(f"{name} must be a whole number from {low} to {high}, not {raw!r}.")
+    return int(raw)
+
+
+@dataclass(frozen=True)
+class ConnectionBudget:
+    """What a web tier may hold of PostgreSQL's connections: each worker's pool (TELELAB_DB_POOL_SIZE kept open,
+    TELELAB_DB_MAX_OVERFLOW more under load) plus its LISTEN connection, times the workers of every web host."""
+
+    pool_size: int
+    max_overflow: int
+    web_hosts: int
+
+    @property
+    def per_worker(self) -> int:
+        return self.pool_size + self.max_overflow + LISTENER_CONNECTIONS
+
+    def needed(self, workers: int) -> int:
+        """The most the web tier holds with workers per host; a rolling restart runs one worker more for a moment."""
+        return self.web_hosts * (workers + 1) * self.per_worker
+
+
+def connection_budget(env: dict[str, str] | None = None) -> ConnectionBudget:
+    """TELELAB_DB_POOL_SIZE, TELELAB_DB_MAX_OVERFLOW and TELELAB_WEB_HOSTS (how many web hosts share the database)."""
+    env = dict(os.environ if env is None else env)
+    return ConnectionBudget(_whole_number(env, "TELELAB_DB_POOL_SIZE", "5", 1, 200),
+                            _whole_number(env, "TELELAB_DB_MAX_OVERFLOW", "10", 0, 200),
+                            _whole_number(env, "TELELAB_WEB_HOSTS", "1", 1, 100))
+
+
+def shared_dir(env: dict[str, str]) -> Path | None:
+    """TELELAB_SHARED_DIR: an absolute folder every web host reads and writes (lesson videos and other uploads)."""
+    raw = env.get("TELELAB_SHARED_DIR", "").strip()
+    if not raw:
+        return None
+    if not Path(raw).is_absolute():
+        raise ConfigError(f"TELELAB_SHARED_DIR must be an absolute path (a folder every web host mounts), not {raw!r}.")
+    return Path(raw)
+
+
 def from_environment(instance_dir: Path, environ: dict[str, str] | None = None) -> dict[str, object]:
     """The Flask config mapping built from TELELAB_* variables."""
     env = dict(os.environ if environ is None else environ)
     secure_cookie = env.get("TELELAB_SECURE_COOKIES", "0").lower() in {"1", "true", "yes"}
     idle = timedelta(minutes=_positive_number(env, "TELELAB_SESSION_IDLE_MINUTES", "120"))
+    budget = connection_budget(env)
     return {
         "DATABASE_URL": env.get("TELELAB_DATABASE_URL", f"sqlite:///{instance_dir / 'telelab.sqlite3'}"),
         "SECRET_KEY": env.get("TELELAB_SECRET_KEY") or persistent_secret_key(instance_dir),
@@ -114,4 +163,9 @@ def from_environment(instance_dir: Path, environ: dict[str, str] | None = None) 
         "SESSION_REFRESH_EACH_REQUEST": False,
         "WTF_CSRF_TIME_LIMIT": None,  # the token lives as long as the session, which expires itself
         "MAX_CONTENT_LENGTH": 2 * 1024 * 1024,
+        "DB_POOL_SIZE": budget.pool_size,
+        "DB_MAX_OVERFLOW": budget.max_overflow,
+        # Lesson videos and other uploads: a folder every web host reads (a shared mount with several hosts).
+        # None: the instance folder, which is one host's (teaching/lessons.py: shared_dir).
+        "SHARED_DIR": shared_dir(env),
     }

@@ -37,9 +37,9 @@ class WriteLockHeld(RuntimeError):
     itself for the whole busy timeout and then fail with "database is locked"."""
 
 
-def make_engine(url: str) -> Engine:
+def make_engine(url: str, pool_size: int = 5, max_overflow: int = 10) -> Engine:
     """An engine for url; SQLite gets foreign keys on, a busy timeout for concurrent threads, and the single-writer
-    guard (one unit of work per thread)."""
+    guard (one unit of work per thread); PostgreSQL a pool of pool_size + max_overflow (config.ConnectionBudget)."""
     if url.startswith("sqlite"):
         engine = create_engine(url, connect_args={"timeout": SQLITE_BUSY_TIMEOUT_S, "check_same_thread": False})
 
@@ -52,7 +52,7 @@ def make_engine(url: str) -> Engine:
 
         event.listen(engine, "before_cursor_execute", _one_writer_per_thread)
         return engine
-    return create_engine(url, pool_pre_ping=True)
+    return create_engine(url, pool_pre_ping=True, pool_size=pool_size, max_overflow=max_overflow)
 
 
 _writing = threading.local()
@@ -86,7 +86,8 @@ def _one_writer_per_thread(connection, _cursor, statement: str, _parameters, _co
 
 def init_app(app: Flask) -> None:
     """Binds an engine and a session factory to app, and the unit of work to its requests."""
-    engine = make_engine(app.config["DATABASE_URL"])
+    engine = make_engine(app.config["DATABASE_URL"], app.config.get("DB_POOL_SIZE", 5),
+                         app.config.get("DB_MAX_OVERFLOW", 10))
     app.extensions[_EXTENSION_KEY] = sessionmaker(bind=engine, expire_on_commit=False)
 
     @app.after_request

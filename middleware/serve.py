@@ -105,6 +105,56 @@ def serve_with_gunicorn(host: str, port: int, workers: int) -> None:
     LabServer().run()
 
 
+class ConnectionBudgetExceeded(RuntimeError):
+    """The web tier could hold more PostgreSQL connections than the server allows; the message says what to change."""
+
+
+def check_connection_budget(database_url: str, workers: int, env: dict[str, str] | None = None) -> str | None:
+    """Refuses (ConnectionBudgetExceeded) a web tier whose workers could hold more connections than PostgreSQL's
+    max_connections less its superuser_reserved_connections; the budget as a sentence, or None for SQLite (one
+    process). Every web host checks as it starts, each counting every host (TELELAB_WEB_HOSTS)."""
+    from sqlalchemy import create_engine, text
+    from sqlalchemy.pool import NullPool
+
+    from middleware.config import connection_budget
+
+    if not database_url.startswith("postgresql"):
+        return None
+    budget = connection_budget(env)
+    engine = create_engine(database_url, poolclass=NullPool)
+    try:
+        with engine.connect() as connection:
+            max_connections = int(connection.execute(text("SHOW max_connections")).scalar_one())
+            reserved = int(connection.execute(text("SHOW superuser_reserved_connections")).scalar_one())
+    finally:
+        engine.dispose()
+    allowed, needed = max_connections - reserved, budget.needed(workers)
+    sentence = (f"{budget.web_hosts} web host(s) x ({workers} workers + 1 during a rolling restart) x "
+                f"{budget.per_worker} connections a worker (TELELAB_DB_POOL_SIZE {budget.pool_size} + "
+                f"TELELAB_DB_MAX_OVERFLOW {budget.max_overflow} + 1 LISTEN) = {needed}; PostgreSQL allows {allowed} "
+                f"(max_connections {max_connections} - superuser_reserved_connections {reserved})")
+    if needed > allowed:
+        raise ConnectionBudgetExceeded(
+            f"The web tier could need more PostgreSQL connections than the server allows: {sentence}. Lower the "
+            "workers or TELELAB_DB_MAX_OVERFLOW, or raise max_connections (docs/operator-guide/deployment.md).")
+    return sentence
+
+
+def prepare_master(arbiter: Any) -> None:
+    """gunicorn's on_starting hook: the connection budget is checked against PostgreSQL before any worker starts (a
+    clear error instead of "too many clients" in some worker under load), and the master restarts workers in turn."""
+    from middleware.config import ConfigError
+
+    database_url = os.environ.get("TELELAB_DATABASE_URL", "")
+    try:
+        sentence = check_connection_budget(database_url, int(arbiter.cfg.workers))
+    except (ConnectionBudgetExceeded, ConfigError) as refused:
+        raise SystemExit(f"telelab: {refused}") from None
+    if sentence is not None:
+        logging.getLogger("gunicorn.error").info("PostgreSQL connection budget: %s", sentence)
+    roll_restarts(arbiter)
+
+
 def roll_restarts(arbiter: Any) -> None:
     """gunicorn's on_starting hook: the master becomes a RollingArbiter (gunicorn takes no arbiter class from a
     configuration file, and a deployment's bare `gunicorn -c` must restart the same way as `telelab up`)."""

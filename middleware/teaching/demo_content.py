@@ -99,7 +99,8 @@ def seed_demo_content(app: Flask, record_video: bool = True) -> list[str]:
     added: list[str] = []
     cues, errors = parse_cue_track(DEMO_CUES, None)
     assert not errors, errors
-    video = video_dir(app.instance_path) / DEMO_VIDEO
+    with app.app_context():  # the app's shared folder, where every host serves lesson videos from
+        video = video_dir(app.instance_path) / DEMO_VIDEO
     if record_video and not video.exists():
         print(f"recording the demo lesson's video from the simulator ({DEMO_VIDEO_LENGTH_S:.0f} s)…", flush=True)
         if not record_demo_video(Path(video), cues, DEMO_VIDEO_LENGTH_S):

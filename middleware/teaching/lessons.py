@@ -6,6 +6,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from flask import current_app, has_app_context
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -74,8 +75,11 @@ class LessonDraft:
 
 
 def video_dir(instance_path: str) -> Path:
-    """The folder of lesson videos (in the instance folder, never in the code tree)."""
-    return Path(instance_path) / "lessons"
+    """The folder of lesson videos, never in the code tree: `lessons/` in the shared folder every web host reads
+    (TELELAB_SHARED_DIR, the app's SHARED_DIR) when the app sets one, else in the instance folder (one host's disk:
+    with several web hosts a video uploaded on one would be missing on the others)."""
+    shared = current_app.config.get("SHARED_DIR") if has_app_context() else None
+    return Path(shared or instance_path) / "lessons"
 
 
 def available_videos(instance_path: str) -> list[str]:
