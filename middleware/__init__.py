@@ -42,6 +42,9 @@ from middleware.preferences import routes as preferences_routes
 from middleware.robots import registry
 from middleware.teaching import (
     class_routes,
+    class_wall,
+    class_wall_live,
+    class_wall_routes,
     farm_routes,
     lesson_routes,
     practice_robots,
@@ -109,6 +112,7 @@ def _compose_robot_access(app: Flask) -> None:
     coordinator = access_coordinator.init_app(app, AccessHooks(priority, bookings_services.check_in))
     practice_robots.init_app(app, robots, farm_setup.init_app(app))
     commands.init_app(app, robots, coordinator, (trial_rules.teleoperation_only(db.session_factory(app)),))
+    commands.robot_commands(app).oversee(class_wall.WallOversight(db.session_factory(app)))
     preferences_routes.lock_preference(trial_rules.FEEDBACK_PREFERENCE_KEY, trial_rules.feedback_set_by_trial)
 
 
@@ -119,10 +123,10 @@ def _register_areas(app: Flask) -> None:
                       courses_routes.blueprint, experiment_routes.blueprint, assessment_routes.blueprint,
                       assessment_pages.blueprint, practice_routes.blueprint, lesson_routes.blueprint,
                       tour_routes.blueprint, class_routes.blueprint, farm_routes.blueprint, pool_routes.blueprint,
-                      limits_routes.blueprint, plans_routes.blueprint):
+                      limits_routes.blueprint, plans_routes.blueprint, class_wall_routes.blueprint):
         app.register_blueprint(blueprint)
     app.register_blueprint(lab_teleperception.blueprint)
     app.register_blueprint(api_routes.blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
-                            practice_routes.register, tour_live.register], socket_login_check)
+                            practice_routes.register, tour_live.register, class_wall_live.register], socket_login_check)
     realtime.hold_viewers_with(app, delay.viewer_hold)

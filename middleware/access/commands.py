@@ -30,7 +30,7 @@ from flask import Flask, current_app
 from middleware.errors import ApiError, Refused
 from middleware.robots.link import DriveResult, RobotLink
 from middleware.robots.refusals import NOT_CONTROLLER_MESSAGE, STALE_TOKEN_CODES, CommandRefused, RobotUnavailable
-from middleware.robots.registry import RobotRegistry
+from middleware.robots.registry import PersonalRobot, RobotRegistry
 from protos.telelab.v1 import robot_pb2
 
 T = TypeVar("T")
@@ -156,6 +156,38 @@ def hand_over(link: RobotLink, token: str) -> bool:
 
 # (robot name, user id) -> why the user may only drive the robot by hand now (an open delay trial), or None.
 HandDrivingRule = Callable[[str, int], str | None]
+
+
+class Oversight(Protocol):
+    """Who besides its owner may reach a personal robot (a tutor of its owner's open class), and who holds it now
+    (a tutor who took it over: the owner's commands are refused until it ends). create_app hands it in."""
+
+    def oversees(self, robot_name: str, user_id: int) -> bool:
+        """Whether user_id (not the owner) may watch the personal robot and act on it as a supervisor."""
+
+    def held_by(self, robot_name: str) -> int | None:
+        """The overseer who holds the personal robot now, or None (its owner commands it)."""
+
+
+class HeldTokens:
+    """A personal robot's owner token, given to whoever holds the robot now: its owner, or an overseer who took
+    it over (everyone else observes)."""
+
+    def __init__(self, owner: OwnerToken, held_by: Callable[[], int | None], user_id: int, owner_id: int) -> None:
+        self._owner, self._held_by, self._user_id, self._owner_id = owner, held_by, user_id, owner_id
+
+    def token(self, fresh: bool) -> str | None:
+        """The owner's token while this user holds the robot."""
+        holder = self._held_by()
+        return self._owner.token(fresh) if (holder or self._owner_id) == self._user_id else None
+
+    def resend(self, token: str) -> bool:
+        """Hands the robot the owner's token again."""
+        return self._owner.resend(token)
+
+    def nobody_controls(self) -> bool:
+        """Someone always holds a personal robot."""
+        return False
 
 
 class Commander:
@@ -291,13 +323,31 @@ class RobotCommands:
                  hand_rules: tuple[HandDrivingRule, ...] = ()) -> None:
         self._registry, self._coordinator, self._hand_rules = registry, coordinator, hand_rules
 
+    _oversight: Oversight | None = None
+
+    def oversee(self, oversight: Oversight) -> None:
+        """Lets overseers (a class's tutors, by create_app's hook) reach personal robots and take them over."""
+        self._oversight = oversight
+
     def reachable(self, robot_name: str, user_id: int | None) -> RobotLink | None:
-        """The robot's link if user_id may see it: any lab robot, a personal robot for its owner only."""
+        """The robot's link if user_id may see it: any lab robot, a personal robot for its owner (and its
+        overseers: a tutor of the owner's open class) only."""
         link = self._registry.get(robot_name)
         if link is None:
             return None
         owner_id = self._registry.owner_of(robot_name)
-        return link if owner_id is None or owner_id == user_id else None
+        return link if owner_id is None or owner_id == user_id or self._oversees(robot_name, user_id) else None
+
+    def _oversees(self, robot_name: str, user_id: int | None) -> bool:
+        return self._oversight is not None and user_id is not None and self._oversight.oversees(robot_name, user_id)
+
+    def _personal_tokens(self, link: RobotLink, personal: PersonalRobot, user_id: int) -> TokenSource:
+        """The owner's token, to whoever holds the personal robot now (its owner, or an overseer who took it over)."""
+        owner = OwnerToken(link, lambda: personal.token)
+        oversight = self._oversight
+        if oversight is None:
+            return owner
+        return HeldTokens(owner, lambda: oversight.held_by(link.name), user_id, personal.owner_id)
 
     def require(self, robot_name: str, user_id: int | None, field: str = "robot_name") -> RobotLink:
         """reachable(), or a 404 naming field (a robot of someone else's is answered like a missing one)."""
@@ -312,7 +362,7 @@ class RobotCommands:
         hand_only = self._hand_only(robot_name, user_id)
         personal = self._registry.personal(robot_name)
         if personal is not None:
-            return Commander(link, OwnerToken(link, lambda: personal.token), field, hand_only)
+            return Commander(link, self._personal_tokens(link, personal, user_id), field, hand_only)
         return Commander(link, SeatTokens(self._coordinator, robot_name, user_id), field, hand_only)
 
     def _hand_only(self, robot_name: str, user_id: int) -> Callable[[], str | None]:
@@ -324,7 +374,12 @@ class RobotCommands:
         """The user's supervisory actions on the robot: as its controller, or, for a supervisor (a tutor or an
         admin) on a lab robot, under the robot's current token. Anyone else is refused as an observer."""
         commander = self.for_user(robot_name, user_id, field)
-        if not supervisor or self._registry.personal(robot_name) is not None or commander.is_controller():
+        personal = self._registry.personal(robot_name)
+        if personal is not None and supervisor and personal.owner_id != user_id and self._oversees(robot_name,
+                                                                                                  user_id):
+            # A class's tutor stops or docks a student's robot whoever holds it.
+            return Commander(commander.link, OwnerToken(commander.link, lambda: personal.token), field)
+        if not supervisor or personal is not None or commander.is_controller():
             return commander
         return Commander(commander.link, SupervisorTokens(self._coordinator, robot_name), field,
                          self._hand_only(robot_name, user_id))

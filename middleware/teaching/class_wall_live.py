@@ -1,0 +1,317 @@
+"""The class wall's channels: one socket carries the whole class to the tutor, one its own seat to each student.
+
+`/ws/courses/<id>/class-wall` (the course's tutors and admins): the seats (names, hands, takeovers, tests) whenever
+they change, and every robot's pose, speed, battery and activity in one message POSE_PERIOD_S apart, taken from
+the robot's telemetry hub (robots/fanout.py: one upstream per robot per process, shared with the consoles), never
+one socket per tile. Who is running a skill or a plan is asked of each robot every GOALS_EVERY_S. While the wall
+is open its tutor's takeovers hold (class_wall.still_watching); when it closes they end, unless the worker is
+restarting (the wall reconnects to another worker and holds them again).
+
+`/ws/class-session/wall` (a student with a seat): their hand, who holds their robot and the tutor's notices,
+whenever they change. Both are woken by the event bus (topic "class-wall") in every worker at once, and read the
+database again every SEATS_EVERY_S besides (a test that starts, a robot that stops).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from flask import current_app
+from flask_login import current_user
+from sqlalchemy.orm import Session
+
+from middleware import events
+from middleware.access.commands import robot_commands
+from middleware.db import get_session, unit_of_work
+from middleware.errors import Refused
+from middleware.live.loop import Continuation, blocking_work, channel_loop
+from middleware.live.wire import LiveSocket
+from middleware.models import User
+from middleware.models.farm import ClassSession
+from middleware.realtime import CLOSE_FORBIDDEN, CLOSE_NOT_FOUND, Channels, WebSocket, as_json, refuse
+from middleware.robots.link import RobotLink
+from middleware.robots.refusals import RobotUnavailable
+from middleware.teaching import class_sessions, class_wall
+from middleware.validation import decimal_int
+
+POSE_PERIOD_S = 0.2  # 5 poses a second per robot: smooth enough to see a robot move, light for 200 of them
+SEATS_EVERY_S = 2.0
+GOALS_EVERY_S = 3.0
+MOVING_MPS, TURNING_RADPS = 0.01, 0.02
+
+_lock = threading.Lock()
+_versions: dict[int, int] = {}
+_wakers: dict[int, set[Callable[[], None]]] = {}
+_listening_engines: set[int] = set()
+
+
+def notify(class_session_id: int | None) -> None:
+    """Wakes the sockets of the class session (None: every one)."""
+    with _lock:
+        ids = list(_wakers) if class_session_id is None else [class_session_id]
+        wakers: list[Callable[[], None]] = []
+        for session_id in ids:
+            _versions[session_id] = _versions.get(session_id, 0) + 1
+            wakers.extend(_wakers.get(session_id, ()))
+    for wake in wakers:
+        wake()
+
+
+def _heard(key: str | None) -> None:
+    notify(None if key is None else decimal_int(key, 1))
+
+
+def _listen(db: Session) -> None:
+    engine = db.get_bind().engine
+    if id(engine) not in _listening_engines:
+        _listening_engines.add(id(engine))
+        events.listen(engine, class_wall.TOPIC, _heard)
+
+
+class _Wake:
+    """A socket's registration for its class session's news."""
+
+    def __init__(self, class_session_id: int, live: LiveSocket) -> None:
+        loop = asyncio.get_running_loop()
+        self.class_session_id = class_session_id
+
+        def wake() -> None:
+            with contextlib.suppress(RuntimeError):  # the loop closed: the process is ending
+                loop.call_soon_threadsafe(live.nudge)
+
+        self._wake = wake
+        with _lock:
+            _wakers.setdefault(class_session_id, set()).add(wake)
+
+    def version(self) -> int:
+        return _versions.get(self.class_session_id, 0)
+
+    def leave(self) -> None:
+        with _lock:
+            _wakers.get(self.class_session_id, set()).discard(self._wake)
+
+
+def _read_wall(class_session_id: int, tutor_id: int, refresh: bool) -> list[dict[str, object]] | None:
+    """The wall's seats (None once the session ended); refresh: the tutor's takeovers hold on."""
+    with unit_of_work(current_app) as db:
+        opened = db.get(ClassSession, class_session_id)
+        if opened is None or opened.ended_at is not None:
+            return None
+        if refresh:
+            class_wall.still_watching(db, class_session_id, tutor_id)
+        return [seat.to_dict() for seat in class_wall.wall_seats(db, class_session_id)]
+
+
+def _tutor_left(class_session_id: int, tutor_id: int) -> None:
+    with unit_of_work(current_app) as db:
+        class_wall.tutor_left(db, class_session_id, tutor_id)
+
+
+def activity(goals: list[Any]) -> str:
+    """What a robot's running goals say it does: "plan:<name>", "skill:<name>", "driving" or ""."""
+    running = [goal for goal in goals if not goal.ended_sim_s]
+    for goal in running:
+        if goal.skill.startswith("plan:"):
+            return goal.skill
+    for goal in running:
+        if goal.skill != "direct_control":
+            return f"skill:{goal.skill}"
+    return "driving" if running else ""
+
+
+def _goals_of(links: dict[int, RobotLink]) -> dict[int, str]:
+    found = {}
+    for user_id, link in links.items():
+        try:
+            found[user_id] = activity(link.goals())
+        except RobotUnavailable:
+            found[user_id] = "faulted"
+    return found
+
+
+def pose_row(user_id: int, packed: Any, goal_activity: str, online: bool) -> list[object] | None:
+    """[user id, x, y, theta, linear, angular, battery charge, activity] from a packed telemetry message."""
+    try:
+        message = json.loads(packed[1] if isinstance(packed, tuple) else packed)
+        odometry = message["odometry"]
+        pose = odometry["pose"]
+        linear, angular = float(odometry["linear_mps"]), float(odometry["angular_radps"])
+        charge = message.get("battery", {}).get("charge")
+    except (ValueError, KeyError, TypeError, IndexError):
+        return None
+    if not online:
+        state = "faulted"
+    elif goal_activity and goal_activity != "driving":
+        state = goal_activity
+    elif abs(linear) > MOVING_MPS or abs(angular) > TURNING_RADPS:
+        state = "driving"
+    else:
+        state = "idle"
+    return [user_id, round(pose["x_m"], 3), round(pose["y_m"], 3), round(pose["theta_rad"], 3), round(linear, 3),
+            round(angular, 3), None if charge is None else round(float(charge), 3), state]
+
+
+class _Robots:
+    """The wall's subscriptions to its robots' telemetry hubs, following the seats."""
+
+    def __init__(self, tutor_id: int) -> None:
+        self._tutor_id = tutor_id
+        self._commands = robot_commands()
+        self.links: dict[int, RobotLink] = {}
+        self._subscriptions: dict[int, Any] = {}
+        self.rows: dict[int, list[object]] = {}
+        self.activities: dict[int, str] = {}
+
+    def follow(self, seats: list[dict[str, object]]) -> None:
+        """Subscribes to every running seat's robot, and leaves the others (on the loop)."""
+        wanted: dict[int, str] = {int(str(seat["user_id"])): str(seat["robot"]) for seat in seats
+                                  if seat["seat_state"] == "ready"}
+        for user_id in list(self.links):
+            if user_id not in wanted or self.links[user_id].name != wanted[user_id]:
+                self._leave(user_id)
+        for user_id, robot in wanted.items():
+            if user_id in self.links:
+                continue
+            link = self._commands.reachable(robot, self._tutor_id)
+            if link is None or link.telemetry.closed:
+                continue
+            self.links[user_id] = link
+            self._subscriptions[user_id] = link.telemetry.subscribe()
+
+    def _leave(self, user_id: int) -> None:
+        self.links.pop(user_id, None)
+        self.rows.pop(user_id, None)
+        subscription = self._subscriptions.pop(user_id, None)
+        if subscription is not None:
+            subscription.close()
+
+    def poses(self) -> list[list[object]]:
+        """Every followed robot's newest row (the last one again for a robot with nothing new)."""
+        for user_id, subscription in self._subscriptions.items():
+            packed = subscription.next_message(0)
+            online = self.links[user_id].telemetry.status_with_version()[0].online
+            if packed is not None:
+                row = pose_row(user_id, packed, self.activities.get(user_id, ""), online)
+                if row is not None:
+                    self.rows[user_id] = row
+            elif user_id in self.rows and not online:
+                self.rows[user_id][-1] = "faulted"
+        return list(self.rows.values())
+
+    def close(self) -> None:
+        """Leaves every hub."""
+        for user_id in list(self.links):
+            self._leave(user_id)
+
+
+def _refusal_close(ws: WebSocket, refused: Refused) -> None:
+    refuse(ws, CLOSE_NOT_FOUND if refused.status == 404 else CLOSE_FORBIDDEN, refused.code, refused.message,
+           refused.field)
+
+
+def wall_channel(ws: WebSocket, course_id: int) -> Continuation | None:
+    """The whole class for its tutor: seats when they change, every robot's pose POSE_PERIOD_S apart."""
+    tutor_id = int(current_user.get_id())
+    db = get_session()
+    actor = db.get(User, tutor_id)
+    try:
+        if actor is None:
+            raise Refused(403, "forbidden", "Log in again.")
+        _course, opened = class_wall.wall_session(db, actor, course_id)
+    except Refused as refused:
+        _refusal_close(ws, refused)
+        return None
+    class_session_id = opened.id
+    _listen(db)
+    db.close()  # a socket lives long: no transaction stays open between reads
+    work = blocking_work()
+    robots = _Robots(tutor_id)
+
+    async def follow(live: LiveSocket) -> None:
+        wake = _Wake(class_session_id, live)
+        read_version, sent_seats = -1, None
+        seats_at = goals_at = refreshed_at = poses_at = 0.0
+        try:
+            while live.connected:
+                now = time.monotonic()
+                if wake.version() != read_version or now - seats_at >= SEATS_EVERY_S:
+                    read_version, seats_at = wake.version(), now
+                    refresh = now - refreshed_at >= class_wall.TAKEOVER_REFRESH_S
+                    seats = await work(_read_wall, class_session_id, tutor_id, refresh)
+                    if refresh:
+                        refreshed_at = now
+                    if seats is None:
+                        await live.send(as_json({"type": "ended"}))
+                        break
+                    robots.follow(seats)
+                    if seats != sent_seats:
+                        await live.send(as_json({"type": "seats", "seats": seats}))
+                        sent_seats = seats
+                if now - goals_at >= GOALS_EVERY_S and robots.links:
+                    goals_at = now
+                    robots.activities = await work(_goals_of, dict(robots.links))
+                if now - poses_at >= POSE_PERIOD_S:
+                    poses_at = now
+                    live.send_latest(as_json({"type": "poses", "t": round(time.time(), 3),
+                                              "robots": robots.poses()}))
+                wait_s = max(0.0, POSE_PERIOD_S - (time.monotonic() - poses_at))
+                await live.receive(timeout=wait_s)  # woken by notify(); what the page sends is dropped
+        finally:
+            wake.leave()
+            robots.close()
+            if not channel_loop().draining:  # a restarting worker's wall comes back on another: keep holding
+                await work(_tutor_left, class_session_id, tutor_id)
+
+    return follow
+
+
+def _read_mine(user_id: int) -> dict[str, object]:
+    with unit_of_work(current_app) as db:
+        actor = db.get(User, user_id)
+        return {"open": False} if actor is None else class_wall.student_view(db, actor)
+
+
+def student_channel(ws: WebSocket) -> Continuation | None:
+    """The student's own seat: their hand, who holds their robot, the tutor's notices, whenever they change."""
+    user_id = int(current_user.get_id())
+    db = get_session()
+    actor = db.get(User, user_id)
+    found = class_sessions.my_seat(db, actor) if actor is not None else None
+    if found is None:
+        refuse(ws, CLOSE_NOT_FOUND, "no_class_session", "No class session is open for your courses now.")
+        return None
+    class_session_id = found[1].session_id
+    _listen(db)
+    db.close()
+    work = blocking_work()
+
+    async def follow(live: LiveSocket) -> None:
+        wake = _Wake(class_session_id, live)
+        read_version, sent, read_at = -1, None, 0.0
+        try:
+            while live.connected:
+                if wake.version() != read_version or time.monotonic() - read_at >= SEATS_EVERY_S:
+                    read_version, read_at = wake.version(), time.monotonic()
+                    mine = await work(_read_mine, user_id)
+                    if mine != sent:
+                        await live.send(as_json({"type": "seat", **mine}))
+                        sent = mine
+                    if not mine.get("open"):
+                        break
+                await live.receive(timeout=SEATS_EVERY_S)
+        finally:
+            wake.leave()
+
+    return follow
+
+
+def register(sock: Channels) -> None:
+    """Declares the wall's channels."""
+    sock.route("/ws/courses/<int:course_id>/class-wall", endpoint="class_wall_channel")(wall_channel)
+    sock.route("/ws/class-session/wall", endpoint="class_student_wall_channel")(student_channel)
