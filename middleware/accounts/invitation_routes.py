@@ -10,6 +10,7 @@ from sqlalchemy import select
 from middleware.accounts import invitations
 from middleware.accounts.schemas import clean_invitation_days, clean_optional_id
 from middleware.accounts.web import back_url, blueprint
+from middleware.api.contract import ID, OBJECT, STRING, about, described, nullable, obj
 from middleware.auth import sessions
 from middleware.db import discard_changes, get_session
 from middleware.errors import Refused, flashed, unless_refused
@@ -46,6 +47,15 @@ def invitations_create() -> ResponseReturnValue:
 
 @blueprint.post("/api/invitations")
 @login_required
+@described(
+    body=obj(
+        ("role",),
+        role=about("student or tutor"),
+        course_id=about("a course's id, or null"),
+        days=about("days it stays valid"),
+    ),
+    answers={201: obj(("id", "role"), id=ID, role=STRING, course_id=nullable(ID))},
+)
 def api_create_invitation() -> ResponseReturnValue:
     """{role, course_id?, days?}: an invitation link, returned once."""
     data = json_body()
@@ -73,6 +83,7 @@ def invitations_revoke(invitation_id: int) -> ResponseReturnValue:
 
 @blueprint.delete("/api/invitations/<int:invitation_id>")
 @login_required
+@described(answers={200: obj(("invitation",), invitation=OBJECT)}, refusals=(409,))
 def api_revoke_invitation(invitation_id: int) -> ResponseReturnValue:
     """Withdraws a pending invitation; answers it as lists show it."""
     view = invitations.revoke_invitation(get_session(), current_user, invitation_id, now())

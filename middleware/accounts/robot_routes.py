@@ -9,6 +9,7 @@ from flask_login import current_user, login_required
 from middleware.accounts import robot_admin
 from middleware.accounts.schemas import clean_flag, clean_id
 from middleware.accounts.web import blueprint
+from middleware.api.contract import OBJECT, STRING, about, array, described, obj
 from middleware.db import after_commit, get_session
 from middleware.errors import flashed, unless_refused
 from middleware.robots.link import CommandRefused, RobotUnavailable
@@ -92,6 +93,7 @@ def robots_update(robot_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/admin/robots")
 @login_required
+@described(answers={200: obj(("robots",), robots=array(OBJECT))})
 def api_robots() -> ResponseReturnValue:
     """Every robot in the table (admins)."""
     return jsonify({"robots": [r.to_dict() for r in robot_admin.list_robots(get_session(), current_user)]})
@@ -99,6 +101,17 @@ def api_robots() -> ResponseReturnValue:
 
 @blueprint.post("/api/admin/robots")
 @login_required
+@described(
+    body=obj(
+        ("name", "address"),
+        name=about("the robot's name"),
+        title=about("shown to people"),
+        address=about("host:port of its skill server"),
+        kind=about("its kind (pools)"),
+    ),
+    answers={201: obj(("robot",), robot=OBJECT)},
+    refusals=(409,),
+)
 def api_add_robot() -> ResponseReturnValue:
     """{name, title?, address, kind?}: adds a robot (admins)."""
     data = json_body()
@@ -110,6 +123,16 @@ def api_add_robot() -> ResponseReturnValue:
 
 @blueprint.patch("/api/admin/robots/<int:robot_id>")
 @login_required
+@described(
+    body=obj(
+        title=about("shown to people"),
+        address=about("host:port"),
+        kind=about("its kind"),
+        enabled=about("true or false"),
+    ),
+    answers={200: obj(("robot",), robot=OBJECT)},
+    refusals=(409,),
+)
 def api_update_robot(robot_id: int) -> ResponseReturnValue:
     """{title?, address?, kind?, enabled?}: changes a robot (admins)."""
     data = json_body()
@@ -138,6 +161,9 @@ def robots_kind_picture(kind: str) -> ResponseReturnValue:
 
 @blueprint.get("/api/admin/robot-kinds")
 @login_required
+@described(
+    answers={200: obj(("kinds",), kinds=array(obj(("kind", "camera_picture"), kind=STRING, camera_picture=STRING)))}
+)
 def api_kind_pictures() -> ResponseReturnValue:
     """Every robot kind with its camera panel's default picture (admins)."""
     return jsonify({"kinds": [{"kind": kind, "camera_picture": picture}
@@ -146,6 +172,10 @@ def api_kind_pictures() -> ResponseReturnValue:
 
 @blueprint.put("/api/admin/robot-kinds/<kind>/picture")
 @login_required
+@described(
+    body=obj(("picture",), picture=about('"video" or "drawn"')),
+    answers={200: obj(("kind", "camera_picture"), kind=STRING, camera_picture=STRING)},
+)
 def api_set_kind_picture(kind: str) -> ResponseReturnValue:
     """{picture: "video" | "drawn"}: the camera panel's default picture for the robots of one kind (admins)."""
     data = json_body()

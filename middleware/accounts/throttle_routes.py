@@ -8,6 +8,7 @@ from flask_login import current_user, login_required
 
 from middleware.accounts import services
 from middleware.accounts.web import blueprint
+from middleware.api.contract import ANY, OBJECT, about, array, described, obj
 from middleware.db import get_session
 from middleware.errors import flashed, unless_refused
 from middleware.web import json_body, now
@@ -31,6 +32,7 @@ def throttles_clear() -> ResponseReturnValue:
 
 @blueprint.get("/api/admin/login-throttles")
 @login_required
+@described(answers={200: obj(("throttles",), throttles=array(OBJECT))})
 def api_throttles() -> ResponseReturnValue:
     """The login keys being slowed now or at their next failure (admins)."""
     throttles = services.login_throttles(get_session(), current_user, now())
@@ -39,6 +41,14 @@ def api_throttles() -> ResponseReturnValue:
 
 @blueprint.delete("/api/admin/login-throttles")
 @login_required
+@described(
+    body=obj(
+        ("address",),
+        address=about("the address whose failed logins are forgotten"),
+        username=about("only this username's, when given"),
+    ),
+    answers={200: obj(("cleared",), cleared=ANY)},
+)
 def api_clear_throttle() -> ResponseReturnValue:
     """{address, username?}: forgets the failed logins from address (of username only, when given)."""
     data = json_body()

@@ -12,6 +12,7 @@ from flask_login import current_user, login_required
 from middleware.accounts import services
 from middleware.accounts.schemas import clean_flag
 from middleware.accounts.web import blueprint
+from middleware.api.contract import BOOLEAN, OBJECT, STRING, about, array, described, obj, text
 from middleware.auth import sessions
 from middleware.auth.schemas import InvalidField
 from middleware.auth.services import change_own_password
@@ -60,6 +61,11 @@ def password_submit() -> ResponseReturnValue:
 
 @blueprint.post("/api/account/password")
 @login_required
+@described(
+    body=obj(("current_password", "new_password"), current_password=text(), new_password=text()),
+    answers={200: obj(("changed",), changed=BOOLEAN)},
+    refusals=(429,),
+)
 def api_password() -> ResponseReturnValue:
     """{current_password, new_password}: changes one's own password."""
     data = json_body()
@@ -141,6 +147,7 @@ def reset_password(user_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/users")
 @login_required
+@described(answers={200: obj(("users",), users=array(OBJECT))})
 def api_users() -> ResponseReturnValue:
     """Every account (admins)."""
     return jsonify({"users": [u.to_dict() for u in services.list_users(get_session(), current_user)]})
@@ -148,6 +155,15 @@ def api_users() -> ResponseReturnValue:
 
 @blueprint.post("/api/users")
 @login_required
+@described(
+    body=obj(
+        ("username", "role"),
+        username=about("2-64 lowercase letters, digits, ., _ or -"),
+        role=about("student, tutor or admin"),
+    ),
+    answers={201: obj(("user", "password"), user=OBJECT, password=STRING)},
+    refusals=(409,),
+)
 def api_create_user() -> ResponseReturnValue:
     """{username, role}: creates an account; the answer holds the generated password, once."""
     data = json_body()
@@ -158,6 +174,11 @@ def api_create_user() -> ResponseReturnValue:
 
 @blueprint.patch("/api/users/<int:user_id>")
 @login_required
+@described(
+    body=obj(role=about("student, tutor or admin"), is_active=about("true or false")),
+    answers={200: obj(("user",), user=OBJECT)},
+    refusals=(409,),
+)
 def api_update_user(user_id: int) -> ResponseReturnValue:
     """{role?, is_active?}: changes an account (admins)."""
     data, dbs = json_body(), get_session()
@@ -172,6 +193,7 @@ def api_update_user(user_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/users/<int:user_id>/password-reset")
 @login_required
+@described(answers={200: obj(("username", "password"), username=STRING, password=STRING)})
 def api_reset_password(user_id: int) -> ResponseReturnValue:
     """Gives an account a generated password, returned once (admins; tutors for their students)."""
     user, password = services.reset_password(get_session(), current_user, user_id)

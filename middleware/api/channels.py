@@ -12,7 +12,7 @@ from typing import Any
 
 from flask import Flask
 
-from middleware.api.contract import ERROR, Schema, array, number, obj, one_of, text, whole
+from middleware.api.contract import ERROR, Schema, number, obj, one_of, text, whole
 
 _ERROR_MESSAGE: Schema = obj(("type", "code", "message"), type=one_of("error"), code=text(), message=text(),
                              field={"type": ["string", "null"]})

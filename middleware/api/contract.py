@@ -96,12 +96,20 @@ def array(items: Schema | None = None, max_items: int | None = None, **extra: An
     return schema
 
 
-def obj(required: tuple[str, ...] | list[str] = (), **properties: Schema) -> Schema:
+def obj(required: tuple[str, ...] | list[str] = (), *, description: str | None = None,
+        **properties: Schema) -> Schema:
     """A JSON object with properties (others allowed: a client may send more than a view reads)."""
     schema: Schema = {"type": "object", "properties": properties}
+    if description:
+        schema["description"] = description
     if required:
         schema["required"] = list(required)
     return schema
+
+
+def about(description: str) -> Schema:
+    """A field the view reads and checks itself (several forms accepted): documented, its shape not fixed here."""
+    return {"description": description}
 
 
 ANY: Schema = {}
@@ -172,7 +180,8 @@ def described(summary: str | None = None, *, body: Schema | None = None, body_re
             if validators["body"] is not None and (body_required or request.get_data(cache=True)):
                 _check(validators["body"], request.get_json(silent=True), "body")
             if validators["form"] is not None and request.mimetype == "multipart/form-data":
-                _check(validators["form"], {**request.form.to_dict(), **request.files.to_dict()}, "form")
+                files = {name: upload.filename or "" for name, upload in request.files.items()}  # a file is its bytes
+                _check(validators["form"], {**request.form.to_dict(), **files}, "form")
             return view(*args, **kwargs)
 
         setattr(checked, ATTRIBUTE, operation)

@@ -12,6 +12,7 @@ from flask_login import current_user, login_required
 from sqlalchemy.orm import Session
 
 from middleware.access.coordinator import access_coordinator
+from middleware.api.contract import BOOLEAN, ID, OBJECT, STRING, about, array, described, file_answer, obj, whole
 from middleware.assessment import attempts, bank, recommendations, review, survey
 from middleware.assessment.recording import finish_recording, record_after_commit, robot_run
 from middleware.assessment.schemas import parse_exam, parse_question, parse_survey
@@ -66,6 +67,7 @@ def run(action: Callable[[Session], Any], status: int = 200) -> tuple[Response, 
 
 @blueprint.get("/api/courses/<int:course_id>/questions")
 @login_required
+@described(answers={200: obj(("questions",), questions=array(OBJECT))})
 def api_questions(course_id: int) -> ResponseReturnValue:
     """The course's question bank, with keys (its tutors, admins)."""
     return run(lambda dbs: {"questions": [bank.question_dict(q) for q in
@@ -74,6 +76,16 @@ def api_questions(course_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/courses/<int:course_id>/questions")
 @login_required
+@described(
+    body=obj(
+        ("kind", "prompt"),
+        kind=about("the question's kind"),
+        prompt=about("the question"),
+        topics=about("its topics"),
+        points=about("its points"),
+    ),
+    answers={201: obj(("question",), question=OBJECT)},
+)
 def api_add_question(course_id: int) -> ResponseReturnValue:
     """{kind, prompt, topics, points, ...kind's fields}: adds a question."""
     data = json_body()
@@ -87,6 +99,11 @@ def api_add_question(course_id: int) -> ResponseReturnValue:
 
 @blueprint.put("/api/questions/<int:question_id>")
 @login_required
+@described(
+    body=obj(("kind", "prompt"), kind=about("the question's kind"), prompt=about("the question")),
+    answers={200: obj(("question",), question=OBJECT)},
+    refusals=(409,),
+)
 def api_update_question(question_id: int) -> ResponseReturnValue:
     """Replaces a question."""
     data = json_body()
@@ -101,6 +118,7 @@ def api_update_question(question_id: int) -> ResponseReturnValue:
 
 @blueprint.delete("/api/questions/<int:question_id>")
 @login_required
+@described(answers={200: obj(("deleted",), deleted=ID)}, refusals=(409,))
 def api_delete_question(question_id: int) -> ResponseReturnValue:
     """Removes a question from the bank."""
     def action(dbs: Session) -> dict[str, int]:
@@ -112,6 +130,7 @@ def api_delete_question(question_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/courses/<int:course_id>/bank.json")
 @login_required
+@described(answers={200: file_answer("application/json", "the bank as a file")})
 def api_export_bank(course_id: int) -> ResponseReturnValue:
     """The bank as a file to download."""
     text = bank.export_bank(get_session(), current_user, course_id)
@@ -121,6 +140,13 @@ def api_export_bank(course_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/courses/<int:course_id>/bank")
 @login_required
+@described(
+    form=obj(
+        ("file",), file={"type": "string", "format": "binary", "description": "a bank file (the JSON body also works)"}
+    ),
+    answers={201: obj(("imported",), imported=whole(0))},
+    refusals=(413,),
+)
 def api_import_bank(course_id: int) -> ResponseReturnValue:
     """A bank file (the upload 'file', or the JSON body): every question is added, or none."""
     def action(dbs: Session) -> dict[str, Any]:
@@ -137,6 +163,7 @@ def api_import_bank(course_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/courses/<int:course_id>/exams")
 @login_required
+@described(answers={200: obj(("exams",), exams=array(OBJECT))})
 def api_exams(course_id: int) -> ResponseReturnValue:
     """The course's quizzes and tests (its students and tutors, admins)."""
     def action(dbs: Session) -> dict[str, Any]:
@@ -150,6 +177,20 @@ def api_exams(course_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/courses/<int:course_id>/exams")
 @login_required
+@described(
+    body=obj(
+        ("title", "kind"),
+        title=about("the test's title"),
+        kind=about("quiz or test, or a task's kind"),
+        opens_at=about("ISO 8601"),
+        closes_at=about("ISO 8601"),
+        duration_s=about("seconds"),
+        max_attempts=about("attempts allowed"),
+        question_ids=about("the questions' ids"),
+    ),
+    answers={201: obj(("exam",), exam=OBJECT)},
+    refusals=(409,),
+)
 def api_create_exam(course_id: int) -> ResponseReturnValue:
     """{title, kind, opens_at, closes_at, duration_s, max_attempts, question_ids, task fields}: a new exam."""
     data = json_body()
@@ -164,6 +205,11 @@ def api_create_exam(course_id: int) -> ResponseReturnValue:
 
 @blueprint.put("/api/exams/<int:exam_id>")
 @login_required
+@described(
+    body=obj(title=about("the test's title"), kind=about("its kind")),
+    answers={200: obj(("exam",), exam=OBJECT)},
+    refusals=(409,),
+)
 def api_update_exam(exam_id: int) -> ResponseReturnValue:
     """Changes an exam (questions and task frozen once started)."""
     data = json_body()
@@ -178,6 +224,7 @@ def api_update_exam(exam_id: int) -> ResponseReturnValue:
 
 @blueprint.delete("/api/exams/<int:exam_id>")
 @login_required
+@described(answers={200: obj(("deleted",), deleted=ID)}, refusals=(409,))
 def api_delete_exam(exam_id: int) -> ResponseReturnValue:
     """Deletes a test nobody has attempted (409 exam_has_attempts otherwise)."""
     def action(dbs: Session) -> dict[str, int]:
@@ -192,6 +239,7 @@ def api_delete_exam(exam_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/exams/<int:exam_id>/attempts")
 @login_required
+@described(answers={200: obj(("attempts",), attempts=array(OBJECT))})
 def api_exam_attempts(exam_id: int) -> ResponseReturnValue:
     """Every attempt at the exam (its course's tutors, admins)."""
     return run(lambda dbs: {"attempts": review.list_attempts(dbs, current_user, exam_id, server_now())})
@@ -206,6 +254,7 @@ def start_attempt(dbs: Session, exam_id: int) -> Any:
 
 @blueprint.post("/api/exams/<int:exam_id>/attempts")
 @login_required
+@described(answers={200: obj(("attempt",), attempt=OBJECT), 201: obj(("attempt",), attempt=OBJECT)}, refusals=(409,))
 def api_start_attempt(exam_id: int) -> ResponseReturnValue:
     """Starts the student's attempt (or returns the one in progress)."""
     return run(lambda dbs: {"attempt": review.attempt_view(dbs, current_user, start_attempt(dbs, exam_id).id,
@@ -214,6 +263,7 @@ def api_start_attempt(exam_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/attempts/<int:attempt_id>")
 @login_required
+@described(answers={200: obj(("attempt",), attempt=OBJECT)})
 def api_attempt(attempt_id: int) -> ResponseReturnValue:
     """The attempt: questions, answers, time left by the server's clock; marks and comments once submitted."""
     return run(lambda dbs: {"attempt": review.attempt_view(dbs, current_user, attempt_id, server_now())})
@@ -221,6 +271,11 @@ def api_attempt(attempt_id: int) -> ResponseReturnValue:
 
 @blueprint.patch("/api/attempts/<int:attempt_id>/answers")
 @login_required
+@described(
+    body=obj(("answers",), answers=obj(description="item -> answer")),
+    answers={200: obj(("saved", "answers"), saved=array(STRING), answers=OBJECT)},
+    refusals=(409,),
+)
 def api_save_answers(attempt_id: int) -> ResponseReturnValue:
     """{answers: {item: answer}}: saves answers as the student goes (refused after the deadline)."""
     data = json_body()
@@ -242,6 +297,12 @@ def _grade_settled_attempts_on_the_robot_s_run(_state: object) -> None:
 
 @blueprint.post("/api/attempts/<int:attempt_id>/submit")
 @login_required
+@described(
+    body=obj(answers=obj(description="item -> answer, saved before submitting")),
+    body_required=False,
+    answers={200: obj(("attempt",), attempt=OBJECT)},
+    refusals=(409,),
+)
 def api_submit(attempt_id: int) -> ResponseReturnValue:
     """{answers?}: submits the attempt; it is graded at once (quizzes show the correction immediately)."""
     data = request.get_json(silent=True) or {}
@@ -258,6 +319,17 @@ def api_submit(attempt_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/attempts/<int:attempt_id>/overrides")
 @login_required
+@described(
+    body=obj(
+        ("item", "points", "reason"),
+        item=about("the item"),
+        points=about("the new mark"),
+        reason=about("why"),
+        comment=about("for the student"),
+    ),
+    answers={200: obj(("review_id",), review_id=ID)},
+    refusals=(409,),
+)
 def api_override(attempt_id: int) -> ResponseReturnValue:
     """{item, points, reason, comment?}: a tutor replaces one item's mark."""
     data = json_body()
@@ -268,6 +340,11 @@ def api_override(attempt_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/attempts/<int:attempt_id>/comments")
 @login_required
+@described(
+    body=obj(("comment",), comment=about("the comment's text"), item=about("the item it is about, or none")),
+    answers={200: obj(("review_id",), review_id=ID)},
+    refusals=(409,),
+)
 def api_comment(attempt_id: int) -> ResponseReturnValue:
     """{comment, item?}: a tutor's comment the student sees with the corrected attempt."""
     data = json_body()
@@ -280,6 +357,7 @@ def api_comment(attempt_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/courses/<int:course_id>/grades.csv")
 @login_required
+@described(answers={200: file_answer("text/csv", "best final mark per student and exam")})
 def api_grades_csv(course_id: int) -> ResponseReturnValue:
     """Best final mark per student and exam, as CSV (its tutors, admins)."""
     text = review.grades_csv(get_session(), current_user, course_id, server_now())
@@ -289,6 +367,7 @@ def api_grades_csv(course_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/courses/<int:course_id>/recommendations")
 @login_required
+@described(answers={200: obj(("topics",), topics=array(OBJECT))})
 def api_recommendations(course_id: int) -> ResponseReturnValue:
     """The student's per-topic results and the activities recommended for weak topics."""
     def action(dbs: Session) -> dict[str, Any]:
@@ -304,6 +383,11 @@ def api_recommendations(course_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/courses/<int:course_id>/survey")
 @login_required
+@described(
+    body=obj(("ratings",), ratings=obj(description="item -> 1 to 5"), comments=about("free text")),
+    answers={201: obj(("answered",), answered=BOOLEAN)},
+    refusals=(409,),
+)
 def api_survey(course_id: int) -> ResponseReturnValue:
     """{ratings: {item: 1-5}, comments}: the student's evaluation of the system, once."""
     data = json_body()
@@ -319,6 +403,7 @@ def api_survey(course_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/courses/<int:course_id>/survey/results")
 @login_required
+@described(answers={200: obj(("respondents", "min_respondents"), respondents=whole(0), min_respondents=whole(0))})
 def api_survey_results(course_id: int) -> ResponseReturnValue:
     """The distribution of answers per question and the comments (its tutors, admins); empty, with `hidden`,
     until MIN_RESPONDENTS have answered."""
@@ -337,6 +422,7 @@ def _survey_dict(form: survey.CourseSurveyForm) -> dict[str, Any]:
 
 @blueprint.get("/api/courses/<int:course_id>/survey/statements")
 @login_required
+@described(answers={200: OBJECT})
 def api_survey_statements(course_id: int) -> ResponseReturnValue:
     """The course's survey as its students rate it (students and tutors of the course, admins)."""
     def action(dbs: Session) -> dict[str, Any]:
@@ -349,6 +435,13 @@ def api_survey_statements(course_id: int) -> ResponseReturnValue:
 
 @blueprint.put("/api/courses/<int:course_id>/survey/statements")
 @login_required
+@described(
+    body=obj(
+        ("title", "statements"), title=about("the survey's title"), statements=about("[{text, low_label, high_label}]")
+    ),
+    answers={200: OBJECT},
+    refusals=(409,),
+)
 def api_write_survey(course_id: int) -> ResponseReturnValue:
     """{title, statements: [{text, low_label, high_label}]}: the course's tutor writes its survey (409
     survey_answered once a student has answered)."""

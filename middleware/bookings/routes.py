@@ -10,6 +10,7 @@ from flask import Blueprint, Response, abort, current_app, flash, jsonify, redir
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
+from middleware.api.contract import OBJECT, STRING, about, array, described, obj, text
 from middleware.bookings import ical, services
 from middleware.bookings.availability import viewer_availability
 from middleware.bookings.schemas import (
@@ -51,6 +52,7 @@ def _require_robot(robot_name: str) -> str:
 
 @blueprint.get("/api/bookings")
 @login_required
+@described(answers={200: obj(("bookings",), bookings=array(OBJECT))})
 def api_my_bookings() -> ResponseReturnValue:
     """The current user's bookings that end in the last 30 days or later."""
     session, now = get_session(), _now()
@@ -61,6 +63,20 @@ def api_my_bookings() -> ResponseReturnValue:
 
 @blueprint.post("/api/bookings")
 @login_required
+@described(
+    body=obj(
+        ("starts_at",),
+        robot_name=about("a robot (or pool)"),
+        pool=about("a pool's kind (or robot_name)"),
+        starts_at=about("ISO 8601"),
+        ends_at=about("ISO 8601 (or duration_min)"),
+        duration_min=about("minutes"),
+        kind=about("personal or course"),
+        course_id=about("the course, for a course booking"),
+    ),
+    answers={201: obj(("booking",), booking=OBJECT)},
+    refusals=(409,),
+)
 def api_create_booking() -> ResponseReturnValue:
     """Books a slot: {robot_name | pool, starts_at, ends_at | duration_min, kind?, course_id?}."""
     data = request.get_json(silent=True)
@@ -76,6 +92,7 @@ def api_create_booking() -> ResponseReturnValue:
 
 @blueprint.delete("/api/bookings/<int:booking_id>")
 @login_required
+@described(answers={200: obj(("booking",), booking=OBJECT)}, refusals=(409,))
 def api_cancel_booking(booking_id: int) -> ResponseReturnValue:
     """Cancels a booking (the booker, a tutor of its course, or an admin)."""
     session, now = get_session(), _now()
@@ -85,6 +102,13 @@ def api_cancel_booking(booking_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/robots/<robot_name>/bookings")
 @login_required
+@described(
+    query={
+        "from": text(64, description="ISO 8601"),
+        "to": text(64, description="ISO 8601, at most 62 days after from"),
+    },
+    answers={200: obj(("robot_name", "from"), robot_name=STRING, bookings=array(OBJECT))},
+)
 def api_robot_bookings(robot_name: str) -> ResponseReturnValue:
     """The robot's bookings between ?from= and ?to= (ISO 8601; default: this ISO week in UTC)."""
     _require_robot(robot_name)

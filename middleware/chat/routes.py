@@ -9,6 +9,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
+from middleware.api.contract import ID, OBJECT, STRING, about, array, described, obj, whole
 from middleware.chat import services
 from middleware.db import get_session
 from middleware.errors import ApiError
@@ -23,6 +24,10 @@ def _require_robot(robot_name: str) -> None:
 
 @blueprint.get("/api/robots/<robot_name>/chat")
 @login_required
+@described(
+    query={"after_id": whole(0, 2**63 - 1)},
+    answers={200: obj(("robot_name",), robot_name=STRING, messages=array(OBJECT))},
+)
 def list_messages(robot_name: str) -> ResponseReturnValue:
     """The last 50 visible messages, or those after ?after_id=N (at most 50)."""
     _require_robot(robot_name)
@@ -37,6 +42,11 @@ def list_messages(robot_name: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/robots/<robot_name>/chat")
 @login_required
+@described(
+    body=obj(("body",), body=about("the message's text")),
+    answers={201: obj(("message",), message=OBJECT)},
+    refusals=(429,),
+)
 def post_message(robot_name: str) -> ResponseReturnValue:
     """Posts {"body": "..."} to the robot's chat."""
     _require_robot(robot_name)
@@ -49,6 +59,7 @@ def post_message(robot_name: str) -> ResponseReturnValue:
 
 @blueprint.delete("/api/robots/<robot_name>/chat/<int:message_id>")
 @login_required
+@described(answers={200: obj(("deleted",), deleted=ID)})
 def delete_message(robot_name: str, message_id: int) -> ResponseReturnValue:
     """Soft-deletes a message (tutors and admins)."""
     _require_robot(robot_name)

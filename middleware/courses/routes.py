@@ -13,6 +13,7 @@ from sqlalchemy.orm import Session
 
 from middleware.accounts.invitations import list_invitations
 from middleware.accounts.services import forbidden
+from middleware.api.contract import ID, OBJECT, STRING, about, array, described, obj, one_of
 from middleware.auth.schemas import InvalidField
 from middleware.courses import services
 from middleware.courses.schemas import (
@@ -170,6 +171,7 @@ def _api(action: Callable[[Session], object], status: int = 200) -> ResponseRetu
 
 @blueprint.get("/api/courses")
 @login_required
+@described(answers={200: obj(("courses",), courses=array(OBJECT))})
 def api_courses() -> ResponseReturnValue:
     """The courses the user belongs to (every course for an admin)."""
     return _api(lambda dbs: {"courses": [c.to_dict() for c in services.list_courses(dbs, current_user)]})
@@ -177,6 +179,18 @@ def api_courses() -> ResponseReturnValue:
 
 @blueprint.post("/api/courses")
 @login_required
+@described(
+    body=obj(
+        ("code", "title"),
+        code=about("the course's code"),
+        title=about("its title"),
+        turn_length_s=about("seconds"),
+        booking_allowance_min=about("minutes"),
+        graded_run_hold_min=about("minutes"),
+    ),
+    answers={201: obj(("course",), course=OBJECT)},
+    refusals=(409,),
+)
 def api_create_course() -> ResponseReturnValue:
     """{code, title, turn_length_s?, booking_allowance_min?, graded_run_hold_min?}: creates a course."""
     data = json_body()
@@ -192,6 +206,7 @@ def api_create_course() -> ResponseReturnValue:
 
 @blueprint.get("/api/courses/<int:course_id>")
 @login_required
+@described(answers={200: obj(("course",), course=OBJECT)})
 def api_course(course_id: int) -> ResponseReturnValue:
     """A course with its members (its tutors, admins)."""
     def action(dbs: Session) -> dict[str, object]:
@@ -204,6 +219,10 @@ def api_course(course_id: int) -> ResponseReturnValue:
 
 @blueprint.patch("/api/courses/<int:course_id>")
 @login_required
+@described(
+    body=obj(title=about("its title"), turn_length_s=about("seconds"), booking_allowance_min=about("minutes")),
+    answers={200: obj(("course",), course=OBJECT)},
+)
 def api_update_course(course_id: int) -> ResponseReturnValue:
     """{title?, turn_length_s?, booking_allowance_min?}: changes a course (its tutors, admins)."""
     data = json_body()
@@ -218,6 +237,11 @@ def api_update_course(course_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/courses/<int:course_id>/members")
 @login_required
+@described(
+    body=obj(("username",), username=about("an existing student's username")),
+    answers={201: obj(("enrolled",), enrolled=STRING), 200: obj(("enrolled",), enrolled=STRING)},
+    refusals=(409,),
+)
 def api_enrol(course_id: int) -> ResponseReturnValue:
     """{username}: enrols an existing student account."""
     data = json_body()
@@ -227,6 +251,7 @@ def api_enrol(course_id: int) -> ResponseReturnValue:
 
 @blueprint.delete("/api/courses/<int:course_id>/members/<int:user_id>")
 @login_required
+@described(answers={200: obj(("removed",), removed=ID)})
 def api_unenrol(course_id: int, user_id: int) -> ResponseReturnValue:
     """Removes a student from the course."""
     def action(dbs: Session) -> dict[str, object]:
@@ -238,6 +263,12 @@ def api_unenrol(course_id: int, user_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/courses/<int:course_id>/members.csv")
 @login_required
+@described(
+    form=obj(("file",), file={"type": "string", "format": "binary", "description": "a CSV of usernames"}),
+    query={"format": one_of("json", "csv")},
+    answers={200: OBJECT},
+    refusals=(413,),
+)
 def api_enrol_csv(course_id: int) -> ResponseReturnValue:
     """A CSV file (multipart field 'file'): the enrolment report as JSON, or as CSV with ?format=csv."""
     report = _enrol_uploaded_csv(course_id)

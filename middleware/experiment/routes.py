@@ -14,6 +14,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware.access.commands import robot_commands
+from middleware.api.contract import OBJECT, STRING, about, described, number, obj
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
 from middleware.experiment import services
@@ -147,6 +148,7 @@ def page() -> ResponseReturnValue:
 
 @blueprint.get("/api/experiment/state")
 @login_required
+@described(answers={200: OBJECT})
 def state() -> ResponseReturnValue:
     """The student's trial in progress with its run now, their video delay (the trial's, on its robot; else a
     tutor's), their last trial ended (recorded or given up), and, while no trial is in progress, the robots that
@@ -168,6 +170,12 @@ def state() -> ResponseReturnValue:
 
 @blueprint.post("/api/experiment/trials")
 @login_required
+@described(
+    body=obj(robot_name=about("a robot running a course scene"), course_id=about("the course it counts for")),
+    body_required=False,
+    answers={201: obj(("trial",), trial=OBJECT)},
+    refusals=(409, 503),
+)
 def start_trial() -> ResponseReturnValue:
     """Assigns a random condition on the chosen track robot and applies its delay and feedback setting."""
     body = request.get_json(silent=True) or {}
@@ -191,6 +199,7 @@ def start_trial() -> ResponseReturnValue:
 
 @blueprint.post("/api/experiment/trials/<int:trial_id>/finish")
 @login_required
+@described(answers={200: obj(("trial",), trial=OBJECT)}, refusals=(409, 503))
 def finish(trial_id: int) -> ResponseReturnValue:
     """Records the run the robot's track monitor finished after the trial began."""
     session = get_session()
@@ -210,6 +219,7 @@ def finish(trial_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/experiment/trials/<int:trial_id>/abandon")
 @login_required
+@described(answers={200: obj(("trial",), trial=OBJECT)}, refusals=(409,))
 def abandon(trial_id: int) -> ResponseReturnValue:
     """Gives the trial up; it is not counted, and the robot's run under way ends with it."""
 
@@ -223,6 +233,10 @@ def abandon(trial_id: int) -> ResponseReturnValue:
 
 @blueprint.put("/api/experiment/delays/<username>")
 @login_required
+@described(
+    body=obj(("delay_s",), delay_s=about("0 to 7 seconds")),
+    answers={200: obj(("username", "delay_s"), username=STRING, delay_s=number())},
+)
 def put_delay(username: str) -> ResponseReturnValue:
     """A tutor sets one user's added video delay: {"delay_s": 0..7}."""
     body = request.get_json(silent=True)
@@ -237,6 +251,7 @@ def put_delay(username: str) -> ResponseReturnValue:
 
 @blueprint.get("/api/experiment/results")
 @login_required
+@described(answers={200: OBJECT})
 def results() -> ResponseReturnValue:
     """Every completed trial and the means with standard errors per condition (tutors)."""
     rows = _run(lambda s: services.class_trials(s, _actor()))

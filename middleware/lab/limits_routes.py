@@ -8,6 +8,7 @@ from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
 from middleware.access.limits import UNITS, changeable_fields, check_permitted, parse_limits_request
+from middleware.api.contract import OBJECT, STRING, array, described, number, obj
 from middleware.db import get_session
 from middleware.robots.messages import limits_dict
 
@@ -20,6 +21,7 @@ def _user_id() -> int:
 
 @blueprint.get("/api/robots/<robot_name>/limits")
 @login_required
+@described(answers={200: obj(("limits", "may_change"), limits=OBJECT, may_change=array(STRING))}, refusals=(503,))
 def limits(robot_name: str) -> ResponseReturnValue:
     """The limits in force, their ranges, and which of them this user may change (anyone who may watch the robot)."""
     robot = robot_commands().for_user(robot_name, _user_id())
@@ -29,6 +31,11 @@ def limits(robot_name: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/robots/<robot_name>/limits")
 @login_required
+@described(
+    body=obj(max_linear_mps=number(0), max_angular_radps=number(0), watchdog_s=number(0)),
+    answers={200: obj(("limits", "may_change"), limits=OBJECT, may_change=array(STRING), message=STRING)},
+    refusals=(409, 503),
+)
 def set_limits(robot_name: str) -> ResponseReturnValue:
     """{max_linear_mps?, max_angular_radps?, watchdog_s?} (0 or absent keeps a value): the controller changes the
     settings their role and course allow; they bind the drive pad, skills and plans alike."""

@@ -14,6 +14,7 @@ from middleware.access import pools
 from middleware.access.coordinator import access_coordinator
 from middleware.access.pool_seats import PoolSeats
 from middleware.accounts.services import require_admin
+from middleware.api.contract import ANY, OBJECT, about, array, described, obj
 from middleware.db import after_commit, get_session
 from middleware.errors import Refused, flashed, unless_refused
 from middleware.farm.base import FarmUnavailable
@@ -52,6 +53,7 @@ def wait_page(kind: str) -> ResponseReturnValue:
 
 @blueprint.get("/api/pools/<kind>/seat")
 @login_required
+@described(answers={200: OBJECT})
 def api_seat(kind: str) -> ResponseReturnValue:
     """Where the user stands for kind: bound to a robot, waiting (position, expected wait), or not queued."""
     return jsonify(_seat_dict(kind))
@@ -59,6 +61,7 @@ def api_seat(kind: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/pools/<kind>/queue")
 @login_required
+@described(answers={200: OBJECT}, refusals=(409,))
 def api_join(kind: str) -> ResponseReturnValue:
     """Waits for any robot of kind (or keeps waiting: the page calls this every few seconds)."""
     _seats().join(kind, _user_id())
@@ -67,6 +70,7 @@ def api_join(kind: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/pools/<kind>/claim")
 @login_required
+@described(answers={200: OBJECT}, refusals=(409, 503))
 def api_claim(kind: str) -> ResponseReturnValue:
     """A free robot of kind now; 409 pool_full with the expected wait when none is free (nothing queued)."""
     _seats().claim(kind, _user_id())
@@ -75,6 +79,7 @@ def api_claim(kind: str) -> ResponseReturnValue:
 
 @blueprint.delete("/api/pools/<kind>/queue")
 @login_required
+@described(answers={200: OBJECT})
 def api_leave(kind: str) -> ResponseReturnValue:
     """Stops waiting for kind."""
     _seats().leave(kind, _user_id())
@@ -114,6 +119,7 @@ def _pools_report() -> list[dict[str, Any]]:
 
 @blueprint.get("/api/pools")
 @login_required
+@described(answers={200: obj(("pools",), pools=array(OBJECT))})
 def api_pools() -> ResponseReturnValue:
     """The pools a user may wait for: kind, robots, robots answering, free now, pool queue size."""
     return jsonify({"pools": [{"kind": p["kind"], "robots": len(p["robots"]),
@@ -132,6 +138,7 @@ def admin_page() -> ResponseReturnValue:
 
 @blueprint.get("/api/admin/pools")
 @login_required
+@described(answers={200: obj(("pools",), pools=array(OBJECT))})
 def admin_api() -> ResponseReturnValue:
     """The pools report as JSON (admins)."""
     require_admin(current_user)
@@ -196,6 +203,16 @@ def admin_stop(kind: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/admin/pools")
 @login_required
+@described(
+    body=obj(
+        ("kind", "scene", "count"),
+        kind=about("the pool's kind"),
+        scene=about("a scene's name"),
+        count=about("how many robots"),
+    ),
+    answers={201: obj(("started",), started=ANY)},
+    refusals=(409, 503),
+)
 def admin_api_start() -> ResponseReturnValue:
     """{kind, scene, count}: starts simulated robots of a pool on the farm (admins)."""
     data = request.get_json(silent=True)
@@ -206,6 +223,7 @@ def admin_api_start() -> ResponseReturnValue:
 
 @blueprint.delete("/api/admin/pools/<kind>")
 @login_required
+@described(answers={200: obj(("stopped",), stopped=ANY)}, refusals=(503,))
 def admin_api_stop(kind: str) -> ResponseReturnValue:
     """Stops the farm's robots of a pool (admins)."""
     return jsonify({"stopped": _stop(kind)})

@@ -9,6 +9,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
+from middleware.api.contract import ANY, BOOLEAN, OBJECT, STRING, described, obj
 from middleware.assessment.hidden_obstacles import hiding_book, info_without_obstacles, scene_without_obstacles
 from middleware.db import get_session
 from middleware.lab.skills import SUPERVISOR_ROLES
@@ -63,6 +64,7 @@ ROBOT_INFO_MAX_AGE_S = 1.0
 
 @blueprint.get("/api/robots/<robot_name>")
 @login_required
+@described(answers={200: obj(("name", "online"), name=STRING, title=ANY, online=BOOLEAN, info=ANY)})
 def robot_description(robot_name: str) -> ResponseReturnValue:
     """The robot's name, whether it answers, and its figures (null while it does not answer); the scene's obstacle
     boxes left out during the user's obstacle-zone test (middleware/assessment/hidden_obstacles.py)."""
@@ -84,6 +86,7 @@ SCENE_RECHECK_S = 5.0
 
 @blueprint.get("/api/robots/<robot_name>/scene")
 @login_required
+@described(answers={200: OBJECT}, refusals=(503,))
 def robot_scene(robot_name: str) -> ResponseReturnValue:
     """The robot's static world for the browser's 3D views, to whoever may see the robot (its camera's rule).
 

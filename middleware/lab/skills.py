@@ -9,6 +9,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import Commander, robot_commands
+from middleware.api.contract import ANY, BOOLEAN, OBJECT, STRING, array, described, obj
 from middleware.assessment.hidden_obstacles import MAP_REFUSAL, OBSTACLES_HIDDEN, hiding_book
 from middleware.db import get_session
 from middleware.errors import ApiError
@@ -61,6 +62,7 @@ def parse_activation(body: object) -> tuple[dict[str, object], bool]:
 
 @blueprint.get("/api/robots/<robot_name>/panels")
 @login_required
+@described(answers={200: obj(("robot",), robot=STRING, skills_available=BOOLEAN)})
 def panels(robot_name: str) -> ResponseReturnValue:
     """The descriptors of every panel of the robot's console."""
     link = robot_commands().require(robot_name, _user_id())
@@ -79,6 +81,11 @@ def panels(robot_name: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/robots/<robot_name>/skills/<skill>/goals")
 @login_required
+@described(
+    body=obj(parameters=obj(description="name -> number, true/false or a word"), preempt=BOOLEAN),
+    answers={202: obj(("goal",), goal=OBJECT)},
+    refusals=(409, 503),
+)
 def activate(robot_name: str, skill: str) -> ResponseReturnValue:
     """Starts a skill as a goal for the controller."""
     robot = robot_commands().for_user(robot_name, _user_id())
@@ -97,6 +104,7 @@ def _robot_leg_ms(robot: Commander) -> float | None:
 
 @blueprint.put("/api/robots/<robot_name>/response-times")
 @login_required
+@described(body=obj(delivery=OBJECT, throughput_bps=ANY), answers={200: obj(("recorded",), recorded=BOOLEAN)})
 def report_response_times(robot_name: str) -> ResponseReturnValue:
     """The console's response-time figures for the robot (its panel's table), kept for the user's tutor."""
     robot_commands().require(robot_name, _user_id())
@@ -113,6 +121,7 @@ def _goal_id(goal_id: str) -> str:
 
 @blueprint.get("/api/robots/<robot_name>/goals")
 @login_required
+@described(answers={200: obj(("goals",), goals=array(OBJECT), robot_online=BOOLEAN)}, refusals=(503,))
 def running_goals(robot_name: str) -> ResponseReturnValue:
     """The robot's running goals, whoever started them (a console opened again, a tour's step, another tab): its
     panels show them as their own. Observers may read them too; none while the robot does not answer."""
@@ -127,6 +136,7 @@ def running_goals(robot_name: str) -> ResponseReturnValue:
 
 @blueprint.get("/api/robots/<robot_name>/goals/<goal_id>")
 @login_required
+@described(answers={200: obj(("goal",), goal=OBJECT)}, refusals=(503,))
 def goal(robot_name: str, goal_id: str) -> ResponseReturnValue:
     """A goal's state (observers may read it too)."""
     robot = robot_commands().for_user(robot_name, _user_id())
@@ -136,6 +146,7 @@ def goal(robot_name: str, goal_id: str) -> ResponseReturnValue:
 
 @blueprint.delete("/api/robots/<robot_name>/goals/<goal_id>")
 @login_required
+@described(answers={200: obj(("goal",), goal=OBJECT)}, refusals=(409, 503))
 def cancel(robot_name: str, goal_id: str) -> ResponseReturnValue:
     """Cancels a goal; its message reports the error left."""
     robot = robot_commands().for_user(robot_name, _user_id())
@@ -151,6 +162,7 @@ def _supervision(robot_name: str) -> Commander:
 
 @blueprint.delete("/api/robots/<robot_name>/map")
 @login_required
+@described(answers={200: OBJECT}, refusals=(409, 503))
 def clear_map(robot_name: str) -> ResponseReturnValue:
     """Forgets the robot's map (supervisory): a map gone wrong would otherwise mislead every later user."""
     robot = _supervision(robot_name)
@@ -161,6 +173,7 @@ def clear_map(robot_name: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/robots/<robot_name>/dock")
 @login_required
+@described(answers={200: OBJECT}, refusals=(409, 503))
 def return_to_dock(robot_name: str) -> ResponseReturnValue:
     """Carries the robot back to its dock (supervisory): the way out of a drifted pose or a robot stuck on a wall."""
     robot = _supervision(robot_name)
@@ -173,6 +186,7 @@ def return_to_dock(robot_name: str) -> ResponseReturnValue:
 
 @blueprint.get("/api/robots/<robot_name>/map")
 @login_required
+@described(answers={200: obj(("map",), map=ANY)}, refusals=(503,))
 def occupancy_map(robot_name: str) -> ResponseReturnValue:
     """The occupancy grid built by environment modelling so far, or {"map": null} with a sentence before any.
 

@@ -16,6 +16,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
+from middleware.api.contract import OBJECT, STRING, described, file_answer, obj, one_of
 from middleware.errors import ApiError
 from middleware.lab.perception_export import SensorAngles, readings_csv, readings_mcap
 from middleware.lab.skills import SUPERVISOR_ROLES, _supervision
@@ -68,6 +69,11 @@ def page(robot_name: str) -> ResponseReturnValue:
 
 @blueprint.get("/api/robots/<robot_name>/evidence")
 @login_required
+@described(
+    query={"sensor": one_of("both", "sonar", "laser"), "part": one_of("both", "static", "moving")},
+    answers={200: obj(("evidence",), evidence=OBJECT)},
+    refusals=(503,),
+)
 def evidence(robot_name: str) -> ResponseReturnValue:
     """?sensor=both|sonar|laser&part=both|static|moving: the chosen layers of the robot's evidence grid."""
     link = robot_commands().require(robot_name, _user_id())
@@ -78,6 +84,7 @@ def evidence(robot_name: str) -> ResponseReturnValue:
 
 @blueprint.delete("/api/robots/<robot_name>/evidence")
 @login_required
+@described(answers={200: obj(("evidence",), evidence=OBJECT, message=STRING)}, refusals=(409, 503))
 def reset(robot_name: str) -> ResponseReturnValue:
     """Forgets the evidence grid and the readings (supervisory: the controller, or a tutor or admin at any time)."""
     robot = _supervision(robot_name)
@@ -106,6 +113,7 @@ def _download(body: str | bytes | Iterator[str], robot_name: str, suffix: str, m
 
 @blueprint.get("/api/robots/<robot_name>/readings.csv")
 @login_required
+@described(answers={200: file_answer("text/csv", "a row per range")}, refusals=(503,))
 def readings_as_csv(robot_name: str) -> ResponseReturnValue:
     """The raw readings kept (the last four minutes since the last reset) as CSV, a row per range."""
     link = robot_commands().require(robot_name, _user_id())
@@ -115,6 +123,7 @@ def readings_as_csv(robot_name: str) -> ResponseReturnValue:
 
 @blueprint.get("/api/robots/<robot_name>/readings.mcap")
 @login_required
+@described(answers={200: file_answer("application/octet-stream", "MCAP, topic /teleperception/scan")}, refusals=(503,))
 def readings_as_mcap(robot_name: str) -> ResponseReturnValue:
     """The raw readings kept as an MCAP file of JSON messages (topic /teleperception/scan)."""
     link = robot_commands().require(robot_name, _user_id())

@@ -12,6 +12,21 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.limits import WATCHDOG_FIELD, changeable_fields
+from middleware.api.contract import (
+    ANY,
+    BOOLEAN,
+    ID,
+    OBJECT,
+    about,
+    array,
+    described,
+    file_answer,
+    nullable,
+    obj,
+    one_of,
+    text,
+    whole,
+)
 from middleware.auth.schemas import InvalidField
 from middleware.courses.services import list_courses
 from middleware.db import get_session
@@ -76,6 +91,7 @@ def editor(plan_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/plans")
 @login_required
+@described(answers={200: obj(("plans",), plans=array(OBJECT))})
 def api_list() -> ResponseReturnValue:
     """{"plans": [...]}: mine first, then those shared with my courses."""
     dbs = get_session()
@@ -85,6 +101,11 @@ def api_list() -> ResponseReturnValue:
 
 @blueprint.post("/api/plans/check")
 @login_required
+@described(
+    body=obj(("text",), text=text(description="the plan, one command a line")),
+    answers={200: obj(("valid", "errors"), valid=BOOLEAN, errors=array(OBJECT), summary=ANY, plan=ANY)},
+    refusals=(503,),
+)
 def api_check() -> ResponseReturnValue:
     """Checks a plan's text: {"valid", "errors": [{line, column, field, message}], "summary", "plan"}."""
     text = schemas.plan_text(json_body().get("text"))
@@ -98,6 +119,15 @@ def api_check() -> ResponseReturnValue:
 
 @blueprint.post("/api/plans")
 @login_required
+@described(
+    body=obj(
+        ("name", "text"),
+        name=text(64, description="1 to 64 letters, digits, - and _"),
+        text=text(description="the plan, one command a line"),
+    ),
+    answers={201: obj(("plan",), plan=OBJECT)},
+    refusals=(503,),
+)
 def api_create() -> ResponseReturnValue:
     """Creates a plan from {"name", "text"}; 201 with it, or 400 invalid_plan listing every error."""
     body = json_body()
@@ -109,6 +139,7 @@ def api_create() -> ResponseReturnValue:
 
 @blueprint.get("/api/plans/<int:plan_id>")
 @login_required
+@described(query={"version": whole(1, 2**31 - 1)}, answers={200: obj(("plan",), plan=OBJECT)})
 def api_read(plan_id: int) -> ResponseReturnValue:
     """A plan with its latest version, or ?version=N."""
     return _plan_answer(plan_id, version=schemas.optional_version(request.args.get("version")))
@@ -116,6 +147,11 @@ def api_read(plan_id: int) -> ResponseReturnValue:
 
 @blueprint.put("/api/plans/<int:plan_id>")
 @login_required
+@described(
+    body=obj(("text",), text=text(description="the plan, one command a line"), name=nullable(text(64))),
+    answers={200: obj(("plan",), plan=OBJECT)},
+    refusals=(503,),
+)
 def api_save(plan_id: int) -> ResponseReturnValue:
     """Saves {"text", "name"?} as the plan's next version."""
     body = json_body()
@@ -128,6 +164,7 @@ def api_save(plan_id: int) -> ResponseReturnValue:
 
 @blueprint.delete("/api/plans/<int:plan_id>")
 @login_required
+@described(answers={200: obj(("deleted",), deleted=ID)})
 def api_delete(plan_id: int) -> ResponseReturnValue:
     """Deletes my plan and its versions."""
     services.delete_plan(get_session(), current_user, plan_id)
@@ -136,6 +173,7 @@ def api_delete(plan_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/plans/<int:plan_id>/copy")
 @login_required
+@described(body=obj(name=nullable(text(64))), body_required=False, answers={201: obj(("plan",), plan=OBJECT)})
 def api_copy(plan_id: int) -> ResponseReturnValue:
     """Copies a plan I may read into my plans ({"name"?}); 201 with the copy."""
     body = request.get_json(silent=True)
@@ -147,6 +185,9 @@ def api_copy(plan_id: int) -> ResponseReturnValue:
 
 @blueprint.put("/api/plans/<int:plan_id>/share")
 @login_required
+@described(
+    body=obj(("course_id",), course_id=about("a course's id, or null")), answers={200: obj(("plan",), plan=OBJECT)}
+)
 def api_share(plan_id: int) -> ResponseReturnValue:
     """Shares my plan with a course I teach ({"course_id": id}) or stops sharing it ({"course_id": null})."""
     body = json_body()
@@ -158,6 +199,7 @@ def api_share(plan_id: int) -> ResponseReturnValue:
 
 @blueprint.put("/api/plans/<int:plan_id>/skill")
 @login_required
+@described(body=obj(("console_skill",), console_skill=BOOLEAN), answers={200: obj(("plan",), plan=OBJECT)})
 def api_use_as_skill(plan_id: int) -> ResponseReturnValue:
     """Shows my plan as a panel in my consoles ({"console_skill": true}) or stops ({"console_skill": false})."""
     body = json_body()
@@ -169,6 +211,10 @@ def api_use_as_skill(plan_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/plans/<int:plan_id>/export")
 @login_required
+@described(
+    query={"format": one_of("json", "txt"), "version": whole(1, 2**31 - 1)},
+    answers={200: file_answer("application/json", "the plan as a file (text/plain with ?format=txt)")},
+)
 def api_export(plan_id: int) -> ResponseReturnValue:
     """The plan as a file: ?format=json (canonical, the default) or txt; ?version=N for an older one."""
     chosen = schemas.export_format(request.args.get("format"))
@@ -187,6 +233,13 @@ def api_export(plan_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/plans/import")
 @login_required
+@described(
+    form=obj(
+        ("file",), file={"type": "string", "format": "binary", "description": ".json (exported) or .txt"}, name=text(64)
+    ),
+    answers={201: obj(("plan",), plan=OBJECT)},
+    refusals=(413, 503),
+)
 def api_import() -> ResponseReturnValue:
     """Imports a plan file (multipart "file", optional "name"); 201 with the new plan, or 400 naming the line."""
     upload = request.files.get("file")
@@ -202,6 +255,17 @@ def api_import() -> ResponseReturnValue:
 
 @blueprint.post("/api/plans/<int:plan_id>/runs")
 @login_required
+@described(
+    body=obj(
+        ("target",),
+        target=text(64, description='"practice" or a lab robot'),
+        beside=about("the lab robot it runs beside"),
+        from_dock=BOOLEAN,
+        version=about("a version, or the latest"),
+    ),
+    answers={202: obj(("plan_id", "version"), plan_id=ID, version=whole(1))},
+    refusals=(409, 503),
+)
 def api_run(plan_id: int) -> ResponseReturnValue:
     """Runs the plan ({"target": "practice" | robot name, "beside": lab robot, "from_dock": bool, "version"?})."""
     body = json_body()
@@ -219,6 +283,11 @@ def api_run(plan_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/plans/<int:plan_id>/predictions")
 @login_required
+@described(
+    body=obj(beside=about("the lab robot to copy"), from_dock=BOOLEAN, version=about("a version, or the latest")),
+    answers={200: file_answer("application/x-ndjson", "the prediction's progress, a JSON object a line")},
+    refusals=(409, 503),
+)
 def api_predict(plan_id: int) -> ResponseReturnValue:
     """Predicts the plan in fast mode on a throwaway copy of a lab robot ({"beside": lab robot, "from_dock": bool,
     "version"?}): a stream of JSON lines (application/x-ndjson), progress then the end (middleware.plans.predictions).

@@ -12,6 +12,7 @@ from flask_login import current_user, login_required
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from middleware.api.contract import ANY, about, described, obj
 from middleware.db import get_session
 from middleware.errors import ApiError
 from middleware.models import UserPreference
@@ -50,6 +51,7 @@ def _find(key: str) -> UserPreference | None:
 
 @blueprint.get("/api/me/preferences/<key>")
 @login_required
+@described(answers={200: obj(("value",), value=ANY)})
 def read(key: str) -> ResponseReturnValue:
     """The stored value, or null; for a key that may be locked, why it cannot change now (null when it can)."""
     preference = _find(_key(key))
@@ -61,6 +63,11 @@ def read(key: str) -> ResponseReturnValue:
 
 @blueprint.put("/api/me/preferences/<key>")
 @login_required
+@described(
+    body=obj(("value",), value=about("any JSON value of at most 8 KB")),
+    answers={200: obj(("value",), value=ANY)},
+    refusals=(409,),
+)
 def write(key: str) -> ResponseReturnValue:
     """Stores a JSON value of at most 8 KB."""
     name = _key(key)

@@ -9,6 +9,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy.exc import DBAPIError
 
+from middleware.api.contract import OBJECT, about, described, obj
 from middleware.courses.services import get_course
 from middleware.db import after_commit, get_session, session_factory
 from middleware.models import User
@@ -65,6 +66,7 @@ def tutor_page(course_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/courses/<int:course_id>/class-session")
 @login_required
+@described(answers={200: OBJECT})
 def status(course_id: int) -> ResponseReturnValue:
     """The open session and every seat's robot state."""
     return jsonify(_session_dict(course_id))
@@ -72,6 +74,12 @@ def status(course_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/courses/<int:course_id>/class-session")
 @login_required
+@described(
+    body=obj(scene=about("the scene every student's robot starts in")),
+    body_required=False,
+    answers={201: OBJECT},
+    refusals=(409, 503),
+)
 def start(course_id: int) -> ResponseReturnValue:
     """Opens a class session and starts every student's robot in the background."""
     session, manager = get_session(), practice_manager()
@@ -85,6 +93,7 @@ def start(course_id: int) -> ResponseReturnValue:
 
 @blueprint.delete("/api/courses/<int:course_id>/class-session")
 @login_required
+@described(answers={200: OBJECT})
 def end(course_id: int) -> ResponseReturnValue:
     """Ends the open session: every student's robot is stopped."""
     owners, manager = class_sessions.end_session(get_session(), _actor(), course_id), practice_manager()
@@ -118,6 +127,7 @@ def student_page() -> ResponseReturnValue:
 
 @blueprint.get("/api/class-session")
 @login_required
+@described(answers={200: OBJECT})
 def my_seat() -> ResponseReturnValue:
     """The open class session the user has a seat in, and their robot's state."""
     return jsonify(_my_seat_dict())
@@ -125,6 +135,7 @@ def my_seat() -> ResponseReturnValue:
 
 @blueprint.post("/api/class-session/robot")
 @login_required
+@described(answers={202: OBJECT}, refusals=(409, 503))
 def restart_my_robot() -> ResponseReturnValue:
     """Starts the user's class robot again after they stopped it (or it was lost), in the background."""
     class_session_id = class_sessions.restart_my_robot(get_session(), _actor())

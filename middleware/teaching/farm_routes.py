@@ -8,6 +8,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.accounts.services import require_admin
+from middleware.api.contract import OBJECT, described
 from middleware.db import session_factory
 from middleware.errors import Refused
 from middleware.farm.base import FarmUnavailable
@@ -36,6 +37,7 @@ def farm_page() -> ResponseReturnValue:
 
 @blueprint.get("/api/admin/farm")
 @login_required
+@described(answers={200: OBJECT}, refusals=(503,))
 def farm_api() -> ResponseReturnValue:
     """The farm's state as JSON (admins)."""
     return jsonify(_status())

@@ -20,6 +20,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from werkzeug.exceptions import RequestEntityTooLarge
 
+from middleware.api.contract import ANY, OBJECT, STRING, about, array, described, obj, whole
 from middleware.db import get_session
 from middleware.errors import ApiError, flashed, unless_refused
 from middleware.extensions import csrf
@@ -124,6 +125,7 @@ def results_page(lesson_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/lessons/<int:lesson_id>/results")
 @login_required
+@described(answers={200: obj(("whose", "parts"), whose=ANY, students=ANY, parts=array(OBJECT))})
 def results_api(lesson_id: int) -> ResponseReturnValue:
     """The comparison per part as JSON: {whose, students, parts: [{part, before, after, change, rating_*}]}."""
     found = lesson_results(get_session(), _lesson(lesson_id), _user())
@@ -174,6 +176,12 @@ def _receive_video() -> str:
 @blueprint.post("/api/lessons/videos", endpoint="upload_video_api")
 @csrf.exempt
 @login_required
+@described(
+    form=obj(("video",), video={"type": "string", "format": "binary", "description": "the lesson video"}),
+    query={"lesson": whole(1, 2**31 - 1)},
+    answers={201: obj(("video_name", "videos"), video_name=STRING, videos=array())},
+    refusals=(413,),
+)
 def upload_video() -> ResponseReturnValue:
     """Uploads a lesson video (tutors; multipart field "video", with the CSRF token).
 
@@ -199,6 +207,11 @@ def upload_video() -> ResponseReturnValue:
 @blueprint.post("/lessons/videos/<name>/delete")
 @blueprint.delete("/api/lessons/videos/<name>", endpoint="delete_video_api")
 @login_required
+@described(
+    query={"lesson": whole(1, 2**31 - 1)},
+    answers={200: obj(("deleted", "videos"), deleted=STRING, videos=array())},
+    refusals=(409,),
+)
 def delete_video(name: str) -> ResponseReturnValue:
     """Deletes an uploaded video no lesson plays (tutors). The editor's button comes back to the editor."""
     api = request.path.startswith("/api/")
@@ -243,6 +256,7 @@ def video(lesson_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/lessons/<int:lesson_id>")
 @login_required
+@described(answers={200: OBJECT})
 def lesson_api(lesson_id: int) -> ResponseReturnValue:
     """A lesson with its cues."""
     return jsonify(lesson_dict(_lesson(lesson_id)))
@@ -250,6 +264,10 @@ def lesson_api(lesson_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/lessons/check")
 @login_required
+@described(
+    body=obj(("cues",), cues=about("the cue track (WebVTT)")),
+    answers={200: obj(("cues", "errors"), cues=array(OBJECT), errors=array(OBJECT))},
+)
 def check() -> ResponseReturnValue:
     """Checks a cue track without saving: {"cues": text} -> the cues and every error by line."""
     _require_tutor()
@@ -263,6 +281,16 @@ def check() -> ResponseReturnValue:
 @blueprint.post("/api/lessons")
 @blueprint.put("/api/lessons/<int:lesson_id>")
 @login_required
+@described(
+    body=obj(
+        ("title",),
+        title=about("the lesson's title"),
+        video=about("its video's name"),
+        cues=about("the cue track (WebVTT)"),
+    ),
+    answers={200: OBJECT, 201: OBJECT},
+    refusals=(409,),
+)
 def save(lesson_id: int | None = None) -> ResponseReturnValue:
     """Creates or updates a lesson after checking every cue against the robot's skills."""
     _require_tutor()
@@ -286,6 +314,12 @@ def _run_body() -> tuple[dict[str, object], float]:
 
 @blueprint.post("/api/lessons/<int:lesson_id>/cues/<int:index>/run")
 @login_required
+@described(
+    body=obj(target=about('"practice" or a robot the user controls')),
+    body_required=False,
+    answers={200: OBJECT, 202: OBJECT},
+    refusals=(409, 503),
+)
 def run_cue(lesson_id: int, index: int) -> ResponseReturnValue:
     """Sends the stored command of cue `index` (never a command from the page) to the learner's target."""
     received_at = time.perf_counter()
@@ -306,6 +340,12 @@ def run_cue(lesson_id: int, index: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/lessons/<int:lesson_id>/start")
 @login_required
+@described(
+    body=obj(target=about('"practice" or a robot the user controls')),
+    body_required=False,
+    answers={200: OBJECT},
+    refusals=(409, 503),
+)
 def start_lesson(lesson_id: int) -> ResponseReturnValue:
     """Places the learner's target where the lesson's video starts (their practice robot: at its dock)."""
     require_before_test(get_session(), _lesson(lesson_id), _user())
@@ -316,6 +356,12 @@ def start_lesson(lesson_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/lessons/stop")
 @login_required
+@described(
+    body=obj(target=about('"practice" or a robot the user controls')),
+    body_required=False,
+    answers={200: OBJECT},
+    refusals=(409, 503),
+)
 def stop() -> ResponseReturnValue:
     """Stops the learner's target at once (pause, seek, buffering, end)."""
     received_at = time.perf_counter()

@@ -9,6 +9,7 @@ from flask import Blueprint, jsonify, render_template, request, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
+from middleware.api.contract import OBJECT, described, obj
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
 from middleware.lab.sockets import camera_relay
@@ -52,6 +53,7 @@ def page() -> ResponseReturnValue:
 
 @blueprint.get("/api/practice")
 @login_required
+@described(answers={200: OBJECT})
 def status() -> ResponseReturnValue:
     """Whether the user's practice robot runs."""
     return jsonify(status_dict(_user_id()))
@@ -59,6 +61,7 @@ def status() -> ResponseReturnValue:
 
 @blueprint.post("/api/practice")
 @login_required
+@described(answers={200: OBJECT, 202: OBJECT}, refusals=(409, 503))
 def start() -> ResponseReturnValue:
     """Claims the user's practice robot, which the farm starts once the claim is committed (202: the page follows
     it to running), or answers the running one (200)."""
@@ -72,6 +75,7 @@ def start() -> ResponseReturnValue:
 
 @blueprint.delete("/api/practice")
 @login_required
+@described(answers={200: OBJECT})
 def stop() -> ResponseReturnValue:
     """Stops the user's practice robot."""
     manager = practice_manager()
@@ -83,6 +87,11 @@ def stop() -> ResponseReturnValue:
 
 @blueprint.post("/api/practice/commands")
 @login_required
+@described(
+    body=obj(("command",), command=obj(description="a declarative command: {kind, ...}")),
+    answers={202: OBJECT},
+    refusals=(409, 503),
+)
 def command() -> ResponseReturnValue:
     """Runs one declarative command on the practice robot: {"command": {...}}."""
     received_at = time.perf_counter()
@@ -96,6 +105,7 @@ def command() -> ResponseReturnValue:
 
 @blueprint.get("/api/robots/<target_name>/command-goals/<goal_id>")
 @login_required
+@described(answers={200: obj(("goal",), goal=OBJECT)}, refusals=(409, 503))
 def goal(target_name: str, goal_id: str) -> ResponseReturnValue:
     """A goal of the practice robot ("practice") or of a lab robot the user controls."""
     if not GOAL_ID.fullmatch(goal_id):

@@ -11,6 +11,7 @@ from sqlalchemy import select
 
 from middleware.access.coordinator import access_coordinator
 from middleware.accounts.schemas import clean_optional_id
+from middleware.api.contract import OBJECT, about, described, obj, one_of
 from middleware.bookings.services import tutored_courses
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
@@ -115,6 +116,7 @@ def _panel_choices(in_use: list[str]) -> list[tuple[str, str]]:
 
 @blueprint.get("/api/tours/<int:tour_id>")
 @login_required
+@described(answers={200: OBJECT})
 def tour_api(tour_id: int) -> ResponseReturnValue:
     """A tour with its steps."""
     return jsonify(tour_dict(_tour(tour_id)))
@@ -123,6 +125,11 @@ def tour_api(tour_id: int) -> ResponseReturnValue:
 @blueprint.post("/api/tours")
 @blueprint.put("/api/tours/<int:tour_id>")
 @login_required
+@described(
+    body=obj(("title",), title=about("the tour's title"), steps=about("its steps")),
+    answers={200: OBJECT, 201: OBJECT},
+    refusals=(409,),
+)
 def save(tour_id: int | None = None) -> ResponseReturnValue:
     """Creates or updates a tour; steps' skills and parameters are checked against the robot's schemas."""
     _require_tutor()
@@ -135,6 +142,9 @@ def save(tour_id: int | None = None) -> ResponseReturnValue:
 
 @blueprint.post("/api/tours/<int:tour_id>/steps/<int:index>/run")
 @login_required
+@described(
+    body=obj(target=about('"practice" or a robot the user controls')), answers={202: OBJECT}, refusals=(409, 503)
+)
 def run_step(tour_id: int, index: int) -> ResponseReturnValue:
     """Runs the stored command of step index on the learner's target (practice robot or a robot they control)."""
     received_at = time.perf_counter()
@@ -165,6 +175,16 @@ def start_page(tour_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/tours/<int:tour_id>/sessions")
 @login_required
+@described(
+    body=obj(
+        ("robot",),
+        robot=about("a lab robot"),
+        course_id=about("a course's id, or null"),
+        override=about("true or false (admins)"),
+    ),
+    answers={201: OBJECT},
+    refusals=(409, 503),
+)
 def start_live(tour_id: int) -> ResponseReturnValue:
     """Starts a live class: {"robot": name, "course_id": id|null, "override": false} (teaching/authority.py says
     who may)."""
@@ -203,6 +223,7 @@ def session_page(session_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/tour-sessions/<int:session_id>")
 @login_required
+@described(answers={200: OBJECT})
 def session_api(session_id: int) -> ResponseReturnValue:
     """The class's state."""
     found = _live(session_id)
@@ -212,6 +233,17 @@ def session_api(session_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/tour-sessions/<int:session_id>")
 @login_required
+@described(
+    body=obj(
+        ("action",),
+        action=one_of("step", "control", "end"),
+        index=about("the step, for step"),
+        user=about("a username or null, for control"),
+    ),
+    body_required=False,
+    answers={200: OBJECT},
+    refusals=(409, 503),
+)
 def session_action(session_id: int) -> ResponseReturnValue:
     """The tutor's actions: {"action": "step", "index": n} | {"action": "control", "user": name|null} | end."""
     session = get_session()
