@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 
 from middleware.plans.steps import (
     CONDITION_KINDS,
+    EVENTS,
     MAX_ERRORS,
     MAX_EXPANDED_STEPS,
     MAX_PLAN_DURATION_S,
@@ -20,7 +21,10 @@ from middleware.plans.steps import (
     MIN_REPEAT,
     SETTINGS,
     Condition,
+    IfStep,
+    OnStep,
     PlanError,
+    RepeatStep,
     Step,
 )
 from middleware.plans.summary import certain_duration_s, expanded_count
@@ -37,6 +41,7 @@ DIRECT_CONTROL = "direct_control"  # its schema gives the robot's velocity ceili
 MAX_PARAMETERS = 32
 OBSTACLE_RANGE_M = (0.05, 8.0)  # the laser's reach
 BATTERY_RANGE = (0.01, 1.0)  # a fraction of full; below 0 is never true, and the skill server refuses 0
+WARNING_RANGE_M = (0.05, 3.0)  # detect_obstacle's warning distance (its schema on the skill server)
 WATCHDOG_RANGE_S = (0.2, 5.0)  # the base's drive watchdog: what SetLimits accepts (README, Low-level commands)
 MIN_SPEED_MPS, MIN_TURN_RATE_RADPS = 0.05, 0.1
 
@@ -217,6 +222,61 @@ def condition(kind: str, value: object, negate: bool, written: str | None = None
     checked = _checked(kind, value, schema, "value", written)
     assert isinstance(checked, float)
     return Condition(kind, checked, negate)
+
+
+def event_schema(event: str) -> Mapping[str, object] | None:
+    """The schema of an event's value (None: the event takes none), or a StepProblem for an unknown event."""
+    if event not in EVENTS:
+        raise StepProblem("event", f"{shown(event)} is not an event{did_you_mean(event, EVENTS)}; "
+                                   f"use {', '.join(EVENTS)}.")
+    if event == "obstacle_detected":
+        return {"type": "double", "unit": "m", "minimum": WARNING_RANGE_M[0], "maximum": WARNING_RANGE_M[1]}
+    if event == "battery_low":
+        return {"type": "double", "unit": "", "minimum": BATTERY_RANGE[0], "maximum": BATTERY_RANGE[1]}
+    return None
+
+
+def event_value(event: str, value: object, written: str | None = None) -> float | None:
+    """A checked event and its value (None: the event's default)."""
+    schema = event_schema(event)
+    if value is None:
+        return None
+    if schema is None:
+        raise StepProblem("value", f"{event} takes no value; got {cut(written) if written else shown(value)}.")
+    checked = _checked(event, value, schema, "value", written)
+    assert isinstance(checked, float)
+    return checked
+
+
+def handler_errors(steps: Sequence[Step], path: str = "steps", in_handler: bool = False) -> list[PlanError]:
+    """The rules of on blocks: each watches lines after it in its block, one per event in a block, none in another's
+    body, a body not empty."""
+    errors: list[PlanError] = []
+    handled: dict[str, int] = {}
+    for index, step in enumerate(steps):
+        where = f"{path}[{index}]"
+        if isinstance(step, OnStep):
+            if in_handler:
+                errors.append(place_error(step.line, step.column, where, "an on block cannot hold another on: while "
+                                                                         "an on block runs, no event is handled."))
+            if step.event in handled:
+                errors.append(place_error(step.line, step.column, f"{where}.event", f"{step.event} is handled "
+                                          f"already on line {handled[step.event]} of this block; write one on "
+                                          "for it."))
+            handled.setdefault(step.event, step.line)
+            if index == len(steps) - 1:
+                errors.append(place_error(step.line, step.column, where, "this on handles nothing: it watches the "
+                                          "lines after it in its block, and none follows. Put it before them."))
+            if not step.body:
+                errors.append(place_error(step.line, step.column, f"{where}.body", "this on has nothing in its "
+                                                                                   "block."))
+            errors += handler_errors(step.body, f"{where}.body", True)
+        elif isinstance(step, RepeatStep):
+            errors += handler_errors(step.body, f"{where}.body", in_handler)
+        elif isinstance(step, IfStep):
+            errors += handler_errors(step.then, f"{where}.then", in_handler)
+            errors += handler_errors(step.otherwise, f"{where}.else", in_handler)
+    return errors
 
 
 def setting_schema(setting: str, skills: SkillSchemas) -> Mapping[str, object]:

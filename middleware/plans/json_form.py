@@ -15,6 +15,7 @@ from middleware.plans.steps import (
     Condition,
     DriveStep,
     IfStep,
+    OnStep,
     Plan,
     PlanError,
     PlanInvalid,
@@ -38,6 +39,7 @@ KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {  # kind -> (require
     "if": (("condition", "then"), ("else",)),
     "set": (("setting", "value"), ()),
     "say": (("text",), ()),
+    "on": (("event", "body"), ("value",)),
 }
 
 
@@ -69,6 +71,9 @@ def _step_json(step: Step) -> dict[str, object]:
                 "then": [_step_json(s) for s in step.then], "else": [_step_json(s) for s in step.otherwise]}
     if isinstance(step, SetStep):
         return {**head, "kind": "set", "setting": step.setting, "value": step.value}
+    if isinstance(step, OnStep):
+        return {**head, "kind": "on", "event": step.event, "value": step.value,
+                "body": [_step_json(s) for s in step.body]}
     return {**head, "kind": "say", "text": step.text}
 
 
@@ -89,6 +94,8 @@ def plan_from_json(doc: object, skills: SkillSchemas) -> Plan:
                 steps = reader.block(doc["steps"], "steps", 0)
             except checks.TooManyErrors:
                 raise PlanInvalid(reader.errors) from None
+    if not reader.errors:
+        reader.errors += checks.handler_errors(steps)
     if not reader.errors:
         reader.errors += checks.plan_totals(steps)
     plan = Plan(tuple(steps))
@@ -167,7 +174,7 @@ class _Reader:
             return None
         readers: Mapping[str, Callable[[dict[str, object], str, int], Step | None]] = {
             "skill": self._skill, "drive": self._drive, "wait": self._wait, "repeat": self._repeat, "if": self._if,
-            "set": self._set, "say": self._say,
+            "set": self._set, "say": self._say, "on": self._on,
         }
         try:
             step = readers[kind](value, path, depth)
@@ -277,6 +284,20 @@ class _Reader:
         if not isinstance(setting, str):
             raise StepProblem("setting", f"setting must be one of {', '.join(checks.SETTINGS)}; got {shown(setting)}.")
         return SetStep(setting, checks.setting_value(setting, value["value"], self.skills))
+
+    def _on(self, value: dict[str, object], path: str, depth: int) -> Step | None:
+        event = value["event"]
+        try:
+            if not isinstance(event, str):
+                raise StepProblem("event", f"event must be one of {', '.join(checks.EVENTS)}; got {shown(event)}.")
+            threshold: float | None = checks.event_value(event, value.get("value"))
+        except StepProblem as problem:
+            self.report(_line(value), _column(value), f"{path}.{problem.field}", problem.message)
+            return None
+        body = self._nested(value["body"], f"{path}.body", depth, _line(value))
+        if body is None:
+            return None
+        return OnStep(event, threshold, tuple(body))
 
     def _say(self, value: dict[str, object], path: str, depth: int) -> Step | None:
         return SayStep(checks.say_text(value["text"]))

@@ -11,6 +11,7 @@ from __future__ import annotations
 from middleware.plans.aliases import ALIASES, Alias
 from middleware.plans.json_form import plan_from_json, plan_to_json
 from middleware.plans.steps import (
+    EVENTS,
     FORMAT,
     MAX_DEPTH,
     MAX_EXPANDED_STEPS,
@@ -23,6 +24,7 @@ from middleware.plans.steps import (
     Condition,
     DriveStep,
     IfStep,
+    OnStep,
     Plan,
     PlanError,
     PlanInvalid,
@@ -40,8 +42,9 @@ from middleware.plans.text_writer import plan_to_text
 from middleware.teaching.command_form import SkillSchemas
 
 __all__ = [
-    "ALIASES", "Alias", "FORMAT", "MAX_DEPTH", "MAX_EXPANDED_STEPS", "MAX_LINES", "MAX_PLAN_DURATION_S", "MAX_REPEAT",
-    "MAX_SAY_CHARS", "MAX_STEP_DURATION_S", "MAX_TEXT_BYTES", "Condition", "DriveStep", "IfStep", "Plan", "PlanError",
-    "PlanInvalid", "RepeatStep", "SayStep", "SetStep", "SkillSchemas", "SkillStep", "Step", "WaitStep", "is_plan_name",
-    "parse_plan_text", "plan_from_json", "plan_summary", "plan_to_json", "plan_to_text",
+    "ALIASES", "EVENTS", "Alias", "FORMAT", "MAX_DEPTH", "MAX_EXPANDED_STEPS", "MAX_LINES", "MAX_PLAN_DURATION_S",
+    "MAX_REPEAT", "MAX_SAY_CHARS", "MAX_STEP_DURATION_S", "MAX_TEXT_BYTES", "Condition", "DriveStep", "IfStep",
+    "OnStep", "Plan", "PlanError", "PlanInvalid", "RepeatStep", "SayStep", "SetStep", "SkillSchemas", "SkillStep",
+    "Step", "WaitStep", "is_plan_name", "parse_plan_text", "plan_from_json", "plan_summary", "plan_to_json",
+    "plan_to_text",
 ]

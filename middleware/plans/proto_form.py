@@ -7,6 +7,7 @@ from middleware.plans.steps import (
     Condition,
     DriveStep,
     IfStep,
+    OnStep,
     Plan,
     RepeatStep,
     SayStep,
@@ -69,4 +70,7 @@ def _step(step: Step) -> robot_pb2.PlanStep:
         proto.set.setting, proto.set.value = step.setting, step.value
     elif isinstance(step, SayStep):
         proto.say.text = step.text
+    elif isinstance(step, OnStep):
+        proto.on.event, proto.on.value = step.event, step.value or 0.0
+        proto.on.body.CopyFrom(_block(step.body))
     return proto

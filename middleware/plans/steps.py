@@ -25,6 +25,11 @@ MAX_PLAN_NAME = 64
 
 CONDITION_KINDS = ("obstacle_within", "goal_reached", "battery_below")
 SETTINGS = ("max_speed", "max_turn_rate", "watchdog")
+# The events an on block reacts to (issue 33; the skill server's EVENTS in skill_server/plans/validation.py):
+# obstacle_detected (detect_obstacle's rule; value: warning distance, m), wall_lost (wall_following), goal_reached
+# (a skill line reached its goal), localized (the localization skill, run beside the plan), battery_low (value:
+# fraction of full).
+EVENTS = ("obstacle_detected", "wall_lost", "goal_reached", "localized", "battery_low")
 
 
 @dataclass(frozen=True)
@@ -144,7 +149,19 @@ class SayStep:
     column: int = field(default=0, compare=False)
 
 
-Step = SkillStep | DriveStep | WaitStep | RepeatStep | IfStep | SetStep | SayStep
+@dataclass(frozen=True)
+class OnStep:
+    """From the next line to the end of its block, when event happens the line running is cut short and body runs
+    in its place; value is the event's threshold (None: its default)."""
+
+    event: str
+    value: float | None
+    body: tuple[Step, ...]
+    line: int = field(default=0, compare=False)
+    column: int = field(default=0, compare=False)
+
+
+Step = SkillStep | DriveStep | WaitStep | RepeatStep | IfStep | SetStep | SayStep | OnStep
 
 
 @dataclass(frozen=True)

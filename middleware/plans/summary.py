@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 
-from middleware.plans.steps import DriveStep, IfStep, Plan, RepeatStep, SkillStep, Step, WaitStep
+from middleware.plans.steps import DriveStep, IfStep, OnStep, Plan, RepeatStep, SkillStep, Step, WaitStep
 
 
 def expanded_count(steps: Iterable[Step]) -> int:
@@ -15,16 +15,26 @@ def expanded_count(steps: Iterable[Step]) -> int:
             total += step.count * expanded_count(step.body)
         elif isinstance(step, IfStep):
             total += 1 + expanded_count(step.then) + expanded_count(step.otherwise)  # the test is a step too
+        elif isinstance(step, OnStep):
+            total += 1 + expanded_count(step.body)  # its body, once: it runs in the place of a line cut short
         else:
             total += 1
     return total
 
 
 def duration_bound_s(steps: Iterable[Step]) -> float | None:
-    """The longest the steps can take, or None when a step has no bound (a skill or a wait with no time limit)."""
+    """The longest the steps can take, or None when a step has no bound (a skill or a wait with no time limit).
+    After an on, a line cut short runs the on's body in its place: the bound adds the longest body to each line."""
     total = 0.0
+    handler_s = 0.0  # the longest body of the ons in force
     for step in steps:
         part: float | None
+        if isinstance(step, OnStep):
+            body = duration_bound_s(step.body)
+            if body is None:
+                return None
+            handler_s = max(handler_s, body)
+            continue
         if isinstance(step, RepeatStep):
             body = duration_bound_s(step.body)
             part = None if body is None else step.count * body
@@ -41,14 +51,17 @@ def duration_bound_s(steps: Iterable[Step]) -> float | None:
             part = 0.0
         if part is None:
             return None
-        total += part
+        total += part + (handler_s * expanded_count((step,)) if handler_s else 0.0)
     return total
 
 
 def certain_duration_s(steps: Iterable[Step]) -> float:
-    """The time the steps take at the least: drives and plain waits (a skill or a condition may end early)."""
+    """The time the steps take at the least: drives and plain waits (a skill or a condition may end early, and an
+    on may cut any line after it short)."""
     total = 0.0
     for step in steps:
+        if isinstance(step, OnStep):
+            break
         if isinstance(step, RepeatStep):
             total += step.count * certain_duration_s(step.body)
         elif isinstance(step, IfStep):
@@ -69,6 +82,8 @@ def walk(steps: Iterable[Step]) -> Iterator[Step]:
         elif isinstance(step, IfStep):
             yield from walk(step.then)
             yield from walk(step.otherwise)
+        elif isinstance(step, OnStep):
+            yield from walk(step.body)
 
 
 def plan_summary(plan: Plan) -> dict[str, object]:

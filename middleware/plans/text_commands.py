@@ -13,7 +13,7 @@ from middleware.plans.steps import Condition, DriveStep, SayStep, SetStep, Skill
 from middleware.plans.tokens import Kind, Token
 from middleware.teaching.command_form import SkillSchemas
 
-COMMANDS = ("drive", "wait", "wait_until", "repeat", "if", "set", "say", *ALIASES)
+COMMANDS = ("drive", "wait", "wait_until", "repeat", "if", "on", "set", "say", *ALIASES)
 Report = Callable[[int, int, str, str], None]  # line, column, message, field
 
 
@@ -226,6 +226,30 @@ class CommandReader:
             return checks.condition(kind.text, value, negate, values[0].written if values else None)
         except StepProblem as problem:
             raise self.at(values[0] if values else kind, f"{path}.{problem.field}", problem.message) from None
+
+    def event(self, head: Token, tokens: list[Token], path: str) -> tuple[str, float | None]:
+        """An on's header: an event and maybe its value (on obstacle_detected 0.3)."""
+        if any(t.kind is Kind.BAD for t in tokens):
+            raise Reported()
+        self._units_apart(tokens, path)
+        if not tokens:
+            raise self.at(head, f"{path}.event", f"on needs an event: {', '.join(checks.EVENTS)}, as in "
+                                                 "on obstacle_detected { ... }.")
+        name, values = tokens[0], tokens[1:]
+        try:
+            if name.kind is not Kind.WORD:
+                raise StepProblem("event", f"an event is a name such as obstacle_detected; got {name.written[:40]!r}.")
+            schema = checks.event_schema(name.text)
+        except StepProblem as problem:
+            raise self.at(name, f"{path}.event", problem.message) from None
+        if len(values) > 1:
+            raise self.at(values[1], f"{path}.value", f"{name.text} takes at most one value.")
+        value = self.number(values[0], str((schema or {}).get("unit", "")), name.text, f"{path}.value") if values \
+            else None
+        try:
+            return name.text, checks.event_value(name.text, value, values[0].written if values else None)
+        except StepProblem as problem:
+            raise self.at(values[0] if values else name, f"{path}.{problem.field}", problem.message) from None
 
     def _set(self, head: Token, tokens: list[Token], path: str) -> Step:
         self._units_apart(tokens, path)

@@ -10,6 +10,7 @@ from middleware.plans.steps import (
     MAX_LINES,
     MAX_TEXT_BYTES,
     IfStep,
+    OnStep,
     Plan,
     PlanError,
     PlanInvalid,
@@ -44,6 +45,8 @@ def parse_plan_text(text: str, skills: SkillSchemas) -> Plan:
         steps = parser.block("steps", 0, None)
     except checks.TooManyErrors:
         raise PlanInvalid(_in_reading_order(parser.errors)) from None
+    if not parser.errors:
+        parser.errors += checks.handler_errors(steps)
     if not parser.errors:
         parser.errors += checks.plan_totals(steps)
     plan = Plan(tuple(steps))
@@ -111,8 +114,10 @@ class _Parser:
             return self._repeat(head, path, depth)
         if head.kind is Kind.WORD and head.text == "if":
             return self._if(head, path, depth)
+        if head.kind is Kind.WORD and head.text == "on":
+            return self._on(head, path, depth)
         if head.kind is Kind.OPEN:
-            self.report(head.line, head.column, "a { block } belongs after repeat, if or else.", path)
+            self.report(head.line, head.column, "a { block } belongs after repeat, if, else or on.", path)
             self._skip_block(head, path)
             return None
         if head.kind is Kind.WORD and head.text == "else":
@@ -124,7 +129,7 @@ class _Parser:
         arguments = self._line_tokens()
         if self.peek().kind is Kind.OPEN:
             opener = self.advance()
-            self.report(opener.line, opener.column, "only repeat, if and else take a { block }.", path)
+            self.report(opener.line, opener.column, "only repeat, if, else and on take a { block }.", path)
             self._skip_block(opener, path)
             return None
         try:
@@ -206,6 +211,18 @@ class _Parser:
             self.report(head.line, head.column, "this repeat has nothing in its block.", f"{path}.body")
             return None
         return RepeatStep(count, tuple(body), head.line, head.column)
+
+    def _on(self, head: Token, path: str, depth: int) -> Step | None:
+        header = self._line_tokens()
+        try:
+            event = self.commands.event(head, header, path)
+        except Reported:
+            event = None
+        before = len(self.errors)
+        body = self._nested_block(head, f"{path}.body", depth)
+        if event is None or body is None or len(self.errors) > before:
+            return None
+        return OnStep(event[0], event[1], tuple(body), head.line, head.column)
 
     def _if(self, head: Token, path: str, depth: int) -> Step | None:
         header = self._line_tokens()

@@ -13,6 +13,7 @@ from middleware.plans.steps import (
     Condition,
     DriveStep,
     IfStep,
+    OnStep,
     Plan,
     PlanError,
     RepeatStep,
@@ -147,3 +148,8 @@ def _write(steps: tuple[Step, ...], depth: int, lines: list[str]) -> None:
             lines.append(f"{indent}set {step.setting} {value}")
         elif isinstance(step, SayStep):
             lines.append(f"{indent}say {quoted(step.text)}")
+        elif isinstance(step, OnStep):
+            value = "" if step.value is None else f" {number_text(step.value)}"
+            lines.append(f"{indent}on {step.event}{value} {{")
+            _write(step.body, depth + 1, lines)
+            lines.append(indent + "}")

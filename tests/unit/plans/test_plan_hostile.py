@@ -22,7 +22,7 @@ def nested(depth: int, inner: str = 'say "deep"') -> str:
 HOSTILE_TEXTS = [
     ("nine nested blocks", nested(9), 9, 10, "steps[0]" + ".body[0]" * 8 + ".body",
      "blocks nest at most 8 deep; this one would be 9 deep"),
-    ("ten thousand braces", "{" * 10_000, 1, 1, "steps[0]", "a { block } belongs after repeat, if or else"),
+    ("ten thousand braces", "{" * 10_000, 1, 1, "steps[0]", "a { block } belongs after repeat, if, else or on"),
     ("ten thousand closing braces", "}" * 10_000, 1, 1, "steps", "this } closes no block"),
     ("repeat a billion", 'repeat 1000000000 {\n  say "x"\n}', 1, 8, "steps[0].count",
      "count must be between 1 and 100; got 1000000000."),

@@ -120,8 +120,8 @@ def test_battery_low_fires_at_once_when_the_charge_is_below_already() -> None:
     ((OnLine(1, 1, "goal_reached", 0.0, (OnLine(2, 3, "wall_lost", 0.0, (SayLine(3, 5, "x"),)), SayLine(4, 3, "z"))),
       SayLine(6, 1, "y")),
      (2, "on", "an on block cannot hold another on")),
-    ((OnLine(1, 1, "goal_reached", 0.0, (SayLine(2, 3, "x"),)), OnLine(4, 1, "goal_reached", 0.0, (SayLine(5, 3, "x"),)),
-      SayLine(7, 1, "y")),
+    ((OnLine(1, 1, "goal_reached", 0.0, (SayLine(2, 3, "x"),)),
+      OnLine(4, 1, "goal_reached", 0.0, (SayLine(5, 3, "x"),)), SayLine(7, 1, "y")),
      (4, "event", "goal_reached is handled already on line 1 of this block")),
     ((OnLine(1, 1, "localized", 0.0, ()), SayLine(3, 1, "y")), (1, "body", "an on block needs at least one line")),
 ])
