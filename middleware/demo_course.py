@@ -30,6 +30,8 @@ from middleware.assessment.survey_statements import parse_statements
 from middleware.auth.services import create_user, find_user, generate_password
 from middleware.courses import services as courses
 from middleware.courses.schemas import CourseSettings
+from middleware.experiment import protocol as experiment_protocol
+from middleware.experiment import services as experiment
 from middleware.models import Course, Role
 from middleware.plans.demo_plans import seed_demo_plans
 
@@ -90,6 +92,21 @@ DEMO_SURVEY_ANSWERS: dict[str, tuple[tuple[int, ...], str]] = {
     "demo-classmate-1": ((5, 4, 4, 3, 5, 4, 4, 5), "Driving the robot from home made the odometry lesson concrete."),
     "demo-classmate-2": ((4, 4, 2, 4, 4, 3, 5, 3), "Booking a slot was hard in the week before the test."),
     "demo-classmate-3": ((4, 5, 3, 4, 5, 4, 4, 4), ""),
+}
+# The experiment's protocol in the demo course (a one-minute learning period, so the journey is walked at once), and
+# the classmates' trials on course-A: their details, then seconds per condition (control, 1 s on/off, 3 s on/off),
+# near the thesis' figures (the preview saves about a quarter at 3 s).
+DEMO_LEARNING_S = 60
+DEMO_TRIALS: dict[str, tuple[dict[str, Any], dict[tuple[float, bool], float]]] = {
+    "demo-classmate-1": ({"age": 23, "location": "remote", "games_experience": "much", "robots_experience": "none"},
+                         {(0.0, False): 41.0, (1.0, True): 47.5, (1.0, False): 55.0, (3.0, True): 61.0,
+                          (3.0, False): 82.0}),
+    "demo-classmate-2": ({"age": 25, "location": "lab", "games_experience": "some", "robots_experience": "some"},
+                         {(0.0, False): 38.5, (1.0, True): 45.0, (1.0, False): 50.5, (3.0, True): 58.0,
+                          (3.0, False): 77.5}),
+    "demo-classmate-3": ({"age": 24, "location": "remote", "games_experience": "none", "robots_experience": "none"},
+                         {(0.0, False): 44.0, (1.0, True): 52.0, (1.0, False): 57.5, (3.0, True): 63.5,
+                          (3.0, False): 85.0}),
 }
 QUIZ_QUESTIONS = (0, 1, 3, 6)  # indices into DEMO_QUESTIONS
 TIMED_QUESTIONS = (0, 2, 4, 5)
@@ -169,5 +186,21 @@ def _survey_classmates(session: Session, tutor: Any, course_id: int) -> list[str
         survey.submit_survey(session, classmate, course_id, *parse_survey(
             {"ratings": {s.key: rating for s, rating in zip(statements, ratings, strict=False)},
              "comments": comments}, statements))
+        _experiment_trials(session, classmate, course_id)
         set_active_by_name(session, username, False)
-    return [f"the lab survey answered by {len(DEMO_SURVEY_ANSWERS)} demo classmates"]
+    experiment_protocol.set_protocol(session, tutor, course_id, {"learning_s": DEMO_LEARNING_S})
+    return [f"the lab survey answered by {len(DEMO_SURVEY_ANSWERS)} demo classmates",
+            f"{len(DEMO_TRIALS) * len(experiment_protocol.CONDITIONS_PER_COURSE)} experiment trials of theirs on "
+            "course-A"]
+
+
+def _experiment_trials(session: Session, classmate: Any, course_id: int) -> None:
+    """The classmate's details (with consent) and one trial per condition, in their counterbalanced order."""
+    details, seconds = DEMO_TRIALS[classmate.username]
+    experiment_protocol.answer_details(session, classmate, {"consent": True, **details})
+    experiment_protocol.participant(session, classmate.id).learning_started_at = (  # type: ignore[union-attr]
+        datetime.now(UTC) - timedelta(days=1))
+    for _ in seconds:
+        trial = experiment.assign_trial(session, classmate, "course-a", "course-A", course_id)
+        experiment.finish_trial(session, classmate, trial.id,
+                                experiment.RunResult(seconds[(trial.delay_s, trial.feedback)], 0))

@@ -303,6 +303,32 @@ def make_course(app, code: str, members: dict[str, str]) -> int:
         return course.id
 
 
+def ready_for_trials(app_or_session, username: str, order_index: int = 1) -> None:
+    """username has answered the experiment's participant questions (declined) and finished the learning period,
+    and runs row order_index of the design (row 1 begins with 1 s, preview on; row 0 with the no-delay control)."""
+    from datetime import UTC, datetime, timedelta
+
+    from sqlalchemy.orm import Session
+
+    from middleware.db import session_factory
+    from middleware.models import User
+    from middleware.models.experiment import Participant
+
+    def write(session: Session) -> None:
+        user = session.query(User).filter_by(username=username).one()
+        now = datetime.now(UTC)
+        session.merge(Participant(user_id=user.id, consent=False, answered_at=now,
+                                  learning_started_at=now - timedelta(days=1), order_index=order_index))
+        session.flush()
+
+    if isinstance(app_or_session, Session):
+        write(app_or_session)
+        return
+    with session_factory(app_or_session)() as session:
+        write(session)
+        session.commit()
+
+
 @pytest.fixture
 def live_server(app) -> Iterator[LiveServer]:
     """A running web server for the app."""

@@ -14,14 +14,15 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware.access.commands import robot_commands
-from middleware.api.contract import OBJECT, STRING, about, described, number, obj
+from middleware.api.contract import BOOLEAN, ID, OBJECT, STRING, about, array, described, number, obj
+from middleware.courses.authority import taught_course_ids
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
-from middleware.experiment import services
+from middleware.experiment import protocol, services
 from middleware.experiment.delay import delay_book
 from middleware.experiment.progress import TrackRunNow, finished_in_trial, progress_view, track_route
 from middleware.experiment.trial_rules import FEEDBACK_PREFERENCE_KEY
-from middleware.models import User, UserPreference
+from middleware.models import Course, CourseMembership, User, UserPreference
 from middleware.models.accounts import utc_now
 from middleware.models.experiment import TRIAL_OPEN, Trial
 from middleware.models.farm import PersonalRobotRecord
@@ -47,8 +48,15 @@ def _run(action: Callable[[Session], T]) -> T:
 
 def _trial_dict(trial: Trial) -> dict[str, object]:
     return {"id": trial.id, "course_id": trial.course_id, "robot_name": trial.robot_name, "course": trial.course,
-            "delay_s": trial.delay_s, "feedback": trial.feedback, "status": trial.status,
-            "total_time_s": trial.total_time_s, "errors": trial.errors}
+            "delay_s": trial.delay_s, "feedback": trial.feedback, "commands_delayed": trial.commands_delayed,
+            "status": trial.status, "total_time_s": trial.total_time_s, "errors": trial.errors}
+
+
+def _json_object() -> dict[str, object]:
+    body = request.get_json(silent=True)
+    if not isinstance(body, dict):
+        raise ApiError(400, "invalid_field", "Send a JSON object.", "body")
+    return body
 
 
 def track_robots(user_id: int) -> list[dict[str, object]]:
@@ -157,13 +165,15 @@ def state() -> ResponseReturnValue:
     actor = _actor()
     trial = services.current_trial(session, actor)
     last = services.last_finished_trial(session, actor)
+    courses = services.student_courses(session, actor)
     return jsonify({
+        "protocol": protocol.state_for(session, actor, trial.course_id if trial else
+                                       (courses[0].id if courses else None)),
         "trial": _trial_dict(trial) if trial else None,
         "run": _run_progress(trial) if trial else None,
         "last_trial": _trial_dict(last) if last else None,
         "robots": track_robots(actor.id) if trial is None else [],
-        "courses": [{"id": c.id, "code": c.code, "title": c.title}
-                    for c in services.student_courses(session, actor)] if trial is None else [],
+        "courses": [{"id": c.id, "code": c.code, "title": c.title} for c in courses] if trial is None else [],
         "delay_s": trial.delay_s if trial else services.get_video_delay(session, actor.id),
     })
 
@@ -195,6 +205,70 @@ def start_trial() -> ResponseReturnValue:
         return trial
 
     return jsonify({"trial": _trial_dict(_run(action))}), 201
+
+
+@blueprint.put("/api/experiment/participant")
+@login_required
+@described(
+    body=obj(
+        ("consent",),
+        consent=about("true or false"),
+        age=about("years"),
+        location=about("where"),
+        games_experience=about("a level"),
+        robots_experience=about("a level"),
+    ),
+    answers={200: OBJECT},
+    refusals=(409,),
+)
+def put_participant() -> ResponseReturnValue:
+    """The student's details, asked once before the first trial: {"consent": bool, "age", "location",
+    "games_experience", "robots_experience"} (kept only with consent)."""
+    body = _json_object()
+    row = protocol.answer_details(get_session(), _actor(), body)
+    return jsonify({"consent": row.consent, "age": row.age, "location": row.location,
+                    "games_experience": row.games_experience, "robots_experience": row.robots_experience})
+
+
+@blueprint.post("/api/experiment/learning")
+@login_required
+@described(answers={201: obj(("started",), started=BOOLEAN)}, refusals=(409,))
+def start_learning() -> ResponseReturnValue:
+    """Starts the student's learning period (time to drive the course freely before the first trial)."""
+    protocol.start_learning(get_session(), _actor())
+    return jsonify({"started": True}), 201
+
+
+@blueprint.get("/api/experiment/protocols")
+@login_required
+@described(answers={200: obj(("courses",), courses=array(OBJECT))})
+def protocols() -> ResponseReturnValue:
+    """The courses the tutor teaches (every course for an admin) with their experiment protocol."""
+    session = get_session()
+    actor = _actor()
+    if actor.role not in ("tutor", "admin"):
+        raise ApiError(403, "forbidden", "Only tutors and admins set experiment protocols.")
+    query = select(Course).order_by(Course.code)
+    if actor.role != "admin":
+        query = query.where(Course.id.in_(taught_course_ids(actor)))
+    return jsonify({"courses": [{"id": c.id, "code": c.code, "title": c.title,
+                                 **protocol.protocol_for(session, c.id).__dict__}
+                                for c in session.scalars(query)]})
+
+
+@blueprint.put("/api/experiment/protocols/<int:course_id>")
+@login_required
+@described(
+    body=obj(
+        learning_s=about("seconds"), delay_commands=about("true or false"), export_participants=about("true or false")
+    ),
+    answers={200: obj(("course_id",), course_id=ID)},
+)
+def put_protocol(course_id: int) -> ResponseReturnValue:
+    """A tutor sets the course's learning period and switches: {"learning_s", "delay_commands",
+    "export_participants"} (any of them)."""
+    settings = protocol.set_protocol(get_session(), _actor(), course_id, _json_object())
+    return jsonify({"course_id": course_id, **settings.__dict__})
 
 
 @blueprint.post("/api/experiment/trials/<int:trial_id>/finish")
@@ -259,7 +333,19 @@ def results() -> ResponseReturnValue:
     return jsonify({
         "trials": [{**_trial_dict(t), "username": name} for t, name in rows],
         "summary": [g.__dict__ for g in summary],
+        "comparisons": [c.__dict__ for c in services.compare(summary)],
+        "participants": protocol.participants_summary(get_session(), _class_student_ids()),
+        "orders": len(protocol.ORDERS),
     })
+
+
+def _class_student_ids() -> set[int]:
+    """The students of the courses the actor teaches (every student for an admin)."""
+    actor = _actor()
+    query = select(CourseMembership.user_id).where(CourseMembership.role == "student")
+    if actor.role != "admin":
+        query = query.where(CourseMembership.course_id.in_(taught_course_ids(actor)))
+    return set(get_session().scalars(query))
 
 
 @blueprint.get("/experiment/results.csv")
@@ -267,5 +353,6 @@ def results() -> ResponseReturnValue:
 def results_csv() -> ResponseReturnValue:
     """The class's trials as CSV."""
     rows = _run(lambda s: services.class_trials(s, _actor()))
-    return Response(services.results_csv(rows), mimetype="text/csv",
+    details = services.exportable_details(get_session(), rows)
+    return Response(services.results_csv(rows, details), mimetype="text/csv",
                     headers={"Content-Disposition": "attachment; filename=experiment-results.csv"})

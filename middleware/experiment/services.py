@@ -8,9 +8,7 @@ from __future__ import annotations
 import csv
 import io
 import math
-import random
-from collections import Counter
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from sqlalchemy import select
@@ -18,17 +16,17 @@ from sqlalchemy import select
 from middleware import events
 from middleware.courses.authority import taught_course_ids, teaches_student
 from middleware.errors import Refused
+from middleware.experiment import protocol
 from middleware.experiment.delay import parse_delay_s
 from middleware.models import Course, CourseMembership, Role, User
 from middleware.models.access import RobotControl
 from middleware.models.accounts import utc_now
-from middleware.models.experiment import TRIAL_OPEN, Trial, VideoDelay
+from middleware.models.experiment import TRIAL_OPEN, Participant, Trial, VideoDelay
 
 COURSES = ("course-A", "course-B")
 DELAYS_TOPIC = "delays"  # announced with the user's id when a delay in force may have changed
-TRIAL_DELAYS_S = (1.0, 3.0)
 CONDITIONS: tuple[tuple[str, float, bool], ...] = tuple(
-    (course, delay, feedback) for course in COURSES for delay in TRIAL_DELAYS_S for feedback in (True, False)
+    (course, delay, feedback) for course in COURSES for delay, feedback in protocol.CONDITIONS_PER_COURSE
 )
 MAX_TRIAL_TIME_S = 3600.0
 MAX_TRIAL_ERRORS = 1000
@@ -110,34 +108,24 @@ def may_restart_run(session, student: User, robot_name: str) -> bool:
     return control is None or control.controller_id in (None, student.id)
 
 
-def choose_condition(done: Iterable[tuple[str, float, bool]], courses: Sequence[str],
-                     rng: random.Random) -> tuple[str, float, bool]:
-    """A random condition among the ones this student has run least (balanced), on the courses available."""
-    candidates = [c for c in CONDITIONS if c[0] in courses]
-    if not candidates:
-        raise Refused(409, "no_course_robot", "No robot runs a course scene now. Ask your tutor to start one.",
-                      "robot_name")
-    counts = Counter(done)
-    fewest = min(counts[c] for c in candidates)
-    return rng.choice([c for c in candidates if counts[c] == fewest])
-
-
-def assign_trial(session, student: User, robot_name: str, robot_scene: str,
-                 rng: random.Random | None = None, course_id: object = None) -> Trial:
-    """Assigns the student a random condition on the robot's course, counted for their class course (see
-    trial_course_id); its delay is on their video of that robot while the trial is open (the delay book reads
-    open trials)."""
+def assign_trial(session, student: User, robot_name: str, robot_scene: str, course_id: object = None) -> Trial:
+    """Begins the student's next trial on the robot's course, counted for their class course (see
+    trial_course_id), once they have answered the participant questions and their learning period is over: the
+    next condition of their counterbalanced order (protocol.next_condition); its delay is on their video of that
+    robot while the trial is open (the delay book reads open trials), and on their commands too when the course's
+    protocol says so."""
     existing = current_trial(session, student)
     if existing is not None:
         return existing
     if robot_scene not in COURSES:
         raise Refused(409, "not_a_course", f"The robot {robot_name} does not run a course scene.", "robot_name")
     class_course_id = trial_course_id(session, student, course_id)
-    done = [(t.course, t.delay_s, t.feedback) for t in session.scalars(
-        select(Trial).where(Trial.user_id == student.id, Trial.status == "completed"))]
-    course, delay, feedback = choose_condition(done, [robot_scene], rng or random.SystemRandom())
-    trial = Trial(user_id=student.id, course_id=class_course_id, robot_name=robot_name, course=course,
-                  delay_s=delay, feedback=feedback, status=TRIAL_OPEN, errors=0, created_at=utc_now())
+    settings = protocol.protocol_for(session, class_course_id)
+    protocol.require_ready(session, student, settings)
+    delay, feedback = protocol.next_condition(session, student, class_course_id, robot_scene)
+    trial = Trial(user_id=student.id, course_id=class_course_id, robot_name=robot_name, course=robot_scene,
+                  delay_s=delay, feedback=feedback, status=TRIAL_OPEN, errors=0,
+                  commands_delayed=settings.delay_commands and delay > 0, created_at=utc_now())
     session.add(trial)
     session.flush()
     events.announce(session, DELAYS_TOPIC, str(student.id))
@@ -226,20 +214,68 @@ def summarise(trials: Iterable[Trial]) -> list[GroupStats]:
     return stats
 
 
+@dataclass(frozen=True)
+class Comparison:
+    """What the thesis reports for a course at one delay: the time the preview saves (the mean without it minus
+    the mean with it, as a share of the former) and each mean against the no-delay control's."""
+
+    course: str
+    delay_s: float
+    preview_saves: float | None
+    on_vs_control: float | None
+    off_vs_control: float | None
+
+
+def compare(stats: Sequence[GroupStats]) -> list[Comparison]:
+    """Per course and added delay, from the conditions' means (None where a condition has no trial yet)."""
+    means = {(g.course, g.delay_s, g.feedback): g.mean_time_s for g in stats}
+    comparisons = []
+    for course in COURSES:
+        control = means.get((course, protocol.CONTROL_DELAY_S, False))
+        for delay in sorted({d for d, _ in protocol.CONDITIONS_PER_COURSE if d > protocol.CONTROL_DELAY_S}):
+            on, off = means.get((course, delay, True)), means.get((course, delay, False))
+            if on is None and off is None:
+                continue
+            comparisons.append(Comparison(
+                course, delay, (off - on) / off if on is not None and off else None,
+                on / control if on is not None and control else None,
+                off / control if off is not None and control else None))
+    return comparisons
+
+
 def _cell(value: object) -> str:
     text = "" if value is None else str(value)
     return "'" + text if text[:1] in ("=", "+", "-", "@") else text
 
 
-def results_csv(rows: Sequence[tuple[Trial, str]]) -> str:
-    """One line per completed trial; cells starting with = + - @ are quoted against CSV injection."""
+PARTICIPANT_COLUMNS = ("age", "location", "games_experience", "robots_experience")
+
+
+def results_csv(rows: Sequence[tuple[Trial, str]], details: Mapping[int, Participant] | None = None) -> str:
+    """One line per completed trial; cells starting with = + - @ are quoted against CSV injection. details: the
+    participants whose details may go out (consenting, of a course whose tutor enabled it); the columns are there
+    only when some may."""
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\r\n")
-    writer.writerow(["trial_id", "username", "robot", "course", "delay_s", "feedback", "total_time_s", "errors",
-                     "finished_at_utc"])
+    extra = PARTICIPANT_COLUMNS if details else ()
+    writer.writerow(["trial_id", "username", "robot", "course", "delay_s", "feedback", "commands_delayed",
+                     "total_time_s", "errors", "finished_at_utc", *extra])
     for trial, username in rows:
+        person = details.get(trial.user_id) if details else None
         writer.writerow([_cell(v) for v in (
             trial.id, username, trial.robot_name, trial.course, trial.delay_s, "on" if trial.feedback else "off",
-            round(trial.total_time_s or 0.0, 3), trial.errors,
-            trial.finished_at.isoformat() if trial.finished_at else "")])
+            "yes" if trial.commands_delayed else "no", round(trial.total_time_s or 0.0, 3), trial.errors,
+            trial.finished_at.isoformat() if trial.finished_at else "",
+            *(getattr(person, column) if person is not None else "" for column in extra))])
     return out.getvalue()
+
+
+def exportable_details(session, rows: Sequence[tuple[Trial, str]]) -> dict[int, Participant]:
+    """The details that may go into an export of rows: a consenting participant's, for trials of a course whose
+    protocol enables it."""
+    allowed = {trial.user_id for trial, _ in rows
+               if trial.course_id is not None and protocol.protocol_for(session, trial.course_id).export_participants}
+    if not allowed:
+        return {}
+    return {p.user_id: p for p in session.scalars(select(Participant).where(Participant.user_id.in_(allowed),
+                                                                           Participant.consent.is_(True)))}

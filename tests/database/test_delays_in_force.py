@@ -8,6 +8,7 @@ from sqlalchemy.orm import Session
 from middleware.experiment import services
 from middleware.experiment.delay import delay_in_force_s, read_all_delays_s
 from middleware.models import Course, CourseMembership, User
+from tests.conftest import ready_for_trials
 
 
 def _accounts(session: Session) -> tuple[User, User]:
@@ -19,6 +20,7 @@ def _accounts(session: Session) -> tuple[User, User]:
     session.add_all([CourseMembership(course_id=course.id, user_id=student.id, role="student"),
                      CourseMembership(course_id=course.id, user_id=tutor.id, role="tutor")])  # tim teaches ann
     session.flush()
+    ready_for_trials(session, "ann")
     return student, tutor
 
 

@@ -35,7 +35,7 @@ import pytest
 import simple_websocket
 
 from benchmarks.lab_under_test import WebSocketClient
-from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LabClient, postgres_database
+from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LabClient, postgres_database, ready_for_trials
 from tests.e2e.test_experiment import place
 from tests.e2e.test_lab_with_workers import NGINX, _answers, _children, _command, _free_port
 from tests.e2e.test_panels import wait_for
@@ -127,6 +127,7 @@ def _prepare(database_url: str) -> tuple[dict[str, int], int]:
             session.add_all(CourseMembership(course_id=course.id, user_id=ids[name], role=role)
                             for name, role in (("tutor1", "tutor"), ("student1", "student"), ("student2", "student")))
             tour_id = save_tour(session, DEMO_TOURS[1], None, None).id
+            ready_for_trials(session, "trialist")
             session.commit()
             return ids | {"course": course.id}, tour_id
     finally:

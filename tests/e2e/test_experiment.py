@@ -22,7 +22,7 @@ import pytest
 
 from skill_server.server import create_server
 from skill_server.sim.geometry import Pose2D
-from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer, make_course, served_lab
+from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer, make_course, ready_for_trials, served_lab
 from tests.e2e.test_console import log_in
 
 pytestmark = pytest.mark.e2e
@@ -46,12 +46,14 @@ def course_lab(scene: str, robot_name: str, tmp_path: Path) -> Iterator[tuple[An
 def course_b_lab(tmp_path: Path) -> Iterator[tuple[Any, LiveServer]]:
     with course_lab("course-B", "course-b", tmp_path) as lab:
         make_course(lab[1].app, "EXP", {"tutor1": "tutor", "student1": "student"})  # tutor1 reads its results
+        ready_for_trials(lab[1].app, "student1")
         yield lab
 
 
 @pytest.fixture
 def course_a_lab(tmp_path: Path) -> Iterator[tuple[Any, LiveServer]]:
     with course_lab("course-A", "course-a", tmp_path) as lab:
+        ready_for_trials(lab[1].app, "student1")
         yield lab
 
 

@@ -13,7 +13,7 @@ import pytest
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 from skill_server.server import create_server
 from skill_server.sim.geometry import Pose2D
-from tests.conftest import STUDENT_PASSWORD, LabClient, make_course, served_lab
+from tests.conftest import STUDENT_PASSWORD, LabClient, make_course, ready_for_trials, served_lab
 from tests.integration.lab.test_skills_api import take_control
 
 
@@ -29,6 +29,7 @@ def course_app(tmp_path: Path, course_robot):
     """The lab with tutor1 teaching student1 (a tutor sets and reads only their own students' delays and trials)."""
     with served_lab(f"course-1=127.0.0.1:{course_robot.port}", tmp_path) as server:
         make_course(server.app, "EXP", {"tutor1": "tutor", "student1": "student"})
+        ready_for_trials(server.app, "student1")
         yield server
 
 
@@ -142,6 +143,7 @@ def test_a_student_runs_a_trial_on_course_a_and_the_tutor_sees_it(course_app, co
 @pytest.fixture
 def course_and_lab_app(tmp_path: Path, course_robot, skill_server_address: str):
     with served_lab(f"course-1=127.0.0.1:{course_robot.port},lab-1={skill_server_address}", tmp_path) as server:
+        ready_for_trials(server.app, "student1")
         yield server
 
 

@@ -11,7 +11,7 @@ import time
 import pytest
 import simple_websocket
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, add_test_account, make_course, served_lab
+from tests.conftest import STUDENT_PASSWORD, LabClient, add_test_account, make_course, ready_for_trials, served_lab
 from tests.integration.experiment.test_experiment import (  # noqa: F401 (fixtures)
     course_app,
     course_robot,
@@ -150,6 +150,7 @@ def two_courses(tmp_path, course_robot):  # noqa: F811
             session.commit()
         x = make_course(server.app, "X", {"tutor1": "tutor", "student1": "student"})
         y = make_course(server.app, "Y", {"tutor2": "tutor", "student1": "student"})
+        ready_for_trials(server.app, "student1")
         yield server, x, y
 
 

@@ -11,7 +11,15 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, make_course, make_test_app
+from tests.conftest import (
+    STUDENT_PASSWORD,
+    LabClient,
+    LiveServer,
+    add_test_account,
+    make_course,
+    make_test_app,
+    ready_for_trials,
+)
 from tests.integration.teaching.test_class_sessions import _wait_until_ready
 from tests.integration.teaching.test_practice_console_and_uploads import _api
 
@@ -33,6 +41,7 @@ def small_class(tmp_path: Path, skill_server_address: str) -> Iterator[tuple[Liv
             add_test_account(session, name, role)
         session.commit()
     course_id = make_course(app, "ROB101", {"tutor1": "tutor", "ann": "student", "bob": "student"})
+    ready_for_trials(app, "ann")
     now = datetime.now(UTC)
     with session_factory(app)() as session:
         exam = bank.create_exam(session, find_user(session, "tutor1"), course_id, parse_exam({

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import random
 import struct
 import time
 
@@ -20,7 +19,7 @@ from middleware.experiment.delay import (
     delay_in_force_s,
     parse_delay_s,
 )
-from middleware.experiment.services import CONDITIONS, choose_condition, results_csv, summarise
+from middleware.experiment.services import results_csv, summarise
 from middleware.models.experiment import Trial
 
 
@@ -179,19 +178,10 @@ def test_means_and_standard_errors_per_condition() -> None:
     assert stats[1].standard_error_s is None
 
 
-def test_conditions_are_random_but_balanced_over_a_students_trials() -> None:
-    rng = random.Random(4)
-    done: list[tuple[str, float, bool]] = []
-    for _ in range(8):
-        done.append(choose_condition(done, ["course-A", "course-B"], rng))
-    assert sorted(done) == sorted(CONDITIONS)  # each of the 8 conditions once before any twice
-    only_a = choose_condition([], ["course-A"], rng)
-    assert only_a[0] == "course-A" and only_a[1] in (1.0, 3.0)
-
-
 def test_csv_quotes_cells_that_a_spreadsheet_would_run() -> None:
     text = results_csv([(_trial(1, "course-A", 1.0, True, 42.0), "=cmd|calc"), (_trial(2, "course-B", 3.0, False, 9.5),
                                                                                "@evil")])
     lines = text.splitlines()
-    assert lines[0].startswith("trial_id,username,robot,course,delay_s,feedback,total_time_s,errors")
+    assert lines[0].startswith("trial_id,username,robot,course,delay_s,feedback,commands_delayed,total_time_s,errors")
+    assert "age" not in lines[0], "no participant details unless a tutor enables them"
     assert "'=cmd|calc" in lines[1] and "'@evil" in lines[2] and ",on," in lines[1] and ",off," in lines[2]
