@@ -44,6 +44,7 @@ function render(state) {
   startButton.hidden = state.open;
   sceneChoice.hidden = state.open;
   endButton.hidden = !state.open;
+  root.querySelector("[data-action=wall]").hidden = !state.open;
   table.hidden = !state.open;
   rows.replaceChildren(...state.seats.map(seatRow));
   const { starting, ready, failed, stopped } = state.counts;
