@@ -38,6 +38,10 @@ from middleware.models.assessment import Attempt, Exam
 # hand the reader in); None: the trace stored so far is graded.
 RunSource = Callable[[str, datetime, datetime], "list[list[float]] | None"]
 _run_source: RunSource | None = None
+# Who hears that a mark became final (submitted, or a tutor's override), in the transaction that makes it:
+# create_app hands the listeners in (the LTI grade passback), so assessment imports none of them.
+FinalMarkListener = Callable[[Session, Attempt], object]
+_final_mark_listeners: list[FinalMarkListener] = []
 
 MAX_ANSWER_CHARS = 4000
 
@@ -89,6 +93,18 @@ def read_runs_from(source: RunSource) -> None:
     _run_source = source
 
 
+def on_final_mark(listener: FinalMarkListener) -> None:
+    """Makes listener(session, attempt) hear of every final mark and every override (once, however often given)."""
+    if listener not in _final_mark_listeners:
+        _final_mark_listeners.append(listener)
+
+
+def final_mark_changed(session: Session, attempt: Attempt) -> None:
+    """Tells the listeners that attempt's final mark is set or changed."""
+    for listener in _final_mark_listeners:
+        listener(session, attempt)
+
+
 def _run_until_deadline(exam: Exam, attempt: Attempt, deadline: datetime) -> list[list[float]] | None:
     robot_name = attempt.robot_name or exam.robot_name
     if exam.kind != "experimental" or not robot_name or _run_source is None:
@@ -114,6 +130,7 @@ def _finalise(session: Session, exam: Exam, attempt: Attempt, at: datetime, by: 
     attempt.max_score = round(sum(r.max_points for r in results), 4)
     attempt.status, attempt.open_key, attempt.submitted_at, attempt.submitted_by = "submitted", None, at, by
     session.flush()
+    final_mark_changed(session, attempt)
 
 
 def settle(session: Session, attempt: Attempt, now: datetime) -> bool:

@@ -11,7 +11,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.assessment.attempts import _items, my_attempts, settle, settle_due, window_state
+from middleware.assessment.attempts import _items, final_mark_changed, my_attempts, settle, settle_due, window_state
 from middleware.assessment.bank import list_exams, managed_exam, question_dict, questions_of
 from middleware.assessment.policy import may_teach, readable_attempt, teaching_course
 from middleware.courses.schemas import csv_safe
@@ -175,6 +175,7 @@ def override_mark(session: Session, actor: User, attempt_id: int, item: object, 
                            reason=reason.strip(), comment=text[:4000], created_at=now)
     session.add(review)
     session.flush()
+    final_mark_changed(session, attempt)
     return review
 
 

@@ -39,6 +39,9 @@ class LtiPlatform(Base):
     auth_login_url: Mapped[str] = mapped_column(String(1000))
     auth_token_url: Mapped[str] = mapped_column(String(1000))
     key_set_url: Mapped[str] = mapped_column(String(1000))
+    # The origins whose pages may frame Telelab's (frame-ancestors): the issuer's by default, and the LMS's own
+    # site where it differs (Canvas's issuer is canvas.instructure.com, its pages the university's).
+    frame_origins: Mapped[list[str]] = mapped_column(JSON, default=list)
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
 
 

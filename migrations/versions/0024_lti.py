@@ -32,6 +32,7 @@ def upgrade() -> None:
     sa.Column('auth_login_url', sa.String(length=1000), nullable=False),
     sa.Column('auth_token_url', sa.String(length=1000), nullable=False),
     sa.Column('key_set_url', sa.String(length=1000), nullable=False),
+    sa.Column('frame_origins', sa.JSON(), nullable=False),
     sa.Column('created_at', sa.DateTime(timezone=True), nullable=False),
     sa.PrimaryKeyConstraint('id', name=op.f('pk_lti_platforms')),
     sa.UniqueConstraint('issuer', 'client_id', name='uq_lti_platforms_issuer_client')

@@ -1,0 +1,68 @@
+"""What a tutor may place in an LMS course by deep linking, and where each placed link opens.
+
+Targets are "kind:key": console:<robot>, pool:<kind>, lesson:<id>, tour:<id>, exam:<id> (a test: the LMS makes a
+gradebook column for it), class: (the course's class session). Tests are those of the courses the tutor teaches.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from flask import url_for
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from middleware.access.pools import kinds
+from middleware.courses.authority import taught_course_ids
+from middleware.lti.launches import Target
+from middleware.models import Role, User
+from middleware.models.assessment import Exam
+from middleware.models.teaching import Lesson, Tour
+
+
+@dataclass(frozen=True)
+class Placeable:
+    """One item of the deep-linking picker."""
+
+    target: str
+    kind: str  # what a person reads: "Robot console", "Test", ...
+    title: str
+    score_maximum: float | None = None
+
+
+def placeable(session: Session, actor: User, robot_names: list[str]) -> list[Placeable]:
+    """Everything actor may place, grouped by kind."""
+    items = [Placeable(f"console:{name}", "Robot console", name) for name in robot_names]
+    items += [Placeable(f"pool:{kind}", "Pool of robots", f"Any free robot of kind {kind}")
+              for kind in kinds(session)]
+    items += [Placeable(f"lesson:{lesson.id}", "Lesson", lesson.title)
+              for lesson in session.scalars(select(Lesson).order_by(Lesson.title, Lesson.id))]
+    items += [Placeable(f"tour:{tour.id}", "Tour", tour.title)
+              for tour in session.scalars(select(Tour).order_by(Tour.title, Tour.id))]
+    exams = select(Exam).order_by(Exam.title, Exam.id)
+    if actor.role != Role.ADMIN:
+        exams = exams.where(Exam.course_id.in_(taught_course_ids(actor)))
+    items += [Placeable(f"exam:{exam.id}", "Test", exam.title, 100.0) for exam in session.scalars(exams)]
+    items.append(Placeable("class:", "Class session", "The course's class session"))
+    return items
+
+
+def destination(target: Target | None, course_id: int | None, teaches: bool) -> str:
+    """The page a launch of target opens (the lab's home for none)."""
+    if target is None:
+        return url_for("lab.index")
+    if target.kind == "console":
+        return url_for("lab.console", robot_name=target.key)
+    if target.kind == "pool":
+        return url_for("pools.wait_page", kind=target.key)
+    if target.kind == "lesson" and target.key.isdigit():
+        return url_for("lessons.play", lesson_id=int(target.key))
+    if target.kind == "tour" and target.key.isdigit():
+        return url_for("tours.play", tour_id=int(target.key))
+    if target.kind == "exam" and target.key.isdigit():
+        return url_for("assessment_pages.exam_page", exam_id=int(target.key))
+    if target.kind == "class":
+        if teaches and course_id is not None:
+            return url_for("classes.tutor_page", course_id=course_id)
+        return url_for("classes.student_page")
+    return url_for("lab.index")
