@@ -18,6 +18,7 @@ from middleware.access.coordinator import AccessHooks
 from middleware.access.graded_runs import with_graded_run_priority
 from middleware.accounts import routes as accounts_routes
 from middleware.api import routes as api_routes
+from middleware.assessment import attempts
 from middleware.assessment import pages as assessment_pages
 from middleware.assessment import routes as assessment_routes
 from middleware.auth import cookies as auth_cookies
@@ -37,6 +38,10 @@ from middleware.lab import routes as lab_routes
 from middleware.lab import skills as lab_skills
 from middleware.lab import sockets as lab_sockets
 from middleware.lab import teleperception_routes as lab_teleperception
+from middleware.lti import embedding as lti_embedding
+from middleware.lti import grades as lti_grades
+from middleware.lti import routes as lti_routes
+from middleware.lti import setup as lti_setup
 from middleware.plans import routes as plans_routes
 from middleware.preferences import routes as preferences_routes
 from middleware.robots import registry
@@ -92,12 +97,14 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
     @app.after_request
     def _security_headers(response: Response) -> Response:
         response.headers.setdefault("X-Content-Type-Options", "nosniff")
-        response.headers.setdefault("X-Frame-Options", "DENY")
+        framers = lti_embedding.frame_ancestors(app)  # registered LMSs' origins, else 'none'
+        if framers == "'none'":
+            response.headers.setdefault("X-Frame-Options", "DENY")
         response.headers.setdefault("Referrer-Policy", "same-origin")
         response.headers.setdefault(
             "Content-Security-Policy",
             "default-src 'self'; img-src 'self' blob: data:; connect-src 'self' ws: wss:; "
-            f"style-src 'self'; script-src 'self' {import_map_source}; object-src 'none'; frame-ancestors 'none'",
+            f"style-src 'self'; script-src 'self' {import_map_source}; object-src 'none'; frame-ancestors {framers}",
         )
         return response
 
@@ -126,6 +133,10 @@ def _register_areas(app: Flask) -> None:
                       limits_routes.blueprint, plans_routes.blueprint, class_wall_routes.blueprint):
         app.register_blueprint(blueprint)
     app.register_blueprint(lab_teleperception.blueprint)
+    app.register_blueprint(lti_routes.blueprint)
+    lti_setup.init_app(app)
+    attempts.on_final_mark(lti_grades.queue_final_mark)  # a final or overridden mark goes to the LMS gradebook
+    auth_cookies.cross_site_when(app, lti_embedding.embedded)
     app.register_blueprint(api_routes.blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
                             practice_routes.register, tour_live.register, class_wall_live.register], socket_login_check)
