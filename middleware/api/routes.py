@@ -13,7 +13,7 @@ from flask import Blueprint, current_app, jsonify, render_template
 from flask.typing import ResponseReturnValue
 
 from middleware.api import document
-from middleware.api.contract import OBJECT, described
+from middleware.api.contract import OBJECT, Answer, described
 
 blueprint = Blueprint("api", __name__)
 
@@ -50,6 +50,7 @@ def _operations(spec: dict[str, Any]) -> list[dict[str, Any]]:
 
 
 @blueprint.get("/api/docs")
+@described(answers={200: Answer({"type": "string"}, "text/html", "the page")}, login=False)
 def docs_page() -> ResponseReturnValue:
     """A readable page of the document: every operation, its input and answers, and the channels."""
     spec = document.build(current_app)

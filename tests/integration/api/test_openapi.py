@@ -1,0 +1,163 @@
+"""The API described: every JSON route and channel is in the OpenAPI document, which is served and readable; and
+Schemathesis, driven by that document against the live app as every role, meets no 5xx and no answer (status,
+media type, body shape) the document does not promise."""
+
+from __future__ import annotations
+
+import time
+from collections import Counter
+from pathlib import Path
+
+import pytest
+import requests
+import schemathesis
+from hypothesis import HealthCheck, Phase, given, settings
+from schemathesis.checks import not_a_server_error
+from schemathesis.specs.openapi.checks import (
+    content_type_conformance,
+    response_schema_conformance,
+    status_code_conformance,
+)
+
+from middleware.api import channels, document
+from middleware.api.contract import described, operation_of
+from tests.conftest import LiveServer
+from tests.hardening.conftest import ROLES, seeded_lab, stop_lab
+
+# Routes still being built by another engineer (named, with why); empty when every route declares its contract.
+# Areas whose routes another engineer is building now, not yet committed (issue 29's session): named, with why. A
+# route of any other area without a contract fails the test.
+PENDING_AREAS: dict[str, str] = {
+    "class_wall": "the class wall (teaching/class_wall_routes.py), being built",
+    "exercises": "the exercises area (issue 30), being built",
+    "lti": "the LTI tool (issue 29 item 1), being built",
+    "recordings": "the recordings area (issue 31), being built",
+}
+
+PENDING_CHANNELS = {"/ws/class-session/wall": PENDING_AREAS["class_wall"],
+                    "/ws/courses/<int:course_id>/class-wall": PENDING_AREAS["class_wall"]}
+
+
+def pending(app) -> set[str]:
+    """The routes of the pending areas, as "METHOD /rule"."""
+    return {f"{method} {rule.rule}" for rule in document.api_rules(app) for method in document.methods_of(rule)
+            if rule.endpoint.split(".")[0] in PENDING_AREAS}
+EXAMPLES_PER_OPERATION = 3  # four roles x ~150 operations: the whole run stays well under a minute
+CHECKS = [not_a_server_error, status_code_conformance, content_type_conformance, response_schema_conformance]
+
+
+@pytest.fixture(scope="module")
+def described_lab(tmp_path_factory: pytest.TempPathFactory):
+    """The seeded demo lab (robots unreachable, CSRF off as for the hostile-input runs), served on loopback."""
+    tmp_path = tmp_path_factory.mktemp("openapi")
+    app = seeded_lab(f"sqlite:///{tmp_path / 'lab.sqlite3'}", tmp_path)
+    server = LiveServer(app)
+    yield server
+    server.stop()
+    stop_lab(app)
+
+
+def test_every_json_route_and_channel_is_in_the_document(described_lab) -> None:
+    app = described_lab.app
+    missing = [route for route in document.undescribed(app) if route not in pending(app)]
+    assert missing == [], f"declare a contract with @described on these views (middleware/api/contract.py): {missing}"
+    assert [rule for rule in channels.undescribed_channels(app) if rule not in PENDING_CHANNELS] == [], \
+        "describe the new channel in middleware/api/channels.py"
+    spec = requests.get(f"{described_lab.url}/api/openapi.json", timeout=30).json()
+    operations = {f"{method.upper()} {path}" for path, item in spec["paths"].items() for method in item
+                  if method != "parameters"}
+    expected = {f"{method} {document.openapi_path(rule.rule)}" for rule in document.api_rules(app)
+                for method in document.methods_of(rule)} - {document.openapi_path(route) for route in pending(app)}
+    assert spec["openapi"] == "3.1.0" and operations >= expected and len(operations) >= 130
+    assert set(spec["x-websocket"]["channels"]) == set(channels.channel_rules(app)) - set(PENDING_CHANNELS)
+    plan_create = spec["paths"]["/api/plans"]["post"]
+    assert plan_create["requestBody"]["content"]["application/json"]["schema"]["required"] == ["name", "text"]
+    assert plan_create["responses"]["401"] == {"$ref": "#/components/responses/Refused",
+                                               "description": "Not logged in (or the login ended)"}
+
+
+def test_the_document_names_a_route_that_declares_nothing_and_checks_what_one_declares() -> None:
+    from flask import Flask
+
+    app = Flask(__name__)
+
+    @app.post("/api/things")
+    @described(body={"type": "object", "required": ["name"], "properties": {"name": {"type": "string",
+                                                                                    "maxLength": 4}}})
+    def things() -> dict[str, str]:
+        return {"made": "yes"}
+
+    @app.get("/api/forgotten")
+    def forgotten() -> dict[str, str]:
+        return {}
+
+    assert document.undescribed(app) == ["GET /api/forgotten"]
+    assert operation_of(app.view_functions["things"]) is not None
+    client = app.test_client()
+    app.register_error_handler(Exception, lambda error: ({"field": getattr(error, "field", None)},
+                                                         getattr(error, "status", 500)))
+    assert client.post("/api/things", json={"name": "abcde"}).get_json() == {"field": "name"}
+    assert client.post("/api/things", json={}).get_json() == {"field": "name"}
+    assert client.post("/api/things", json={"name": "ab"}).get_json() == {"made": "yes"}
+
+
+def test_the_api_page_lists_every_operation_readably(described_lab, chromium) -> None:
+    spec = requests.get(f"{described_lab.url}/api/openapi.json", timeout=30).json()
+    count = sum(1 for item in spec["paths"].values() for method in item if method != "parameters")
+    shots = Path(__file__).resolve().parents[3] / "test-artifacts"
+    shots.mkdir(exist_ok=True)
+    for name, size in (("desktop", {"width": 1280, "height": 900}), ("phone", {"width": 390, "height": 844})):
+        context = chromium.new_context(viewport=size)
+        page = context.new_page()
+        page.goto(f"{described_lab.url}/api/docs")
+        assert page.get_by_role("heading", name="The Telelab API").is_visible()
+        assert page.get_by_test_id("operation").count() == count
+        summary = page.locator('[data-operation="POST /api/plans"] summary')
+        summary.focus()
+        page.keyboard.press("Enter")
+        assert page.locator('[data-operation="POST /api/plans"]').get_by_text("Body").is_visible()
+        assert page.evaluate("document.documentElement.scrollWidth") <= size["width"]
+        page.screenshot(path=str(shots / f"api-docs-{name}.png"))
+        context.close()
+
+
+def _session(url: str, role: str, passwords: dict[str, str]) -> requests.Session:
+    session = requests.Session()
+    if role != "anonymous":
+        answer = session.post(f"{url}/login", data={"username": role, "password": passwords[role]},
+                              allow_redirects=False, timeout=30)
+        assert answer.status_code == 302, f"{role} could not log in"
+    return session
+
+
+def test_schemathesis_finds_no_5xx_and_no_answer_the_document_does_not_promise(described_lab) -> None:
+    url = described_lab.url
+    schema = schemathesis.openapi.from_url(f"{url}/api/openapi.json")
+    operations = [result.ok() for result in schema.get_all_operations()]
+    passwords = described_lab.app.config["TEST_PASSWORDS"]
+    failures: list[str] = []
+    cases: Counter[str] = Counter()
+    started = time.monotonic()
+    for role in ROLES:  # the admin last: what an admin's cases change (a password, a role) is seen by no one after
+        session = _session(url, role, passwords)
+        for operation in operations:
+            if operation.method.upper() == "POST" and operation.path == "/api/account/password":
+                continue  # would change the role's own password mid-run; its edge is covered by tests/hardening
+
+            @settings(max_examples=EXAMPLES_PER_OPERATION, deadline=None, database=None, derandomize=True,
+                      phases=[Phase.explicit, Phase.generate], suppress_health_check=list(HealthCheck))
+            @given(operation.as_strategy())
+            def run(case, role=role, session=session, operation=operation) -> None:
+                cases[role] += 1
+                response = case.call(base_url=url, session=session, timeout=30)
+                try:
+                    case.validate_response(response, checks=CHECKS)
+                except Exception as failure:  # noqa: BLE001  (every failure is listed at the end)
+                    failures.append(f"{role} {operation.method.upper()} {operation.path} -> {response.status_code}: "
+                                    f"{str(failure).splitlines()[0][:300]}")
+
+            run()
+    elapsed = time.monotonic() - started
+    print(f"schemathesis: {dict(cases)} cases per role, {sum(cases.values())} in {elapsed:.1f} s")
+    assert all(cases[role] >= len(operations) - 1 for role in ROLES)
+    assert failures == [], "\n".join(sorted(set(failures)))
