@@ -66,6 +66,7 @@ ROUTES = (
     "DELETE /api/bookings/<int:booking_id>",
     "GET /api/class-session",
     "POST /api/class-session/robot",
+    "GET /api/class-session/wall", "POST /api/class-session/hand", "DELETE /api/class-session/hand",
     "GET /api/docs",
     "GET /api/openapi.json",
     "GET /api/courses",
@@ -76,6 +77,8 @@ ROUTES = (
     "GET /api/courses/<int:course_id>/class-session",
     "POST /api/courses/<int:course_id>/class-session",
     "DELETE /api/courses/<int:course_id>/class-session",
+    "GET /api/courses/<int:course_id>/class-wall", "POST /api/courses/<int:course_id>/class-wall",
+    "POST /api/courses/<int:course_id>/class-wall/seats/<int:user_id>",
     "GET /api/courses/<int:course_id>/bank.json",
     "GET /api/courses/<int:course_id>/exams",
     "POST /api/courses/<int:course_id>/exams",
@@ -192,6 +195,7 @@ ROUTES = (
     "POST /courses",
     "GET /courses/<int:course_id>",
     "GET /courses/<int:course_id>/class",
+    "GET /courses/<int:course_id>/class/wall",
     "GET /courses/<int:course_id>/grades",
     "GET /courses/<int:course_id>/assessment",
     "POST /courses/<int:course_id>/assessment/bank",
@@ -252,6 +256,7 @@ ROUTES = (
     "GET /ws/robots/<robot_name>/queue",
     "GET /ws/robots/<robot_name>/telemetry",
     "GET /ws/tour-sessions/<int:session_id>",
+    "GET /ws/courses/<int:course_id>/class-wall", "GET /ws/class-session/wall",
 )
 
 BODY_METHODS = {"POST", "PUT", "PATCH"}
@@ -405,6 +410,10 @@ EDGE_REQUESTS: tuple[tuple[str, str, str, str, dict[str, object]], ...] = (  # r
     ("student", "GET", "/api/plans/1/export", "query", {"format": "txt", "version": "1"}),
     ("student", "GET", "/api/plans/1", "query", {"version": "1"}),
     ("tutor", "POST", "/api/courses/1/class-session", "json", {"scene": "lab"}),
+    ("tutor", "POST", "/api/courses/1/class-wall", "json", {"action": "push", "kind": "test", "id": 1}),
+    ("tutor", "POST", "/api/courses/1/class-wall/seats/1", "json", {"action": "note", "text": "Look",
+                                                                    "point": {"x_m": 0.1, "y_m": 0.2}}),
+    ("student", "POST", "/api/class-session/hand", "json", {"text": "Help"}),
     ("student", "POST", "/api/robots/lab-1/limits", "json", {"max_linear_mps": 0.2, "max_angular_radps": 0.5,
                                                               "watchdog_s": 1.0}),
     ("student", "GET", "/api/robots/lab-1/readings.csv", "query", {"sensor": "both", "part": "both"}),
