@@ -8,7 +8,7 @@ browser's Accept-Language, English."""
 from __future__ import annotations
 
 from flask import Flask, has_request_context, request, session
-from flask_babel import Babel, get_locale  # type: ignore[import-untyped]
+from flask_babel import Babel, get_locale, lazy_gettext  # type: ignore[import-untyped]
 from flask_login import current_user
 from sqlalchemy import select
 
@@ -20,6 +20,8 @@ LANGUAGES = ("en", "es")
 LANGUAGE_NAMES = {"en": "English", "es": "Español"}
 # The user's own choice, a preference like any other (PUT /api/me/preferences/language {"value": "es"} sets it too).
 LANGUAGE_PREFERENCE_KEY = "language"
+# The roles' names as pages show them (the stored role stays the English word).
+ROLE_NAMES = {"student": lazy_gettext("student"), "tutor": lazy_gettext("tutor"), "admin": lazy_gettext("admin")}
 _CHOSEN_KEY = "language"
 _LAUNCH_KEY = "launch_locale"
 
@@ -65,8 +67,15 @@ def _locale() -> str:
 
 
 def current_language() -> str:
-    """The request's language code ("en" or "es")."""
+    """The request's language code ("en" or "es"); English outside a request."""
+    if not has_request_context():
+        return LANGUAGES[0]
     return str(get_locale() or LANGUAGES[0]).split("_")[0]
+
+
+def role_name(role: str) -> str:
+    """A role's name in the page's language ("estudiante"); an unknown role as it is."""
+    return str(ROLE_NAMES[role]) if role in ROLE_NAMES else role
 
 
 def init_app(app: Flask) -> None:
@@ -74,4 +83,4 @@ def init_app(app: Flask) -> None:
 
     @app.context_processor
     def _language() -> dict[str, object]:
-        return {"page_language": current_language(), "language_names": LANGUAGE_NAMES}
+        return {"page_language": current_language(), "language_names": LANGUAGE_NAMES, "role_name": role_name}

@@ -1,8 +1,16 @@
-"""How pages write moments: "Mon 23 Nov 2026, 21:10 UTC", never raw ISO 8601 (the `moment` template filter)."""
+"""How pages write moments: "Mon 23 Nov 2026, 21:10 UTC", never raw ISO 8601 (the `moment` template filter).
+In Spanish (the request's language, middleware/i18n.py): "lun 23 nov 2026, 21:10 UTC"."""
 
 from __future__ import annotations
 
 from datetime import UTC, datetime
+
+from babel.dates import format_datetime
+
+from middleware import i18n
+
+# The same moment in each language's words (CLDR patterns, read by Babel), always in UTC.
+MOMENT_PATTERNS = {"es": "EEE d MMM y, HH:mm 'UTC'"}
 
 
 def moment_words(value: datetime | str | None) -> str:
@@ -11,4 +19,7 @@ def moment_words(value: datetime | str | None) -> str:
         return "—"
     moment = datetime.fromisoformat(value) if isinstance(value, str) else value
     moment = moment.replace(tzinfo=UTC) if moment.tzinfo is None else moment.astimezone(UTC)
+    language = i18n.current_language()
+    if language in MOMENT_PATTERNS:
+        return format_datetime(moment, MOMENT_PATTERNS[language], tzinfo=UTC, locale=language).replace(".", "")
     return moment.strftime("%a %d %b %Y, %H:%M UTC")

@@ -4,6 +4,7 @@
 
 import { h } from "./dom.js";
 import { parameterLabel, readValue, shortNumber } from "./parameters.js";
+import { t } from "./i18n.js";
 
 const MAX_LINEAR_MPS = 0.5;
 const MAX_ANGULAR_RADPS = 1.5;
@@ -21,15 +22,15 @@ export function authoringSkills(doc = document) {
 
 /** A command in words: {"skill": "go_to_goal", ...} -> "Go to goal: goal x 1 m, goal y 0.5 m". */
 export function describeCommand(command, skills = []) {
-  if (!command || typeof command !== "object") return "No command";
-  if (command.stop === true) return "Stop the robot";
+  if (!command || typeof command !== "object") return t("No command");
+  if (command.stop === true) return t("Stop the robot");
   if (command.sound) {
     const { frequency_hz: hz = 880, duration_s: seconds = 0.5, caption = "" } = command.sound;
-    return `Play a sound (${shortNumber(hz)} Hz, ${shortNumber(seconds)} s), captioned “${caption}”`;
+    return t("Play a sound ({hz} Hz, {seconds} s), captioned “{caption}”", { hz: shortNumber(hz), seconds: shortNumber(seconds), caption });
   }
   if (command.drive) {
     const { linear_mps: linear = 0, angular_radps: angular = 0 } = command.drive;
-    return `Drive at ${shortNumber(linear)} m/s, turning ${shortNumber(angular)} rad/s`;
+    return t("Drive at {linear} m/s, turning {angular} rad/s", { linear: shortNumber(linear), angular: shortNumber(angular) });
   }
   const skill = skills.find((s) => s.name === command.skill);
   const schema = new Map((skill?.parameters ?? []).map((p) => [p.name, p]));
@@ -53,13 +54,13 @@ export class CommandBuilder {
   #id = `command-${++nextId}`;
 
   /** Fills container with the fields; optional adds "No command". */
-  constructor(container, skills, { optional = false, legend = "Command", sounds = false } = {}) {
+  constructor(container, skills, { optional = false, legend = t("Command"), sounds = false } = {}) {
     this.#skills = skills.filter((skill) => !skill.direct_drive); // "Drive" is that skill, in fewer words
     const choices = [
-      ...(optional ? [["none", "No command"]] : []),
-      ...(this.#skills.length ? [["skill", "Run a skill"]] : []),
-      ["drive", "Drive"], ["stop", "Stop the robot"],
-      ...(sounds ? [["sound", "Play a sound (the robot stands still)"]] : []),
+      ...(optional ? [["none", t("No command")]] : []),
+      ...(this.#skills.length ? [["skill", t("Run a skill")]] : []),
+      ["drive", t("Drive")], ["stop", t("Stop the robot")],
+      ...(sounds ? [["sound", t("Play a sound (the robot stands still)")]] : []),
     ];
     this.#kind = h("select", { id: `${this.#id}-kind`, "data-field": "command-kind" },
       choices.map(([value, text]) => h("option", { value, text })));
@@ -72,20 +73,20 @@ export class CommandBuilder {
         inputmode: "decimal", "data-drive": name }));
     this.#drive = h("div", { class: "command-builder__drive", hidden: true },
       number("linear_mps", MAX_LINEAR_MPS, 0.2, "m/s"), number("angular_radps", MAX_ANGULAR_RADPS, 0, "rad/s"),
-      h("p", { class: "muted small", text: `Speeds up to ${MAX_LINEAR_MPS} m/s and ${MAX_ANGULAR_RADPS} rad/s; the `
-        + "robot drives until the cue or step ends." }));
+      h("p", { class: "muted small", text: t("Speeds up to {MAX_LINEAR_MPS} m/s and {MAX_ANGULAR_RADPS} rad/s; the ", { MAX_LINEAR_MPS, MAX_ANGULAR_RADPS })
+        + t("robot drives until the cue or step ends.") }));
     this.#sound = h("div", { class: "command-builder__sound", hidden: true },
-      h("label", {}, "Pitch [Hz]", h("input", { name: "frequency_hz", type: "number", step: "any", min: "100",
+      h("label", {}, t("Pitch [Hz]"), h("input", { name: "frequency_hz", type: "number", step: "any", min: "100",
         max: "4000", value: "880", inputmode: "decimal", "data-sound": "frequency_hz" })),
-      h("label", {}, "Length [s]", h("input", { name: "duration_s", type: "number", step: "any", min: "0.05",
+      h("label", {}, t("Length [s]"), h("input", { name: "duration_s", type: "number", step: "any", min: "0.05",
         max: "5", value: "0.5", inputmode: "decimal", "data-sound": "duration_s" })),
-      h("label", {}, "Caption, shown to those who cannot hear it", h("input", { name: "caption", maxlength: "120",
-        value: "The robot beeps", "data-sound": "caption" })));
+      h("label", {}, t("Caption, shown to those who cannot hear it"), h("input", { name: "caption", maxlength: "120",
+        value: t("The robot beeps"), "data-sound": "caption" })));
     const skillPart = h("div", { class: "command-builder__skill" },
-      h("label", { for: this.#skillSelect.id, text: "Skill" }), this.#skillSelect, this.#skillHelp, this.#parameterBox);
+      h("label", { for: this.#skillSelect.id, text: t("Skill") }), this.#skillSelect, this.#skillHelp, this.#parameterBox);
     container.append(h("fieldset", { class: "command-builder" },
       h("legend", { text: legend }),
-      h("label", { for: this.#kind.id, text: "What the robot does" }), this.#kind,
+      h("label", { for: this.#kind.id, text: t("What the robot does") }), this.#kind,
       skillPart, this.#drive, this.#sound));
     this.#kind.addEventListener("change", () => this.#show());
     this.#skillSelect.addEventListener("change", () => this.#buildParameters());
@@ -129,7 +130,7 @@ export class CommandBuilder {
 
   #invalid(input, label) {
     input.focus();
-    const range = input.min && input.max ? ` between ${input.min} and ${input.max}` : "";
+    const range = input.min && input.max ? t(" between {min} and {max}", { min: input.min, max: input.max }) : "";
     return new Error(`${label}: enter a number${range}.`);
   }
 
@@ -171,7 +172,7 @@ export class CommandBuilder {
     this.#inputs.set(parameter.name, { parameter, input });
     const numeric = parameter.type === "double" || parameter.type === "int";
     const range = numeric && Number.isFinite(parameter.minimum) && Number.isFinite(parameter.maximum)
-      && (parameter.minimum || parameter.maximum) ? ` (${shortNumber(parameter.minimum)} to ${shortNumber(parameter.maximum)})` : "";
+      && (parameter.minimum || parameter.maximum) ? t(" ({minimum} to {maximum})", { minimum: shortNumber(parameter.minimum), maximum: shortNumber(parameter.maximum) }) : "";
     return h("div", { class: "command-builder__field" },
       h("label", { for: id }, parameterLabel(parameter.name), parameter.unit ? ` [${parameter.unit}]` : ""),
       input,

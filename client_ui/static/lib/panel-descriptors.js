@@ -2,6 +2,9 @@
 // kinds that registered (static/panels/registry.js): the kind's own `check` looks at its extra fields (a
 // skill's schema). A descriptor that fails here is shown as a notice in its place; it never stops the page.
 
+import { t } from "./i18n.js";
+
+
 const ID_PATTERN = /^[A-Za-z0-9_.:-]{1,64}$/;
 
 function isPlainObject(value) {
@@ -17,16 +20,16 @@ export function checkDescriptor(descriptor, { panels = new Map(), seenIds = new 
   const fail = (problem) => ({
     ok: false, problem, title: isPlainObject(descriptor) && typeof descriptor.title === "string" ? descriptor.title : "",
   });
-  if (!isPlainObject(descriptor)) return fail("the description is not an object");
-  if (typeof descriptor.id !== "string" || !ID_PATTERN.test(descriptor.id)) return fail("the panel has no usable id");
-  if (seenIds.has(descriptor.id)) return fail(`two panels share the id ${descriptor.id}`);
-  if (typeof descriptor.kind !== "string") return fail("the panel has no kind");
+  if (!isPlainObject(descriptor)) return fail(t("the description is not an object"));
+  if (typeof descriptor.id !== "string" || !ID_PATTERN.test(descriptor.id)) return fail(t("the panel has no usable id"));
+  if (seenIds.has(descriptor.id)) return fail(t("two panels share the id {id}", { id: descriptor.id }));
+  if (typeof descriptor.kind !== "string") return fail(t("the panel has no kind"));
   const panel = panels.get(descriptor.kind);
-  if (!panel) return fail(`this console does not know panels of kind "${descriptor.kind}"`);
-  if (typeof descriptor.title !== "string" || !descriptor.title.trim()) return fail("the panel has no title");
+  if (!panel) return fail(t("this console does not know panels of kind \"{kind}\"", { kind: descriptor.kind }));
+  if (typeof descriptor.title !== "string" || !descriptor.title.trim()) return fail(t("the panel has no title"));
   const channel = descriptor.channel ?? null;
   if (channel !== null && (typeof channel !== "string" || !channel.startsWith("/ws/"))) {
-    return fail("the panel's data channel is not a WebSocket path");
+    return fail(t("the panel's data channel is not a WebSocket path"));
   }
   const problem = panel.check ? panel.check(descriptor) : "";
   if (problem) return fail(problem);

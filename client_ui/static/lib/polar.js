@@ -1,5 +1,7 @@
 // Pure geometry of the polar sensor views (sonar, laser): forward is up on screen, left is left.
 
+import { t } from "./i18n.js";
+
 /** Screen point for a reading at range_m and bearing_rad (0 = forward, + = left), around (cx, cy). */
 export function polarToScreen(cx, cy, scale_px_per_m, range_m, bearing_rad) {
   return [cx - Math.sin(bearing_rad) * range_m * scale_px_per_m, cy - Math.cos(bearing_rad) * range_m * scale_px_per_m];
@@ -35,9 +37,9 @@ export function describeBearing(bearing_rad) {
   let degrees = (bearing_rad * 180) / Math.PI;
   degrees = ((((degrees + 180) % 360) + 360) % 360) - 180;
   const rounded = Math.round(Math.abs(degrees));
-  if (rounded <= 2) return "ahead";
-  if (rounded >= 178) return "behind";
-  return `${rounded}° ${degrees > 0 ? "left" : "right"}`;
+  if (rounded <= 2) return t("ahead");
+  if (rounded >= 178) return t("behind");
+  return degrees > 0 ? t("{degrees}° left", { degrees: rounded }) : t("{degrees}° right", { degrees: rounded });
 }
 
 /** The nearest echo in each of `count` equal sectors spanning the bearings given, for a readable summary. */

@@ -5,6 +5,7 @@
 // and its late and lost messages are the paper's bandwidth and packet-loss measures.
 
 import { legFigures } from "./stats.js";
+import { t } from "./i18n.js";
 
 export const LATE_AFTER_MS = 1000; // the paper's reference for operability: a command answered later is late
 export const LOST_AFTER_MS = 5000; // a command unanswered this long (or when its socket closed) is lost
@@ -121,15 +122,15 @@ export function reportOf(log, nowMs, windowMs = 10000) {
   return { ...report, delivery: { sent, late, lost }, throughput_bps: log.throughput(nowMs, windowMs) };
 }
 
-const KIND_WORDS = { skill: "skill activations", drive: "drive commands" };
+const KIND_WORDS = { skill: t("skill activations"), drive: t("drive commands") };
 
 /** One line a tutor reads for a reported kind: "3 skill activations: 80.9–196.2 ms, mean 128.4, jitter 57.7", or
  *  "no skill activations" when none was timed. Pure. */
 export function reportLine(report, kind) {
   const timed = report?.[kind];
   const total = timed?.total;
-  if (!timed?.count || !Number.isFinite(total?.mean)) return `no ${KIND_WORDS[kind]}`;
+  if (!timed?.count || !Number.isFinite(total?.mean)) return t("no {value}", { value: KIND_WORDS[kind] });
   const ms = (value) => (Number.isFinite(value) ? value.toFixed(1) : "—");
-  return `${timed.count} ${KIND_WORDS[kind]}: ${ms(total.min)}–${ms(total.max)} ms, mean ${ms(total.mean)}, `
-    + `jitter ${ms(total.jitter)}`;
+  return t("{count} {value}: {min}–{max} ms, mean {mean}, ", { count: timed.count, value: KIND_WORDS[kind], min: ms(total.min), max: ms(total.max), mean: ms(total.mean) })
+    + t("jitter {jitter}", { jitter: ms(total.jitter) });
 }

@@ -1,6 +1,7 @@
 // The one place that talks to the server: JSON over fetch, and channels that reconnect, on one WebSocket a page.
 // Everything the server says is data to show; nothing here decides what the user may do.
 import { PageLink } from "./page-link.js";
+import { t } from "./i18n.js";
 
 /** Close codes after which trying again cannot help. */
 export const CLOSE_CODES = Object.freeze({
@@ -47,7 +48,7 @@ export async function fetchJson(url, { method = "GET", body, signal } = {}) {
     });
   } catch (networkError) {
     if (networkError.name === "AbortError") throw networkError;
-    throw new ApiError(0, "network", "The lab server cannot be reached. Check your connection and try again.");
+    throw new ApiError(0, "network", t("The lab server cannot be reached. Check your connection and try again."));
   }
 
   const payload = await response.json().catch(() => null);
@@ -56,7 +57,7 @@ export async function fetchJson(url, { method = "GET", body, signal } = {}) {
     throw new ApiError(
       response.status,
       error?.code ?? "http_" + response.status,
-      error?.message ?? `The server answered ${response.status} ${response.statusText}.`,
+      error?.message ?? t("The server answered {status} {statusText}.", { status: response.status, statusText: response.statusText }),
       error?.field ?? null,
       payload,
     );
@@ -81,13 +82,13 @@ export async function fetchJsonLines(url, { body, signal } = {}, onMessage = () 
     });
   } catch (networkError) {
     if (networkError.name === "AbortError") throw networkError;
-    throw new ApiError(0, "network", "The lab server cannot be reached. Check your connection and try again.");
+    throw new ApiError(0, "network", t("The lab server cannot be reached. Check your connection and try again."));
   }
   if (!response.ok || !response.body) {
     const payload = await response.json().catch(() => null);
     const error = payload?.error;
     throw new ApiError(response.status, error?.code ?? "http_" + response.status,
-      error?.message ?? `The server answered ${response.status} ${response.statusText}.`, error?.field ?? null, payload);
+      error?.message ?? t("The server answered {status} {statusText}.", { status: response.status, statusText: response.statusText }), error?.field ?? null, payload);
   }
   const reader = response.body.pipeThrough(new TextDecoderStream()).getReader();
   let pending = "";
@@ -97,7 +98,7 @@ export async function fetchJsonLines(url, { body, signal } = {}, onMessage = () 
       chunk = await reader.read();
     } catch (streamError) {
       if (streamError.name === "AbortError") throw streamError;
-      throw new ApiError(0, "network", "The connection to the lab server was lost before the answer ended.");
+      throw new ApiError(0, "network", t("The connection to the lab server was lost before the answer ended."));
     }
     if (chunk.done) break;
     pending += chunk.value;

@@ -7,9 +7,10 @@
 
 import { h } from "../dom.js";
 import { layoutReducer, normalizeLayout, serializeLayout } from "../layout.js";
+import { t } from "../i18n.js";
 
 const SAVE_DELAY_MS = 400;
-const TAB_NAMES = { drive: "Drive", navigate: "Navigate", sense: "Sense", chat: "Chat" };
+const TAB_NAMES = { drive: t("Drive"), navigate: t("Navigate"), sense: t("Sense"), chat: t("Chat") };
 const FIRST_TAB = "drive";
 
 /**
@@ -47,7 +48,7 @@ export class ConsoleLayout {
   constructor(grid, menuHost, { save = null, onSaveError = () => {}, tabs = true } = {}) {
     this.#grid = grid;
     this.#tabbed = tabs;
-    this.#tabList = h("div", { class: "console__tabs", role: "tablist", "aria-label": "Console views",
+    this.#tabList = h("div", { class: "console__tabs", role: "tablist", "aria-label": t("Console views"),
       hidden: !tabs });
     this.#tabList.addEventListener("keydown", (event) => this.#onTabKey(event));
     grid.before(this.#tabList);
@@ -55,13 +56,13 @@ export class ConsoleLayout {
     this.#onSaveError = onSaveError;
     this.#menuList = h("ul", { class: "panels-menu__list" });
     this.#menuCount = h("span", { class: "panels-menu__count", "data-field": "hidden-count" });
-    this.#summary = h("summary", { class: "button panels-menu__button" }, "Panels", this.#menuCount);
+    this.#summary = h("summary", { class: "button panels-menu__button" }, t("Panels"), this.#menuCount);
     menuHost.append(h("details", { class: "panels-menu", "data-testid": "panels-menu" },
       this.#summary,
       h("div", { class: "panels-menu__body" },
-        h("p", { class: "panels-menu__hint", text: "Show or hide panels:" }),
+        h("p", { class: "panels-menu__hint", text: t("Show or hide panels:") }),
         this.#menuList,
-        h("button", { type: "button", class: "button panels-menu__reset", "data-layout": "reset", text: "Reset layout",
+        h("button", { type: "button", class: "button panels-menu__reset", "data-layout": "reset", text: t("Reset layout"),
           onclick: () => this.#dispatch({ type: "reset", ids: this.ids, defaultSpans: this.#defaultSpans }) }))));
   }
 
@@ -126,7 +127,7 @@ export class ConsoleLayout {
     entry.unread = count;
     entry.badge.hidden = count === 0;
     entry.badge.textContent = count ? String(count) : "";
-    entry.badge.setAttribute("aria-label", `${count} new`);
+    entry.badge.setAttribute("aria-label", t("{count} new", { count }));
   }
 
   #onTabKey(event) {
@@ -149,17 +150,17 @@ export class ConsoleLayout {
       onclick: () => this.#onTool(id, action),
     }, h("span", { "aria-hidden": "true", text: glyph }));
     const buttons = {
-      up: button("up", "↑", `Move ${title} up`),
-      down: button("down", "↓", `Move ${title} down`),
-      span: button("span", "⇔", `Wide ${title}`, { "aria-pressed": "false" }),
-      hide: button("hide", "×", `Hide ${title}`),
+      up: button("up", "↑", t("Move {title} up", { title })),
+      down: button("down", "↓", t("Move {title} down", { title })),
+      span: button("span", "⇔", t("Wide {title}", { title }), { "aria-pressed": "false" }),
+      hide: button("hide", "×", t("Hide {title}", { title })),
     };
     const notice = h("p", { class: "panel-frame__notice", role: "status", "data-field": "panel-notice", hidden: true });
     const frame = h("section", { class: "panel-frame", role: "region", "aria-labelledby": titleId,
       "data-panel-id": id, "data-kind": descriptor.kind },
       h("div", { class: "panel-frame__bar" },
         h("h2", { class: "panel-frame__title", id: titleId, text: title }),
-        h("div", { class: "panel-frame__tools", role: "group", "aria-label": `Arrange ${title}` },
+        h("div", { class: "panel-frame__tools", role: "group", "aria-label": t("Arrange {title}", { title }) },
           buttons.up, buttons.down, buttons.span, buttons.hide)),
       descriptor.help ? frameHelp(descriptor.help) : null,
       notice,
@@ -183,7 +184,7 @@ export class ConsoleLayout {
   /** A visible notice in place of a panel that could not be shown. */
   addNotice(text) {
     const notice = h("section", { class: "panel-frame panel-frame--broken", role: "region",
-      "aria-label": "A panel that could not be shown", "data-notice": "bad-descriptor" },
+      "aria-label": t("A panel that could not be shown"), "data-notice": "bad-descriptor" },
       h("p", { class: "alert alert--error", text }));
     this.#grid.append(notice);
     return notice;
@@ -194,7 +195,7 @@ export class ConsoleLayout {
     const entry = this.#frames.get(id);
     if (!entry) return;
     entry.notices += 1;
-    entry.notice.textContent = entry.notices > 1 ? `${text} (${entry.notices} so far)` : text;
+    entry.notice.textContent = entry.notices > 1 ? t("{text} ({notices} so far)", { text, notices: entry.notices }) : text;
     entry.notice.hidden = false;
   }
 
@@ -237,7 +238,7 @@ export class ConsoleLayout {
       entry.buttons.down.disabled = visible[visible.length - 1] === id;
       entry.checkbox.checked = !hidden.includes(id);
     }
-    this.#menuCount.textContent = hidden.length ? ` (${hidden.length} hidden)` : "";
+    this.#menuCount.textContent = hidden.length ? t(" ({length} hidden)", { length: hidden.length }) : "";
   }
 
   #scheduleSave() {

@@ -18,6 +18,7 @@ import { feedService, registerFeedService } from "./feed-services.js";
 import { GUESS_FIELDS, goalParameterNames } from "../panel-descriptors.js";
 import { bindFeedback, savePictureChoice } from "./feedback-wiring.js";
 import { playTurnTone } from "./turn-tone.js";
+import { t } from "../i18n.js";
 
 const FINAL_GOAL_STATES = new Set(["succeeded", "canceled", "aborted"]);
 const MAP_POLL_MS = 2000;
@@ -27,8 +28,8 @@ const SCENE_RETRY_MS = 5000;
 const TIMINGS_SHOWN_EVERY_MS = 500;
 const BOOKINGS_AHEAD_MS = 14 * 24 * 3600 * 1000;
 const BOOKINGS_REFRESH_MS = 60 * 1000;
-const DRAWN_PICTURE_STATUS = "video off: picture drawn by this browser from where the robot stands";
-const WITHHELD_CAMERA_STATUS = { phase: "off", reason: "off during your obstacle-zone test (it would show the obstacles)" };
+const DRAWN_PICTURE_STATUS = t("video off: picture drawn by this browser from where the robot stands");
+const WITHHELD_CAMERA_STATUS = { phase: "off", reason: t("off during your obstacle-zone test (it would show the obstacles)") };
 function isStatusOrError(message) {
   return message?.type === "status" || message?.type === "error";
 }
@@ -132,7 +133,7 @@ export class ConsoleWiring {
       action();
     } catch (error) {
       console.warn(`panel ${id} ignored a message:`, error);
-      this.#layout.notify(id, `Ignored a message this panel could not show (${error.message}).`);
+      this.#layout.notify(id, t("Ignored a message this panel could not show ({message}).", { message: error.message }));
     }
   }
 
@@ -149,7 +150,7 @@ export class ConsoleWiring {
         const message = parseJsonMessage(detail);
         if (message?.type === "status" && typeof message.robot_online === "boolean") this.#showOnline(message.robot_online);
         for (const listener of this.#textListeners.get(path)) {
-          if (!message) this.#layout.notify(listener.id, "Ignored a message that could not be read.");
+          if (!message) this.#layout.notify(listener.id, t("Ignored a message that could not be read."));
           else this.#guard(listener.id, () => listener.onMessage(message));
         }
       });
@@ -170,7 +171,7 @@ export class ConsoleWiring {
 
   #showOnline(online) {
     const badge = this.#root.querySelector("#robot-online");
-    badge.textContent = online ? "Online" : "Offline";
+    badge.textContent = online ? t("Online") : t("Offline");
     badge.classList.toggle("badge--online", online);
     badge.classList.toggle("badge--offline", !online);
     this.#status.robotOnline = online;
@@ -183,7 +184,7 @@ export class ConsoleWiring {
       if (robot.info) for (const listener of this.#infoListeners) listener(robot.info);
     } catch (error) {
       const line = this.#root.querySelector("#console-error");
-      line.textContent = error instanceof ApiError ? error.message : "The robot's description could not be loaded.";
+      line.textContent = error instanceof ApiError ? error.message : t("The robot's description could not be loaded.");
       line.hidden = false;
     }
   }
@@ -254,7 +255,7 @@ export class ConsoleWiring {
         return;
       }
       const message = parseJsonMessage(detail);
-      if (!message) this.#layout.notify(descriptor.id, "Ignored a message that could not be read.");
+      if (!message) this.#layout.notify(descriptor.id, t("Ignored a message that could not be read."));
       else if (isStatusOrError(message)) this.#guard(descriptor.id, () => { panel.message = message; });
       if (message?.type === "error" && message.code === "obstacles_hidden" && !withheld) {
         withheld = true;
@@ -284,7 +285,7 @@ export class ConsoleWiring {
         panel.note = String(scene?.obstacles_hidden ?? ""); // the obstacles left out during an obstacle-zone test
         this.#guard(descriptor.id, () => { panel.scene = scene; });
       } catch (error) {
-        panel.note = `The lab's description could not be loaded: ${error.message}`;
+        panel.note = t("The lab's description could not be loaded: {message}", { message: error.message });
         if (error.status === 503 || error.status === 0) setTimeout(load, SCENE_RETRY_MS);
       }
     };
@@ -309,7 +310,7 @@ export class ConsoleWiring {
       fail: (error) => {
         panel.grid = null;
         // A map withheld during an obstacle-zone test is no fault: its sentence says why and until when.
-        panel.note = error.code === "obstacles_hidden" ? error.message : `The map could not be loaded: ${error.message}`;
+        panel.note = error.code === "obstacles_hidden" ? error.message : t("The map could not be loaded: {message}", { message: error.message });
       },
     });
   }
@@ -350,7 +351,7 @@ export class ConsoleWiring {
       mapPanel.grid = null;
       mapPanel.note = String(answer?.message ?? ""); // the next poll's "No map yet" follows on from it
     } catch (error) {
-      mapPanel.note = `The map was not cleared: ${error.message}`;
+      mapPanel.note = t("The map was not cleared: {message}", { message: error.message });
     }
   }
 
@@ -366,7 +367,7 @@ export class ConsoleWiring {
       mapPanel.resetTrails();
       this.#actionNote(mapPanel, String(answer?.message ?? ""));
     } catch (error) {
-      mapPanel.note = `The robot was not moved: ${error.message}`;
+      mapPanel.note = t("The robot was not moved: {message}", { message: error.message });
     }
   }
 
@@ -555,7 +556,7 @@ export class ConsoleWiring {
     channel.addEventListener("message", ({ detail }) => {
       const message = parseJsonMessage(detail);
       if (!message) {
-        this.#layout.notify(descriptor.id, "Ignored a goal message that could not be read.");
+        this.#layout.notify(descriptor.id, t("Ignored a goal message that could not be read."));
         return;
       }
       this.#guard(descriptor.id, () => {

@@ -4,6 +4,7 @@
 
 import { fetchJson } from "../transport.js";
 import { registerFeedService } from "./feed-services.js";
+import { t } from "../i18n.js";
 
 function problem(error, prefix = "") {
   return { code: error.code ?? "network", message: `${prefix}${error.message}`, field: error.field ?? null };
@@ -23,7 +24,7 @@ export function connectLimits(wiring, descriptor, panel) {
     try {
       panel.limits = await fetchJson(url);
     } catch (error) {
-      panel.error = { ...problem(error, "The limits could not be read: "), field: null };
+      panel.error = { ...problem(error, t("The limits could not be read: ")), field: null };
     }
   };
   const queuePath = `${wiring.robotPath}/queue`;

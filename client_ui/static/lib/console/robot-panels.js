@@ -8,6 +8,7 @@ import { loadPanels } from "../../panels/registry.js";
 import * as connectionStatus from "../../panels/connection-status/connection-status.js";
 import { ConsoleLayout } from "./console-layout.js";
 import { ConsoleWiring } from "./console-wiring.js";
+import { t } from "../i18n.js";
 
 /** A panel id in words when the robot does not describe it ("skill-wall_following" -> "Wall following"). */
 export function panelWords(id) {
@@ -23,7 +24,7 @@ export function panelWords(id) {
 export async function showRobotPanels(host, robotName, wanted) {
   connectionStatus.register();
   const status = h("connection-status");
-  const online = h("p", { class: "badge", id: "robot-online", "data-field": "robot-online", text: "Checking…" });
+  const online = h("p", { class: "badge", id: "robot-online", "data-field": "robot-online", text: t("Checking…") });
   const problem = h("p", { class: "alert alert--error", id: "console-error", role: "alert", hidden: true });
   const grid = h("div", { class: "console__panels", "data-slot": "panels" });
   host.replaceChildren(h("div", { class: "robot-panels__bar" }, online, status), problem, grid);
@@ -55,7 +56,7 @@ export async function showRobotPanels(host, robotName, wanted) {
     layout.restore(null);
     wiring.startAll();
   } catch (error) {
-    problem.textContent = `The robot's panels could not be shown: ${error.message}`;
+    problem.textContent = t("The robot's panels could not be shown: {message}", { message: error.message });
     problem.hidden = false;
   }
   return {

@@ -2,6 +2,7 @@
 // (showing the attempt submitted as it stood) when the server says the time is up. Submitting with questions left
 // unanswered asks once more, naming them. Decides nothing itself.
 import { ApiError, fetchJson } from "../../lib/transport.js";
+import { t } from "../../lib/i18n.js";
 
 const root = document.getElementById("attempt");
 const form = document.getElementById("answers-form");
@@ -43,9 +44,9 @@ async function save(fieldset) {
   const pair = answerOf(fieldset);
   if (!pair) return;
   const [code, body] = await send("PATCH", `/api/attempts/${attemptId}/answers`, { answers: { [pair[0]]: pair[1] } });
-  if (code === 200) status.textContent = "Answer saved.";
+  if (code === 200) status.textContent = t("Answer saved.");
   else if (code === 409) window.location.reload();  // time up or submitted elsewhere: show what the server has
-  else status.textContent = (body.error && body.error.message) || "The answer was not saved; try again.";
+  else status.textContent = (body.error && body.error.message) || t("The answer was not saved; try again.");
 }
 
 function isAnswered(fieldset) {
@@ -69,8 +70,8 @@ form.addEventListener("submit", (event) => {
   if (!missing.length || names === warnedAbout) return;
   event.preventDefault();
   warnedAbout = names;
-  const count = missing.length === 1 ? "1 question is" : `${missing.length} questions are`;
-  warning.textContent = `${count} not answered: ${names}. Answer them, or press Submit again to hand in as it is.`;
+  const count = missing.length === 1 ? t("1 question is") : t("{length} questions are", { length: missing.length });
+  warning.textContent = t("{count} not answered: {names}. Answer them, or press Submit again to hand in as it is.", { count, names });
   warning.hidden = false;
   warning.scrollIntoView({ block: "center" });
 });

@@ -1,6 +1,9 @@
 // The bookings page: times are laid out by the server in the zone named by ?tz=; this module makes that
 // the browser's own zone (Intl) on first visit, and says which zone is shown. No rules live here.
 
+import { t } from "../../lib/i18n.js";
+
+
 function start() {
   const root = document.querySelector("#bookings[data-tz]");
   if (!root) return;
@@ -14,8 +17,8 @@ function start() {
   const note = root.querySelector("#time-zone-source");
   if (note) {
     note.textContent = root.dataset.tz === browserZone
-      ? "(your browser's time zone)"
-      : `(your browser is set to ${browserZone})`;
+      ? t("(your browser's time zone)")
+      : t("(your browser is set to {browserZone})", { browserZone });
   }
 }
 

@@ -10,17 +10,18 @@ import { ConsoleLayout } from "../../lib/console/console-layout.js";
 import { ConsoleWiring } from "../../lib/console/console-wiring.js";
 import * as connectionStatus from "../../panels/connection-status/connection-status.js";
 import { loadPanels } from "../../panels/registry.js";
+import { t } from "../../lib/i18n.js";
 
 const LAYOUT_PREFERENCE = "/api/me/preferences/console-layout";
 
 /** The panels every robot had before the middleware described them; used only if the list cannot be had. */
 function basicPanels(robotPath) {
   return [
-    { id: "camera", kind: "camera", title: "Camera", channel: `${robotPath}/camera`, tab: "drive" },
-    { id: "drive", kind: "drive", title: "Drive", channel: `${robotPath}/drive`, tab: "drive" },
-    { id: "queue", kind: "queue", title: "Turn", channel: `${robotPath}/queue`, tab: "drive" },
-    { id: "odometry", kind: "odometry", title: "Odometry", channel: `${robotPath}/telemetry`, tab: "drive" },
-    { id: "chat", kind: "chat", title: "Chat", channel: `${robotPath}/chat`, tab: "chat" },
+    { id: "camera", kind: "camera", title: t("Camera"), channel: `${robotPath}/camera`, tab: "drive" },
+    { id: "drive", kind: "drive", title: t("Drive"), channel: `${robotPath}/drive`, tab: "drive" },
+    { id: "queue", kind: "queue", title: t("Turn"), channel: `${robotPath}/queue`, tab: "drive" },
+    { id: "odometry", kind: "odometry", title: t("Odometry"), channel: `${robotPath}/telemetry`, tab: "drive" },
+    { id: "chat", kind: "chat", title: t("Chat"), channel: `${robotPath}/chat`, tab: "chat" },
   ];
 }
 
@@ -41,17 +42,17 @@ function fetchPanelList(robotName) {
 function checkedPanelList({ answer, error }, robotPath, panels) {
   const checked = error ? null : checkPanelList(answer, panels);
   if (checked) return { entries: checked, problem: typeof answer.notice === "string" ? answer.notice : "" };
-  const why = error instanceof ApiError ? error.message : "it could not be loaded";
+  const why = error instanceof ApiError ? error.message : t("it could not be loaded");
   return { entries: checkPanelList({ panels: basicPanels(robotPath) }, panels),
-    problem: error ? `The robot's panel list is unavailable (${why}); showing the basic panels.`
-      : "The robot's panel list could not be read; showing the basic panels." };
+    problem: error ? t("The robot's panel list is unavailable ({why}); showing the basic panels.", { why })
+      : t("The robot's panel list could not be read; showing the basic panels.") };
 }
 
 /** A descriptor's problem in words, naming the panel modules that did not load when its kind is unknown. */
 function describeProblem(entry, failed) {
   const modules = failed.map(({ module, problem }) => `${module}: ${problem}`).join("; ");
-  return failed.length && entry.problem.startsWith("this console does not know")
-    ? `${entry.problem} (panel code that did not load: ${modules})` : entry.problem;
+  return failed.length && entry.problem.startsWith(t("this console does not know"))
+    ? t("{problem} (panel code that did not load: {modules})", { problem: entry.problem, modules }) : entry.problem;
 }
 
 async function loadSavedLayout() {
@@ -78,7 +79,7 @@ async function start() {
   const grid = root.querySelector('[data-slot="panels"]');
   const layout = new ConsoleLayout(grid, root.querySelector('[data-slot="panels-menu"]'), {
     save: (value) => fetchJson(LAYOUT_PREFERENCE, { method: "PUT", body: { value } }),
-    onSaveError: (error) => showPageError(root, `Your panel layout was not saved: ${error.message}`),
+    onSaveError: (error) => showPageError(root, t("Your panel layout was not saved: {message}", { message: error.message })),
   });
   const wiring = new ConsoleWiring({ root, robotName, robotPath, status, layout });
 
@@ -89,7 +90,7 @@ async function start() {
   root.querySelector("[data-console-loading]")?.remove();
   for (const entry of entries) {
     if (!entry.ok) {
-      layout.addNotice(`${entry.title ? `The panel “${entry.title}”` : "A panel"} could not be shown: ${describeProblem(entry, failed)}.`);
+      layout.addNotice(t("{value} could not be shown: {entry}.", { value: entry.title ? t("The panel “{title}”", { title: entry.title }) : t("A panel"), entry: describeProblem(entry, failed) }));
       continue;
     }
     const { descriptor } = entry;
@@ -100,7 +101,7 @@ async function start() {
       layout.addPanel(descriptor, panel, span);
       wiring.wire(descriptor, panel, feeds);
     } catch (error) {
-      layout.addNotice(`The panel “${descriptor.title}” could not be started: ${error.message}.`);
+      layout.addNotice(t("The panel “{title}” could not be started: {message}.", { title: descriptor.title, message: error.message }));
     }
   }
   layout.restore(saved);

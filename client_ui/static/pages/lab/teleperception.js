@@ -9,6 +9,7 @@ import { canvasToWorld, fitView, worldToCanvas, worldTransform } from "../../lib
 import { ApiError, fetchJson } from "../../lib/transport.js";
 import { gridImage } from "../../panels/map-panel/map-panel.js";
 import { showRobotPanels } from "../../lib/console/robot-panels.js";
+import { t } from "../../lib/i18n.js";
 
 const POLL_MS = 1000;
 const ROBOT_RADIUS_M = 0.2;
@@ -36,7 +37,7 @@ function showError(error) {
     errorLine.hidden = true;
     return;
   }
-  errorLine.textContent = error instanceof ApiError ? error.message : "Something went wrong; reload the page.";
+  errorLine.textContent = error instanceof ApiError ? error.message : t("Something went wrong; reload the page.");
   errorLine.hidden = false;
 }
 
@@ -101,7 +102,7 @@ function draw() {
   for (const rect of rects) drawRect(ctx, rect, "#c26a00");
   if (dragStart && dragNow) drawRect(ctx, [...dragStart, ...dragNow], "#b1261b");
   const c = evidence.counts;
-  countsLine.textContent = `Readings integrated: sonar ${c.sonar}, laser ${c.laser} (standing ${c.static}, moving ` +
+  countsLine.textContent = t("Readings integrated: sonar {sonar}, laser {laser} (standing {static}, moving ", { sonar: c.sonar, laser: c.laser, static: c.static }) +
     `${c.moving}). ${evidence.accumulating ? "Accumulating while this page is open." : "Paused."}`;
   canvas.dataset.drawn = String(evidence.version);
 }
@@ -140,14 +141,14 @@ function pointerWorld(event) {
 }
 
 function showZoneCount() {
-  zoneCount.textContent = rects.length ? `${rects.length} rectangle(s) marked.` : "No rectangle yet.";
+  zoneCount.textContent = rects.length ? t("{length} rectangle(s) marked.", { length: rects.length }) : t("No rectangle yet.");
 }
 
 async function drive(linear, angular, duration) {
   try {
     await fetchJson(`${api}/skills/direct_control/goals`, { method: "POST", body: {
       parameters: { linear_mps: linear, angular_radps: angular, duration_s: duration }, preempt: true } });
-    messageLine.textContent = "Moving: these readings go to part 2.";
+    messageLine.textContent = t("Moving: these readings go to part 2.");
     showError(null);
   } catch (error) {
     showError(error);
@@ -155,7 +156,7 @@ async function drive(linear, angular, duration) {
 }
 
 async function resetGrid() {
-  if (!window.confirm("Reset the evidence grid? Everyone watching this robot sees it emptied.")) return;
+  if (!window.confirm(t("Reset the evidence grid? Everyone watching this robot sees it emptied."))) return;
   try {
     const answer = await fetchJson(`${api}/evidence`, { method: "DELETE" });
     messageLine.textContent = answer.message;
@@ -169,7 +170,7 @@ async function resetGrid() {
 async function saveZone() {
   try {
     await fetchJson(`/api/attempts/${attemptId}/answers`, { method: "PATCH", body: { answers: { zone: { rects } } } });
-    messageLine.textContent = `Saved ${rects.length} rectangle(s). Submit the test from its page when you are done.`;
+    messageLine.textContent = t("Saved {length} rectangle(s). Submit the test from its page when you are done.", { length: rects.length });
     showError(null);
   } catch (error) {
     showError(error);

@@ -5,6 +5,7 @@ import { Channel, fetchJson, fetchJsonLines, parseJsonMessage } from "../../lib/
 import { h } from "../../lib/dom.js";
 import { boxCorners, fitView, sceneBounds, worldToCanvas } from "../../lib/map-geometry.js";
 import { addSample, endErrorCm, endStateWords, isFinal, lineOf } from "./plan-trace.js";
+import { t } from "../../lib/i18n.js";
 
 const root = document.getElementById("plan-editor");
 const planId = Number(root.dataset.planId);
@@ -59,25 +60,26 @@ function showErrors(errors) {
   state.errors = errors;
   errorList.replaceChildren(...errors.map((error) => h("li", { class: "plans-errors__item", "data-line": error.line },
     h("button", { type: "button", class: "plans-errors__goto", onclick: () => moveToLine(error.line, error.column) },
-      error.line ? `Line ${error.line}, column ${error.column}` : "The plan"),
+      error.line ? t("Line {line}, column {column}", { line: error.line, column: error.column }) : t("The plan")),
     ` ${error.message}`)));
   renderGutter();
 }
 
 function summaryWords(summary) {
   if (!summary) return "";
-  const duration = summary.max_duration_s == null ? "no time bound" : `at most ${summary.max_duration_s} s`;
-  return `${summary.steps} step${summary.steps === 1 ? "" : "s"}, ${duration}`;
+  const duration = summary.max_duration_s == null ? t("no time bound") : t("at most {max_duration_s} s", { max_duration_s: summary.max_duration_s });
+  return (summary.steps === 1 ? t("1 step, {duration}", { duration }) : t("{steps} steps, {duration}", { steps: summary.steps, duration }));
 }
 
 async function check() {
-  checkStatus.textContent = "Checking…";
+  checkStatus.textContent = t("Checking…");
   try {
     const answer = await fetchJson("/api/plans/check", { method: "POST", body: { text: text.value } });
     showErrors(answer.errors);
     checkStatus.textContent = answer.valid
-      ? `The plan is valid: ${summaryWords(answer.summary)}.`
-      : `${answer.errors.length} problem${answer.errors.length === 1 ? "" : "s"} found: see the marked lines.`;
+      ? t("The plan is valid: {summary}.", { summary: summaryWords(answer.summary) })
+      : (answer.errors.length === 1 ? t("1 problem found: see the marked lines.")
+        : t("{length} problems found: see the marked lines.", { length: answer.errors.length }));
     checkStatus.dataset.valid = String(answer.valid);
     return answer.valid;
   } catch (error) {
@@ -95,10 +97,10 @@ function showPlan(plan) {
   state.saved = { text: plan.text, version: plan.version };
   versionSelect.replaceChildren(...plan.versions.map((v) => h("option", { value: v.version,
     selected: v.version === plan.version }, `${v.version}${v.version === plan.latest_version ? " (latest)" : ""}`)));
-  const shared = plan.shared_with ? `Shared with ${plan.shared_with.code}.` : "Not shared.";
+  const shared = plan.shared_with ? t("Shared with {code}.", { code: plan.shared_with.code }) : t("Not shared.");
   root.closest("main").querySelector("[data-field=plan-about]").textContent = plan.mine
-    ? `Your plan, version ${plan.version} of ${plan.latest_version}. ${shared}`
-    : `${plan.owner}'s plan, shared with you to read and run: copy it to change it. Version ${plan.version}.`;
+    ? t("Your plan, version {version} of {latest_version}. {shared}", { version: plan.version, latest_version: plan.latest_version, shared })
+    : t("{owner}'s plan, shared with you to read and run: copy it to change it. Version {version}.", { owner: plan.owner, version: plan.version });
   root.closest("main").querySelector("[data-field=plan-name]").textContent = plan.name;
   const skillBox = root.querySelector("input[name=console_skill]");
   if (skillBox) skillBox.checked = Boolean(plan.console_skill);
@@ -118,12 +120,12 @@ async function load(version = null) {
 
 async function save() {
   if (!mine) return;
-  checkStatus.textContent = "Saving…";
+  checkStatus.textContent = t("Saving…");
   try {
     const body = { text: text.value };
     if (nameInput) body.name = nameInput.value.trim();
     showPlan((await fetchJson(`/api/plans/${planId}`, { method: "PUT", body })).plan);
-    checkStatus.textContent = `Saved as version ${state.latest}.`;
+    checkStatus.textContent = t("Saved as version {latest}.", { latest: state.latest });
     checkStatus.dataset.valid = "true";
   } catch (error) {
     showErrors(error.payload?.errors ?? []);
@@ -148,7 +150,7 @@ async function share() {
     const { plan } = await fetchJson(`/api/plans/${planId}/share`, { method: "PUT",
       body: { course_id: value ? Number(value) : null } });
     showPlan({ ...plan });
-    checkStatus.textContent = plan.shared_with ? `Shared with ${plan.shared_with.code}.` : "No longer shared.";
+    checkStatus.textContent = plan.shared_with ? t("Shared with {code}.", { code: plan.shared_with.code }) : t("No longer shared.");
   } catch (error) {
     checkStatus.textContent = error.message;
   }
@@ -160,8 +162,8 @@ async function useAsSkill(event) {
   try {
     await fetchJson(`/api/plans/${planId}/skill`, { method: "PUT", body: { console_skill: wanted } });
     checkStatus.textContent = wanted
-      ? "This plan is now a panel in your consoles (the Navigate view): Run runs its latest version there."
-      : "This plan is no longer a panel in your consoles.";
+      ? t("This plan is now a panel in your consoles (the Navigate view): Run runs its latest version there.")
+      : t("This plan is no longer a panel in your consoles.");
   } catch (error) {
     box.checked = !wanted;
     checkStatus.textContent = error.message;
@@ -169,7 +171,7 @@ async function useAsSkill(event) {
 }
 
 async function remove() {
-  if (!window.confirm("Delete this plan and all its versions?")) return;
+  if (!window.confirm(t("Delete this plan and all its versions?"))) return;
   try {
     await fetchJson(`/api/plans/${planId}`, { method: "DELETE" });
     window.location.assign("/plans");
@@ -223,7 +225,7 @@ function draw() {
   canvas.dataset.predictedPoints = String(state.traces.predicted.length);
   canvas.dataset.realPoints = String(state.traces.real.length);
   const error = endErrorCm(state.traces.predicted, state.traces.real);
-  endErrorLine.textContent = error == null ? "" : ` — end points ${error.toFixed(1)} cm apart`;
+  endErrorLine.textContent = error == null ? "" : t(" — end points {error} cm apart", { error: error.toFixed(1) });
 }
 
 async function loadScene(robotName) {
@@ -241,7 +243,7 @@ async function loadScene(robotName) {
 function showLine(label, feedback) {
   const line = lineOf(feedback);
   if (line && line !== state.runningLine) { state.runningLine = line; renderGutter(); }
-  if (line) progressLine.textContent = `${label}: running line ${line}: ${String(feedback.state ?? "").replace(/^line \d+:\s*/, "")}`;
+  if (line) progressLine.textContent = t("{label}: running line {line}: {value}", { label, line, value: String(feedback.state ?? "").replace(/^line \d+:\s*/, "") });
 }
 
 function setRunning(running) {
@@ -270,7 +272,7 @@ function follow(answer, kind, label) {
   const run = { answer, kind, label, finished: false };
   state.run = run;
   endStateLine.textContent = "";
-  progressLine.textContent = `${label}: started.`;
+  progressLine.textContent = t("{label}: started.", { label });
   setRunning(true);
   run.telemetry = new Channel(answer.telemetry_channel);
   run.telemetry.addEventListener("message", (event) => {
@@ -289,7 +291,7 @@ function follow(answer, kind, label) {
   });
   run.goalChannel.addEventListener("statechange", (event) => {
     if (event.detail.phase === "closed" && event.detail.code && event.detail.code !== 1000 && !run.finished) {
-      progressLine.textContent = `${label}: the run's progress cannot be followed (${event.detail.reason}).`;
+      progressLine.textContent = t("{label}: the run's progress cannot be followed ({reason}).", { label, reason: event.detail.reason });
       setRunning(false);
     }
   });
@@ -306,9 +308,9 @@ function onPrediction(run, message) {
   if (message.type === "progress" && message.phase === "starting") {
     progressLine.textContent = `${run.label}: ${message.message}`;
   } else if (message.type === "started") {
-    startLine.textContent = `${run.label} on a fast simulated copy: ${message.start?.message ?? ""}`;
-    if (run.unsaved) startLine.textContent += ` It runs version ${run.unsaved}, as saved: save to predict your changes.`;
-    progressLine.textContent = `${run.label}: running…`;
+    startLine.textContent = t("{label} on a fast simulated copy: {value}", { label: run.label, value: message.start?.message ?? "" });
+    if (run.unsaved) startLine.textContent += t(" It runs version {unsaved}, as saved: save to predict your changes.", { unsaved: run.unsaved });
+    progressLine.textContent = t("{label}: running…", { label: run.label });
   } else if (message.type === "progress") {
     const from = Number.isInteger(message.trace_from) ? message.trace_from : state.traces.predicted.length;
     state.traces.predicted = [...state.traces.predicted.slice(0, from), ...(message.trace ?? [])].slice(-5000);
@@ -318,7 +320,7 @@ function onPrediction(run, message) {
     state.traces.predicted = message.trace ?? state.traces.predicted;
     finish(run, message.goal);
     if (message.sim_time_s != null && message.wall_s != null) {
-      startLine.textContent += ` ${Number(message.sim_time_s).toFixed(1)} s of plan predicted in ${Number(message.wall_s).toFixed(1)} s.`;
+      startLine.textContent += t(" {sim_time_s} s of plan predicted in {wall_s} s.", { sim_time_s: Number(message.sim_time_s).toFixed(1), wall_s: Number(message.wall_s).toFixed(1) });
     }
   } else if (message.type === "error") {
     run.finished = true;
@@ -332,12 +334,12 @@ function onPrediction(run, message) {
 async function predict() {
   if (!(await check())) return;
   const robotName = robotSelect?.value ?? "";
-  const run = { label: "Prediction", prediction: true, finished: false, abort: new AbortController(),
+  const run = { label: t("Prediction"), prediction: true, finished: false, abort: new AbortController(),
     unsaved: state.saved && text.value.trim() !== state.saved.text.trim() ? state.saved.version : null };
   state.run = run;
   state.traces.predicted = [];
   draw();
-  progressLine.textContent = "Prediction: starting…";
+  progressLine.textContent = t("Prediction: starting…");
   endStateLine.textContent = "";
   delete endStateLine.dataset.status;
   startLine.textContent = "";
@@ -348,12 +350,12 @@ async function predict() {
         signal: run.abort.signal },
       (message) => onPrediction(run, message));
     if (!run.finished) {
-      progressLine.textContent = "Prediction: the answer ended early; try again.";
+      progressLine.textContent = t("Prediction: the answer ended early; try again.");
       setRunning(false);
     }
   } catch (error) {
     run.finished = true;
-    progressLine.textContent = error.name === "AbortError" ? "Prediction: cancelled." : `Prediction: ${error.message}`;
+    progressLine.textContent = error.name === "AbortError" ? t("Prediction: cancelled.") : t("Prediction: {message}", { message: error.message });
     setRunning(false);
   }
 }
@@ -361,7 +363,7 @@ async function predict() {
 async function startRun(target) {
   if (!(await check())) return;
   const robotName = robotSelect?.value ?? "";
-  progressLine.textContent = `Starting on ${robotName}…`;
+  progressLine.textContent = t("Starting on {robotName}…", { robotName });
   endStateLine.textContent = "";
   try {
     const answer = await fetchJson(`/api/plans/${planId}/runs`,
@@ -387,16 +389,16 @@ function queueForRobot() {
   const robotName = robotSelect?.value;
   if (!robotName) return;
   state.queue?.close();
-  turnLine.textContent = `Joining ${robotName}'s queue…`;
+  turnLine.textContent = t("Joining {robotName}'s queue…", { robotName });
   state.queue = new Channel(`/ws/robots/${encodeURIComponent(robotName)}/queue`);
   state.queue.addEventListener("message", (event) => {
     const seat = parseJsonMessage(event.detail);
     if (seat?.type !== "queue") return;
     button("run").hidden = !seat.is_controller;
-    button("run").textContent = `Run on ${robotName}`;
+    button("run").textContent = t("Run on {robotName}", { robotName });
     turnLine.textContent = seat.is_controller
-      ? `Your turn on ${robotName}${seat.turn_remaining_s != null ? ` (${Math.round(seat.turn_remaining_s)} s left)` : ""}.`
-      : `Waiting for ${robotName}: position ${seat.position ?? "?"} of ${seat.queue_size}${seat.controller ? `, ${seat.controller} has it` : ""}.`;
+      ? t("Your turn on {robotName}{value}.", { robotName, value: seat.turn_remaining_s != null ? t(" ({turn_remaining_s} s left)", { turn_remaining_s: Math.round(seat.turn_remaining_s) }) : "" })
+      : t("Waiting for {robotName}: position {value} of {queue_size}{value2}.", { robotName, value: seat.position ?? "?", queue_size: seat.queue_size, value2: seat.controller ? t(", {controller} has it", { controller: seat.controller }) : "" });
   });
 }
 

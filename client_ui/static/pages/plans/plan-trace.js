@@ -1,6 +1,9 @@
 // Pure parts of the plan page: a run's trace from pose samples, its end state in words, the line a feedback
 // names, and the distance between two traces' end points. No DOM, so it tests in isolation.
 
+import { t } from "../../lib/i18n.js";
+
+
 const FINAL = new Set(["succeeded", "aborted", "canceled"]);
 
 /** Whether a goal status is final. */
@@ -34,7 +37,7 @@ export function endStateWords(goal) {
   const line = /^line (\d+)/.exec(message)?.[1] ?? lineOf(goal?.feedback);
   const code = goal?.error_code ? ` (${goal.error_code})` : "";
   const reason = message.replace(/^line \d+:\s*/, "");
-  return line ? `${status} at line ${line}${code}: ${reason}` : `${status}${code}: ${reason}`;
+  return line ? t("{status} at line {line}{code}: {reason}", { status, line, code, reason }) : `${status}${code}: ${reason}`;
 }
 
 /** Distance in centimetres between the last points of two traces, or null while either is empty. */

@@ -3,9 +3,10 @@
 
 import { h } from "../../lib/dom.js";
 import { KINDS, LEGS, reportLine } from "../../lib/response-times.js";
+import { t } from "../../lib/i18n.js";
 
-const LEG_LABELS = { total: "Total", client: "Browser → middleware", robot: "Middleware → robot" };
-const FIGURES = [["min", "Min"], ["mean", "Mean"], ["max", "Max"], ["jitter", "Jitter (IQR)"]];
+const LEG_LABELS = { total: t("Total"), client: t("Browser → middleware"), robot: t("Middleware → robot") };
+const FIGURES = [["min", t("Min")], ["mean", t("Mean")], ["max", t("Max")], ["jitter", t("Jitter (IQR)")]];
 
 function ms(value) {
   return Number.isFinite(value) ? value.toFixed(1) : "—";
@@ -13,7 +14,7 @@ function ms(value) {
 
 function legsTable(report) {
   return h("table", { class: "class-rtt__legs" },
-    h("thead", {}, h("tr", {}, h("th", { scope: "col", text: "Round trip (ms)" }),
+    h("thead", {}, h("tr", {}, h("th", { scope: "col", text: t("Round trip (ms)") }),
       FIGURES.map(([, label]) => h("th", { scope: "col", text: label })))),
     h("tbody", {}, KINDS.filter((kind) => report[kind]?.count).flatMap((kind) => LEGS.map((leg) => h("tr", {},
       h("th", { scope: "row", text: `${kind === "skill" ? "Skills" : "Drive"}: ${LEG_LABELS[leg]}` }),
@@ -23,11 +24,11 @@ function legsTable(report) {
 
 /** The content of a seat's "Response times" cell. */
 export function responseTimesCell(report) {
-  if (!report) return [h("span", { class: "muted", text: "not measured yet" })];
+  if (!report) return [h("span", { class: "muted", text: t("not measured yet") })];
   const { late, lost } = report.delivery;
   return [
     ...KINDS.map((kind) => h("div", { "data-field": `rtt-${kind}-line`, text: reportLine(report, kind) })),
-    h("div", { "data-field": "rtt-delivery", text: `${late} late, ${lost} lost` }),
-    h("details", {}, h("summary", { text: "Legs" }), legsTable(report)),
+    h("div", { "data-field": "rtt-delivery", text: t("{late} late, {lost} lost", { late, lost }) }),
+    h("details", {}, h("summary", { text: t("Legs") }), legsTable(report)),
   ];
 }

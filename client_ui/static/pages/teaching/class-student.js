@@ -1,5 +1,6 @@
 // The student's class session page: their own robot's state, and the way to its console once it is ready.
 import { fetchJson } from "../../lib/transport.js";
+import { t } from "../../lib/i18n.js";
 
 const root = document.getElementById("my-class");
 const statusLine = root.querySelector("[data-field=status]");
@@ -14,16 +15,16 @@ function render(seat) {
   restartButton.hidden = !(seat.open && (seat.state === "stopped" || seat.state === "failed"));
   if (seat.console_url) consoleLink.href = seat.console_url;
   if (!seat.open) {
-    statusLine.textContent = "No class session is open for your courses now. Your tutor starts one in class.";
+    statusLine.textContent = t("No class session is open for your courses now. Your tutor starts one in class.");
     timer = setTimeout(refresh, 10000);
     return;
   }
   const course = `${seat.course.code} · ${seat.course.title}`;
   const words = {
-    starting: `Class session of ${course}: your robot ${seat.robot} is starting…`,
-    ready: `Class session of ${course}: your robot ${seat.robot} is ready.`,
-    failed: `Class session of ${course}: your robot did not start. ${seat.message} Tell your tutor.`,
-    stopped: `Class session of ${course}: your robot ${seat.robot} is stopped. Start it again to go on.`,
+    starting: t("Class session of {course}: your robot {robot} is starting…", { course, robot: seat.robot }),
+    ready: t("Class session of {course}: your robot {robot} is ready.", { course, robot: seat.robot }),
+    failed: t("Class session of {course}: your robot did not start. {message} Tell your tutor.", { course, message: seat.message }),
+    stopped: t("Class session of {course}: your robot {robot} is stopped. Start it again to go on.", { course, robot: seat.robot }),
   };
   statusLine.textContent = words[seat.state];
   timer = setTimeout(refresh, seat.state === "starting" ? 1000 : 5000);

@@ -1,6 +1,7 @@
 // The tutor's class session page: start it, follow every student's robot as it starts, end it.
 import { fetchJson } from "../../lib/transport.js";
 import { responseTimesCell } from "./class-response-times.js";
+import { t } from "../../lib/i18n.js";
 
 const root = document.getElementById("class-session");
 const api = `/api/courses/${root.dataset.courseId}/class-session`;
@@ -12,22 +13,22 @@ const sceneChoice = root.querySelector("[data-field=scene-choice]");
 const sceneSelect = sceneChoice.querySelector("select");
 const table = root.querySelector("table");
 const rows = table.querySelector("tbody");
-const STATE_WORDS = { starting: "starting…", ready: "ready", failed: "did not start", stopped: "stopped" };
+const STATE_WORDS = { starting: t("starting…"), ready: t("ready"), failed: t("did not start"), stopped: t("stopped") };
 let timer = null;
 const legsOpen = new Set(); // user ids whose response-time legs the tutor opened
 
 function seatRow(seat) {
   const row = document.createElement("tr");
   row.dataset.state = seat.state;
-  for (const [label, text] of [["Student", seat.username], ["Robot", seat.robot],
-    ["State", STATE_WORDS[seat.state] + (seat.message ? `: ${seat.message}` : "")]]) {
+  for (const [label, text] of [[t("Student"), seat.username], [t("Robot"), seat.robot],
+    [t("State"), STATE_WORDS[seat.state] + (seat.message ? `: ${seat.message}` : "")]]) {
     const cell = document.createElement("td");
     cell.dataset.label = label;
     cell.textContent = text;
     row.append(cell);
   }
   const times = document.createElement("td");
-  times.dataset.label = "Response times";
+  times.dataset.label = t("Response times");
   times.dataset.field = "response-times";
   times.append(...responseTimesCell(seat.response_times));
   const legs = times.querySelector("details");
@@ -49,10 +50,10 @@ function render(state) {
   rows.replaceChildren(...state.seats.map(seatRow));
   const { starting, ready, failed, stopped } = state.counts;
   summary.textContent = state.open
-    ? `Class session open (${state.scene}): ${ready} of ${state.seats.length} robots ready`
-      + (starting ? `, ${starting} starting` : "") + (failed ? `, ${failed} did not start` : "")
-      + (stopped ? `, ${stopped} stopped` : "") + "."
-    : "No class session is open for this course.";
+    ? t("Class session open ({scene}): {ready} of {length} robots ready", { scene: state.scene, ready, length: state.seats.length })
+      + (starting ? t(", {starting} starting", { starting }) : "") + (failed ? t(", {failed} did not start", { failed }) : "")
+      + (stopped ? t(", {stopped} stopped", { stopped }) : "") + "."
+    : t("No class session is open for this course.");
   clearTimeout(timer);
   if (state.open) timer = setTimeout(refresh, starting ? 1000 : 5000);
 }
@@ -69,7 +70,7 @@ async function refresh() {
 async function act(method) {
   startButton.disabled = endButton.disabled = true;
   errorLine.hidden = true;
-  summary.textContent = method === "POST" ? "Starting every student's robot…" : "Stopping every robot…";
+  summary.textContent = method === "POST" ? t("Starting every student's robot…") : t("Stopping every robot…");
   try {
     render(await fetchJson(api, method === "POST" ? { method, body: { scene: sceneSelect.value } } : { method }));
   } catch (error) {
@@ -82,6 +83,6 @@ async function act(method) {
 
 startButton.addEventListener("click", () => act("POST"));
 endButton.addEventListener("click", () => {
-  if (window.confirm("End the class session? Every student's robot stops.")) act("DELETE");
+  if (window.confirm(t("End the class session? Every student's robot stops."))) act("DELETE");
 });
 refresh();

@@ -4,6 +4,7 @@
 import { h } from "../../lib/dom.js";
 import { CommandBuilder, authoringSkills, describeCommand } from "../../lib/command-builder.js";
 import { ApiError, fetchJson } from "../../lib/transport.js";
+import { t } from "../../lib/i18n.js";
 
 const form = document.getElementById("lesson-form");
 const errorList = form.querySelector("[data-slot=errors]");
@@ -16,7 +17,7 @@ const cueList = form.querySelector("[data-slot=cue-list]");
 const cueStart = form.querySelector("[data-field=cue-start]");
 const skills = authoringSkills();
 const trackDetails = form.querySelector("[data-field=track-details]");
-const command = new CommandBuilder(form.querySelector("[data-slot=cue-command]"), skills, { legend: "Command", sounds: true });
+const command = new CommandBuilder(form.querySelector("[data-slot=cue-command]"), skills, { legend: t("Command"), sounds: true });
 let checked = { cues: [], errors: [] };
 
 /** 75.25 -> "1:15.3", for people. */
@@ -42,23 +43,23 @@ function trackOf(cues) {
 function showErrors(errors) {
   if (errors.some((error) => error.line)) trackDetails.open = true; // the lines named are in the track
   errorList.replaceChildren(...errors.map((error) => {
-    const where = error.line ? `Line ${error.line}` : "Lesson";
+    const where = error.line ? t("Line {line}", { line: error.line }) : t("Lesson");
     return h("li", { text: `${where} (${error.field}): ${error.message}` });
   }));
 }
 
 function showCues() {
   if (!checked.cues.length) {
-    cueList.replaceChildren(h("li", { class: "muted", text: "No cues yet: play the video, pause, and add one below." }));
+    cueList.replaceChildren(h("li", { class: "muted", text: t("No cues yet: play the video, pause, and add one below.") }));
     return;
   }
   cueList.replaceChildren(...checked.cues.map((cue, index) => h("li", { class: "authoring-list__item", "data-cue": String(index) },
     h("p", {}, h("strong", { text: `${clock(cue.start_s)}–${clock(cue.end_s)}` }), ` ${describeCommand(cue.command, skills)}`),
     h("div", { class: "authoring-list__actions" },
-      h("button", { type: "button", class: "button teaching-quiet", text: "Play from here",
-        "aria-label": `Play the video from cue ${index + 1}`, onclick: () => playFrom(cue.start_s) }),
-      h("button", { type: "button", class: "button teaching-quiet", text: "Remove",
-        "aria-label": `Remove cue ${index + 1}`, onclick: () => removeCue(index) })),
+      h("button", { type: "button", class: "button teaching-quiet", text: t("Play from here"),
+        "aria-label": t("Play the video from cue {value}", { value: index + 1 }), onclick: () => playFrom(cue.start_s) }),
+      h("button", { type: "button", class: "button teaching-quiet", text: t("Remove"),
+        "aria-label": t("Remove cue {value}", { value: index + 1 }), onclick: () => removeCue(index) })),
   )));
 }
 
@@ -71,12 +72,12 @@ function values() {
 
 /** Asks the server what the track holds; lists its cues and every error. */
 async function check() {
-  result.textContent = "Checking…";
+  result.textContent = t("Checking…");
   try {
     checked = await fetchJson("/api/lessons/check", { method: "POST", body: { cues: cuesField.value } });
     showErrors(checked.errors);
     showCues();
-    result.textContent = checked.errors.length ? `${checked.errors.length} problem(s).` : `${checked.cues.length} cue(s), all valid.`;
+    result.textContent = checked.errors.length ? t("{length} problem(s).", { length: checked.errors.length }) : t("{length} cue(s), all valid.", { length: checked.cues.length });
   } catch (error) {
     result.textContent = error.message;
   }
@@ -90,7 +91,7 @@ function playFrom(seconds) {
 
 async function removeCue(index) {
   if (checked.errors.length) {
-    result.textContent = "Fix the problems listed first: the track cannot be rewritten while it has errors.";
+    result.textContent = t("Fix the problems listed first: the track cannot be rewritten while it has errors.");
     return;
   }
   cuesField.value = trackOf(checked.cues.filter((_, i) => i !== index));
@@ -100,7 +101,7 @@ async function removeCue(index) {
 form.querySelector("[data-action=add-cue]").addEventListener("click", async () => {
   const duration = form.querySelector("[name=cue_duration]");
   if (!duration.checkValidity() || duration.value === "") {
-    result.textContent = "Lasts: enter between 0.5 and 600 seconds.";
+    result.textContent = t("Lasts: enter between 0.5 and 600 seconds.");
     duration.focus();
     return;
   }
@@ -126,36 +127,36 @@ function followVideoChoice() {
   const name = videoChoice.value;
   if (!name) {
     preview.removeAttribute("src");
-    previewNote.textContent = "Upload or choose a video to preview it here.";
+    previewNote.textContent = t("Upload or choose a video to preview it here.");
     return;
   }
   preview.src = `/lessons/videos/${encodeURIComponent(name)}`;
-  previewNote.textContent = `Previewing ${name}.`;
+  previewNote.textContent = t("Previewing {name}.", { name });
 }
 
 videoChoice.addEventListener("change", followVideoChoice);
 preview.addEventListener("timeupdate", () => { cueStart.textContent = clock(preview.currentTime); });
 preview.addEventListener("seeked", () => { cueStart.textContent = clock(preview.currentTime); });
-preview.addEventListener("error", () => { previewNote.textContent = "This video cannot be played in this browser."; });
+preview.addEventListener("error", () => { previewNote.textContent = t("This video cannot be played in this browser."); });
 form.querySelector("[data-action=check]").addEventListener("click", check);
 
 form.addEventListener("submit", async (event) => {
   event.preventDefault();
   const id = form.dataset.lessonId;
-  result.textContent = "Saving…";
+  result.textContent = t("Saving…");
   try {
     const payload = await fetchJson(id ? `/api/lessons/${id}` : "/api/lessons", { method: id ? "PUT" : "POST", body: values() });
     showErrors([]);
-    result.textContent = "Saved.";
+    result.textContent = t("Saved.");
     if (!id) window.location.assign(`/lessons/${payload.id}/edit`);
   } catch (error) {
     if (!(error instanceof ApiError) || error.status === 0) {
-      result.textContent = error instanceof ApiError ? error.message : "The lab server cannot be reached.";
+      result.textContent = error instanceof ApiError ? error.message : t("The lab server cannot be reached.");
       return;
     }
     const payload = error.payload ?? {};
     showErrors(payload.errors ?? [{ line: 0, field: payload.error?.field ?? "lesson", message: payload.error?.message }]);
-    result.textContent = payload.error?.message ?? "Not saved.";
+    result.textContent = payload.error?.message ?? t("Not saved.");
   }
 });
 

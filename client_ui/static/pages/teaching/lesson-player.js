@@ -5,6 +5,7 @@ import { fetchJson } from "../../lib/transport.js";
 import { playTone, showCaption } from "./lesson-sound.js";
 import { CuePlayback, cueIndexOf, summarize } from "./lesson-playback.js";
 import { showLessonRobot } from "./lesson-robot.js";
+import { t } from "../../lib/i18n.js";
 
 const root = document.getElementById("lesson");
 const video = root.querySelector("video");
@@ -38,7 +39,7 @@ function showStatus(text, isError = false) {
 }
 
 function formatMs(value) {
-  return value === null ? "–" : `${value.toFixed(1)} ms`;
+  return value === null ? "–" : t("{value} ms", { value: value.toFixed(1) });
 }
 
 function renderLatency() {
@@ -65,7 +66,7 @@ async function run(index, why) {
   const remaining = cue ? cue.end_s - video.currentTime : MAX_HOLD_S;
   const holdS = Math.min(MAX_HOLD_S, Math.max(0.1, remaining));
   clearRenewal();
-  log(`cue ${index} (${why}) → ${describe(cue)}`, "run");
+  log(t("cue {index} ({why}) → {cue}", { index, why, cue: describe(cue) }), "run");
   try {
     const answer = await fetchJson(`/api/lessons/${lessonId}/cues/${index}/run`, {
       method: "POST", body: { target: targetSelect.value, hold_s: Number(holdS.toFixed(3)) },
@@ -74,22 +75,22 @@ async function run(index, why) {
     series.cueToAck.push(total);
     series.middlewareToAck.push(answer.middleware_to_ack_ms);
     renderLatency();
-    const goal = answer.goal ? `goal ${answer.goal.status}` : "applied";
-    log(`cue ${index} acknowledged: ${goal} in ${total.toFixed(1)} ms`, "ack");
+    const goal = answer.goal ? t("goal {status}", { status: answer.goal.status }) : t("applied");
+    log(t("cue {index} acknowledged: {goal} in {total} ms", { index, goal, total: total.toFixed(1) }), "ack");
     root.dataset.lastGoal = answer.goal ? answer.goal.goal_id : "";
     if (answer.sound) {
       playTone(answer.sound);
       showCaption(captionLine, answer.sound);
-      log(`cue ${index}: the robot plays a sound: ${answer.sound.caption}`, "sound");
+      log(t("cue {index}: the robot plays a sound: {caption}", { index, caption: answer.sound.caption }), "sound");
     }
     // A drive longer than direct_control's 10 s is renewed while its cue still runs.
     if (cue && "drive" in cue.command && remaining > MAX_HOLD_S && playback.running === index) {
       renewTimer = setTimeout(() => { if (playback.running === index) { playback.running = null; playback.cueChange(index); } },
         (MAX_HOLD_S - 0.5) * 1000);
     }
-    showStatus(`The robot runs cue ${index}.`);
+    showStatus(t("The robot runs cue {index}.", { index }));
   } catch (error) {
-    log(`cue ${index} refused: ${error.message}`, "error");
+    log(t("cue {index} refused: {message}", { index, message: error.message }), "error");
     showStatus(error.message, true);
   }
 }
@@ -98,15 +99,15 @@ async function stop(why) {
   const eventStamp = lastEventStamp || performance.now();
   series.pauseDetect.push(performance.now() - eventStamp);
   clearRenewal();
-  log(`stop (${why})`, "stop");
+  log(t("stop ({why})", { why }), "stop");
   try {
     await fetchJson("/api/lessons/stop", { method: "POST", body: { target: targetSelect.value } });
     if (why !== "cue-exit") series.pauseToAck.push(performance.now() - eventStamp);
     renderLatency();
-    log(`stop (${why}) acknowledged`, "ack");
-    showStatus(why === "end" ? "The lesson has ended; the robot stopped." : "The robot stopped.");
+    log(t("stop ({why}) acknowledged", { why }), "ack");
+    showStatus(why === "end" ? t("The lesson has ended; the robot stopped.") : t("The robot stopped."));
   } catch (error) {
-    log(`stop refused: ${error.message}`, "error");
+    log(t("stop refused: {message}", { message: error.message }), "error");
     showStatus(error.message, true);
   }
 }
@@ -115,8 +116,8 @@ function describe(cue) {
   if (!cue) return "?";
   const command = cue.command;
   if ("skill" in command) return command.skill.replaceAll("_", " ");
-  if ("drive" in command) return `drive ${command.drive.linear_mps} m/s, ${command.drive.angular_radps} rad/s`;
-  if ("sound" in command) return `sound ${command.sound.frequency_hz} Hz: ${command.sound.caption}`;
+  if ("drive" in command) return t("drive {linear_mps} m/s, {angular_radps} rad/s", { linear_mps: command.drive.linear_mps, angular_radps: command.drive.angular_radps });
+  if ("sound" in command) return t("sound {frequency_hz} Hz: {caption}", { frequency_hz: command.sound.frequency_hz, caption: command.sound.caption });
   return "stop";
 }
 
@@ -160,9 +161,9 @@ async function placeAtStart() {
       body: { target: targetSelect.value } });
     root.dataset.startedAt = answer.at;
     log(answer.message, "start");
-    showStatus(`${answer.message} Press play: the robot follows the video.`);
+    showStatus(t("{message} Press play: the robot follows the video.", { message: answer.message }));
   } catch {
-    showStatus("Press play: the robot follows the video."); // e.g. the practice robot is off: the page offers it
+    showStatus(t("Press play: the robot follows the video.")); // e.g. the practice robot is off: the page offers it
   }
 }
 

@@ -6,6 +6,7 @@
 import { h } from "../../lib/dom.js";
 import { fetchJson } from "../../lib/transport.js";
 import { showRobotPanels } from "../../lib/console/robot-panels.js";
+import { t } from "../../lib/i18n.js";
 
 const LESSON_PANELS = ["camera", "map"];
 // The raw readings the 2022 paper showed beside its video, as the console's plots: odometry (a time plot of the
@@ -20,7 +21,7 @@ async function showPractice(host) {
     return;
   }
   const problem = h("p", { role: "alert" });
-  const start = h("button", { type: "button", class: "button button--primary", text: "Start my practice robot",
+  const start = h("button", { type: "button", class: "button button--primary", text: t("Start my practice robot"),
     onclick: async () => {
       start.disabled = true;
       try {
@@ -31,7 +32,7 @@ async function showPractice(host) {
         start.disabled = false;
       }
     } });
-  host.replaceChildren(h("p", { text: "Your practice robot is off. Start it to see it here and let the lesson drive it." }),
+  host.replaceChildren(h("p", { text: t("Your practice robot is off. Start it to see it here and let the lesson drive it.") }),
     start, problem);
 }
 

@@ -1,6 +1,7 @@
 // The practice robot page: start or stop one's own simulated robot, and watch its camera.
 import { fetchJson } from "../../lib/transport.js";
 import { attachCamera } from "./tour-camera.js";
+import { t } from "../../lib/i18n.js";
 
 const root = document.getElementById("practice");
 const statusLine = root.querySelector("[data-field=status]");
@@ -13,12 +14,12 @@ let following = null;
 
 function sentence(state, wasStarting) {
   if (state.running) {
-    return `Your practice robot ${state.name} is running (${state.in_use} of ${state.cap} in use). `
-      + `It stops after ${Math.round(state.idle_stop_s / 60)} minutes unused.`;
+    return t("Your practice robot {name} is running ({in_use} of {cap} in use). ", { name: state.name, in_use: state.in_use, cap: state.cap })
+      + t("It stops after {value} minutes unused.", { value: Math.round(state.idle_stop_s / 60) });
   }
-  if (state.starting) return "Your practice robot is starting…";
-  if (wasStarting) return "Your practice robot did not start. Try again in a moment.";
-  return `Your practice robot is off (${state.in_use} of ${state.cap} in use).`;
+  if (state.starting) return t("Your practice robot is starting…");
+  if (wasStarting) return t("Your practice robot did not start. Try again in a moment.");
+  return t("Your practice robot is off ({in_use} of {cap} in use).", { in_use: state.in_use, cap: state.cap });
 }
 
 function render(state) {
@@ -37,7 +38,7 @@ function render(state) {
 
 async function act(method) {
   startButton.disabled = stopButton.disabled = true;
-  statusLine.textContent = method === "POST" ? "Starting your robot…" : "Stopping your robot…";
+  statusLine.textContent = method === "POST" ? t("Starting your robot…") : t("Stopping your robot…");
   try {
     render(await fetchJson("/api/practice", { method }));
   } catch (error) {

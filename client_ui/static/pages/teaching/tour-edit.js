@@ -4,6 +4,7 @@
 import { h } from "../../lib/dom.js";
 import { CommandBuilder, authoringSkills, describeCommand } from "../../lib/command-builder.js";
 import { fetchJson } from "../../lib/transport.js";
+import { t } from "../../lib/i18n.js";
 
 const form = document.getElementById("tour-form");
 const stepsField = form.querySelector("[name=steps]");
@@ -11,9 +12,9 @@ const stepList = form.querySelector("[data-slot=step-list]");
 const result = form.querySelector("[data-field=result]");
 const skills = authoringSkills();
 const command = new CommandBuilder(form.querySelector("[data-slot=step-command]"), skills,
-  { optional: true, legend: "Command (optional)" });
+  { optional: true, legend: t("Command (optional)") });
 const panelTitles = new Map([...form.querySelectorAll("[name=new_panel] option")].map((o) => [o.value, o.textContent]));
-const CONDITION_WORDS = { skill_finished: "when the skill finishes", manual: "when the learner presses Next" };
+const CONDITION_WORDS = { skill_finished: t("when the skill finishes"), manual: t("when the learner presses Next") };
 
 function readSteps() {
   const steps = JSON.parse(stepsField.value || "[]");
@@ -27,8 +28,8 @@ function writeSteps(steps) {
 }
 
 function conditionWords(condition) {
-  if (condition?.type === "time") return `after ${Number(condition.seconds)} s`;
-  return CONDITION_WORDS[condition?.type] ?? "when the learner presses Next";
+  if (condition?.type === "time") return t("after {seconds} s", { seconds: Number(condition.seconds) });
+  return CONDITION_WORDS[condition?.type] ?? t("when the learner presses Next");
 }
 
 function showSteps() {
@@ -36,22 +37,22 @@ function showSteps() {
   try {
     steps = readSteps();
   } catch {
-    stepList.replaceChildren(h("li", { class: "muted", text: "The steps' JSON below cannot be read; fix it to see the list." }));
+    stepList.replaceChildren(h("li", { class: "muted", text: t("The steps' JSON below cannot be read; fix it to see the list.") }));
     return;
   }
   if (!steps.length) {
-    stepList.replaceChildren(h("li", { class: "muted", text: "No steps yet: add the first with the form below." }));
+    stepList.replaceChildren(h("li", { class: "muted", text: t("No steps yet: add the first with the form below.") }));
     return;
   }
   stepList.replaceChildren(...steps.map((step, index) => h("li", { class: "authoring-list__item", "data-step": String(index) },
-    h("p", {}, h("strong", { text: step.title || `Step ${index + 1}` }), ` — look at ${panelTitles.get(step.panel) ?? step.panel}`),
+    h("p", {}, h("strong", { text: step.title || t("Step {value}", { value: index + 1 }) }), t(" — look at {value}", { value: panelTitles.get(step.panel) ?? step.panel })),
     step.text ? h("p", { class: "muted", text: step.text }) : null,
-    h("p", { class: "small", text: `${describeCommand(step.command, skills)}; goes on ${conditionWords(step.condition)}.` }),
+    h("p", { class: "small", text: t("{command}; goes on {condition}.", { command: describeCommand(step.command, skills), condition: conditionWords(step.condition) }) }),
     h("div", { class: "authoring-list__actions" },
-      h("button", { type: "button", class: "button teaching-quiet", text: "Move up", disabled: index === 0,
-        "aria-label": `Move step ${index + 1} up`, onclick: () => move(index, -1) }),
-      h("button", { type: "button", class: "button teaching-quiet", text: "Remove",
-        "aria-label": `Remove step ${index + 1}`, onclick: () => remove(index) })),
+      h("button", { type: "button", class: "button teaching-quiet", text: t("Move up"), disabled: index === 0,
+        "aria-label": t("Move step {value} up", { value: index + 1 }), onclick: () => move(index, -1) }),
+      h("button", { type: "button", class: "button teaching-quiet", text: t("Remove"),
+        "aria-label": t("Remove step {value}", { value: index + 1 }), onclick: () => remove(index) })),
   )));
 }
 
@@ -60,14 +61,14 @@ function move(index, by) {
   const [step] = steps.splice(index, 1);
   steps.splice(index + by, 0, step);
   writeSteps(steps);
-  result.textContent = "Step moved; save to keep it.";
+  result.textContent = t("Step moved; save to keep it.");
 }
 
 function remove(index) {
   const steps = readSteps();
   steps.splice(index, 1);
   writeSteps(steps);
-  result.textContent = "Step removed; save to keep it.";
+  result.textContent = t("Step removed; save to keep it.");
 }
 
 form.querySelector("[data-action=add-step]").addEventListener("click", () => {
@@ -75,7 +76,7 @@ form.querySelector("[data-action=add-step]").addEventListener("click", () => {
   try {
     steps = readSteps();
   } catch {
-    result.textContent = "The steps' JSON cannot be read; fix it before adding a step.";
+    result.textContent = t("The steps' JSON cannot be read; fix it before adding a step.");
     return;
   }
   const data = new FormData(form);
@@ -91,7 +92,7 @@ form.querySelector("[data-action=add-step]").addEventListener("click", () => {
   }
   steps.push(step);
   writeSteps(steps);
-  result.textContent = `Step ${steps.length} added; save to check and keep it.`;
+  result.textContent = t("Step {length} added; save to check and keep it.", { length: steps.length });
 });
 
 stepsField.addEventListener("input", showSteps);
@@ -103,14 +104,14 @@ form.addEventListener("submit", async (event) => {
   try {
     steps = readSteps();
   } catch {
-    result.textContent = "steps: not valid JSON.";
+    result.textContent = t("steps: not valid JSON.");
     return;
   }
   const id = form.dataset.tourId;
   try {
     const saved = await fetchJson(id ? `/api/tours/${id}` : "/api/tours", { method: id ? "PUT" : "POST",
       body: { title: data.get("title"), summary: data.get("summary"), topics: data.get("topics"), steps } });
-    result.textContent = "Saved.";
+    result.textContent = t("Saved.");
     if (!id) window.location.assign(`/tours/${saved.id}/edit`);
   } catch (error) {
     result.textContent = error.field ? `${error.field}: ${error.message}` : error.message;

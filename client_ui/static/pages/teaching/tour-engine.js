@@ -5,6 +5,9 @@
 // "skill_finished" (the goal ends), "time" (seconds pass), or "manual" (the learner presses Next).
 // Pause stops the robot and the wait; resume replays the current step; replay starts from step 0.
 
+import { t } from "../../lib/i18n.js";
+
+
 export class TourEngine {
   /**
    * steps: [{text, panel, command, condition: {type, seconds}}]
@@ -54,7 +57,7 @@ export class TourEngine {
     if (this.status === "done" || this.status === "ready") return;
     this.epoch += 1;
     this.controller?.abort();
-    this._set("paused", "Paused. Resume replays this step.");
+    this._set("paused", t("Paused. Resume replays this step."));
     await this.io.stop();
   }
 
@@ -80,7 +83,7 @@ export class TourEngine {
         } else if (condition.type === "skill_finished" && goalId) {
           const status = await this.io.waitGoal(goalId, controller.signal);
           if (epoch !== this.epoch) return;
-          if (status !== "succeeded") this.message = `The skill ended ${status}; the tour goes on.`;
+          if (status !== "succeeded") this.message = t("The skill ended {status}; the tour goes on.", { status });
         } else {
           return;  // manual: next() continues
         }
@@ -90,7 +93,7 @@ export class TourEngine {
         return;
       }
     }
-    if (epoch === this.epoch) this._set("done", "The tour is over. Replay it, or try the steps yourself.");
+    if (epoch === this.epoch) this._set("done", t("The tour is over. Replay it, or try the steps yourself."));
   }
 }
 

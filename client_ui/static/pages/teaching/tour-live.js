@@ -4,6 +4,7 @@
 // handed the robot drives it from here.
 import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
 import { panelTitle, showRobotPanels } from "../../lib/console/robot-panels.js";
+import { t } from "../../lib/i18n.js";
 
 const root = document.getElementById("live");
 const sessionId = Number(root.dataset.sessionId);
@@ -19,13 +20,13 @@ function render(next) {
   state = next;
   root.dataset.step = String(next.step_index);
   root.dataset.controller = next.controller ?? "";
-  field("progress").textContent = `Step ${next.step_index + 1} of ${next.step_count}`;
-  field("step-title").textContent = next.step?.title || `Step ${next.step_index + 1}`;
+  field("progress").textContent = t("Step {value} of {step_count}", { value: next.step_index + 1, step_count: next.step_count });
+  field("step-title").textContent = next.step?.title || t("Step {value}", { value: next.step_index + 1 });
   field("step-text").textContent = next.step?.text ?? "";
   field("step-panel").textContent = next.step ? panelTitle(robotPanels.titles, next.step.panel) : "";
   robotPanels.highlight(next.step?.panel);
-  field("control").textContent = next.ended ? "The class has ended."
-    : next.controller === me ? "You have control of the robot." : `${next.controller} has control of the robot.`;
+  field("control").textContent = next.ended ? t("The class has ended.")
+    : next.controller === me ? t("You have control of the robot.") : t("{controller} has control of the robot.", { controller: next.controller });
   field("participants").textContent = next.participants.join(", ");
   if (isTutor) {
     const select = root.querySelector("[data-field=hand-to]");
@@ -64,7 +65,7 @@ if (isTutor) {
     try {
       const answer = await fetchJson(`/api/tours/${tourId}/steps/${state.step_index}/run`, { method: "POST",
         body: { target: robot } });
-      field("error").textContent = answer.goal ? `Running: goal ${answer.goal.status}.` : "Done.";
+      field("error").textContent = answer.goal ? t("Running: goal {status}.", { status: answer.goal.status }) : t("Done.");
     } catch (error) {
       field("error").textContent = error.message;
     }

@@ -3,6 +3,7 @@
 import { fetchJson } from "../../lib/transport.js";
 import { TourEngine, abortableSleep } from "./tour-engine.js";
 import { panelTitle, showRobotPanels } from "../../lib/console/robot-panels.js";
+import { t } from "../../lib/i18n.js";
 
 const root = document.getElementById("tour");
 const tourId = Number(root.dataset.tourId);
@@ -19,9 +20,9 @@ let robotPanels = { titles: new Map(), highlight: () => {} };
 function render(state) {
   root.dataset.status = state.status;
   root.dataset.index = String(state.index);
-  progress.textContent = `Step ${state.index + 1} of ${state.count}`;
-  const words = { ready: "Ready.", running: "Running the step…", waiting: "Watching…", paused: "Paused.",
-    done: "Done.", failed: "Stopped." };
+  progress.textContent = t("Step {value} of {count}", { value: state.index + 1, count: state.count });
+  const words = { ready: t("Ready."), running: t("Running the step…"), waiting: t("Watching…"), paused: t("Paused."),
+    done: t("Done."), failed: t("Stopped.") };
   statusLine.textContent = state.message || words[state.status];
   buttons.start.hidden = state.status !== "ready";
   buttons.pause.hidden = !["running", "waiting"].includes(state.status);
@@ -32,7 +33,7 @@ function render(state) {
 
 const io = {
   show(index, step) {
-    stepTitle.textContent = step.title || `Step ${index + 1}`;
+    stepTitle.textContent = step.title || t("Step {value}", { value: index + 1 });
     stepText.textContent = step.text;
     stepPanel.textContent = panelTitle(robotPanels.titles, step.panel);
     robotPanels.highlight(step.panel);
@@ -58,7 +59,7 @@ const io = {
 };
 
 async function ensurePracticeRobot() {
-  statusLine.textContent = "Starting your practice robot…";
+  statusLine.textContent = t("Starting your practice robot…");
   const state = await fetchJson("/api/practice", { method: "POST" });
   const wanted = ["camera", ...engine.steps.map((step) => step.panel)];
   robotPanels = await showRobotPanels(root.querySelector("[data-slot=robot-panels]"), state.name, wanted);

@@ -24,16 +24,16 @@ import { FILL_MODES, FeedbackLayer } from "./camera-feedback.js";
 import { DrawnView } from "./drawn-view.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 const FPS_WINDOW_MS = 1000;
 const SOURCES = ["video", "drawn"];
-const TRUTH_WITHHELD = "During your graded run the picture is the robot's own camera video: a picture drawn here "
-  + "would need where the robot truly stands, which stays on the server until the run ends.";
+const TRUTH_WITHHELD = t("During your graded run the picture is the robot's own camera video: a picture drawn here would need where the robot truly stands, which stays on the server until the run ends.");
 const WITHHELD_CODE = "obstacles_hidden"; // the camera's refusal during the viewer's obstacle-zone test
 // What the panel calls its picture, by source: a drawn picture is neither video nor live.
 const WORDS = {
-  video: { age: "video age ", delay: "video delay ", waiting: "Waiting for video…" },
-  drawn: { age: "picture age ", delay: "picture delay ", waiting: "Waiting for the robot's pose to draw its view…" },
+  video: { age: t("video age "), delay: t("video delay "), waiting: t("Waiting for video…") },
+  drawn: { age: t("picture age "), delay: t("picture delay "), waiting: t("Waiting for the robot's pose to draw its view…") },
 };
 
 export class CameraPanel extends PanelElement {
@@ -107,12 +107,12 @@ export class CameraPanel extends PanelElement {
     this.#feedbackLock = h("span", { class: "camera__lock", id: "camera-feedback-lock", "data-field": "feedback-lock",
       hidden: true });
     this.#fillSelect = h("select", { id: "camera-feedback-fill", "data-field": "feedback-fill" },
-      h("option", { value: "edges", text: "continue the picture" }),
+      h("option", { value: "edges", text: t("continue the picture") }),
       h("option", { value: "black", text: "black" }));
     this.#fillSelect.value = this.#feedback.fill;
     this.#sourceSelect = h("select", { id: "camera-source", "data-field": "camera-source" },
-      h("option", { value: "video", text: "the robot's camera (video)" }),
-      h("option", { value: "drawn", text: "drawn by this browser from the robot's pose", disabled: true }));
+      h("option", { value: "video", text: t("the robot's camera (video)") }),
+      h("option", { value: "drawn", text: t("drawn by this browser from the robot's pose"), disabled: true }));
     this.#sourceSelect.addEventListener("change", () => {
       this.source = this.#sourceSelect.value;
       this.emit("camera-source-change", { source: this.#source });
@@ -122,23 +122,23 @@ export class CameraPanel extends PanelElement {
       this.emit("camera-feedback-fill-change", { fill: this.#feedback.fill });
     });
     this.append(
-      h("h2", { class: "panel__title", id: "camera-title", text: "Camera" }),
+      h("h2", { class: "panel__title", id: "camera-title", text: t("Camera") }),
       this.#stage = h("div", { class: "camera__stage" }, this.#canvas, this.#placeholder),
       h("p", { class: "camera__stats" },
-        h("span", {}, this.#fpsOutput, " fps"),
-        h("span", {}, this.#ageLabel, this.#ageOutput, " ms"),
-        h("span", { hidden: true }, "frame ", this.#sequenceOutput), // a number for tests and tools, not people
-        h("span", { title: "From sending a command to the first frame that shows it" },
+        h("span", {}, this.#fpsOutput, t(" fps")),
+        h("span", {}, this.#ageLabel, this.#ageOutput, t(" ms")),
+        h("span", { hidden: true }, t("frame "), this.#sequenceOutput), // a number for tests and tools, not people
+        h("span", { title: t("From sending a command to the first frame that shows it") },
           this.#delayLabel, this.#delayOutput, " s"),
         this.#injectedBadge),
       // Folded on a phone, where the picture and the drive pad must share one screen.
       h("details", { class: "camera__options", open: window.matchMedia("(min-width: 760px)").matches },
-        h("summary", { text: "Picture and motion preview" }),
+        h("summary", { text: t("Picture and motion preview") }),
         h("p", { class: "camera__feedback" },
-          h("label", { class: "camera__source" }, "Picture: ", this.#sourceSelect)),
+          h("label", { class: "camera__source" }, t("Picture: "), this.#sourceSelect)),
         h("p", { class: "camera__feedback" },
-          h("label", {}, this.#feedbackToggle, " Move the picture at once with my commands"),
-          h("label", { class: "camera__fill" }, "Where the frame shows nothing: ", this.#fillSelect),
+          h("label", {}, this.#feedbackToggle, t(" Move the picture at once with my commands")),
+          h("label", { class: "camera__fill" }, t("Where the frame shows nothing: "), this.#fillSelect),
           this.#feedbackLock)),
       this.#messageLine,
     );
@@ -156,7 +156,7 @@ export class CameraPanel extends PanelElement {
     if (this.#source !== "video" || this.#withheld) return; // nothing to say of a picture drawn here, or withheld
     this.#stage.classList.toggle("camera__stage--stale", !isConnected);
     if (!isConnected && this.#lastHeader) {
-      this.#placeholder.textContent = "Video paused: the camera connection is down.";
+      this.#placeholder.textContent = t("Video paused: the camera connection is down.");
       this.#placeholder.hidden = false;
     }
   }
@@ -304,7 +304,7 @@ export class CameraPanel extends PanelElement {
     if (!view) {
       const option = this.#sourceSelect.querySelector('option[value="drawn"]');
       option.disabled = true;
-      option.textContent = "drawn here (WebGL is missing)";
+      option.textContent = t("drawn here (WebGL is missing)");
       this.#showMessage(problem, true);
       this.source = "video";
       this.emit("camera-source-change", { source: "video", fallback: true });
@@ -333,8 +333,8 @@ export class CameraPanel extends PanelElement {
     if (message?.type === "status") {
       const offline = message.robot_online === false;
       const online = this.#videoNote || message.message; // why the video shows outlasts its "live"
-      this.#showMessage(offline ? message.message || "The robot is offline." : online, offline);
-      this.#placeholder.textContent = offline ? "No video: the robot is offline." : WORDS.video.waiting;
+      this.#showMessage(offline ? message.message || t("The robot is offline.") : online, offline);
+      this.#placeholder.textContent = offline ? t("No video: the robot is offline.") : WORDS.video.waiting;
       if (offline) {
         this.#placeholder.hidden = false;
         this.#stage.classList.add("camera__stage--stale");
@@ -342,7 +342,7 @@ export class CameraPanel extends PanelElement {
     } else if (message?.type === "error" && message.code === WITHHELD_CODE) {
       this.#withhold(message.message);
     } else if (message?.type === "error") {
-      this.#showMessage(message.message || "The camera stream reported an error.", true);
+      this.#showMessage(message.message || t("The camera stream reported an error."), true);
     }
   }
 
@@ -363,8 +363,8 @@ export class CameraPanel extends PanelElement {
 
   #applyLabel() {
     this.#canvas?.setAttribute("aria-label", this.#source === "drawn"
-      ? `The view of ${this.#robotName || "the robot"}, drawn by this browser from where it stands`
-      : `Live camera of ${this.#robotName || "the robot"}`);
+      ? t("The view of {value}, drawn by this browser from where it stands", { value: this.#robotName || t("the robot") })
+      : t("Live camera of {value}", { value: this.#robotName || t("the robot") }));
   }
 
   /** The panel's words for its picture: the video's, or those of a view drawn here (neither video nor live). */
@@ -404,7 +404,7 @@ export class CameraPanel extends PanelElement {
     const active = Number.isFinite(seconds) && seconds > 0;
     const shown = this.#injectedBadge.textContent;
     this.#injectedBadge.hidden = !active;
-    this.#injectedBadge.textContent = active ? `Added delay ${seconds.toFixed(1)} s` : "";
+    this.#injectedBadge.textContent = active ? t("Added delay {seconds} s", { seconds: seconds.toFixed(1) }) : "";
     // A delay begun or ended (a delay trial, a tutor's): the preview's lock may have changed with it.
     if (this.#injectedBadge.textContent !== shown) this.emit("camera-injected-delay-change", { delay_s: seconds });
   }

@@ -5,6 +5,9 @@
 // applied command, capture time), so the motion preview, the video-delay figure and any added delay treat both
 // sources alike. three.js is loaded only when this source is first chosen.
 
+import { t } from "../../lib/i18n.js";
+
+
 const MAX_SCALE = 2; // up to twice the camera's own resolution (640 x 480 for the Telebot) where the screen has it
 
 /** Frames drawn from poses; `create` resolves to null (with `problem`) where WebGL is missing. */
@@ -32,8 +35,7 @@ export class DrawnView {
       });
       return { view: new DrawnView(renderer, canvas), problem: "" };
     } catch {
-      return { view: null, problem: "This browser cannot draw the view (WebGL is turned off or missing): the "
-        + "robot's camera video is shown instead." };
+      return { view: null, problem: t("This browser cannot draw the view (WebGL is turned off or missing): the robot's camera video is shown instead.") };
     }
   }
 

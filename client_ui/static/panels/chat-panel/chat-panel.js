@@ -9,6 +9,7 @@
 import { h } from "../../lib/dom.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 const MAX_CHARS = 500;
 
@@ -35,15 +36,15 @@ export class ChatPanel extends PanelElement {
     const titleId = "chat-title";
     this.#list = h("ol", { class: "chat__list", role: "log", "aria-live": "polite", "aria-labelledby": titleId,
       "data-field": "chat-messages" });
-    this.#empty = h("p", { class: "chat__empty muted", text: "No messages yet. Say hello." });
+    this.#empty = h("p", { class: "chat__empty muted", text: t("No messages yet. Say hello.") });
     this.#input = h("input", { id: "chat-input", name: "body", type: "text", maxlength: String(MAX_CHARS),
       autocomplete: "off", enterkeyhint: "send", "aria-describedby": "chat-error", disabled: true });
-    this.#send = h("button", { type: "submit", class: "button button--primary chat__send", text: "Send", disabled: true });
+    this.#send = h("button", { type: "submit", class: "button button--primary chat__send", text: t("Send"), disabled: true });
     this.#errorLine = h("p", { class: "chat__error", id: "chat-error", role: "alert", hidden: true });
     const form = h("form", { class: "chat__form", onsubmit: (event) => this.#submit(event) },
-      h("label", { for: "chat-input", class: "visually-hidden", text: "Message to everyone on this robot" }),
+      h("label", { for: "chat-input", class: "visually-hidden", text: t("Message to everyone on this robot") }),
       this.#input, this.#send);
-    this.append(h("h2", { class: "panel__title", id: titleId, text: "Chat" }), this.#list, this.#empty, form,
+    this.append(h("h2", { class: "panel__title", id: titleId, text: t("Chat") }), this.#list, this.#empty, form,
       this.#errorLine);
   }
 
@@ -51,7 +52,7 @@ export class ChatPanel extends PanelElement {
     event.preventDefault();
     const body = this.#input.value.trim();
     if (!body) {
-      this.error = { message: "Write something before sending." };
+      this.error = { message: t("Write something before sending.") };
       return;
     }
     this.emit("chat-send", { body });
@@ -68,8 +69,8 @@ export class ChatPanel extends PanelElement {
         staff && h("span", { class: `chat__role chat__role--${message.author_role}`, text: message.author_role }),
         time,
         this.#canModerate && h("button", {
-          type: "button", class: "chat__delete", text: "Delete",
-          "aria-label": `Delete the message from ${message.author}`,
+          type: "button", class: "chat__delete", text: t("Delete"),
+          "aria-label": t("Delete the message from {author}", { author: message.author }),
           onclick: () => this.emit("chat-delete", { id: message.id }),
         })),
       h("p", { class: "chat__body", "data-field": "chat-body", text: message.body }));
@@ -80,10 +81,10 @@ export class ChatPanel extends PanelElement {
     const unsent = state === "unsent";
     return h("li", { class: `chat__item chat__item--pending${unsent ? " chat__item--unsent" : ""}`, "data-line": line },
       h("div", { class: "chat__meta" },
-        h("span", { class: "chat__author", text: "You" }),
+        h("span", { class: "chat__author", text: t("You") }),
         h("span", { class: "chat__status", "data-field": "chat-status",
-          text: unsent ? "Not sent: the connection was lost" : "Sending…" }),
-        unsent && h("button", { type: "button", class: "chat__resend", text: "Send again",
+          text: unsent ? t("Not sent: the connection was lost") : t("Sending…") }),
+        unsent && h("button", { type: "button", class: "chat__resend", text: t("Send again"),
           onclick: () => this.emit("chat-resend", { line }) })),
       h("p", { class: "chat__body", "data-field": "chat-pending-body", text: body }));
   }
@@ -176,7 +177,7 @@ export class ChatPanel extends PanelElement {
     const open = phase === "open";
     this.#input.disabled = !open;
     this.#send.disabled = !open;
-    this.#input.placeholder = open ? "Message" : phase === "closed" ? "Chat closed" : "Connecting…";
+    this.#input.placeholder = open ? t("Message") : phase === "closed" ? t("Chat closed") : t("Connecting…");
   }
 }
 

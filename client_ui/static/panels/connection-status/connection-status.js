@@ -7,30 +7,31 @@
 import { h } from "../../lib/dom.js";
 import { CLOSE_CODES } from "../../lib/transport.js";
 import { elementRegistrar, PanelElement } from "../panel-base.js";
+import { t } from "../../lib/i18n.js";
 
-const LABELS = { camera: "Camera", telemetry: "Telemetry", drive: "Drive", queue: "Queue" };
+const LABELS = { camera: t("Camera"), telemetry: t("Telemetry"), drive: t("Drive"), queue: t("Queue") };
 
 /** A sentence for a channel state; pure so it can be tested. */
-export function describeState(state, { robotName = "the robot", nowMs = Date.now() } = {}) {
+export function describeState(state, { robotName = t("the robot"), nowMs = Date.now() } = {}) {
   switch (state?.phase) {
     case "open":
       return "connected";
     case "connecting":
-      return "connecting…";
+      return t("connecting…");
     case "reconnecting": {
       const seconds = Math.max(0, Math.ceil((state.retryAt - nowMs) / 1000));
       const why = state.reason ? ` (${state.reason})` : "";
-      return seconds > 0 ? `reconnecting in ${seconds} s${why}` : "reconnecting…";
+      return seconds > 0 ? t("reconnecting in {seconds} s{why}", { seconds, why }) : t("reconnecting…");
     }
     case "off":
       return state.reason || "off";
     case "closed":
-      if (state.code === CLOSE_CODES.NOT_LOGGED_IN) return "closed: your session has ended";
-      if (state.code === CLOSE_CODES.NOT_ALLOWED) return "closed: you are not allowed to use this robot";
-      if (state.code === CLOSE_CODES.UNKNOWN_ROBOT) return `closed: there is no robot called ${robotName}`;
-      return state.reason ? `closed: ${state.reason}` : "closed";
+      if (state.code === CLOSE_CODES.NOT_LOGGED_IN) return t("closed: your session has ended");
+      if (state.code === CLOSE_CODES.NOT_ALLOWED) return t("closed: you are not allowed to use this robot");
+      if (state.code === CLOSE_CODES.UNKNOWN_ROBOT) return t("closed: there is no robot called {robotName}", { robotName });
+      return state.reason ? t("closed: {reason}", { reason: state.reason }) : t("closed");
     default:
-      return "not started";
+      return t("not started");
   }
 }
 
@@ -41,7 +42,7 @@ export class ConnectionStatus extends PanelElement {
   #sessionAlert;
   #loginLink;
   #tickTimer = 0;
-  #robotName = "the robot";
+  #robotName = t("the robot");
 
   disconnectedCallback() {
     super.disconnectedCallback();
@@ -63,7 +64,7 @@ export class ConnectionStatus extends PanelElement {
     this.ensureBuilt();
     const { line, text } = this.#lines.get("robot");
     line.dataset.phase = online ? "open" : "closed";
-    text.textContent = online ? "answering" : "not answering: commands wait until it is back";
+    text.textContent = online ? t("answering") : t("not answering: commands wait until it is back");
   }
 
   /** Show the latest state of the socket called `name`. */
@@ -77,21 +78,21 @@ export class ConnectionStatus extends PanelElement {
 
   build() {
     this.classList.add("panel", "connection-status");
-    const list = h("ul", { class: "connections", role: "list", "aria-label": "Connections" });
-    const lines = [...Object.entries(LABELS), ["robot", "Robot"]];
+    const list = h("ul", { class: "connections", role: "list", "aria-label": t("Connections") });
+    const lines = [...Object.entries(LABELS), ["robot", t("Robot")]];
     for (const [name, label] of lines) {
       const text = h("span", { class: "connection__text", "data-field": `${name}-connection`,
-        text: name === "robot" ? "checking…" : "not started" });
+        text: name === "robot" ? t("checking…") : t("not started") });
       const line = h("li", { class: "connection", "data-connection": name, "data-phase": "idle" },
         h("span", { class: "connection__dot", "aria-hidden": "true" }),
         h("span", { class: "connection__name", text: `${label}:` }), " ", text);
       this.#lines.set(name, { line, text });
       list.append(line);
     }
-    this.#loginLink = h("a", { href: "/login", text: "log in again" });
+    this.#loginLink = h("a", { href: "/login", text: t("log in again") });
     this.#sessionAlert = h("p", { class: "connection__session", id: "session-ended", role: "alert", hidden: true },
-      "Your session has ended — ", this.#loginLink, ".");
-    this.append(h("h2", { class: "visually-hidden", text: "Connection status" }), list, this.#sessionAlert);
+      t("Your session has ended — "), this.#loginLink, ".");
+    this.append(h("h2", { class: "visually-hidden", text: t("Connection status") }), list, this.#sessionAlert);
   }
 
   #render(name) {

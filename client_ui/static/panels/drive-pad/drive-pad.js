@@ -11,14 +11,15 @@ import { h } from "../../lib/dom.js";
 import { driveCommand, isStill, KEY_DIRECTIONS, stickCommand, stepCommand } from "../../lib/drive-math.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 const SVG_NS = "http://www.w3.org/2000/svg";
 const BUTTONS = [
-  { direction: "forward", label: "Forward", area: "up", path: "M12 5 19 15H5z" },
-  { direction: "left", label: "Turn left", area: "left", path: "M5 12 15 5v14z" },
-  { direction: "stop", label: "Stop", area: "stop", path: "M7 7h10v10H7z" },
-  { direction: "right", label: "Turn right", area: "right", path: "M19 12 9 19V5z" },
-  { direction: "backward", label: "Backward", area: "down", path: "M12 19 5 9h14z" },
+  { direction: "forward", label: t("Forward"), area: "up", path: "M12 5 19 15H5z" },
+  { direction: "left", label: t("Turn left"), area: "left", path: "M5 12 15 5v14z" },
+  { direction: "stop", label: t("Stop"), area: "stop", path: "M7 7h10v10H7z" },
+  { direction: "right", label: t("Turn right"), area: "right", path: "M19 12 9 19V5z" },
+  { direction: "backward", label: t("Backward"), area: "down", path: "M12 19 5 9h14z" },
 ];
 const BUTTON_ACTIVATION_KEYS = new Set(["Enter", " "]);
 const NON_TEXT_INPUT_TYPES = new Set(["button", "submit", "reset", "checkbox", "image"]);
@@ -108,8 +109,8 @@ export class DrivePad extends PanelElement {
     this.ensureBuilt();
     this.#linkNote.hidden = state === "ready";
     this.#linkNote.textContent = state === "closed"
-      ? "Driving is unavailable: the drive connection is closed."
-      : "Connecting to the drive…";
+      ? t("Driving is unavailable: the drive connection is closed.")
+      : t("Connecting to the drive…");
   }
 
   /** True while someone else has control: the pad stays usable but says the robot will not obey. */
@@ -130,7 +131,7 @@ export class DrivePad extends PanelElement {
 
   set error(message) {
     this.ensureBuilt();
-    this.#setError(message?.message || (message ? "The robot refused the command." : ""));
+    this.#setError(message?.message || (message ? t("The robot refused the command.") : ""));
   }
 
   /** Directions held by any source right now. */
@@ -148,9 +149,8 @@ export class DrivePad extends PanelElement {
     this.#mode = mode === "step" ? "step" : "hold";
     for (const radio of this.querySelectorAll('input[name="drive-mode"]')) radio.checked = radio.value === this.#mode;
     this.#modeNote.textContent = this.#mode === "step"
-      ? "Step mode: each press drives 0.1 m or turns 15°. The browser drives at the chosen speed for as long as "
-        + "that step takes, then stops, so acceleration makes steps a little short."
-      : "Hold the arrow keys or the buttons to drive; let go to stop.";
+      ? t("Step mode: each press drives 0.1 m or turns 15°. The browser drives at the chosen speed for as long as that step takes, then stops, so acceleration makes steps a little short.")
+      : t("Hold the arrow keys or the buttons to drive; let go to stop.");
     this.#stopAll();
   }
 
@@ -161,7 +161,7 @@ export class DrivePad extends PanelElement {
   build() {
     this.classList.add("panel");
 
-    const pad = h("div", { class: "pad", role: "group", "aria-label": "Drive controls", oncontextmenu: (e) => e.preventDefault() });
+    const pad = h("div", { class: "pad", role: "group", "aria-label": t("Drive controls"), oncontextmenu: (e) => e.preventDefault() });
     for (const spec of BUTTONS) {
       const button = h("button", {
         type: "button",
@@ -181,36 +181,36 @@ export class DrivePad extends PanelElement {
       oninput: () => { this.#showSpeed(); this.#emitIfChanged(); },
     });
     this.#speedOutput = h("output", { id: "drive-speed-value", for: "drive-speed", class: "drive__speed-value" });
-    this.#linkNote = h("p", { class: "drive__note", "data-field": "drive-link", text: "Connecting to the drive…" });
+    this.#linkNote = h("p", { class: "drive__note", "data-field": "drive-link", text: t("Connecting to the drive…") });
     this.#observingNote = h("p", {
       class: "drive__note drive__note--observing", "data-field": "drive-observing", hidden: true,
-      text: "You are observing: the robot obeys the person whose turn it is.",
+      text: t("You are observing: the robot obeys the person whose turn it is."),
     });
     this.#ackOutput = h("span", { "data-field": "ack-sequence", text: "—" });
     this.#appliedOutput = h("span", { "data-field": "applied-sequence", text: "—" });
 
     this.append(
-      h("h2", { class: "panel__title", id: "drive-title", text: "Drive" }),
+      h("h2", { class: "panel__title", id: "drive-title", text: t("Drive") }),
       this.#linkNote,
       this.#observingNote,
       pad,
       h("div", { class: "drive__speed" },
-        h("label", { for: "drive-speed", text: "Speed" }),
+        h("label", { for: "drive-speed", text: t("Speed") }),
         this.#slider,
         this.#speedOutput),
       h("fieldset", { class: "drive__modes" },
-        h("legend", { text: "Mode" }),
+        h("legend", { text: t("Mode") }),
         ["hold", "step"].map((value) => h("label", { class: "drive__mode" },
           h("input", { type: "radio", name: "drive-mode", value, checked: value === "hold",
             onchange: () => { this.mode = value; } }),
-          value === "hold" ? " Press and hold" : " Step"))),
+          value === "hold" ? t(" Press and hold") : t(" Step")))),
       h("p", { class: "drive__hint" },
         this.#modeNote = h("span", { "data-field": "drive-mode-note",
-          text: "Hold the arrow keys or the buttons to drive; let go to stop." }), " ",
-        h("kbd", { text: "Esc" }), " stops."),
+          text: t("Hold the arrow keys or the buttons to drive; let go to stop.") }), " ",
+        h("kbd", { text: t("Esc") }), t(" stops.")),
       this.#gamepadNote = h("p", { class: "drive__note", "data-field": "gamepad", hidden: true }),
       h("p", { class: "drive__acks" },
-        "Last acknowledged command ", this.#ackOutput, " · applied ", this.#appliedOutput),
+        t("Last acknowledged command "), this.#ackOutput, t(" · applied "), this.#appliedOutput),
       this.messageLine({ class: "drive__error", "data-field": "drive-error", role: "alert" }),
     );
     this.#showSpeed();
@@ -317,7 +317,7 @@ export class DrivePad extends PanelElement {
     if (direction === "stop" || this.#stepTimer) return;
     const step = stepCommand(direction, this.speedFraction, this.#limits);
     if (!step) {
-      this.#setError("A step needs a speed above 0 and the robot's limits; wait for the drive to connect.");
+      this.#setError(t("A step needs a speed above 0 and the robot's limits; wait for the drive to connect."));
       return;
     }
     this.toggleAttribute("data-stepping", true);
@@ -334,7 +334,7 @@ export class DrivePad extends PanelElement {
   #onGamepadConnected = (event) => {
     this.#gamepadIndex = event.gamepad.index;
     this.#gamepadNote.hidden = false;
-    this.#gamepadNote.textContent = `Gamepad connected (${event.gamepad.id}): the left stick drives, A or B stops.`;
+    this.#gamepadNote.textContent = t("Gamepad connected ({id}): the left stick drives, A or B stops.", { id: event.gamepad.id });
     cancelAnimationFrame(this.#gamepadFrame);
     this.#gamepadFrame = requestAnimationFrame(this.#pollGamepad);
   };
@@ -343,7 +343,7 @@ export class DrivePad extends PanelElement {
     if (event.gamepad.index !== this.#gamepadIndex) return;
     this.#gamepadIndex = null;
     cancelAnimationFrame(this.#gamepadFrame);
-    this.#gamepadNote.textContent = "Gamepad disconnected.";
+    this.#gamepadNote.textContent = t("Gamepad disconnected.");
     this.#gamepadCommand = { linear_mps: 0, angular_radps: 0 };
     this.#emitIfChanged();
   };
@@ -387,12 +387,12 @@ export class DrivePad extends PanelElement {
     if (!this.#slider) return;
     const percent = Number(this.#slider.value);
     const fraction = percent / 100;
-    this.#slider.setAttribute("aria-valuetext", `${percent} percent`);
+    this.#slider.setAttribute("aria-valuetext", t("{percent} percent", { percent }));
     const linear = this.#limits ? (fraction * this.#limits.max_linear_mps).toFixed(2) : null;
     const angular = this.#limits ? (fraction * this.#limits.max_angular_radps).toFixed(2) : null;
     this.#speedOutput.textContent = linear === null
       ? `${percent} %`
-      : `${percent} % · ${linear} m/s · ${angular} rad/s`;
+      : t("{percent} % · {linear} m/s · {angular} rad/s", { percent, linear, angular });
   }
 
   #setError(text) {

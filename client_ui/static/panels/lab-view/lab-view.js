@@ -18,6 +18,7 @@ import { isEcho } from "../../lib/polar.js";
 import { buildScene, placeRobot } from "../../lib/scene-three.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 const COLOURS = { laser: "#d1390f", sonar: "#c26a00", goal: "#b1261b", path: "#b1261b" };
 const SONAR_SEGMENTS = 6;
@@ -146,7 +147,7 @@ export class LabView extends PanelElement {
     this.classList.add("panel", "lab-view");
     this.#canvas = h("canvas", {
       class: "lab-view__canvas", "data-field": "lab-view-canvas", role: "img", "aria-describedby": "lab-view-summary",
-      "aria-label": "The lab in 3D with the robot. Drag to turn the view; the buttons zoom and look from above.",
+      "aria-label": t("The lab in 3D with the robot. Drag to turn the view; the buttons zoom and look from above."),
     });
     this.#canvas.addEventListener("pointerdown", (event) => this.#startDrag(event));
     this.#canvas.addEventListener("pointermove", (event) => this.#moveDrag(event));
@@ -159,16 +160,16 @@ export class LabView extends PanelElement {
     }, { passive: false });
     this.#aboveButton = h("button", {
       type: "button", class: "button button--secondary", "data-action": "view-above", "aria-pressed": "false",
-      text: "From above", onclick: () => this.#setAbove(!this.#view.above),
+      text: t("From above"), onclick: () => this.#setAbove(!this.#view.above),
     });
     const zoomIn = h("button", { type: "button", class: "button button--secondary", "data-action": "zoom-in",
-      "aria-label": "Zoom in", text: "+", onclick: () => this.#zoom(1 / ZOOM_STEP) });
+      "aria-label": t("Zoom in"), text: "+", onclick: () => this.#zoom(1 / ZOOM_STEP) });
     const zoomOut = h("button", { type: "button", class: "button button--secondary", "data-action": "zoom-out",
-      "aria-label": "Zoom out", text: "−", onclick: () => this.#zoom(ZOOM_STEP) });
+      "aria-label": t("Zoom out"), text: "−", onclick: () => this.#zoom(ZOOM_STEP) });
     this.#summary = h("p", { class: "lab-view__summary", id: "lab-view-summary", "data-field": "lab-view-summary",
-      text: "Waiting for the lab's description…" });
+      text: t("Waiting for the lab's description…") });
     this.append(
-      h("h2", { class: "panel__title", text: "3D lab view" }),
+      h("h2", { class: "panel__title", text: t("3D lab view") }),
       h("div", { class: "lab-view__stage" }, this.#canvas),
       h("div", { class: "lab-view__actions" }, this.#aboveButton, zoomIn, zoomOut),
       this.#summary,
@@ -187,8 +188,7 @@ export class LabView extends PanelElement {
       this.#canvas.hidden = true;
       this.#aboveButton.parentElement.hidden = true;
       this.#summary.replaceWith(h("p", { class: "lab-view__missing", role: "status", "data-field": "lab-view-webgl",
-        text: "This browser cannot draw 3D here: WebGL is turned off or missing. The Lab model panel shows the same "
-          + "lab from above in 2D, and the Camera panel the robot's own view." }));
+        text: t("This browser cannot draw 3D here: WebGL is turned off or missing. The Lab model panel shows the same lab from above in 2D, and the Camera panel the robot's own view.") }));
       return;
     }
     this.dataset.webgl = "ok";
@@ -404,7 +404,7 @@ export class LabView extends PanelElement {
   #setAbove(above) {
     this.#view.above = above;
     this.#aboveButton.setAttribute("aria-pressed", String(above));
-    this.#aboveButton.textContent = above ? "Orbit" : "From above";
+    this.#aboveButton.textContent = above ? t("Orbit") : t("From above");
     this.dataset.view = above ? "above" : "orbit";
     this.scheduleRender();
   }
@@ -461,15 +461,15 @@ export class LabView extends PanelElement {
     const parts = [];
     if (pose) {
       const heading = Math.round((pose.theta_rad * 180) / Math.PI);
-      parts.push(`Robot at (${fixed(pose.x_m)}, ${fixed(pose.y_m)}) m facing ${heading}° by odometry`);
-      parts.push(`${hits} laser hits`);
-      if (echoes) parts.push(`${echoes} sonar echoes`);
+      parts.push(t("Robot at ({x_m}, {y_m}) m facing {heading}° by odometry", { x_m: fixed(pose.x_m), y_m: fixed(pose.y_m), heading }));
+      parts.push(t("{hits} laser hits", { hits }));
+      if (echoes) parts.push(t("{echoes} sonar echoes", { echoes }));
     } else {
-      parts.push(`The ${this.#scene.scene_name} lab; waiting for the robot's pose`);
+      parts.push(t("The {value} lab; waiting for the robot's pose", { value: this.#scene.scene_name }));
     }
-    if (goal) parts.push(`goal (${fixed(goal[0])}, ${fixed(goal[1])}) m`);
-    if (this.#pathWaypoints) parts.push(`planned path of ${this.#pathWaypoints} waypoints`);
-    if (this.#map) parts.push(`map of ${this.#grid.scans_integrated ?? 0} scans on the floor`);
+    if (goal) parts.push(t("goal ({value}, {value2}) m", { value: fixed(goal[0]), value2: fixed(goal[1]) }));
+    if (this.#pathWaypoints) parts.push(t("planned path of {value} waypoints", { value: this.#pathWaypoints }));
+    if (this.#map) parts.push(t("map of {value} scans on the floor", { value: this.#grid.scans_integrated ?? 0 }));
     const text = `${parts.join("; ")}.`;
     if (this.#summary.textContent !== text) this.#summary.textContent = text;
   }

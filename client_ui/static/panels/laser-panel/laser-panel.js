@@ -5,6 +5,7 @@ import { h } from "../../lib/dom.js";
 import { describeBearing, isEcho, laserBearings, nearestReading, polarToScreen, sectorMinima } from "../../lib/polar.js";
 import { POLAR_STYLESHEET, PolarPanel } from "../polar-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 const SECTORS = 8;
 
@@ -18,9 +19,9 @@ export class LaserPanel extends PolarPanel {
     this.#nearest = h("span", { "data-field": "laser-nearest", text: "—" });
     this.#count = h("span", { "data-field": "laser-hits", text: "—" });
     return {
-      title: "Laser", canvasLabel: "Laser scan around the robot, forward up", summaryId: "laser-nearest-line",
-      summary: ["Nearest hit: ", this.#nearest, " · ", this.#count, " beams hit something"],
-      details: "Nearest hit by sector", caption: "Nearest laser hit per sector", columns: ["Sector", "Range (m)"],
+      title: t("Laser"), canvasLabel: t("Laser scan around the robot, forward up"), summaryId: "laser-nearest-line",
+      summary: [t("Nearest hit: "), this.#nearest, " · ", this.#count, t(" beams hit something")],
+      details: t("Nearest hit by sector"), caption: t("Nearest laser hit per sector"), columns: [t("Sector"), t("Range (m)")],
     };
   }
 
@@ -44,17 +45,17 @@ export class LaserPanel extends PolarPanel {
     const maxRange = Number(this.#laser?.max_range_m) || Math.max(1, ...ranges.filter(Number.isFinite));
     const nearest = nearestReading(ranges, bearings, maxRange);
     this.showNearest(this.#nearest, nearest,
-      nearest ? `${nearest.range_m.toFixed(2)} m, ${describeBearing(nearest.bearing_rad)}` : "nothing in range");
+      nearest ? `${nearest.range_m.toFixed(2)} m, ${describeBearing(nearest.bearing_rad)}` : t("nothing in range"));
     this.#count.textContent = String(ranges.filter((r) => isEcho(r, maxRange)).length);
     const body = this.readingsBody;
     const sectors = sectorMinima(ranges, bearings, SECTORS, maxRange);
     if (body.children.length !== sectors.length) {
       body.replaceChildren(...sectors.map((sector) => h("tr", {},
-        h("th", { scope: "row", text: `${describeBearing(sector.from_rad)} to ${describeBearing(sector.to_rad)}` }),
+        h("th", { scope: "row", text: t("{from_rad} to {to_rad}", { from_rad: describeBearing(sector.from_rad), to_rad: describeBearing(sector.to_rad) }) }),
         h("td", { text: "—" }))));
     }
     sectors.forEach((sector, index) => {
-      body.children[index].lastElementChild.textContent = sector.range_m === null ? "nothing" : sector.range_m.toFixed(2);
+      body.children[index].lastElementChild.textContent = sector.range_m === null ? t("nothing") : sector.range_m.toFixed(2);
     });
     this.drawPolar(maxRange, maxRange > 4 ? 1 : 0.5, (ctx, c, scale, size) => {
       // The scanned area, then the hits.

@@ -10,12 +10,13 @@
 import { h } from "../../lib/dom.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 const SETTINGS = [
-  { name: "max_linear_mps", label: "Max speed", unit: "m/s", decimals: 2, low: () => 0, high: (l) => l.robot_max_linear_mps },
-  { name: "max_angular_radps", label: "Max turn rate", unit: "rad/s", decimals: 2, low: () => 0,
+  { name: "max_linear_mps", label: t("Max speed"), unit: "m/s", decimals: 2, low: () => 0, high: (l) => l.robot_max_linear_mps },
+  { name: "max_angular_radps", label: t("Max turn rate"), unit: "rad/s", decimals: 2, low: () => 0,
     high: (l) => l.robot_max_angular_radps },
-  { name: "watchdog_s", label: "Watchdog timeout", unit: "s", decimals: 1, low: (l) => l.min_watchdog_s,
+  { name: "watchdog_s", label: t("Watchdog timeout"), unit: "s", decimals: 1, low: (l) => l.min_watchdog_s,
     high: (l) => l.max_watchdog_s },
 ];
 const LOW_CHARGE = 0.2;
@@ -24,9 +25,9 @@ const LOW_CHARGE = 0.2;
 export function batteryWords(battery) {
   if (!battery || !Number.isFinite(Number(battery.charge))) return "—";
   const percent = `${Math.round(Number(battery.charge) * 100)} %`;
-  if (battery.empty) return `${percent}: empty. The robot will not move until it is back at its dock.`;
-  if (battery.charging) return `${percent}: charging at the dock.`;
-  if (Number(battery.charge) < LOW_CHARGE) return `${percent}: low. Return to the dock soon.`;
+  if (battery.empty) return t("{percent}: empty. The robot will not move until it is back at its dock.", { percent });
+  if (battery.charging) return t("{percent}: charging at the dock.", { percent });
+  if (Number(battery.charge) < LOW_CHARGE) return t("{percent}: low. Return to the dock soon.", { percent });
   return percent;
 }
 
@@ -63,21 +64,20 @@ export class LowLevelPanel extends PanelElement {
       this.#formError = h("p", { class: "low-level__error", "data-field": "limits-error", role: "alert", hidden: true }),
       h("div", { class: "low-level__actions" },
         this.#save = h("button", { type: "submit", class: "button button--primary", "data-action": "save-limits",
-          text: "Save" }),
+          text: t("Save") }),
         this.#observingNote = h("span", { class: "low-level__note", "data-field": "limits-observing", hidden: true,
-          text: "You are observing: the settings are the controller's to change." })));
+          text: t("You are observing: the settings are the controller's to change.") })));
     this.#form.addEventListener("submit", (event) => {
       event.preventDefault();
       this.#submit();
     });
     this.append(
-      h("h2", { class: "panel__title", text: "Low-level commands" }),
+      h("h2", { class: "panel__title", text: t("Low-level commands") }),
       h("div", { class: "low-level__battery" },
-        h("span", { class: "low-level__label", id: `${this.#uid}-battery-label`, text: "Battery" }),
+        h("span", { class: "low-level__label", id: `${this.#uid}-battery-label`, text: t("Battery") }),
         this.#meter, this.#batteryText),
       h("p", { class: "low-level__help", id: `${this.#uid}-help`,
-        text: "Ceilings for every motion (drive pad, skills, plans) and how long the robot keeps driving when your "
-          + "commands stop arriving. Leave a field empty to keep its value; they reset when the turn passes." }),
+        text: t("Ceilings for every motion (drive pad, skills, plans) and how long the robot keeps driving when your commands stop arriving. Leave a field empty to keep its value; they reset when the turn passes.") }),
       this.#form,
       this.#answer = h("p", { class: "low-level__answer", "data-field": "limits-answer", role: "status" }),
       this.messageLine({ class: "low-level__message", "data-field": "low-level-message" }),
@@ -89,7 +89,7 @@ export class LowLevelPanel extends PanelElement {
     const input = h("input", { id, name: setting.name, type: "number", step: "any", inputmode: "decimal",
       disabled: true, "aria-describedby": `${id}-now ${id}-error` });
     const current = h("span", { id: `${id}-now`, class: "low-level__now", "data-current": setting.name, text: "—" });
-    const note = h("span", { class: "low-level__note", text: "Not yours to change in this course.", hidden: true });
+    const note = h("span", { class: "low-level__note", text: t("Not yours to change in this course."), hidden: true });
     const error = h("p", { id: `${id}-error`, class: "low-level__field-error", "data-field-error": setting.name,
       hidden: true });
     this.#inputs.set(setting.name, input);
@@ -99,7 +99,7 @@ export class LowLevelPanel extends PanelElement {
     return h("div", { class: "low-level__field" },
       h("label", { for: id }, setting.label, " ", h("span", { class: "low-level__unit", text: `(${setting.unit})` })),
       input,
-      h("span", { class: "low-level__hint" }, "now ", current, " ", setting.unit, " ", note),
+      h("span", { class: "low-level__hint" }, t("now "), current, " ", setting.unit, " ", note),
       error);
   }
 
@@ -112,10 +112,10 @@ export class LowLevelPanel extends PanelElement {
       detail[name] = Number.isFinite(value) ? value : input.value; // the server names what is wrong
     }
     if (Object.keys(detail).length === 0) {
-      this.#showFormError("Type a new value in at least one field first.");
+      this.#showFormError(t("Type a new value in at least one field first."));
       return;
     }
-    this.#answer.textContent = "Saving…";
+    this.#answer.textContent = t("Saving…");
     this.emit("limits-change", detail);
   }
 

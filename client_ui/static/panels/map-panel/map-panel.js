@@ -22,6 +22,7 @@ import {
 import { isEcho } from "../../lib/polar.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 const CURSOR_STEP_M = 0.1;
 const COLOURS = {
@@ -30,27 +31,27 @@ const COLOURS = {
   drift: "#2b2f36",
 };
 const POSE_STYLES = {
-  odometry: { colour: COLOURS.odometry, label: "odometry", dash: [], filled: true },
-  localized: { colour: COLOURS.localized, label: "estimate", dash: [6, 4], filled: false },
-  tracked: { colour: COLOURS.localized, label: "tracked", dash: [6, 4], filled: false },
-  truth: { colour: COLOURS.truth, label: "true", dash: [2, 3], filled: false },
+  odometry: { colour: COLOURS.odometry, label: t("odometry"), dash: [], filled: true },
+  localized: { colour: COLOURS.localized, label: t("estimate"), dash: [6, 4], filled: false },
+  tracked: { colour: COLOURS.localized, label: t("tracked"), dash: [6, 4], filled: false },
+  truth: { colour: COLOURS.truth, label: t("true"), dash: [2, 3], filled: false },
 };
 // The legend's entries: [colour, text, swatch shape]; render() lists those it drew.
 const LEGEND = {
-  odometry: [COLOURS.odometry, "odometry pose (from the wheels; it drifts)", "robot"],
-  localized: [COLOURS.localized, "localized estimate", "robot-dashed"],
-  tracked: [COLOURS.localized, "tracked pose the skills steer by (laser against the floor plan)", "robot-dashed"],
-  truth: [COLOURS.truth, "true pose", "robot-dotted"],
-  trail: ["#7b8494", "trail of where it has been", "line"],
-  drift: [COLOURS.drift, "drift of odometry", "line-dashed"],
-  "laser-odometry": [COLOURS.laser, "laser hits, placed by the odometry pose", "dot"],
-  "laser-localized": [COLOURS.laser, "laser hits, placed by the localized estimate", "dot"],
-  "laser-tracked": [COLOURS.laser, "laser hits, placed by the tracked pose", "dot"],
-  sonar: ["#c26a00", "sonar cones", "cone"],
-  particles: [COLOURS.particle, "localization particles", "dot"],
+  odometry: [COLOURS.odometry, t("odometry pose (from the wheels; it drifts)"), "robot"],
+  localized: [COLOURS.localized, t("localized estimate"), "robot-dashed"],
+  tracked: [COLOURS.localized, t("tracked pose the skills steer by (laser against the floor plan)"), "robot-dashed"],
+  truth: [COLOURS.truth, t("true pose"), "robot-dotted"],
+  trail: ["#7b8494", t("trail of where it has been"), "line"],
+  drift: [COLOURS.drift, t("drift of odometry"), "line-dashed"],
+  "laser-odometry": [COLOURS.laser, t("laser hits, placed by the odometry pose"), "dot"],
+  "laser-localized": [COLOURS.laser, t("laser hits, placed by the localized estimate"), "dot"],
+  "laser-tracked": [COLOURS.laser, t("laser hits, placed by the tracked pose"), "dot"],
+  sonar: ["#c26a00", t("sonar cones"), "cone"],
+  particles: [COLOURS.particle, t("localization particles"), "dot"],
   target: [COLOURS.target, "target", "cross"],
-  path: [COLOURS.target, "path planned to the goal", "line-dashed"],
-  grid: ["#444", "occupancy map", "cell"],
+  path: [COLOURS.target, t("path planned to the goal"), "line-dashed"],
+  grid: ["#444", t("occupancy map"), "cell"],
 };
 
 function fixed(value, decimals = 2) {
@@ -151,7 +152,7 @@ export class MapPanel extends PanelElement {
     this.#observing = Boolean(observing);
     this.#go.disabled = this.#observing || !this.#target;
     this.#updateSupervision();
-    this.#go.title = this.#observing ? "Going there waits for your turn" : "Start go-to-goal to the target picked on the map";
+    this.#go.title = this.#observing ? t("Going there waits for your turn") : t("Start go-to-goal to the target picked on the map");
   }
 
   /** Whether the user may clear the map and dock the robot while observing (a tutor or an admin). */
@@ -171,7 +172,7 @@ export class MapPanel extends PanelElement {
     const off = this.#observing && !this.#supervising;
     for (const button of [this.#clear, this.#dock]) {
       button.disabled = off;
-      button.title = off ? "This waits for your turn (or a tutor)" : button.dataset.title;
+      button.title = off ? t("This waits for your turn (or a tutor)") : button.dataset.title;
     }
   }
 
@@ -217,44 +218,43 @@ export class MapPanel extends PanelElement {
     this.#canvas = h("canvas", {
       class: "map__canvas", width: 480, height: 360, tabindex: "0", role: "application",
       "data-wants-arrow-keys": "", "data-field": "map-canvas",
-      "aria-label": "Lab map. Click or tap to set a go-to-goal target; with the keyboard, arrow keys move a cursor "
-        + "and Enter sets the target.",
+      "aria-label": t("Lab map. Click or tap to set a go-to-goal target; with the keyboard, arrow keys move a cursor and Enter sets the target."),
       "aria-describedby": "map-summary",
     });
     this.#canvas.addEventListener("click", (event) => this.#onClick(event));
     this.#canvas.addEventListener("keydown", (event) => this.#onKey(event));
     this.#canvas.addEventListener("focus", () => this.scheduleRender());
     this.#canvas.addEventListener("blur", () => this.scheduleRender());
-    this.#summary = h("p", { class: "map__summary", id: "map-summary", "data-field": "map-summary", text: "Waiting for the robot…" });
+    this.#summary = h("p", { class: "map__summary", id: "map-summary", "data-field": "map-summary", text: t("Waiting for the robot…") });
     this.#cursorLine = h("p", { class: "map__cursor", "aria-live": "polite", "data-field": "map-cursor" });
     this.#go = h("button", {
       type: "button", class: "button button--primary map__go", "data-action": "go-there", disabled: true, hidden: true,
-      text: "Go there", title: "Start go-to-goal to the target picked on the map",
+      text: t("Go there"), title: t("Start go-to-goal to the target picked on the map"),
       onclick: () => this.#target && this.emit("map-go", { x_m: this.#target[0], y_m: this.#target[1] }),
     });
     this.#clear = h("button", {
       type: "button", class: "button button--secondary map__clear", "data-action": "clear-map", hidden: true,
-      text: "Clear the map", "data-title": "Forget this robot's map (for everyone) and start a new one",
+      text: t("Clear the map"), "data-title": t("Forget this robot's map (for everyone) and start a new one"),
       onclick: () => {
-        if (window.confirm("Clear this robot's map? Everyone using the robot after you starts from no map.")) {
+        if (window.confirm(t("Clear this robot's map? Everyone using the robot after you starts from no map."))) {
           this.emit("map-clear", {});
         }
       },
     });
     this.#dock = h("button", {
       type: "button", class: "button button--secondary map__dock", "data-action": "dock",
-      text: "Return to the dock",
-      "data-title": "Carry the robot back to its dock: its skills stop and its odometry restarts there",
+      text: t("Return to the dock"),
+      "data-title": t("Carry the robot back to its dock: its skills stop and its odometry restarts there"),
       onclick: () => {
-        if (window.confirm("Carry the robot back to its dock? Its running skills stop; the map is kept.")) {
+        if (window.confirm(t("Carry the robot back to its dock? Its running skills stop; the map is kept."))) {
           this.emit("map-dock", {});
         }
       },
     });
     this.#updateSupervision();
-    this.#legend = h("ul", { class: "map__legend", "aria-label": "Map legend", "data-field": "map-legend" });
+    this.#legend = h("ul", { class: "map__legend", "aria-label": t("Map legend"), "data-field": "map-legend" });
     this.append(
-      h("h2", { class: "panel__title", text: "Lab model" }),
+      h("h2", { class: "panel__title", text: t("Lab model") }),
       h("div", { class: "map__stage" }, this.#canvas),
       h("div", { class: "map__actions" }, this.#cursorLine, this.#go, this.#clear, this.#dock),
       this.#summary,
@@ -502,33 +502,33 @@ export class MapPanel extends PanelElement {
 
   #summarize(poses, goal) {
     const parts = [];
-    if (poses.odometry) parts.push(`Robot at (${fixed(poses.odometry.x_m)}, ${fixed(poses.odometry.y_m)}) m by odometry`);
+    if (poses.odometry) parts.push(t("Robot at ({x_m}, {y_m}) m by odometry", { x_m: fixed(poses.odometry.x_m), y_m: fixed(poses.odometry.y_m) }));
     const loc = this.#localization;
     if (poses.localized) {
       // "Localized" only once it converged: before, the localization panel may be saying the guess does not fit.
       const at = `(${fixed(poses.localized.x_m)}, ${fixed(poses.localized.y_m)}) m`;
-      parts.push((loc.converged ? `localized at ${at}, converged` : `estimate at ${at}, not converged yet`)
-        + (Number.isFinite(loc.position_error_m) ? `, ${fixed(loc.position_error_m, 2)} m from the true pose` : ""));
+      parts.push((loc.converged ? t("localized at {at}, converged", { at }) : t("estimate at {at}, not converged yet", { at }))
+        + (Number.isFinite(loc.position_error_m) ? t(", {position_error_m} m from the true pose", { position_error_m: fixed(loc.position_error_m, 2) }) : ""));
     }
     if (poses.tracked) {
-      parts.push(`the skills steer by (${fixed(poses.tracked.x_m)}, ${fixed(poses.tracked.y_m)}) m, tracked against `
-        + "the floor plan");
+      parts.push(t("the skills steer by ({x_m}, {y_m}) m, tracked against ", { x_m: fixed(poses.tracked.x_m), y_m: fixed(poses.tracked.y_m) })
+        + t("the floor plan"));
     }
     if (poses.odometry && poses.truth) {
-      parts.push(`odometry has drifted ${fixed(poseDistance(poses.odometry, poses.truth))} m from the true pose`);
+      parts.push(t("odometry has drifted {value} m from the true pose", { value: fixed(poseDistance(poses.odometry, poses.truth)) }));
     } else if (poses.odometry && (poses.localized ?? poses.tracked)) {
-      const other = poses.localized ? "estimate" : "tracked pose";
-      parts.push(`odometry is ${fixed(poseDistance(poses.odometry, poses.localized ?? poses.tracked))} m from the ${other}`);
+      const other = poses.localized ? t("estimate") : t("tracked pose");
+      parts.push(t("odometry is {value} m from the {other}", { value: fixed(poseDistance(poses.odometry, poses.localized ?? poses.tracked)), other }));
     }
-    if (goal) parts.push(`target (${fixed(goal[0])}, ${fixed(goal[1])}) m`);
-    if (this.#grid) parts.push(`map of ${this.#grid.scans_integrated ?? 0} scans`); // else the note says why not
-    const text = parts.length ? `${parts.join("; ")}.` : "Waiting for the robot…";
+    if (goal) parts.push(t("target ({value}, {value2}) m", { value: fixed(goal[0]), value2: fixed(goal[1]) }));
+    if (this.#grid) parts.push(t("map of {value} scans", { value: this.#grid.scans_integrated ?? 0 })); // else the note says why not
+    const text = parts.length ? `${parts.join("; ")}.` : t("Waiting for the robot…");
     if (this.#summary.textContent !== text) this.#summary.textContent = text;
   }
 
   #emitTarget(x_m, y_m) {
     this.#target = [x_m, y_m];
-    this.#cursorLine.textContent = `Target set to (${fixed(x_m)}, ${fixed(y_m)}) m.`;
+    this.#cursorLine.textContent = t("Target set to ({x_m}, {y_m}) m.", { x_m: fixed(x_m), y_m: fixed(y_m) });
     this.dataset.targetX = fixed(x_m);
     this.dataset.targetY = fixed(y_m);
     this.emit("map-target", { x_m, y_m });
@@ -554,7 +554,7 @@ export class MapPanel extends PanelElement {
         ? [this.#poses().odometry.x_m, this.#poses().odometry.y_m] : [0, 0]);
       const [dx, dy] = moves[event.key];
       this.#cursor = moveCursor(start, dx * step, dy * step, this.#bounds);
-      this.#cursorLine.textContent = `Cursor at (${fixed(this.#cursor[0])}, ${fixed(this.#cursor[1])}) m; Enter sets the target.`;
+      this.#cursorLine.textContent = t("Cursor at ({value}, {value2}) m; Enter sets the target.", { value: fixed(this.#cursor[0]), value2: fixed(this.#cursor[1]) });
       this.scheduleRender();
     } else if (event.key === "Enter" && this.#cursor) {
       event.preventDefault();

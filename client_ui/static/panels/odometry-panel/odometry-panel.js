@@ -8,6 +8,7 @@
 import { h } from "../../lib/dom.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 const DEG_PER_RAD = 180 / Math.PI;
 const PLOT_WINDOW_S = 30;
@@ -21,9 +22,8 @@ export function driftNote(message) {
   if (!odometry || !standing) return "";
   const off_m = Math.hypot(odometry.x_m - standing.x_m, odometry.y_m - standing.y_m);
   if (!(off_m >= DRIFT_NOTED_M)) return "";
-  return `These numbers are ${off_m.toFixed(1)} m off where the robot stands (the camera shows it there), and `
-    + "skills and plans steer by them. Localize it (Navigate tab: Localization) or return it to its dock "
-    + "(Navigate tab: the map's \"Return to the dock\").";
+  return t("These numbers are {off_m} m off where the robot stands (the camera shows it there), and ", { off_m: off_m.toFixed(1) })
+    + t("skills and plans steer by them. Localize it (Navigate tab: Localization) or return it to its dock (Navigate tab: the map's \"Return to the dock\").");
 }
 
 /** Samples of the last windowS seconds before nowS; pure. */
@@ -34,12 +34,12 @@ export function trimHistory(samples, nowS, windowS = PLOT_WINDOW_S) {
 /** How long ago the robot last applied a drive command, as a person reads it; the sequence number itself (wall-clock
  *  milliseconds on the wire, so that it survives a worker change) means nothing to them. Pure. */
 export function appliedAgo(appliedAtMs, nowMs) {
-  if (!Number.isFinite(appliedAtMs)) return "none since this panel opened";
+  if (!Number.isFinite(appliedAtMs)) return t("none since this panel opened");
   const ago_s = Math.max(0, (nowMs - appliedAtMs) / 1000);
-  if (ago_s < 1) return "just now";
-  if (ago_s < 60) return `${Math.floor(ago_s)} s ago`;
-  if (ago_s < 3600) return `${Math.floor(ago_s / 60)} min ago`;
-  return `${Math.floor(ago_s / 3600)} h ago`;
+  if (ago_s < 1) return t("just now");
+  if (ago_s < 60) return t("{ago_s} s ago", { ago_s: Math.floor(ago_s) });
+  if (ago_s < 3600) return t("{value} min ago", { value: Math.floor(ago_s / 60) });
+  return t("{value} h ago", { value: Math.floor(ago_s / 3600) });
 }
 
 /** Format a finite number with fixed decimals; "—" for anything else. Avoids printing "-0.00". */
@@ -60,9 +60,9 @@ export function headingDegrees(thetaRad) {
 const ROWS = [
   { label: "x", field: "x", unit: "m" },
   { label: "y", field: "y", unit: "m" },
-  { label: "Heading", field: "heading", unit: "°", extra: { field: "heading-rad", unit: "rad" } },
-  { label: "Speed", field: "linear", unit: "m/s" },
-  { label: "Turn rate", field: "angular", unit: "rad/s", extra: { field: "angular-deg", unit: "°/s" } },
+  { label: t("Heading"), field: "heading", unit: "°", extra: { field: "heading-rad", unit: "rad" } },
+  { label: t("Speed"), field: "linear", unit: "m/s" },
+  { label: t("Turn rate"), field: "angular", unit: "rad/s", extra: { field: "angular-deg", unit: "°/s" } },
 ];
 
 export class OdometryPanel extends PanelElement {
@@ -108,24 +108,24 @@ export class OdometryPanel extends PanelElement {
             field(row.extra.field), h("span", { class: "odometry__unit", text: row.extra.unit }))))));
     this.#deadmanNote = h("p", {
       class: "odometry__note", "data-field": "deadman", hidden: true,
-      text: "Stopped by the safety deadman: no drive commands arrived in time.",
+      text: t("Stopped by the safety deadman: no drive commands arrived in time."),
     });
     this.#driftNote = h("p", { class: "odometry__note", "data-field": "drift", hidden: true });
     this.append(
-      h("h2", { class: "panel__title", text: "Odometry" }),
+      h("h2", { class: "panel__title", text: t("Odometry") }),
       list,
       this.#deadmanNote,
       this.#driftNote,
       this.messageLine({ class: "odometry__message", "data-field": "telemetry-message" }),
       h("figure", { class: "odometry__plot" },
         this.#plot = h("canvas", { width: 320, height: 110, role: "img", "data-field": "odometry-plot",
-          "aria-label": "Speed and turn rate over the last 30 seconds" }),
+          "aria-label": t("Speed and turn rate over the last 30 seconds") }),
         h("figcaption", {},
-          h("span", { class: "odometry__key odometry__key--speed", text: "speed (m/s)" }),
-          h("span", { class: "odometry__key odometry__key--turn", text: "turn rate (rad/s)" }),
-          h("span", { class: "muted", text: " · last 30 s" }))),
+          h("span", { class: "odometry__key odometry__key--speed", text: t("speed (m/s)") }),
+          h("span", { class: "odometry__key odometry__key--turn", text: t("turn rate (rad/s)") }),
+          h("span", { class: "muted", text: t(" · last 30 s") }))),
       h("p", { class: "odometry__meta" },
-        "tick ", field("tick"), " · last command applied ", field("last-applied")),
+        t("tick "), field("tick"), t(" · last command applied "), field("last-applied")),
     );
   }
 
@@ -212,7 +212,7 @@ export class OdometryPanel extends PanelElement {
 
   /** A text status/error message from the telemetry socket. */
   set message(message) {
-    this.showMessage(message?.message || (message?.type === "status" && !message.robot_online ? "The robot is offline." : ""));
+    this.showMessage(message?.message || (message?.type === "status" && !message.robot_online ? t("The robot is offline.") : ""));
   }
 }
 

@@ -8,6 +8,7 @@
 import { h } from "../../lib/dom.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 const FINAL = new Set(["succeeded", "aborted", "canceled"]);
 
@@ -21,11 +22,11 @@ export function feedbackLine(feedback) {
 
 /** The words for a goal of a plan: "Running line 3: ...", "SUCCEEDED", "ABORTED at line 2 (CODE): ..."; pure. */
 export function planGoalWords(goal, feedback = goal?.feedback) {
-  if (!goal) return "Not run yet.";
+  if (!goal) return t("Not run yet.");
   const status = String(goal.status ?? "");
   if (!FINAL.has(status)) {
     const line = feedbackLine(feedback);
-    return line ? `Running line ${line}: ${String(feedback.state ?? "").replace(/^line \d+:\s*/, "")}` : "Starting…";
+    return line ? t("Running line {line}: {value}", { line, value: String(feedback.state ?? "").replace(/^line \d+:\s*/, "") }) : t("Starting…");
   }
   if (status === "succeeded") return "SUCCEEDED";
   const message = String(goal.message ?? "");
@@ -47,8 +48,8 @@ export class PlanPanel extends PanelElement {
     this.classList.add("panel");
     this.dataset.plan = String(this.#descriptor.plan_id);
     this.#run = h("button", { type: "button", class: "button button--primary", "data-action": "run-plan",
-      text: "Run" });
-    this.#cancel = h("button", { type: "button", class: "button", "data-action": "cancel-plan", text: "Cancel",
+      text: t("Run") });
+    this.#cancel = h("button", { type: "button", class: "button", "data-action": "cancel-plan", text: t("Cancel"),
       hidden: true });
     this.#run.addEventListener("click", () => {
       this.error = null;
@@ -57,11 +58,11 @@ export class PlanPanel extends PanelElement {
     this.#cancel.addEventListener("click", () => {
       if (this.#goal) this.emit("skill-cancel", { skill: this.#descriptor.skill, goal_id: this.#goal.goal_id });
     });
-    this.#editor = h("a", { href: this.#descriptor.editor_url, text: "Open in the plan editor" });
+    this.#editor = h("a", { href: this.#descriptor.editor_url, text: t("Open in the plan editor") });
     this.#status = h("p", { class: "plan-panel__status", "data-field": "plan-status", role: "status",
-      "aria-live": "polite", text: "Not run yet." });
+      "aria-live": "polite", text: t("Not run yet.") });
     this.append(
-      h("h2", { class: "panel__title", text: `Plan ${this.#descriptor.plan_name}` }),
+      h("h2", { class: "panel__title", text: t("Plan {value}", { value: this.#descriptor.plan_name }) }),
       h("div", { class: "plan-panel__actions" }, this.#run, this.#cancel, this.#editor),
       this.#status,
       this.messageLine({ class: "plan-panel__message", "data-field": "plan-message" }),
@@ -100,7 +101,7 @@ export class PlanPanel extends PanelElement {
 }
 
 function checkPlanDescriptor(descriptor) {
-  return descriptor?.plan_id && descriptor?.run_url && descriptor?.skill ? "" : "a plan panel needs its plan";
+  return descriptor?.plan_id && descriptor?.run_url && descriptor?.skill ? "" : t("a plan panel needs its plan");
 }
 
 export const register = registerPanel({

@@ -8,6 +8,7 @@
 import { h } from "../../lib/dom.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 /** "1:05" from seconds; "—" when unknown. */
 export function formatDuration(seconds) {
@@ -24,22 +25,22 @@ export function waitingCount(seat) {
 
 /** The sentence that says where the user stands, in the same terms as the "Waiting" figure beside it. */
 export function describeSeat(seat) {
-  if (!seat) return "Joining the queue…";
-  if (seat.faulted) return "The robot is not answering. Your place is kept; the turn clock is stopped.";
-  if (!seat.in_queue) return "You are watching without a place in the queue.";
+  if (!seat) return t("Joining the queue…");
+  if (seat.faulted) return t("The robot is not answering. Your place is kept; the turn clock is stopped.");
+  if (!seat.in_queue) return t("You are watching without a place in the queue.");
   if (seat.is_controller) {
     if (seat.turn_remaining_s !== null) {
       return waitingCount(seat) > 0 && Number(seat.queue_size) <= 1
-        ? "You have control. Others are waiting for a robot of this kind: your turn ends when the countdown does."
-        : "You have control. Others are waiting: your turn ends when the countdown does.";
+        ? t("You have control. Others are waiting for a robot of this kind: your turn ends when the countdown does.")
+        : t("You have control. Others are waiting: your turn ends when the countdown does.");
     }
-    return waitingCount(seat) > 0 ? "You have control, with no time limit for now: you go first at this time (a booking or a class)."
-      : "You have control. Nobody is waiting, so there is no time limit.";
+    return waitingCount(seat) > 0 ? t("You have control, with no time limit for now: you go first at this time (a booking or a class).")
+      : t("You have control. Nobody is waiting, so there is no time limit.");
   }
-  const who = seat.controller ? `${seat.controller} is driving.` : "Nobody is driving.";
+  const who = seat.controller ? t("{controller} is driving.", { controller: seat.controller }) : t("Nobody is driving.");
   const waiting = waitingCount(seat);
-  if (seat.position === 1) return `${who} You are next${waiting > 1 ? ` of the ${waiting} waiting` : ""}.`;
-  return `${who} You are number ${seat.position} of the ${waiting} waiting.`;
+  if (seat.position === 1) return t("{who} You are next{value}.", { who, value: waiting > 1 ? t(" of the {waiting} waiting", { waiting }) : "" });
+  return t("{who} You are number {position} of the {waiting} waiting.", { who, position: seat.position, waiting });
 }
 
 const SLOT_FORMAT = new Intl.DateTimeFormat(undefined, { weekday: "short", day: "numeric", month: "short",
@@ -58,9 +59,9 @@ export function upcomingBookings(bookings, nowMs, limit = 3) {
 export function describeBooking(booking, nowMs) {
   const starts = Date.parse(booking.starts_at);
   const when = `${SLOT_FORMAT.format(starts)}–${END_FORMAT.format(Date.parse(booking.ends_at))}`;
-  const whose = booking.mine ? "yours" : booking.kind === "class" ? `class ${booking.course_code ?? ""}`.trim()
-    : booking.booked_by ? `booked by ${booking.booked_by}` : "booked";
-  return `${when} · ${whose}${starts <= nowMs ? " · now" : ""}`;
+  const whose = booking.mine ? t("yours") : booking.kind === "class" ? t("class {value}", { value: booking.course_code ?? "" }).trim()
+    : booking.booked_by ? t("booked by {booked_by}", { booked_by: booking.booked_by }) : t("booked");
+  return `${when} · ${whose}${starts <= nowMs ? ` · ${t("now")}` : ""}`;
 }
 
 /** The seat as it stands elapsedS after the server sent it: the countdown and the wait have run on. */
@@ -86,24 +87,24 @@ export class QueuePanel extends PanelElement {
       onclick: () => this.emit("queue-action", { type }),
     }));
     this.append(
-      h("h2", { class: "panel__title", text: "Turn" }),
-      h("p", { class: "queue__summary", "aria-live": "polite" }, field("queue-summary", "Joining the queue…")),
+      h("h2", { class: "panel__title", text: t("Turn") }),
+      h("p", { class: "queue__summary", "aria-live": "polite" }, field("queue-summary", t("Joining the queue…"))),
       h("dl", { class: "queue__figures" },
-        h("div", {}, h("dt", { text: "Waiting" }), h("dd", {}, field("queue-size"))),
-        h("div", { class: "queue__countdown" }, h("dt", { text: "Turn ends in" }), h("dd", {}, field("turn-remaining"))),
-        h("div", { class: "queue__wait" }, h("dt", { text: "Your turn in about" }), h("dd", {}, field("estimated-wait")))),
+        h("div", {}, h("dt", { text: t("Waiting") }), h("dd", {}, field("queue-size"))),
+        h("div", { class: "queue__countdown" }, h("dt", { text: t("Turn ends in") }), h("dd", {}, field("turn-remaining"))),
+        h("div", { class: "queue__wait" }, h("dt", { text: t("Your turn in about") }), h("dd", {}, field("estimated-wait")))),
       h("p", { class: "queue__warning", role: "alert", "data-field": "turn-warning", hidden: true,
-        text: "Your turn is about to end." }),
+        text: t("Your turn is about to end.") }),
       h("div", { class: "queue__actions" },
-        button("pass", "Pass the turn", "Give control to the next person now; you go to the end of the line"),
-        button("leave", "Leave the queue", "Stop waiting; you keep watching"),
-        button("join", "Join the queue", "Take a place at the end of the line")),
+        button("pass", t("Pass the turn"), t("Give control to the next person now; you go to the end of the line")),
+        button("leave", t("Leave the queue"), t("Stop waiting; you keep watching")),
+        button("join", t("Join the queue"), t("Take a place at the end of the line"))),
       this.messageLine({ class: "queue__message", "data-field": "queue-message" }),
-      this.#bookingSection = h("section", { class: "queue__bookings", "aria-label": "Bookings of this robot",
+      this.#bookingSection = h("section", { class: "queue__bookings", "aria-label": t("Bookings of this robot"),
         hidden: true },
-      h("h3", { class: "queue__bookings-title", text: "Next bookings" }),
+      h("h3", { class: "queue__bookings-title", text: t("Next bookings") }),
       this.#bookingList = h("ul", { class: "queue__booking-list", "data-field": "robot-bookings" }),
-      this.#bookLink = h("a", { class: "queue__book-link", href: "/bookings", text: "Book a time" })),
+      this.#bookLink = h("a", { class: "queue__book-link", href: "/bookings", text: t("Book a time") })),
     );
     this.seat = null;
   }
@@ -121,7 +122,7 @@ export class QueuePanel extends PanelElement {
     const upcoming = upcomingBookings(bookings, now);
     this.#bookingList.replaceChildren(...(upcoming.length
       ? upcoming.map((b) => h("li", { class: b.mine ? "queue__booking--mine" : "", text: describeBooking(b, now) }))
-      : [h("li", { class: "muted", text: "None in the next two weeks: the queue decides." })]));
+      : [h("li", { class: "muted", text: t("None in the next two weeks: the queue decides.") })]));
   }
 
   /**
@@ -156,7 +157,7 @@ export class QueuePanel extends PanelElement {
     this.#fields["queue-size"].textContent = seat ? String(waitingCount(seat)) : "—";
     // A robot that does not answer stops the clock, so no countdown or wait would be true.
     this.#fields["turn-remaining"].textContent = seat?.faulted ? "stopped" : seat?.turn_remaining_s == null
-      ? "no limit" : formatDuration(seat.turn_remaining_s);
+      ? t("no limit") : formatDuration(seat.turn_remaining_s);
     this.#fields["estimated-wait"].textContent = seat?.faulted ? "—" : formatDuration(seat?.estimated_wait_s);
     this.querySelector('[data-field="turn-warning"]').hidden = !seat?.warning;
     this.#buttons.pass.hidden = !(seat?.is_controller && waitingCount(seat) > 0);

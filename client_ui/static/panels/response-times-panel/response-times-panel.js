@@ -9,10 +9,11 @@ import { h } from "../../lib/dom.js";
 import { LATE_AFTER_MS, LEGS } from "../../lib/response-times.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
-const KIND_TITLES = { skill: "Skill activations", drive: "Drive commands" };
-const LEG_LABELS = { total: "Total", client: "Browser → middleware", robot: "Middleware → robot" };
-const FIGURES = [["min", "Min"], ["mean", "Mean"], ["max", "Max"], ["jitter", "Jitter (IQR)"]];
+const KIND_TITLES = { skill: t("Skill activations"), drive: t("Drive commands") };
+const LEG_LABELS = { total: t("Total"), client: t("Browser → middleware"), robot: t("Middleware → robot") };
+const FIGURES = [["min", t("Min")], ["mean", t("Mean")], ["max", t("Max")], ["jitter", t("Jitter (IQR)")]];
 const THROUGHPUT_WINDOW_MS = 10000;
 
 /** Milliseconds with one decimal, "—" for none. */
@@ -23,7 +24,7 @@ export function formatMs(value) {
 /** Bytes per second as a person reads them. */
 export function formatRate(bytesPerS) {
   if (!Number.isFinite(bytesPerS)) return "—";
-  return bytesPerS >= 1000 ? `${(bytesPerS / 1000).toFixed(1)} kB/s` : `${Math.round(bytesPerS)} B/s`;
+  return bytesPerS >= 1000 ? t("{value} kB/s", { value: (bytesPerS / 1000).toFixed(1) }) : `${Math.round(bytesPerS)} B/s`;
 }
 
 export class ResponseTimesPanel extends PanelElement {
@@ -59,22 +60,20 @@ export class ResponseTimesPanel extends PanelElement {
   build() {
     this.classList.add("panel", "rtt");
     const table = (kind) => h("table", { class: "rtt__table", "data-kind": kind },
-      h("caption", {}, `${KIND_TITLES[kind]} · `, this.#value(`rtt-${kind}-count`), " timed (ms)"),
-      h("thead", {}, h("tr", {}, h("th", { scope: "col", text: "Round trip" }),
+      h("caption", {}, `${KIND_TITLES[kind]} · `, this.#value(`rtt-${kind}-count`), t(" timed (ms)")),
+      h("thead", {}, h("tr", {}, h("th", { scope: "col", text: t("Round trip") }),
         FIGURES.map(([, label]) => h("th", { scope: "col", text: label })))),
       h("tbody", {}, LEGS.map((leg) => h("tr", {},
         h("th", { scope: "row", text: LEG_LABELS[leg] }),
         FIGURES.map(([figure]) => this.#cell(`rtt-${kind}-${leg}-${figure}`))))));
     this.append(
-      h("h2", { class: "panel__title", text: "Response times" }),
+      h("h2", { class: "panel__title", text: t("Response times") }),
       table("skill"),
       table("drive"),
       h("p", { class: "rtt__connection", "data-field": "rtt-connection" },
-        "Throughput ", this.#value("rtt-throughput"), " · ", this.#value("rtt-sent"), " sent · ",
-        this.#value("rtt-late"), ` late (over ${LATE_AFTER_MS / 1000} s) · `, this.#value("rtt-lost"), " lost"),
-      h("p", { class: "rtt__help muted", text: "Timed on your own skill activations and drive commands since this "
-        + "console opened. Browser → middleware is the whole round trip less the middleware's call to the robot; "
-        + "jitter is the spread of the middle half of the round trips." }),
+        t("Throughput "), this.#value("rtt-throughput"), " · ", this.#value("rtt-sent"), t(" sent · "),
+        this.#value("rtt-late"), t(" late (over {value} s) · ", { value: LATE_AFTER_MS / 1000 }), this.#value("rtt-lost"), t(" lost")),
+      h("p", { class: "rtt__help muted", text: t("Timed on your own skill activations and drive commands since this console opened. Browser → middleware is the whole round trip less the middleware's call to the robot; jitter is the spread of the middle half of the round trips.") }),
     );
   }
 

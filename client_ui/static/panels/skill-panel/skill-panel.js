@@ -15,13 +15,14 @@ import { GUESS_FIELDS, goalParameterNames } from "../../lib/panel-descriptors.js
 import { parameterLabel, readValue, shortNumber } from "../../lib/parameters.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 const ACTIVE = new Set(["accepted", "executing", "canceling"]);
 const MAX_EVENTS = 30;
 const DEG_PER_RAD = 180 / Math.PI;
 const STATUS_WORDS = {
-  accepted: "Accepted", executing: "Running", canceling: "Canceling…", succeeded: "Succeeded",
-  canceled: "Canceled", aborted: "Aborted",
+  accepted: t("Accepted"), executing: t("Running"), canceling: t("Canceling…"), succeeded: t("Succeeded"),
+  canceled: t("Canceled"), aborted: t("Aborted"),
 };
 
 /** A skill's state word for people: "goal_blocked" -> "goal blocked". */
@@ -38,17 +39,17 @@ function fixed(value, decimals) {
 const PARAMETER_TYPES = new Set(["double", "int", "bool", "enum", "string"]);
 
 function checkParameter(parameter, index) {
-  if (parameter === null || typeof parameter !== "object" || Array.isArray(parameter)) return `parameter ${index + 1} is not an object`;
-  if (typeof parameter.name !== "string" || !parameter.name) return `parameter ${index + 1} has no name`;
-  if (!PARAMETER_TYPES.has(parameter.type)) return `parameter ${parameter.name} has an unknown type`;
-  if (parameter.type === "enum" && !Array.isArray(parameter.choices)) return `parameter ${parameter.name} has no choices`;
+  if (parameter === null || typeof parameter !== "object" || Array.isArray(parameter)) return t("parameter {value} is not an object", { value: index + 1 });
+  if (typeof parameter.name !== "string" || !parameter.name) return t("parameter {value} has no name", { value: index + 1 });
+  if (!PARAMETER_TYPES.has(parameter.type)) return t("parameter {name} has an unknown type", { name: parameter.name });
+  if (parameter.type === "enum" && !Array.isArray(parameter.choices)) return t("parameter {name} has no choices", { name: parameter.name });
   return "";
 }
 
 /** What is wrong with a skill descriptor for this panel (in words), or "" when the panel can be generated. */
 export function checkSkillDescriptor(descriptor) {
-  if (typeof descriptor.skill !== "string" || !descriptor.skill) return "the skill panel names no skill";
-  if (!Array.isArray(descriptor.schema)) return "the skill panel has no parameter schema";
+  if (typeof descriptor.skill !== "string" || !descriptor.skill) return t("the skill panel names no skill");
+  if (!Array.isArray(descriptor.schema)) return t("the skill panel has no parameter schema");
   for (const [index, parameter] of descriptor.schema.entries()) {
     const problem = checkParameter(parameter, index);
     if (problem) return problem;
@@ -144,7 +145,7 @@ export class SkillPanel extends PanelElement {
     this.#cancel.disabled = !active || goal.status === "canceling";
     if (goal.feedback) this.feedback = goal.feedback;
     if (!active) {
-      const reached = goal.goal_reached ? " The goal was reached." : "";
+      const reached = goal.goal_reached ? t(" The goal was reached.") : "";
       const code = goal.error_code ? ` (${stateWords(goal.error_code).toLowerCase()})` : "";
       this.#result.textContent = `${STATUS_WORDS[goal.status] ?? goal.status}${code}: ${goal.message || "no details."}${reached}`;
       this.#result.dataset.outcome = goal.status;
@@ -162,7 +163,7 @@ export class SkillPanel extends PanelElement {
     this.#events.prepend(h("li", { "data-event": event.kind }, `${time}${stateWords(event.kind)}`,
       event.message ? `: ${event.message}` : ""));
     if (event.message && event.kind !== "started") { // the newest news stays in sight (the status says it started)
-      this.#latest.textContent = `Latest: ${event.message}`;
+      this.#latest.textContent = t("Latest: {message}", { message: event.message });
       this.#latest.hidden = false;
     }
     while (this.#events.children.length > MAX_EVENTS) this.#events.lastElementChild.remove();
@@ -178,7 +179,7 @@ export class SkillPanel extends PanelElement {
     this.#fields.heading.textContent = fixed(Number(feedback.heading_error_rad) * DEG_PER_RAD, 1);
     const pose = feedback.pose ?? {};
     this.#fields.pose.textContent = `(${fixed(pose.x_m, 2)}, ${fixed(pose.y_m, 2)}) m, ${fixed(Number(pose.theta_rad) * DEG_PER_RAD, 0)}°`
-      + (feedback.pose_source ? ` by ${feedback.pose_source}` : "");
+      + (feedback.pose_source ? t(" by {pose_source}", { pose_source: feedback.pose_source }) : "");
   }
 
   /** A refusal of the last activation or cancel: shown next to its field, or above the buttons. */
@@ -193,14 +194,14 @@ export class SkillPanel extends PanelElement {
     const entry = error.field ? this.#inputs.get(error.field) : null;
     if (entry) {
       entry.input.closest("details")?.setAttribute("open", "");
-      entry.errorLine.textContent = error.message || "This value was refused.";
+      entry.errorLine.textContent = error.message || t("This value was refused.");
       entry.errorLine.hidden = false;
       entry.input.setAttribute("aria-invalid", "true");
       entry.input.focus();
       this.#formError.hidden = true;
       return;
     }
-    this.#formError.textContent = error.message || "The skill could not be started.";
+    this.#formError.textContent = error.message || t("The skill could not be started.");
     this.#formError.hidden = false;
     this.#preempt.hidden = error.code !== "busy";
   }
@@ -228,50 +229,50 @@ export class SkillPanel extends PanelElement {
     }
     const folded = descriptor.schema.length - [...everyTime].filter((name) => this.#inputs.has(name)).length;
     this.#more = folded ? h("details", { class: "skill__more", "data-field": "skill-settings" },
-      h("summary", { text: `Settings (${folded})` }), settings) : null;
+      h("summary", { text: t("Settings ({folded})", { folded }) }), settings) : null;
     this.#activate = h("button", { type: "submit", class: "button button--primary", "data-action": "activate",
-      text: "Activate" });
+      text: t("Activate") });
     this.#cancel = h("button", { type: "button", class: "button button--secondary", "data-action": "cancel",
-      text: "Deactivate", disabled: true, onclick: () => this.#emitCancel() });
+      text: t("Deactivate"), disabled: true, onclick: () => this.#emitCancel() });
     this.#preempt = h("button", { type: "button", class: "button button--warn", "data-action": "preempt", hidden: true,
-      text: "Preempt it", title: "Stop the skill that is driving and start this one",
+      text: t("Preempt it"), title: t("Stop the skill that is driving and start this one"),
       onclick: (event) => this.#submit(event, true) });
     this.#formError = h("p", { class: "skill__error", role: "alert", "data-field": "skill-error", hidden: true });
     this.#observingNote = h("p", { class: "skill__observing", "data-field": "skill-observing", hidden: true,
-      text: "You are watching: skills start during your turn." });
+      text: t("You are watching: skills start during your turn.") });
     if (this.#inputs.has(GUESS_FIELDS.x)) {
       for (const name of Object.values(GUESS_FIELDS)) {
         this.#inputs.get(name)?.input.addEventListener("input", () => { this.#guessEdited = true; });
       }
       this.#form.append(h("button", { type: "button", class: "button button--secondary button--small",
-        "data-action": "use-current-pose", text: "Use the current pose",
-        title: "Fill the guess with where the robot believes it is now",
+        "data-action": "use-current-pose", text: t("Use the current pose"),
+        title: t("Fill the guess with where the robot believes it is now"),
         onclick: () => { this.#guessEdited = false; this.#fillGuess(); } }));
     }
     this.#form.append(...(this.#more ? [this.#more] : []), this.#formError, this.#observingNote,
       h("div", { class: "skill__actions" }, this.#activate, this.#cancel, this.#preempt));
 
     const field = (name) => (this.#fields[name] = h("span", { "data-field": `skill-${name}`, text: "—" }));
-    this.#status = h("span", { class: "skill__status", "data-field": "skill-status", text: "Idle" });
-    this.#progress = h("progress", { max: "1", value: "0", "aria-label": `${descriptor.title} progress` });
-    this.#events = h("ol", { class: "skill__events", "aria-label": `${descriptor.title} events`, "data-field": "skill-events" });
+    this.#status = h("span", { class: "skill__status", "data-field": "skill-status", text: t("Idle") });
+    this.#progress = h("progress", { max: "1", value: "0", "aria-label": t("{title} progress", { title: descriptor.title }) });
+    this.#events = h("ol", { class: "skill__events", "aria-label": t("{title} events", { title: descriptor.title }), "data-field": "skill-events" });
     this.#result = h("p", { class: "skill__result", role: "status", "data-field": "skill-result", hidden: true });
     this.#latest = h("p", { class: "skill__latest", "data-field": "skill-latest", hidden: true });
     this.append(
       h("h2", { class: "panel__title", text: descriptor.title }),
       h("p", { class: "skill__kind muted",
-        text: descriptor.motor ? "Motor skill: drives the wheels; only one runs at a time."
-          : "Perceptive skill: runs beside the motor skills." }),
+        text: descriptor.motor ? t("Motor skill: drives the wheels; only one runs at a time.")
+          : t("Perceptive skill: runs beside the motor skills.") }),
       this.#form,
       h("div", { class: "skill__live", "aria-live": "polite" },
-        h("p", { class: "skill__line" }, "Status: ", this.#status, " · state ", field("state")),
+        h("p", { class: "skill__line" }, t("Status: "), this.#status, t(" · state "), field("state")),
         this.#figures = h("div", { hidden: true }, this.#progress,
           h("dl", { class: "skill__figures" },
-            h("div", {}, h("dt", { text: "Distance error" }), h("dd", {}, field("distance"), " m")),
-            h("div", {}, h("dt", { text: "Heading error" }), h("dd", {}, field("heading"), "°")),
-            h("div", {}, h("dt", { text: "Pose" }), h("dd", {}, field("pose"))))),
+            h("div", {}, h("dt", { text: t("Distance error") }), h("dd", {}, field("distance"), " m")),
+            h("div", {}, h("dt", { text: t("Heading error") }), h("dd", {}, field("heading"), "°")),
+            h("div", {}, h("dt", { text: t("Pose") }), h("dd", {}, field("pose"))))),
         this.#latest, this.#result),
-      h("details", { class: "skill__log" }, h("summary", { text: "Events" }), this.#events),
+      h("details", { class: "skill__log" }, h("summary", { text: t("Events") }), this.#events),
     );
   }
 
@@ -305,7 +306,7 @@ export class SkillPanel extends PanelElement {
     input.addEventListener("input", () => this.#clearFieldError(entry));
     const numeric = parameter.type === "double" || parameter.type === "int";
     const range = numeric && Number.isFinite(parameter.minimum) && Number.isFinite(parameter.maximum)
-      ? ` (${shortNumber(parameter.minimum)} to ${shortNumber(parameter.maximum)})` : "";
+      ? t(" ({minimum} to {maximum})", { minimum: shortNumber(parameter.minimum), maximum: shortNumber(parameter.maximum) }) : "";
     if (shown) input.title = `${parameter.help ?? ""}${range}`;
     const label = h("label", { for: id }, parameterLabel(parameter.name),
       parameter.unit ? h("span", { class: "skill__unit", text: ` [${parameter.unit}]` }) : null);

@@ -5,6 +5,7 @@ import { h } from "../../lib/dom.js";
 import { describeBearing, isEcho, nearestReading, polarToScreen } from "../../lib/polar.js";
 import { POLAR_STYLESHEET, PolarPanel } from "../polar-base.js";
 import { registerPanel } from "../registry.js";
+import { t } from "../../lib/i18n.js";
 
 export class SonarPanel extends PolarPanel {
   #nearest;
@@ -14,9 +15,9 @@ export class SonarPanel extends PolarPanel {
   polarView() {
     this.#nearest = h("span", { "data-field": "sonar-nearest", text: "—" });
     return {
-      title: "Sonar", canvasLabel: "Sonar readings around the robot, forward up",
-      summaryId: "sonar-nearest-line", summaryAttrs: { "aria-live": "off" }, summary: ["Nearest echo: ", this.#nearest],
-      details: "All sonar readings", caption: "Sonar readings", columns: ["Sonar", "Bearing", "Range (m)"],
+      title: t("Sonar"), canvasLabel: t("Sonar readings around the robot, forward up"),
+      summaryId: "sonar-nearest-line", summaryAttrs: { "aria-live": "off" }, summary: [t("Nearest echo: "), this.#nearest],
+      details: t("All sonar readings"), caption: t("Sonar readings"), columns: [t("Sonar"), t("Bearing"), t("Range (m)")],
     };
   }
 
@@ -42,11 +43,11 @@ export class SonarPanel extends PolarPanel {
     const maxRange = Math.max(0.5, ...this.#sonars.map((s) => Number(s.max_range_m) || 0));
     const nearest = nearestReading(this.#ranges, bearings, maxRange);
     this.showNearest(this.#nearest, nearest, nearest
-      ? `${nearest.range_m.toFixed(2)} m, ${describeBearing(nearest.bearing_rad)} (sonar ${nearest.index + 1})`
-      : this.#ranges.length ? "nothing in range" : "—");
+      ? t("{range_m} m, {bearing_rad} (sonar {value})", { range_m: nearest.range_m.toFixed(2), bearing_rad: describeBearing(nearest.bearing_rad), value: nearest.index + 1 })
+      : this.#ranges.length ? t("nothing in range") : "—");
     this.readingsBody.querySelectorAll("[data-sonar-range]").forEach((cell, index) => {
       const range = this.#ranges[index];
-      cell.textContent = isEcho(range, Number(this.#sonars[index]?.max_range_m) || Infinity) ? range.toFixed(2) : "no echo";
+      cell.textContent = isEcho(range, Number(this.#sonars[index]?.max_range_m) || Infinity) ? range.toFixed(2) : t("no echo");
     });
     this.drawPolar(maxRange, 0.5, (ctx, c, scale) => this.#drawCones(ctx, c, scale, maxRange));
   }

@@ -1,0 +1,51 @@
+// The ES modules' words in the page's language. Every sentence a person reads goes through t("..."), in English;
+// the page's <html lang> names the language, and ./i18n/<lang>.js (generated from the gettext catalogue by
+// `make translations`) holds the translations. Values go in by name: t("{name} is driving.", { name }).
+//
+// The catalogue is loaded before any module that imports this one runs (top-level await), so module-level
+// constants may call t() too. Numbers, dates and times: number(), dateTime() and time() format per the language.
+
+const language = (globalThis.document?.documentElement?.lang || "en").split("-")[0].toLowerCase();
+
+async function load() {
+  if (language === "en") return {};
+  try {
+    return (await import(`./i18n/${language}.js`)).default;
+  } catch {
+    return {};  // a language without a catalogue reads English, never a broken page
+  }
+}
+
+const messages = await load();
+
+/** The page's language code, "en" or "es". */
+export const LANGUAGE = language;
+
+/** text in the page's language, with each {name} replaced by values[name]. */
+export function t(text, values = undefined) {
+  const translated = messages[text] || text;
+  if (!values) return translated;
+  return translated.replace(/\{(\w+)\}/g, (whole, name) => (name in values ? String(values[name]) : whole));
+}
+
+/** A number as the page's language writes it: 1,234.5 in English, 1234,5 in Spanish. */
+export function number(value, options = {}) {
+  return new Intl.NumberFormat(language, options).format(value);
+}
+
+/** A number with a fixed count of decimals, in the page's language (the translated form of value.toFixed(digits)). */
+export function fixed(value, digits = 1) {
+  return number(value, { minimumFractionDigits: digits, maximumFractionDigits: digits, useGrouping: false });
+}
+
+/** A moment (Date, ms or ISO text) as the page's language writes a date and time, in the browser's time zone. */
+export function dateTime(moment, options = { weekday: "short", day: "numeric", month: "short", hour: "2-digit",
+  minute: "2-digit" }) {
+  return new Intl.DateTimeFormat(language, options).format(new Date(moment));
+}
+
+/** A moment's time of day, "09:30". */
+export function time(moment) {
+  return new Intl.DateTimeFormat(language, { hour: "2-digit", minute: "2-digit", hourCycle: "h23" })
+    .format(new Date(moment));
+}
