@@ -43,6 +43,7 @@ from middleware.lti import grades as lti_grades
 from middleware.lti import routes as lti_routes
 from middleware.lti import setup as lti_setup
 from middleware.plans import routes as plans_routes
+from middleware.preferences import language as language_routes
 from middleware.preferences import routes as preferences_routes
 from middleware.robots import registry
 from middleware.teaching import (
@@ -133,6 +134,7 @@ def _register_areas(app: Flask) -> None:
                       limits_routes.blueprint, plans_routes.blueprint, class_wall_routes.blueprint):
         app.register_blueprint(blueprint)
     app.register_blueprint(lab_teleperception.blueprint)
+    app.register_blueprint(language_routes.blueprint)
     app.register_blueprint(lti_routes.blueprint)
     lti_setup.init_app(app)
     attempts.on_final_mark(lti_grades.queue_final_mark)  # a final or overridden mark goes to the LMS gradebook
