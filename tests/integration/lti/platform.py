@@ -75,7 +75,7 @@ class LmsPlatform:
 
     def claims(self, nonce: str, sub: str, roles: list[str], *, context: str | None = "course-1",
                custom: dict[str, str] | None = None, lineitem: str | None = None, deep_link: bool = False,
-               locale: str | None = "es-ES", **extra: Any) -> dict[str, Any]:
+               locale: str | None = None, **extra: Any) -> dict[str, Any]:
         """A launch's claims for the tool."""
         now = int(time.time())
         body: dict[str, Any] = {
