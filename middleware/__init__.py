@@ -9,7 +9,7 @@ from flask import Flask, Response, redirect, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user
 
-from middleware import browser_modules, db, i18n, realtime, validation
+from middleware import browser_modules, db, i18n, realtime, recordings, validation
 from middleware import config as config_module
 from middleware.access import commands
 from middleware.access import coordinator as access_coordinator
@@ -45,6 +45,7 @@ from middleware.lti import setup as lti_setup
 from middleware.plans import routes as plans_routes
 from middleware.preferences import language as language_routes
 from middleware.preferences import routes as preferences_routes
+from middleware.recordings import routes as recordings_routes
 from middleware.robots import registry
 from middleware.teaching import (
     class_routes,
@@ -139,6 +140,8 @@ def _register_areas(app: Flask) -> None:
     lti_setup.init_app(app)
     attempts.on_final_mark(lti_grades.queue_final_mark)  # a final or overridden mark goes to the LMS gradebook
     auth_cookies.cross_site_when(app, lti_embedding.embedded)
+    app.register_blueprint(recordings_routes.blueprint)
+    recordings.init_app(app)
     app.register_blueprint(api_routes.blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
                             practice_routes.register, tour_live.register, class_wall_live.register], socket_login_check)

@@ -20,9 +20,13 @@ as an observer), the same token means the robot forgot it (re-send it, then retr
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextvars import ContextVar
+from dataclasses import dataclass
+from dataclasses import field as dataclass_field
 from typing import Protocol, TypeVar
 
 from flask import Flask, current_app
@@ -154,6 +158,35 @@ def hand_over(link: RobotLink, token: str) -> bool:
     return True
 
 
+@dataclass(frozen=True)
+class CommandNote:
+    """A command as it went to the robot (or was refused), for the observers create_app hands in (the recorder)."""
+
+    robot_name: str
+    user_id: int | None
+    action: str  # drive, activate, run_plan, cancel, clear_map, return_to_dock, place_robot, ...
+    sent_unix_s: float
+    accepted: bool
+    outcome: str  # the goal id or applied sequence; the refusal's code when refused
+    source: str | None  # what command_source() named around the call; None: the observer infers it
+    detail: dict[str, object] = dataclass_field(default_factory=dict)
+
+
+# Called after each command with its note; it must not block (the live path waits for it).
+CommandObserver = Callable[[CommandNote], None]
+_command_source: ContextVar[str | None] = ContextVar("telelab_command_source", default=None)
+
+
+@contextlib.contextmanager
+def command_source(source: str) -> Iterator[None]:
+    """Names the source (pad, skill_panel, cue, tour_step, plan, student_code, tutor) of the commands sent inside."""
+    reset = _command_source.set(source)
+    try:
+        yield
+    finally:
+        _command_source.reset(reset)
+
+
 # (robot name, user id) -> why the user may only drive the robot by hand now (an open delay trial), or None.
 HandDrivingRule = Callable[[str, int], str | None]
 
@@ -199,9 +232,11 @@ class Commander:
     """
 
     def __init__(self, link: RobotLink, tokens: TokenSource, field: str | None = None,
-                 hand_only: Callable[[], str | None] | None = None) -> None:
+                 hand_only: Callable[[], str | None] | None = None, user_id: int | None = None,
+                 observers: tuple[CommandObserver, ...] = ()) -> None:
         self.link, self._tokens, self._field = link, tokens, field
         self._hand_only = hand_only
+        self._user_id, self._observers = user_id, observers
         # The paper's second leg: how long this commander's last command spent in its calls to the robot [ms].
         self.robot_round_trip_ms: float | None = None
 
@@ -216,7 +251,9 @@ class Commander:
 
     def drive(self, sequence: int, linear_mps: float, angular_radps: float) -> DriveResult:
         """A direct drive command (the robot's deadman stops the base when they stop coming)."""
-        return self._as_controller(lambda token: self.link.drive(token, sequence, linear_mps, angular_radps))
+        return self._as_controller(lambda token: self.link.drive(token, sequence, linear_mps, angular_radps),
+                                   "drive", {"sequence": sequence, "linear_mps": linear_mps,
+                                             "angular_radps": angular_radps})
 
     def stop(self) -> DriveResult:
         """A zero drive, which preempts any motor goal at once; numbered again above the robot's when another
@@ -231,12 +268,14 @@ class Commander:
         """Starts a skill as a goal."""
         if skill != "direct_control" and any(s.name == skill and s.motor for s in self.link.skills()):
             self._refuse_unless_by_hand_allowed()
-        return self._as_controller(lambda token: self.link.activate_skill(token, skill, parameters, preempt))
+        return self._as_controller(lambda token: self.link.activate_skill(token, skill, parameters, preempt),
+                                   "activate", {"skill": skill, "parameters": parameters})
 
     def run_plan(self, name: str, plan: robot_pb2.PlanBlock, preempt: bool) -> robot_pb2.GoalState:
         """Starts a checked plan as one motor goal "plan:<name>"."""
         self._refuse_unless_by_hand_allowed()
-        return self._as_controller(lambda token: self.link.run_plan(token, name, plan, preempt))
+        return self._as_controller(lambda token: self.link.run_plan(token, name, plan, preempt),
+                                   "run_plan", {"plan_name": name})
 
     def hold_drive(self, linear_mps: float, angular_radps: float, hold_s: float) -> robot_pb2.GoalState:
         """A drive held for hold_s (0.1 to 10 s) as a direct_control goal: it stops by itself if its sender goes."""
@@ -246,26 +285,28 @@ class Commander:
 
     def cancel(self, goal_id: str) -> robot_pb2.GoalState:
         """Cancels a goal; its message reports the error left."""
-        return self._as_controller(lambda token: self.link.cancel_goal(token, goal_id))
+        return self._as_controller(lambda token: self.link.cancel_goal(token, goal_id), "cancel",
+                                   {"goal_id": goal_id})
 
     def clear_map(self) -> list[str]:
         """Forgets the robot's map (for everyone after); the ids of the mapping and localization goals it ended."""
-        return self._as_controller(self.link.clear_map)
+        return self._as_controller(self.link.clear_map, "clear_map")
 
     def return_to_dock(self) -> robot_pb2.ReturnToDockResponse:
         """Carries the robot to its dock: every goal ends, odometry restarts at the dock."""
         self._refuse_unless_by_hand_allowed()
-        return self._as_controller(self.link.return_to_dock)
+        return self._as_controller(self.link.return_to_dock, "return_to_dock")
 
     def place_robot(self, pose: robot_pb2.Pose2D) -> robot_pb2.PlaceRobotResponse:
         """Places the robot at pose (refused naming the field unless it fits there): every goal ends, odometry
         restarts at the pose."""
         self._refuse_unless_by_hand_allowed()
-        return self._as_controller(lambda token: self.link.place_robot(token, pose))
+        return self._as_controller(lambda token: self.link.place_robot(token, pose), "place_robot",
+                                   {"x_m": pose.x_m, "y_m": pose.y_m, "theta_rad": pose.theta_rad})
 
     def reset_evidence(self) -> robot_pb2.EvidenceGrid:
         """Forgets the robot's teleperception evidence grid and readings (for every viewer); the emptied grid."""
-        return self._as_controller(self.link.reset_evidence_grid)
+        return self._as_controller(self.link.reset_evidence_grid, "reset_evidence")
 
     def limits(self) -> robot_pb2.Limits:
         """The velocity ceilings and the watchdog in force (reading needs no control)."""
@@ -274,7 +315,9 @@ class Commander:
     def set_limits(self, max_linear_mps: float, max_angular_radps: float, watchdog_s: float) -> robot_pb2.Limits:
         """Changes the robot's limits as its controller (0 keeps a value); the limits in force afterwards."""
         return self._as_controller(lambda token: self.link.set_limits(token, max_linear_mps, max_angular_radps,
-                                                                      watchdog_s))
+                                                                      watchdog_s), "set_limits",
+                                   {"max_linear_mps": max_linear_mps, "max_angular_radps": max_angular_radps,
+                                    "watchdog_s": watchdog_s})
 
     def goal_state(self, goal_id: str) -> robot_pb2.GoalState:
         """A goal's state (reading needs no control)."""
@@ -285,7 +328,29 @@ class Commander:
         if reason:
             raise Refused(409, "hand_driving_only", reason, self._field)
 
-    def _as_controller(self, call: Callable[[str], T]) -> T:
+    def _as_controller(self, call: Callable[[str], T], action: str = "",
+                       detail: dict[str, object] | None = None) -> T:
+        if not self._observers:
+            return self._as_controller_unobserved(call)
+        sent_unix_s = time.time()
+        try:
+            result = self._as_controller_unobserved(call)
+        except Refused as refused:
+            self._tell(CommandNote(self.link.name, self._user_id, action, sent_unix_s, False, refused.code,
+                                   _command_source.get(), detail or {}))
+            raise
+        self._tell(CommandNote(self.link.name, self._user_id, action, sent_unix_s, True, _outcome(result),
+                               _command_source.get(), detail or {}))
+        return result
+
+    def _tell(self, note: CommandNote) -> None:
+        for observer in self._observers:
+            try:
+                observer(note)
+            except Exception:  # noqa: BLE001 - an observer's failure never fails the command
+                log.exception("a command observer failed")
+
+    def _as_controller_unobserved(self, call: Callable[[str], T]) -> T:
         self.robot_round_trip_ms = None
         timed = self._timed(call)
         token = self._tokens.token(fresh=False)
@@ -316,12 +381,26 @@ class Commander:
         return attempt
 
 
+def _outcome(result: object) -> str:
+    """What a command's answer says in a note: the goal it started, or the sequence in force."""
+    if isinstance(result, robot_pb2.GoalState):
+        return result.goal_id
+    if isinstance(result, DriveResult):
+        return str(result.applied_sequence)
+    return ""
+
+
 class RobotCommands:
     """Finds the robots a user may reach and gives their commands the right token source."""
 
     def __init__(self, registry: RobotRegistry, coordinator: Seats,
-                 hand_rules: tuple[HandDrivingRule, ...] = ()) -> None:
+                 hand_rules: tuple[HandDrivingRule, ...] = (), observers: tuple[CommandObserver, ...] = ()) -> None:
         self._registry, self._coordinator, self._hand_rules = registry, coordinator, hand_rules
+        self._observers = observers
+
+    def observe(self, observer: CommandObserver) -> None:
+        """Adds an observer every later command is told of (create_app hands in the recorder's)."""
+        self._observers = (*self._observers, observer)
 
     _oversight: Oversight | None = None
 
@@ -362,8 +441,10 @@ class RobotCommands:
         hand_only = self._hand_only(robot_name, user_id)
         personal = self._registry.personal(robot_name)
         if personal is not None:
-            return Commander(link, self._personal_tokens(link, personal, user_id), field, hand_only)
-        return Commander(link, SeatTokens(self._coordinator, robot_name, user_id), field, hand_only)
+            return Commander(link, self._personal_tokens(link, personal, user_id), field, hand_only, user_id,
+                             self._observers)
+        return Commander(link, SeatTokens(self._coordinator, robot_name, user_id), field, hand_only, user_id,
+                         self._observers)
 
     def _hand_only(self, robot_name: str, user_id: int) -> Callable[[], str | None]:
         return lambda: next((reason for rule in self._hand_rules if (reason := rule(robot_name, user_id))), None)
@@ -382,7 +463,16 @@ class RobotCommands:
         if not supervisor or personal is not None or commander.is_controller():
             return commander
         return Commander(commander.link, SupervisorTokens(self._coordinator, robot_name), field,
-                         self._hand_only(robot_name, user_id))
+                         self._hand_only(robot_name, user_id), user_id,
+                         tuple(_as_tutor(observer) for observer in self._observers))
+
+
+def _as_tutor(observer: CommandObserver) -> CommandObserver:
+    """observer, told a supervisor's command came from a tutor unless its sender named another source."""
+    def tell(note: CommandNote) -> None:
+        observer(note if note.source else CommandNote(note.robot_name, note.user_id, note.action, note.sent_unix_s,
+                                                      note.accepted, note.outcome, "tutor", note.detail))
+    return tell
 
 
 def owned_robot(link: RobotLink, token: str) -> Commander:

@@ -18,6 +18,7 @@ from middleware.models.lab import ResponseTimeReport  # noqa: F401
 from middleware.models.lti import LtiContext, LtiGradePassback, LtiIdentity, LtiPlatform  # noqa: F401
 from middleware.models.plans import PlanVersion, StoredPlan
 from middleware.models.preferences import UserPreference
+from middleware.models.recordings import RecordedCommand, Recording  # noqa: F401
 from middleware.models.robots import Robot, RobotKindSetting
 from middleware.models.teaching import GuidedSession, GuidedSessionPresence, Lesson, Tour  # noqa: F401
 

@@ -1,0 +1,160 @@
+"""A recording's files: MCAP parts in the shared recordings directory (one per process that recorded the session:
+a take-over after a crash starts a new part), written chunked and flushed every FLUSH_S, and read back up to the
+last complete chunk of each part, whatever cut the file."""
+
+from __future__ import annotations
+
+import io
+import os
+import shutil
+import struct
+import threading
+import time
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO
+
+import zstandard
+from google.protobuf.message import Message
+from mcap.exceptions import McapError
+from mcap.records import Channel, Chunk, Schema
+from mcap.records import Message as McapMessage
+from mcap.stream_reader import StreamReader, breakup_chunk
+from mcap.writer import CompressionType, Writer
+from mcap_protobuf.schema import register_schema
+
+from middleware.recordings import channels
+
+FLUSH_S = 1.0  # a crash loses at most this much: the chunk in progress is closed and written this often
+CHUNK_BYTES = 256 * 1024
+PART_PREFIX = "part-"
+
+
+def recording_dir(root: Path, recording_id: int) -> Path:
+    """Where the recording's parts live."""
+    return root / f"{int(recording_id):010d}"
+
+
+def new_part_path(root: Path, recording_id: int, process_key: str) -> Path:
+    """A new part's path (numbered after the parts already there), its directory made."""
+    folder = recording_dir(root, recording_id)
+    folder.mkdir(parents=True, exist_ok=True)
+    taken = len(list(folder.glob(f"{PART_PREFIX}*.mcap")))
+    safe_key = "".join(c if c.isalnum() or c in "-." else "_" for c in process_key)[:80]
+    return folder / f"{PART_PREFIX}{taken:03d}-{safe_key}.mcap"
+
+
+def part_paths(root: Path, recording_id: int) -> list[Path]:
+    """The recording's parts in the order they were started."""
+    return sorted(recording_dir(root, recording_id).glob(f"{PART_PREFIX}*.mcap"))
+
+
+def size_on_disk(root: Path, recording_id: int) -> int:
+    """The bytes its parts take."""
+    return sum(path.stat().st_size for path in part_paths(root, recording_id))
+
+
+def remove_recording(root: Path, recording_id: int) -> None:
+    """Deletes its files."""
+    shutil.rmtree(recording_dir(root, recording_id), ignore_errors=True)
+
+
+class PartWriter:
+    """One part: protobuf messages on the recording's topics, chunks closed and written (fsync) every FLUSH_S."""
+
+    def __init__(self, target: Path | IO[bytes], metadata: dict[str, str], chunk_bytes: int = CHUNK_BYTES) -> None:
+        self._file: IO[bytes] = open(target, "wb") if isinstance(target, Path) else target  # noqa: SIM115
+        self._writer = Writer(self._file, chunk_size=chunk_bytes, compression=CompressionType.ZSTD)
+        self._writer.start(profile="", library="telelab recorder")
+        self._writer.add_metadata("session", metadata)
+        self._channels: dict[str, int] = {}
+        self._sequences: dict[str, int] = {}
+        self._lock = threading.Lock()
+        self._flushed_at = time.monotonic()
+        self._finished = False
+
+    def write(self, topic: str, message: Message, log_time_ns: int) -> None:
+        """Adds one message (log time in unix ns)."""
+        with self._lock:
+            if self._finished:
+                return
+            channel_id = self._channels.get(topic)
+            if channel_id is None:
+                schema_id = register_schema(self._writer, type(message))
+                channel_id = self._channels[topic] = self._writer.register_channel(
+                    topic=topic, message_encoding="protobuf", schema_id=schema_id)
+            sequence = self._sequences[topic] = self._sequences.get(topic, -1) + 1
+            self._writer.add_message(channel_id=channel_id, log_time=log_time_ns, publish_time=log_time_ns,
+                                     data=message.SerializeToString(), sequence=sequence)
+
+    def flush_if_due(self) -> None:
+        """Closes the chunk in progress and writes it to disk when FLUSH_S has passed since the last time."""
+        if time.monotonic() - self._flushed_at >= FLUSH_S:
+            self.flush()
+
+    def flush(self) -> None:
+        """Closes the chunk in progress and writes it to disk now."""
+        with self._lock:
+            if self._finished:
+                return
+            self._writer.flush()
+            if hasattr(self._file, "fileno") and not isinstance(self._file, io.BytesIO):
+                os.fsync(self._file.fileno())
+            self._flushed_at = time.monotonic()
+
+    def finish(self) -> None:
+        """Writes the summary and footer and closes the file."""
+        with self._lock:
+            if self._finished:
+                return
+            self._finished = True
+            self._writer.finish()
+            if not isinstance(self._file, io.BytesIO):
+                self._file.close()
+
+
+@dataclass(frozen=True)
+class Recorded:
+    """One message read back."""
+
+    topic: str
+    log_time_ns: int
+    data: bytes
+
+    def decode(self) -> Message:
+        """The message as its channel's protobuf type."""
+        message = channels.MESSAGE_TYPES[self.topic]()
+        message.ParseFromString(self.data)
+        return message
+
+
+def read_part(source: Path | IO[bytes]) -> Iterator[Recorded]:
+    """The part's messages on known topics, up to its last complete chunk (a cut file ends there, no error)."""
+    stream: IO[bytes] = open(source, "rb") if isinstance(source, Path) else source  # noqa: SIM115
+    topics: dict[int, str] = {}
+    try:
+        reader = StreamReader(stream, emit_chunks=True, record_size_limit=256 * 1024 * 1024)
+        for record in reader.records:
+            inner: Iterable[object] = breakup_chunk(record) if isinstance(record, Chunk) else (record,)
+            for item in inner:
+                if isinstance(item, Channel):
+                    topics[item.id] = item.topic
+                elif isinstance(item, McapMessage):
+                    topic = topics.get(item.channel_id)
+                    if topic in channels.MESSAGE_TYPES:
+                        yield Recorded(topic, item.log_time, item.data)
+                elif isinstance(item, Schema):
+                    continue
+    except (McapError, EOFError, ValueError, OSError, IndexError, struct.error, zstandard.ZstdError):
+        return  # the cut: everything before it was read
+    finally:
+        if isinstance(source, Path):
+            stream.close()
+
+
+def read_recording(root: Path, recording_id: int) -> list[Recorded]:
+    """Every part's messages, in log-time order (a stable sort: one topic's order is kept)."""
+    messages = [message for path in part_paths(root, recording_id) for message in read_part(path)]
+    messages.sort(key=lambda m: m.log_time_ns)
+    return messages
