@@ -14,6 +14,7 @@ from middleware.plans import (
     Condition,
     DriveStep,
     IfStep,
+    OnStep,
     Plan,
     PlanInvalid,
     RepeatStep,
@@ -84,13 +85,21 @@ def simple_steps(skills: SkillSchemas) -> st.SearchStrategy[Step]:
     )
 
 
+events = st.one_of(
+    st.tuples(st.sampled_from(["wall_lost", "goal_reached", "localized"]), st.none()),
+    st.tuples(st.just("obstacle_detected"), st.none() | st.floats(0.05, 3.0)),
+    st.tuples(st.just("battery_low"), st.none() | st.floats(0.01, 1.0)),
+)
+
+
 def blocks(children: st.SearchStrategy[Step]) -> st.SearchStrategy[Step]:
-    """repeat and if around smaller steps."""
+    """repeat, if and on around smaller steps."""
     body = st.lists(children, min_size=1, max_size=4).map(tuple)
     return st.one_of(
         st.builds(RepeatStep, st.integers(1, 3), body),
         st.builds(IfStep, conditions, st.lists(children, max_size=3).map(tuple),
                   st.lists(children, max_size=3).map(tuple)),
+        st.builds(lambda event, body: OnStep(event[0], event[1], body), events, body),
     )
 
 
