@@ -3,6 +3,7 @@ recording is answered only to whom may see it (services.visible_recording): anot
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -51,10 +52,22 @@ def _data(recording: Recording, from_s: float = 0.0, to_s: float | None = None) 
     return export.replay_data(messages, services.may_see_truth(_user()), from_s, to_s)
 
 
+def _seconds(name: str) -> float | None:
+    """A time query parameter: a finite number of seconds from 0 to MAX_RANGE_S, or None when absent."""
+    raw = request.args.get(name)
+    if raw is None or raw == "":
+        return None
+    try:
+        value = float(raw)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or not 0.0 <= value <= MAX_RANGE_S or len(raw) > 32:
+        raise ApiError(400, "invalid_field", f"{name} must be a number of seconds from 0 to {MAX_RANGE_S:.0f}.", name)
+    return value
+
+
 def _range() -> tuple[float, float | None]:
-    from_s = float(request.args.get("from_s", "0"))
-    to_raw = request.args.get("to_s")
-    to_s = float(to_raw) if to_raw is not None else None
+    from_s, to_s = _seconds("from_s") or 0.0, _seconds("to_s")
     if to_s is not None and to_s < from_s:
         raise ApiError(400, "invalid_field", "to_s must not be before from_s.", "to_s")
     return from_s, to_s

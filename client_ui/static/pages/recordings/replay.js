@@ -1,0 +1,239 @@
+// The replay page: one recording's channels (fetched once as JSON) drawn at the timeline's time: the map with the
+// trails, the robot's-eye view redrawn from the scene (lib/robot-eye.js), the speed and sonar plots, the command
+// log. Play, pause, speed, scrub and jumps only move the time; every view is a function of it.
+
+import { RobotEyeRenderer } from "../../lib/robot-eye.js";
+import { fitView, sceneBounds, worldToCanvas } from "../../lib/map-geometry.js";
+import { t } from "../../lib/i18n.js";
+
+const root = document.getElementById("replay");
+const $ = (selector) => root.querySelector(selector);
+const timeInput = $('[data-field="time"]');
+const playButton = $('[data-action="play"]');
+const speedSelect = $('[data-field="speed"]');
+const jumpSelect = $('[data-field="jump"]');
+const status = $('[data-field="status"]');
+let data = null;
+let now = 0;
+let playing = false;
+let eye = null;
+let lastFrame = 0;
+
+/** The index of the last sample at or before time s (samples are [t, ...] or {t}), -1 before the first. */
+export function sampleAt(samples, s) {
+  let low = 0;
+  let high = samples.length - 1;
+  let found = -1;
+  while (low <= high) {
+    const mid = (low + high) >> 1;
+    const at = Array.isArray(samples[mid]) ? samples[mid][0] : samples[mid].t;
+    if (at <= s) { found = mid; low = mid + 1; } else { high = mid - 1; }
+  }
+  return found;
+}
+
+function pose(row) {
+  return row ? { x_m: row[1], y_m: row[2], theta_rad: row[3] } : null;
+}
+
+function boxes() {
+  return (data.scene?.blocks ?? []).map((b) => ({ center_x_m: b.center_x_m, center_y_m: b.center_y_m,
+    half_x_m: b.half_x_m, half_y_m: b.half_y_m, yaw_rad: b.yaw_rad }));
+}
+
+function drawMap() {
+  const canvas = $('[data-slot="map"]');
+  const context = canvas.getContext("2d");
+  const trails = [["odometry", "#1f6feb"], ["localization", "#d97706"], ["ground_truth", "#15803d"]];
+  const points = trails.flatMap(([name]) => data[name].map((r) => ({ center_x_m: r[1], center_y_m: r[2], half_x_m: 0, half_y_m: 0, yaw_rad: 0 })));
+  const view = fitView(sceneBounds([...boxes(), ...points]), canvas.width, canvas.height);
+  context.clearRect(0, 0, canvas.width, canvas.height);
+  context.fillStyle = "#9aa5b1";
+  for (const b of boxes()) {
+    const [cx, cy] = worldToCanvas(view, b.center_x_m, b.center_y_m);
+    context.save();
+    context.translate(cx, cy);
+    context.rotate(-b.yaw_rad);
+    context.fillRect(-b.half_x_m * view.scale, -b.half_y_m * view.scale, 2 * b.half_x_m * view.scale, 2 * b.half_y_m * view.scale);
+    context.restore();
+  }
+  for (const [name, colour] of trails) {
+    const rows = data[name];
+    const last = sampleAt(rows, now);
+    if (last < 0) continue;
+    context.strokeStyle = colour;
+    context.lineWidth = 2;
+    context.beginPath();
+    rows.slice(0, last + 1).forEach((r, i) => {
+      const [x, y] = worldToCanvas(view, r[1], r[2]);
+      if (i === 0) context.moveTo(x, y); else context.lineTo(x, y);
+    });
+    context.stroke();
+    const [x, y] = worldToCanvas(view, rows[last][1], rows[last][2]);
+    context.fillStyle = colour;
+    context.beginPath();
+    context.arc(x, y, 5, 0, 2 * Math.PI);
+    context.fill();
+    context.beginPath();
+    context.moveTo(x, y);
+    context.lineTo(x + 12 * Math.cos(rows[last][3]), y - 12 * Math.sin(rows[last][3]));
+    context.stroke();
+  }
+}
+
+function drawPlot(canvas, series, { min, max, label }) {
+  const context = canvas.getContext("2d");
+  const { width, height } = canvas;
+  context.clearRect(0, 0, width, height);
+  const span = Math.max(1e-6, data.duration_s);
+  const y = (v) => height - 16 - ((v - min) / Math.max(1e-6, max - min)) * (height - 28);
+  for (const [rows, column, colour] of series) {
+    context.strokeStyle = colour;
+    context.beginPath();
+    rows.forEach((r, i) => {
+      const x = (r[0] / span) * width;
+      if (i === 0) context.moveTo(x, y(r[column])); else context.lineTo(x, y(r[column]));
+    });
+    context.stroke();
+  }
+  context.strokeStyle = "#c0392b";
+  context.beginPath();
+  context.moveTo((now / span) * width, 0);
+  context.lineTo((now / span) * width, height);
+  context.stroke();
+  context.fillStyle = "#333";
+  context.fillText(label, 4, 12);
+}
+
+function drawSonar() {
+  const canvas = $('[data-slot="sonar"]');
+  const context = canvas.getContext("2d");
+  const { width, height } = canvas;
+  context.clearRect(0, 0, width, height);
+  const row = data.sonar[sampleAt(data.sonar, now)];
+  context.fillStyle = "#333";
+  context.fillText(t("Sonar ranges now [m]"), 4, 12);
+  if (!row) return;
+  const ranges = row.slice(1);
+  const top = Math.max(...(data.info?.sonar_max_m ?? [3]), 0.1);
+  const barWidth = width / Math.max(1, ranges.length);
+  context.fillStyle = "#1f6feb";
+  ranges.forEach((r, i) => {
+    const h = (Math.min(r, top) / top) * (height - 24);
+    context.fillRect(i * barWidth + 2, height - 4 - h, barWidth - 4, h);
+  });
+}
+
+function drawCommands() {
+  const items = root.querySelectorAll('[data-slot="commands"] li');
+  const current = sampleAt(data.commands, now);
+  items.forEach((item, i) => {
+    item.classList.toggle("is-past", i < current);
+    item.classList.toggle("is-current", i === current);
+  });
+}
+
+function drawEye(p) {
+  if (!eye || !p) return;
+  try {
+    eye.render(p);
+  } catch (error) {
+    eye = null;
+    $('[data-field="eye-status"]').textContent = t("This browser cannot draw the robot's-eye view.");
+  }
+}
+
+function draw() {
+  const odometry = pose(data.odometry[sampleAt(data.odometry, now)]);
+  const truth = pose(data.ground_truth[sampleAt(data.ground_truth, now)]);
+  timeInput.value = String(now);
+  $('[data-field="now"]').textContent = `${now.toFixed(2)} s / ${data.duration_s.toFixed(1)} s`;
+  const poseText = $('[data-field="pose"]');
+  if (odometry) {
+    poseText.textContent = t("Odometry: x {x} m, y {y} m, heading {th} rad", { x: odometry.x_m.toFixed(3), y: odometry.y_m.toFixed(3), th: odometry.theta_rad.toFixed(3) });
+    poseText.dataset.x = String(odometry.x_m);
+    poseText.dataset.y = String(odometry.y_m);
+    poseText.dataset.t = String(data.odometry[sampleAt(data.odometry, now)][0]);
+  }
+  drawMap();
+  drawEye(truth ?? odometry);
+  drawPlot($('[data-slot="speed"]'), [[data.odometry, 4, "#1f6feb"], [data.odometry, 5, "#d97706"]],
+    { min: -1.5, max: 1.5, label: t("Speed: linear [m/s] blue, angular [rad/s] orange") });
+  drawSonar();
+  drawCommands();
+}
+
+function seek(s) {
+  now = Math.min(Math.max(0, s), data.duration_s);
+  draw();
+}
+
+function tick(frameTime) {
+  if (!playing) return;
+  const elapsed = lastFrame ? (frameTime - lastFrame) / 1000 : 0;
+  lastFrame = frameTime;
+  seek(now + elapsed * Number(speedSelect.value));
+  if (now >= data.duration_s) { setPlaying(false); return; }
+  requestAnimationFrame(tick);
+}
+
+function setPlaying(on) {
+  playing = on;
+  playButton.textContent = on ? t("Pause") : t("Play");
+  lastFrame = 0;
+  if (on) {
+    if (now >= data.duration_s) now = 0;
+    requestAnimationFrame(tick);
+  }
+}
+
+function fillLists() {
+  const list = $('[data-slot="commands"]');
+  data.commands.forEach((c) => {
+    const button = document.createElement("button");
+    button.type = "button";
+    const what = c.action === "drive" ? `drive ${c.linear_mps} m/s ${c.angular_radps} rad/s`
+      : c.action === "activate" ? `${c.skill}` : c.action === "run_plan" ? `plan ${c.plan_name}` : c.action;
+    button.textContent = `${c.t.toFixed(2)} s · #${c.sequence} · ${c.source} · ${what}${c.accepted ? "" : ` (${t("refused")}: ${c.outcome})`}`;
+    button.addEventListener("click", () => seek(c.t));
+    const item = document.createElement("li");
+    item.append(button);
+    list.append(item);
+  });
+  const events = [
+    ...data.goals.map((g) => ({ t: g.t, label: `${g.t.toFixed(2)} s · ${t("goal")} ${g.skill}: ${g.status}` })),
+    ...data.commands.filter((c) => c.action !== "drive").map((c) => ({ t: c.t, label: `${c.t.toFixed(2)} s · ${c.action} ${c.skill || c.plan_name || ""}` })),
+  ].sort((a, b) => a.t - b.t);
+  for (const event of events) {
+    const option = document.createElement("option");
+    option.value = String(event.t);
+    option.textContent = event.label;
+    jumpSelect.append(option);
+  }
+}
+
+async function start() {
+  const response = await fetch(`/api/recordings/${root.dataset.recordingId}/data`, { credentials: "same-origin" });
+  if (!response.ok) {
+    status.textContent = t("The recording could not be read.");
+    return;
+  }
+  data = await response.json();
+  timeInput.max = String(data.duration_s);
+  if (data.scene) {
+    try {
+      eye = new RobotEyeRenderer($('[data-slot="eye"]'), data.scene, { width_px: 320, height_px: 240 });
+    } catch (error) {
+      $('[data-field="eye-status"]').textContent = t("This browser cannot draw the robot's-eye view.");
+    }
+  }
+  fillLists();
+  status.textContent = t("{n} s recorded: play it, or drag the time.", { n: data.duration_s.toFixed(1) });
+  root.dataset.ready = "true";
+  seek(0);
+}
+
+timeInput.addEventListener("input", () => { setPlaying(false); seek(Number(timeInput.value)); });
+playButton.addEventListener("click", () => setPlaying(!playing));
+jumpSelect.addEventListener("change", () => { if (jumpSelect.value !== "") seek(Number(jumpSelect.value)); });
+start();
