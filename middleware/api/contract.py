@@ -131,6 +131,7 @@ class Answer:
     schema: Schema
     media_type: str = MEDIA_JSON
     description: str = ""
+    alternatives: Mapping[str, Schema] = field(default_factory=dict)  # other media types of the same answer
 
 
 @dataclass(frozen=True)
@@ -148,11 +149,13 @@ class Operation:
     tags: tuple[str, ...] = ()
 
 
-def file_answer(media_type: str, description: str = "") -> Answer:
-    """An answer that is a file (CSV, MCAP, a download)."""
-    binary = media_type not in ("text/csv", "text/plain", "text/calendar", "application/x-ndjson")
-    schema: Schema = {"type": "string", "format": "binary"} if binary else {"type": "string"}
-    return Answer(schema, media_type, description)
+def file_answer(media_type: str, description: str = "", alternatives: Mapping[str, Schema] | None = None) -> Answer:
+    """An answer that is a file (CSV, MCAP, a JSON document to download); alternatives: other media types it may
+    come as (?format=txt)."""
+    textual = media_type in ("text/csv", "text/plain", "text/calendar", "application/x-ndjson")
+    schema: Schema = OBJECT if media_type == MEDIA_JSON else (
+        {"type": "string"} if textual else {"type": "string", "format": "binary"})
+    return Answer(schema, media_type, description, dict(alternatives or {}))
 
 
 def described(summary: str | None = None, *, body: Schema | None = None, body_required: bool = True,

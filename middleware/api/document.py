@@ -77,8 +77,9 @@ def _operation(rule: Rule, method: str, declared: Operation) -> dict[str, Any]:
     elif declared.form is not None:
         operation["requestBody"] = {"required": True, "content": {"multipart/form-data": {"schema": declared.form}}}
     for status, answer in declared.answers.items():
-        operation["responses"][str(status)] = {"description": answer.description or "Done",
-                                               "content": {answer.media_type: {"schema": answer.schema}}}
+        content = {answer.media_type: {"schema": answer.schema}}
+        content.update({media: {"schema": schema} for media, schema in answer.alternatives.items()})
+        operation["responses"][str(status)] = {"description": answer.description or "Done", "content": content}
     for status in declared.refusals:
         operation["responses"].setdefault(str(status), "Refused")
     if declared.login:

@@ -213,7 +213,8 @@ def api_use_as_skill(plan_id: int) -> ResponseReturnValue:
 @login_required
 @described(
     query={"format": one_of("json", "txt"), "version": whole(1, 2**31 - 1)},
-    answers={200: file_answer("application/json", "the plan as a file (text/plain with ?format=txt)")},
+    answers={200: file_answer("application/json", "the plan as a file (text/plain with ?format=txt)",
+                              {"text/plain": {"type": "string"}})},
 )
 def api_export(plan_id: int) -> ResponseReturnValue:
     """The plan as a file: ?format=json (canonical, the default) or txt; ?version=N for an older one."""

@@ -93,7 +93,7 @@ def start(course_id: int) -> ResponseReturnValue:
 
 @blueprint.delete("/api/courses/<int:course_id>/class-session")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: OBJECT}, refusals=(409,))
 def end(course_id: int) -> ResponseReturnValue:
     """Ends the open session: every student's robot is stopped."""
     owners, manager = class_sessions.end_session(get_session(), _actor(), course_id), practice_manager()

@@ -267,6 +267,7 @@ def lesson_api(lesson_id: int) -> ResponseReturnValue:
 @described(
     body=obj(("cues",), cues=about("the cue track (WebVTT)")),
     answers={200: obj(("cues", "errors"), cues=array(OBJECT), errors=array(OBJECT))},
+    refusals=(503,),
 )
 def check() -> ResponseReturnValue:
     """Checks a cue track without saving: {"cues": text} -> the cues and every error by line."""
@@ -289,7 +290,7 @@ def check() -> ResponseReturnValue:
         cues=about("the cue track (WebVTT)"),
     ),
     answers={200: OBJECT, 201: OBJECT},
-    refusals=(409,),
+    refusals=(409, 503),
 )
 def save(lesson_id: int | None = None) -> ResponseReturnValue:
     """Creates or updates a lesson after checking every cue against the robot's skills."""

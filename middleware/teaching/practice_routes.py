@@ -61,7 +61,7 @@ def status() -> ResponseReturnValue:
 
 @blueprint.post("/api/practice")
 @login_required
-@described(answers={200: OBJECT, 202: OBJECT}, refusals=(409, 503))
+@described(answers={200: OBJECT, 202: OBJECT}, refusals=(409, 429, 503))
 def start() -> ResponseReturnValue:
     """Claims the user's practice robot, which the farm starts once the claim is committed (202: the page follows
     it to running), or answers the running one (200)."""

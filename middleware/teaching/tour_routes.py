@@ -128,7 +128,7 @@ def tour_api(tour_id: int) -> ResponseReturnValue:
 @described(
     body=obj(("title",), title=about("the tour's title"), steps=about("its steps")),
     answers={200: OBJECT, 201: OBJECT},
-    refusals=(409,),
+    refusals=(409, 503),
 )
 def save(tour_id: int | None = None) -> ResponseReturnValue:
     """Creates or updates a tour; steps' skills and parameters are checked against the robot's schemas."""

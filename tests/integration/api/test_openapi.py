@@ -12,7 +12,6 @@ import pytest
 import requests
 import schemathesis
 from hypothesis import HealthCheck, Phase, given, settings
-from schemathesis.checks import not_a_server_error
 from schemathesis.specs.openapi.checks import (
     content_type_conformance,
     response_schema_conformance,
@@ -42,8 +41,8 @@ def pending(app) -> set[str]:
     """The routes of the pending areas, as "METHOD /rule"."""
     return {f"{method} {rule.rule}" for rule in document.api_rules(app) for method in document.methods_of(rule)
             if rule.endpoint.split(".")[0] in PENDING_AREAS}
-EXAMPLES_PER_OPERATION = 3  # four roles x ~150 operations: the whole run stays well under a minute
-CHECKS = [not_a_server_error, status_code_conformance, content_type_conformance, response_schema_conformance]
+EXAMPLES_PER_OPERATION = 2  # four roles x ~110 operations x ~2.5 cases (explicit examples included): under a minute
+CHECKS = [status_code_conformance, content_type_conformance, response_schema_conformance]
 
 
 @pytest.fixture(scope="module")
@@ -130,13 +129,40 @@ def _session(url: str, role: str, passwords: dict[str, str]) -> requests.Session
     return session
 
 
+def _fuzz(operation, role: str, session: requests.Session, url: str, cases: Counter[str],
+          failures: list[str]) -> None:
+    """EXAMPLES_PER_OPERATION cases of operation sent as role; each answer checked against the document."""
+
+    @settings(max_examples=EXAMPLES_PER_OPERATION, deadline=None, database=None, derandomize=True,
+              phases=[Phase.explicit, Phase.generate], suppress_health_check=list(HealthCheck))
+    @given(operation.as_strategy())
+    def run(case) -> None:
+        cases[role] += 1
+        response = case.call(base_url=url, session=session, timeout=30)
+        found = []
+        if response.status_code >= 500 and response.status_code != 503:
+            found.append("a server error")  # 503 is the documented robot_offline: the lab's robots do not answer
+        try:
+            case.validate_response(response, checks=CHECKS)
+        except BaseExceptionGroup as group:  # schemathesis' FailureGroup: every failure of this answer
+            found += [f"{getattr(e, 'title', type(e).__name__)}: {str(getattr(e, 'message', e))[:200]}"
+                      for e in group.exceptions]
+        if found:
+            failures.append(f"{role} {operation.method.upper()} {operation.path} -> {response.status_code}: "
+                            f"{'; '.join(found)} | {case.as_curl_command()[:300]}")
+
+    run()
+
+
 def test_schemathesis_finds_no_5xx_and_no_answer_the_document_does_not_promise(described_lab) -> None:
     url = described_lab.url
     schema = schemathesis.openapi.from_url(f"{url}/api/openapi.json")
-    operations = [result.ok() for result in schema.get_all_operations()]
+    operations = [operation for operation in (result.ok() for result in schema.get_all_operations())
+                  if operation.definition.raw.get("tags", [""])[0] not in PENDING_AREAS]
     passwords = described_lab.app.config["TEST_PASSWORDS"]
     failures: list[str] = []
     cases: Counter[str] = Counter()
+    slowest: Counter[str] = Counter()
     started = time.monotonic()
     for role in ROLES:  # the admin last: what an admin's cases change (a password, a role) is seen by no one after
         session = _session(url, role, passwords)
@@ -144,20 +170,11 @@ def test_schemathesis_finds_no_5xx_and_no_answer_the_document_does_not_promise(d
             if operation.method.upper() == "POST" and operation.path == "/api/account/password":
                 continue  # would change the role's own password mid-run; its edge is covered by tests/hardening
 
-            @settings(max_examples=EXAMPLES_PER_OPERATION, deadline=None, database=None, derandomize=True,
-                      phases=[Phase.explicit, Phase.generate], suppress_health_check=list(HealthCheck))
-            @given(operation.as_strategy())
-            def run(case, role=role, session=session, operation=operation) -> None:
-                cases[role] += 1
-                response = case.call(base_url=url, session=session, timeout=30)
-                try:
-                    case.validate_response(response, checks=CHECKS)
-                except Exception as failure:  # noqa: BLE001  (every failure is listed at the end)
-                    failures.append(f"{role} {operation.method.upper()} {operation.path} -> {response.status_code}: "
-                                    f"{str(failure).splitlines()[0][:300]}")
-
-            run()
+            began = time.monotonic()
+            _fuzz(operation, role, session, url, cases, failures)
+            slowest[f"{operation.method.upper()} {operation.path}"] += time.monotonic() - began
     elapsed = time.monotonic() - started
-    print(f"schemathesis: {dict(cases)} cases per role, {sum(cases.values())} in {elapsed:.1f} s")
+    print(f"schemathesis: {dict(cases)} cases per role, {sum(cases.values())} in {elapsed:.1f} s; slowest: "
+          + ", ".join(f"{name} {seconds:.1f} s" for name, seconds in slowest.most_common(8)))
     assert all(cases[role] >= len(operations) - 1 for role in ROLES)
     assert failures == [], "\n".join(sorted(set(failures)))
