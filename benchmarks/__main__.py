@@ -12,7 +12,8 @@ from pathlib import Path
 BENCHMARKS = ("benchmarks.latency", "benchmarks.skills", "benchmarks.feedback", "benchmarks.farm",
               "benchmarks.consoles", "benchmarks.workers", "benchmarks.sticky",
               "benchmarks.browser_view", "benchmarks.capacity", "benchmarks.database_load",
-              "benchmarks.plans", "benchmarks.response_times")
+              "benchmarks.plans", "benchmarks.response_times", "benchmarks.class_wall",
+              "benchmarks.recording_cost")
 
 
 def main(argv: list[str] | None = None) -> int:
