@@ -29,6 +29,7 @@ from middleware.chat import routes as chat_routes
 from middleware.chat import sockets as chat_sockets
 from middleware.courses import routes as courses_routes
 from middleware.errors import register_error_handlers
+from middleware.exercises import routes as exercises_routes
 from middleware.experiment import delay, trial_rules
 from middleware.experiment import routes as experiment_routes
 from middleware.extensions import csrf, login_manager, socket_login_check
@@ -136,6 +137,7 @@ def _register_areas(app: Flask) -> None:
         app.register_blueprint(blueprint)
     app.register_blueprint(lab_teleperception.blueprint)
     app.register_blueprint(language_routes.blueprint)
+    app.register_blueprint(exercises_routes.blueprint)
     app.register_blueprint(lti_routes.blueprint)
     lti_setup.init_app(app)
     attempts.on_final_mark(lti_grades.queue_final_mark)  # a final or overridden mark goes to the LMS gradebook

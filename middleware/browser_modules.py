@@ -15,6 +15,25 @@ from markupsafe import Markup
 VENDOR_MODULES = {
     "three": "vendor/node_modules/three/build/three.module.js",
     "three/addons/": "vendor/node_modules/three/examples/jsm/",
+    # CodeMirror 6 for the exercises' editor (every bare specifier its ES modules import has an entry).
+    "codemirror": "vendor/node_modules/codemirror/dist/index.js",
+    "@codemirror/autocomplete": "vendor/node_modules/@codemirror/autocomplete/dist/index.js",
+    "@codemirror/commands": "vendor/node_modules/@codemirror/commands/dist/index.js",
+    "@codemirror/lang-python": "vendor/node_modules/@codemirror/lang-python/dist/index.js",
+    "@codemirror/language": "vendor/node_modules/@codemirror/language/dist/index.js",
+    "@codemirror/lint": "vendor/node_modules/@codemirror/lint/dist/index.js",
+    "@codemirror/search": "vendor/node_modules/@codemirror/search/dist/index.js",
+    "@codemirror/state": "vendor/node_modules/@codemirror/state/dist/index.js",
+    "@codemirror/streamparser": "vendor/node_modules/@codemirror/streamparser/dist/index.js",
+    "@codemirror/view": "vendor/node_modules/@codemirror/view/dist/index.js",
+    "@lezer/common": "vendor/node_modules/@lezer/common/dist/index.js",
+    "@lezer/highlight": "vendor/node_modules/@lezer/highlight/dist/index.js",
+    "@lezer/lr": "vendor/node_modules/@lezer/lr/dist/index.js",
+    "@lezer/python": "vendor/node_modules/@lezer/python/dist/index.js",
+    "@marijn/find-cluster-break": "vendor/node_modules/@marijn/find-cluster-break/src/index.js",
+    "crelt": "vendor/node_modules/crelt/index.js",
+    "style-mod": "vendor/node_modules/style-mod/src/style-mod.js",
+    "w3c-keyname": "vendor/node_modules/w3c-keyname/index.js",
 }
 
 

@@ -1,0 +1,217 @@
+// The page's side of a student's run: the Python worker, the memory it shares with the page, and the robot's
+// drive and telemetry channels. The worker's commands reach the robot only through the drive socket (DriveSession:
+// sequence numbers, 20 Hz repeats the deadman expects, a stop on release), so the server checks each one as it
+// checks the pad's. If the worker stops ticking (a loop without robot.tick(), a crash), the page stops the robot
+// within WATCHDOG_MS; a closed tab closes the socket, and the server (and else the robot's deadman) stops it.
+import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
+import { DriveSession } from "../../lib/drive-session.js";
+
+const STOP = 0, TELEMETRY_VERSION = 1, SKILL_STATE = 2, SKILL_RESULT = 3, TELEMETRY_BYTES = 4;
+const TELEMETRY_CAPACITY = 64 * 1024;
+export const WATCHDOG_MS = 300;  // no tick for this long: the page stops the robot
+const STOP_GRACE_MS = 1500;  // an interrupt not answered in this time: the worker is replaced
+const SKILL_POLL_MS = 250;
+const FINAL_GOAL = { succeeded: 1, aborted: 2, canceled: 3 };
+
+/** The Python worker with its shared memory; "ready" resolves when Pyodide has loaded (load_s in the detail). */
+export class PythonWorker extends EventTarget {
+  constructor() {
+    super();
+    this.control = new Int32Array(new SharedArrayBuffer(8 * 4));
+    this.telemetry = new Uint8Array(new SharedArrayBuffer(TELEMETRY_CAPACITY));
+    this.interrupt = new Uint8Array(new SharedArrayBuffer(1));
+    this.ready = this.#spawn();
+  }
+
+  #spawn() {
+    this.worker?.terminate();
+    this.worker = new Worker("/exercises/python-worker.js", { type: "module" });
+    return new Promise((resolve, reject) => {
+      this.worker.onmessage = (event) => {
+        const message = event.data;
+        if (message.type === "ready") resolve(message);
+        else if (message.type === "failed" && !this.loaded) reject(new Error(message.message));
+        this.dispatchEvent(new CustomEvent("message", { detail: message }));
+      };
+      this.worker.onerror = (event) => reject(new Error(event.message || "The Python worker did not start."));
+      this.worker.postMessage({ type: "init", control: this.control.buffer, telemetry: this.telemetry.buffer,
+                                interrupt: this.interrupt.buffer });
+    }).then((message) => { this.loaded = true; return message; });
+  }
+
+  /** Replace a worker that does not answer (the interpreter reloads). */
+  restart() {
+    this.loaded = false;
+    this.ready = this.#spawn();
+    return this.ready;
+  }
+
+  writeTelemetry(text) {
+    const bytes = new TextEncoder().encode(text);
+    if (bytes.length > this.telemetry.length) return;
+    Atomics.add(this.control, TELEMETRY_VERSION, 1);  // odd: being written
+    this.telemetry.set(bytes);
+    Atomics.store(this.control, TELEMETRY_BYTES, bytes.length);
+    Atomics.add(this.control, TELEMETRY_VERSION, 1);
+  }
+
+  run(code, limits) {
+    Atomics.store(this.control, STOP, 0);
+    Atomics.store(this.control, SKILL_STATE, 0);
+    this.interrupt[0] = 0;
+    this.worker.postMessage({ type: "run", code, ...limits });
+  }
+
+  stop() {
+    Atomics.store(this.control, STOP, 1);
+    Atomics.notify(this.control, STOP);
+    this.interrupt[0] = 2;  // SIGINT: a KeyboardInterrupt at the interpreter's next check
+  }
+
+  skillEnded(code) {
+    Atomics.store(this.control, SKILL_RESULT, code);
+    Atomics.store(this.control, SKILL_STATE, 2);
+    Atomics.notify(this.control, SKILL_STATE);
+  }
+}
+
+/**
+ * One run of the student's code on a robot. Events: "print" (detail: {line, stream}), "state" (detail: text),
+ * "sent" (a drive command went), "ack" (detail: the ack, with performance.now() of its command in sent_at),
+ * "done" (detail: the worker's outcome plus the report, if the code made one).
+ */
+export class RobotRun extends EventTarget {
+  #python; #robotName; #drive; #telemetry; #session; #watchdog = 0; #lastTick = 0; #skillPending = false;
+  #finished = false; #stopTimer = 0; #report = null; #command = { linear_mps: 0, angular_radps: 0 };
+  #sentAt = new Map();
+
+  constructor(python, robotName) {
+    super();
+    this.#python = python;
+    this.#robotName = robotName;
+    this.onWorker = (event) => this.#fromWorker(event.detail);
+  }
+
+  /** Opens the robot's channels; resolves with the drive socket's ready message (limits, is_controller) once the
+   * first telemetry has come too (the program's first tick reads real sensors). */
+  connect() {
+    const path = `/ws/robots/${encodeURIComponent(this.#robotName)}`;
+    this.#drive = new Channel(`${path}/drive`);
+    this.#session = new DriveSession(this.#drive);
+    this.#telemetry = new Channel(`${path}/telemetry`);
+    this.#telemetry.addEventListener("message", (event) => {
+      if (typeof event.detail !== "string") return;
+      const message = parseJsonMessage(event.detail);
+      if (message?.type !== "telemetry") return;
+      this.#python.writeTelemetry(event.detail);
+      this.dispatchEvent(new CustomEvent("telemetry", { detail: message }));
+    });
+    this.#session.addEventListener("error", (event) => this.#print(`Robot: ${event.detail.message}`, "stderr"));
+    this.#session.addEventListener("sent", (event) => {
+      this.#sentAt.set(event.detail.sequence, performance.now());
+      this.dispatchEvent(new CustomEvent("sent", { detail: event.detail }));
+    });
+    this.#session.addEventListener("ack", (event) => {
+      const sentAt = this.#sentAt.get(event.detail.sequence);
+      this.#sentAt.delete(event.detail.sequence);
+      this.dispatchEvent(new CustomEvent("ack", { detail: { ...event.detail, sent_at: sentAt } }));
+    });
+    const heard = new Promise((resolve) => this.addEventListener("telemetry", resolve, { once: true }));
+    const ready = new Promise((resolve) => this.#session.addEventListener("ready", (event) => resolve(event.detail),
+                                                                           { once: true }));
+    return Promise.all([ready, heard]).then(([message]) => message);
+  }
+
+  start(code, limits) {
+    this.#python.addEventListener("message", this.onWorker);
+    this.#lastTick = performance.now();
+    this.#watchdog = setInterval(() => this.#checkTicks(), 50);
+    this.#python.run(code, limits);
+  }
+
+  /** Stop: the interpreter is interrupted, the robot stopped now; a worker that does not answer is replaced. */
+  stop() {
+    if (this.#finished) return;
+    this.#session?.stop();
+    this.#python.stop();
+    clearTimeout(this.#stopTimer);
+    this.#stopTimer = setTimeout(() => {
+      if (this.#finished) return;
+      this.#print("The program did not stop by itself: Python is restarted.", "stderr");
+      this.#python.restart();
+      this.#end({ ok: false, stopped: true, message: "Stopped." });
+    }, STOP_GRACE_MS);
+  }
+
+  /** Closes the channels (the server stops the robot when its drive socket closes). */
+  close() {
+    this.#session?.stop();
+    this.#drive?.close();
+    this.#telemetry?.close();
+    clearInterval(this.#watchdog);
+  }
+
+  #checkTicks() {
+    if (this.#skillPending || this.#finished) return;
+    if (performance.now() - this.#lastTick > WATCHDOG_MS && (this.#command.linear_mps || this.#command.angular_radps)) {
+      this.#command = { linear_mps: 0, angular_radps: 0 };
+      this.#session.stop();
+      this.dispatchEvent(new CustomEvent("state", { detail: "watchdog" }));
+    }
+  }
+
+  #fromWorker(message) {
+    if (message.type === "drive") {
+      this.#lastTick = performance.now();
+      const same = message.linear_mps === this.#command.linear_mps && message.angular_radps === this.#command.angular_radps;
+      if (!same) {
+        this.#command = { linear_mps: message.linear_mps, angular_radps: message.angular_radps };
+        this.#session.setCommand(this.#command);
+      }
+    } else if (message.type === "print") {
+      this.#print(message.line, message.stream);
+    } else if (message.type === "report") {
+      this.#report = { x_m: message.x_m, y_m: message.y_m, t_s: message.t_s };
+    } else if (message.type === "skill") {
+      this.#runSkill(message.name, message.parameters);
+    } else if (message.type === "done") {
+      this.#end(message);
+    }
+  }
+
+  async #runSkill(name, parameters) {
+    this.#skillPending = true;
+    try {
+      const answer = await fetchJson("/api/practice/commands", { method: "POST",
+        body: { command: { skill: name, parameters } } });
+      const goalId = answer.goal?.goal_id;
+      let status = answer.goal?.status;
+      while (goalId && !(status in FINAL_GOAL) && !this.#finished) {
+        await new Promise((resolve) => setTimeout(resolve, SKILL_POLL_MS));
+        const goal = await fetchJson(`/api/robots/practice/command-goals/${encodeURIComponent(goalId)}`);
+        status = goal.goal?.status ?? goal.status;
+      }
+      this.#python.skillEnded(FINAL_GOAL[status] ?? 2);
+    } catch (error) {
+      this.#print(`Skill ${name}: ${error.message}`, "stderr");
+      this.#python.skillEnded(4);
+    } finally {
+      this.#skillPending = false;
+      this.#lastTick = performance.now();
+    }
+  }
+
+  #print(line, stream = "stdout") {
+    this.dispatchEvent(new CustomEvent("print", { detail: { line, stream } }));
+  }
+
+  #end(outcome) {
+    if (this.#finished) return;
+    this.#finished = true;
+    clearTimeout(this.#stopTimer);
+    clearInterval(this.#watchdog);
+    this.#python.removeEventListener("message", this.onWorker);
+    this.#session?.stop();
+    this.dispatchEvent(new CustomEvent("done", { detail: { ...outcome, report: this.#report } }));
+  }
+}

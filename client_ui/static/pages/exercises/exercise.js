@@ -1,0 +1,237 @@
+// An exercise's page: the CodeMirror editor, Run (the practice robot) and Submit (a hidden start, graded), Stop,
+// the console, and the grade with the robot's true path, which the server measured from the robot's own record.
+import { EditorView, basicSetup } from "codemirror";
+import { EditorState, StateEffect, StateField } from "@codemirror/state";
+import { Decoration } from "@codemirror/view";
+import { python } from "@codemirror/lang-python";
+import { fetchJson } from "../../lib/transport.js";
+import { PythonWorker, RobotRun } from "./exercise-run.js";
+import { drawTrace } from "./trace-map.js";
+
+const root = document.getElementById("exercise");
+const slug = root.dataset.slug;
+const statusLine = root.querySelector("[data-field=status]");
+const consolePane = root.querySelector("[data-field=console]");
+const gradeLine = root.querySelector("[data-field=grade]");
+const measurements = root.querySelector("[data-slot=measurements]");
+const runsList = root.querySelector("[data-slot=runs]");
+const map = root.querySelector("[data-slot=map]");
+const robotLine = root.querySelector("[data-field=robot]");
+const buttons = Object.fromEntries([...root.querySelectorAll("[data-action]")].map((b) => [b.dataset.action, b]));
+const PRACTICE_POLL_MS = 1000;
+const PRACTICE_WAIT_MS = 120000;
+
+let template = "";
+let current = null;  // { run, robotRun }
+let pythonReady = false;
+export const timings = { pyodide_load_s: null, acks: [] };  // read by the benchmark
+window.telelabExercise = timings;
+
+// ---- the editor, with the line of an error marked ----
+const markError = StateEffect.define();
+const errorLine = StateField.define({
+  create: () => Decoration.none,
+  update(marks, transaction) {
+    marks = marks.map(transaction.changes);
+    for (const effect of transaction.effects) {
+      if (effect.is(markError)) {
+        marks = effect.value === null ? Decoration.none
+          : Decoration.set([Decoration.line({ class: "exercise__error-line" }).range(effect.value)]);
+      }
+    }
+    return transaction.docChanged ? Decoration.none : marks;
+  },
+  provide: (field) => EditorView.decorations.from(field),
+});
+const editor = new EditorView({
+  parent: root.querySelector("[data-slot=editor]"),
+  state: EditorState.create({ doc: "", extensions: [basicSetup, python(), errorLine, EditorView.lineWrapping,
+    EditorView.cspNonce.of(root.dataset.styleNonce ?? "")] }),
+});
+
+/** The program as Python reads it: a no-break space (pasted from a web page) is a space. */
+function code() {
+  return editor.state.doc.toString().replace(/\u00a0/g, " ");
+}
+
+function setCode(text) {
+  editor.dispatch({ changes: { from: 0, to: editor.state.doc.length, insert: text } });
+}
+
+function showError(line) {
+  if (!line || line > editor.state.doc.lines) return;
+  const at = editor.state.doc.line(line);
+  editor.dispatch({ effects: [markError.of(at.from), EditorView.scrollIntoView(at.from, { y: "center" })],
+                    selection: { anchor: at.from } });
+}
+
+// ---- console and status ----
+function say(text, kind = "info") {
+  statusLine.textContent = text;
+  statusLine.dataset.kind = kind;
+}
+
+function print(line, stream = "stdout") {
+  const span = document.createElement("span");
+  span.className = stream;
+  span.textContent = line + "\n";
+  consolePane.append(span);
+  while (consolePane.childNodes.length > 500) consolePane.firstChild.remove();
+  consolePane.scrollTop = consolePane.scrollHeight;
+}
+
+function setRunning(running) {
+  buttons.run.disabled = buttons.submit.disabled = running || !pythonReady;
+  buttons.stop.disabled = !running;
+  buttons.reset.disabled = running;
+}
+
+// ---- Python ----
+const python3 = new PythonWorker();
+python3.ready.then((message) => {
+  pythonReady = true;
+  timings.pyodide_load_s = message.load_s;
+  root.dataset.pythonReady = "true";
+  say(`Python ${message.version} is ready (loaded in ${message.load_s.toFixed(1)} s).`);
+  setRunning(false);
+}, (error) => say(`Python did not load: ${error.message}`, "error"));
+
+if (!window.crossOriginIsolated) {
+  say("This page needs a browser that isolates it (SharedArrayBuffer): a current Chromium, Firefox or Safari.", "error");
+}
+
+// ---- the practice robot ----
+async function practiceRobot() {
+  let state = await fetchJson("/api/practice");
+  if (state.running) return state.name;
+  if (!state.starting) {
+    say("Starting your practice robot…");
+    state = await fetchJson("/api/practice", { method: "POST" });
+  }
+  const until = Date.now() + PRACTICE_WAIT_MS;
+  while (!state.running && Date.now() < until) {
+    await new Promise((resolve) => setTimeout(resolve, PRACTICE_POLL_MS));
+    state = await fetchJson("/api/practice");
+  }
+  if (!state.running) throw new Error("Your practice robot did not start. Try again in a moment.");
+  return state.name;
+}
+
+// ---- a run ----
+async function start(mode) {
+  setRunning(true);
+  editor.dispatch({ effects: markError.of(null) });
+  consolePane.textContent = "";
+  try {
+    await practiceRobot();
+    say(mode === "submission" ? "Placing the robot at a hidden start…" : "Placing the robot at the start…");
+    const answer = await fetchJson(`/api/exercises/${encodeURIComponent(slug)}/runs`, { method: "POST",
+      body: { code: code(), mode } });
+    const run = answer.run;
+    const robotRun = new RobotRun(python3, run.robot_name);
+    current = { run, robotRun };
+    robotRun.addEventListener("print", (event) => print(event.detail.line, event.detail.stream));
+    robotRun.addEventListener("ack", (event) => {
+      if (event.detail.sent_at !== undefined) timings.acks.push(performance.now() - event.detail.sent_at);
+      if (timings.acks.length > 2000) timings.acks.shift();
+    });
+    robotRun.addEventListener("telemetry", (event) => showOdometry(event.detail));
+    robotRun.addEventListener("state", () => print("No robot.tick() for a while: the robot was stopped.", "stderr"));
+    robotRun.addEventListener("done", (event) => finish(event.detail));
+    const ready = await robotRun.connect();
+    if (ready.is_controller === false) throw new Error("You do not control this robot now.");
+    root.dataset.running = "true";
+    say(`Running on ${run.robot_name} (${answer.exercise.time_limit_s} s at most). Stop ends it now.`);
+    robotRun.start(code(), { max_linear_mps: ready.max_linear_mps,
+      max_angular_radps: ready.max_angular_radps, time_limit_s: answer.exercise.time_limit_s });
+  } catch (error) {
+    say(error.message, "error");
+    current?.robotRun.close();
+    current = null;
+    setRunning(false);
+  }
+}
+
+async function finish(outcome) {
+  const { run, robotRun } = current;
+  robotRun.close();
+  root.dataset.running = "false";
+  if (outcome.ok) print("Your program ended.");
+  else if (outcome.stopped) print("Stopped: the robot was stopped.", "stderr");
+  else {
+    if (outcome.traceback) print(outcome.traceback.trimEnd(), "stderr");
+    print(outcome.line ? `Line ${outcome.line}: ${outcome.message}` : outcome.message, "stderr");
+    showError(outcome.line);
+  }
+  say(outcome.ok || outcome.stopped ? "Measuring the run from the robot's record…"
+    : `Your program failed${outcome.line ? ` at line ${outcome.line}` : ""}: ${outcome.message}. Measuring what the robot did…`,
+  outcome.ok || outcome.stopped ? "info" : "error");
+  try {
+    const body = outcome.report ? { report: outcome.report } : {};
+    const answer = await fetchJson(`/api/exercise-runs/${run.id}/finish`, { method: "POST", body });
+    showGrade(answer.run, answer.scene_boxes);
+    if (outcome.ok || outcome.stopped) say(answer.run.status === "graded" ? "Run graded." : answer.run.feedback);
+  } catch (error) {
+    say(error.message, "error");
+  }
+  current = null;
+  setRunning(false);
+  loadRuns();
+}
+
+function showOdometry(message) {
+  const { pose, linear_mps: v } = message.odometry;
+  robotLine.textContent = `${current?.run.robot_name ?? "Robot"}: x ${pose.x_m.toFixed(2)} m, y ${pose.y_m.toFixed(2)} m, `
+    + `heading ${(pose.theta_rad * 180 / Math.PI).toFixed(0)}°, speed ${v.toFixed(2)} m/s`;
+  robotLine.dataset.speed = String(v);
+  robotLine.dataset.x = String(pose.x_m);
+}
+
+function showGrade(run, boxes) {
+  const kind = run.mode === "submission" ? "Submission" : "Practice run";
+  gradeLine.classList.remove("muted");
+  gradeLine.textContent = run.grade === null ? `${kind}: ${run.feedback}`
+    : `${kind} #${run.id}: ${Math.round(run.grade * 100)}% — ${run.feedback}`;
+  gradeLine.dataset.grade = run.grade ?? "";
+  const body = measurements.querySelector("tbody");
+  body.replaceChildren(...run.measurements.map((m) => {
+    const row = document.createElement("tr");
+    for (const text of [m.name, `${formatValue(m.value)} ${m.unit}`, `${m.lower_is_better ? "≤" : "≥"} ${m.bar} ${m.unit}`,
+      `${Math.round(m.fraction * 100)}%`]) {
+      const cell = document.createElement("td");
+      cell.textContent = text;
+      row.append(cell);
+    }
+    return row;
+  }));
+  measurements.hidden = !run.measurements.length;
+  drawTrace(map, boxes ?? [], run.trace ?? [], run.start);
+}
+
+function formatValue(value) {
+  return Number.isFinite(value) ? (Math.abs(value) >= 10 ? value.toFixed(1) : value.toFixed(2)) : "—";
+}
+
+async function loadRuns() {
+  const answer = await fetchJson(`/api/exercises/${encodeURIComponent(slug)}`);
+  runsList.replaceChildren(...answer.runs.map((run) => {
+    const item = document.createElement("li");
+    const grade = run.grade === null ? run.status : `${Math.round(run.grade * 100)}%`;
+    item.textContent = `#${run.id} ${run.mode === "submission" ? "submission" : "practice"} · ${grade} · ${run.started_at.slice(0, 16).replace("T", " ")}`;
+    return item;
+  }));
+  return answer;
+}
+
+buttons.run.addEventListener("click", () => start("practice"));
+buttons.submit.addEventListener("click", () => start("submission"));
+buttons.stop.addEventListener("click", () => { say("Stopping…"); current?.robotRun.stop(); });
+buttons.reset.addEventListener("click", () => setCode(template));
+// A closed or hidden tab: the robot stops now (the drive socket's close stops it too, and else the deadman).
+addEventListener("pagehide", () => { current?.robotRun.stop(); current?.robotRun.close(); });
+
+loadRuns().then((answer) => {
+  template = answer.exercise.template;
+  setCode(answer.code);
+}, (error) => say(error.message, "error"));
+setRunning(false);

@@ -1,0 +1,54 @@
+// Draws a run's true path on the lab's map: the walls and obstacles the robot reports, the start, the path.
+const PADDING_PX = 12;
+
+/** The map's bounds [x0, y0, x1, y1] around the boxes and the path. */
+export function mapBounds(boxes, trace) {
+  const xs = [], ys = [];
+  for (const box of boxes) {
+    const r = Math.hypot(box.hx, box.hy);
+    xs.push(box.x - r, box.x + r);
+    ys.push(box.y - r, box.y + r);
+  }
+  for (const [, x, y] of trace) { xs.push(x); ys.push(y); }
+  if (!xs.length) return [-4, -3, 4, 3];
+  return [Math.min(...xs), Math.min(...ys), Math.max(...xs), Math.max(...ys)];
+}
+
+export function drawTrace(canvas, boxes, trace, start) {
+  const context = canvas.getContext("2d");
+  const [x0, y0, x1, y1] = mapBounds(boxes, trace);
+  const scale = Math.min((canvas.width - 2 * PADDING_PX) / (x1 - x0 || 1), (canvas.height - 2 * PADDING_PX) / (y1 - y0 || 1));
+  const toPx = (x, y) => [PADDING_PX + (x - x0) * scale, canvas.height - PADDING_PX - (y - y0) * scale];
+  context.clearRect(0, 0, canvas.width, canvas.height);
+  context.fillStyle = "#5b6675";
+  for (const box of boxes) {
+    const [cx, cy] = toPx(box.x, box.y);
+    context.save();
+    context.translate(cx, cy);
+    context.rotate(-box.yaw);
+    context.fillRect(-box.hx * scale, -box.hy * scale, 2 * box.hx * scale, 2 * box.hy * scale);
+    context.restore();
+  }
+  if (trace.length) {
+    context.strokeStyle = "#1d5fc4";
+    context.lineWidth = 2;
+    context.beginPath();
+    trace.forEach(([, x, y], i) => { const [px, py] = toPx(x, y); if (i) context.lineTo(px, py); else context.moveTo(px, py); });
+    context.stroke();
+    const [ex, ey] = toPx(trace.at(-1)[1], trace.at(-1)[2]);
+    context.fillStyle = "#b1261b";
+    context.beginPath();
+    context.arc(ex, ey, 5, 0, 2 * Math.PI);
+    context.fill();
+  }
+  if (start) {
+    const [sx, sy] = toPx(start[0], start[1]);
+    context.strokeStyle = "#17703a";
+    context.lineWidth = 3;
+    context.beginPath();
+    context.arc(sx, sy, 6, 0, 2 * Math.PI);
+    context.moveTo(sx, sy);
+    context.lineTo(sx + 14 * Math.cos(start[2]), sy - 14 * Math.sin(start[2]));
+    context.stroke();
+  }
+}

@@ -1,0 +1,112 @@
+"""The exercises the lab ships with (an admin or a tutor adds more through the API); each has a statement, a
+template, a scene, a practice start, a region of hidden random starts for submissions, a time limit and a
+rubric graded from the robot's ground truth (grading.py). All run in the practice robot's scene, "lab"."""
+
+from __future__ import annotations
+
+from typing import Any
+
+TEMPLATE_HEAD = '''from telelab import robot
+
+# The loop runs at 20 Hz: each robot.tick() waits for the next period, sends your last command and reads the
+# sensors. It answers False when the time is up or you press Stop.
+'''
+
+BUMP_AND_GO = TEMPLATE_HEAD + '''
+print("Bump and go: starting")
+while robot.tick():
+    if robot.front_distance() < 0.45:
+        # Something ahead: back off a little, then turn away.
+        robot.set_velocity(0.0, 0.0)
+    else:
+        robot.set_velocity(0.3, 0.0)
+'''
+
+WALL_FOLLOWING = TEMPLATE_HEAD + '''
+DISTANCE_M = 0.5  # keep the wall on your left at this distance
+
+while robot.tick():
+    scan = robot.laser()
+    left = scan.nearest(1.2, 1.6)    # beams pointing left
+    ahead = scan.nearest(-0.3, 0.3)
+    # Your controller here: turn towards or away from the wall to keep `left` near DISTANCE_M.
+    robot.set_velocity(0.2, 0.0)
+'''
+
+OBSTACLE_AVOIDANCE = TEMPLATE_HEAD + '''import math
+
+GOAL = (3.2, -1.5)  # in the odometry frame, which starts where the robot is placed
+
+while robot.tick():
+    pose = robot.odometry()
+    dx, dy = GOAL[0] - pose.x_m, GOAL[1] - pose.y_m
+    # A virtual force field: an attraction towards the goal, repulsions from the laser's close hits.
+    heading = math.atan2(dy, dx) - pose.theta_rad
+    robot.set_velocity(0.25, max(-1.0, min(1.0, 1.5 * math.atan2(math.sin(heading), math.cos(heading)))))
+'''
+
+COVER_ROOM = TEMPLATE_HEAD + '''
+# A vacuum cleaner: sweep as much of the room's floor as you can before the time is up.
+while robot.tick():
+    robot.set_velocity(0.3, 0.2)
+'''
+
+BUILT_IN: list[dict[str, Any]] = [
+    {
+        "slug": "bump-and-go",
+        "title": "Bump and go",
+        "statement": ("Drive around the lab without getting stuck: go straight, and when an obstacle comes close "
+                      "(the laser or the bumper tells you), back off, turn to a new direction and go on. Graded "
+                      "from where the robot truly went: the distance driven, how many 0.5 m floor cells it "
+                      "visited, and the longest time it stayed stuck in one spot."),
+        "template": BUMP_AND_GO,
+        "scene": "lab",
+        "rubric": {"kind": "bump_and_go", "min_travel_m": 6.0, "min_cells": 14, "cell_m": 0.5, "stuck_s": 5.0,
+                   "stuck_move_m": 0.1},
+        "start": [0.0, 0.0, 0.0],
+        "random_starts": {"x_m": [-1.0, 1.0], "y_m": [-0.8, 0.8], "theta_rad": [-3.1, 3.1]},
+        "time_limit_s": 45.0,
+    },
+    {
+        "slug": "wall-following",
+        "title": "Follow the wall at 0.5 m",
+        "statement": ("The robot starts beside the north wall (y = 3 m), the wall on its left. Follow it, keeping "
+                      "its centre 0.5 m from the wall's face, for at least 3 m. Graded from the truth: the RMS "
+                      "error of the distance to the wall after the first 5 s, and the distance covered along it."),
+        "template": WALL_FOLLOWING,
+        "scene": "lab",
+        "rubric": {"kind": "wall_following", "x1_m": -4.0, "y1_m": 3.0, "x2_m": 4.0, "y2_m": 3.0,
+                   "distance_m": 0.5, "tolerance_m": 0.08, "min_travel_m": 3.0, "settle_s": 5.0},
+        "start": [-3.0, 2.45, 0.0],
+        "random_starts": {"x_m": [-3.4, -2.4], "y_m": [2.3, 2.6], "theta_rad": [-0.25, 0.25]},
+        "time_limit_s": 25.0,
+    },
+    {
+        "slug": "obstacle-avoidance",
+        "title": "Reach the goal around the pillar",
+        "statement": ("Drive to the goal 3.7 m ahead of the start (x = 3.2 m, y = -1.5 m in the lab's frame) "
+                      "without touching anything: a pillar stands on the straight line. A virtual force field "
+                      "(the goal attracts, the laser's close hits repel) is one way. Graded from the truth: "
+                      "the closest the robot came to the goal (within 0.4 m for full marks: odometry drifts)."),
+        "template": OBSTACLE_AVOIDANCE,
+        "scene": "lab",
+        "rubric": {"kind": "reach_goal", "x_m": 3.2, "y_m": -1.5, "radius_m": 0.4},
+        "start": [-0.5, -1.5, 0.0],
+        "random_starts": {"x_m": [-0.7, -0.3], "y_m": [-1.55, -1.45], "theta_rad": [-0.2, 0.2]},
+        "time_limit_s": 40.0,
+    },
+    {
+        "slug": "cover-room",
+        "title": "Vacuum the open floor",
+        "statement": ("Sweep the open floor in the middle of the lab (x from -1.5 to 1.5 m, y from -1 to 1 m) "
+                      "like a robot vacuum cleaner. Graded from the truth: the share of that floor the robot's "
+                      "body passed over (60% for full marks)."),
+        "template": COVER_ROOM,
+        "scene": "lab",
+        "rubric": {"kind": "cover_room", "x_min_m": -1.5, "x_max_m": 1.5, "y_min_m": -1.0, "y_max_m": 1.0,
+                   "cell_m": 0.25, "min_coverage": 0.6},
+        "start": [0.0, 0.0, 0.0],
+        "random_starts": {"x_m": [-0.5, 0.5], "y_m": [-0.5, 0.5], "theta_rad": [-3.1, 3.1]},
+        "time_limit_s": 60.0,
+    },
+]

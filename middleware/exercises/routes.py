@@ -1,0 +1,219 @@
+"""Exercises pages and API: the catalogue, an exercise's page (the student's Python runs in their browser), code
+versions, runs placed and graded by the server, and the tutor's view of the class's work.
+
+Routes parse and respond; services.py decides. The exercise page and its worker are the only responses with
+cross-origin isolation (COOP/COEP, so the worker can share memory with the page and be interrupted) and the
+worker's the only one whose CSP allows WebAssembly ('wasm-unsafe-eval', which Pyodide needs)."""
+
+from __future__ import annotations
+
+import secrets
+from datetime import datetime
+
+from flask import Blueprint, Response, current_app, jsonify, render_template, request, send_from_directory
+from flask.typing import ResponseReturnValue
+from flask_login import current_user, login_required
+
+from middleware.access.commands import robot_commands
+from middleware.assessment.recording import robot_run
+from middleware.browser_modules import csp_hash_source, import_map_text
+from middleware.db import get_session
+from middleware.exercises import schemas, services
+from middleware.robots.link import RobotUnavailable
+from middleware.teaching.targets import PRACTICE_TARGET, resolve_target
+from middleware.web import now
+from protos.telelab.v1 import robot_pb2
+
+blueprint = Blueprint("exercises", __name__)
+PAGE_FOLDER = "pages/exercises"
+ISOLATION_HEADERS = {"Cross-Origin-Opener-Policy": "same-origin", "Cross-Origin-Embedder-Policy": "require-corp"}
+
+
+def _read_log(robot_name: str, since: datetime, until: datetime) -> list[list[float]] | None:
+    return robot_run(robot_name, since, until)
+
+
+def _map_source() -> str:
+    """The CSP source of the page's import map (the same the app's own policy names)."""
+    return csp_hash_source(import_map_text(current_app.static_url_path or "/static"))
+
+
+def _isolated(response: Response) -> Response:
+    response.headers.update(ISOLATION_HEADERS)
+    return response
+
+
+@blueprint.get("/exercises")
+@login_required
+def index() -> ResponseReturnValue:
+    """The catalogue, with the user's best submitted grade of each."""
+    session = get_session()
+    services.ensure_catalogue(session)
+    exercises = services.catalogue(session)
+    best = {e.id: max((r.fraction for r in services.own_runs(session, current_user, e, 200)
+                       if r.mode == "submission" and r.fraction is not None), default=None) for e in exercises}
+    return render_template("exercises/index.html", exercises=exercises, best=best,
+                           editor=services.may_edit_catalogue(current_user))
+
+
+@blueprint.get("/exercises/<slug>")
+@login_required
+def page(slug: str) -> ResponseReturnValue:
+    """An exercise's page: the statement, the editor, Run and Submit, the console, the grade and the trace."""
+    session = get_session()
+    services.ensure_catalogue(session)
+    exercise = services.exercise_by_slug(session, slug)
+    nonce = secrets.token_urlsafe(16)  # CodeMirror writes its styles in a <style> element carrying this nonce
+    response = Response(render_template("exercises/exercise.html", exercise=exercise, style_nonce=nonce,
+                                        tutor=services.may_edit_catalogue(current_user)))
+    response.headers["Content-Security-Policy"] = (
+        "default-src 'self'; img-src 'self' blob: data:; connect-src 'self' ws: wss:; "
+        f"style-src 'self' 'nonce-{nonce}'; script-src 'self' {_map_source()}; object-src 'none'; "
+        "frame-ancestors 'none'")
+    return _isolated(response)
+
+
+@blueprint.get("/exercises/python-worker.js")
+@login_required
+def worker() -> ResponseReturnValue:
+    """The worker that runs the student's Python on Pyodide: its own CSP allows WebAssembly."""
+    response = send_from_directory(current_app.static_folder or "", f"{PAGE_FOLDER}/python-worker.js",
+                                   mimetype="text/javascript", max_age=0)
+    response.headers["Content-Security-Policy"] = (
+        "default-src 'self'; connect-src 'self'; "
+        f"script-src 'self' 'wasm-unsafe-eval' {_map_source()}; object-src 'none'; frame-ancestors 'none'")
+    return _isolated(response)
+
+
+@blueprint.get("/exercises/<slug>/class")
+@login_required
+def class_page(slug: str) -> ResponseReturnValue:
+    """A tutor's view of their students' code versions, runs and grades."""
+    session = get_session()
+    exercise = services.exercise_by_slug(session, slug)
+    rows = services.class_overview(session, current_user, exercise)
+    return render_template("exercises/class.html", exercise=exercise, rows=rows)
+
+
+@blueprint.get("/api/exercises")
+@login_required
+def list_exercises() -> ResponseReturnValue:
+    """The catalogue."""
+    session = get_session()
+    services.ensure_catalogue(session)
+    return jsonify({"exercises": [services.exercise_dict(e) for e in services.catalogue(session)]})
+
+
+@blueprint.post("/api/exercises")
+@login_required
+def add() -> ResponseReturnValue:
+    """A tutor or admin adds an exercise."""
+    fields = schemas.definition(request.get_json(silent=True))
+    exercise = services.add_exercise(get_session(), current_user, fields)
+    return jsonify({"exercise": services.exercise_dict(exercise, full=True)}), 201
+
+
+@blueprint.get("/api/exercises/<slug>")
+@login_required
+def detail(slug: str) -> ResponseReturnValue:
+    """An exercise, the user's latest code and their latest runs."""
+    session = get_session()
+    exercise = services.exercise_by_slug(session, slug)
+    latest = services.latest_code(session, current_user.id, exercise.id)
+    runs = services.own_runs(session, current_user, exercise)
+    for run in runs:
+        services.finish_if_overdue(session, run, _read_log, now())
+    return jsonify({"exercise": services.exercise_dict(exercise, full=True),
+                    "code": latest.code if latest else exercise.template,
+                    "runs": [services.run_dict(r) for r in runs]})
+
+
+@blueprint.put("/api/exercises/<slug>")
+@login_required
+def change(slug: str) -> ResponseReturnValue:
+    """A tutor or admin rewrites an exercise."""
+    session = get_session()
+    exercise = services.exercise_by_slug(session, slug)
+    fields = schemas.definition(request.get_json(silent=True), slug_required=False)
+    services.change_exercise(session, current_user, exercise, fields, now())
+    return jsonify({"exercise": services.exercise_dict(exercise, full=True)})
+
+
+@blueprint.post("/api/exercises/<slug>/codes")
+@login_required
+def save(slug: str) -> ResponseReturnValue:
+    """Saves a version of the user's code without running it."""
+    session = get_session()
+    exercise = services.exercise_by_slug(session, slug)
+    body = schemas.body_object(request.get_json(silent=True))
+    version = services.save_code(session, current_user, exercise, schemas.code(body.get("code")), now())
+    return jsonify({"code_id": version.id}), 201
+
+
+@blueprint.post("/api/exercises/<slug>/runs")
+@login_required
+def start_run(slug: str) -> ResponseReturnValue:
+    """Saves the code, places the user's robot at the run's start (hidden for a submission) and opens the run."""
+    session = get_session()
+    exercise = services.exercise_by_slug(session, slug)
+    body = request.get_json(silent=True)
+    text, mode = schemas.run_request(body)
+    target = body.get("robot", PRACTICE_TARGET) if isinstance(body, dict) else PRACTICE_TARGET
+    commander = resolve_target(target, current_user.id)
+    try:
+        scene = commander.link.info().scene_name
+    except RobotUnavailable as offline:
+        raise services.ExerciseRefused(503, offline.code, offline.message, "robot") from None
+    version = services.save_code(session, current_user, exercise, text, now())
+
+    def place(start: list[float]) -> None:
+        commander.place_robot(robot_pb2.Pose2D(x_m=start[0], y_m=start[1], theta_rad=start[2]))
+
+    run = services.begin_run(session, current_user, exercise, version, mode, commander.robot_name, scene, place,
+                             now, _read_log)
+    return jsonify({"run": services.run_dict(run), "exercise": services.exercise_dict(exercise)}), 201
+
+
+@blueprint.get("/api/exercise-runs/<int:run_id>")
+@login_required
+def read_run(run_id: int) -> ResponseReturnValue:
+    """A run (graded once its time is up, if its page never finished it), with its trace once graded."""
+    session = get_session()
+    run = services.run_for(session, current_user, run_id)
+    services.finish_if_overdue(session, run, _read_log, now())
+    return jsonify({"run": services.run_dict(run, with_trace=True)})
+
+
+@blueprint.post("/api/exercise-runs/<int:run_id>/finish")
+@login_required
+def finish(run_id: int) -> ResponseReturnValue:
+    """Ends the run now and grades it from the robot's own record; the body may only carry the pose the code
+    reported (the localization exercise)."""
+    session = get_session()
+    report = schemas.finish_request(request.get_json(silent=True))
+    run = services.run_for(session, current_user, run_id)
+    services.finish_run(session, current_user, run, report, _read_log, now())
+    scene = _scene_boxes(run.robot_name)
+    return jsonify({"run": services.run_dict(run, with_trace=True), "scene_boxes": scene})
+
+
+@blueprint.get("/api/exercises/<slug>/class")
+@login_required
+def class_work(slug: str) -> ResponseReturnValue:
+    """A tutor's students' code versions, runs and grades (JSON)."""
+    session = get_session()
+    exercise = services.exercise_by_slug(session, slug)
+    return jsonify({"students": services.class_overview(session, current_user, exercise)})
+
+
+def _scene_boxes(robot_name: str) -> list[dict[str, float]]:
+    """The walls and obstacles of the run's robot, for drawing the trace on the map (none if it is away)."""
+    link = robot_commands().reachable(robot_name, current_user.id)
+    if link is None:
+        return []
+    try:
+        info = link.info()
+    except RobotUnavailable:
+        return []
+    return [{"x": b.center_x_m, "y": b.center_y_m, "hx": b.half_x_m, "hy": b.half_y_m, "yaw": b.yaw_rad}
+            for b in info.scene_boxes]

@@ -1,0 +1,159 @@
+"""What the exercises API accepts, checked at the edge: code, run modes, reports, and an exercise's definition.
+
+A run's body never carries a grade, a trace or a start: the server places the robot and measures the run itself,
+so a body naming one of them is refused (400 naming the field), not silently ignored."""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+from middleware.auth.schemas import InvalidField
+from middleware.exercises.grading import RUBRIC_KINDS
+from middleware.validation import unstorable, unstorable_place
+
+MAX_CODE_CHARS = 20_000
+MAX_STATEMENT_CHARS = 4_000
+SLUG_PATTERN = re.compile(r"^[a-z0-9][a-z0-9-]{0,62}$")
+MODES = ("practice", "submission")
+FORGED_FIELDS = ("grade", "fraction", "trace", "measurements", "start", "started_at", "ended_at", "seed")
+MIN_TIME_LIMIT_S, MAX_TIME_LIMIT_S = 5.0, 600.0
+
+
+def body_object(body: object) -> dict[str, Any]:
+    """The request's JSON object, or a 400."""
+    if not isinstance(body, dict):
+        raise InvalidField("body", "Send a JSON object.")
+    return body
+
+
+def text(value: object, field: str, max_chars: int, what: str) -> str:
+    """Stored text of at most max_chars, or a 400 naming field."""
+    if not isinstance(value, str):
+        raise InvalidField(field, f"{field} must be {what}.")
+    if len(value) > max_chars:
+        raise InvalidField(field, f"{field} is at most {max_chars} characters; it has {len(value)}.")
+    if unstorable(value):
+        raise InvalidField(field, f"{field} holds a character that cannot be stored ({unstorable_place(value)}); "
+                                  "remove it.")
+    return value
+
+
+def code(value: object, field: str = "code") -> str:
+    """A student's Python source."""
+    return text(value, field, MAX_CODE_CHARS, "the program's Python text")
+
+
+def run_request(body: object) -> tuple[str, str]:
+    """(code, mode) of a run's request; a forged measurement is refused naming its field."""
+    data = body_object(body)
+    refuse_forged(data)
+    mode = data.get("mode", "practice")
+    if mode not in MODES:
+        raise InvalidField("mode", 'mode must be "practice" or "submission".')
+    return code(data.get("code")), str(mode)
+
+
+def refuse_forged(data: dict[str, Any]) -> None:
+    """A 400 for any field only the server may write (the grade, the trace, the start)."""
+    for name in FORGED_FIELDS:
+        if name in data:
+            raise InvalidField(name, f"{name} is measured by the lab from the robot's own record; a request cannot "
+                                     "set it.")
+
+
+def finite(value: object, field: str, low: float = -1e6, high: float = 1e6) -> float:
+    """A finite number within [low, high], or a 400 naming field."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise InvalidField(field, f"{field} must be a finite number.")
+    if not low <= value <= high:
+        raise InvalidField(field, f"{field} must be between {low:g} and {high:g}; got {value:g}.")
+    return float(value)
+
+
+def finish_request(body: object) -> dict[str, float] | None:
+    """The pose the code reported ({"report": {"x_m", "y_m", "t_s"}}), or None; forged measurements refused."""
+    data = body_object(body if body is not None else {})
+    refuse_forged(data)
+    report = data.get("report")
+    if report is None:
+        return None
+    if not isinstance(report, dict):
+        raise InvalidField("report", 'report must be {"x_m": ..., "y_m": ..., "t_s": ...}.')
+    return {"x_m": finite(report.get("x_m"), "report.x_m"), "y_m": finite(report.get("y_m"), "report.y_m"),
+            "t_s": finite(report.get("t_s", 0.0), "report.t_s", 0.0, MAX_TIME_LIMIT_S)}
+
+
+def _pose(value: object, field: str) -> list[float]:
+    if not isinstance(value, list) or len(value) != 3:
+        raise InvalidField(field, f"{field} must be [x_m, y_m, theta_rad].")
+    return [finite(v, f"{field}[{i}]", -50.0, 50.0) for i, v in enumerate(value)]
+
+
+def _region(value: object, field: str) -> dict[str, list[float]] | None:
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        raise InvalidField(field, f'{field} must be {{"x_m": [low, high], "y_m": [...], "theta_rad": [...]}}.')
+    region = {}
+    for key in ("x_m", "y_m", "theta_rad"):
+        pair = value.get(key)
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise InvalidField(f"{field}.{key}", f"{field}.{key} must be [low, high].")
+        low, high = (finite(v, f"{field}.{key}[{i}]", -50.0, 50.0) for i, v in enumerate(pair))
+        if low > high:
+            raise InvalidField(f"{field}.{key}", f"{field}.{key}: low must not exceed high.")
+        region[key] = [low, high]
+    return region
+
+
+RUBRIC_NUMBERS = {
+    "bump_and_go": ("min_travel_m", "min_cells", "stuck_s"),
+    "wall_following": ("x1_m", "y1_m", "x2_m", "y2_m", "distance_m", "tolerance_m", "min_travel_m"),
+    "reach_goal": ("x_m", "y_m", "radius_m"),
+    "cover_room": ("x_min_m", "x_max_m", "y_min_m", "y_max_m", "min_coverage"),
+    "report_pose": ("tolerance_m",),
+}
+OPTIONAL_NUMBERS = ("cell_m", "stuck_move_m", "settle_s")
+
+
+def _rubric(value: object) -> dict[str, Any]:
+    if not isinstance(value, dict) or value.get("kind") not in RUBRIC_KINDS:
+        raise InvalidField("rubric.kind", f"rubric.kind must be one of {', '.join(RUBRIC_KINDS)}.")
+    kind = str(value["kind"])
+    rubric: dict[str, Any] = {"kind": kind}
+    for name in RUBRIC_NUMBERS[kind]:
+        rubric[name] = finite(value.get(name), f"rubric.{name}", -50.0, 1000.0)
+    for name in OPTIONAL_NUMBERS:
+        if name in value:
+            rubric[name] = finite(value[name], f"rubric.{name}", 0.05, 100.0)
+    if kind == "cover_room" and (rubric["x_min_m"] >= rubric["x_max_m"] or rubric["y_min_m"] >= rubric["y_max_m"]):
+        raise InvalidField("rubric.x_max_m", "The region's maximum must exceed its minimum.")
+    return rubric
+
+
+def definition(body: object, slug_required: bool = True) -> dict[str, Any]:
+    """An exercise's definition as an admin or tutor writes it (the catalogue's form, catalogue.py)."""
+    data = body_object(body)
+    result: dict[str, Any] = {}
+    if slug_required:
+        slug = data.get("slug")
+        if not isinstance(slug, str) or not SLUG_PATTERN.fullmatch(slug):
+            raise InvalidField("slug", "slug is 1 to 63 lower-case letters, digits and -, starting with a letter "
+                                       "or digit.")
+        result["slug"] = slug
+    result["title"] = text(data.get("title"), "title", 120, "the exercise's title")
+    if not result["title"].strip():
+        raise InvalidField("title", "title must not be empty.")
+    result["statement"] = text(data.get("statement"), "statement", MAX_STATEMENT_CHARS, "what the student reads")
+    result["template"] = code(data.get("template"), "template")
+    scene = data.get("scene", "lab")
+    if not isinstance(scene, str) or not re.fullmatch(r"[A-Za-z0-9_-]{1,64}", scene):
+        raise InvalidField("scene", "scene must be a scene's name, such as lab.")
+    result["scene"] = scene
+    result["rubric"] = _rubric(data.get("rubric"))
+    result["start"] = _pose(data.get("start"), "start")
+    result["random_starts"] = _region(data.get("random_starts"), "random_starts")
+    result["time_limit_s"] = finite(data.get("time_limit_s"), "time_limit_s", MIN_TIME_LIMIT_S, MAX_TIME_LIMIT_S)
+    return result

@@ -1,0 +1,258 @@
+"""The exercises' rules: the catalogue, code versions, runs placed and graded by the server, and who sees what.
+
+Services take the session and the acting user and flush; the request's unit of work commits. A run's start, its
+time window and its grade are the server's: the robot is placed where the server chose (a hidden random start
+for a submission), and the grade is computed from the robot's own pose log between the run's start and its end
+(never later than its time limit), never from anything the browser sends."""
+
+from __future__ import annotations
+
+import json
+import random
+import secrets
+from collections.abc import Callable
+from datetime import datetime, timedelta
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from middleware.courses.authority import taught_student_ids, teaches_student
+from middleware.errors import ApiError, Refused
+from middleware.exercises import grading
+from middleware.exercises.catalogue import BUILT_IN
+from middleware.models import Role, User
+from middleware.models.accounts import as_utc
+from middleware.models.exercises import Exercise, ExerciseCode, ExerciseRun
+
+RATE_HZ = 20
+GRACE_S = 1.0  # the page's finish call may come a little after the time limit
+# (robot name, since, until) -> the robot's trace [t_s, gx, gy, gth, ox, oy, oth], or None when it cannot tell
+PoseLogReader = Callable[[str, datetime, datetime], list[list[float]] | None]
+
+
+class ExerciseRefused(Refused):
+    """A refusal of the exercises area."""
+
+
+def ensure_catalogue(session: Session) -> None:
+    """Adds the built-in exercises the database lacks (a second worker adding the same one at once is harmless)."""
+    present = set(session.scalars(select(Exercise.slug)))
+    for entry in BUILT_IN:
+        if entry["slug"] in present:
+            continue
+        try:
+            with session.begin_nested():
+                session.add(_new_exercise(entry, None))
+        except IntegrityError:
+            continue
+
+
+def _new_exercise(entry: dict[str, Any], author_id: int | None) -> Exercise:
+    return Exercise(slug=entry["slug"], title=entry["title"], statement=entry["statement"],
+                    template=entry["template"], scene=entry["scene"], rubric_json=json.dumps(entry["rubric"]),
+                    start_json=json.dumps(entry["start"]),
+                    random_starts_json=json.dumps(entry["random_starts"]), time_limit_s=entry["time_limit_s"],
+                    created_by_id=author_id)
+
+
+def catalogue(session: Session) -> list[Exercise]:
+    """Every exercise, in the order they were added."""
+    return list(session.scalars(select(Exercise).order_by(Exercise.id)))
+
+
+def exercise_by_slug(session: Session, slug: str) -> Exercise:
+    """The exercise, or a 404 naming slug."""
+    exercise = session.scalar(select(Exercise).where(Exercise.slug == slug[:64]))
+    if exercise is None:
+        raise ApiError(404, "unknown_exercise", "There is no such exercise.", "slug")
+    return exercise
+
+
+def may_edit_catalogue(actor: User) -> bool:
+    """Tutors and admins extend the catalogue."""
+    return actor.role in (Role.TUTOR, Role.ADMIN)
+
+
+def _require_editor(actor: User) -> None:
+    if not may_edit_catalogue(actor):
+        raise ExerciseRefused(403, "forbidden", "Only tutors and admins change the exercise catalogue.")
+
+
+def add_exercise(session: Session, actor: User, fields: dict[str, Any]) -> Exercise:
+    """A new exercise of the catalogue (409 when its slug is taken)."""
+    _require_editor(actor)
+    if session.scalar(select(Exercise.id).where(Exercise.slug == fields["slug"])) is not None:
+        raise ExerciseRefused(409, "slug_taken", "An exercise with that slug exists; choose another.", "slug")
+    exercise = _new_exercise(fields, actor.id)
+    session.add(exercise)
+    session.flush()
+    return exercise
+
+
+def change_exercise(session: Session, actor: User, exercise: Exercise, fields: dict[str, Any], now: datetime) -> None:
+    """Rewrites an exercise's definition (runs already graded keep their grades)."""
+    _require_editor(actor)
+    exercise.title, exercise.statement, exercise.template = fields["title"], fields["statement"], fields["template"]
+    exercise.scene, exercise.time_limit_s = fields["scene"], fields["time_limit_s"]
+    exercise.rubric_json, exercise.start_json = json.dumps(fields["rubric"]), json.dumps(fields["start"])
+    exercise.random_starts_json, exercise.updated_at = json.dumps(fields["random_starts"]), now
+    session.flush()
+
+
+def exercise_dict(exercise: Exercise, full: bool = False) -> dict[str, Any]:
+    """What a student reads of an exercise (never the hidden starts' region)."""
+    answer: dict[str, Any] = {"slug": exercise.slug, "title": exercise.title, "scene": exercise.scene,
+                              "time_limit_s": exercise.time_limit_s, "rate_hz": RATE_HZ}
+    if full:
+        answer.update(statement=exercise.statement, template=exercise.template,
+                      rubric=json.loads(exercise.rubric_json), practice_start=json.loads(exercise.start_json))
+    return answer
+
+
+def save_code(session: Session, user: User, exercise: Exercise, text: str, now: datetime) -> ExerciseCode:
+    """A new version of the user's code (the same text as their latest is not stored twice)."""
+    latest = latest_code(session, user.id, exercise.id)
+    if latest is not None and latest.code == text:
+        return latest
+    version = ExerciseCode(exercise_id=exercise.id, user_id=user.id, code=text, saved_at=now)
+    session.add(version)
+    session.flush()
+    return version
+
+
+def latest_code(session: Session, user_id: int, exercise_id: int) -> ExerciseCode | None:
+    """The user's latest code version for the exercise."""
+    return session.scalar(select(ExerciseCode).where(ExerciseCode.user_id == user_id,
+                                                     ExerciseCode.exercise_id == exercise_id)
+                          .order_by(ExerciseCode.id.desc()).limit(1))
+
+
+def draw_start(exercise: Exercise, mode: str, seed: int) -> list[float]:
+    """Where the robot starts: the exercise's practice start, or for a submission a start drawn from its hidden
+    region with seed (the practice start when it has none)."""
+    region = json.loads(exercise.random_starts_json)
+    if mode != "submission" or not region:
+        return [float(v) for v in json.loads(exercise.start_json)]
+    draw = random.Random(seed)
+    return [draw.uniform(*region["x_m"]), draw.uniform(*region["y_m"]), draw.uniform(*region["theta_rad"])]
+
+
+def begin_run(session: Session, user: User, exercise: Exercise, code_version: ExerciseCode, mode: str,
+              robot_name: str, robot_scene: str, place: Callable[[list[float]], None], now: Callable[[], datetime],
+              read_log: PoseLogReader) -> ExerciseRun:
+    """Places the user's robot at the run's start and opens the run from that moment; a run of theirs still open
+    is graded first, up to now (a bad submission cannot be dropped by starting another)."""
+    if robot_scene != exercise.scene:
+        raise ExerciseRefused(409, "wrong_scene", f"This exercise runs in the {exercise.scene!r} scene and your robot "
+                                                  f"runs {robot_scene!r}; start a robot in that scene.", "robot")
+    for open_run in session.scalars(select(ExerciseRun).where(ExerciseRun.user_id == user.id,
+                                                              ExerciseRun.status == "running")):
+        finish_run(session, user, open_run, None, read_log, now())
+    seed = secrets.randbelow(2**31)
+    start = draw_start(exercise, mode, seed)
+    place(start)
+    run = ExerciseRun(exercise_id=exercise.id, user_id=user.id, code_id=code_version.id, robot_name=robot_name,
+                      mode=mode, seed=seed, start_json=json.dumps([round(v, 4) for v in start]), started_at=now(),
+                      status="running")
+    session.add(run)
+    session.flush()
+    return run
+
+
+def run_for(session: Session, viewer: User, run_id: int) -> ExerciseRun:
+    """A run its owner, or a tutor teaching them, may read; 404 for anyone else."""
+    run = session.get(ExerciseRun, run_id)
+    if run is None or not (run.user_id == viewer.id or _teaches(session, viewer, run.user_id)):
+        raise ApiError(404, "unknown_run", "There is no such run.", "run_id")
+    return run
+
+
+def _teaches(session: Session, viewer: User, user_id: int) -> bool:
+    target = session.get(User, user_id)
+    return target is not None and teaches_student(session, viewer, target)
+
+
+def finish_run(session: Session, user: User, run: ExerciseRun, report: dict[str, float] | None,
+               read_log: PoseLogReader, now: datetime) -> ExerciseRun:
+    """Grades the run from the robot's pose log between its start and now (at most its time limit)."""
+    if run.user_id != user.id:
+        raise ApiError(404, "unknown_run", "There is no such run.", "run_id")
+    if run.status != "running":
+        return run
+    exercise = session.get(Exercise, run.exercise_id)
+    assert exercise is not None
+    started = as_utc(run.started_at)
+    ended = min(now, started + timedelta(seconds=exercise.time_limit_s + GRACE_S))
+    trace = read_log(run.robot_name, started, ended)
+    run.ended_at, run.report_json = ended, json.dumps(report)
+    if trace is None:
+        run.status, run.fraction = "failed", None
+        run.feedback = ("The robot could not give its record of the run (it restarted or stopped meanwhile), so it "
+                        "cannot be graded. Run it again.")
+        session.flush()
+        return run
+    result = grading.grade(json.loads(exercise.rubric_json), trace, report)
+    run.status, run.fraction, run.feedback = "graded", result.fraction, result.feedback
+    run.measurements_json = json.dumps(result.measurements_dict())
+    run.trace_json = json.dumps([[s[0], s[1], s[2]] for s in trace])
+    session.flush()
+    return run
+
+
+def finish_if_overdue(session: Session, run: ExerciseRun, read_log: PoseLogReader, now: datetime) -> None:
+    """Grades a run whose page never finished it (a closed tab) once its time limit has passed."""
+    exercise = session.get(Exercise, run.exercise_id)
+    if run.status == "running" and exercise is not None and \
+            now >= as_utc(run.started_at) + timedelta(seconds=exercise.time_limit_s + GRACE_S):
+        owner = session.get(User, run.user_id)
+        if owner is not None:
+            finish_run(session, owner, run, None, read_log, now)
+
+
+def run_dict(run: ExerciseRun, with_trace: bool = False) -> dict[str, Any]:
+    """A run as the pages show it: the start only once it is over (a submission's start is hidden until then)."""
+    over = run.status != "running"
+    answer: dict[str, Any] = {
+        "id": run.id, "mode": run.mode, "status": run.status, "robot_name": run.robot_name,
+        "started_at": as_utc(run.started_at).isoformat(), "code_id": run.code_id,
+        "ended_at": as_utc(run.ended_at).isoformat() if run.ended_at else None,
+        "grade": run.fraction, "feedback": run.feedback, "measurements": json.loads(run.measurements_json),
+        "start": json.loads(run.start_json) if over or run.mode == "practice" else None,
+    }
+    if with_trace:
+        answer["trace"] = json.loads(run.trace_json)
+    return answer
+
+
+def own_runs(session: Session, user: User, exercise: Exercise, limit: int = 20) -> list[ExerciseRun]:
+    """The user's latest runs of the exercise."""
+    return list(session.scalars(select(ExerciseRun).where(ExerciseRun.user_id == user.id,
+                                                          ExerciseRun.exercise_id == exercise.id)
+                                .order_by(ExerciseRun.id.desc()).limit(limit)))
+
+
+def class_overview(session: Session, actor: User, exercise: Exercise) -> list[dict[str, Any]]:
+    """For a tutor (their students) or an admin (everyone): each student's code versions, runs and best grade."""
+    if actor.role not in (Role.TUTOR, Role.ADMIN):
+        raise ExerciseRefused(403, "forbidden", "Only tutors and admins see the class's work.")
+    taught = taught_student_ids(actor)
+    users_query = select(User).where(User.role == Role.STUDENT).order_by(User.username)
+    if taught is not None:
+        users_query = users_query.where(User.id.in_(taught))
+    rows = []
+    for student in session.scalars(users_query):
+        versions = list(session.scalars(select(ExerciseCode).where(ExerciseCode.user_id == student.id,
+                                                                   ExerciseCode.exercise_id == exercise.id)
+                                        .order_by(ExerciseCode.id)))
+        runs = own_runs(session, student, exercise, limit=200)
+        if not versions and not runs:
+            continue
+        graded = [r.fraction for r in runs if r.mode == "submission" and r.fraction is not None]
+        rows.append({"user_id": student.id, "username": student.username,
+                     "best_submission": max(graded) if graded else None,
+                     "codes": [{"id": v.id, "saved_at": as_utc(v.saved_at).isoformat(), "code": v.code}
+                               for v in versions],
+                     "runs": [run_dict(r) for r in runs]})
+    return rows

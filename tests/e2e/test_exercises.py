@@ -1,0 +1,162 @@
+"""A student's Python exercise in Chromium: Pyodide runs their code in a worker against their practice robot, the
+server grades the run from the robot's own record; Stop interrupts an endless loop and stops the robot; an
+exception shows its line; a closed tab stops the robot within the deadman's time. Desktop and phone."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from tests.conftest import ARTIFACTS_DIR, LiveServer, served_lab
+from tests.e2e.test_lessons import log_in
+
+pytestmark = pytest.mark.e2e
+
+BUMP_AND_GO = """from telelab import robot
+
+print("bump and go: starting")
+turning_until = 0.0
+while robot.tick():
+    if robot.time() < turning_until:
+        robot.set_velocity(0.0, 1.2)
+    elif robot.front_distance() < 0.6:
+        print("obstacle at", round(robot.time(), 1), "s")
+        turning_until = robot.time() + 1.2
+    else:
+        robot.set_velocity(0.4, 0.0)
+"""
+ENDLESS = """from telelab import robot
+robot.set_velocity(0.3, 0.0)
+robot.tick()
+print("looping forever")
+while True:
+    pass
+"""
+FAILING = """from telelab import robot
+robot.tick()
+
+def speed():
+    return 1 / 0
+
+robot.set_velocity(speed(), 0.0)
+"""
+
+
+@pytest.fixture(scope="module")
+def exercise_lab(tmp_path_factory: pytest.TempPathFactory, skill_server_address: str) -> Iterator[LiveServer]:
+    from middleware.teaching.practice_robots import practice_manager
+
+    with served_lab(f"lab-1={skill_server_address}", tmp_path_factory.mktemp("exercises")) as server:
+        try:
+            yield server
+        finally:
+            practice_manager(server.app).shutdown()
+
+
+def set_code(page, text: str) -> None:
+    """Replaces the editor's text as a person would: select all, then type (paste) the program."""
+    page.locator(".cm-content").click()
+    page.keyboard.press("Control+a")
+    page.keyboard.press("Delete")
+    page.keyboard.insert_text(text)
+    typed = page.locator(".cm-content").inner_text().replace("\xa0", " ")
+    assert [line.rstrip() for line in typed.splitlines() if line.strip()] == \
+        [line.rstrip() for line in text.splitlines() if line.strip()], typed
+
+
+def truth_speed(server: LiveServer, robot_name: str, seconds: float = 0.6) -> float:
+    """How far the robot truly moved over the last `seconds`, per second, from its own pose log."""
+    from middleware.robots.registry import robot_registry
+
+    with server.app.app_context():
+        link = robot_registry().get(robot_name)
+        now = time.time()
+        samples = link.pose_log(now - seconds, now).samples
+    if len(samples) < 2:
+        return 0.0
+    first, last = samples[0].ground_truth, samples[-1].ground_truth
+    return ((last.x_m - first.x_m) ** 2 + (last.y_m - first.y_m) ** 2) ** 0.5 / seconds
+
+
+def wait_until(check, timeout_s: float, what: str) -> None:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if check():
+            return
+        time.sleep(0.1)
+    raise AssertionError(what)
+
+
+def test_a_student_runs_submits_stops_and_reads_errors_in_the_browser(page, exercise_lab: LiveServer) -> None:
+    log_in(page, exercise_lab)
+    page.goto(f"{exercise_lab.url}/exercises")
+    page.get_by_role("link", name="Bump and go").click()
+    page.get_by_role("status").filter(has_text="Python").filter(has_text="is ready").wait_for(timeout=90_000)
+    assert page.evaluate("window.crossOriginIsolated")
+    # The template runs as it is: the student sees it.
+    assert "robot.tick()" in page.locator(".cm-content").inner_text()
+    set_code(page, BUMP_AND_GO)
+    page.get_by_role("button", name="Run on my practice robot").click()
+    page.get_by_role("status").filter(has_text="Running on practice-student1").wait_for(timeout=90_000)
+    console = page.locator("[data-field=console]")
+    console.filter(has_text="bump and go: starting").wait_for(timeout=15_000)
+    # It moves: the odometry line shows a speed, and the robot truly moves.
+    wait_until(lambda: float(page.locator("[data-field=robot]").get_attribute("data-speed") or 0) > 0.2, 15,
+               "the robot's odometry never showed it moving")
+    wait_until(lambda: truth_speed(exercise_lab, "practice-student1") > 0.2, 10, "the robot did not truly move")
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS_DIR / "exercise-running.png"), full_page=True)
+    page.get_by_role("button", name="Stop").click()
+    page.locator("[data-field=grade]").filter(has_text="Practice run").wait_for(timeout=20_000)
+    wait_until(lambda: truth_speed(exercise_lab, "practice-student1") < 0.02, 5, "the robot kept moving after Stop")
+
+    # Submit: a hidden start, the whole time limit, a grade from the robot's record.
+    page.get_by_role("button", name="Submit for a grade").click()
+    page.get_by_role("status").filter(has_text="Running on").wait_for(timeout=30_000)
+    grade = page.locator("[data-field=grade]").filter(has_text="Submission")
+    grade.wait_for(timeout=90_000)
+    assert "%" in grade.inner_text()
+    assert page.locator("[data-slot=measurements] tbody tr").count() == 3
+    page.screenshot(path=str(ARTIFACTS_DIR / "exercise-graded.png"), full_page=True)
+
+    # An endless loop: Stop interrupts it and the robot stops.
+    set_code(page, ENDLESS)
+    page.get_by_role("button", name="Run on my practice robot").click()
+    console.filter(has_text="looping forever").wait_for(timeout=30_000)
+    page.get_by_role("button", name="Stop").click()
+    console.filter(has_text="Stopped").wait_for(timeout=10_000)
+    wait_until(lambda: truth_speed(exercise_lab, "practice-student1") < 0.02, 5, "an endless loop kept the robot going")
+    page.get_by_role("button", name="Run on my practice robot").wait_for()
+
+    # An exception: the student's line and the traceback.
+    set_code(page, FAILING)
+    page.get_by_role("button", name="Run on my practice robot").click()
+    console.filter(has_text="Line 5: ZeroDivisionError").wait_for(timeout=30_000)
+    assert "exercise.py" in console.inner_text()
+    assert page.locator(".exercise__error-line").count() == 1
+    page.screenshot(path=str(ARTIFACTS_DIR / "exercise-error.png"), full_page=True)
+
+
+def test_closing_the_tab_stops_the_robot_within_the_deadman_time(chromium, exercise_lab: LiveServer) -> None:
+    phone = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
+    page = phone.new_page()
+    try:
+        log_in(page, exercise_lab)
+        page.goto(f"{exercise_lab.url}/exercises/bump-and-go")
+        page.get_by_role("status").filter(has_text="is ready").wait_for(timeout=90_000)
+        set_code(page, BUMP_AND_GO)
+        page.get_by_role("button", name="Run on my practice robot").click()
+        page.get_by_role("status").filter(has_text="Running on").wait_for(timeout=90_000)
+        wait_until(lambda: truth_speed(exercise_lab, "practice-student1") > 0.2, 15, "the robot did not move")
+        ARTIFACTS_DIR.mkdir(exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS_DIR / "exercise-phone.png"), full_page=True)
+        page.close()
+        closed = time.monotonic()
+        wait_until(lambda: truth_speed(exercise_lab, "practice-student1", 0.3) < 0.02, 5,
+                   "the robot kept moving after its tab closed")
+        # The deadman's time (0.4 s) plus the pose log's sampling and this check's own period.
+        assert time.monotonic() - closed < 2.0
+    finally:
+        phone.close()
