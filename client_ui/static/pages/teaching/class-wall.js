@@ -73,7 +73,8 @@ function makeTile(seat) {
   canvas.height = Math.round(120 * scale);
   const tile = {
     seat, element, canvas, ctx: canvas.getContext("2d"), pose: null, trail: [], state: "idle", pointer: null,
-    dirty: true, visible: false,
+    dirty: true, visible: false, words: null, battery: null,
+    fields: { state: element.querySelector("[data-field=state]"), battery: element.querySelector("[data-field=battery]") },
   };
   canvas.addEventListener("click", (event) => { // a pointer for the note, while Assist is open
     if (!element.querySelector("details").open || !boxes) return;
@@ -91,20 +92,33 @@ function makeTile(seat) {
   return tile;
 }
 
-function renderTile(tile) {
+/** The tile's state and battery words, written only when they change (a pose comes 5 times a second per tile). */
+function renderWords(tile) {
   const { seat, element } = tile;
   tile.state = tileState(seat, tile.pose);
-  element.dataset.state = tile.state;
+  const activity = tile.pose?.activity ?? "";
+  const detail = (tile.state === "skill" || tile.state === "plan") ? ` (${activity.split(":").slice(1).join(":")})` : "";
+  const words = STATE_WORDS[tile.state] + detail + (tile.state === "faulted" && seat.message ? `: ${seat.message}` : "");
+  const charge = tile.pose?.charge;
+  const battery = Number.isFinite(charge) ? `battery ${Math.round(charge * 100)} %` : "battery unknown";
+  if (words !== tile.words) {
+    tile.words = words;
+    element.dataset.state = tile.state;
+    tile.fields.state.textContent = words;
+    applyFilter(tile);
+  }
+  if (battery !== tile.battery) {
+    tile.battery = battery;
+    tile.fields.battery.textContent = battery;
+  }
+}
+
+function renderTile(tile) {
+  const { seat, element } = tile;
+  renderWords(tile);
   element.dataset.hand = String(Boolean(seat.hand));
   element.dataset.held = String(Boolean(seat.held_by));
   element.querySelector("[data-field=name]").textContent = seat.username;
-  const activity = tile.pose?.activity ?? "";
-  const detail = (tile.state === "skill" || tile.state === "plan") ? ` (${activity.split(":").slice(1).join(":")})` : "";
-  element.querySelector("[data-field=state]").textContent = STATE_WORDS[tile.state] + detail
-    + (tile.state === "faulted" && seat.message ? `: ${seat.message}` : "");
-  const charge = tile.pose?.charge;
-  element.querySelector("[data-field=battery]").textContent = Number.isFinite(charge)
-    ? `battery ${Math.round(charge * 100)} %` : "battery unknown";
   const hand = element.querySelector("[data-field=hand]");
   hand.hidden = !seat.hand;
   hand.textContent = seat.hand ? `Hand raised${seat.hand.text ? `: ${seat.hand.text}` : "."}` : "";
@@ -181,12 +195,10 @@ function updatePoses(rows) {
     const pose = parsePoseRow(row);
     const tile = tiles.get(pose.userId);
     if (!tile) continue;
-    const before = tile.state;
     tile.pose = pose;
     grow(tile.trail, pose);
     tile.element.dataset.pose = `${pose.x_m.toFixed(2)},${pose.y_m.toFixed(2)},${pose.theta_rad.toFixed(2)}`;
-    tile.state = tileState(tile.seat, pose);
-    if (tile.state !== before || posesSeen % 5 === 0) renderTile(tile); // words change rarely; battery each second
+    renderWords(tile);
     markDirty(tile);
   }
   if (posesSeen % 5 === 0) renderSummary();
