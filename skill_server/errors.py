@@ -67,3 +67,7 @@ class NoTrack(RobotError):
 
 class BatteryEmpty(RobotError):
     """The battery is empty: the base refuses to move until the robot is recharged at its dock."""
+
+
+class NotRestartable(RobotError):
+    """The robot runs inside another program (a test, a notebook): that program restarts it, not a request."""

@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, replace
 from typing import TypeVar
 
-from skill_server.errors import NoMap, NoTrack, UnknownGoal, WorldStopped
+from skill_server.errors import NoMap, NoTrack, NotRestartable, UnknownGoal, WorldStopped
 from skill_server.goals import Goal, GoalEvent, GoalFeedback, GoalSnapshot, GoalStatus
 from skill_server.plans.model import (
     DriveLine,
@@ -31,11 +31,13 @@ from skill_server.plans.model import (
     WaitLine,
 )
 from skill_server.plans.validation import check_plan
+from skill_server.process import ProcessFacts, ProcessWatch
 from skill_server.sequencer import Activation, Sequencer, attach_sequencer
 from skill_server.sim.battery import BatterySpec, BatteryState
 from skill_server.sim.camera import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS
 from skill_server.sim.drive_gate import DriveAck, MotionLimits
 from skill_server.sim.geometry import Pose2D
+from skill_server.sim.health import Fault, LoopReport
 from skill_server.sim.laser import LaserSpec
 from skill_server.sim.pacing import SimTimePacer
 from skill_server.sim.panels import PanelSpec
@@ -82,6 +84,15 @@ class NumberedEvent:
 GoalUpdate = GoalSnapshot | NumberedEvent | GoalFeedback
 
 
+
+@dataclass(frozen=True)
+class RobotHealth:
+    """What a tutor diagnoses a robot by: its loop against real time, its faults, its process."""
+
+    loop: LoopReport
+    faults: list[Fault]
+    process: ProcessFacts
+
 class Robot:
     """One simulated robot: its description, commands, goals, maps and streams."""
 
@@ -90,6 +101,7 @@ class Robot:
         self.sequencer = sequencer
         self.name = name
         self.teleperception = _teleperception_of(world)
+        self.process = ProcessWatch()  # `python -m skill_server` hands in one that can restart it
 
     @classmethod
     def build(
@@ -189,6 +201,21 @@ class Robot:
     def clear_map(self, token: str) -> list[str]:
         """Forgets the environment model (supervisory); the ids of the mapping and localization goals ended."""
         return self.world.run_in_loop(lambda: self.sequencer.clear_map(token))
+
+    def check_supervisor(self, token: str) -> None:
+        """NotController unless token is the controller's (the middleware acts for a supervisor with it)."""
+        self.sequencer.check_supervisory_token(token)
+
+    def health(self) -> RobotHealth:
+        """The loop against real time over the last seconds, the faults kept (oldest first), and the process."""
+        return RobotHealth(self.world.health.report(), self.world.health.faults(), self.process.facts())
+
+    def restart(self, token: str) -> None:
+        """Restarts the robot's process once this answer is sent (supervisory); NotRestartable when it lives inside
+        another program."""
+        self.check_supervisor(token)
+        if not self.process.restart():
+            raise NotRestartable(f"{self.name} runs inside another program: restart it there.")
 
     def return_to_dock(self, token: str) -> tuple[list[str], Pose2D]:
         """Carries the robot to its scene's spawn pose (supervisory): every goal ends, odometry restarts there.

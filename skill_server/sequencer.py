@@ -43,6 +43,9 @@ class Activation:
     preempted_goal_id: str
 
 
+# Aborts that are someone's decision, not the robot failing: the controller changed, the world was reset.
+ROUTINE_ABORTS = ("CONTROL_REVOKED", "RESET")
+
 class Sequencer:
     """Runs at most one motor goal and any number of perceptive goals (one per skill) on the world's tick.
 
@@ -78,6 +81,7 @@ class Sequencer:
         self._tracker_built = False
         self.plan_observer: PlanObserver | None = None  # told when each plan's skill line starts (benchmarks)
         self.drive_watchdog: DriveWatchdog | None = None  # what a plan's `set watchdog` sets (attach_sequencer)
+        self.on_fault: Callable[[str, str], None] | None = None  # told of each goal aborted (the robot's health)
 
     # ---- requests (loop thread) ------------------------------------------------------------------
 
@@ -309,6 +313,8 @@ class Sequencer:
                         f"{math.degrees(feedback.heading_error_rad):.1f} deg")
         if kind is not None:
             goal.announce(self._sim_time_s, kind, message)
+        if status is GoalStatus.ABORTED and code not in ROUTINE_ABORTS and self.on_fault is not None:
+            self.on_fault("skill_aborted", f"{goal.skill} ({goal.goal_id}) aborted, {code}: {message}")
         goal.finish(status, self._sim_time_s, code, message, reached)
         controller.stop()
         self._last_feedback_s.pop(goal.goal_id, None)
@@ -384,6 +390,8 @@ def attach_sequencer(world: Any, registry: SkillRegistry | None = None, goals: G
                           lambda: world.controller_token, lambda: world.drive_version)
     sequencer.perception.floor_plan = getattr(world, "scene", None)
     sequencer.drive_watchdog = WorldWatchdog(world)
+    health = getattr(world, "health", None)
+    sequencer.on_fault = health.fault if health is not None else None
     sequencer.start_pose_tracking()  # before the loop runs: building it takes about 40 ms
     world.attach_autonomy(sequencer)
     return sequencer

@@ -18,6 +18,7 @@ from grpc_reflection.v1alpha import reflection
 
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 from skill_server.errors import RobotError
+from skill_server.process import CONTROLLER_TOKEN_VARIABLE, RESTARTS_VARIABLE, ProcessWatch, exec_again
 from skill_server.robot import BatterySpec, Robot
 from skill_server.sequencer import Sequencer
 from skill_server.service import RobotService
@@ -89,6 +90,7 @@ def create_server(
     host: str = "127.0.0.1",
     controller_token: str = "",
     battery: BatterySpec | None = None,
+    process: ProcessWatch | None = None,
 ) -> SkillServer:
     """Builds the world and the gRPC server, starts both, and returns them (port=0 picks a free port).
 
@@ -100,6 +102,8 @@ def create_server(
     if controller_token:
         robot.set_controller(controller_token)
     server = grpc.server(futures.ThreadPoolExecutor(max_workers=MAX_WORKERS, thread_name_prefix="robot-rpc"))
+    if process is not None:
+        robot.process = process
     robot_pb2_grpc.add_RobotServicer_to_server(RobotService(robot), server)
     health_pool = futures.ThreadPoolExecutor(max_workers=2, thread_name_prefix="robot-health")
     health_servicer = health.HealthServicer(experimental_non_blocking=True, experimental_thread_pool=health_pool)
@@ -134,13 +138,19 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     return parser.parse_args(argv)
 
 
-# Read from the environment, not the command line, so other users of the host cannot read it off `ps`.
-CONTROLLER_TOKEN_VARIABLE = "TELELAB_CONTROLLER_TOKEN"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Runs a skill server until SIGINT or SIGTERM."""
     args = parse_args(argv)
+    stop_requested = threading.Event()
+    restart_requested = threading.Event()
+
+    def restart() -> None:
+        restart_requested.set()
+        stop_requested.set()
+
+    restarts = int(os.environ.get(RESTARTS_VARIABLE, "0") or 0)
     try:
         running = create_server(
             port=args.port,
@@ -152,11 +162,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             host=args.host,
             controller_token=os.environ.get(CONTROLLER_TOKEN_VARIABLE, ""),
             battery=BatterySpec(full_drive_s=args.battery_drive_s),
+            process=ProcessWatch(restart, restarts),
         )
     except (RobotError, OSError) as error:
         print(f"skill server: {error}", file=sys.stderr, flush=True)
         return 2
-    stop_requested = threading.Event()
 
     def request_stop(signum: int, frame: FrameType | None) -> None:
         stop_requested.set()
@@ -170,5 +180,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     while not stop_requested.wait(0.5):
         if args.parent_pid and os.getppid() != args.parent_pid:
             break
+    controller_token = running.robot.world.controller_token
     running.stop()
+    if restart_requested.is_set():
+        exec_again(_arguments_again(args, running.port), controller_token, restarts + 1)
     return 0
+
+
+def _arguments_again(args: argparse.Namespace, port: int) -> list[str]:
+    """The command line that starts this robot again as it runs now (on the port it holds, not 0)."""
+    again = ["--port", str(port), "--host", args.host, "--scene", args.scene, "--seed", str(args.seed),
+             "--deadman-s", repr(args.deadman_s), "--name", args.name, "--battery-drive-s", repr(args.battery_drive_s)]
+    if args.fast:
+        again.append("--fast")
+    if args.parent_pid:
+        again += ["--parent-pid", str(args.parent_pid)]
+    return again

@@ -23,6 +23,7 @@ from skill_server.robot import (
     Pose2D,
     PublishedGrid,
     RobotDescription,
+    RobotHealth,
     RobotSnapshot,
     SceneDescription,
     SkillEntry,
@@ -421,3 +422,13 @@ def track_event_to_proto(event: TrackEvent) -> robot_pb2.TrackEvent:
     return robot_pb2.TrackEvent(
         index=event.index, kind=event.kind, sim_time_s=event.sim_time_s, unix_s=event.unix_s,
         attempt=event.attempt, elapsed_s=event.elapsed_s, errors=event.errors, message=event.message)
+
+
+def health_to_proto(health: RobotHealth) -> robot_pb2.RobotHealth:
+    loop, faults, process = health.loop, health.faults, health.process
+    return robot_pb2.RobotHealth(
+        real_time_factor=loop.real_time_factor, loop_lag_ms_p50=loop.lag_ms_p50, loop_lag_ms_max=loop.lag_ms_max,
+        parked=loop.parked, cpu_percent=process.cpu_percent, rss_bytes=process.rss_bytes,
+        uptime_s=process.uptime_s, version=process.version, pid=process.pid,
+        faults=[robot_pb2.RobotFault(unix_s=f.unix_s, kind=f.kind, message=f.message) for f in faults],
+        log_tail=process.log_tail, restartable=process.restartable, restarts=process.restarts)

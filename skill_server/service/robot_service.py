@@ -20,6 +20,7 @@ from skill_server.errors import (
     NoMap,
     NotController,
     NoTrack,
+    NotRestartable,
     ResourceBusy,
     UnknownGoal,
     UnknownSkill,
@@ -43,6 +44,7 @@ STATUS_OF_ERROR: list[tuple[type[Exception], grpc.StatusCode]] = [
     (NoMap, grpc.StatusCode.FAILED_PRECONDITION),
     (NoTrack, grpc.StatusCode.FAILED_PRECONDITION),
     (BatteryEmpty, grpc.StatusCode.FAILED_PRECONDITION),
+    (NotRestartable, grpc.StatusCode.FAILED_PRECONDITION),
     (MissingControllerToken, grpc.StatusCode.UNAUTHENTICATED),
     (NotController, grpc.StatusCode.PERMISSION_DENIED),
     (WorldStopped, grpc.StatusCode.UNAVAILABLE),
@@ -158,6 +160,19 @@ class RobotService(robot_pb2_grpc.RobotServicer):
         with domain_errors(context):
             ended, dock = self._robot.return_to_dock(request.token)
             return robot_pb2.ReturnToDockResponse(ended_goal_ids=ended, dock=convert.pose_to_proto(dock))
+
+    def GetHealth(self, request: robot_pb2.GetHealthRequest,
+                  context: grpc.ServicerContext) -> robot_pb2.RobotHealth:
+        """The loop against real time, the process, the faults and the log's last lines (telediagnosis)."""
+        return convert.health_to_proto(self._robot.health())
+
+    def Restart(self, request: robot_pb2.RestartRequest,
+                context: grpc.ServicerContext) -> robot_pb2.RestartResponse:
+        """Restarts the robot's process after answering (supervisory: the controller's token)."""
+        with domain_errors(context):
+            self._robot.restart(request.token)
+            return robot_pb2.RestartResponse(restarting=True, message=(
+                f"{self._robot.name} is restarting; it answers again in a few seconds, back at its dock."))
 
     def PlaceRobot(self, request: robot_pb2.PlaceRobotRequest,
                    context: grpc.ServicerContext) -> robot_pb2.PlaceRobotResponse:

@@ -20,6 +20,7 @@ from skill_server.sim.battery import Battery, BatteryState, at_dock
 from skill_server.sim.camera import DEFAULT_CAMERA_FPS, Camera, CameraSpec
 from skill_server.sim.drive_gate import DriveAck, DriveGate, MotionLimits
 from skill_server.sim.geometry import Pose2D, yaw_from_quaternion
+from skill_server.sim.health import LoopHealth
 from skill_server.sim.laser import Laser, LaserSpec
 from skill_server.sim.odometry import WheelOdometry
 from skill_server.sim.pacing import SimTimePacer
@@ -115,6 +116,7 @@ class World:
         self.parked = False  # read by tests and benchmarks
         self._publication = Publication()
         self.pose_log = PoseLog()
+        self.health = LoopHealth()  # what a tutor's diagnosis reads: the loop against real time, and faults
         self._snapshot_observers: list[Callable[[RobotSnapshot], None]] = []
         self._autonomy: Autonomy | None = None
         self._scene_description: SceneDescription | None = None
@@ -299,16 +301,22 @@ class World:
                 wall_origin_s, sim_origin_s = time.monotonic(), self._sim_time_s
             self._tick_once()
             if not self.realtime:
+                self.health.note_tick(time.monotonic(), self._sim_time_s, 0.0)
                 time.sleep(0)  # let gRPC threads take the GIL between ticks
                 continue
             if self._rested_long_enough():
+                self.health.note_parked(True)
                 self._stay_parked()
                 wall_origin_s, sim_origin_s = time.monotonic(), self._sim_time_s
                 continue
-            lag_s = time.monotonic() - (wall_origin_s + self._sim_time_s - sim_origin_s)
+            now_s = time.monotonic()
+            lag_s = now_s - (wall_origin_s + self._sim_time_s - sim_origin_s)
+            self.health.note_tick(now_s, self._sim_time_s, lag_s)
             if lag_s < 0:
                 self._serve_commands_for(-lag_s, tick_on_drive=-lag_s <= self.tick_dt_s)
             elif lag_s > MAX_REALTIME_LAG_S:
+                self.health.fault("behind_real_time", f"The simulation fell {lag_s:.2f} s behind real time; it "
+                                  "dropped the backlog and goes on from now.")
                 wall_origin_s, sim_origin_s = time.monotonic(), self._sim_time_s
 
     def _rested_long_enough(self) -> bool:
@@ -528,6 +536,8 @@ class World:
             self._deadman_armed = False
             self._deadman_stopped = True
             self._gate.stopped_by_deadman(target.version)
+            self.health.fault("deadman", f"No drive command came for {self.deadman_timeout_s:g} s while the base "
+                              "moved: the deadman stopped it.")
 
     def _apply_wheel_speeds(self) -> None:
         left_radps, right_radps = wheel_speeds_radps(self.spec, self._linear_mps, self._angular_radps)

@@ -608,6 +608,64 @@ class ReturnToDockRequest(_message.Message):
     token: str
     def __init__(self, token: _Optional[str] = ...) -> None: ...
 
+class GetHealthRequest(_message.Message):
+    __slots__ = ()
+    def __init__(self) -> None: ...
+
+class RobotFault(_message.Message):
+    __slots__ = ("unix_s", "kind", "message")
+    UNIX_S_FIELD_NUMBER: _ClassVar[int]
+    KIND_FIELD_NUMBER: _ClassVar[int]
+    MESSAGE_FIELD_NUMBER: _ClassVar[int]
+    unix_s: float
+    kind: str
+    message: str
+    def __init__(self, unix_s: _Optional[float] = ..., kind: _Optional[str] = ..., message: _Optional[str] = ...) -> None: ...
+
+class RobotHealth(_message.Message):
+    __slots__ = ("real_time_factor", "loop_lag_ms_p50", "loop_lag_ms_max", "parked", "cpu_percent", "rss_bytes", "uptime_s", "version", "pid", "faults", "log_tail", "restartable", "restarts")
+    REAL_TIME_FACTOR_FIELD_NUMBER: _ClassVar[int]
+    LOOP_LAG_MS_P50_FIELD_NUMBER: _ClassVar[int]
+    LOOP_LAG_MS_MAX_FIELD_NUMBER: _ClassVar[int]
+    PARKED_FIELD_NUMBER: _ClassVar[int]
+    CPU_PERCENT_FIELD_NUMBER: _ClassVar[int]
+    RSS_BYTES_FIELD_NUMBER: _ClassVar[int]
+    UPTIME_S_FIELD_NUMBER: _ClassVar[int]
+    VERSION_FIELD_NUMBER: _ClassVar[int]
+    PID_FIELD_NUMBER: _ClassVar[int]
+    FAULTS_FIELD_NUMBER: _ClassVar[int]
+    LOG_TAIL_FIELD_NUMBER: _ClassVar[int]
+    RESTARTABLE_FIELD_NUMBER: _ClassVar[int]
+    RESTARTS_FIELD_NUMBER: _ClassVar[int]
+    real_time_factor: float
+    loop_lag_ms_p50: float
+    loop_lag_ms_max: float
+    parked: bool
+    cpu_percent: float
+    rss_bytes: int
+    uptime_s: float
+    version: str
+    pid: int
+    faults: _containers.RepeatedCompositeFieldContainer[RobotFault]
+    log_tail: _containers.RepeatedScalarFieldContainer[str]
+    restartable: bool
+    restarts: int
+    def __init__(self, real_time_factor: _Optional[float] = ..., loop_lag_ms_p50: _Optional[float] = ..., loop_lag_ms_max: _Optional[float] = ..., parked: _Optional[bool] = ..., cpu_percent: _Optional[float] = ..., rss_bytes: _Optional[int] = ..., uptime_s: _Optional[float] = ..., version: _Optional[str] = ..., pid: _Optional[int] = ..., faults: _Optional[_Iterable[_Union[RobotFault, _Mapping]]] = ..., log_tail: _Optional[_Iterable[str]] = ..., restartable: _Optional[bool] = ..., restarts: _Optional[int] = ...) -> None: ...
+
+class RestartRequest(_message.Message):
+    __slots__ = ("token",)
+    TOKEN_FIELD_NUMBER: _ClassVar[int]
+    token: str
+    def __init__(self, token: _Optional[str] = ...) -> None: ...
+
+class RestartResponse(_message.Message):
+    __slots__ = ("restarting", "message")
+    RESTARTING_FIELD_NUMBER: _ClassVar[int]
+    MESSAGE_FIELD_NUMBER: _ClassVar[int]
+    restarting: bool
+    message: str
+    def __init__(self, restarting: _Optional[bool] = ..., message: _Optional[str] = ...) -> None: ...
+
 class ReturnToDockResponse(_message.Message):
     __slots__ = ("ended_goal_ids", "dock")
     ENDED_GOAL_IDS_FIELD_NUMBER: _ClassVar[int]

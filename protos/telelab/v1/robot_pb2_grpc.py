@@ -169,6 +169,16 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetPerceptionReadingsRequest.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PerceptionReadings.FromString,
                 _registered_method=True)
+        self.GetHealth = channel.unary_unary(
+                '/telelab.v1.Robot/GetHealth',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetHealthRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.RobotHealth.FromString,
+                _registered_method=True)
+        self.Restart = channel.unary_unary(
+                '/telelab.v1.Robot/Restart',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.RestartRequest.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.RestartResponse.FromString,
+                _registered_method=True)
 
 
 class RobotServicer:
@@ -386,6 +396,23 @@ class RobotServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def GetHealth(self, request, context):
+        """Telediagnosis (the 2003 paper): how the world's loop keeps up with real time, the process's CPU and memory,
+        the faults met with their times, the last lines of the robot's log and the skill server's version.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def Restart(self, request, context):
+        """Telemaintenance: restarts the robot's process on the same address (supervisory, like ReturnToDock: the
+        controller's token). Answered first, then the process starts again keeping its controller; FAILED_PRECONDITION
+        when it runs inside another program that must restart it.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
 
 def add_RobotServicer_to_server(servicer, server):
     rpc_method_handlers = {
@@ -523,6 +550,16 @@ def add_RobotServicer_to_server(servicer, server):
                     servicer.GetPerceptionReadings,
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetPerceptionReadingsRequest.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.PerceptionReadings.SerializeToString,
+            ),
+            'GetHealth': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetHealth,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.GetHealthRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.RobotHealth.SerializeToString,
+            ),
+            'Restart': grpc.unary_unary_rpc_method_handler(
+                    servicer.Restart,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.RestartRequest.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.RestartResponse.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -1254,6 +1291,60 @@ class Robot:
             '/telelab.v1.Robot/GetPerceptionReadings',
             protos_dot_telelab_dot_v1_dot_robot__pb2.GetPerceptionReadingsRequest.SerializeToString,
             protos_dot_telelab_dot_v1_dot_robot__pb2.PerceptionReadings.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def GetHealth(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/GetHealth',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.GetHealthRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.RobotHealth.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def Restart(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/telelab.v1.Robot/Restart',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.RestartRequest.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.RestartResponse.FromString,
             options,
             channel_credentials,
             insecure,
