@@ -91,7 +91,7 @@ class SessionRecorder:
             self._write_context()
             self._stream = self._link.stream_telemetry(RATE_HZ)
             last_second = time.monotonic()
-            for telemetry in self._stream:  # type: ignore[attr-defined]
+            for telemetry in self._stream:
                 self._write_telemetry(telemetry)
                 if time.monotonic() - last_second >= files.FLUSH_S:
                     last_second = time.monotonic()
@@ -171,8 +171,8 @@ class SessionRecorder:
             detail = _json_object(row.detail)
             record = channels.CommandRecord(
                 sent_unix_s=row.sent_unix_s, user_id=row.user_id or 0, sequence=row.sequence, source=row.source,
-                action=row.action, linear_mps=float(detail.get("linear_mps", 0.0) or 0.0),
-                angular_radps=float(detail.get("angular_radps", 0.0) or 0.0), skill=str(detail.get("skill", "")),
+                action=row.action, linear_mps=_number(detail.get("linear_mps")),
+                angular_radps=_number(detail.get("angular_radps")), skill=str(detail.get("skill", "")),
                 parameters_json=json.dumps(detail.get("parameters", {})), plan_name=str(detail.get("plan_name", "")),
                 accepted=row.accepted, outcome=row.outcome)
             self._writer.write(channels.COMMANDS, record, _ns(row.sent_unix_s))
@@ -209,6 +209,10 @@ class SessionRecorder:
                 row.skill_count += self._counts["skills"]
                 row.plan_count += self._counts["plans"]
                 row.size_bytes = files.size_on_disk(self._root, row.id)
+
+
+def _number(value: object) -> float:
+    return float(value) if isinstance(value, int | float) else 0.0
 
 
 def _json_object(text: str) -> dict[str, object]:

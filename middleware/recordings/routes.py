@@ -23,7 +23,7 @@ MAX_RANGE_S = 7 * 24 * 3600.0
 
 
 def _user() -> User:
-    return current_user._get_current_object()  # type: ignore[attr-defined,no-any-return]
+    return current_user._get_current_object()
 
 
 def _summary(recording: Recording, owner: str | None = None) -> dict[str, object]:

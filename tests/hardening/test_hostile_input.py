@@ -27,6 +27,11 @@ ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
 
 ROUTES = (
     "GET /",
+    "GET /recordings", "GET /recordings/<int:recording_id>", "GET /admin/recordings", "GET /api/recordings",
+    "GET /api/recordings/<int:recording_id>", "DELETE /api/recordings/<int:recording_id>",
+    "GET /api/recordings/<int:recording_id>/data", "GET /api/recordings/<int:recording_id>/export.mcap",
+    "GET /api/recordings/<int:recording_id>/export/<channel>.csv", "GET /api/recordings/<int:recording_id>/source",
+    "GET /api/recordings/of/<kind>/<int:ref_id>",
     "GET /account/password",
     "POST /account/password",
     "GET /admin/farm",
