@@ -34,7 +34,7 @@ from middleware.experiment import delay, trial_rules
 from middleware.experiment import routes as experiment_routes
 from middleware.extensions import csrf, login_manager, socket_login_check
 from middleware.farm import setup as farm_setup
-from middleware.lab import limits_routes, pool_routes
+from middleware.lab import limits_routes, pool_routes, robot_health_routes
 from middleware.lab import routes as lab_routes
 from middleware.lab import skills as lab_skills
 from middleware.lab import sockets as lab_sockets
@@ -133,7 +133,8 @@ def _register_areas(app: Flask) -> None:
                       courses_routes.blueprint, experiment_routes.blueprint, assessment_routes.blueprint,
                       assessment_pages.blueprint, practice_routes.blueprint, lesson_routes.blueprint,
                       tour_routes.blueprint, class_routes.blueprint, farm_routes.blueprint, pool_routes.blueprint,
-                      limits_routes.blueprint, plans_routes.blueprint, class_wall_routes.blueprint):
+                      limits_routes.blueprint, plans_routes.blueprint, class_wall_routes.blueprint,
+                      robot_health_routes.blueprint):
         app.register_blueprint(blueprint)
     app.register_blueprint(lab_teleperception.blueprint)
     app.register_blueprint(language_routes.blueprint)

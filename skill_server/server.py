@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import signal
 import sys
@@ -177,6 +178,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"skill server {args.name} listening on {args.host}:{running.port} (scene {running.scene})",
         flush=True,
     )
+    logging.getLogger(__name__).info("%s listening on %s:%d (scene %s, restart %d)", args.name, args.host,
+                                     running.port, running.scene, restarts)
     while not stop_requested.wait(0.5):
         if args.parent_pid and os.getppid() != args.parent_pid:
             break

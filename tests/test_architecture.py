@@ -56,7 +56,7 @@ def test_every_top_level_folder_has_a_readme() -> None:
 PRODUCT_PACKAGES = ("middleware", "skill_server", "protos")
 ROBOT_COMMAND_METHODS = {"drive", "activate_skill", "cancel_goal", "clear_map", "return_to_dock", "set_controller",
                          "reset_evidence_grid", "place_robot",
-                         "set_limits", "get_limits", "run_plan"}
+                         "set_limits", "get_limits", "run_plan", "restart"}
 REQUEST_STATE = {("flask", "request"), ("flask", "g"), ("flask", "session"), ("flask_login", "current_user")}
 
 

@@ -297,6 +297,10 @@ class Commander:
         self._refuse_unless_by_hand_allowed()
         return self._as_controller(self.link.return_to_dock, "return_to_dock")
 
+    def restart(self) -> robot_pb2.RestartResponse:
+        """Restarts the robot's process (telemaintenance): its goals end, it comes back at its dock, same controller."""
+        return self._as_controller(self.link.restart, "restart")
+
     def place_robot(self, pose: robot_pb2.Pose2D) -> robot_pb2.PlaceRobotResponse:
         """Places the robot at pose (refused naming the field unless it fits there): every goal ends, odometry
         restarts at the pose."""
@@ -465,6 +469,19 @@ class RobotCommands:
         return Commander(commander.link, SupervisorTokens(self._coordinator, robot_name), field,
                          self._hand_only(robot_name, user_id), user_id,
                          tuple(_as_tutor(observer) for observer in self._observers))
+
+
+    def for_maintenance(self, robot_name: str, field: str = "robot_name") -> Commander:
+        """Maintenance of the robot for someone the caller found may maintain it (an admin, a tutor of its courses):
+        under its owner's token for a personal robot, else under the current controller's, whoever holds it."""
+        link = self._registry.get(robot_name)
+        if link is None:
+            raise ApiError(404, "unknown_robot", f"There is no robot named {robot_name[:64]!r}.", field)
+        personal = self._registry.personal(robot_name)
+        if personal is not None:
+            return Commander(link, OwnerToken(link, lambda: personal.token), field)
+        return Commander(link, SupervisorTokens(self._coordinator, robot_name), field, observers=tuple(
+            _as_tutor(observer) for observer in self._observers))
 
 
 def _as_tutor(observer: CommandObserver) -> CommandObserver:

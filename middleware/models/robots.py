@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import DateTime, String
+from sqlalchemy import DateTime, ForeignKey, String
 from sqlalchemy.orm import Mapped, mapped_column
 
 from middleware.models.accounts import utc_now
@@ -38,3 +38,17 @@ class RobotKindSetting(Base):
     kind: Mapped[str] = mapped_column(String(32), primary_key=True)
     camera_picture: Mapped[str] = mapped_column(String(8), default="video")
     updated_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+
+
+class RobotMaintenance(Base):
+    """One maintenance action a tutor or an admin took on a robot from its health page (a restart, a return to the
+    dock, a cleared map), with what came of it: the robot's maintenance log."""
+
+    __tablename__ = "robot_maintenance"
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    robot_name: Mapped[str] = mapped_column(String(64), index=True)
+    actor_id: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+    action: Mapped[str] = mapped_column(String(16))
+    outcome: Mapped[str] = mapped_column(String(500))
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)

@@ -141,6 +141,14 @@ class RobotLink:
         """Carries the robot to its dock; the goals that ended and the dock's pose."""
         return self._call(self._stub.ReturnToDock, robot_pb2.ReturnToDockRequest(token=token))
 
+    def health(self) -> robot_pb2.RobotHealth:
+        """The robot's loop, process, faults and log tail (telediagnosis)."""
+        return self._call(self._stub.GetHealth, robot_pb2.GetHealthRequest())
+
+    def restart(self, token: str) -> robot_pb2.RestartResponse:
+        """Restarts the robot's process (it answers first, then comes back on the same address)."""
+        return self._call(self._stub.Restart, robot_pb2.RestartRequest(token=token))
+
     def place_robot(self, token: str, pose: robot_pb2.Pose2D) -> robot_pb2.PlaceRobotResponse:
         """Places the robot at pose; the goals that ended and the pose."""
         return self._call(self._stub.PlaceRobot, robot_pb2.PlaceRobotRequest(token=token, pose=pose))

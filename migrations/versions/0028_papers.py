@@ -1,5 +1,5 @@
-"""the thesis' protocol whole: a course's experiment protocol (learning period, delayed commands, exported
-details), each participant's details, learning period and counterbalanced order, and trials that delayed commands
+"""the papers' remaining parts: the thesis' protocol whole (a course's experiment protocol, each participant's
+details, learning period and counterbalanced order, trials that delayed commands) and each robot's maintenance log
 
 Revision ID: 0028
 Revises: 0027
@@ -59,9 +59,23 @@ def upgrade() -> None:
     )
     with op.batch_alter_table("experiment_trials") as batch:
         batch.add_column(sa.Column("commands_delayed", sa.Boolean(), nullable=False, server_default=sa.false()))
+    op.create_table(
+        "robot_maintenance",
+        sa.Column("id", sa.Integer(), primary_key=True),
+        sa.Column("robot_name", sa.String(64), nullable=False),
+        sa.Column("actor_id", sa.Integer(), sa.ForeignKey("users.id", ondelete="SET NULL",
+                                                         name=op.f("fk_robot_maintenance_actor_id_users")),
+                  nullable=True),
+        sa.Column("action", sa.String(16), nullable=False),
+        sa.Column("outcome", sa.String(500), nullable=False),
+        sa.Column("created_at", sa.DateTime(timezone=True), nullable=False),
+    )
+    op.create_index(op.f("ix_robot_maintenance_robot_name"), "robot_maintenance", ["robot_name"])
 
 
 def downgrade() -> None:
+    op.drop_index(op.f("ix_robot_maintenance_robot_name"), table_name="robot_maintenance")
+    op.drop_table("robot_maintenance")
     with op.batch_alter_table("experiment_trials") as batch:
         batch.drop_column("commands_delayed")
     op.drop_table("experiment_participants")
