@@ -29,6 +29,7 @@ from middleware.models.class_wall import ClassHand, ClassNotice, ClassTakeover
 from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord
 from middleware.teaching import class_sessions
 from middleware.teaching.practice_robots import practice_name
+from middleware.validation import MAX_ROW_ID
 
 TOPIC = "class-wall"
 TAKEOVER_FRESH_S = 12.0  # a takeover whose wall was not heard of for this long has ended (the tutor left)
@@ -272,7 +273,7 @@ def push(session: Session, actor: User, course_id: int, kind: object, item_id: o
     course, opened = wall_session(session, actor, course_id)
     if not isinstance(kind, str) or kind not in PUSH_KINDS:
         raise Refused(400, "invalid_field", f"kind must be one of {', '.join(PUSH_KINDS)}.", "kind")
-    if isinstance(item_id, bool) or not isinstance(item_id, int) or not 1 <= item_id < 2**63:
+    if isinstance(item_id, bool) or not isinstance(item_id, int) or not 1 <= item_id <= MAX_ROW_ID:
         raise Refused(400, "invalid_field", "id must be the number of what you send.", "id")
     title, url = _pushed(session, course, kind, item_id)
     notice = ClassNotice(session_id=opened.id, user_id=None, from_id=actor.id, kind="push",
