@@ -4,8 +4,12 @@ media type, body shape) the document does not promise."""
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
 import time
 from collections import Counter
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -23,7 +27,7 @@ from middleware.api.contract import described, operation_of
 from tests.conftest import LiveServer
 from tests.hardening.conftest import ROLES, seeded_lab, stop_lab
 
-# Routes still being built by another engineer (named, with why); empty when every route declares its contract.
+ROOT = Path(__file__).resolve().parents[3]
 # Areas whose routes another engineer is building now, not yet committed (issue 29's session): named, with why. A
 # route of any other area without a contract fails the test.
 PENDING_AREAS: dict[str, str] = {
@@ -41,7 +45,10 @@ def pending(app) -> set[str]:
     """The routes of the pending areas, as "METHOD /rule"."""
     return {f"{method} {rule.rule}" for rule in document.api_rules(app) for method in document.methods_of(rule)
             if rule.endpoint.split(".")[0] in PENDING_AREAS}
-EXAMPLES_PER_OPERATION = 2  # four roles x ~110 operations x ~2.5 cases (explicit examples included): under a minute
+# A first pass sends every operation as every role (its simplest case); the second sends more, while the run is
+# under BUDGET_S (on 2 quiet cores the first pass takes about 25 s).
+PASSES = (1, 4)
+BUDGET_S = 45.0
 CHECKS = [status_code_conformance, content_type_conformance, response_schema_conformance]
 
 
@@ -120,20 +127,39 @@ def test_the_api_page_lists_every_operation_readably(described_lab, chromium) ->
         context.close()
 
 
-def _session(url: str, role: str, passwords: dict[str, str]) -> requests.Session:
+@pytest.fixture(scope="module")
+def lab_process(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict]:
+    """The seeded lab served by a child process (described_lab.py): {"url", "passwords"}."""
+    process = subprocess.Popen([sys.executable, "-m", "tests.integration.api.described_lab",
+                                str(tmp_path_factory.mktemp("schemathesis"))], cwd=ROOT,
+                               stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert process.stdout is not None
+        yield json.loads(process.stdout.readline())
+    finally:
+        assert process.stdin is not None and process.stdout is not None
+        process.stdin.close()
+        process.wait(timeout=60)
+        process.stdout.close()
+
+
+def _session(url: str, role: str, passwords: dict[str, str]) -> requests.Session | None:
+    """A session logged in as role's demo account (None when an admin's case of the first pass changed its password
+    or closed it)."""
     session = requests.Session()
     if role != "anonymous":
         answer = session.post(f"{url}/login", data={"username": role, "password": passwords[role]},
                               allow_redirects=False, timeout=30)
-        assert answer.status_code == 302, f"{role} could not log in"
+        if answer.status_code != 302:
+            return None
     return session
 
 
-def _fuzz(operation, role: str, session: requests.Session, url: str, cases: Counter[str],
+def _fuzz(operation, role: str, session: requests.Session, url: str, examples: int, cases: Counter[str],
           failures: list[str]) -> None:
-    """EXAMPLES_PER_OPERATION cases of operation sent as role; each answer checked against the document."""
+    """Up to examples cases of operation sent as role; each answer checked against the document."""
 
-    @settings(max_examples=EXAMPLES_PER_OPERATION, deadline=None, database=None, derandomize=True,
+    @settings(max_examples=examples, deadline=None, database=None, derandomize=True,
               phases=[Phase.explicit, Phase.generate], suppress_health_check=list(HealthCheck))
     @given(operation.as_strategy())
     def run(case) -> None:
@@ -154,27 +180,30 @@ def _fuzz(operation, role: str, session: requests.Session, url: str, cases: Coun
     run()
 
 
-def test_schemathesis_finds_no_5xx_and_no_answer_the_document_does_not_promise(described_lab) -> None:
-    url = described_lab.url
+def test_schemathesis_finds_no_5xx_and_no_answer_the_document_does_not_promise(lab_process) -> None:
+    url = lab_process["url"]
     schema = schemathesis.openapi.from_url(f"{url}/api/openapi.json")
     operations = [operation for operation in (result.ok() for result in schema.get_all_operations())
                   if operation.definition.raw.get("tags", [""])[0] not in PENDING_AREAS]
-    passwords = described_lab.app.config["TEST_PASSWORDS"]
+    passwords = lab_process["passwords"]
     failures: list[str] = []
     cases: Counter[str] = Counter()
     slowest: Counter[str] = Counter()
     started = time.monotonic()
-    for role in ROLES:  # the admin last: what an admin's cases change (a password, a role) is seen by no one after
-        session = _session(url, role, passwords)
-        for operation in operations:
-            if operation.method.upper() == "POST" and operation.path == "/api/account/password":
-                continue  # would change the role's own password mid-run; its edge is covered by tests/hardening
-
-            began = time.monotonic()
-            _fuzz(operation, role, session, url, cases, failures)
-            slowest[f"{operation.method.upper()} {operation.path}"] += time.monotonic() - began
+    for examples in PASSES:
+        for role in ROLES:  # the admin last: what an admin's cases change (a password, a role) is seen by no one after
+            session = _session(url, role, passwords)
+            assert session is not None or examples != PASSES[0], f"{role} could not log in"
+            for operation in operations if session is not None else []:
+                if examples != PASSES[0] and time.monotonic() - started > BUDGET_S:
+                    break
+                if operation.method.upper() == "POST" and operation.path == "/api/account/password":
+                    continue  # would change the role's own password mid-run; its edge is covered by tests/hardening
+                began = time.monotonic()
+                _fuzz(operation, role, session, url, examples, cases, failures)
+                slowest[f"{operation.method.upper()} {operation.path}"] += time.monotonic() - began
     elapsed = time.monotonic() - started
     print(f"schemathesis: {dict(cases)} cases per role, {sum(cases.values())} in {elapsed:.1f} s; slowest: "
           + ", ".join(f"{name} {seconds:.1f} s" for name, seconds in slowest.most_common(8)))
-    assert all(cases[role] >= len(operations) - 1 for role in ROLES)
+    assert all(cases[role] >= len(operations) - 1 for role in ROLES)  # the first pass: every operation, every role
     assert failures == [], "\n".join(sorted(set(failures)))
