@@ -1,0 +1,568 @@
+"""A class as it really arrives (issue 31): N students log in over a window, each opens a full console on a robot of
+their own and drives it, and the web workers are restarted in turn in the middle; run with 1, 2 and 3 workers at the
+same load.
+
+The web tier is gunicorn with the shared configuration (`deploy/gunicorn.conf.py`, as a web host runs it) on a fresh
+PostgreSQL database, behind Debian's nginx with the site the deployment guide gives (`deploy/nginx/telelab.conf`).
+The robots are stand-ins (`standin_robots.py`: the robot protocol on grpc.aio, no physics), so that the web tier is
+what is measured. A student's console is one `/ws/link` carrying telemetry (the drawn view's and the panels' feed),
+localization and drive, driving at the console's rate (a command every 50 ms), and an ordinary request every
+second (GET /api/robots/<name>). Halfway through the hold, SIGHUP to the gunicorn master restarts the workers one
+at a time; each console reconnects when its link closes with 1012.
+
+Reported per worker count, each beside a floor from the same run: web CPU per student-second (floor: the idle
+workers' CPU over the same time), its ratio to 1 worker's (target: within 10 %), threads per worker (floor: idle),
+PostgreSQL transactions per student-second (floor: idle), the p99 of ordinary requests (floor: the same request
+with nobody in) and of drive acknowledgements (floor: the robot's own Drive round trip over gRPC), the reconnect
+time after the restart (floor: a console's first opening), and seats lost (target 0). The tutor's wall is not in
+the load (it is another part of issue 31). `--quick`: 4 students over 1 s, a 4 s hold, 1 worker only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import json
+import math
+import os
+import platform
+import shutil
+import signal
+import statistics
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import grpc
+
+from benchmarks.load_client import HttpUser, Refused, WebSocketUser
+from benchmarks.report import Measurement, percentile_ms, print_table, write_json
+from benchmarks.standin_robots import StandInFleet
+from benchmarks.web_tier import (
+    ROOT,
+    SECRET_KEY,
+    WebServer,
+    admin_dsn,
+    cpu_seconds,
+    create_students,
+    free_port,
+    fresh_database,
+    log_in_one,
+)
+from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
+
+NGINX = shutil.which("nginx") or "/usr/sbin/nginx"
+DRIVE_INTERVAL_S = 0.05  # the console's rate (middleware/lab/sockets.py DRIVE_SEND_INTERVAL_MS)
+REQUEST_INTERVAL_S = 1.0
+RESTART_SETTLE_S = 3.0  # the class goes on at least this long after the last old worker left
+SEAT_WAIT_S = 10.0  # a student who gets no acknowledgement this long after reconnecting has lost their seat
+RATIO_TARGET = 1.10
+CHANNELS = ("telemetry", "localization", "drive")
+DRIVE_SUB = 3
+
+
+@dataclass
+class Student:
+    """One student's console, and what it measured."""
+
+    name: str
+    robot: str
+    start_s: float
+    acks_s: list[float] = field(default_factory=list)
+    requests_s: list[float] = field(default_factory=list)
+    request_errors: int = 0
+    first_console_s: float | None = None
+    reconnects_s: list[float] = field(default_factory=list)
+    restarts_seen: int = 0
+    seat_lost: bool = False
+    in_at: float | None = None
+    out_at: float | None = None
+    telemetry: int = 0
+    errors: list[str] = field(default_factory=list)
+
+
+class ClassLoad:
+    """The class on one asyncio loop (this process): every student from their login to the end."""
+
+    def __init__(self, port: int, students: list[Student], end_at: float) -> None:
+        self.port, self.students, self._end_at = port, students, end_at
+        self.restart_done = False  # the class goes on until the restart is over, however long it takes
+
+    @property
+    def end_at(self) -> float:
+        return self._end_at if self.restart_done else float("inf")
+
+    @end_at.setter
+    def end_at(self, value: float) -> None:
+        self._end_at = value
+
+    async def run(self, started: float) -> None:
+        await asyncio.gather(*(self._student(s, started) for s in self.students))
+
+    async def _student(self, student: Student, started: float) -> None:
+        await asyncio.sleep(max(0.0, started + student.start_s - time.monotonic()))
+        loop = asyncio.get_running_loop()
+        try:
+            cookie = await loop.run_in_executor(None, log_in_one, f"http://127.0.0.1:{self.port}", student.name)
+        except Exception as error:  # noqa: BLE001 - reported: a login that failed is a student who never came in
+            student.errors.append(f"login: {error}")
+            return
+        student.in_at = time.monotonic()
+        requests = asyncio.ensure_future(self._requests(student, cookie))
+        closed_at: float | None = None
+        try:
+            while time.monotonic() < self.end_at:
+                opened = time.monotonic()
+                try:
+                    link = await WebSocketUser.open(self.port, "/ws/link", cookie)
+                except (Refused, OSError) as error:
+                    student.errors.append(f"open: {error}")
+                    await asyncio.sleep(0.1)
+                    continue
+                code = await self._console(student, link, opened, closed_at)
+                if code == 1012:  # the worker is leaving: reconnect at once, as transport.js does
+                    student.restarts_seen += 1
+                    closed_at = time.monotonic()
+                    continue
+                break
+        finally:
+            student.out_at = time.monotonic()
+            requests.cancel()
+
+    async def _console(self, student: Student, link: WebSocketUser, opened: float, closed_at: float | None) -> int:
+        for sub, channel in enumerate(CHANNELS, start=1):
+            link.send_text(json.dumps({"type": "subscribe", "sub": sub, "path": f"/ws/robots/{student.robot}/"
+                                                                                  f"{channel}"}))
+        sent: dict[int, float] = {}
+        ready = asyncio.Event()
+        acked = asyncio.Event()
+
+        def on_message(opcode: int, payload: bytes) -> None:
+            if opcode != 1:
+                return
+            head, _, text = payload.decode().partition(" ")
+            if head == "1":
+                student.telemetry += 1
+                return
+            if head != str(DRIVE_SUB):
+                return
+            message = json.loads(text)
+            if message.get("type") == "ready":
+                ready.set()
+            elif message.get("type") == "ack":
+                at = time.monotonic()
+                sent_at = sent.pop(message["sequence"], None)
+                if sent_at is not None:
+                    student.acks_s.append(at - sent_at)
+                if not acked.is_set():
+                    acked.set()
+                    if closed_at is not None:
+                        student.reconnects_s.append(at - closed_at)
+                    elif student.first_console_s is None:
+                        student.first_console_s = at - opened
+            elif message.get("type") == "error":
+                student.errors.append(f"drive: {message.get('code')}")
+
+        async def drive() -> None:
+            await ready.wait()
+            sequence = 0
+            next_at = time.monotonic()
+            while time.monotonic() < self.end_at:
+                sequence += 1
+                sent[sequence] = time.monotonic()
+                link.send_text(f"{DRIVE_SUB} " + json.dumps({"type": "drive", "sequence": sequence,
+                                                             "linear_mps": 0.1, "angular_radps": 0.3}))
+                next_at += DRIVE_INTERVAL_S
+                await asyncio.sleep(max(0.0, next_at - time.monotonic()))
+
+        async def watch_seat() -> None:
+            try:
+                await asyncio.wait_for(acked.wait(), SEAT_WAIT_S)
+            except TimeoutError:
+                student.seat_lost = True
+
+        tasks = [asyncio.ensure_future(drive()), asyncio.ensure_future(watch_seat())]
+        reader = asyncio.ensure_future(link.read_messages(on_message))
+        try:
+            while not reader.done() and time.monotonic() < self.end_at:  # the end moves while a restart goes on
+                await asyncio.wait([reader], timeout=0.25)
+            return (reader.result() or 1006) if reader.done() else 1000
+        except (ConnectionError, OSError):
+            return 1006
+        finally:
+            for task in tasks:
+                task.cancel()
+            if not reader.done():
+                link.close()
+                reader.cancel()
+
+    async def _requests(self, student: Student, cookie: str) -> None:
+        user = HttpUser(self.port, cookie)
+        try:
+            while True:
+                started = time.perf_counter()
+                try:
+                    status = await user.get(f"/api/robots/{student.robot}")
+                    if status == 200:
+                        student.requests_s.append(time.perf_counter() - started)
+                    else:
+                        student.request_errors += 1
+                except (ConnectionError, OSError, asyncio.IncompleteReadError):
+                    student.request_errors += 1
+                    user.close()
+                await asyncio.sleep(REQUEST_INTERVAL_S)
+        finally:
+            user.close()
+
+
+class Nginx:
+    """Debian's nginx with the deployment's site, its upstream the given web port."""
+
+    def __init__(self, upstream_port: int, folder: Path) -> None:
+        self.port = free_port()
+        site = (ROOT / "deploy" / "nginx" / "telelab.conf").read_text()
+        site = site.replace("server 127.0.0.1:5000;", f"server 127.0.0.1:{upstream_port};")
+        site = site.replace("listen 8080;", f"listen 127.0.0.1:{self.port};")
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "telelab.conf").write_text(site)
+        (folder / "nginx.conf").write_text(
+            ("user root;\n" if os.geteuid() == 0 else "")
+            + f"pid {folder}/nginx.pid;\nerror_log {folder}/error.log;\nworker_processes 1;\n"
+            + "events { worker_connections 4096; }\n"
+            + f"http {{\n  access_log off;\n  client_body_temp_path {folder}/body;\n  proxy_temp_path {folder}/proxy;\n"
+            + f"  include {folder}/telelab.conf;\n}}\n")
+        self.process = subprocess.Popen([NGINX, "-p", str(folder), "-c", str(folder / "nginx.conf"), "-g",
+                                         "daemon off;"], stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 20
+        while not _answers(self.port):
+            if self.process.poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError(f"nginx did not start: {self.process.stderr.read() if self.process.stderr else ''}")
+            time.sleep(0.1)
+
+    def stop(self) -> None:
+        self.process.terminate()
+        self.process.communicate(timeout=10)
+
+
+def _answers(port: int) -> bool:
+    import socket
+
+    try:
+        with socket.create_connection(("127.0.0.1", port), timeout=0.5):
+            return True
+    except OSError:
+        return False
+
+
+def worker_pids(server: WebServer) -> list[int]:
+    """The master's workers now (a worker leaving between the listing and the look is skipped)."""
+    for _attempt in range(20):
+        try:
+            return server.worker_pids()
+        except OSError:
+            time.sleep(0.05)
+    return []
+
+
+def _threads(pid: int) -> int:
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("Threads:"):
+                return int(line.split()[1])
+    except OSError:
+        pass
+    return 0
+
+
+class WorkerMeter:
+    """Samples every worker of a gunicorn master (they change in a rolling restart): CPU per pid, threads."""
+
+    def __init__(self, server: WebServer) -> None:
+        self._server = server
+        self._first: dict[int, float] = {}
+        self._last: dict[int, float] = {}
+        self.threads: list[int] = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._sample_forever, daemon=True)
+
+    def start(self) -> None:
+        self._sample(first=True)
+        self._thread.start()
+
+    def _sample(self, first: bool = False) -> None:
+        for pid in worker_pids(self._server):
+            try:
+                used = cpu_seconds(pid)
+            except OSError:
+                continue
+            self._first.setdefault(pid, used if first else 0.0)
+            self._last[pid] = used
+
+    def _sample_forever(self) -> None:
+        while not self._stop.wait(0.2):
+            self._sample()
+
+    def sample_threads(self) -> None:
+        self.threads.extend(_threads(pid) for pid in worker_pids(self._server))
+
+    def stop(self) -> float:
+        """The workers' CPU seconds since start."""
+        self._stop.set()
+        self._thread.join(5)
+        self._sample()
+        return sum(self._last[pid] - self._first[pid] for pid in self._last)
+
+
+def _transactions(database_url: str) -> int:
+    import psycopg
+
+    name = database_url.rsplit("/", 1)[1]
+    with psycopg.connect(admin_dsn(), autocommit=True) as admin:
+        admin.execute("SELECT pg_stat_clear_snapshot()")
+        row = admin.execute("SELECT xact_commit + xact_rollback FROM pg_stat_database WHERE datname = %s",
+                            (name,)).fetchone()
+    return int(row[0]) if row else 0
+
+
+def _drive_floor(address: str, samples: int) -> list[float]:
+    """The robot's own Drive round trip over gRPC (what the middleware's leg adds to)."""
+    with grpc.insecure_channel(address) as channel:
+        stub = robot_pb2_grpc.RobotStub(channel)
+        stub.SetController(robot_pb2.SetControllerRequest(token="floor"))
+        found = []
+        for sequence in range(1, samples + 1):
+            started = time.perf_counter()
+            stub.Drive(robot_pb2.DriveCommand(token="floor", sequence=sequence, linear_mps=0.0))
+            found.append(time.perf_counter() - started)
+        stub.SetController(robot_pb2.SetControllerRequest(token=""))
+    return found
+
+
+async def _idle_requests(port: int, cookie: str, path: str, seconds: float) -> list[float]:
+    user, found, end = HttpUser(port, cookie), [], time.monotonic() + seconds
+    try:
+        while time.monotonic() < end:
+            started = time.perf_counter()
+            if await user.get(path) == 200:
+                found.append(time.perf_counter() - started)
+            await asyncio.sleep(0.05)
+    finally:
+        user.close()
+    return found
+
+
+@dataclass
+class RunFigures:
+    workers: int
+    students: int
+    student_s: float
+    cpu_s: float
+    idle_cpu_s: float
+    threads_per_worker: int
+    idle_threads_per_worker: int
+    transactions: int
+    idle_transactions: float
+    requests_s: list[float]
+    idle_requests_s: list[float]
+    request_errors: int
+    acks_s: list[float]
+    drive_floor_s: list[float]
+    reconnects_s: list[float]
+    first_consoles_s: list[float]
+    seats_lost: int
+    never_in: int
+    restarts_seen: int
+    errors: list[str]
+
+    @property
+    def cpu_per_student_s(self) -> float:
+        return self.cpu_s / self.student_s if self.student_s else float("nan")
+
+
+def run_class(workers: int, students: int, login_window_s: float, hold_s: float, idle_s: float,
+              folder: Path) -> RunFigures:
+    """One class on `workers` workers: the idle floors, then the class with a rolling restart halfway through the
+    hold."""
+    names = [f"pupil{i + 1}" for i in range(students)]
+    fleet = StandInFleet(students + 1, "class-robot-")
+    robots = list(fleet.addresses)
+    try:
+        with fresh_database() as database_url:
+            phase = time.monotonic()
+            create_students(database_url, names)
+            print(f"  database and {students} students ready in {time.monotonic() - phase:.1f} s", flush=True)
+            phase = time.monotonic()
+            web_port = free_port()
+            server = WebServer([sys.executable, "-m", "gunicorn", "-c", "deploy/gunicorn.conf.py", "-w", str(workers),
+                                "-b", "127.0.0.1:{port}", "middleware:create_app()"],
+                               {"TELELAB_DATABASE_URL": database_url, "TELELAB_SECRET_KEY": SECRET_KEY,
+                                "TELELAB_ROBOTS": fleet.robots_setting}, port=web_port)
+            nginx = None
+            try:
+                server.wait_for_workers(workers)
+                nginx = Nginx(web_port, folder / f"nginx-{workers}")
+                print(f"  {workers} worker(s) and nginx serving in {time.monotonic() - phase:.1f} s", flush=True)
+                return _measure(server, nginx.port, fleet, robots, names, database_url, workers, login_window_s,
+                                hold_s, idle_s)
+            finally:
+                if nginx is not None:
+                    nginx.stop()
+                server.stop(signal.SIGTERM)
+    finally:
+        fleet.stop()
+
+
+def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str], names: list[str],
+             database_url: str, workers: int, login_window_s: float, hold_s: float, idle_s: float) -> RunFigures:
+    probe_cookie = log_in_one(f"http://127.0.0.1:{port}", names[0])
+    drive_floor = _drive_floor(fleet.addresses[robots[-1]], 200)
+    # The idle floors: nobody in but one probe asking the ordinary request.
+    meter = WorkerMeter(server)
+    meter.start()
+    transactions_before = _transactions(database_url)
+    idle_requests = asyncio.run(_idle_requests(port, probe_cookie, f"/api/robots/{robots[-1]}", idle_s))
+    meter.sample_threads()
+    idle_threads = max(meter.threads)
+    idle_cpu_per_s = meter.stop() / idle_s
+    idle_transactions_per_s = (_transactions(database_url) - transactions_before) / idle_s
+    # The class.
+    students = [Student(name, robots[i], login_window_s * i / max(1, len(names) - 1) if len(names) > 1 else 0.0)
+                for i, name in enumerate(names)]
+    meter = WorkerMeter(server)
+    meter.start()
+    transactions_before = _transactions(database_url)
+    started = time.monotonic()
+    end_at = started + login_window_s + hold_s
+    restart_at = started + login_window_s + hold_s / 2
+    load = ClassLoad(port, students, end_at)
+
+    def restart_in_the_middle() -> None:
+        try:
+            time.sleep(max(0.0, restart_at - 1.0 - time.monotonic()))
+            meter.sample_threads()  # everyone is in, before the restart
+            time.sleep(max(0.0, restart_at - time.monotonic()))
+            print(f"rolling restart of the {workers} worker(s)", flush=True)
+            leaving = set(worker_pids(server))
+            server.process.send_signal(signal.SIGHUP)
+            deadline = time.monotonic() + 120
+            while leaving & set(worker_pids(server)) and time.monotonic() < deadline:
+                time.sleep(0.2)
+            load.end_at = max(load._end_at, time.monotonic() + RESTART_SETTLE_S)  # every console back, driving
+        finally:
+            load.restart_done = True
+
+    restarter = threading.Thread(target=restart_in_the_middle, daemon=True)
+    restarter.start()
+    asyncio.run(load.run(started))
+    elapsed_s = time.monotonic() - started
+    cpu_s = meter.stop()
+    restarter.join(120)
+    time.sleep(1.0)  # pg_stat_database's counters lag up to a second behind the transactions
+    transactions = _transactions(database_url) - transactions_before
+    student_s = sum((s.out_at or 0) - (s.in_at or 0) for s in students if s.in_at is not None)
+    errors = [f"{s.name}: {e}" for s in students for e in s.errors]
+    return RunFigures(
+        workers=workers, students=len(students), student_s=student_s, cpu_s=cpu_s,
+        idle_cpu_s=idle_cpu_per_s * elapsed_s, threads_per_worker=max(meter.threads or [0]),
+        idle_threads_per_worker=idle_threads, transactions=transactions,
+        idle_transactions=idle_transactions_per_s * elapsed_s,
+        requests_s=[r for s in students for r in s.requests_s], idle_requests_s=idle_requests,
+        request_errors=sum(s.request_errors for s in students), acks_s=[a for s in students for a in s.acks_s],
+        drive_floor_s=drive_floor, reconnects_s=[r for s in students for r in s.reconnects_s],
+        first_consoles_s=[s.first_console_s for s in students if s.first_console_s is not None],
+        seats_lost=sum(s.seat_lost for s in students), never_in=sum(s.in_at is None for s in students),
+        restarts_seen=sum(s.restarts_seen for s in students), errors=errors[:30])
+
+
+def machine() -> dict[str, object]:
+    """What the machine was."""
+    model = ""
+    with contextlib.suppress(OSError):
+        model = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
+                      if line.startswith("model name")), "")
+    memory_gb = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 1e9
+    return {"cores": os.cpu_count(), "cpu": model, "memory_gb": round(memory_gb, 1), "system": platform.platform(),
+            "python": platform.python_version(), "load_average_at_start": os.getloadavg()[0]}
+
+
+def rows_for(figures: RunFigures, one_worker_cpu: float | None, graded: bool) -> list[Measurement]:
+    scenario = f"{figures.students} students, {figures.workers} worker(s)"
+    reconnect_p50 = statistics.median(figures.reconnects_s) if figures.reconnects_s else float("nan")
+    ratio = figures.cpu_per_student_s / one_worker_cpu if one_worker_cpu else None
+    request_p99, ack_p99 = percentile_ms(figures.requests_s, 99), percentile_ms(figures.acks_s, 99)
+    rows = [
+        Measurement(scenario, "web CPU per student-second (floor: idle workers)", figures.cpu_per_student_s * 1000,
+                    "ms", "-", floor=figures.idle_cpu_s / figures.student_s * 1000 if figures.student_s else None),
+        Measurement(scenario, "threads per worker, everyone in (floor: idle)", float(figures.threads_per_worker),
+                    "count", "-", floor=float(figures.idle_threads_per_worker)),
+        Measurement(scenario, "PostgreSQL transactions per student-second (floor: idle)",
+                    figures.transactions / figures.student_s if figures.student_s else None, "count", "-",
+                    floor=figures.idle_transactions / figures.student_s if figures.student_s else None),
+        Measurement(scenario, "ordinary request p99 (floor: nobody in)", request_p99, "ms", "-",
+                    floor=percentile_ms(figures.idle_requests_s, 99)),
+        Measurement(scenario, "drive acknowledgement p99 (floor: the robot's own gRPC Drive)", ack_p99, "ms", "-",
+                    floor=percentile_ms(figures.drive_floor_s, 99)),
+        Measurement(scenario, "reconnect after the restart, p50 (floor: a console's first opening)",
+                    reconnect_p50 * 1000, "ms", "-",
+                    floor=statistics.median(figures.first_consoles_s) * 1000 if figures.first_consoles_s else None),
+        Measurement(scenario, "reconnect after the restart, max", max(figures.reconnects_s, default=float("nan"))
+                    * 1000, "ms", "-"),
+        Measurement(scenario, "seats lost", float(figures.seats_lost + figures.never_in), "count", "= 0",
+                    passed=figures.seats_lost + figures.never_in == 0 if graded else None),
+        Measurement(scenario, "ordinary request errors", float(figures.request_errors), "count", "-"),
+    ]
+    if ratio is not None and figures.workers > 1:
+        rows.insert(1, Measurement(scenario, "web CPU per student-second / 1 worker's", ratio, "ratio",
+                                   f"<= {RATIO_TARGET:g}", floor=1.0,
+                                   passed=ratio <= RATIO_TARGET if graded else None))
+    return rows
+
+
+def run(quick: bool, output: Path, students: int | None = None, workers: tuple[int, ...] | None = None) -> list:
+    students = students or (4 if quick else 50)
+    workers = workers or ((1,) if quick else (1, 2, 3))
+    login_window_s, hold_s, idle_s = (1.0, 4.0, 1.0) if quick else (60.0, 40.0, 10.0)
+    output.mkdir(parents=True, exist_ok=True)
+    the_machine = machine()
+    rows: list[Measurement] = []
+    runs = []
+    one_worker_cpu: float | None = None
+    for count in workers:
+        print(f"a class of {students} on {count} worker(s): logins over {login_window_s:g} s, {hold_s:g} s held, "
+              "a rolling restart halfway", flush=True)
+        figures = run_class(count, students, login_window_s, hold_s, idle_s, output / "class-day")
+        if count == 1:
+            one_worker_cpu = figures.cpu_per_student_s
+        rows += rows_for(figures, one_worker_cpu, graded=not quick)
+        runs.append({"workers": count, "student_s": figures.student_s, "cpu_s": figures.cpu_s,
+                     "restarts_seen": figures.restarts_seen, "reconnects": len(figures.reconnects_s),
+                     "acks": len(figures.acks_s), "requests": len(figures.requests_s), "errors": figures.errors})
+    print_table(f"A class of {students} on its own robots, behind nginx, with a rolling restart", rows)
+    for row in rows:  # a figure with no sample (no reconnect in a run) is absent, not NaN
+        if row.measured is not None and math.isnan(row.measured):
+            row.measured = None
+        if row.floor is not None and math.isnan(row.floor):
+            row.floor = None
+    write_json(output / "class_day.json", rows, {"students": students, "workers": list(workers),
+                                                   "login_window_s": login_window_s, "hold_s": hold_s,
+                                                   "machine": the_machine, "runs": runs})
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--output", default="bench-results")
+    parser.add_argument("--students", type=int, default=None, help="the class's size (50 here, 200 on bigger hosts)")
+    parser.add_argument("--workers", type=int, nargs="+", default=None)
+    args = parser.parse_args(argv)
+    run(args.quick, Path(args.output), args.students, tuple(args.workers) if args.workers else None)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
