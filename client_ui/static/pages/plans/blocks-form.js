@@ -327,7 +327,7 @@ export function textToBlocks(text) {
     last.data = JSON.stringify(data);
   }
   const first = chain(items);
-  return { blocks: { languageVersion: 0, blocks: first ? [{ ...first, x: 0, y: 0 }] : [] } };
+  return { blocks: { languageVersion: 0, blocks: first ? [{ ...first, x: 16, y: 16 }] : [] } };
 }
 
 function dataOf(block) {
