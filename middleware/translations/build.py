@@ -1,8 +1,7 @@
 """`make translations` (python -m middleware.translations.build): the catalogues from the code's own words.
 
-1. Extracts every _("...") of the Python code and templates and every t("...") of the ES modules (babel.cfg) into
-   messages.pot.
-2. Updates each language's messages.po from it: a new message comes in untranslated (English is the source, so its
+1. Extracts every _("...") of the Python code and templates and every t("...") of the ES modules (babel.cfg).
+2. Updates each language's messages.po from them: a new message comes in untranslated (English is the source, so its
    catalogue copies the message), one no longer used is dropped. Never fuzzy: a changed message is a new one.
 3. Compiles each messages.mo (committed, so a fresh clone serves Spanish without a build step).
 4. Writes client_ui/static/lib/i18n/<lang>.js, the ES modules' messages of each language but English.
@@ -17,6 +16,7 @@ import io
 import json
 import subprocess
 import sys
+import tempfile
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -26,7 +26,6 @@ from babel.messages.pofile import read_po, write_po
 
 ROOT = Path(__file__).resolve().parents[2]
 TRANSLATIONS = Path(__file__).resolve().parent
-POT = TRANSLATIONS / "messages.pot"
 JS_CATALOGUES = ROOT / "client_ui" / "static" / "lib" / "i18n"
 SOURCE_LANGUAGE = "en"
 LANGUAGES = ("en", "es")
@@ -41,14 +40,16 @@ def po_path(language: str) -> Path:
 
 def extract() -> Catalog:
     """The messages the code says now (pybabel extract, as babel.cfg maps the files)."""
-    command = [sys.executable, "-c", "from babel.messages.frontend import main; main()", "extract", "-F",
-               str(ROOT / "babel.cfg"), "--no-default-keywords", "--no-wrap", "--sort-by-file", "--omit-header",
-               "-o", str(POT), "--project", "Telelab"]
-    for keyword in KEYWORDS:
-        command += ["-k", keyword]
-    subprocess.run([*command, "."], cwd=ROOT, check=True, capture_output=True)
-    with POT.open("rb") as file:
-        return read_po(file)
+    with tempfile.TemporaryDirectory() as folder:
+        template = Path(folder) / "messages.pot"
+        command = [sys.executable, "-c", "from babel.messages.frontend import main; main()", "extract", "-F",
+                   str(ROOT / "babel.cfg"), "--no-default-keywords", "--no-wrap", "--sort-by-file", "--omit-header",
+                   "-o", str(template), "--project", "Telelab"]
+        for keyword in KEYWORDS:
+            command += ["-k", keyword]
+        subprocess.run([*command, "."], cwd=ROOT, check=True, capture_output=True)
+        with template.open("rb") as file:
+            return read_po(file)
 
 
 def read_catalogue(language: str) -> Catalog:

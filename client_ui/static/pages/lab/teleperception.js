@@ -102,8 +102,9 @@ function draw() {
   for (const rect of rects) drawRect(ctx, rect, "#c26a00");
   if (dragStart && dragNow) drawRect(ctx, [...dragStart, ...dragNow], "#b1261b");
   const c = evidence.counts;
-  countsLine.textContent = t("Readings integrated: sonar {sonar}, laser {laser} (standing {static}, moving ", { sonar: c.sonar, laser: c.laser, static: c.static }) +
-    `${c.moving}). ${evidence.accumulating ? "Accumulating while this page is open." : "Paused."}`;
+  countsLine.textContent = t("Readings integrated: sonar {sonar}, laser {laser} (standing {static}, moving {moving}).",
+    { sonar: c.sonar, laser: c.laser, static: c.static, moving: c.moving })
+    + ` ${evidence.accumulating ? t("Accumulating while this page is open.") : t("Paused.")}`;
   canvas.dataset.drawn = String(evidence.version);
 }
 

@@ -96,7 +96,7 @@ function showPlan(plan) {
   state.latest = plan.latest_version;
   state.saved = { text: plan.text, version: plan.version };
   versionSelect.replaceChildren(...plan.versions.map((v) => h("option", { value: v.version,
-    selected: v.version === plan.version }, `${v.version}${v.version === plan.latest_version ? " (latest)" : ""}`)));
+    selected: v.version === plan.version }, `${v.version}${v.version === plan.latest_version ? t(" (latest)") : ""}`)));
   const shared = plan.shared_with ? t("Shared with {code}.", { code: plan.shared_with.code }) : t("Not shared.");
   root.closest("main").querySelector("[data-field=plan-about]").textContent = plan.mine
     ? t("Your plan, version {version} of {latest_version}. {shared}", { version: plan.version, latest_version: plan.latest_version, shared })
@@ -324,7 +324,7 @@ function onPrediction(run, message) {
     }
   } else if (message.type === "error") {
     run.finished = true;
-    progressLine.textContent = `${run.label}: ${message.error?.message ?? "the prediction failed."}`;
+    progressLine.textContent = `${run.label}: ${message.error?.message ?? t("the prediction failed.")}`;
     if (message.trace) state.traces.predicted = message.trace;
     setRunning(false);
     draw();

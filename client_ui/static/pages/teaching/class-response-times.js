@@ -17,7 +17,7 @@ function legsTable(report) {
     h("thead", {}, h("tr", {}, h("th", { scope: "col", text: t("Round trip (ms)") }),
       FIGURES.map(([, label]) => h("th", { scope: "col", text: label })))),
     h("tbody", {}, KINDS.filter((kind) => report[kind]?.count).flatMap((kind) => LEGS.map((leg) => h("tr", {},
-      h("th", { scope: "row", text: `${kind === "skill" ? "Skills" : "Drive"}: ${LEG_LABELS[leg]}` }),
+      h("th", { scope: "row", text: `${kind === "skill" ? t("Skills") : t("Drive")}: ${LEG_LABELS[leg]}` }),
       FIGURES.map(([figure]) => h("td", { "data-field": `rtt-${kind}-${leg}-${figure}`,
         text: ms(report[kind][leg][figure]) })))))));
 }

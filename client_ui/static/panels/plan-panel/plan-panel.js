@@ -32,7 +32,7 @@ export function planGoalWords(goal, feedback = goal?.feedback) {
   const message = String(goal.message ?? "");
   const line = /^line (\d+)/.exec(message)?.[1];
   const code = goal.error_code ? ` (${goal.error_code})` : "";
-  return `${status.toUpperCase()}${line ? ` at line ${line}` : ""}${code}: ${message.replace(/^line \d+:\s*/, "")}`;
+  return `${status.toUpperCase()}${line ? t(" at line {line}", { line }) : ""}${code}: ${message.replace(/^line \d+:\s*/, "")}`;
 }
 
 export class PlanPanel extends PanelElement {

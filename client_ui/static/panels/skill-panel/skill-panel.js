@@ -147,7 +147,7 @@ export class SkillPanel extends PanelElement {
     if (!active) {
       const reached = goal.goal_reached ? t(" The goal was reached.") : "";
       const code = goal.error_code ? ` (${stateWords(goal.error_code).toLowerCase()})` : "";
-      this.#result.textContent = `${STATUS_WORDS[goal.status] ?? goal.status}${code}: ${goal.message || "no details."}${reached}`;
+      this.#result.textContent = `${STATUS_WORDS[goal.status] ?? goal.status}${code}: ${goal.message || t("no details.")}${reached}`;
       this.#result.dataset.outcome = goal.status;
       this.#result.hidden = false;
       if (goal.status === "succeeded") this.#progress.value = 1;
