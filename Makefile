@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 RUN_STAMP := $(VENV)/.run-installed
 TEST_STAMP := $(VENV)/.test-installed
 
-.PHONY: run test protos bench lint docs chromium ffmpeg nginx three clean
+.PHONY: run test protos bench lint docs translations chromium ffmpeg nginx three clean
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -82,6 +82,11 @@ lint: $(TEST_STAMP)
 # The documentation site (mkdocs.yml) into site/; --strict fails on a broken link, as tests/test_docs.py does.
 docs: $(TEST_STAMP)
 	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict
+
+# The language catalogues (docs/languages.md): the words of the code into each middleware/translations/<lang>/
+# messages.po, then the compiled .mo and client_ui/static/lib/i18n/<lang>.js (both committed: a clone needs no build).
+translations: $(RUN_STAMP)
+	$(PY) -m middleware.translations.build
 
 clean:
 	rm -rf $(VENV) .pytest_cache site
