@@ -52,6 +52,12 @@ def chat_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
     """Sends the last 50 messages, then new ones and deletions; takes say and delete commands."""
     if open_robot_channel(ws, robot_name) is None:
         return None
+    return room_channel(ws, robot_name)
+
+
+def room_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
+    """A chat room's channel for a user its caller let in: a robot's room (above), or another area's (a class's,
+    named so that no robot is: "class:<id>")."""
     user_id = int(current_user.get_id())
     can_moderate = current_user.role in services.MODERATOR_ROLES
     subscription = chat_hub(current_app._get_current_object()).subscribe(robot_name)  # type: ignore[attr-defined]

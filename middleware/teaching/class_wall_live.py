@@ -28,6 +28,7 @@ from sqlalchemy.orm import Session
 
 from middleware import events
 from middleware.access.commands import robot_commands
+from middleware.chat.sockets import room_channel
 from middleware.db import get_session, unit_of_work
 from middleware.errors import Refused
 from middleware.live.loop import Continuation, blocking_work, channel_loop
@@ -311,7 +312,42 @@ def student_channel(ws: WebSocket) -> Continuation | None:
     return follow
 
 
+def chat_room(class_session_id: int) -> str:
+    """The class's chat room (middleware/chat): a name no robot has, so no robot's room is the class's."""
+    return f"class:{class_session_id}"
+
+
+def student_chat_channel(ws: WebSocket) -> Continuation | None:
+    """The chat of the class the student has a seat in (the chat's own channel, in the class's room)."""
+    db = get_session()
+    actor = db.get(User, int(current_user.get_id()))
+    found = class_sessions.my_seat(db, actor) if actor is not None else None
+    db.close()
+    if found is None:
+        refuse(ws, CLOSE_NOT_FOUND, "no_class_session", "No class session is open for your courses now.")
+        return None
+    return room_channel(ws, chat_room(found[1].session_id))
+
+
+def tutor_chat_channel(ws: WebSocket, course_id: int) -> Continuation | None:
+    """The chat of the course's open class, for its tutors and admins."""
+    db = get_session()
+    actor = db.get(User, int(current_user.get_id()))
+    try:
+        if actor is None:
+            raise Refused(403, "forbidden", "Log in again.")
+        room = chat_room(class_wall.wall_session(db, actor, course_id)[1].id)
+    except Refused as refused:
+        _refusal_close(ws, refused)
+        return None
+    finally:
+        db.close()
+    return room_channel(ws, room)
+
+
 def register(sock: Channels) -> None:
-    """Declares the wall's channels."""
+    """Declares the wall's channels and the class's chat."""
     sock.route("/ws/courses/<int:course_id>/class-wall", endpoint="class_wall_channel")(wall_channel)
     sock.route("/ws/class-session/wall", endpoint="class_student_wall_channel")(student_channel)
+    sock.route("/ws/courses/<int:course_id>/class-wall/chat", endpoint="class_tutor_chat_channel")(tutor_chat_channel)
+    sock.route("/ws/class-session/chat", endpoint="class_student_chat_channel")(student_chat_channel)

@@ -128,6 +128,14 @@ def test_a_tutor_sees_the_class_moves_takes_over_answers_a_hand_and_stops_every_
         second.get_by_role("button", name="Raise my hand").wait_for()
         assert second.get_by_role("status").filter(has_text="Your hand is up").count() == 0
 
+        # The class chat (the chat's own room for the class) beside the tutor's notes.
+        second.locator("#chat-input:enabled").fill("Is the sonar noisy?")
+        second.locator("#chat-input").press("Enter")
+        page.get_by_text("Class chat").click()
+        page.locator('chat-panel [data-field="chat-body"]', has_text="Is the sonar noisy?").wait_for(timeout=15_000)
+        first.locator('chat-panel [data-field="chat-body"]', has_text="Is the sonar noisy?").wait_for(timeout=15_000)
+        second.screenshot(path=str(ARTIFACTS_DIR / "class-wall-student-phone.png"), full_page=True)
+
         # Take over: the student sees it at once and is refused; one click gives the robot back.
         page.get_by_role("button", name="Take over: student1").click()
         held = first.get_by_role("alert").filter(has_text="Your tutor tutor1 has taken over your robot")

@@ -155,6 +155,28 @@ def test_a_raised_hand_reaches_the_wall_at_once_and_comes_down_when_answered(wal
         _close(wall, mine)
 
 
+def test_the_class_chat_is_the_chats_own_room_for_the_class_alone(wall_lab) -> None:
+    server, course_id, _ids = wall_lab
+    tutor, student, classmate = _login(server, "tutor1"), _login(server, "s01"), _login(server, "s02")
+    rooms = [tutor.websocket(f"/ws/courses/{course_id}/class-wall/chat"), student.websocket("/ws/class-session/chat"),
+             classmate.websocket("/ws/class-session/chat")]
+    try:
+        for ws in rooms:
+            assert _until(ws, lambda message: message["type"] == "history")["robot_name"].startswith("class:")
+        rooms[1].send(json.dumps({"type": "say", "body": "Is the sonar noisy?", "line": "k1"}))
+        for ws in rooms:
+            said = _until(ws, lambda message: message["type"] == "message")["message"]
+            assert said["body"] == "Is the sonar noisy?"
+        for client, path in [(_login(server, "s03"), "/ws/class-session/chat"),
+                             (_login(server, "tutor2"), f"/ws/courses/{course_id}/class-wall/chat")]:
+            ws = client.websocket(path)
+            assert receive_json(ws)["code"] in ("no_class_session", "forbidden") and closed_with(ws) in (4403, 4404)
+        # The class's room is no robot's: the robots' chat API does not reach it.
+        assert _api(student, "GET", f"/api/robots/{said['robot_name']}/chat")[0] == 404
+    finally:
+        _close(*rooms)
+
+
 def test_a_takeover_refuses_the_student_until_given_back_or_the_tutor_leaves(wall_lab) -> None:
     from middleware.access.commands import robot_commands
 

@@ -1,6 +1,8 @@
 // The student's side of the class wall, on their class page: raise a hand (with a sentence), see at once when the
 // tutor holds their robot, and read the tutor's notes, pointers and what they sent the class.
 import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
+import { connectChat } from "../../lib/console/chat-session.js";
+import { register as registerChatPanel } from "../../panels/chat-panel/chat-panel.js";
 import { drawTile, floorPlan } from "./class-wall-draw.js";
 
 const root = document.getElementById("class-help");
@@ -87,6 +89,12 @@ async function start() {
   fetchJson(`/api/robots/${encodeURIComponent(seat.robot)}`).then((description) => {
     boxes = description.info?.scene_boxes ?? null;
   }).catch(() => {});
+  if (!root.querySelector("chat-panel")) { // the class's chat, beside the tutor's notes: middleware/chat's own room
+    registerChatPanel();
+    const panel = document.createElement("chat-panel");
+    root.querySelector("[data-field=chat]").append(panel);
+    connectChat("/ws/class-session", panel);
+  }
   channel = new Channel("/ws/class-session/wall");
   channel.addEventListener("message", (event) => {
     const message = parseJsonMessage(event.detail);

@@ -2,6 +2,8 @@
 // tutor's actions on one robot or on all. The server decides every action; this page shows and asks.
 import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
 import { canvasToWorld } from "../../lib/map-geometry.js";
+import { connectChat } from "../../lib/console/chat-session.js";
+import { register as registerChatPanel } from "../../panels/chat-panel/chat-panel.js";
 import { drawTile, floorPlan, grow, parsePoseRow, tileState } from "./class-wall-draw.js";
 
 const root = document.getElementById("class-wall");
@@ -275,6 +277,16 @@ pushForm.addEventListener("submit", async (event) => {
 });
 
 for (const box of filters) box.addEventListener("change", () => tiles.forEach(applyFilter));
+
+// The class's chat (middleware/chat's room of the class), opened only when the tutor opens it.
+const chatBox = document.querySelector("[data-field=chat-box]");
+chatBox.addEventListener("toggle", () => {
+  if (!chatBox.open || chatBox.querySelector("chat-panel")) return;
+  registerChatPanel();
+  const panel = document.createElement("chat-panel");
+  chatBox.querySelector("[data-field=chat]").append(panel);
+  connectChat(`/ws/courses/${root.dataset.courseId}/class-wall`, panel);
+});
 
 async function load() {
   try {
