@@ -38,6 +38,15 @@ class MiddlewarePanel:
                 "channel": f"/ws/robots/{robot_name}/{self.socket}", "help": self.help, "tab": self.tab}
 
 
+# The 2003 paper's skill classes as the catalogue names them (SkillDescription.skill_class).
+SKILL_CLASS_WORDS = {
+    robot_pb2.SKILL_CLASS_MOTOR: "Motor skill: acts on the wheels from the command alone.",
+    robot_pb2.SKILL_CLASS_PERCEPTIVE: "Perceptive skill: interprets the sensors for the other skills.",
+    robot_pb2.SKILL_CLASS_SENSORIMOTOR: "Sensorimotor skill: chooses the wheels' commands from what it perceives.",
+    robot_pb2.SKILL_CLASS_DELIBERATIVE: "Deliberative skill: reasons over time (plans, builds the map).",
+}
+
+
 @dataclass(frozen=True)
 class SkillController:
     """One skill of the robot: activate, deactivate, watch."""
@@ -52,9 +61,10 @@ class SkillController:
             "kind": "skill",
             "title": self.skill.title or self.skill.name.replace("_", " ").capitalize(),
             "channel": f"/ws/robots/{self.robot_name}/goals",
-            "help": self.skill.help,
+            "help": " ".join(filter(None, (SKILL_CLASS_WORDS.get(self.skill.skill_class), self.skill.help))),
             "tab": "navigate",
             "skill": self.skill.name,
+            "skill_class": robot_pb2.SkillClass.Name(self.skill.skill_class).removeprefix("SKILL_CLASS_").lower(),
             "motor": self.skill.motor,
             "schema": [parameter_schema_dict(p) for p in self.skill.parameters],
         }

@@ -80,3 +80,18 @@ def test_a_skill_panel_follows_the_robot_s_panels_and_a_direct_drive_skill_gets_
     ids = [d["id"] for d in robot_panels("lab-1", telebot_info(), skills)]
     assert "skill-direct_control" not in ids
     assert ids.index("skill-go_to_goal") > ids.index("low-level") and ids[-2:] == ["chat", "response-times"]
+
+
+def test_each_skill_panel_names_the_skills_class_of_the_2003_paper() -> None:
+    from skill_server.service.convert import skill_to_proto
+    from skill_server.sim.robot_model import RobotSpec
+    from skill_server.skills.catalog import default_registry
+
+    skills = [skill_to_proto(entry) for entry in default_registry(RobotSpec()).entries()]
+    panels = by_id(robot_panels("lab-1", telebot_info(), skills, False, ("telebot", "video"), "drawn"))
+    assert panels["skill-go_to_goal"]["skill_class"] == "sensorimotor"
+    assert str(panels["skill-go_to_goal"]["help"]).startswith("Sensorimotor skill: ")
+    assert str(panels["skill-detect_obstacle"]["help"]).startswith("Perceptive skill: interprets the sensors")
+    assert str(panels["skill-environment_modelling"]["help"]).startswith("Deliberative skill: ")
+    assert {panel["skill_class"] for panel in panels.values() if panel["kind"] == "skill"} == {
+        "sensorimotor", "perceptive", "deliberative"}  # direct control is the drive pad, a motor skill
