@@ -91,6 +91,23 @@ DEMO_TOURS = [
           "command": {"skill": "direct_control",
                       "parameters": {"linear_mps": 0.0, "angular_radps": 0.6, "duration_s": 5.0}},
           "condition": {"type": "skill_finished"}}]},
+    # In Spanish, beside the English ones (docs/languages.md): the first tour, as a Spanish-speaking tutor writes it.
+    {"slug": "control-directo", "topics": "control directo, odometría",
+     "title": "Control directo",
+     "summary": "Conduce tú el robot: velocidades y el hombre muerto.",
+     "steps": [
+         {"title": "La cámara", "text": "Esto es lo que ve el robot. Míralo mientras se mueve.",
+          "panel": "camera", "condition": {"type": "time", "seconds": 3}},
+         {"title": "Adelante", "text": "El control directo mantiene una velocidad un rato y luego para solo.",
+          "panel": "drive", "command": {"skill": "direct_control",
+                                        "parameters": {"linear_mps": 0.2, "angular_radps": 0.0, "duration_s": 3.0}},
+          "condition": {"type": "skill_finished"}},
+         {"title": "Giro", "text": "Ahora un giro sobre sí mismo: la odometría muestra el cambio de orientación.",
+          "panel": "odometry", "command": {"skill": "direct_control",
+                                           "parameters": {"linear_mps": 0.0, "angular_radps": 0.8, "duration_s": 2.0}},
+          "condition": {"type": "skill_finished"}},
+         {"title": "Te toca", "text": "Abre la consola y conduce con las flechas.", "panel": "drive",
+          "condition": {"type": "manual"}}]},
 ]
 
 
@@ -118,6 +135,12 @@ def seed_demo_content(app: Flask, record_video: bool = True) -> list[str]:
                                 "direct control, navigation, odometry", *_lesson_tests(session))
             save_lesson(session, draft, author)
             added.append("lesson first-moves")
+        if video.exists() and session.scalar(select(Lesson).where(Lesson.slug == "primeros-movimientos")) is None:
+            save_lesson(session, LessonDraft(  # the same video and cues, told in Spanish (docs/languages.md)
+                "primeros-movimientos", "Primeros movimientos", "El vídeo conduce tu robot: adelante, un giro y "
+                "luego un objetivo. Si pausas, el robot se para.", DEMO_VIDEO, cues,
+                "control directo, navegación, odometría", None, None), author)
+            added.append("lesson primeros-movimientos")
         session.commit()
     return added
 
