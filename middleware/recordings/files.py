@@ -154,7 +154,13 @@ def read_part(source: Path | IO[bytes]) -> Iterator[Recorded]:
 
 
 def read_recording(root: Path, recording_id: int) -> list[Recorded]:
-    """Every part's messages, in log-time order (a stable sort: one topic's order is kept)."""
+    """Every part's messages, in log-time order (a stable sort: one topic's order is kept). A sample both recorders
+    wrote at a take-over (a new stream starts with the latest reading) is kept once."""
     messages = [message for path in part_paths(root, recording_id) for message in read_part(path)]
     messages.sort(key=lambda m: m.log_time_ns)
-    return messages
+    kept: list[Recorded] = []
+    for message in messages:
+        if kept and kept[-1].log_time_ns == message.log_time_ns and message in kept[-8:]:
+            continue
+        kept.append(message)
+    return kept

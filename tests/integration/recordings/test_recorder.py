@@ -158,7 +158,8 @@ def test_a_driven_session_reads_back_with_every_command_in_order_each_schema_and
         assert schemas["/odometry"] == "telelab.v1.Odometry" and schemas["/ground_truth"] == "telelab.v1.Pose2D"
         assert schemas["/sonar"] == "telelab.v1.SonarReading" and schemas["/laser"] == "telelab.v1.LaserScan"
         assert schemas["/scene"] == "telelab.v1.SceneDescription" and schemas["/robot_info"] == "telelab.v1.RobotInfo"
-        assert schemas["/commands"] == "telelab.recording.v1.CommandRecord" and schemas["/goals"] == "telelab.v1.GoalState"
+        assert schemas["/commands"] == "telelab.recording.v1.CommandRecord"
+        assert schemas["/goals"] == "telelab.v1.GoalState"
         assert all(summary.schemas[c.schema_id].encoding == "protobuf" for c in summary.channels.values())
         decoded = list(reader.iter_decoded_messages(log_time_order=True))
     commands = [m for _, c, _, m in decoded if c.topic == "/commands"]
@@ -208,9 +209,8 @@ def test_a_file_cut_at_a_random_byte_is_read_up_to_its_last_complete_chunk(drive
 
 
 def _chunk_message_counts(data: bytes) -> list[int]:
-    from mcap.records import Chunk
+    from mcap.records import Chunk, Message
     from mcap.stream_reader import StreamReader, breakup_chunk
-    from mcap.records import Message
 
     total, ends = 0, []
     for record in StreamReader(io.BytesIO(data), emit_chunks=True).records:
@@ -220,8 +220,9 @@ def _chunk_message_counts(data: bytes) -> list[int]:
     return ends
 
 
-ENDPOINTS = ("/recordings/{id}", "/api/recordings/{id}", "/api/recordings/{id}/data", "/api/recordings/{id}/export.mcap",
-             "/api/recordings/{id}/export/odometry.csv", "/api/recordings/{id}/export/commands.csv")
+ENDPOINTS = ("/recordings/{id}", "/api/recordings/{id}", "/api/recordings/{id}/data",
+             "/api/recordings/{id}/export.mcap", "/api/recordings/{id}/export/odometry.csv",
+             "/api/recordings/{id}/export/commands.csv")
 
 
 @pytest.mark.parametrize(("username", "sees", "truth"), [
