@@ -149,3 +149,4 @@ def _register_areas(app: Flask) -> None:
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
                             practice_routes.register, tour_live.register, class_wall_live.register], socket_login_check)
     realtime.hold_viewers_with(app, delay.viewer_hold)
+    lab_sockets.hold_commands_with(app, delay.command_hold)

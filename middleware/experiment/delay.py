@@ -1,5 +1,6 @@
 """Injected video delay: every stream that shows one viewer where the robot is (camera, telemetry, localization)
-held until capture time + delay, or arrival + delay for a stream without a capture time (commands are not).
+held until capture time + delay, or arrival + delay for a stream without a capture time; and, during a trial whose
+course's protocol says so, the student's drive commands too (`command_hold`, the drive channel's hook).
 
 The thesis added delay with a distant proxy; here the relay does it per viewer. `DelayQueue` is the pure
 part (ordering, bounds); `parse_delay_s` validates a requested delay; `ViewerDelay` follows one viewer's
@@ -153,24 +154,37 @@ class DelayBook:
 
     def __init__(self, load: Callable[[], Delays], refresh_s: float = REFRESH_S,
                  clock: Callable[[], float] = time.monotonic,
-                 hears_changes: Callable[[], bool] = lambda: False) -> None:
+                 hears_changes: Callable[[], bool] = lambda: False,
+                 load_commands: Callable[[], Delays] = dict) -> None:
         self._load, self._refresh_s, self._clock = load, refresh_s, clock
+        self._load_commands = load_commands
         self._hears_changes = hears_changes  # True: changes are announced (forget), so no periodic read
         self._delays: Delays = {}
+        self._command_delays: Delays = {}
         self._loaded_at = float("-inf")
         self._lock = threading.Lock()
 
     def delay_of(self, user_id: int, robot_name: str) -> float:
         """user_id's delay on robot_name as read at most refresh_s ago (0 when none is in force)."""
+        self._read_if_due()
+        return delay_in_force_s(self._delays, user_id, robot_name)
+
+    def command_delay_of(self, user_id: int, robot_name: str) -> float:
+        """The delay on user_id's commands to robot_name: their open trial's there when its course's protocol
+        delays commands (the distant proxy), else 0."""
+        self._read_if_due()
+        return self._command_delays.get((user_id, robot_name), 0.0)
+
+    def _read_if_due(self) -> None:
         period = float("inf") if self._hears_changes() else self._refresh_s
         if self._clock() - self._loaded_at >= period:
             with self._lock:
                 if self._clock() - self._loaded_at >= period:
                     try:
                         self._delays = self._load()
+                        self._command_delays = self._load_commands()
                     finally:
                         self._loaded_at = self._clock()  # after a failure too: not one retry per viewer
-        return delay_in_force_s(self._delays, user_id, robot_name)
 
     def forget(self) -> None:
         """The next read goes to the database (a delay was just changed in this process)."""
@@ -185,6 +199,13 @@ def read_all_delays_s(session) -> Delays:
             for user_id, robot_name, delay_s in session.execute(union_all(tutors, trials))}
 
 
+def read_command_delays_s(session) -> Delays:
+    """The open trials that hold their student's commands too, by (user, robot)."""
+    rows = session.execute(select(Trial.user_id, Trial.robot_name, Trial.delay_s)
+                           .where(Trial.status == TRIAL_OPEN, Trial.commands_delayed.is_(True)))
+    return {(user_id, robot_name): float(delay_s) for user_id, robot_name, delay_s in rows}
+
+
 def delay_book(app=None) -> DelayBook:
     """The delay book of app (or of the current app), made on first use."""
     app = app or current_app._get_current_object()  # type: ignore[attr-defined]
@@ -196,8 +217,13 @@ def delay_book(app=None) -> DelayBook:
             with factory() as session:
                 return read_all_delays_s(session)
 
+        def load_commands() -> Delays:
+            with factory() as session:
+                return read_command_delays_s(session)
+
         bus = events.bus_of(factory.kw["bind"])
-        made = DelayBook(load, hears_changes=lambda: not bus.shared or bus.listening.is_set())
+        made = DelayBook(load, hears_changes=lambda: not bus.shared or bus.listening.is_set(),
+                         load_commands=load_commands)
         book = app.extensions.setdefault(_BOOK_KEY, made)
         if book is made:
             bus.listen("delays", lambda _user: made.forget())
@@ -209,6 +235,13 @@ def viewer_hold(robot_name: str, user_id: int) -> ViewerHold:
     composed in create_app)."""
     book = delay_book()
     return ViewerHold(ViewerDelay(lambda: book.delay_of(user_id, robot_name), refresh_s=0.0))  # the book limits reads
+
+
+def command_hold(robot_name: str, user_id: int) -> Callable[[], float]:
+    """How long user_id's commands to robot_name are held now, by the process's delay book (the drive channel's
+    hook, composed in create_app). It may read the database: call it off the channel loop."""
+    book = delay_book()
+    return lambda: book.command_delay_of(user_id, robot_name)
 
 
 def apply_viewer_delay(ws, delay: ViewerDelay | None, held: DelayQueue, online: bool = True) -> float:

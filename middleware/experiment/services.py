@@ -57,7 +57,7 @@ def _store_delay(session, user_id: int, delay_s: float, set_by_id: int) -> Video
 
 def set_video_delay(session, actor: User, user_id: object, delay_s: object) -> VideoDelay:
     """A tutor sets the added video delay (0-7 s) of a student they teach, an admin anyone's, on every robot;
-    commands are never delayed."""
+    a tutor's delay never holds commands (only a trial of a course whose protocol delays commands does)."""
     _require_teacher(actor)
     delay = parse_delay_s(delay_s)
     target = None if isinstance(user_id, bool) or not isinstance(user_id, int) else session.get(User, user_id)

@@ -7,10 +7,11 @@ import asyncio
 import contextlib
 import functools
 import logging
+from collections.abc import Awaitable, Callable
 from datetime import UTC, datetime
 
 import grpc
-from flask import current_app
+from flask import Flask, current_app
 from flask_login import current_user
 from simple_websocket import ConnectionClosed
 
@@ -110,8 +111,69 @@ def measured_round_trip_ms(link: RobotLink) -> float | None:
         return None
 
 
+# (robot, user) -> how long that user's commands to the robot are held now (an experiment trial's distant proxy);
+# composed in create_app (hold_commands_with), none by default.
+CommandHold = Callable[[str, int], Callable[[], float]]
+_COMMAND_HOLD_KEY = "telelab.command_hold"
+COMMAND_HOLD_RECHECK_S = 1.0
+
+
+def hold_commands_with(app: Flask, hold: CommandHold) -> None:
+    """The drive channel holds each user's commands as hold says (create_app hands in the experiment's)."""
+    app.extensions[_COMMAND_HOLD_KEY] = hold
+
+
+def _no_hold(robot_name: str, user_id: int) -> Callable[[], float]:
+    return lambda: 0.0
+
+
+class HeldCommands:
+    """A driver's commands held for the delay in force when each arrived, sent in arrival order once due: the
+    thesis' distant proxy, on the commands as the relay does it on the video. Reading the delay may reach the
+    database, so it is read off the loop, at most every COMMAND_HOLD_RECHECK_S."""
+
+    def __init__(self, read_delay_s: Callable[[], float], work: Callable[..., Awaitable[object]]) -> None:
+        self._read, self._work = read_delay_s, work
+        self._delay_s, self._checked_at = 0.0, float("-inf")
+        self._queue: asyncio.Queue[tuple[float, Callable[[], Awaitable[None]]]] = asyncio.Queue()
+        self._sender: asyncio.Task[None] | None = None
+
+    async def delay_s(self) -> float:
+        loop = asyncio.get_running_loop()
+        if loop.time() - self._checked_at >= COMMAND_HOLD_RECHECK_S:
+            self._checked_at = loop.time()
+            with contextlib.suppress(Exception):  # a database hiccup keeps the last known delay
+                self._delay_s = float(await self._work(self._read))  # type: ignore[arg-type]
+        return self._delay_s
+
+    def send_later(self, due: float, send: Callable[[], Awaitable[None]]) -> None:
+        """Sends at due (the loop's clock), after every command queued before."""
+        self._queue.put_nowait((due, send))
+        if self._sender is None:
+            self._sender = asyncio.get_running_loop().create_task(self._send_in_order())
+
+    @property
+    def holding(self) -> bool:
+        return self._sender is not None and not self._queue.empty()
+
+    async def _send_in_order(self) -> None:
+        loop = asyncio.get_running_loop()
+        while True:
+            due, send = await self._queue.get()
+            await asyncio.sleep(max(0.0, due - loop.time()))
+            await send()
+
+    async def close(self) -> None:
+        """Drops what is still held (the socket closed: the stop that follows is not held)."""
+        if self._sender is not None:
+            self._sender.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._sender
+
+
 def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
-    """Drive commands: validated here, sent through the command path; the robot stops when the socket closes."""
+    """Drive commands: validated here, sent through the command path (held first while an experiment trial delays
+    them); the robot stops at once when the socket closes."""
     link = open_robot_channel(ws, robot_name)
     if link is None:
         return None
@@ -135,9 +197,29 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
         "is_controller": robot.is_controller(),
     })
     work = blocking_work()
+    hold = current_app.extensions.get(_COMMAND_HOLD_KEY, _no_hold)(robot_name, user_id)
 
     async def drive(live: LiveSocket) -> None:
         last_sequence = 0
+        held = HeldCommands(hold, work)
+
+        async def send(command) -> None:  # noqa: ANN001 - a parsed drive message
+            try:
+                result = await work(robot.drive, sequence_base + command.sequence, command.linear_mps,
+                                    command.angular_radps)
+            except (CommandRefused, RobotUnavailable) as refused:
+                await live.send(as_json({"type": "error", "code": refused.code, "message": refused.message,
+                                         "field": refused.field}))
+                return
+            await live.send(as_json({
+                "type": "ack",
+                "sequence": command.sequence,
+                "applied_sequence": max(0, result.applied_sequence - sequence_base),
+                "linear_mps": result.linear_mps,
+                "angular_radps": result.angular_radps,
+                "robot_rtt_ms": round(result.round_trip_ms, 3),
+            }))
+
         try:
             while True:
                 raw = await live.receive(timeout=RECEIVE_WAIT_S)
@@ -156,22 +238,13 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
                                              "field": invalid.field}))
                     continue
                 last_sequence = command.sequence
-                try:
-                    result = await work(robot.drive, sequence_base + command.sequence, command.linear_mps,
-                                        command.angular_radps)
-                except (CommandRefused, RobotUnavailable) as refused:
-                    await live.send(as_json({"type": "error", "code": refused.code, "message": refused.message,
-                                             "field": refused.field}))
-                    continue
-                await live.send(as_json({
-                    "type": "ack",
-                    "sequence": command.sequence,
-                    "applied_sequence": max(0, result.applied_sequence - sequence_base),
-                    "linear_mps": result.linear_mps,
-                    "angular_radps": result.angular_radps,
-                    "robot_rtt_ms": round(result.round_trip_ms, 3),
-                }))
+                delay_s = await held.delay_s()
+                if delay_s > 0 or held.holding:
+                    held.send_later(asyncio.get_running_loop().time() + delay_s, functools.partial(send, command))
+                else:
+                    await send(command)
         finally:
+            await held.close()
             await work(_stop_quietly, robot, sequence_base + last_sequence + 1)
             seat.keep(live, closing=True)
 

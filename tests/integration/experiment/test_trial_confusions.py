@@ -6,11 +6,14 @@ that count for the courses they teach."""
 from __future__ import annotations
 
 import contextlib
+import json
 import time
 
 import pytest
 import simple_websocket
+from sqlalchemy import select
 
+from middleware.models import Course
 from tests.conftest import STUDENT_PASSWORD, LabClient, add_test_account, make_course, ready_for_trials, served_lab
 from tests.integration.experiment.test_experiment import (  # noqa: F401 (fixtures)
     course_app,
@@ -187,3 +190,42 @@ def test_a_tutor_reads_only_the_trials_that_count_for_a_course_they_teach(two_co
     assert seen_by("tutor1") == [trial["id"]]
     assert seen_by("tutor2") == []  # student1's tutor in course Y, not in course X
     assert seen_by("root") == [trial["id"]]
+
+
+def _ack_after_s(drive, sequence: int) -> float:
+    """Seconds from sending a drive command to its acknowledgement on the drive socket."""
+    sent = time.monotonic()
+    drive.send(json.dumps({"type": "drive", "sequence": sequence, "linear_mps": 0.0, "angular_radps": 0.1}))
+    while True:
+        message = json.loads(drive.receive(timeout=10))
+        if message.get("type") == "ack" and message["sequence"] == sequence:
+            return time.monotonic() - sent
+
+
+def test_a_trial_of_a_course_whose_protocol_delays_commands_holds_the_drivers_commands_for_its_delay(
+        course_app) -> None:  # noqa: F811
+    from middleware.auth.services import find_user
+    from middleware.db import session_factory
+    from middleware.experiment import protocol
+
+    student = LabClient(course_app.url)
+    assert student.login() == 302
+    queue = take_control(student, "course-1")
+    drive = student.websocket("/ws/robots/course-1/drive")
+    assert json.loads(drive.receive(timeout=10))["type"] == "ready"
+    assert _ack_after_s(drive, 1) < 0.5, "no trial: commands go at once"
+    with session_factory(course_app.app)() as session:
+        tutor = find_user(session, "tutor1")
+        course_id = session.scalars(select(Course.id).where(Course.code == "EXP")).one()
+        protocol.set_protocol(session, tutor, course_id, {"delay_commands": True})
+        session.commit()
+    trial = _start_trial(student)
+    assert trial["commands_delayed"] and trial["delay_s"] == 1.0, trial  # the ready student runs row 1: 1 s first
+    time.sleep(1.2)  # the drive channel reads the delay in force at most once a second
+    held = [_ack_after_s(drive, sequence) for sequence in (2, 3)]
+    assert all(0.9 <= seconds < 2.5 for seconds in held), held
+    _give_up(student, trial)
+    time.sleep(1.2)
+    assert _ack_after_s(drive, 4) < 0.5, "the trial given up, commands go at once again"
+    drive.close()
+    queue.close()
