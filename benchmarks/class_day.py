@@ -61,6 +61,9 @@ REQUEST_INTERVAL_S = 1.0
 RESTART_SETTLE_S = 3.0  # the class goes on at least this long after the last old worker left
 SEAT_WAIT_S = 10.0  # a student who gets no acknowledgement this long after reconnecting has lost their seat
 RATIO_TARGET = 1.10
+# What may grow however many robots: the pools with fixed ceilings (the sockets' blocking work, 16; the liveness
+# probes, 8) and a request or two in flight. A pump thread per stream was 3 a robot.
+THREADS_ALLOWANCE = 28
 CHANNELS = ("telemetry", "localization", "drive")
 DRIVE_SUB = 3
 
@@ -256,6 +259,15 @@ def _answers(port: int) -> bool:
             return True
     except OSError:
         return False
+
+
+def _settled_threads(pid: int, window_s: float = 1.0) -> int:
+    """The fewest threads of pid over window_s (a request thread in flight is not the worker's own)."""
+    least, deadline = _threads(pid), time.monotonic() + window_s
+    while time.monotonic() < deadline:
+        time.sleep(0.1)
+        least = min(least, _threads(pid))
+    return least
 
 
 def worker_pids(server: WebServer) -> list[int]:
@@ -478,6 +490,68 @@ def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str
         restarts_seen=sum(s.restarts_seen for s in students), errors=errors[:30])
 
 
+async def _open_consoles(port: int, cookies: list[str], robots: list[str]) -> list[WebSocketUser]:
+    """A console (camera, telemetry, localization and drive on one link) per robot, each once its channels sent
+    their first message; robots are shared out over the students (a user holds at most 40 sockets)."""
+    async def one(index: int, robot: str) -> WebSocketUser:
+        link = await WebSocketUser.open(port, "/ws/link", cookies[index % len(cookies)])
+        channels = ("camera", *CHANNELS)
+        for sub, channel in enumerate(channels, start=1):
+            link.send_text(json.dumps({"type": "subscribe", "sub": sub, "path": f"/ws/robots/{robot}/{channel}"}))
+        waiting = set(range(1, len(channels) + 1))
+        done = asyncio.Event()
+
+        def on_message(opcode: int, payload: bytes) -> None:
+            sub = int.from_bytes(payload[:4], "big") if opcode == 2 else int(payload.split(b" ", 1)[0])
+            waiting.discard(sub)
+            if not waiting:
+                done.set()
+
+        reader = asyncio.ensure_future(link.read_messages(on_message))
+        await asyncio.wait_for(done.wait(), 120)
+        link.reader = reader  # type: ignore[attr-defined]  # kept reading (pings answered) until closed
+        return link
+
+    return list(await asyncio.gather(*(one(i, robot) for i, robot in enumerate(robots))))
+
+
+def threads_with_robots(steps: tuple[int, ...], students: int) -> list[tuple[int, int]]:
+    """(robots with a console open, the worker's threads) at each step, on one worker (gunicorn, the shared
+    configuration) with stand-in robots: a worker's threads do not grow with its robots (no pump thread per stream)."""
+    names = [f"pupil{i + 1}" for i in range(students)]
+    fleet = StandInFleet(max(steps), "wall-robot-")
+    robots = list(fleet.addresses)
+    found: list[tuple[int, int]] = []
+    try:
+        with fresh_database() as database_url:
+            create_students(database_url, names)
+            server = WebServer([sys.executable, "-m", "gunicorn", "-c", "deploy/gunicorn.conf.py", "-w", "1", "-b",
+                                "127.0.0.1:{port}", "middleware:create_app()"],
+                               {"TELELAB_DATABASE_URL": database_url, "TELELAB_SECRET_KEY": SECRET_KEY,
+                                "TELELAB_ROBOTS": fleet.robots_setting})
+            try:
+                (worker,) = server.wait_for_workers(1)
+                cookies = [log_in_one(server.url, name) for name in names]
+
+                async def climb() -> None:
+                    opened: list[WebSocketUser] = []
+                    for step in steps:
+                        opened += await _open_consoles(server.port, cookies, robots[len(opened):step])
+                        await asyncio.sleep(2.0)  # the handshakes' request threads return to the server
+                        found.append((step, _settled_threads(worker)))
+                        print(f"  {step} robots with a console open: {found[-1][1]} threads in the worker",
+                              flush=True)
+                    for link in opened:
+                        link.close()
+
+                asyncio.run(climb())
+            finally:
+                server.stop(signal.SIGTERM)
+    finally:
+        fleet.stop()
+    return found
+
+
 def machine() -> dict[str, object]:
     """What the machine was."""
     model = ""
@@ -541,6 +615,15 @@ def run(quick: bool, output: Path, students: int | None = None, workers: tuple[i
         runs.append({"workers": count, "student_s": figures.student_s, "cpu_s": figures.cpu_s,
                      "restarts_seen": figures.restarts_seen, "reconnects": len(figures.reconnects_s),
                      "acks": len(figures.acks_s), "requests": len(figures.requests_s), "errors": figures.errors})
+    steps = (1, 4) if quick else (1, 50, 200)
+    print(f"threads of one worker with consoles open on {', '.join(map(str, steps))} robots", flush=True)
+    climb = threads_with_robots(steps, max(1, min(students, max(steps) // 4 + 1)))
+    scenario = "one worker, a console per robot"
+    for step, threads in climb:
+        rows.append(Measurement(scenario, f"worker threads with {step} robots' consoles (floor: 1 robot's)",
+                                float(threads), "count", f"<= {climb[0][1] + THREADS_ALLOWANCE}",
+                                floor=float(climb[0][1]),
+                                passed=threads <= climb[0][1] + THREADS_ALLOWANCE if not quick else None))
     print_table(f"A class of {students} on its own robots, behind nginx, with a rolling restart", rows)
     for row in rows:  # a figure with no sample (no reconnect in a run) is absent, not NaN
         if row.measured is not None and math.isnan(row.measured):
@@ -549,7 +632,8 @@ def run(quick: bool, output: Path, students: int | None = None, workers: tuple[i
             row.floor = None
     write_json(output / "class_day.json", rows, {"students": students, "workers": list(workers),
                                                    "login_window_s": login_window_s, "hold_s": hold_s,
-                                                   "machine": the_machine, "runs": runs})
+                                                   "machine": the_machine, "runs": runs,
+                                                   "threads_with_robots": climb})
     return rows
 
 
