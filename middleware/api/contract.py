@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 from flask import request
-from jsonschema import Draft202012Validator
-from jsonschema.exceptions import ValidationError
+from jsonschema import Draft202012Validator  # type: ignore[import-untyped]
+from jsonschema.exceptions import ValidationError  # type: ignore[import-untyped]
 
 from middleware.validation import InvalidInput, decimal_int
 
@@ -246,7 +246,8 @@ def _refusal(error: ValidationError, start: str) -> InvalidInput:
         return InvalidInput(name, f"{name} is required.")
     if kind == "type":
         kinds = schema.get("type")
-        wanted = " or ".join(_KINDS.get(k, k) for k in (kinds if isinstance(kinds, list) else [kinds]))
+        named = [str(k) for k in (kinds if isinstance(kinds, list) else [kinds])]
+        wanted = " or ".join(_KINDS.get(k, k) for k in named)
         return InvalidInput(name, f"{name} must be {wanted}.")
     if kind in ("minimum", "maximum"):
         low, high = schema.get("minimum"), schema.get("maximum")
