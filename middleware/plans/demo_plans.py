@@ -1,6 +1,7 @@
-"""The demo plans seeded with the demo course (middleware/demo_course.py): one of the demo student's own and one
-the demo tutor shares with the course. Both use only the language's own commands (drive, repeat, wait, say), so
-they are checked without a robot's skill schemas: the lab's robots may not be running yet when it is seeded."""
+"""The demo plans seeded with the demo course (middleware/demo_course.py): two of the demo student's own (one reacts
+to an obstacle with an on block, issue 33) and one the demo tutor shares with the course. All use only the
+language's own commands (drive, repeat, wait, say, on), so they are checked without a robot's skill schemas: the
+lab's robots may not be running yet when it is seeded."""
 
 from __future__ import annotations
 
@@ -17,6 +18,17 @@ repeat 4 {
   drive 0.2 0 for 2s
   drive 0 0.5 for 3.14s
 }
+""")
+REACTING_PLAN = ("bump-and-turn", """# Drives ahead; whenever something comes within 40 cm it backs off and turns.
+on obstacle_detected 0.4 {
+  say "Something ahead: backing off and turning"
+  drive -0.1 0 for 1s
+  drive 0 0.8 for 2s
+}
+repeat 8 {
+  drive 0.25 0 for 2s
+}
+say "Done"
 """)
 SHARED_PLAN = ("careful-forward", """# Drives ahead while the way is clear, and says so when something is close.
 say "Driving ahead carefully"
@@ -37,9 +49,10 @@ def seed_demo_plans(session: Session, course_id: int) -> list[str]:
     added."""
     added: list[str] = []
     student, tutor = find_user(session, "student"), find_user(session, "tutor")
-    if student is not None and not _has_plan(session, student.id, STUDENT_PLAN[0]):
-        create_plan(session, student, STUDENT_PLAN[0], check_text(STUDENT_PLAN[1], {}))
-        added.append(f"the demo student's plan {STUDENT_PLAN[0]}")
+    for name, text in (STUDENT_PLAN, REACTING_PLAN):
+        if student is not None and not _has_plan(session, student.id, name):
+            create_plan(session, student, name, check_text(text, {}))
+            added.append(f"the demo student's plan {name}")
     if tutor is not None and not _has_plan(session, tutor.id, SHARED_PLAN[0]):
         plan = create_plan(session, tutor, SHARED_PLAN[0], check_text(SHARED_PLAN[1], {}))
         share_plan(session, tutor, plan.id, course_id)

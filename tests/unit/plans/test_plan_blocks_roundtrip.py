@@ -16,7 +16,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from middleware.plans import Plan, PlanInvalid, parse_plan_text, plan_from_json, plan_to_json, plan_to_text
-from middleware.plans.demo_plans import SHARED_PLAN, STUDENT_PLAN
+from middleware.plans.demo_plans import REACTING_PLAN, SHARED_PLAN, STUDENT_PLAN
 from tests.unit.plans.catalogue import catalogue_schemas
 from tests.unit.plans.test_plan_properties import plans
 
@@ -58,7 +58,7 @@ def converter() -> Iterator[Converter]:
 
 def texts_of_the_plan_tests() -> list[str]:
     """Every string of the plan tests that holds a line break or reads as a plan, and the demo plans."""
-    found = [STUDENT_PLAN[1], SHARED_PLAN[1]]
+    found = [STUDENT_PLAN[1], REACTING_PLAN[1], SHARED_PLAN[1]]
     for path in PLAN_TESTS:
         if not path.exists():
             continue
