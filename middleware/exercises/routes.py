@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import secrets
 from datetime import datetime
+from pathlib import Path
 
-from flask import Blueprint, Response, current_app, jsonify, render_template, request, send_from_directory
+from flask import Blueprint, Response, current_app, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
@@ -77,8 +78,9 @@ def page(slug: str) -> ResponseReturnValue:
 @login_required
 def worker() -> ResponseReturnValue:
     """The worker that runs the student's Python on Pyodide: its own CSP allows WebAssembly."""
-    response = send_from_directory(current_app.static_folder or "", f"{PAGE_FOLDER}/python-worker.js",
-                                   mimetype="text/javascript", max_age=0)
+    script = Path(current_app.static_folder or "", PAGE_FOLDER, "python-worker.js").read_bytes()
+    response = Response(script, mimetype="text/javascript")
+    response.headers["Cache-Control"] = "no-cache"
     response.headers["Content-Security-Policy"] = (
         "default-src 'self'; connect-src 'self'; "
         f"script-src 'self' 'wasm-unsafe-eval' {_map_source()}; object-src 'none'; frame-ancestors 'none'")

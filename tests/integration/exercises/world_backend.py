@@ -41,6 +41,7 @@ class WorldBackend:
     def __init__(self, world: World, time_limit_s: float) -> None:
         self.world, self.time_limit_s = world, time_limit_s
         self.sequence, self.trace, self.reports = 0, [], []
+        self.last_sent = (0.0, 0.0)
         self._t0 = world.snapshot.sim_time_s
         self._next_sample = 0.0
         self._sample()
@@ -75,6 +76,7 @@ class WorldBackend:
                 "battery": {"charge": s.battery.charge}}
 
     def send(self, linear_mps: float, angular_radps: float) -> None:
+        self.last_sent = (linear_mps, angular_radps)
         self.sequence += 1
         self.world.drive(TOKEN, self.sequence, linear_mps, angular_radps)
 
