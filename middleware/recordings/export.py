@@ -56,7 +56,8 @@ def replay_data(messages: list[files.Recorded], truth: bool, from_s: float = 0.0
     visible = list(allowed(messages, truth))
     t0 = visible[0].log_time_ns if visible else 0
     data: dict[str, list[object]] = {"odometry": [], "ground_truth": [], "sonar": [], "laser": [],
-                                     "localization": [], "commands": [], "goals": []}
+                                     "localization": [], "commands": [], "goals": [], "camera": []}
+    camera_index = 0
     scene: dict[str, object] | None = None
     info: dict[str, object] | None = None
     end_s = 0.0
@@ -73,11 +74,26 @@ def replay_data(messages: list[files.Recorded], truth: bool, from_s: float = 0.0
                     "sonar_max_m": [s.max_range_m for s in robot_info.sonars],
                     "laser": MessageToDict(robot_info.laser, preserving_proto_field_name=True)}
             continue
+        if message.topic == channels.CAMERA:
+            if from_s <= t and (to_s is None or t <= to_s):
+                data["camera"].append([round(t, 3), camera_index])  # the frame's own URL names the index
+            camera_index += 1
+            continue
         if t < from_s or (to_s is not None and t > to_s):
             continue
         _add(data, message, round(t, 3))
     return {"t0_unix_s": t0 / 1e9, "duration_s": round(end_s, 3), "truth": truth, "scene": scene, "info": info,
             **data}
+
+
+def camera_frame(messages: list[files.Recorded], index: int) -> bytes | None:
+    """The JPEG of the recording's index-th camera frame, or None."""
+    frames = [m for m in messages if m.topic == channels.CAMERA]
+    if not 0 <= index < len(frames):
+        return None
+    frame = frames[index].decode()
+    assert isinstance(frame, robot_pb2.CameraFrame)
+    return frame.jpeg
 
 
 def _add(data: dict[str, list[object]], message: files.Recorded, t: float) -> None:

@@ -30,11 +30,15 @@ from middleware.models.recordings import RecordedCommand, Recording
 from middleware.recordings import channels, files, services
 from middleware.recordings.settings import RecordingSettings
 from middleware.robots.link import RobotLink
+from middleware.robots.messages import unpack_camera_frame
 from middleware.robots.registry import RobotRegistry
 from protos.telelab.v1 import robot_pb2
 
 log = logging.getLogger(__name__)
 RATE_HZ = 10.0  # telemetry samples a second (odometry, truth, sonar, laser)
+CAMERA_EVERY_S = 1.0  # a JPEG frame a second while someone watches the server camera...
+CAMERA_EVERY_LONG_S = 5.0  # ...and one every 5 s after the session's first CAMERA_THIN_AFTER_S
+CAMERA_THIN_AFTER_S = 600.0
 CHECK_S = 0.5  # how often the keeper looks at the sessions
 STALE_S = 5.0  # a recording not heard of for this long lost its recorder
 SWEEP_S = 60.0  # retention and disk limits
@@ -66,8 +70,10 @@ class SessionRecorder:
         self._thread = threading.Thread(target=self._run, name=f"record-{recording.id}", daemon=True)
         self._localization = threading.Thread(target=self._record_localization, name=f"record-loc-{recording.id}",
                                               daemon=True)
+        self._camera = threading.Thread(target=self._record_camera, name=f"record-cam-{recording.id}", daemon=True)
         self._thread.start()
         self._localization.start()
+        self._camera.start()
 
     @property
     def running(self) -> bool:
@@ -139,6 +145,43 @@ class SessionRecorder:
             log.info("recording %s: localization stopped (%s)", self.recording_id, error)
         finally:
             subscription.close()
+
+    def _record_camera(self) -> None:
+        """JPEG frames, thinned, only while someone else in this process watches the server camera (a view drawn
+        in the browser needs none: the replay redraws it from the scene and the poses)."""
+        subscription = None
+        started, last_capture = time.monotonic(), 0.0
+        try:
+            while not self._done.wait(0.2):
+                hub = self._link.camera
+                if hub.viewer_count - (1 if subscription is not None else 0) <= 0:
+                    if subscription is not None:
+                        subscription.close()
+                        subscription = None
+                    continue
+                if subscription is None:
+                    subscription = hub.subscribe()
+                every = CAMERA_EVERY_S if time.monotonic() - started < CAMERA_THIN_AFTER_S else CAMERA_EVERY_LONG_S
+                if time.time() - last_capture < every:
+                    continue
+                packed = subscription.next_message(timeout_s=0.5)
+                if packed is None:
+                    continue
+                header, jpeg = unpack_camera_frame(packed)
+                capture = float(header.get("capture_unix_s") or time.time())  # type: ignore[arg-type]
+                if capture - last_capture < every:
+                    continue  # thinned by the frames' own capture times
+                frame = robot_pb2.CameraFrame(
+                    frame_sequence=int(header.get("frame_sequence") or 0),  # type: ignore[call-overload]
+                    capture_unix_s=capture, width_px=int(header.get("width_px") or 0),  # type: ignore[call-overload]
+                    height_px=int(header.get("height_px") or 0), jpeg=jpeg)  # type: ignore[call-overload]
+                self._writer.write(channels.CAMERA, frame, _ns(capture))
+                last_capture = capture
+        except Exception as error:  # noqa: BLE001 - the hub closed: the telemetry goes on
+            log.info("recording %s: camera frames stopped (%s)", self.recording_id, error)
+        finally:
+            if subscription is not None:
+                subscription.close()
 
     def _each_second(self) -> bool:
         """Copies new commands, notes goal changes, flushes, heartbeats; False once the session ended."""

@@ -161,6 +161,18 @@ def export_csv(recording_id: int, channel: str) -> ResponseReturnValue:
         "Content-Disposition": f'attachment; filename="recording-{recording.id}-{channel}.csv"'})
 
 
+@blueprint.get("/api/recordings/<int:recording_id>/camera/<int:index>")
+@login_required
+@described(answers={200: file_answer("image/jpeg", "one recorded camera frame")})
+def camera_frame(recording_id: int, index: int) -> ResponseReturnValue:
+    """The index-th JPEG frame recorded while someone watched the server camera."""
+    recording = services.visible_recording(get_session(), _user(), recording_id)
+    jpeg = export.camera_frame(files.read_recording(_root(), recording.id), index)
+    if jpeg is None:
+        raise ApiError(404, "unknown_frame", "This recording has no such camera frame.", "index")
+    return Response(jpeg, mimetype="image/jpeg", headers={"Cache-Control": "private, max-age=3600"})
+
+
 @blueprint.get("/api/recordings/<int:recording_id>/source")
 @login_required
 @described(answers={200: file_answer("text/plain", "the plan or code that produced the run")})

@@ -32,6 +32,7 @@ ROUTES = (
     "GET /api/recordings/<int:recording_id>/data", "GET /api/recordings/<int:recording_id>/export.mcap",
     "GET /api/recordings/<int:recording_id>/export/<channel>.csv", "GET /api/recordings/<int:recording_id>/source",
     "GET /api/recordings/of/<kind>/<int:ref_id>",
+    "GET /api/recordings/<int:recording_id>/camera/<int:index>",
     "GET /account/password",
     "POST /account/password",
     "GET /admin/farm",

@@ -117,6 +117,7 @@ def driven(recording_lab: LiveServer) -> dict:
     wait_for(lambda: any(r.ended_at is None and r.status == "recording" and r.recorder_key
                          for r in recording_rows(recording_lab)), 10, "the turn was never recorded")
     telemetry = student.websocket(f"/ws/robots/{ROBOT}/telemetry")
+    camera = student.websocket(f"/ws/robots/{ROBOT}/camera")  # someone watches the server camera meanwhile
     drive = student.websocket(f"/ws/robots/{ROBOT}/drive")
     receive(drive, "ready")
     sent, live = [], []
@@ -126,6 +127,8 @@ def driven(recording_lab: LiveServer) -> dict:
         receive(drive, "ack")
         sent.append(sequence)
         sequence += 1
+        while camera.receive(timeout=0) is not None:
+            pass
         while (raw := telemetry.receive(timeout=0)) is not None:
             message = json.loads(raw) if isinstance(raw, str) else {}
             if message.get("type") == "telemetry":
@@ -137,6 +140,7 @@ def driven(recording_lab: LiveServer) -> dict:
     time.sleep(1.2)  # the goal runs a second: its start and progress are recorded
     drive.close()
     telemetry.close()
+    camera.close()
     queue.send(json.dumps({"type": "leave"}))
     queue.close()
     rows = wait_for(lambda: [r for r in recording_rows(recording_lab) if r.status == "ready"], 20,
@@ -174,6 +178,12 @@ def test_a_driven_session_reads_back_with_every_command_in_order_each_schema_and
     goals = [m for _, c, _, m in decoded if c.topic == "/goals"]
     assert goals and goals[0].skill == "orientation_control" and skill[-1].outcome == goals[0].goal_id
     assert recording.command_count == len(commands)
+    # The server camera was watched for about three seconds: its frames are in, thinned to about one a second.
+    frames = [(raw.log_time, m) for _, c, raw, m in decoded if c.topic == "/camera"]
+    assert 1 <= len(frames) <= 6 and all(m.jpeg[:2] == b"\xff\xd8" for _, m in frames), len(frames)
+    gaps = [(b - a) / 1e9 for (a, _), (b, _) in zip(frames, frames[1:], strict=False)]
+    assert all(gap >= 0.8 for gap in gaps), gaps
+    assert schemas["/camera"] == "telelab.v1.CameraFrame"
     # The recorder reads a stream of its own: its samples fall on other ticks than the viewer's, so each live pose
     # is compared with the recorded track at the live sample's capture time (linear between its neighbours).
     track = [(raw.log_time / 1e9, m.pose) for _, c, raw, m in decoded if c.topic == "/odometry"]
@@ -220,7 +230,7 @@ def _chunk_message_counts(data: bytes) -> list[int]:
     return ends
 
 
-ENDPOINTS = ("/recordings/{id}", "/api/recordings/{id}", "/api/recordings/{id}/data",
+ENDPOINTS = ("/recordings/{id}", "/api/recordings/{id}", "/api/recordings/{id}/data", "/api/recordings/{id}/camera/0",
              "/api/recordings/{id}/export.mcap", "/api/recordings/{id}/export/odometry.csv",
              "/api/recordings/{id}/export/commands.csv")
 
@@ -244,6 +254,8 @@ def test_each_role_sees_only_the_recordings_it_may_and_the_truth_only_where_allo
     data = json.loads(body)
     assert bool(data["ground_truth"]) == truth and data["truth"] == truth
     assert data["odometry"] and data["commands"] and data["scene"]
+    status, jpeg = get(client, f"/api/recordings/{recording_id}/camera/0")
+    assert status == 200 and jpeg[:2] == b"\xff\xd8"
     status, _ = get(client, f"/api/recordings/{recording_id}/export/ground_truth.csv")
     assert status == (200 if truth else 404)
     status, body = get(client, f"/api/recordings/{recording_id}/export.mcap")
@@ -269,6 +281,7 @@ def test_anonymous_is_sent_to_log_in_and_the_api_answers_401(recording_lab: Live
     ("/api/recordings/{id}/data?to_s=1e400", 400, "to_s"),
     ("/api/recordings/{id}/export/passwords.csv", 404, "channel"),
     ("/api/recordings/{id}/source", 404, "recording_id"),
+    ("/api/recordings/{id}/camera/999999", 404, "index"),
     ("/api/recordings/of/turn/0", 404, "ref_id"),
     ("/api/recordings/of/%00/1", 400, None),
 ])

@@ -143,6 +143,16 @@ function drawEye(p) {
   }
 }
 
+let cameraShown = -1;
+
+function drawCamera() {
+  const row = data.camera[sampleAt(data.camera, now)];
+  const index = row ? row[1] : -1;
+  if (index === cameraShown || index < 0) return;
+  cameraShown = index;
+  $('[data-slot="camera"]').src = `/api/recordings/${root.dataset.recordingId}/camera/${index}`;
+}
+
 function draw() {
   const odometry = pose(data.odometry[sampleAt(data.odometry, now)]);
   const truth = pose(data.ground_truth[sampleAt(data.ground_truth, now)]);
@@ -161,6 +171,7 @@ function draw() {
     { min: -1.5, max: 1.5, label: t("Speed: linear [m/s] blue, angular [rad/s] orange") });
   drawSonar();
   drawCommands();
+  drawCamera();
 }
 
 function seek(s) {
@@ -228,6 +239,7 @@ async function start() {
     }
   }
   fillLists();
+  $('[data-slot="camera-card"]').hidden = !data.camera.length;
   status.textContent = t("{n} s recorded: play it, or drag the time.", { n: data.duration_s.toFixed(1) });
   root.dataset.ready = "true";
   seek(0);
