@@ -9,6 +9,7 @@ from collections.abc import Sequence
 
 from middleware.auth.schemas import InvalidField
 from middleware.errors import Refused
+from middleware.lti import commands as lti_commands
 
 
 def _app(**overrides: object):
@@ -288,6 +289,8 @@ def build_parser() -> argparse.ArgumentParser:
     drain = farm_commands.add_parser("drain", help="move every robot off a Ray node (its id from status)")
     drain.add_argument("node")
     drain.set_defaults(handler=cmd_farm_drain)
+
+    lti_commands.add_commands(commands, _app)  # telelab lti register | urls | list | rotate-key | retire-key
 
     bench = commands.add_parser("bench", help="measure response times, streaming and capacity")
     bench.add_argument("--quick", action="store_true", help="a short smoke run that asserts no timings")

@@ -3,6 +3,7 @@ of work (a refusal anywhere discards all of it)."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -48,7 +49,7 @@ def accept_launch(session: Session, validated: ValidatedLaunch, secret: str) -> 
     return AcceptedLaunch(user, context.course_id if context else None, target, teaches)
 
 
-def deep_link_owner(session: Session, claims: dict[str, Any], actor: User) -> None:
+def deep_link_owner(session: Session, claims: Mapping[str, Any], actor: User) -> None:
     """Refuses anyone but the person who made the deep-linking launch."""
     identity = session.scalar(select(LtiIdentity).where(LtiIdentity.user_id == actor.id))
     if identity is None or identity.issuer != claims.get("iss") or identity.subject != claims.get("sub"):

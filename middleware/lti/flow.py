@@ -5,7 +5,7 @@ A refused launch raises LaunchRefused: the request's unit of work is discarded, 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import jwt
 from flask import Response, request
@@ -13,6 +13,7 @@ from pylti1p3.contrib.flask import FlaskMessageLaunch, FlaskOIDCLogin, FlaskRequ
 from pylti1p3.deep_link_resource import DeepLinkResource
 from pylti1p3.exception import LtiException, OIDCException
 from pylti1p3.lineitem import LineItem
+from pylti1p3.message_launch import MessageLaunch
 from sqlalchemy.orm import Session
 
 from middleware.lti import launches
@@ -86,7 +87,7 @@ def login_redirect(session: Session, launch_url: str, params: dict[str, str] | N
     storage = DatabaseLaunchStorage(session)
     login = FlaskOIDCLogin(_request(params), DatabaseToolConf(session), launch_data_storage=storage)
     try:
-        return login.redirect(launch_url)  # type: ignore[no-any-return]
+        return login.redirect(launch_url)
     except (OIDCException, LtiException) as error:
         raise LaunchRefused("bad_login", "The LMS's login request was refused: " + str(error) +
                             ". Check the platform's registration.") from None
@@ -115,7 +116,7 @@ def validate_launch(session: Session) -> ValidatedLaunch:
     tool_conf = DatabaseToolConf(session)
     launch = FlaskMessageLaunch(FlaskRequest(), tool_conf, launch_data_storage=DatabaseLaunchStorage(session),
                                 requests_session=http_session())
-    launch.set_jwt_verify_options({"verify_aud": False, "require": REQUIRED_CLAIMS})
+    launch.set_jwt_verify_options(cast(dict[str, bool], {"verify_aud": False, "require": REQUIRED_CLAIMS}))
     launch.set_launch_data_lifetime(LAUNCH_LIFETIME_S)
     try:
         claims = dict(launch.get_launch_data())
@@ -141,7 +142,7 @@ def _unverified_issuer() -> str:
         return ""
 
 
-def restore_launch(session: Session, launch_id: str) -> FlaskMessageLaunch:
+def restore_launch(session: Session, launch_id: str) -> MessageLaunch:
     """A stored launch (a deep-linking request being answered)."""
     try:
         return FlaskMessageLaunch.from_cache(launch_id, FlaskRequest(), DatabaseToolConf(session),
@@ -151,10 +152,10 @@ def restore_launch(session: Session, launch_id: str) -> FlaskMessageLaunch:
                                               "again.") from None
 
 
-def deep_link_response(launch: FlaskMessageLaunch, items: list[tuple[str, str, str, float | None]],
+def deep_link_response(launch: MessageLaunch, items: list[tuple[str, str, str, float | None]],
                        secret: str) -> tuple[str, str]:
     """(the platform's return URL, the signed JWT) placing items: (title, url, target, score maximum or None)."""
-    context = launch.get_launch_data().get(launches.CONTEXT_CLAIM) or {}
+    context = cast(dict[str, Any], launch.get_launch_data().get(launches.CONTEXT_CLAIM) or {})
     resources = []
     for title, url, target, maximum in items:
         resource = DeepLinkResource().set_url(url).set_title(title).set_custom_params(

@@ -10,7 +10,7 @@ import json
 from datetime import datetime
 from typing import Any
 
-from jwcrypto.jwk import JWK
+from jwcrypto.jwk import JWK  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 

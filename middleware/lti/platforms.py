@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from urllib.parse import urlsplit
 
@@ -31,7 +32,7 @@ class InvalidPlatform(Refused):
         super().__init__(400, "invalid_field", message, field)
 
 
-def _text(fields: dict[str, object], name: str, label: str, limit: int = 255) -> str:
+def _text(fields: Mapping[str, object], name: str, label: str, limit: int = 255) -> str:
     value = fields.get(name)
     if not isinstance(value, str) or not value.strip():
         raise InvalidPlatform(name, f"Fill in {label}.")
@@ -83,7 +84,7 @@ class PlatformFields:
     frame_origins: list[str]
 
 
-def clean_platform(fields: dict[str, object]) -> PlatformFields:
+def clean_platform(fields: Mapping[str, object]) -> PlatformFields:
     """Every field checked, the first wrong one named."""
     issuer = clean_url(_text(fields, "issuer", "The issuer"), "issuer", "The issuer")
     client_id = _text(fields, "client_id", "The client id")
@@ -108,7 +109,7 @@ def clean_platform(fields: dict[str, object]) -> PlatformFields:
                           list(dict.fromkeys([origin_of(issuer), *origins])))
 
 
-def register(session: Session, fields: dict[str, object]) -> LtiPlatform:
+def register(session: Session, fields: Mapping[str, object]) -> LtiPlatform:
     """Adds a platform, or updates the one with the same issuer and client id (its deployments replaced)."""
     clean = clean_platform(fields)
     platform = session.scalar(select(LtiPlatform).where(LtiPlatform.issuer == clean.issuer,

@@ -53,13 +53,13 @@ def _fetch(session: Session, context: LtiContext, http: requests.Session | None)
                                                 "(no Names and Role Provisioning service in its launches).")
     nrps = NamesRolesProvisioningService(services.connector(session, platform, http),
                                          {"context_memberships_url": context.memberships_url,
-                                          "service_versions": ["2.0"]})  # type: ignore[typeddict-item]
+                                          "service_versions": ["2.0"]})  # type: ignore[typeddict-unknown-key]
     try:
         members = nrps.get_members()
     except (LtiException, requests.RequestException, ValueError) as error:
         raise Refused(502, "lms_unreachable", "The roster could not be read: " +
                       services.failure_reason(error)) from None
-    return [m for m in members if isinstance(m, dict)][:MAX_MEMBERS]
+    return [dict(m) for m in members if isinstance(m, dict)][:MAX_MEMBERS]
 
 
 def sync(session: Session, actor: User, course_id: int, http: requests.Session | None = None) -> RosterReport:

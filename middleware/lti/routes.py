@@ -4,6 +4,7 @@ admin's platform registrations and keys, and the tutor's roster sync and grade r
 from __future__ import annotations
 
 from typing import Any
+from urllib.parse import urlencode
 
 from flask import Blueprint, current_app, flash, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
@@ -34,9 +35,10 @@ def login() -> ResponseReturnValue:
     not: then "Open in a new window"), then the redirect to the LMS's authorization endpoint."""
     params = _login_params()
     if not request.values.get("telelab_checked") and not request.values.get("lti1p3_new_window"):
+        here = url_for("lti.login") + "?"
         return render_template("lti/login_check.html",
-                               continue_url=url_for("lti.login", telelab_checked="1", **params),
-                               new_window_url=url_for("lti.login", lti1p3_new_window="1", **params))
+                               continue_url=here + urlencode({"telelab_checked": "1", **params}),
+                               new_window_url=here + urlencode({"lti1p3_new_window": "1", **params}))
     return flow.login_redirect(get_session(), url_for("lti.launch", _external=True), params)
 
 

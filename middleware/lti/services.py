@@ -17,7 +17,7 @@ HTTP_TIMEOUT_S = 15.0
 class _TimeoutSession(requests.Session):
     """A requests session whose calls never wait for ever on an LMS."""
 
-    def request(self, *args, **kwargs):  # type: ignore[no-untyped-def, override]
+    def request(self, *args, **kwargs):
         """requests.Session.request with a timeout when none is given."""
         kwargs.setdefault("timeout", HTTP_TIMEOUT_S)
         return super().request(*args, **kwargs)

@@ -36,7 +36,7 @@ class ToolRegistration(Registration):
         return self._kid
 
 
-class DatabaseToolConf(ToolConfAbstract):  # type: ignore[type-arg]
+class DatabaseToolConf(ToolConfAbstract):
     """Registrations of the platforms registered in the database; one issuer may hold several client ids."""
 
     def __init__(self, session: Session) -> None:
