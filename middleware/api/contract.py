@@ -173,7 +173,7 @@ def described(summary: str | None = None, *, body: Schema | None = None, body_re
 
     def decorate(view: F) -> F:
         operation = Operation(
-            summary=summary or (view.__doc__ or view.__name__).strip().splitlines()[0],
+            summary=summary or " ".join((view.__doc__ or view.__name__).strip().split("\n\n")[0].split()),
             body=body, body_required=body_required, form=form, query=query, answers=shaped,
             refusals=tuple(sorted(set(COMMON_REFUSALS if login else (400, 404)) | set(refusals))), login=login)
 
