@@ -7,7 +7,7 @@ import math
 import re
 from pathlib import Path
 
-from flask import Blueprint, Response, current_app, jsonify, render_template, request
+from flask import Blueprint, Response, current_app, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
@@ -93,6 +93,16 @@ def replay_page(recording_id: int) -> ResponseReturnValue:
                            truth=services.may_see_truth(_user()), channels=export.CSV_CHANNELS)
 
 
+@blueprint.get("/recordings/of/<kind>/<int:ref_id>")
+@login_required
+def run_of(kind: str, ref_id: int) -> ResponseReturnValue:
+    """The replay of an attempt's, a trial's or an exercise run's session (the result pages link here)."""
+    recording = services.recording_for(get_session(), _user(), kind, ref_id) if kind in RECORDING_KINDS else None
+    if recording is None:
+        raise Refused(404, "unknown_recording", "This run was not recorded, or you may not see it.")
+    return redirect(url_for("recordings.replay_page", recording_id=recording.id))
+
+
 @blueprint.get("/admin/recordings")
 @login_required
 def storage_page() -> ResponseReturnValue:
@@ -132,7 +142,8 @@ def recording_data(recording_id: int) -> ResponseReturnValue:
     """The decoded channels from from_s to to_s (seconds from the first message): what the replay page draws."""
     recording = services.visible_recording(get_session(), _user(), recording_id)
     from_s, to_s = _range()
-    return jsonify(_data(recording, from_s, to_s))
+    return jsonify({**_data(recording, from_s, to_s),
+                    "measurement": services.attempt_measurement(get_session(), recording)})
 
 
 @blueprint.get("/api/recordings/<int:recording_id>/export.mcap")

@@ -18,7 +18,7 @@ from middleware.courses.authority import taught_student_ids, teaches_student
 from middleware.errors import ApiError
 from middleware.models.access import RobotControl
 from middleware.models.accounts import Role, User, as_utc, utc_now
-from middleware.models.assessment import Attempt
+from middleware.models.assessment import Attempt, Exam
 from middleware.models.courses import CourseMembership
 from middleware.models.experiment import Trial
 from middleware.models.farm import PersonalRobotRecord
@@ -134,6 +134,27 @@ def stop_recording(session: Session, recording_id: int, reason: str = "finished"
     """Ends the recording (its file is completed by the recorder within a second); False if it had ended."""
     return bool(session.execute(update(Recording).where(Recording.id == recording_id, Recording.ended_at.is_(None))
                                 .values(ended_at=utc_now(), end_reason=reason[:32])).rowcount)  # type: ignore[attr-defined]
+
+
+_TASK_FIELDS = ("kind", "x_m", "y_m", "x1_m", "y1_m", "x2_m", "y2_m", "distance_m")
+
+
+def attempt_measurement(session: Session, recording: Recording) -> dict[str, object] | None:
+    """For a test attempt's run: the task the rubric measured (its target or wall), the student's reported pose,
+    and the grader's sentence and points, for the replay to draw; None for any other run."""
+    if recording.kind != "test_attempt" or recording.ref_id is None:
+        return None
+    attempt = session.get(Attempt, recording.ref_id)
+    exam = session.get(Exam, attempt.exam_id) if attempt is not None else None
+    if attempt is None or exam is None or not exam.task:
+        return None
+    result = next((r for r in attempt.results or [] if r.get("item") == "task"), None)
+    report = (attempt.answers or {}).get("report") if isinstance(attempt.answers, dict) else None
+    return {"attempt_id": attempt.id, "task": {k: exam.task[k] for k in _TASK_FIELDS if k in exam.task},
+            "report": report if isinstance(report, dict) else None,
+            "feedback": result.get("feedback") if result else None,
+            "points": result.get("points") if result else None, "max_points": result.get("max_points") if result
+            else None}
 
 
 def may_see_truth(actor: User) -> bool:

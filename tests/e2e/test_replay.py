@@ -20,7 +20,8 @@ def track_pose(t: float) -> tuple[float, float, float]:
     return 0.2 * t, 0.5 * math.sin(0.3 * t), 0.15 * math.cos(0.3 * t)
 
 
-def write_recording(app, skill_server_address: str) -> tuple[int, list[tuple[float, float, float, float]]]:
+def write_recording(app, skill_server_address: str, kind: str = "turn",
+                    ref_id: int | None = None) -> tuple[int, list[tuple[float, float, float, float]]]:
     """A 20-second recording of student1 on lab-1 (odometry, truth, sonar, commands, a goal); its id and track."""
     import grpc
 
@@ -36,7 +37,7 @@ def write_recording(app, skill_server_address: str) -> tuple[int, list[tuple[flo
         info = stub.GetRobotInfo(robot_pb2.GetRobotInfoRequest(), timeout=10)
     with session_factory(app)() as session:
         user = session.query(User).filter_by(username="student1").one()
-        recording = Recording(user_id=user.id, robot_name="lab-1", kind="turn", explicit=False,
+        recording = Recording(user_id=user.id, robot_name="lab-1", kind=kind, ref_id=ref_id, explicit=False,
                               started_at=datetime.fromtimestamp(START_UNIX_S, UTC),
                               ended_at=datetime.fromtimestamp(START_UNIX_S + 20, UTC), end_reason="turn_ended",
                               status="ready", command_count=3)
@@ -115,3 +116,47 @@ def test_scrubbing_the_replay_shows_the_pose_the_file_holds_for_that_time(
     width = page.evaluate("document.documentElement.scrollWidth")
     assert width <= 390, f"the replay page scrolls sideways on a phone ({width} px)"
     page.screenshot(path=str(ARTIFACTS_DIR / "replay-phone.png"), full_page=True)
+
+
+def graded_attempt(app) -> int:
+    """A submitted experimental attempt of student1 (reach_point at (4, 0.3), graded): its id."""
+    from middleware.db import session_factory
+    from middleware.models import Course, User
+    from middleware.models.assessment import Attempt, Exam
+
+    with session_factory(app)() as session:
+        user = session.query(User).filter_by(username="student1").one()
+        course = Course(code="REPLAY", title="Replay")
+        session.add(course)
+        session.flush()
+        exam = Exam(course_id=course.id, title="Reach", kind="experimental", robot_name="lab-1", question_ids=[],
+                    task={"kind": "reach_point", "x_m": 4.0, "y_m": 0.3, "points": 2.0})
+        session.add(exam)
+        session.flush()
+        attempt = Attempt(exam_id=exam.id, user_id=user.id, status="submitted", started_at=datetime.now(UTC),
+                          submitted_at=datetime.now(UTC), answers={},
+                          results=[{"item": "task", "points": 1.0, "max_points": 2.0, "correct": False,
+                                    "feedback": "The robot ended 0.081 m from (4.0, 0.3).", "topics": []}])
+        session.add(attempt)
+        session.commit()
+        return attempt.id
+
+
+def test_a_test_attempt_s_run_opens_from_its_id_with_what_the_rubric_measured(
+        page, app, live_server: LiveServer, skill_server_address: str) -> None:
+    attempt_id = graded_attempt(app)
+    write_recording(app, skill_server_address, kind="test_attempt", ref_id=attempt_id)
+    page.goto(f"{live_server.url}/login")
+    page.get_by_label("Username").fill("student1")
+    page.get_by_label("Password").fill(STUDENT_PASSWORD)
+    page.get_by_role("button", name="Log in").click()
+    page.locator('[data-field="username"]').wait_for()
+    page.goto(f"{live_server.url}/recordings/of/test_attempt/{attempt_id}")
+    page.locator("#replay[data-ready=true]").wait_for(timeout=20_000)
+    measured = page.get_by_test_id("replay-measurement").inner_text()
+    assert "1 of 2 points" in measured and "0.081 m" in measured, measured
+    assert "what the test measured" in page.locator(".replay__legend").inner_text()
+    ARTIFACTS_DIR.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS_DIR / "replay-attempt.png"), full_page=True)
+    response = page.goto(f"{live_server.url}/recordings/of/test_attempt/{attempt_id + 1000}")
+    assert response is not None and response.status == 404

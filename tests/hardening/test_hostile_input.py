@@ -33,6 +33,7 @@ ROUTES = (
     "GET /api/recordings/<int:recording_id>/export/<channel>.csv", "GET /api/recordings/<int:recording_id>/source",
     "GET /api/recordings/of/<kind>/<int:ref_id>",
     "GET /api/recordings/<int:recording_id>/camera/<int:index>",
+    "GET /recordings/of/<kind>/<int:ref_id>",
     "GET /account/password",
     "POST /account/password",
     "GET /admin/farm",

@@ -57,6 +57,7 @@ function drawMap() {
     context.fillRect(-b.half_x_m * view.scale, -b.half_y_m * view.scale, 2 * b.half_x_m * view.scale, 2 * b.half_y_m * view.scale);
     context.restore();
   }
+  drawMeasurement(context, view);
   for (const [name, colour] of trails) {
     const rows = data[name];
     const last = sampleAt(rows, now);
@@ -79,6 +80,55 @@ function drawMap() {
     context.lineTo(x + 12 * Math.cos(rows[last][3]), y - 12 * Math.sin(rows[last][3]));
     context.stroke();
   }
+}
+
+/** The rubric's measurement of a test attempt's run: the target, the wall or the reported pose, in purple. */
+function drawMeasurement(context, view) {
+  const task = data.measurement?.task;
+  if (!task) return;
+  context.save();
+  context.strokeStyle = "#7c3aed";
+  context.fillStyle = "#7c3aed";
+  context.lineWidth = 2;
+  if (task.kind === "reach_point") {
+    const [x, y] = worldToCanvas(view, task.x_m, task.y_m);
+    context.beginPath();
+    context.arc(x, y, 7, 0, 2 * Math.PI);
+    context.stroke();
+    const end = data.ground_truth.length ? data.ground_truth : data.odometry;
+    const last = end[end.length - 1];
+    if (last) {
+      const [ex, ey] = worldToCanvas(view, last[1], last[2]);
+      context.setLineDash([4, 3]);
+      context.beginPath();
+      context.moveTo(ex, ey);
+      context.lineTo(x, y);
+      context.stroke();
+    }
+  } else if (task.kind === "wall_following") {
+    const [x1, y1] = worldToCanvas(view, task.x1_m, task.y1_m);
+    const [x2, y2] = worldToCanvas(view, task.x2_m, task.y2_m);
+    context.beginPath();
+    context.moveTo(x1, y1);
+    context.lineTo(x2, y2);
+    context.stroke();
+    const length = Math.hypot(x2 - x1, y2 - y1) || 1;
+    const [nx, ny] = [-(y2 - y1) / length, (x2 - x1) / length];
+    const offset = (task.distance_m ?? 0) * view.scale;
+    context.setLineDash([4, 3]);
+    for (const side of [1, -1]) {
+      context.beginPath();
+      context.moveTo(x1 + side * nx * offset, y1 + side * ny * offset);
+      context.lineTo(x2 + side * nx * offset, y2 + side * ny * offset);
+      context.stroke();
+    }
+  }
+  const report = data.measurement.report;
+  if (report && Number.isFinite(Number(report.x_m)) && Number.isFinite(Number(report.y_m))) {
+    const [x, y] = worldToCanvas(view, Number(report.x_m), Number(report.y_m));
+    context.fillRect(x - 4, y - 4, 8, 8);
+  }
+  context.restore();
 }
 
 function drawPlot(canvas, series, { min, max, label }) {
@@ -239,6 +289,11 @@ async function start() {
     }
   }
   fillLists();
+  if (data.measurement) {
+    const m = data.measurement;
+    $('[data-field="measurement"]').textContent = t("Graded: {points} of {max} points. {feedback}", {
+      points: m.points ?? "–", max: m.max_points ?? "–", feedback: m.feedback ?? "" });
+  }
   $('[data-slot="camera-card"]').hidden = !data.camera.length;
   status.textContent = t("{n} s recorded: play it, or drag the time.", { n: data.duration_s.toFixed(1) });
   root.dataset.ready = "true";
