@@ -63,8 +63,11 @@ def catalogue(session: Session) -> list[Exercise]:
 
 
 def exercise_by_slug(session: Session, slug: str) -> Exercise:
-    """The exercise, or a 404 naming slug."""
+    """The exercise (a built-in one is added to a database that lacks it), or a 404 naming slug."""
     exercise = session.scalar(select(Exercise).where(Exercise.slug == slug[:64]))
+    if exercise is None and any(entry["slug"] == slug for entry in BUILT_IN):
+        ensure_catalogue(session)
+        exercise = session.scalar(select(Exercise).where(Exercise.slug == slug))
     if exercise is None:
         raise ApiError(404, "unknown_exercise", "There is no such exercise.", "slug")
     return exercise

@@ -1,0 +1,95 @@
+"""The exercises API over HTTP on a real skill server: the server places the robot (a hidden start for a
+submission), grades the run from the robot's own pose log, refuses a forged grade or trace, keeps a student's
+code from another user's robot, shows a run only to its owner and their tutors, and lets tutors extend the
+catalogue."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from tests.integration.plans.conftest import PlansLab, api
+
+STILL = "from telelab import robot\nwhile robot.tick():\n    robot.stop()\n"
+NEW_EXERCISE = {"slug": "reach-the-crate", "title": "Reach the crate", "statement": "Drive to the crate.",
+                "template": STILL, "scene": "lab", "start": [0, 0, 0],
+                "random_starts": {"x_m": [-0.5, 0.5], "y_m": [-0.5, 0.5], "theta_rad": [-1, 1]},
+                "rubric": {"kind": "reach_goal", "x_m": 2.0, "y_m": 1.4, "radius_m": 0.4}, "time_limit_s": 30}
+
+
+def wait_for_practice_robot(client) -> None:
+    status, answer = api(client, "POST", "/api/practice", {})
+    assert status in (200, 202), answer
+    deadline = time.monotonic() + 90
+    while not answer.get("running"):
+        assert time.monotonic() < deadline, "the practice robot did not start"
+        time.sleep(0.5)
+        _, answer = api(client, "GET", "/api/practice")
+
+
+@pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
+def test_runs_are_placed_and_graded_by_the_server_and_seen_by_owner_and_tutor_only(plans_lab: PlansLab) -> None:
+    ann = plans_lab.client("student1")
+    # Nothing a request sends can stand for the robot's record.
+    for forged in ("grade", "trace", "start", "measurements"):
+        status, answer = api(ann, "POST", "/api/exercises/bump-and-go/runs", {"code": STILL, forged: 1})
+        assert (status, answer["error"]["field"]) == (400, forged), answer
+    # Another user's robot is answered like a missing one; a lab robot needs the turn.
+    status, answer = api(ann, "POST", "/api/exercises/bump-and-go/runs", {"code": STILL, "robot": "practice-student2"})
+    assert (status, answer["error"]["code"]) == (404, "unknown_robot"), answer
+    status, answer = api(ann, "POST", "/api/exercises/bump-and-go/runs", {"code": STILL, "robot": "lab-1"})
+    assert (status, answer["error"]["code"]) == (403, "not_controller"), answer
+
+    wait_for_practice_robot(ann)
+    status, answer = api(ann, "POST", "/api/exercises/bump-and-go/runs", {"code": STILL, "mode": "practice"})
+    assert status == 201, answer
+    practice = answer["run"]
+    assert practice["start"] == [0.0, 0.0, 0.0] and practice["robot_name"] == "practice-student1"
+    time.sleep(1.5)  # a few pose-log samples
+    status, answer = api(ann, "POST", f"/api/exercise-runs/{practice['id']}/finish", {"trace": [[0, 9, 9]]})
+    assert (status, answer["error"]["field"]) == (400, "trace"), answer
+    status, answer = api(ann, "POST", f"/api/exercise-runs/{practice['id']}/finish", {})
+    assert status == 200, answer
+    graded = answer["run"]
+    assert graded["status"] == "graded" and len(graded["trace"]) >= 3
+    driven = next(m for m in graded["measurements"] if m["name"] == "distance driven")
+    assert driven["value"] < 0.05 and graded["grade"] < 0.5  # it stood still: the truth says so
+    assert answer["scene_boxes"]
+
+    status, answer = api(ann, "POST", "/api/exercises/bump-and-go/runs", {"code": STILL, "mode": "submission"})
+    assert status == 201, answer
+    submission = answer["run"]
+    assert submission["start"] is None  # hidden until the run is over
+    _, answer = api(ann, "POST", f"/api/exercise-runs/{submission['id']}/finish", {})
+    assert answer["run"]["start"] is not None and answer["run"]["start"] != [0.0, 0.0, 0.0]
+
+    # The owner and their tutor read a run; another student and another course's tutor get a 404.
+    for name, expected in (("student1", 200), ("tutor1", 200), ("student2", 404), ("tutor2", 404)):
+        status, _ = api(plans_lab.client(name), "GET", f"/api/exercise-runs/{practice['id']}")
+        assert status == expected, name
+    status, answer = api(plans_lab.client("tutor1"), "GET", "/api/exercises/bump-and-go/class")
+    assert status == 200
+    row = next(r for r in answer["students"] if r["username"] == "student1")
+    assert row["codes"][0]["code"] == STILL and len(row["runs"]) == 2
+    assert not any(r["username"] == "student3" for r in answer["students"])
+    status, _ = api(ann, "GET", "/api/exercises/bump-and-go/class")
+    assert status == 403
+
+
+@pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
+def test_tutors_extend_the_catalogue_and_students_cannot(plans_lab: PlansLab) -> None:
+    status, answer = api(plans_lab.client("student1"), "POST", "/api/exercises", NEW_EXERCISE)
+    assert status == 403, answer
+    tutor = plans_lab.client("tutor1")
+    status, answer = api(tutor, "POST", "/api/exercises", {**NEW_EXERCISE, "rubric": {"kind": "teleport"}})
+    assert (status, answer["error"]["field"]) == (400, "rubric.kind"), answer
+    status, answer = api(tutor, "POST", "/api/exercises", {**NEW_EXERCISE, "time_limit_s": 1e9})
+    assert (status, answer["error"]["field"]) == (400, "time_limit_s"), answer
+    status, answer = api(tutor, "POST", "/api/exercises", NEW_EXERCISE)
+    assert status == 201, answer
+    assert "random_starts" not in answer["exercise"]  # the hidden starts stay the server's
+    status, answer = api(tutor, "POST", "/api/exercises", NEW_EXERCISE)
+    assert (status, answer["error"]["code"]) == (409, "slug_taken")
+    status, answer = api(plans_lab.client("student1"), "GET", "/api/exercises")
+    assert "reach-the-crate" in [e["slug"] for e in answer["exercises"]]
