@@ -6,6 +6,9 @@ blocks fit a phone. Screenshots in test-artifacts/."""
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
+
 import pytest
 
 from tests.conftest import ARTIFACTS_DIR, LiveServer
@@ -61,6 +64,16 @@ def text_now(page) -> str:
     return page.get_by_label("The plan's text, one command a line").input_value()
 
 
+def wait_for_text(page, wanted: Callable[[str], bool]) -> str:
+    """The plan's text once wanted holds of it, read as a person reads it (the page's CSP refuses string
+    predicates evaluated in the page)."""
+    deadline = time.monotonic() + 20
+    while not wanted(text := text_now(page)):
+        assert time.monotonic() < deadline, text
+        page.wait_for_timeout(100)
+    return text
+
+
 def test_a_student_builds_a_plan_with_blocks_and_tries_it(page, app, demo_accounts, live_server: LiveServer) -> None:
     from middleware.lab_runner import seed_demo_course
     from middleware.teaching.practice_robots import practice_manager
@@ -92,7 +105,7 @@ def test_a_student_builds_a_plan_with_blocks_and_tries_it(page, app, demo_accoun
         toolbox = page.locator(".blocklyToolbox").bounding_box()
         assert area is not None and toolbox is not None
         drag_from_toolbox(page, "Say and set", 0, toolbox["x"] + toolbox["width"] + 40, area["y"] + 40)  # say
-        page.wait_for_function("document.querySelector('textarea[name=text]').value.startsWith('say')")
+        wait_for_text(page, lambda text: text.startswith("say"))
         say_box = page.evaluate("""() => {
             const box = window.Blockly.getMainWorkspace().getTopBlocks(false)[0].getSvgRoot().getBoundingClientRect();
             return {x: box.x, y: box.y, height: box.height};
@@ -109,8 +122,22 @@ def test_a_student_builds_a_plan_with_blocks_and_tries_it(page, app, demo_accoun
         page.mouse.click(field["x"], field["y"])
         page.locator(".blocklyHtmlInput").fill("3s")
         page.keyboard.press("Enter")
-        page.wait_for_function(f"document.querySelector('textarea[name=text]').value === {BUILT!r}")
+        wait_for_text(page, lambda text: text == BUILT)
         page.screenshot(path=str(ARTIFACTS_DIR / "plan-blocks-built.png"), full_page=True)
+
+        # By keyboard (Blockly's own navigation): Tab reaches the plan's blocks (the one last edited), the arrows go
+        # from block to block, each read out by its words.
+        page.locator("[data-action=show-blocks]").focus()
+        reached = []
+        for _ in range(8):
+            page.keyboard.press("Tab")
+            reached.append(page.evaluate("document.activeElement.getAttribute('aria-label') || ''"))
+            if reached[-1].startswith("drive, 0.2, m/s, turn, 0, rad/s, for, 3s"):
+                break
+        assert reached[-1].startswith("drive, 0.2, m/s, turn, 0, rad/s, for, 3s"), reached
+        page.keyboard.press("ArrowUp")
+        assert page.evaluate("window.Blockly.getFocusManager().getFocusedNode().type") == "plan_say"
+        assert "say, hello" in page.evaluate("document.activeElement.getAttribute('aria-label')")
 
         page.get_by_role("button", name="Check", exact=True).click()
         page.locator("[data-field=check-status][data-valid=true]").wait_for()
