@@ -26,6 +26,7 @@ from middleware.models import Course, Lesson, StoredPlan, User
 from middleware.models.accounts import utc_now
 from middleware.models.assessment import Attempt, Exam
 from middleware.models.class_wall import ClassHand, ClassNotice, ClassTakeover
+from middleware.models.exercises import Exercise
 from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord
 from middleware.teaching import class_sessions
 from middleware.teaching.practice_robots import practice_name
@@ -39,7 +40,7 @@ OVERSEES_CACHE_S = 5.0
 HAND_TEXT_MAX = 200
 NOTE_TEXT_MAX = 300
 NOTICES_SHOWN = 10
-PUSH_KINDS = {"lesson": "a lesson", "plan": "a plan", "test": "a test"}
+PUSH_KINDS = {"lesson": "a lesson", "plan": "a plan", "test": "a test", "exercise": "an exercise"}
 
 
 def announce(session: Session, class_session_id: int) -> None:
@@ -269,7 +270,8 @@ def _point(value: object) -> tuple[float, float]:
 
 
 def push(session: Session, actor: User, course_id: int, kind: object, item_id: object) -> ClassNotice:
-    """Sends every student of the class a lesson, a plan shared with the course or a test of the course."""
+    """Sends every student of the class a lesson, an exercise, a plan shared with the course or a test of the
+    course."""
     course, opened = wall_session(session, actor, course_id)
     if not isinstance(kind, str) or kind not in PUSH_KINDS:
         raise Refused(400, "invalid_field", f"kind must be one of {', '.join(PUSH_KINDS)}.", "kind")
@@ -296,6 +298,10 @@ def _pushed(session: Session, course: Course, kind: str, item_id: int) -> tuple[
         if plan is not None:
             raise Refused(400, "invalid_field", "Share the plan with the course first: its students cannot open "
                                                 "it otherwise.", "id")
+    elif kind == "exercise":
+        exercise = session.get(Exercise, item_id)
+        if exercise is not None:
+            return exercise.title, f"/exercises/{exercise.slug}"
     else:
         exam = session.get(Exam, item_id)
         if exam is not None and exam.course_id == course.id:
@@ -304,14 +310,16 @@ def _pushed(session: Session, course: Course, kind: str, item_id: int) -> tuple[
 
 
 def choices(session: Session, course: Course) -> dict[str, list[dict[str, object]]]:
-    """What the wall's push menu offers: every lesson, the plans shared with the course, the course's tests."""
+    """What the wall's push menu offers: every lesson and exercise, the plans shared with the course, the course's
+    tests."""
     lessons = session.execute(select(Lesson.id, Lesson.title).order_by(Lesson.title)).all()
     plans = session.execute(select(StoredPlan.id, StoredPlan.name).where(StoredPlan.shared_course_id == course.id)
                             .order_by(StoredPlan.name)).all()
     exams = session.execute(select(Exam.id, Exam.title).where(Exam.course_id == course.id)
                             .order_by(Exam.title)).all()
+    exercises = session.execute(select(Exercise.id, Exercise.title).order_by(Exercise.title)).all()
     return {kind: [{"id": row[0], "title": row[1]} for row in rows]
-            for kind, rows in (("lesson", lessons), ("plan", plans), ("test", exams))}
+            for kind, rows in (("lesson", lessons), ("exercise", exercises), ("plan", plans), ("test", exams))}
 
 
 def student_view(session: Session, actor: User) -> dict[str, object]:

@@ -151,6 +151,22 @@ def test_a_raised_hand_reaches_the_wall_at_once_and_comes_down_when_answered(wal
         notice = _until(mine, lambda message: message["type"] == "seat" and message["notices"])["notices"][0]
         assert (notice["kind"], notice["text"], notice["x_m"], notice["from"]) == ("pointer", "Look at the sonar.",
                                                                                    0.5, "tutor1")
+        # A push reaches every student: a test of the course, with its link.
+        from middleware.db import session_factory
+        from middleware.models.assessment import Exam
+
+        with session_factory(server.app)() as session:
+            exam = Exam(course_id=course_id, title="Quiz on sonar", kind="quiz")
+            session.add(exam)
+            session.commit()
+            exam_id = exam.id
+        status, pushed = _api(tutor, "POST", f"/api/courses/{course_id}/class-wall",
+                              {"action": "push", "kind": "test", "id": exam_id})
+        assert status == 200 and pushed["url"] == f"/assessment/exams/{exam_id}", pushed
+        notice = _until(mine, lambda message: message["type"] == "seat" and message["notices"][0]["kind"] == "push")
+        assert notice["notices"][0]["title"] == "Quiz on sonar"
+        classmate = _api(_login(server, "s02"), "GET", "/api/class-session/wall")[1]
+        assert classmate["notices"][0]["title"] == "Quiz on sonar"
     finally:
         _close(wall, mine)
 

@@ -4,6 +4,7 @@ import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
 import { connectChat } from "../../lib/console/chat-session.js";
 import { register as registerChatPanel } from "../../panels/chat-panel/chat-panel.js";
 import { drawTile, floorPlan } from "./class-wall-draw.js";
+import { t } from "../../lib/i18n.js";
 
 const root = document.getElementById("class-help");
 const form = root.querySelector("[data-field=hand-form]");
@@ -11,7 +12,9 @@ const lowerButton = root.querySelector("[data-action=lower]");
 const handLine = root.querySelector("[data-field=hand]");
 const heldLine = root.querySelector("[data-field=held]");
 const notices = root.querySelector("[data-field=notices]");
-const PUSH_WORDS = { lesson: "Open the lesson", plan: "Open the plan", test: "Open the test" };
+const PUSH_WORDS = {
+  lesson: t("Open the lesson"), exercise: t("Open the exercise"), plan: t("Open the plan"), test: t("Open the test"),
+};
 let channel = null;
 let boxes = null;
 
@@ -20,15 +23,17 @@ function render(seat) {
   if (!seat.open) return;
   root.dataset.held = String(Boolean(seat.held_by));
   heldLine.hidden = !seat.held_by;
-  heldLine.textContent = seat.held_by
-    ? `Your tutor ${seat.held_by} has taken over your robot: your commands wait until they give it back.` : "";
+  heldLine.textContent = !seat.held_by ? ""
+    : t("Your tutor {tutor} has taken over your robot: your commands wait until they give it back.", {
+      tutor: seat.held_by });
   lowerButton.hidden = !seat.hand;
-  form.querySelector("[data-action=raise]").textContent = seat.hand ? "Change my question" : "Raise my hand";
-  handLine.textContent = seat.hand
-    ? `Your hand is up${seat.hand.text ? `: “${seat.hand.text}”` : ""}. Your tutor sees it on the class wall.` : "";
+  form.querySelector("[data-action=raise]").textContent = seat.hand ? t("Change my question") : t("Raise my hand");
+  handLine.textContent = !seat.hand ? "" : seat.hand.text
+    ? t("Your hand is up: “{text}”. Your tutor sees it on the class wall.", { text: seat.hand.text })
+    : t("Your hand is up. Your tutor sees it on the class wall.");
   const items = seat.notices.map(noticeItem);
   notices.replaceChildren(...(items.length ? items : [Object.assign(document.createElement("li"),
-    { className: "muted", textContent: "Nothing yet." })]));
+    { className: "muted", textContent: t("Nothing yet.") })]));
 }
 
 function noticeItem(notice) {
@@ -36,12 +41,13 @@ function noticeItem(notice) {
   item.dataset.kind = notice.kind;
   const when = new Date(notice.at).toLocaleTimeString([], { hour: "2-digit", minute: "2-digit" });
   if (notice.kind === "push") {
-    item.append(`${when} · ${notice.from ?? "Your tutor"} sent the class: ${notice.title} `);
+    item.append(t("{when} · {tutor} sent the class: {title}", { when, tutor: notice.from ?? t("Your tutor"),
+      title: notice.title }), " ");
     const link = Object.assign(document.createElement("a"), { href: notice.url, textContent: PUSH_WORDS[notice.what] });
     item.append(link);
     return item;
   }
-  item.append(`${when} · ${notice.from ?? "Your tutor"}: ${notice.text || "Look here."}`);
+  item.append(`${when} · ${notice.from ?? t("Your tutor")}: ${notice.text || t("Look here.")}`);
   if (notice.kind === "pointer") {
     item.append(` (x ${notice.x_m} m, y ${notice.y_m} m)`);
     if (boxes) {
@@ -49,7 +55,8 @@ function noticeItem(notice) {
       canvas.width = 360;
       canvas.height = 240;
       canvas.setAttribute("role", "img");
-      canvas.setAttribute("aria-label", `The lab's map, marked at x ${notice.x_m} m, y ${notice.y_m} m`);
+      canvas.setAttribute("aria-label", t("The lab's map, marked at x {x} m, y {y} m", { x: notice.x_m,
+        y: notice.y_m }));
       drawTile(canvas.getContext("2d"), floorPlan(boxes, canvas.width, canvas.height),
         { pose: null, pointer: { x_m: notice.x_m, y_m: notice.y_m } });
       item.append(canvas);

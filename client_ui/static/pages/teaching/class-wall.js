@@ -2,6 +2,7 @@
 // tutor's actions on one robot or on all. The server decides every action; this page shows and asks.
 import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
 import { canvasToWorld } from "../../lib/map-geometry.js";
+import { t } from "../../lib/i18n.js";
 import { connectChat } from "../../lib/console/chat-session.js";
 import { register as registerChatPanel } from "../../panels/chat-panel/chat-panel.js";
 import { drawTile, floorPlan, grow, parsePoseRow, tileState } from "./class-wall-draw.js";
@@ -16,10 +17,10 @@ const pushForm = root.querySelector("[data-field=push]");
 const pushSelect = pushForm.querySelector("select");
 const filters = [...root.querySelectorAll("[data-filter]")];
 const STATE_WORDS = {
-  idle: "idle", driving: "driving", skill: "running a skill", plan: "running a plan", test: "taking a test",
-  faulted: "faulted", starting: "starting…",
+  idle: t("idle"), driving: t("driving"), skill: t("running a skill"), plan: t("running a plan"),
+  test: t("taking a test"), faulted: t("faulted"), starting: t("starting…"),
 };
-const PUSH_WORDS = { lesson: "Lesson", plan: "Plan", test: "Test" };
+const PUSH_WORDS = { lesson: t("Lesson"), exercise: t("Exercise"), plan: t("Plan"), test: t("Test") };
 const tiles = new Map(); // user id -> tile
 const plans = new Map(); // "<w>x<h>" -> floor plan bitmap and view
 let boxes = null;
@@ -86,7 +87,7 @@ function makeTile(seat) {
       (event.clientY - box.top) * (canvas.height / box.height));
     tile.pointer = { x_m: Math.round(x_m * 100) / 100, y_m: Math.round(y_m * 100) / 100 };
     element.querySelector("[data-field=point-help]").textContent =
-      `Pointing at x ${tile.pointer.x_m} m, y ${tile.pointer.y_m} m (click again to move it).`;
+      t("Pointing at x {x} m, y {y} m (click again to move it).", { x: tile.pointer.x_m, y: tile.pointer.y_m });
     markDirty(tile);
   });
   tiles.set(seat.user_id, tile);
@@ -102,7 +103,8 @@ function renderWords(tile) {
   const detail = (tile.state === "skill" || tile.state === "plan") ? ` (${activity.split(":").slice(1).join(":")})` : "";
   const words = STATE_WORDS[tile.state] + detail + (tile.state === "faulted" && seat.message ? `: ${seat.message}` : "");
   const charge = tile.pose?.charge;
-  const battery = Number.isFinite(charge) ? `battery ${Math.round(charge * 100)} %` : "battery unknown";
+  const battery = Number.isFinite(charge) ? t("battery {percent} %", { percent: Math.round(charge * 100) })
+    : t("battery unknown");
   if (words !== tile.words) {
     tile.words = words;
     element.dataset.state = tile.state;
@@ -123,12 +125,14 @@ function renderTile(tile) {
   element.querySelector("[data-field=name]").textContent = seat.username;
   const hand = element.querySelector("[data-field=hand]");
   hand.hidden = !seat.hand;
-  hand.textContent = seat.hand ? `Hand raised${seat.hand.text ? `: ${seat.hand.text}` : "."}` : "";
+  hand.textContent = !seat.hand ? "" : seat.hand.text ? t("Hand raised: {text}", { text: seat.hand.text })
+    : t("Hand raised.");
   const held = element.querySelector("[data-field=held]");
   held.hidden = !seat.held_by;
-  held.textContent = seat.held_by ? `Taken over by ${seat.held_by}` : "";
+  held.textContent = seat.held_by ? t("Taken over by {tutor}", { tutor: seat.held_by }) : "";
   element.querySelector("[data-action=watch]").href = seat.watch_url ?? `/lab/${seat.robot}`;
-  element.querySelector("[data-action=watch]").setAttribute("aria-label", `Watch ${seat.username}'s console`);
+  element.querySelector("[data-action=watch]").setAttribute("aria-label",
+    t("Watch {name}'s console", { name: seat.username }));
   element.querySelector("[data-action=take_over]").hidden = Boolean(seat.held_by);
   element.querySelector("[data-action=give_back]").hidden = !seat.held_by;
   element.querySelector("[data-action=answer]").hidden = !seat.hand;
@@ -149,8 +153,8 @@ function renderSummary() {
   const hands = lastSeats.filter((seat) => seat.hand).length;
   const faulted = states.filter((state) => state === "faulted").length;
   const moving = states.filter((state) => state !== "idle" && state !== "faulted").length;
-  summary.textContent = `${lastSeats.length} students: ${moving} busy, ${hands} `
-    + `${hands === 1 ? "hand" : "hands"} raised, ${faulted} faulted.`;
+  summary.textContent = t("{count} students: {busy} busy, {hands} with a hand raised, {faulted} faulted.",
+    { count: lastSeats.length, busy: moving, hands, faulted });
   root.dataset.hands = String(hands);
 }
 
@@ -211,7 +215,7 @@ channel.addEventListener("message", (event) => {
   const message = parseJsonMessage(event.detail);
   if (message?.type === "seats") updateSeats(message.seats);
   else if (message?.type === "poses") updatePoses(message.robots);
-  else if (message?.type === "ended") summary.textContent = "The class session has ended.";
+  else if (message?.type === "ended") summary.textContent = t("The class session has ended.");
   else if (message?.type === "error") showError(message);
 });
 
@@ -235,10 +239,11 @@ list.addEventListener("click", async (event) => {
   const action = button.dataset.action;
   const done = await act(`${api}/seats/${tile.seat.user_id}`, { action }, button);
   if (!done) return;
+  const name = tile.seat.username;
   const words = {
-    stop: `${tile.seat.username}'s robot stopped.`, dock: `${tile.seat.username}'s robot is back at its dock.`,
-    take_over: `You hold ${tile.seat.username}'s robot: Watch to drive it; Give back returns it.`,
-    give_back: `${tile.seat.username} has their robot back.`, answer: `${tile.seat.username}'s hand is down.`,
+    stop: t("{name}'s robot stopped.", { name }), dock: t("{name}'s robot is back at its dock.", { name }),
+    take_over: t("You hold {name}'s robot: Watch to drive it; Give back returns it.", { name }),
+    give_back: t("{name} has their robot back.", { name }), answer: t("{name}'s hand is down.", { name }),
   };
   summary.textContent = words[action] ?? summary.textContent;
 });
@@ -251,9 +256,9 @@ list.addEventListener("submit", async (event) => {
   if (tile.pointer) body.point = tile.pointer;
   if (await act(`${api}/seats/${tile.seat.user_id}`, body, form.querySelector("button"))) {
     form.reset();
-    summary.textContent = `Note sent to ${tile.seat.username}.`;
+    summary.textContent = t("Note sent to {name}.", { name: tile.seat.username });
     tile.pointer = null;
-    form.querySelector("[data-field=point-help]").textContent = "Click the map to point at a place (optional).";
+    form.querySelector("[data-field=point-help]").textContent = t("Click the map to point at a place (optional).");
     markDirty(tile);
   }
 });
@@ -262,9 +267,10 @@ for (const button of root.querySelectorAll(".wall-toolbar > button[data-action]"
   button.addEventListener("click", async () => {
     const done = await act(api, { action: button.dataset.action }, button);
     if (!done) return;
-    const refused = Object.entries(done.refused);
-    summary.textContent = `${done.done} robots ${button.dataset.action === "stop_all" ? "stopped" : "sent to their docks"}`
-      + (refused.length ? `; not ${refused.map(([robot, why]) => `${robot} (${why})`).join(", ")}.` : ".");
+    const refused = Object.entries(done.refused).map(([robot, why]) => `${robot} (${why})`).join(", ");
+    const doneWords = button.dataset.action === "stop_all" ? t("{count} robots stopped.", { count: done.done })
+      : t("{count} robots sent to their docks.", { count: done.done });
+    summary.textContent = refused ? `${doneWords} ${t("Not: {robots}.", { robots: refused })}` : doneWords;
   });
 }
 
@@ -273,7 +279,7 @@ pushForm.addEventListener("submit", async (event) => {
   const [kind, id] = pushSelect.value.split(":");
   if (!id) return;
   const done = await act(api, { action: "push", kind, id: Number(id) }, pushForm.querySelector("button"));
-  if (done) summary.textContent = `Sent to every student: ${done.title}.`;
+  if (done) summary.textContent = t("Sent to every student: {title}.", { title: done.title });
 });
 
 for (const box of filters) box.addEventListener("change", () => tiles.forEach(applyFilter));
@@ -303,7 +309,7 @@ async function load() {
     updateSeats(wall.seats);
   } catch (error) {
     showError(error);
-    summary.textContent = error.code === "no_class_session" ? "No class session is open: start one first." : "";
+    summary.textContent = error.code === "no_class_session" ? t("No class session is open: start one first.") : "";
   }
 }
 load();
