@@ -170,7 +170,8 @@ class LmsPlatform:
         params = {"iss": self.issuer, "login_hint": request.args["login_hint"], "client_id": self.client_id,
                   "lti_deployment_id": self.deployment_id, "target_link_uri": self.tool_url + "/lti/launch"}
         tool = html.escape(request.args.get("tool", self.tool_url) + "/lti/login?" + urlencode(params))
-        page = (f'<!doctype html><title>LMS course</title><h1>LMS course</h1>'
-                f'<iframe id="tool" src="{tool}" style="width:1200px;height:900px" '
+        page = ('<!doctype html><meta name="viewport" content="width=device-width, initial-scale=1">'
+                '<title>LMS course</title><h1>LMS course</h1>'
+                f'<iframe id="tool" src="{tool}" style="width:100%;height:900px;border:1px solid #888" '
                 'allow="fullscreen"></iframe>')
         return Response(page, content_type="text/html")
