@@ -7,8 +7,10 @@ browser's Accept-Language, English."""
 
 from __future__ import annotations
 
+import re
+
 from flask import Flask, has_request_context, request, session
-from flask_babel import Babel, get_locale, lazy_gettext  # type: ignore[import-untyped]
+from flask_babel import Babel, get_locale, gettext, lazy_gettext  # type: ignore[import-untyped]
 from flask_login import current_user
 from sqlalchemy import select
 
@@ -76,6 +78,30 @@ def current_language() -> str:
 def role_name(role: str) -> str:
     """A role's name in the page's language ("estudiante"); an unknown role as it is."""
     return str(ROLE_NAMES[role]) if role in ROLE_NAMES else role
+
+
+def translate_panels(panels: list[dict[str, object]]) -> list[dict[str, object]]:
+    """Console panel descriptors with their title and help in the page's language: the robot's words and the
+    middleware's are English, marked in translations/robot_words.py; words the catalogue has not stay English."""
+    for descriptor in panels:
+        for key in ("title", "help"):
+            text = descriptor.get(key)
+            if isinstance(text, str) and text:
+                descriptor[key] = _sentences(text)
+    return panels
+
+
+def _sentences(text: str) -> str:
+    """text translated whole, or as a known first sentence and the rest (a skill's help: its class, then its own)."""
+    whole = str(gettext(text))
+    if whole != text or current_language() == LANGUAGES[0]:
+        return whole
+    for cut in re.finditer(r"\. ", text):
+        head = text[:cut.start() + 1]
+        translated = str(gettext(head))
+        if translated != head:
+            return f"{translated} {_sentences(text[cut.end():])}"
+    return text
 
 
 def init_app(app: Flask) -> None:

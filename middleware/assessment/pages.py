@@ -9,6 +9,7 @@ from typing import Any
 
 from flask import Blueprint, Response, abort, flash, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext as _  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 from sqlalchemy import select
 from sqlalchemy.orm import Session
@@ -364,7 +365,7 @@ def submit(attempt_id: int) -> ResponseReturnValue:
         owner = attempts.get_attempt(dbs, attempt_id)
         trace = finish_recording(attempt_id) if owner.user_id == current_user.id else None
         attempts.submit_attempt(dbs, current_user, attempt_id, server_now(), _form_answers(), trace)
-        flash("Submitted. Your corrected attempt is below.", "success")
+        flash(_("Submitted. Your corrected attempt is below."), "success")
         return redirect(back, 303)
 
     return unless_refused(hand_in, flashed(back))
@@ -387,7 +388,7 @@ def override(attempt_id: int) -> ResponseReturnValue:
     """A tutor replaces one item's mark, with a reason."""
     return _review_action(attempt_id, lambda dbs, f: review.override_mark(
         dbs, current_user, attempt_id, f.get("item"), f.get("points"), f.get("reason"), f.get("comment"),
-        server_now()), "Mark changed.")
+        server_now()), _("Mark changed."))
 
 
 @blueprint.post("/assessment/attempts/<int:attempt_id>/comment")
@@ -395,7 +396,7 @@ def override(attempt_id: int) -> ResponseReturnValue:
 def comment(attempt_id: int) -> ResponseReturnValue:
     """A tutor's comment on the attempt."""
     return _review_action(attempt_id, lambda dbs, f: review.add_comment(
-        dbs, current_user, attempt_id, f.get("item"), f.get("comment"), server_now()), "Comment added.")
+        dbs, current_user, attempt_id, f.get("item"), f.get("comment"), server_now()), _("Comment added."))
 
 
 @blueprint.get("/courses/<int:course_id>/grades.csv")

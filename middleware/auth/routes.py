@@ -9,6 +9,8 @@ from urllib.parse import urlsplit
 
 from flask import Blueprint, redirect, render_template, request, session, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext as _  # type: ignore[import-untyped]
+from flask_babel import lazy_gettext
 from flask_login import current_user, login_required, logout_user
 
 from middleware.auth import sessions
@@ -17,8 +19,9 @@ from middleware.db import get_session
 
 blueprint = Blueprint("auth", __name__)
 
-WRONG_CREDENTIALS = "Wrong username or password. Check both and try again."
-DISABLED_ACCOUNT = "This account is disabled. Ask your tutor or the lab's administrator to enable it again."
+WRONG_CREDENTIALS = lazy_gettext("Wrong username or password. Check both and try again.")
+DISABLED_ACCOUNT = lazy_gettext("This account is disabled. Ask your tutor or the lab's administrator to enable it "
+                                 "again.")
 SESSION_RENEW_S = 300
 
 
@@ -32,8 +35,8 @@ def renew_session_expiry() -> None:
 def wait_in_words(seconds: int) -> str:
     """'1 second', '40 seconds', '3 minutes' (whole minutes, rounded up, from two minutes on)."""
     if seconds < 120:
-        return f"{seconds} second{'s' if seconds != 1 else ''}"
-    return f"{math.ceil(seconds / 60)} minutes"
+        return _("1 second") if seconds == 1 else _("%(seconds)s seconds", seconds=seconds)
+    return _("%(minutes)s minutes", minutes=math.ceil(seconds / 60))
 
 
 def safe_next_url(value: str | None) -> str | None:
@@ -61,13 +64,14 @@ def login_submit() -> ResponseReturnValue:
     password = request.form.get("password", "")[:256]
     next_url = safe_next_url(request.form.get("next"))
     if not username.strip() or not password:
-        error = "Enter both your username and your password."
+        error = _("Enter both your username and your password.")
         return render_template("auth/login.html", error=error, username=username, next_url=next_url), 400
     # The attempt is recorded whatever the answer (the throttle counts failures): a 401 is the view's answer,
     # not an error, so the request's unit of work commits it.
     outcome = log_in(get_session(), username, password, request.remote_addr or "unknown", datetime.now(UTC))
     if outcome.blocked_seconds is not None:
-        error = f"Too many failed attempts from here; try again in {wait_in_words(outcome.blocked_seconds)}."
+        error = _("Too many failed attempts from here; try again in %(wait)s.",
+                  wait=wait_in_words(outcome.blocked_seconds))
         return (render_template("auth/login.html", error=error, username=username, next_url=next_url), 429,
                 {"Retry-After": str(outcome.blocked_seconds)})
     user = outcome.user

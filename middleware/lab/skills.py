@@ -8,6 +8,7 @@ from flask import Blueprint, current_app, jsonify, request
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
+from middleware import i18n
 from middleware.access.commands import Commander, robot_commands
 from middleware.api.contract import ANY, BOOLEAN, OBJECT, STRING, array, described, obj
 from middleware.assessment.hidden_obstacles import MAP_REFUSAL, OBSTACLES_HIDDEN, hiding_book
@@ -73,7 +74,7 @@ def panels(robot_name: str) -> ResponseReturnValue:
     personal = robot_registry().is_personal_name(robot_name)
     kind, default_picture = camera_picture_of(get_session(), robot_name)
     chosen = chosen_camera_picture(get_session(), _user_id(), kind, CAMERA_PICTURES)
-    panels = robot_panels(robot_name, info, skills, personal, (kind, default_picture), chosen)
+    panels = i18n.translate_panels(robot_panels(robot_name, info, skills, personal, (kind, default_picture), chosen))
     panels += console_skill_panels(get_session(), _user_id(), robot_name)  # the user's plans used as skills
     return jsonify({"robot": robot_name, "skills_available": skills is not None, "personal": personal,
                     "panels": panels, "notice": "" if info is not None else ROBOT_SILENT})

@@ -29,7 +29,7 @@ TRANSLATIONS = Path(__file__).resolve().parent
 JS_CATALOGUES = ROOT / "client_ui" / "static" / "lib" / "i18n"
 SOURCE_LANGUAGE = "en"
 LANGUAGES = ("en", "es")
-KEYWORDS = ("_", "gettext", "lazy_gettext", "t", "ngettext:1,2", "lazy_ngettext:1,2")
+KEYWORDS = ("_", "gettext", "lazy_gettext", "N_", "t", "ngettext:1,2", "lazy_ngettext:1,2")
 # Fixed header dates: a catalogue changes only when its messages do (git says when).
 STAMP = datetime(2026, 1, 1, tzinfo=UTC)
 
