@@ -23,11 +23,11 @@ from __future__ import annotations
 import contextlib
 import logging
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Awaitable, Callable, Iterator
 from contextvars import ContextVar
 from dataclasses import dataclass
 from dataclasses import field as dataclass_field
-from typing import Protocol, TypeVar
+from typing import Any, Protocol, TypeVar
 
 from flask import Flask, current_app
 
@@ -254,6 +254,52 @@ class Commander:
         return self._as_controller(lambda token: self.link.drive(token, sequence, linear_mps, angular_radps),
                                    "drive", {"sequence": sequence, "linear_mps": linear_mps,
                                              "angular_radps": angular_radps})
+
+    async def drive_async(self, sequence: int, linear_mps: float, angular_radps: float,
+                          blocking: Callable[..., Awaitable[Any]]) -> DriveResult:
+        """drive() for a caller on the channel loop (the drive channel): the command reaches the robot over grpc.aio on
+        the loop, so no thread waits for the robot; the token's lookups, which may read the database, go through
+        blocking (`await blocking(fn, *args)`: the loop's pool). The same stale-token rule and notes as drive()."""
+        detail: dict[str, object] = {"sequence": sequence, "linear_mps": linear_mps, "angular_radps": angular_radps}
+        sent_unix_s = time.time()
+        try:
+            result = await self._drive_on_loop(sequence, linear_mps, angular_radps, blocking)
+        except Refused as refused:
+            if self._observers:
+                self._tell(CommandNote(self.link.name, self._user_id, "drive", sent_unix_s, False, refused.code,
+                                       _command_source.get(), detail))
+            raise
+        if self._observers:
+            self._tell(CommandNote(self.link.name, self._user_id, "drive", sent_unix_s, True, _outcome(result),
+                                   _command_source.get(), detail))
+        return result
+
+    async def _drive_on_loop(self, sequence: int, linear_mps: float, angular_radps: float,
+                             blocking: Callable[..., Awaitable[Any]]) -> DriveResult:
+        """_as_controller_unobserved's rule for a drive, awaited."""
+        self.robot_round_trip_ms = None
+
+        async def attempt(token: str) -> DriveResult:
+            started = time.perf_counter()
+            try:
+                return await self.link.drive_async(token, sequence, linear_mps, angular_radps)
+            finally:
+                self.robot_round_trip_ms = (self.robot_round_trip_ms or 0.0) + (time.perf_counter() - started) * 1000
+
+        token = await blocking(self._tokens.token, False)
+        if token is None:
+            raise NotController(self._field, await blocking(self._tokens.nobody_controls))
+        try:
+            return await attempt(token)
+        except CommandRefused as refused:
+            if refused.reason not in STALE_TOKEN_CODES:
+                raise
+            fresh = await blocking(self._tokens.token, True)
+            if fresh is None:
+                raise NotController(self._field, await blocking(self._tokens.nobody_controls)) from None
+            if fresh == token and not await blocking(self._tokens.resend, fresh):
+                raise
+        return await attempt(fresh)
 
     def stop(self) -> DriveResult:
         """A zero drive, which preempts any motor goal at once; numbered again above the robot's when another

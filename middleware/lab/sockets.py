@@ -205,8 +205,8 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
 
         async def send(command) -> None:  # noqa: ANN001 - a parsed drive message
             try:
-                result = await work(robot.drive, sequence_base + command.sequence, command.linear_mps,
-                                    command.angular_radps)
+                result = await robot.drive_async(sequence_base + command.sequence, command.linear_mps,
+                                                 command.angular_radps, work)
             except (CommandRefused, RobotUnavailable) as refused:
                 await live.send(as_json({"type": "error", "code": refused.code, "message": refused.message,
                                          "field": refused.field}))

@@ -18,15 +18,15 @@ from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
+from middleware.live.loop import channel_loop
+
 log = logging.getLogger(__name__)
 
 Packed = TypeVar("Packed")
 
 
 def _channel_event_loop() -> asyncio.AbstractEventLoop:
-    from middleware.live.loop import channel_loop  # the loop starts on first use (a forked worker starts its own)
-
-    return channel_loop().loop
+    return channel_loop().loop  # started on first use (a forked worker starts its own)
 
 
 @dataclass(frozen=True)

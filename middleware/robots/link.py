@@ -297,6 +297,29 @@ class RobotLink:
             self._highest_sequence = max(self._highest_sequence, ack.applied_sequence)
         return DriveResult(ack.applied_sequence, ack.linear_mps, ack.angular_radps, round_trip_ms)
 
+    async def drive_async(self, token: str, sequence: int, linear_mps: float, angular_radps: float) -> DriveResult:
+        """drive() on the running asyncio loop (grpc.aio): no thread waits for the robot, however slow it is."""
+        if self._closed:
+            raise RobotUnavailable(f"The link to {self.name} is closed.")
+        with self._sequence_lock:
+            self._highest_sequence = max(self._highest_sequence, sequence)
+        command = robot_pb2.DriveCommand(
+            token=token, sequence=sequence, linear_mps=linear_mps, angular_radps=angular_radps
+        )
+        started = time.perf_counter()
+        try:
+            ack = await self._aio_stub().Drive(command, timeout=self.rpc_timeout_s)
+        except grpc.RpcError as error:  # grpc.aio.AioRpcError is one
+            translated = _translate(error)
+            if isinstance(translated, RobotUnavailable) and self.unreachable_since is None:
+                self.unreachable_since = time.monotonic()
+            raise translated from None
+        self.unreachable_since = None
+        round_trip_ms = (time.perf_counter() - started) * 1000
+        with self._sequence_lock:
+            self._highest_sequence = max(self._highest_sequence, ack.applied_sequence)
+        return DriveResult(ack.applied_sequence, ack.linear_mps, ack.angular_radps, round_trip_ms)
+
     def get_limits(self) -> robot_pb2.Limits:
         """The velocity ceilings and the deadman (watchdog) timeout in force, with the ranges the robot accepts."""
         return self._call(self._stub.GetLimits, robot_pb2.GetLimitsRequest())
