@@ -13,7 +13,7 @@ BENCHMARKS = ("benchmarks.latency", "benchmarks.skills", "benchmarks.feedback", 
               "benchmarks.consoles", "benchmarks.workers", "benchmarks.sticky",
               "benchmarks.browser_view", "benchmarks.capacity", "benchmarks.database_load",
               "benchmarks.plans", "benchmarks.response_times", "benchmarks.class_wall",
-              "benchmarks.recording_cost", "benchmarks.class_day")
+              "benchmarks.recording_cost", "benchmarks.class_day", "benchmarks.exercises")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -30,6 +30,7 @@ from middleware.assessment.survey_statements import parse_statements
 from middleware.auth.services import create_user, find_user, generate_password
 from middleware.courses import services as courses
 from middleware.courses.schemas import CourseSettings
+from middleware.exercises.services import ensure_catalogue
 from middleware.experiment import protocol as experiment_protocol
 from middleware.experiment import services as experiment
 from middleware.models import Course, Role
@@ -152,6 +153,8 @@ def seed_demo_course(session: Session, now: datetime | None = None) -> DemoCours
     added.append(f"the lab survey the tutor wrote ({len(DEMO_SURVEY_STATEMENTS)} statements)")
     added += _survey_classmates(session, tutor, course.id)
     added += seed_demo_plans(session, course.id)
+    ensure_catalogue(session)  # the Python exercises' built-in catalogue
+    added.append("the Python exercises' catalogue")
     return DemoCourse(course.id, added)
 
 

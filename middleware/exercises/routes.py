@@ -162,10 +162,7 @@ def start_run(slug: str) -> ResponseReturnValue:
     text, mode = schemas.run_request(body)
     target = body.get("robot", PRACTICE_TARGET) if isinstance(body, dict) else PRACTICE_TARGET
     commander = resolve_target(target, current_user.id)
-    try:
-        scene = commander.link.info().scene_name
-    except RobotUnavailable as offline:
-        raise services.ExerciseRefused(503, offline.code, offline.message, "robot") from None
+    scene = commander.link.info().scene_name  # an offline robot is already a 503 robot_offline
     version = services.save_code(session, current_user, exercise, text, now())
 
     def place(start: list[float]) -> None:

@@ -84,6 +84,7 @@ export class RobotRun extends EventTarget {
   #python; #robotName; #drive; #telemetry; #session; #watchdog = 0; #lastTick = 0; #skillPending = false;
   #finished = false; #stopTimer = 0; #report = null; #command = { linear_mps: 0, angular_radps: 0 };
   #sentAt = new Map();
+  #codeAt = null;
 
   constructor(python, robotName) {
     super();
@@ -108,13 +109,14 @@ export class RobotRun extends EventTarget {
     });
     this.#session.addEventListener("error", (event) => this.#print(`Robot: ${event.detail.message}`, "stderr"));
     this.#session.addEventListener("sent", (event) => {
-      this.#sentAt.set(event.detail.sequence, performance.now());
+      this.#sentAt.set(event.detail.sequence, { page: performance.now(), code: this.#codeAt });
       this.dispatchEvent(new CustomEvent("sent", { detail: event.detail }));
     });
     this.#session.addEventListener("ack", (event) => {
-      const sentAt = this.#sentAt.get(event.detail.sequence);
+      const sent = this.#sentAt.get(event.detail.sequence);
       this.#sentAt.delete(event.detail.sequence);
-      this.dispatchEvent(new CustomEvent("ack", { detail: { ...event.detail, sent_at: sentAt } }));
+      if (this.#sentAt.size > 200) this.#sentAt.clear();
+      this.dispatchEvent(new CustomEvent("ack", { detail: { ...event.detail, sent_at: sent?.page, code_at: sent?.code } }));
     });
     const heard = new Promise((resolve) => this.addEventListener("telemetry", resolve, { once: true }));
     const ready = new Promise((resolve) => this.#session.addEventListener("ready", (event) => resolve(event.detail),
@@ -163,10 +165,13 @@ export class RobotRun extends EventTarget {
   #fromWorker(message) {
     if (message.type === "drive") {
       this.#lastTick = performance.now();
+      this.dispatchEvent(new CustomEvent("tick", { detail: { at: message.at } }));
       const same = message.linear_mps === this.#command.linear_mps && message.angular_radps === this.#command.angular_radps;
       if (!same) {
         this.#command = { linear_mps: message.linear_mps, angular_radps: message.angular_radps };
+        this.#codeAt = message.at;  // the command this tick's code set (repeats carry none)
         this.#session.setCommand(this.#command);
+        this.#codeAt = null;
       }
     } else if (message.type === "print") {
       this.#print(message.line, message.stream);

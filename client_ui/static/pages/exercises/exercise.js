@@ -24,7 +24,9 @@ const PRACTICE_WAIT_MS = 120000;
 let template = "";
 let current = null;  // { run, robotRun }
 let pythonReady = false;
-export const timings = { pyodide_load_s: null, acks: [] };  // read by the benchmark
+// Read by the benchmark: Pyodide's load, each tick's time, and per acknowledged command the time from the page's
+// send (what the drive pad measures) and from the student's code (tick -> worker -> page -> socket -> robot).
+export const timings = { pyodide_load_s: null, ticks: [], pad_ack_ms: [], code_ack_ms: [] };
 window.telelabExercise = timings;
 
 // ---- the editor, with the line of an error marked ----
@@ -132,9 +134,10 @@ async function start(mode) {
     current = { run, robotRun };
     robotRun.addEventListener("print", (event) => print(event.detail.line, event.detail.stream));
     robotRun.addEventListener("ack", (event) => {
-      if (event.detail.sent_at !== undefined) timings.acks.push(performance.now() - event.detail.sent_at);
-      if (timings.acks.length > 2000) timings.acks.shift();
+      if (event.detail.sent_at !== undefined) timings.pad_ack_ms.push(performance.now() - event.detail.sent_at);
+      if (event.detail.code_at) timings.code_ack_ms.push(performance.timeOrigin + performance.now() - event.detail.code_at);
     });
+    robotRun.addEventListener("tick", (event) => { if (timings.ticks.length < 20000) timings.ticks.push(event.detail.at); });
     robotRun.addEventListener("telemetry", (event) => showOdometry(event.detail));
     robotRun.addEventListener("state", () => print("No robot.tick() for a while: the robot was stopped.", "stderr"));
     robotRun.addEventListener("done", (event) => finish(event.detail));

@@ -44,7 +44,8 @@ const bridge = {
     return "{}";
   },
   send(linear, angular) {
-    post({ type: "drive", linear_mps: linear, angular_radps: angular });
+    // at: when the code's command left the interpreter, on the clock the page shares (for the latency figures)
+    post({ type: "drive", linear_mps: linear, angular_radps: angular, at: performance.timeOrigin + performance.now() });
   },
   skill(name, parametersJson) {
     Atomics.store(control, SKILL_STATE, 1);
