@@ -1,7 +1,8 @@
 """What a tutor may place in an LMS course by deep linking, and where each placed link opens.
 
 Targets are "kind:key": console:<robot>, pool:<kind>, lesson:<id>, tour:<id>, exam:<id> (a test: the LMS makes a
-gradebook column for it), class: (the course's class session). Tests are those of the courses the tutor teaches.
+gradebook column for it), exercise:<slug> (a Python exercise), class: (the course's class session).
+Tests are those of the courses the tutor teaches.
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ from sqlalchemy.orm import Session
 
 from middleware.access.pools import kinds
 from middleware.courses.authority import taught_course_ids
+from middleware.exercises.services import catalogue as exercise_catalogue
+from middleware.exercises.services import ensure_catalogue
 from middleware.lti.launches import Target
 from middleware.models import Role, User
 from middleware.models.assessment import Exam
@@ -43,6 +46,9 @@ def placeable(session: Session, actor: User, robot_names: list[str]) -> list[Pla
     if actor.role != Role.ADMIN:
         exams = exams.where(Exam.course_id.in_(taught_course_ids(actor)))
     items += [Placeable(f"exam:{exam.id}", "Test", exam.title, 100.0) for exam in session.scalars(exams)]
+    ensure_catalogue(session)  # the built-in exercises exist once asked for
+    items += [Placeable(f"exercise:{exercise.slug}", "Python exercise", exercise.title)
+              for exercise in exercise_catalogue(session)]
     items.append(Placeable("class:", "Class session", "The course's class session"))
     return items
 
@@ -61,6 +67,8 @@ def destination(target: Target | None, course_id: int | None, teaches: bool) -> 
         return url_for("tours.play", tour_id=int(target.key))
     if target.kind == "exam" and target.key.isdigit():
         return url_for("assessment_pages.exam_page", exam_id=int(target.key))
+    if target.kind == "exercise" and target.key:
+        return url_for("exercises.page", slug=target.key)
     if target.kind == "class":
         if teaches and course_id is not None:
             return url_for("classes.tutor_page", course_id=course_id)

@@ -161,7 +161,8 @@ def sign_target(secret: str, context_id: str, target: str) -> str:
 
 @dataclass(frozen=True)
 class Target:
-    """What a placed link opens: console:lab-1, pool:<kind>, lesson:<id>, tour:<id>, exam:<id>, class:."""
+    """What a placed link opens: console:lab-1, pool:<kind>, lesson:<id>, tour:<id>, exam:<id>, exercise:<slug>,
+    class:."""
 
     kind: str
     key: str
