@@ -5,6 +5,9 @@
 import { RobotEyeRenderer } from "../../lib/robot-eye.js";
 import { fitView, sceneBounds, worldToCanvas } from "../../lib/map-geometry.js";
 import { t } from "../../lib/i18n.js";
+import { register as registerLabView } from "../../panels/lab-view/lab-view.js";
+
+registerLabView();
 
 const root = document.getElementById("replay");
 const $ = (selector) => root.querySelector(selector);
@@ -203,6 +206,19 @@ function drawCamera() {
   $('[data-slot="camera"]').src = `/api/recordings/${root.dataset.recordingId}/camera/${index}`;
 }
 
+/** The 3D view (the console's <lab-view>): the robot where it stood then, with its laser hits and sonar cones. */
+function drawThree(p) {
+  const view = $('[data-slot="three"]');
+  if (!data.scene || !p) return;
+  const laser = data.laser[sampleAt(data.laser, now)];
+  const sonar = data.sonar[sampleAt(data.sonar, now)];
+  view.telemetry = {
+    type: "telemetry", odometry: { pose: p, linear_mps: 0, angular_radps: 0 },
+    laser: laser ? { angle_min_rad: laser[1], angle_increment_rad: laser[2], ranges_m: laser[3] } : null,
+    sonar: sonar ? { ranges_m: sonar.slice(1) } : null,
+  };
+}
+
 function draw() {
   const odometry = pose(data.odometry[sampleAt(data.odometry, now)]);
   const truth = pose(data.ground_truth[sampleAt(data.ground_truth, now)]);
@@ -217,6 +233,7 @@ function draw() {
   }
   drawMap();
   drawEye(truth ?? odometry);
+  drawThree(truth ?? odometry);
   drawPlot($('[data-slot="speed"]'), [[data.odometry, 4, "#1f6feb"], [data.odometry, 5, "#d97706"]],
     { min: -1.5, max: 1.5, label: t("Speed: linear [m/s] blue, angular [rad/s] orange") });
   drawSonar();
@@ -288,6 +305,7 @@ async function start() {
       $('[data-field="eye-status"]').textContent = t("This browser cannot draw the robot's-eye view.");
     }
   }
+  if (data.scene) $('[data-slot="three"]').scene = data.scene;
   fillLists();
   if (data.measurement) {
     const m = data.measurement;
