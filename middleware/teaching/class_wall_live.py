@@ -127,8 +127,12 @@ def activity(goals: list[Any]) -> str:
 
 
 def _goals_of(links: dict[int, RobotLink]) -> dict[int, str]:
+    """Each robot's activity from its goals (one call each, in turn; a robot whose stream is down is not asked)."""
     found = {}
     for user_id, link in links.items():
+        if not link.telemetry.status_with_version()[0].online:
+            found[user_id] = "faulted"
+            continue
         try:
             found[user_id] = activity(link.goals())
         except RobotUnavailable:
@@ -169,17 +173,20 @@ class _Robots:
         self.rows: dict[int, list[object]] = {}
         self.activities: dict[int, str] = {}
 
-    def follow(self, seats: list[dict[str, object]]) -> None:
-        """Subscribes to every running seat's robot, and leaves the others (on the loop)."""
-        wanted: dict[int, str] = {int(str(seat["user_id"])): str(seat["robot"]) for seat in seats
-                                  if seat["seat_state"] == "ready"}
+    def find(self, seats: list[dict[str, object]]) -> dict[int, RobotLink | None]:
+        """The link of every running seat's robot not followed yet (None: not reachable now); it may read the
+        database, so it runs on the pool."""
+        wanted = {int(str(seat["user_id"])): str(seat["robot"]) for seat in seats if seat["seat_state"] == "ready"}
+        return {user_id: self._commands.reachable(robot, self._tutor_id) for user_id, robot in wanted.items()
+                if user_id not in self.links or self.links[user_id].name != robot}
+
+    def follow(self, seats: list[dict[str, object]], found: dict[int, RobotLink | None]) -> None:
+        """Subscribes to the robots found, and leaves those of seats no longer running (on the loop)."""
+        running = {int(str(seat["user_id"])) for seat in seats if seat["seat_state"] == "ready"}
         for user_id in list(self.links):
-            if user_id not in wanted or self.links[user_id].name != wanted[user_id]:
+            if user_id not in running or user_id in found:
                 self._leave(user_id)
-        for user_id, robot in wanted.items():
-            if user_id in self.links:
-                continue
-            link = self._commands.reachable(robot, self._tutor_id)
+        for user_id, link in found.items():
             if link is None or link.telemetry.closed:
                 continue
             self.links[user_id] = link
@@ -204,6 +211,11 @@ class _Robots:
             elif user_id in self.rows and not online:
                 self.rows[user_id][-1] = "faulted"
         return list(self.rows.values())
+
+    def take_activities(self, done: asyncio.Future[dict[int, str]]) -> None:
+        """The goals' answer, once it came (a cancelled or failed ask keeps the last)."""
+        if not done.cancelled() and done.exception() is None:
+            self.activities = done.result()
 
     def close(self) -> None:
         """Leaves every hub."""
@@ -238,6 +250,7 @@ def wall_channel(ws: WebSocket, course_id: int) -> Continuation | None:
         wake = _Wake(class_session_id, live)
         read_version, sent_seats = -1, None
         seats_at = goals_at = refreshed_at = poses_at = 0.0
+        goals: asyncio.Future[dict[int, str]] | None = None
         try:
             while live.connected:
                 now = time.monotonic()
@@ -250,13 +263,14 @@ def wall_channel(ws: WebSocket, course_id: int) -> Continuation | None:
                     if seats is None:
                         await live.send(as_json({"type": "ended"}))
                         break
-                    robots.follow(seats)
+                    robots.follow(seats, await work(robots.find, seats))
                     if seats != sent_seats:
                         await live.send(as_json({"type": "seats", "seats": seats}))
                         sent_seats = seats
-                if now - goals_at >= GOALS_EVERY_S and robots.links:
-                    goals_at = now
-                    robots.activities = await work(_goals_of, dict(robots.links))
+                if now - goals_at >= GOALS_EVERY_S and robots.links and (goals is None or goals.done()):
+                    goals_at = now  # asked beside the poses: a robot slow to answer never holds them back
+                    goals = asyncio.ensure_future(work(_goals_of, dict(robots.links)))
+                    goals.add_done_callback(lambda done: robots.take_activities(done))
                 if now - poses_at >= POSE_PERIOD_S:
                     poses_at = now
                     live.send_latest(as_json({"type": "poses", "t": round(time.time(), 3),
@@ -265,6 +279,8 @@ def wall_channel(ws: WebSocket, course_id: int) -> Continuation | None:
                 await live.receive(timeout=wait_s)  # woken by notify(); what the page sends is dropped
         finally:
             wake.leave()
+            if goals is not None:
+                goals.cancel()
             robots.close()
             if not channel_loop().draining:  # a restarting worker's wall comes back on another: keep holding
                 await work(_tutor_left, class_session_id, tutor_id)
