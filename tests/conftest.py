@@ -510,6 +510,20 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log):
     return LoadFileSharingMachineResources(config, log)
 
 
+# Figures a test wants read at the end of `make test` (record_property("summary", line)), from any xdist worker.
+_summaries: list[str] = []
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    if report.when == "call":
+        _summaries.extend(str(value) for name, value in report.user_properties if name == "summary")
+
+
+def pytest_terminal_summary(terminalreporter) -> None:
+    for line in _summaries:
+        terminalreporter.write_line(line)
+
+
 EXIT_GRACE_S = 60
 _exit_status = {"code": 0}
 
