@@ -76,4 +76,8 @@ def scene_dict(scene: robot_pb2.SceneDescription) -> dict[str, object]:
                   "sonars": [{"mount_angle_rad": s.mount_angle_rad, "cone_half_angle_rad": s.cone_half_angle_rad,
                               "min_range_m": s.min_range_m, "max_range_m": s.max_range_m}
                              for s in scene.sonar.sonars]},
+        "room_cameras": [{"id": c.id, "title": c.title, "position_m": [c.x_m, c.y_m, c.z_m], "pan_rad": c.pan_rad,
+                          "tilt_rad": c.tilt_rad, "hfov_deg": c.hfov_deg, "pan_range_rad": c.pan_range_rad,
+                          "tilt_range_rad": [c.min_tilt_rad, c.max_tilt_rad],
+                          "hfov_range_deg": [c.min_hfov_deg, c.max_hfov_deg]} for c in scene.room_cameras],
     }

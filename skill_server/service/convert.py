@@ -187,6 +187,11 @@ def scene_to_proto(scene: SceneDescription, known_version: str = "") -> robot_pb
             sonars=[robot_pb2.SonarGeometry(mount_angle_rad=s.mount_angle_rad,
                                             cone_half_angle_rad=s.cone_half_angle_rad, min_range_m=s.min_range_m,
                                             max_range_m=s.max_range_m) for s in scene.sonar.sonars]),
+        room_cameras=[robot_pb2.RoomCamera(
+            id=c.id, title=c.title, x_m=c.x_m, y_m=c.y_m, z_m=c.z_m, pan_rad=c.pan_rad, tilt_rad=c.tilt_rad,
+            hfov_deg=c.hfov_deg, pan_range_rad=c.pan_range_rad, min_tilt_rad=c.min_tilt_rad,
+            max_tilt_rad=c.max_tilt_rad, min_hfov_deg=c.min_hfov_deg, max_hfov_deg=c.max_hfov_deg)
+            for c in scene.room_cameras],
     )
 
 

@@ -40,7 +40,11 @@ LAB_VIEW = PanelSpec("lab-view", "lab-view", "3D lab view",
                      "navigate", "telemetry")
 SONAR = PanelSpec("sonar", "sonar", "Sonar", "The ring of sonars, nearest echo each.", "sense", "telemetry")
 LASER = PanelSpec("laser", "laser", "Laser", "The 180-degree laser scan ahead.", "sense", "telemetry")
+ROOM_CAMERA = PanelSpec("room-camera", "room-camera", "Room camera",
+                        "The robot seen from a camera on the room's wall, drawn by your browser where the robot truly "
+                        "stands. Pan, tilt and zoom it with the buttons, the arrow keys, + and -, or by dragging.",
+                        "navigate", "telemetry")
 LOW_LEVEL = PanelSpec("low-level", "low-level", "Low-level commands",
                       "The battery, the velocity ceilings and the watchdog timeout.", "sense", "telemetry")
 
-TELEBOT_PANELS: tuple[PanelSpec, ...] = (CAMERA, ODOMETRY, MAP, LAB_VIEW, SONAR, LASER, LOW_LEVEL)
+TELEBOT_PANELS: tuple[PanelSpec, ...] = (CAMERA, ODOMETRY, MAP, LAB_VIEW, ROOM_CAMERA, SONAR, LASER, LOW_LEVEL)

@@ -23,7 +23,7 @@ from skill_server.sim.geometry import Pose2D
 from skill_server.sim.laser import LaserSpec
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.sim.robot_visuals import VisualPart, robot_visual_parts
-from skill_server.sim.scenes import BoxObstacle, CylinderObstacle, FloorPatch, SceneSpec, floor_patches
+from skill_server.sim.scenes import BoxObstacle, CylinderObstacle, FloorPatch, RoomCamera, SceneSpec, floor_patches
 from skill_server.sim.sonar import SonarGeometry, SonarRingSpec
 from skill_server.sim.track_monitor import TrackSpec
 
@@ -78,6 +78,7 @@ class SceneDescription:
     camera: CameraModel
     laser: LaserSpec
     sonar: SonarMounts
+    room_cameras: tuple[RoomCamera, ...] = ()
 
 
 def camera_model(camera: CameraSpec, robot: RobotSpec) -> CameraModel:
@@ -113,6 +114,7 @@ def describe_scene(scene: SceneSpec, robot: RobotSpec, camera: CameraSpec, laser
         camera=camera_model(camera, robot),
         laser=laser,
         sonar=SonarMounts(sonar.mount_radius_m, sonar.height_m, sonar.geometries()),
+        room_cameras=scene.room_cameras,
     )
     return replace(description, version=content_version(description))
 

@@ -85,6 +85,33 @@ class SceneBox:
 
 
 @dataclass(frozen=True)
+class RoomCamera:
+    """A pan-tilt-zoom camera mounted in the room (the 2003 lab's), seeing the robot from outside: where it hangs,
+    where it looks at rest (pan from +x, counter-clockwise; tilt below the horizon) and its field at rest. A viewer
+    turns and zooms their own copy of the view; the limits are the mount's."""
+
+    id: str
+    title: str
+    x_m: float
+    y_m: float
+    z_m: float
+    pan_rad: float
+    tilt_rad: float
+    hfov_deg: float = 60.0
+    pan_range_rad: float = math.radians(75.0)  # either way from rest
+    min_tilt_rad: float = math.radians(5.0)
+    max_tilt_rad: float = math.radians(80.0)
+    min_hfov_deg: float = 15.0
+    max_hfov_deg: float = 75.0
+
+
+def corner_camera(x_m: float, y_m: float, z_m: float, title: str = "Room camera") -> RoomCamera:
+    """A camera at (x, y, z) aimed at the room's centre."""
+    return RoomCamera("room", title, x_m, y_m, z_m, math.atan2(-y_m, -x_m),
+                      math.atan2(z_m, math.hypot(x_m, y_m)))
+
+
+@dataclass(frozen=True)
 class SceneSpec:
     """Everything a world needs to build a scene."""
 
@@ -97,6 +124,7 @@ class SceneSpec:
     marks: tuple[FloorMark, ...] = ()
     spawn: Pose2D = field(default_factory=Pose2D)
     track: TrackSpec | None = None  # track scenes: A, B and border lines the track monitor watches
+    room_cameras: tuple[RoomCamera, ...] = ()
 
     def scene_boxes(self) -> list[SceneBox]:
         """Walls and obstacles as boxes; a cylinder is reported as its bounding square."""
@@ -192,6 +220,7 @@ def lab_scene() -> SceneSpec:
         cylinders=(CylinderObstacle("pillar", 1.8, -1.5, 0.25, 1.0, (0.85, 0.85, 0.85, 1.0)),),
         marks=tuple(marks),
         spawn=Pose2D(0.0, 0.0, 0.0),
+        room_cameras=(corner_camera(-half_x + 0.2, -half_y + 0.2, 2.4),),
     )
 
 
@@ -225,7 +254,8 @@ def track_a_scene() -> SceneSpec:
     marks = [*_grid_marks(half_x, half_y), *_point_marks(track)]
     return SceneSpec(name="course-A", floor_half_x_m=half_x, floor_half_y_m=half_y,
                      boxes=tuple(room_walls(half_x, half_y)), marks=tuple(marks),
-                     spawn=Pose2D(track.a_x_m, track.a_y_m, 0.0), track=track)
+                     spawn=Pose2D(track.a_x_m, track.a_y_m, 0.0), track=track,
+                     room_cameras=(corner_camera(0.0, -half_y + 0.2, 2.6),))
 
 
 def track_b_lines(w: float = 0.6) -> tuple[BorderLine, ...]:
@@ -251,7 +281,8 @@ def track_b_scene() -> SceneSpec:
     marks = [*(_line_mark(line) for line in track.lines), *_point_marks(track)]
     return SceneSpec(name="course-B", floor_half_x_m=half_x, floor_half_y_m=half_y,
                      floor_rgba=(0.35, 0.37, 0.36, 1.0), boxes=tuple(room_walls(half_x, half_y)), marks=tuple(marks),
-                     spawn=Pose2D(track.a_x_m, track.a_y_m, 0.0), track=track)
+                     spawn=Pose2D(track.a_x_m, track.a_y_m, 0.0), track=track,
+                     room_cameras=(corner_camera(-half_x + 0.2, -half_y + 0.2, 2.6),))
 
 
 register_scene("lab", lab_scene)

@@ -19,7 +19,7 @@ import { elementRegistrar } from "./panel-base.js";
 
 /** The folders of the panel modules the console loads; each registers one kind. */
 export const PANEL_MODULES = Object.freeze([
-  "camera-panel", "map-panel", "lab-view", "odometry-panel", "sonar-panel", "laser-panel", "drive-pad",
+  "camera-panel", "map-panel", "lab-view", "room-camera", "odometry-panel", "sonar-panel", "laser-panel", "drive-pad",
   "skill-panel", "queue-panel", "chat-panel", "response-times-panel", "low-level-panel", "plan-panel",
 ]);
 

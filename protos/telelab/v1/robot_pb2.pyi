@@ -1051,7 +1051,7 @@ class SonarRing(_message.Message):
     def __init__(self, mount_radius_m: _Optional[float] = ..., height_m: _Optional[float] = ..., sonars: _Optional[_Iterable[_Union[SonarGeometry, _Mapping]]] = ...) -> None: ...
 
 class SceneDescription(_message.Message):
-    __slots__ = ("version", "unchanged", "scene_name", "floor", "marks", "blocks", "cylinders", "track", "spawn", "body_radius_m", "robot_parts", "camera", "laser", "sonar")
+    __slots__ = ("version", "unchanged", "scene_name", "floor", "marks", "blocks", "cylinders", "track", "spawn", "body_radius_m", "robot_parts", "camera", "laser", "sonar", "room_cameras")
     VERSION_FIELD_NUMBER: _ClassVar[int]
     UNCHANGED_FIELD_NUMBER: _ClassVar[int]
     SCENE_NAME_FIELD_NUMBER: _ClassVar[int]
@@ -1066,6 +1066,7 @@ class SceneDescription(_message.Message):
     CAMERA_FIELD_NUMBER: _ClassVar[int]
     LASER_FIELD_NUMBER: _ClassVar[int]
     SONAR_FIELD_NUMBER: _ClassVar[int]
+    ROOM_CAMERAS_FIELD_NUMBER: _ClassVar[int]
     version: str
     unchanged: bool
     scene_name: str
@@ -1080,7 +1081,38 @@ class SceneDescription(_message.Message):
     camera: CameraModel
     laser: LaserGeometry
     sonar: SonarRing
-    def __init__(self, version: _Optional[str] = ..., unchanged: _Optional[bool] = ..., scene_name: _Optional[str] = ..., floor: _Optional[_Union[FloorPatch, _Mapping]] = ..., marks: _Optional[_Iterable[_Union[FloorPatch, _Mapping]]] = ..., blocks: _Optional[_Iterable[_Union[SceneBlock, _Mapping]]] = ..., cylinders: _Optional[_Iterable[_Union[SceneCylinder, _Mapping]]] = ..., track: _Optional[_Union[TrackLayout, _Mapping]] = ..., spawn: _Optional[_Union[Pose2D, _Mapping]] = ..., body_radius_m: _Optional[float] = ..., robot_parts: _Optional[_Iterable[_Union[RobotPart, _Mapping]]] = ..., camera: _Optional[_Union[CameraModel, _Mapping]] = ..., laser: _Optional[_Union[LaserGeometry, _Mapping]] = ..., sonar: _Optional[_Union[SonarRing, _Mapping]] = ...) -> None: ...
+    room_cameras: _containers.RepeatedCompositeFieldContainer[RoomCamera]
+    def __init__(self, version: _Optional[str] = ..., unchanged: _Optional[bool] = ..., scene_name: _Optional[str] = ..., floor: _Optional[_Union[FloorPatch, _Mapping]] = ..., marks: _Optional[_Iterable[_Union[FloorPatch, _Mapping]]] = ..., blocks: _Optional[_Iterable[_Union[SceneBlock, _Mapping]]] = ..., cylinders: _Optional[_Iterable[_Union[SceneCylinder, _Mapping]]] = ..., track: _Optional[_Union[TrackLayout, _Mapping]] = ..., spawn: _Optional[_Union[Pose2D, _Mapping]] = ..., body_radius_m: _Optional[float] = ..., robot_parts: _Optional[_Iterable[_Union[RobotPart, _Mapping]]] = ..., camera: _Optional[_Union[CameraModel, _Mapping]] = ..., laser: _Optional[_Union[LaserGeometry, _Mapping]] = ..., sonar: _Optional[_Union[SonarRing, _Mapping]] = ..., room_cameras: _Optional[_Iterable[_Union[RoomCamera, _Mapping]]] = ...) -> None: ...
+
+class RoomCamera(_message.Message):
+    __slots__ = ("id", "title", "x_m", "y_m", "z_m", "pan_rad", "tilt_rad", "hfov_deg", "pan_range_rad", "min_tilt_rad", "max_tilt_rad", "min_hfov_deg", "max_hfov_deg")
+    ID_FIELD_NUMBER: _ClassVar[int]
+    TITLE_FIELD_NUMBER: _ClassVar[int]
+    X_M_FIELD_NUMBER: _ClassVar[int]
+    Y_M_FIELD_NUMBER: _ClassVar[int]
+    Z_M_FIELD_NUMBER: _ClassVar[int]
+    PAN_RAD_FIELD_NUMBER: _ClassVar[int]
+    TILT_RAD_FIELD_NUMBER: _ClassVar[int]
+    HFOV_DEG_FIELD_NUMBER: _ClassVar[int]
+    PAN_RANGE_RAD_FIELD_NUMBER: _ClassVar[int]
+    MIN_TILT_RAD_FIELD_NUMBER: _ClassVar[int]
+    MAX_TILT_RAD_FIELD_NUMBER: _ClassVar[int]
+    MIN_HFOV_DEG_FIELD_NUMBER: _ClassVar[int]
+    MAX_HFOV_DEG_FIELD_NUMBER: _ClassVar[int]
+    id: str
+    title: str
+    x_m: float
+    y_m: float
+    z_m: float
+    pan_rad: float
+    tilt_rad: float
+    hfov_deg: float
+    pan_range_rad: float
+    min_tilt_rad: float
+    max_tilt_rad: float
+    min_hfov_deg: float
+    max_hfov_deg: float
+    def __init__(self, id: _Optional[str] = ..., title: _Optional[str] = ..., x_m: _Optional[float] = ..., y_m: _Optional[float] = ..., z_m: _Optional[float] = ..., pan_rad: _Optional[float] = ..., tilt_rad: _Optional[float] = ..., hfov_deg: _Optional[float] = ..., pan_range_rad: _Optional[float] = ..., min_tilt_rad: _Optional[float] = ..., max_tilt_rad: _Optional[float] = ..., min_hfov_deg: _Optional[float] = ..., max_hfov_deg: _Optional[float] = ...) -> None: ...
 
 class RunPlanRequest(_message.Message):
     __slots__ = ("token", "name", "plan", "preempt")

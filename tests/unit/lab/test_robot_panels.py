@@ -10,7 +10,7 @@ from protos.telelab.v1 import robot_pb2
 from skill_server.service.convert import panel_to_proto
 from skill_server.sim.panels import TELEBOT_PANELS
 
-ROBOT_OWNS = {"camera", "odometry", "map", "lab-view", "sonar", "laser", "low-level"}
+ROBOT_OWNS = {"camera", "odometry", "map", "lab-view", "room-camera", "sonar", "laser", "low-level"}
 MIDDLEWARE_OWNS = {"drive", "queue", "chat", "response-times"}
 
 # What the console received before the robot described its panels (the descriptor list the middleware held).
@@ -21,6 +21,8 @@ BEFORE = {
     "odometry": ("odometry", "Odometry", "/ws/robots/lab-1/telemetry", "drive"),
     "map": ("map", "Lab model", "/ws/robots/lab-1/localization", "navigate"),
     "lab-view": ("lab-view", "3D lab view", "/ws/robots/lab-1/telemetry", "navigate"),
+    # added since: the room camera (issue 33), a panel the robot describes like the others
+    "room-camera": ("room-camera", "Room camera", "/ws/robots/lab-1/telemetry", "navigate"),
     "sonar": ("sonar", "Sonar", "/ws/robots/lab-1/telemetry", "sense"),
     "laser": ("laser", "Laser", "/ws/robots/lab-1/telemetry", "sense"),
     "chat": ("chat", "Chat", "/ws/robots/lab-1/chat", "chat"),
@@ -46,7 +48,7 @@ def test_the_telebot_console_gets_the_same_descriptors_as_before_the_robot_descr
     assert by_id(descriptors)["camera"]["picture"] == {"kind": "telebot", "default": "video", "chosen": "drawn"}
     in_view = [d["id"] for d in descriptors if d["tab"] == "drive"]
     assert in_view == ["camera", "drive", "queue", "odometry"], "the pad and the turn sit beside the camera"
-    assert [d["id"] for d in descriptors if d["tab"] == "navigate"] == ["map", "lab-view"]
+    assert [d["id"] for d in descriptors if d["tab"] == "navigate"] == ["map", "lab-view", "room-camera"]
 
 
 def test_a_sensor_the_robot_describes_gets_a_panel_with_no_middleware_change() -> None:
