@@ -131,6 +131,15 @@ class StandInRobot(robot_pb2_grpc.RobotServicer):
             await asyncio.sleep(period_s)
 
 
+async def _unimplemented(self: StandInRobot, request: object, context: grpc.aio.ServicerContext) -> None:
+    await context.abort(grpc.StatusCode.UNIMPLEMENTED, "a stand-in robot answers a console's calls only")
+
+
+for _name, _method in vars(robot_pb2_grpc.RobotServicer).items():  # every other call: UNIMPLEMENTED, quietly
+    if callable(_method) and not _name.startswith("_") and _name not in vars(StandInRobot):
+        setattr(StandInRobot, _name, _unimplemented)
+
+
 class StandInFleet:
     """count stand-in robots named prefix1..prefixN on one asyncio loop (a thread of this process)."""
 
