@@ -118,7 +118,7 @@ def send_due(session_factory: Callable[[], Session], now: datetime | None = None
     sent = failed = 0
     client = http or services.http_session()
     for row_id in _claim(session_factory, moment, key):
-        with session_factory() as session:
+        with session_factory() as session:  # the send only reads; its outcome is written in a unit of its own
             row = session.get(LtiGradePassback, row_id)
             if row is None or row.claimed_by != key:
                 continue
@@ -127,7 +127,6 @@ def send_due(session_factory: Callable[[], Session], now: datetime | None = None
                 error = None
             except (LtiException, requests.RequestException, ValueError) as exc:
                 error = services.failure_reason(exc)
-            session.rollback()  # the send read only; the outcome is written in a transaction of its own
         with session_factory() as session, session.begin():
             row = session.get(LtiGradePassback, row_id)
             if row is None:
