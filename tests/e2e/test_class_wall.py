@@ -110,7 +110,7 @@ def test_a_tutor_sees_the_class_moves_takes_over_answers_a_hand_and_stops_every_
         second.get_by_role("button", name="Raise my hand").click()
         second.get_by_role("status").filter(has_text="Your hand is up").wait_for()
         hand = page.locator(".wall-tile", has_text="student2").get_by_text("My robot will not turn")
-        hand.wait_for(timeout=5_000)
+        hand.wait_for(timeout=15_000)
         log_in(tutor_phone_tab := tutor_phone.new_page(), live_server, "tutor1")
         tutor_phone_tab.goto(f"{live_server.url}/courses/{course_id}/class/wall")
         tutor_phone_tab.locator(".wall-tile").nth(2).wait_for()
@@ -124,7 +124,7 @@ def test_a_tutor_sees_the_class_moves_takes_over_answers_a_hand_and_stops_every_
         tutor_phone_tab.get_by_label("Hands raised").uncheck()
         tutor_phone_tab.screenshot(path=str(ARTIFACTS_DIR / "class-wall-phone.png"), full_page=True)
         page.get_by_role("button", name="Answered: student2").click()
-        hand.wait_for(state="detached", timeout=5_000)
+        hand.wait_for(state="detached", timeout=15_000)
         second.get_by_role("button", name="Raise my hand").wait_for()
         assert second.get_by_role("status").filter(has_text="Your hand is up").count() == 0
 
@@ -139,13 +139,13 @@ def test_a_tutor_sees_the_class_moves_takes_over_answers_a_hand_and_stops_every_
         # Take over: the student sees it at once and is refused; one click gives the robot back.
         page.get_by_role("button", name="Take over: student1").click()
         held = first.get_by_role("alert").filter(has_text="Your tutor tutor1 has taken over your robot")
-        held.wait_for(timeout=5_000)
+        held.wait_for(timeout=15_000)
         first.screenshot(path=str(ARTIFACTS_DIR / "class-wall-student-taken-over.png"), full_page=True)
         refused = robot_commands(app).for_user(robots[0], ids["student1"])
         assert not refused.is_controller()
         assert robot_commands(app).for_user(robots[0], ids["tutor1"]).is_controller()
         page.get_by_role("button", name="Give back: student1").click()
-        held.wait_for(state="hidden", timeout=5_000)
+        held.wait_for(state="hidden", timeout=15_000)
         assert robot_commands(app).for_user(robots[0], ids["student1"]).is_controller()
         page.screenshot(path=str(ARTIFACTS_DIR / "class-wall-desktop-after.png"), full_page=True)
     finally:

@@ -249,6 +249,12 @@ def test_the_wall_carries_every_robot_on_one_socket_and_stop_all_stops_them(wall
         _until(wall, lambda message: message["type"] == "poses" and len(message["robots"]) == 2
                and all(row[7] == "idle" for row in message["robots"]), 10)
         assert time.monotonic() - stopped_at < 5
+        # A skill's run shows as the skill (asked of the robot beside the poses).
+        status, goal = _api(students[0], "POST", "/api/robots/practice-s01/skills/go_to_goal/goals",
+                            {"parameters": {"goal_x_m": 0.6, "goal_y_m": 0.4}})
+        assert status == 202, goal
+        _until(wall, lambda message: message["type"] == "poses" and any(
+            row[0] == ids["s01"] and row[7] == "skill:go_to_goal" for row in message["robots"]), 15)
         status, answer = _api(tutor, "POST", f"/api/courses/{course_id}/class-wall", {"action": "dock_all"})
         assert status == 200 and answer["done"] == 2, answer
         wall.send(json.dumps({"type": "anything"}))  # what the page sends is dropped; the socket stays open

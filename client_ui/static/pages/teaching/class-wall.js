@@ -12,6 +12,7 @@ const api = `/api/courses/${root.dataset.courseId}/class-wall`;
 const list = root.querySelector("[data-field=tiles]");
 const template = document.getElementById("wall-tile");
 const summary = root.querySelector("[data-field=summary]");
+const outcome = root.querySelector("[data-field=outcome]"); // what the tutor's last action did
 const errorLine = root.querySelector("[data-field=error]");
 const pushForm = root.querySelector("[data-field=push]");
 const pushSelect = pushForm.querySelector("select");
@@ -153,8 +154,9 @@ function renderSummary() {
   const hands = lastSeats.filter((seat) => seat.hand).length;
   const faulted = states.filter((state) => state === "faulted").length;
   const moving = states.filter((state) => state !== "idle" && state !== "faulted").length;
-  summary.textContent = t("{count} students: {busy} busy, {hands} with a hand raised, {faulted} faulted.",
+  const words = t("{count} students: {busy} busy, {hands} with a hand raised, {faulted} faulted.",
     { count: lastSeats.length, busy: moving, hands, faulted });
+  if (summary.textContent !== words) summary.textContent = words; // a live region: only a change is announced
   root.dataset.hands = String(hands);
 }
 
@@ -245,7 +247,7 @@ list.addEventListener("click", async (event) => {
     take_over: t("You hold {name}'s robot: Watch to drive it; Give back returns it.", { name }),
     give_back: t("{name} has their robot back.", { name }), answer: t("{name}'s hand is down.", { name }),
   };
-  summary.textContent = words[action] ?? summary.textContent;
+  outcome.textContent = words[action] ?? "";
 });
 
 list.addEventListener("submit", async (event) => {
@@ -256,7 +258,7 @@ list.addEventListener("submit", async (event) => {
   if (tile.pointer) body.point = tile.pointer;
   if (await act(`${api}/seats/${tile.seat.user_id}`, body, form.querySelector("button"))) {
     form.reset();
-    summary.textContent = t("Note sent to {name}.", { name: tile.seat.username });
+    outcome.textContent = t("Note sent to {name}.", { name: tile.seat.username });
     tile.pointer = null;
     form.querySelector("[data-field=point-help]").textContent = t("Click the map to point at a place (optional).");
     markDirty(tile);
@@ -270,7 +272,7 @@ for (const button of root.querySelectorAll(".wall-toolbar > button[data-action]"
     const refused = Object.entries(done.refused).map(([robot, why]) => `${robot} (${why})`).join(", ");
     const doneWords = button.dataset.action === "stop_all" ? t("{count} robots stopped.", { count: done.done })
       : t("{count} robots sent to their docks.", { count: done.done });
-    summary.textContent = refused ? `${doneWords} ${t("Not: {robots}.", { robots: refused })}` : doneWords;
+    outcome.textContent = refused ? `${doneWords} ${t("Not: {robots}.", { robots: refused })}` : doneWords;
   });
 }
 
@@ -279,7 +281,7 @@ pushForm.addEventListener("submit", async (event) => {
   const [kind, id] = pushSelect.value.split(":");
   if (!id) return;
   const done = await act(api, { action: "push", kind, id: Number(id) }, pushForm.querySelector("button"));
-  if (done) summary.textContent = t("Sent to every student: {title}.", { title: done.title });
+  if (done) outcome.textContent = t("Sent to every student: {title}.", { title: done.title });
 });
 
 for (const box of filters) box.addEventListener("change", () => tiles.forEach(applyFilter));
