@@ -177,4 +177,6 @@ def grade(rubric: dict[str, Any], trace: list[list[float]], report: dict[str, An
 
 
 def _shown(value: float) -> str:
-    return "none" if not math.isfinite(value) else f"{value:.2f}"
+    if not math.isfinite(value):
+        return "none"
+    return f"{value:.0f}" if float(value).is_integer() else f"{value:.2f}"

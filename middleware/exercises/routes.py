@@ -16,6 +16,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
+from middleware.api.contract import ANY, ID, OBJECT, about, array, described, obj, one_of
 from middleware.assessment.recording import robot_run
 from middleware.browser_modules import csp_hash_source, import_map_text
 from middleware.db import get_session
@@ -99,6 +100,7 @@ def class_page(slug: str) -> ResponseReturnValue:
 
 @blueprint.get("/api/exercises")
 @login_required
+@described(answers={200: obj(("exercises",), exercises=array(OBJECT))})
 def list_exercises() -> ResponseReturnValue:
     """The catalogue."""
     session = get_session()
@@ -108,6 +110,22 @@ def list_exercises() -> ResponseReturnValue:
 
 @blueprint.post("/api/exercises")
 @login_required
+@described(
+    body=obj(
+        ("slug", "title"),
+        slug=about("1 to 63 lower-case letters, digits and -"),
+        title=about("the exercise's title"),
+        statement=about("what the student is asked"),
+        template=about("the starting code"),
+        scene=about("a scene"),
+        start=about("the robot's start"),
+        random_starts=about("true or false"),
+        time_limit_s=about("seconds"),
+        rubric=about("how it is graded"),
+    ),
+    answers={201: obj(("exercise",), exercise=OBJECT)},
+    refusals=(409,),
+)
 def add() -> ResponseReturnValue:
     """A tutor or admin adds an exercise."""
     fields = schemas.definition(request.get_json(silent=True))
@@ -117,6 +135,7 @@ def add() -> ResponseReturnValue:
 
 @blueprint.get("/api/exercises/<slug>")
 @login_required
+@described(answers={200: obj(("exercise",), exercise=OBJECT)})
 def detail(slug: str) -> ResponseReturnValue:
     """An exercise, the user's latest code and their latest runs."""
     session = get_session()
@@ -132,6 +151,21 @@ def detail(slug: str) -> ResponseReturnValue:
 
 @blueprint.put("/api/exercises/<slug>")
 @login_required
+@described(
+    body=obj(
+        ("title",),
+        title=about("the exercise's title"),
+        statement=about("what the student is asked"),
+        template=about("the starting code"),
+        scene=about("a scene"),
+        start=about("the robot's start"),
+        random_starts=about("true or false"),
+        time_limit_s=about("seconds"),
+        rubric=about("how it is graded"),
+    ),
+    answers={200: obj(("exercise",), exercise=OBJECT)},
+    refusals=(409,),
+)
 def change(slug: str) -> ResponseReturnValue:
     """A tutor or admin rewrites an exercise."""
     session = get_session()
@@ -143,6 +177,9 @@ def change(slug: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/exercises/<slug>/codes")
 @login_required
+@described(
+    body=obj(("code",), code=about("the Python code")), answers={201: obj(("code_id",), code_id=ID)}, refusals=(413,)
+)
 def save(slug: str) -> ResponseReturnValue:
     """Saves a version of the user's code without running it."""
     session = get_session()
@@ -154,6 +191,16 @@ def save(slug: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/exercises/<slug>/runs")
 @login_required
+@described(
+    body=obj(
+        ("code",),
+        code=about("the Python code"),
+        mode=one_of("practice", "submission"),
+        robot=about('"practice" or a lab robot the user controls'),
+    ),
+    answers={201: obj(("run", "exercise"), run=OBJECT, exercise=OBJECT)},
+    refusals=(409, 413, 503),
+)
 def start_run(slug: str) -> ResponseReturnValue:
     """Saves the code, places the user's robot at the run's start (hidden for a submission) and opens the run."""
     session = get_session()
@@ -175,6 +222,7 @@ def start_run(slug: str) -> ResponseReturnValue:
 
 @blueprint.get("/api/exercise-runs/<int:run_id>")
 @login_required
+@described(answers={200: obj(("run",), run=OBJECT)})
 def read_run(run_id: int) -> ResponseReturnValue:
     """A run (graded once its time is up, if its page never finished it), with its trace once graded."""
     session = get_session()
@@ -185,6 +233,12 @@ def read_run(run_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/exercise-runs/<int:run_id>/finish")
 @login_required
+@described(
+    body=obj(report=obj(description="the pose the code reported (localization): {x_m, y_m, t_s}")),
+    body_required=False,
+    answers={200: obj(("run",), run=OBJECT, scene_boxes=ANY)},
+    refusals=(409, 503),
+)
 def finish(run_id: int) -> ResponseReturnValue:
     """Ends the run now and grades it from the robot's own record; the body may only carry the pose the code
     reported (the localization exercise)."""
@@ -198,6 +252,7 @@ def finish(run_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/exercises/<slug>/class")
 @login_required
+@described(answers={200: obj(("students",), students=ANY)})
 def class_work(slug: str) -> ResponseReturnValue:
     """A tutor's students' code versions, runs and grades (JSON)."""
     session = get_session()

@@ -75,6 +75,8 @@ def test_runs_are_placed_and_graded_by_the_server_and_seen_by_owner_and_tutor_on
     assert not any(r["username"] == "student3" for r in answer["students"])
     status, _ = api(ann, "GET", "/api/exercises/bump-and-go/class")
     assert status == 403
+    status, page = api(plans_lab.client("tutor1"), "GET", "/exercises/bump-and-go/class")
+    assert status == 200 and 'data-student="student1"' in page["body"] and "robot.stop()" in page["body"]
 
 
 @pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)

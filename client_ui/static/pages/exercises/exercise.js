@@ -174,6 +174,8 @@ async function finish(outcome) {
     const answer = await fetchJson(`/api/exercise-runs/${run.id}/finish`, { method: "POST", body });
     showGrade(answer.run, answer.scene_boxes);
     if (outcome.ok || outcome.stopped) say(answer.run.status === "graded" ? "Run graded." : answer.run.feedback);
+    else say(`Your program failed${outcome.line ? ` at line ${outcome.line}` : ""}: ${outcome.message}. `
+      + "What the robot did until then is graded below.", "error");
   } catch (error) {
     say(error.message, "error");
   }
@@ -199,7 +201,7 @@ function showGrade(run, boxes) {
   const body = measurements.querySelector("tbody");
   body.replaceChildren(...run.measurements.map((m) => {
     const row = document.createElement("tr");
-    for (const text of [m.name, `${formatValue(m.value)} ${m.unit}`, `${m.lower_is_better ? "≤" : "≥"} ${m.bar} ${m.unit}`,
+    for (const text of [m.name, `${formatValue(m.value, m.unit)} ${m.unit}`, `${m.lower_is_better ? "≤" : "≥"} ${m.bar} ${m.unit}`,
       `${Math.round(m.fraction * 100)}%`]) {
       const cell = document.createElement("td");
       cell.textContent = text;
@@ -211,7 +213,8 @@ function showGrade(run, boxes) {
   drawTrace(map, boxes ?? [], run.trace ?? [], run.start);
 }
 
-function formatValue(value) {
+function formatValue(value, unit = "") {
+  if (unit === "cells") return String(Math.round(value));
   return Number.isFinite(value) ? (Math.abs(value) >= 10 ? value.toFixed(1) : value.toFixed(2)) : "—";
 }
 

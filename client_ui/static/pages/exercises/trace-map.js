@@ -5,9 +5,10 @@ const PADDING_PX = 12;
 export function mapBounds(boxes, trace) {
   const xs = [], ys = [];
   for (const box of boxes) {
-    const r = Math.hypot(box.hx, box.hy);
-    xs.push(box.x - r, box.x + r);
-    ys.push(box.y - r, box.y + r);
+    const c = Math.abs(Math.cos(box.yaw)), s = Math.abs(Math.sin(box.yaw));
+    const rx = box.hx * c + box.hy * s, ry = box.hx * s + box.hy * c;  // the rotated box's half extents
+    xs.push(box.x - rx, box.x + rx);
+    ys.push(box.y - ry, box.y + ry);
   }
   for (const [, x, y] of trace) { xs.push(x); ys.push(y); }
   if (!xs.length) return [-4, -3, 4, 3];
