@@ -12,7 +12,7 @@ from typing import Any
 
 from flask import Flask
 
-from middleware.api.contract import ERROR, Schema, number, obj, one_of, text, whole
+from middleware.api.contract import ERROR, Schema, array, number, obj, one_of, text, whole
 
 _ERROR_MESSAGE: Schema = obj(("type", "code", "message"), type=one_of("error"), code=text(), message=text(),
                              field={"type": ["string", "null"]})
@@ -81,6 +81,28 @@ CHANNELS: dict[str, dict[str, Any]] = {
     "/ws/practice/camera": {
         "summary": "The camera of the user's practice robot, as the lab camera's channel.",
         "receives": [], "sends": [{"type": "string", "format": "binary"}, _ERROR_MESSAGE],
+    },
+    "/ws/courses/<int:course_id>/class-wall": {
+        "summary": "The class wall for the course's tutors: every seat when one changes, every robot's pose, and "
+                   "'ended' when the class session ends.",
+        "receives": [],
+        "sends": [obj(("type", "seats"), type=one_of("seats"), seats=array()),
+                  obj(("type",), type=one_of("poses"), t=number()), obj(("type",), type=one_of("ended")),
+                  _ERROR_MESSAGE],
+    },
+    "/ws/class-session/wall": {
+        "summary": "The student's own seat in the open class: their hand, who holds their robot, the tutor's notices.",
+        "receives": [], "sends": [obj(("type",), type=one_of("seat")), _ERROR_MESSAGE],
+    },
+    "/ws/courses/<int:course_id>/class-wall/chat": {
+        "summary": "The chat of the course's open class, for its tutors and admins (the chat channel's messages).",
+        "receives": [obj(("type",), type=one_of("say", "delete"), text=text(500), id=whole(1), line=text(64))],
+        "sends": [obj(("type",), type=one_of("history", "message", "deleted", "sent")), _ERROR_MESSAGE],
+    },
+    "/ws/class-session/chat": {
+        "summary": "The chat of the class the student has a seat in (the chat channel's messages).",
+        "receives": [obj(("type",), type=one_of("say", "delete"), text=text(500), id=whole(1), line=text(64))],
+        "sends": [obj(("type",), type=one_of("history", "message", "deleted", "sent")), _ERROR_MESSAGE],
     },
     "/ws/tour-sessions/<int:session_id>": {
         "summary": "A live class's state for its followers: the step, the robot, who has control.",

@@ -11,10 +11,10 @@ from flask import Blueprint, Response, current_app, jsonify, redirect, render_te
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
-from middleware.api.contract import ID, OBJECT, described, file_answer, number, obj, whole
+from middleware.api.contract import ID, OBJECT, array, described, file_answer, number, obj, whole
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError, Refused
-from middleware.models.accounts import Role, User
+from middleware.models.accounts import Role, User, as_utc
 from middleware.models.recordings import RECORDING_KINDS, Recording
 from middleware.recordings import export, files, recordings_of, services
 
@@ -48,8 +48,17 @@ def _root() -> Path:
 
 
 def _data(recording: Recording, from_s: float = 0.0, to_s: float | None = None) -> dict[str, object]:
-    messages = files.read_recording(_root(), recording.id)
-    return export.replay_data(messages, services.may_see_truth(_user()), from_s, to_s)
+    """The decoded window: only the chunks in it are read from a complete part (the page asks for its first
+    seconds first, so a long recording's first frame does not wait for all of it)."""
+    root = _root()
+    t0 = files.first_log_ns(root, recording.id)
+    windowed = t0 is not None and (from_s > 0 or to_s is not None)
+    messages = files.read_recording(root, recording.id, t0 + int(from_s * 1e9) if windowed and t0 else None,
+                                    t0 + int(to_s * 1e9) if windowed and t0 and to_s is not None else None)
+    data = export.replay_data(messages, services.may_see_truth(_user()), from_s, to_s, t0)
+    if recording.ended_at is not None:
+        data["recording_s"] = round((as_utc(recording.ended_at) - as_utc(recording.started_at)).total_seconds(), 3)
+    return data
 
 
 def _seconds(name: str) -> float | None:
@@ -116,7 +125,7 @@ def storage_page() -> ResponseReturnValue:
 
 @blueprint.get("/api/recordings")
 @login_required
-@described(query={"offset": whole(0, 1_000_000)}, answers={200: obj(("recordings",), recordings=OBJECT)})
+@described(query={"offset": whole(0, 1_000_000)}, answers={200: obj(("recordings",), recordings=array(OBJECT))})
 def list_recordings() -> ResponseReturnValue:
     """The recordings the user may see, newest first (200 a page)."""
     offset = int(request.args.get("offset", "0"))
@@ -167,7 +176,10 @@ def export_csv(recording_id: int, channel: str) -> ResponseReturnValue:
     recording = services.visible_recording(get_session(), _user(), recording_id)
     if channel not in export.CSV_CHANNELS or (channel == "ground_truth" and not services.may_see_truth(_user())):
         raise ApiError(404, "unknown_channel", "There is no such channel in this recording.", "channel")
-    text = export.channel_csv(_data(recording), channel)
+    root = _root()
+    data = export.replay_data(files.read_recording(root, recording.id), services.may_see_truth(_user()),
+                              t0_ns=files.first_log_ns(root, recording.id), laser_every_s=0.0)
+    text = export.channel_csv(data, channel)
     return Response(text, mimetype="text/csv", headers={
         "Content-Disposition": f'attachment; filename="recording-{recording.id}-{channel}.csv"'})
 

@@ -13,6 +13,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import Commander, robot_commands
+from middleware.api.contract import OBJECT, STRING, about, described, obj, one_of
 from middleware.courses.services import managed_course
 from middleware.db import after_commit, get_session
 from middleware.errors import Refused
@@ -69,6 +70,7 @@ def wall_page(course_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/courses/<int:course_id>/class-wall")
 @login_required
+@described(answers={200: OBJECT}, refusals=(409,))
 def wall_state(course_id: int) -> ResponseReturnValue:
     """Every seat of the open class session as the wall shows it (409 when none is open)."""
     return jsonify(wall_dict(course_id))
@@ -76,6 +78,16 @@ def wall_state(course_id: int) -> ResponseReturnValue:
 
 @blueprint.post("/api/courses/<int:course_id>/class-wall/seats/<int:user_id>")
 @login_required
+@described(
+    body=obj(
+        ("action",),
+        action=one_of("stop", "dock", "take_over", "give_back", "answer", "note"),
+        text=about("note: its sentence"),
+        point=about("note: a pointer on the map"),
+    ),
+    answers={200: OBJECT},
+    refusals=(409, 503),
+)
 def seat_action(course_id: int, user_id: int) -> ResponseReturnValue:
     """One student's tile: stop, dock, take over, give back, answer the hand, send a note or a pointer."""
     body = _body()
@@ -116,6 +128,16 @@ def _quietly(robot: str, act: Callable[[], object]) -> str:
 
 @blueprint.post("/api/courses/<int:course_id>/class-wall")
 @login_required
+@described(
+    body=obj(
+        ("action",),
+        action=one_of("stop_all", "dock_all", "push"),
+        kind=about("push: lesson, plan or test"),
+        id=about("push: its id"),
+    ),
+    answers={200: obj(("action",), action=STRING)},
+    refusals=(409, 503),
+)
 def class_action(course_id: int) -> ResponseReturnValue:
     """Every robot at once: stop all, dock all; or push a lesson, plan or test to every student."""
     body = _body()
@@ -142,6 +164,7 @@ def class_action(course_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/class-session/wall")
 @login_required
+@described(answers={200: OBJECT}, refusals=(409,))
 def my_wall() -> ResponseReturnValue:
     """The student's side of the wall: their hand, who holds their robot, the tutor's notes and pushes."""
     return jsonify(class_wall.student_view(get_session(), _actor()))
@@ -149,6 +172,7 @@ def my_wall() -> ResponseReturnValue:
 
 @blueprint.post("/api/class-session/hand")
 @login_required
+@described(body=obj(text=about("an optional sentence")), body_required=False, answers={201: OBJECT}, refusals=(409,))
 def raise_hand() -> ResponseReturnValue:
     """Raises the student's hand (with an optional sentence, `text`)."""
     body = request.get_json(silent=True)
@@ -159,6 +183,7 @@ def raise_hand() -> ResponseReturnValue:
 
 @blueprint.delete("/api/class-session/hand")
 @login_required
+@described(answers={200: OBJECT}, refusals=(409,))
 def lower_hand() -> ResponseReturnValue:
     """Lowers the student's hand."""
     class_wall.lower_hand(get_session(), _actor())

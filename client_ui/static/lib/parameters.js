@@ -1,10 +1,12 @@
 // Skill parameters for people, shared by the skill panels and the authoring forms: labels, typed values, limits.
 
+import { t } from "./i18n.js";
+
 /** "goal_x_m" -> "Goal x"; the unit is shown apart. */
 export function parameterLabel(name) {
   const words = String(name).replace(/_(m|mps|rad|radps|s|deg|ms)$/, "").split("_").filter(Boolean);
   const text = words.join(" ");
-  return text ? text[0].toUpperCase() + text.slice(1) : String(name);
+  return text ? t(text[0].toUpperCase() + text.slice(1)) : String(name);  // the robot's labels: robot_words.py
 }
 
 /** The value an input holds, typed by the parameter's schema; undefined when empty. */

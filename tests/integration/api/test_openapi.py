@@ -28,18 +28,12 @@ from tests.conftest import LiveServer
 from tests.hardening.conftest import ROLES, seeded_lab, stop_lab
 
 ROOT = Path(__file__).resolve().parents[3]
-# Areas whose routes another engineer is building now, not yet committed (issue 29's session): named, with why. A
-# route of any other area without a contract fails the test.
-PENDING_AREAS: dict[str, str] = {
-    "class_wall": "the class wall (teaching/class_wall_routes.py), being built",
-    "exercises": "the exercises area (issue 30), being built",
-    "lti": "the LTI tool (issue 29 item 1), being built",
-    "recordings": "the recordings area (issue 31), being built",
-}
+# Areas whose routes another engineer is building now, not yet committed: named, with why (none now). A route of
+# any other area without a contract fails the test.
+PENDING_AREAS: dict[str, str] = {}
 
-# Channels of the class wall, being built with it (their rules, as the URL map has them).
-PENDING_CHANNELS = {"/ws/class-session/wall", "/ws/courses/<int:course_id>/class-wall", "/ws/class-session/chat",
-                    "/ws/courses/<int:course_id>/class-wall/chat"}
+# Channels still being built, by rule (none now).
+PENDING_CHANNELS: set[str] = set()
 
 
 def pending(app) -> set[str]:

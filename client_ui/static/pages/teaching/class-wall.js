@@ -1,7 +1,7 @@
 // The tutor's class wall: every student's robot drawn from the one wall socket's poses, their hands, and the
 // tutor's actions on one robot or on all. The server decides every action; this page shows and asks.
 import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
-import { canvasToWorld } from "../../lib/map-geometry.js";
+import { canvasToWorld, moveCursor, sceneBounds } from "../../lib/map-geometry.js";
 import { t } from "../../lib/i18n.js";
 import { connectChat } from "../../lib/console/chat-session.js";
 import { register as registerChatPanel } from "../../panels/chat-panel/chat-panel.js";
@@ -68,6 +68,14 @@ function drawDirty() {
   }
 }
 
+function point(tile, x_m, y_m) {
+  tile.pointer = { x_m: Math.round(x_m * 100) / 100, y_m: Math.round(y_m * 100) / 100 };
+  tile.element.querySelector("[data-field=point-help]").textContent =
+    t("Pointing at x {x} m, y {y} m (click or use the arrow keys on the map to move it).",
+      { x: tile.pointer.x_m, y: tile.pointer.y_m });
+  markDirty(tile);
+}
+
 function makeTile(seat) {
   const element = template.content.firstElementChild.cloneNode(true);
   element.dataset.userId = seat.user_id;
@@ -86,10 +94,21 @@ function makeTile(seat) {
     const box = canvas.getBoundingClientRect();
     const [x_m, y_m] = canvasToWorld(plan.view, (event.clientX - box.left) * (canvas.width / box.width),
       (event.clientY - box.top) * (canvas.height / box.height));
-    tile.pointer = { x_m: Math.round(x_m * 100) / 100, y_m: Math.round(y_m * 100) / 100 };
-    element.querySelector("[data-field=point-help]").textContent =
-      t("Pointing at x {x} m, y {y} m (click again to move it).", { x: tile.pointer.x_m, y: tile.pointer.y_m });
-    markDirty(tile);
+    point(tile, x_m, y_m);
+  });
+  canvas.addEventListener("keydown", (event) => { // the same by keyboard: arrows move the pointer 10 cm
+    const step = { ArrowLeft: [-0.1, 0], ArrowRight: [0.1, 0], ArrowUp: [0, 0.1], ArrowDown: [0, -0.1] }[event.key];
+    if (!step || !element.querySelector("details").open) return;
+    event.preventDefault();
+    const from = tile.pointer ?? tile.pose ?? { x_m: 0, y_m: 0 };
+    const [x_m, y_m] = moveCursor([from.x_m, from.y_m], step[0], step[1], sceneBounds(boxes ?? []));
+    point(tile, x_m, y_m);
+  });
+  element.querySelector("details").addEventListener("toggle", (event) => { // the map takes keys while Assist is open
+    canvas.tabIndex = event.target.open ? 0 : -1;
+    canvas.setAttribute("aria-hidden", String(!event.target.open));
+    canvas.setAttribute("aria-label", t("Map of {name}'s robot: arrow keys move the pointer for your note.",
+      { name: tile.seat.username }));
   });
   tiles.set(seat.user_id, tile);
   visibility.observe(element);
@@ -260,7 +279,7 @@ list.addEventListener("submit", async (event) => {
     form.reset();
     outcome.textContent = t("Note sent to {name}.", { name: tile.seat.username });
     tile.pointer = null;
-    form.querySelector("[data-field=point-help]").textContent = t("Click the map to point at a place (optional).");
+    form.querySelector("[data-field=point-help]").textContent = t("Click the map, or use the arrow keys on it, to point at a place (optional).");
     markDirty(tile);
   }
 });
