@@ -51,10 +51,10 @@ def launch() -> ResponseReturnValue:
     validated = flow.validate_launch(dbs)
     accepted = accept_launch(dbs, validated, str(current_app.config["SECRET_KEY"]))
     sessions.begin(accepted.user)
-    locale = (validated.claims.get(launches.PRESENTATION_CLAIM) or {}).get("locale") \
-        if isinstance(validated.claims.get(launches.PRESENTATION_CLAIM), dict) else validated.claims.get("locale")
+    presentation = validated.claims.get(launches.PRESENTATION_CLAIM)
+    locale = presentation.get("locale") if isinstance(presentation, dict) else validated.claims.get("locale")
     if isinstance(locale, str):
-        i18n.remember_launch_locale(locale)
+        i18n.remember_launch_locale(locale)  # the language of the pages, unless the person chose one
     if validated.is_deep_link:
         return _picker(validated.launch_id)
     return redirect(catalog.destination(accepted.target, accepted.course_id, accepted.teaches), 303)

@@ -8,11 +8,12 @@ import html
 import json
 import re
 import time
+from pathlib import Path
 
 import pytest
 from sqlalchemy import func, select
 
-from tests.conftest import LabClient, LiveServer
+from tests.conftest import LabClient, LiveServer, _let_go, make_test_app
 from tests.integration.lti.conftest import begin_login, launch, register
 from tests.integration.lti.platform import CLAIM, INSTRUCTOR, LEARNER, LMS_ADMIN, LmsPlatform
 
@@ -199,4 +200,25 @@ def test_the_jwks_serves_every_unretired_key_and_rotation_keeps_the_old_one(tool
         keys.retire(session, kids[0])
     final = [k["kid"] for k in json.loads(LabClient(tool.url).request("GET", "/lti/jwks.json")[2])["keys"]]
     assert kids[0] not in final and new in final
+
+
+def test_the_session_cookie_crosses_sites_over_https_only_once_a_platform_is_registered(tool: LiveServer,
+                                                                                        lms: LmsPlatform,
+                                                                                        tmp_path: Path) -> None:
+    app = tool.app
+    with app.test_request_context("/", base_url="https://telelab.example.edu"):
+        assert app.session_interface.get_cookie_samesite(app) == "None"
+        assert app.session_interface.get_cookie_secure(app)
+    with app.test_request_context("/", base_url="http://127.0.0.1"):
+        assert app.session_interface.get_cookie_samesite(app) == app.config["SESSION_COOKIE_SAMESITE"]
+    bare = make_test_app(f"sqlite:///{tmp_path / 'bare.sqlite3'}", "", tmp_path)  # no platform: not embedded
+    try:
+        with bare.test_request_context("/", base_url="https://telelab.example.edu"):
+            assert bare.session_interface.get_cookie_samesite(bare) == bare.config["SESSION_COOKIE_SAMESITE"]
+        with bare.test_client() as client:
+            headers = client.get("/healthz").headers
+        assert headers["X-Frame-Options"] == "DENY"
+        assert "frame-ancestors 'none'" in headers["Content-Security-Policy"]
+    finally:
+        _let_go(bare)
 
