@@ -147,7 +147,21 @@ def test_a_tutor_sees_the_class_moves_takes_over_answers_a_hand_and_stops_every_
         page.get_by_role("button", name="Give back: student1").click()
         held.wait_for(state="hidden", timeout=15_000)
         assert robot_commands(app).for_user(robots[0], ids["student1"]).is_controller()
+
+        # Assist by keyboard: a note with a pointer moved by the arrow keys on the tile's map.
+        tile = page.locator(".wall-tile", has_text="student1")
+        tile.get_by_text("Assist").click()
+        tile.locator("canvas").focus()
+        for key in ("ArrowRight", "ArrowRight", "ArrowUp"):
+            page.keyboard.press(key)
+        tile.get_by_text("Pointing at x").wait_for()
+        tile.get_by_label("A note to the student").fill("Drive here next")
+        tile.get_by_role("button", name="Send the note").click()
+        note = first.locator(".class-notices li", has_text="Drive here next")
+        note.wait_for(timeout=15_000)
+        assert "(x " in note.inner_text() and note.locator("canvas").count() == 1
         page.screenshot(path=str(ARTIFACTS_DIR / "class-wall-desktop-after.png"), full_page=True)
+        first.screenshot(path=str(ARTIFACTS_DIR / "class-wall-student-note.png"), full_page=True)
     finally:
         for context in (desktop, phone, tutor_phone):
             context.close()
