@@ -77,6 +77,21 @@ def test_every_json_route_and_channel_is_in_the_document(described_lab) -> None:
                                                "description": "Not logged in (or the login ended)"}
 
 
+def test_a_body_outside_its_declared_contract_is_refused_naming_the_field_before_the_view_runs(described_lab) -> None:
+    session = _session(described_lab.url, "student", described_lab.app.config["TEST_PASSWORDS"])
+    assert session is not None
+    plans_before = session.get(f"{described_lab.url}/api/plans", timeout=30).json()["plans"]
+    for body, field in (({"name": 5, "text": "stop"}, "name"), ({"name": "p" * 65, "text": "stop"}, "name"),
+                        ({"name": "ok"}, "text"), ([1, 2], "body")):
+        answer = session.post(f"{described_lab.url}/api/plans", json=body, timeout=30)
+        assert answer.status_code == 400, (body, answer.text)
+        assert answer.json()["error"]["code"] == "invalid_field" and answer.json()["error"]["field"] == field, body
+    answer = session.put(f"{described_lab.url}/api/plans/1/skill", json={"console_skill": "yes"}, timeout=30)
+    assert answer.json()["error"] == {"code": "invalid_field", "field": "console_skill",
+                                      "message": "console_skill must be true or false."}
+    assert session.get(f"{described_lab.url}/api/plans", timeout=30).json()["plans"] == plans_before  # none stored
+
+
 def test_the_document_names_a_route_that_declares_nothing_and_checks_what_one_declares() -> None:
     from flask import Flask
 
