@@ -9,7 +9,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from tests.conftest import ARTIFACTS_DIR, LiveServer, served_lab
+from tests.conftest import ARTIFACTS_DIR, LiveServer, make_course, served_lab
 from tests.e2e.test_lessons import log_in
 
 pytestmark = pytest.mark.e2e
@@ -49,6 +49,7 @@ def exercise_lab(tmp_path_factory: pytest.TempPathFactory, skill_server_address:
     from middleware.teaching.practice_robots import practice_manager
 
     with served_lab(f"lab-1={skill_server_address}", tmp_path_factory.mktemp("exercises")) as server:
+        make_course(server.app, "EX1", {"student1": "student", "tutor1": "tutor"})
         try:
             yield server
         finally:
@@ -136,7 +137,25 @@ def test_a_student_runs_submits_stops_and_reads_errors_in_the_browser(page, exer
     console.filter(has_text="Line 5: ZeroDivisionError").wait_for(timeout=30_000)
     assert "exercise.py" in console.inner_text()
     assert page.locator(".exercise__error-line").count() == 1
+    page.get_by_role("status").filter(has_text="What the robot did until then is graded below").wait_for(timeout=20_000)
     page.screenshot(path=str(ARTIFACTS_DIR / "exercise-error.png"), full_page=True)
+
+
+def test_a_tutor_reads_each_students_code_versions_runs_and_grades(chromium, exercise_lab: LiveServer) -> None:
+    context = chromium.new_context(viewport={"width": 1280, "height": 800})
+    page = context.new_page()
+    try:
+        log_in(page, exercise_lab, "tutor1")
+        page.goto(f"{exercise_lab.url}/exercises")
+        page.get_by_role("link", name="Students' code, runs and grades").first.click()
+        student = page.locator('[data-student="student1"]')
+        student.wait_for()
+        assert "best submission" in student.inner_text()
+        student.locator("summary").first.click()
+        assert "robot.tick()" in student.locator("pre").first.inner_text()
+        page.screenshot(path=str(ARTIFACTS_DIR / "exercise-class.png"), full_page=True)
+    finally:
+        context.close()
 
 
 def test_closing_the_tab_stops_the_robot_within_the_deadman_time(chromium, exercise_lab: LiveServer) -> None:
