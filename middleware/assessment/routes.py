@@ -327,7 +327,7 @@ def api_submit(attempt_id: int) -> ResponseReturnValue:
         reason=about("why"),
         comment=about("for the student"),
     ),
-    answers={200: obj(("review_id",), review_id=ID)},
+    answers={201: obj(("review_id",), review_id=ID)},
     refusals=(409,),
 )
 def api_override(attempt_id: int) -> ResponseReturnValue:
@@ -342,7 +342,7 @@ def api_override(attempt_id: int) -> ResponseReturnValue:
 @login_required
 @described(
     body=obj(("comment",), comment=about("the comment's text"), item=about("the item it is about, or none")),
-    answers={200: obj(("review_id",), review_id=ID)},
+    answers={201: obj(("review_id",), review_id=ID)},
     refusals=(409,),
 )
 def api_comment(attempt_id: int) -> ResponseReturnValue:
@@ -437,7 +437,9 @@ def api_survey_statements(course_id: int) -> ResponseReturnValue:
 @login_required
 @described(
     body=obj(
-        ("title", "statements"), title=about("the survey's title"), statements=about("[{text, low_label, high_label}]")
+        ("statements",),
+        title=about("the survey's title (a default when none)"),
+        statements=about("[{text, low_label, high_label}], or a line each: text | what 1 means | what 5 means"),
     ),
     answers={200: OBJECT},
     refusals=(409,),

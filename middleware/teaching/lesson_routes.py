@@ -265,7 +265,7 @@ def lesson_api(lesson_id: int) -> ResponseReturnValue:
 @blueprint.post("/api/lessons/check")
 @login_required
 @described(
-    body=obj(("cues",), cues=about("the cue track (WebVTT)")),
+    body=obj(cues=about("the cue track (WebVTT or SRT); missing or wrong, it is answered with its errors")),
     answers={200: obj(("cues", "errors"), cues=array(OBJECT), errors=array(OBJECT))},
     refusals=(503,),
 )
@@ -284,10 +284,12 @@ def check() -> ResponseReturnValue:
 @login_required
 @described(
     body=obj(
-        ("title",),
         title=about("the lesson's title"),
-        video=about("its video's name"),
-        cues=about("the cue track (WebVTT)"),
+        summary=about("what it teaches"),
+        slug=about("its address"),
+        topics=about("its topics"),
+        video_name=about("its video's name"),
+        cues=about("the cue track (WebVTT or SRT); a wrong one is answered with every error by line"),
     ),
     answers={200: OBJECT, 201: OBJECT},
     refusals=(409, 503),

@@ -126,7 +126,7 @@ def tour_api(tour_id: int) -> ResponseReturnValue:
 @blueprint.put("/api/tours/<int:tour_id>")
 @login_required
 @described(
-    body=obj(("title",), title=about("the tour's title"), steps=about("its steps")),
+    body=obj(title=about("the tour's title"), summary=about("what it shows"), steps=about("its steps")),
     answers={200: OBJECT, 201: OBJECT},
     refusals=(409, 503),
 )
