@@ -60,12 +60,13 @@ def _print_urls(site: str) -> None:
 
 def cmd_register(make_app: Callable[[], Flask], args: argparse.Namespace) -> int:
     """Registers (or updates) a platform and prints the tool's URLs and the client id."""
-    app = make_app()
     fields = {"name": args.name, "issuer": args.issuer, "client_id": args.client_id,
               "deployment_ids": args.deployment_ids, "auth_login_url": args.auth_login_url,
               "auth_token_url": args.auth_token_url, "key_set_url": args.key_set_url,
               "frame_origins": args.frame_origins}
     try:
+        platforms.clean_platform(fields)  # a wrong field is named before the app starts
+        app = make_app()
         with app.app_context(), session_factory(app)() as session, session.begin():
             platform = platforms.register(session, fields)
             keys.signing_key(session)
