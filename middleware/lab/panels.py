@@ -61,7 +61,7 @@ class SkillController:
             "kind": "skill",
             "title": self.skill.title or self.skill.name.replace("_", " ").capitalize(),
             "channel": f"/ws/robots/{self.robot_name}/goals",
-            "help": " ".join(filter(None, (SKILL_CLASS_WORDS.get(self.skill.skill_class), self.skill.help))),
+            "help": _help_with_class(self.skill),
             "tab": "navigate",
             "skill": self.skill.name,
             "skill_class": robot_pb2.SkillClass.Name(self.skill.skill_class).removeprefix("SKILL_CLASS_").lower(),
@@ -105,3 +105,11 @@ def robot_panels(robot_name: str, info: robot_pb2.RobotInfo | None, skills: list
         if not skill.direct_drive:  # a direct-drive skill is what the drive pad does: it gets no panel of its own
             panels.append(SkillController(robot_name, skill).describe())
     return panels + [panel.describe(robot_name) for panel in _talk(personal)]
+
+
+def _help_with_class(skill: robot_pb2.SkillDescription) -> str:
+    """The skill's help opening with its class, unless the help names it already ("Perceptive skill: ...")."""
+    words = SKILL_CLASS_WORDS.get(skill.skill_class)
+    if not words or skill.help.startswith(words.split(":")[0]):
+        return skill.help
+    return f"{words} {skill.help}".strip()

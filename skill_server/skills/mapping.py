@@ -24,7 +24,7 @@ def environment_modelling_description() -> SkillDescription:
         name=ENVIRONMENT_MODELLING,
         title="Environment modelling",
         help=(
-            "Perceptive skill: builds an occupancy grid of the lab from the laser (and near sonar echoes) while "
+            "Deliberative skill: builds an occupancy grid of the lab from the laser (and near sonar echoes) while "
             "the robot moves. Each scan is placed at the pose the robot believes (the localization estimate when "
             "localization runs, else odometry), corrected by matching the scan to the map built so far. Drive a "
             "tour (one lap of wall following) for a whole map. The floor-plan option is a teaching aid: it draws the "

@@ -183,9 +183,9 @@ def detect_obstacle_description() -> SkillDescription:
         name=DETECT_OBSTACLE,
         title="Detect obstacle",
         help=(
-            "Watches the laser and sonars and announces an obstacle whenever something comes closer to the robot's "
-            "rim than the warning distance (a plan reacts with on obstacle_detected). Runs beside any motor skill; "
-            "go-to-goal uses the same obstacle data to plan around what it sees."
+            "Perceptive skill: watches the laser and sonars and announces an obstacle whenever something comes "
+            "closer to the robot's rim than the warning distance. Runs beside any motor skill; go-to-goal uses "
+            "the same obstacle data to plan around what it sees."
         ),
         parameters=(
             ParameterSchema("warning_distance_m", ParameterType.DOUBLE, "m", 0.05, 3.0, 0.4,
