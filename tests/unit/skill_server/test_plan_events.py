@@ -9,7 +9,7 @@ from dataclasses import replace
 import pytest
 from skill_sim_helpers import TOKEN
 
-from skill_server.goals import EventKind, GoalSnapshot, GoalStatus
+from skill_server.goals import EventKind, GoalFeedback, GoalSnapshot, GoalStatus
 from skill_server.plans.model import (
     DriveLine,
     InvalidPlan,
@@ -22,10 +22,14 @@ from skill_server.plans.model import (
     WaitLine,
 )
 from skill_server.plans.validation import check_plan
+from skill_server.schema import SkillDescription
 from skill_server.sequencer import Sequencer, attach_sequencer
 from skill_server.sim.battery import BatterySpec
 from skill_server.sim.robot_model import TELEBOT
 from skill_server.sim.world import World
+from skill_server.skills.base import Outcome, SkillController, TickInput
+from skill_server.skills.catalog import default_registry
+from skill_server.skills.registry import SkillRegistry
 
 
 @pytest.fixture
@@ -142,3 +146,44 @@ def test_skills_name_their_class_of_the_2003_paper(lab: tuple[World, Sequencer])
                        "wall_following": "sensorimotor", "round_trip": "sensorimotor",
                        "detect_obstacle": "perceptive", "environment_modelling": "deliberative",
                        "localization": "perceptive"}
+
+
+class _ConvergesAfterASecond(SkillController):
+    """A stand-in for the localization skill (which needs a map and a tour to converge): a perceptive goal that
+    announces CONVERGED after 1 s of sim time, as localization does when its cloud is tight."""
+
+    motor = False
+    skill_class = "perceptive"
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._started_s: float | None = None
+
+    def control(self, tick: TickInput) -> tuple[float, float, Outcome | None, GoalFeedback]:
+        self._started_s = tick.sim_time_s if self._started_s is None else self._started_s
+        if tick.sim_time_s - self._started_s >= 1.0 and not getattr(self, "_said", False):
+            self._said = True
+            self.announce(EventKind.CONVERGED, "converged at (0.00, 0.00) m")
+        return 0.0, 0.0, None, GoalFeedback()
+
+
+def test_localized_comes_from_a_goal_beside_the_plan_through_the_event_manager() -> None:
+    registry = default_registry(TELEBOT)
+    # localization's own name, so that the plan's check finds the skill its event comes from
+    replaced = SkillRegistry()
+    for entry in registry.entries():
+        if entry.description.name == "localization":
+            replaced.register(SkillDescription("localization", "Localization", "stand-in"), _ConvergesAfterASecond)
+        else:
+            replaced.register(entry.description, entry.skill, entry.build)
+    with World("lab", realtime=False, deadman_timeout_s=1000.0) as world:
+        sequencer = attach_sequencer(world, registry=replaced)
+        world.set_controller(TOKEN)
+        sequencer.activate(TOKEN, "localization", {}, False)
+        final = run(world, sequencer, OnLine(1, 1, "localized", 0.0, (SayLine(2, 3, "I know where I am"),)),
+                    WaitLine(4, 1, None, 30.0))
+        assert final.status is GoalStatus.SUCCEEDED, final.message
+        assert said(sequencer, final)[-1] == "line 2: I know where I am"
+        assert said(sequencer, final, EventKind.HANDLED) == [
+            "line 4 cut short by localized (localization: converged at (0.00, 0.00) m): the on of line 1 runs"]
+        assert world.snapshot.sim_time_s < 3.0
