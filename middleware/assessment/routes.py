@@ -384,7 +384,8 @@ def api_recommendations(course_id: int) -> ResponseReturnValue:
 @blueprint.post("/api/courses/<int:course_id>/survey")
 @login_required
 @described(
-    body=obj(("ratings",), ratings=obj(description="item -> 1 to 5"), comments=about("free text")),
+    body={**obj(comments=about("free text")),
+          "patternProperties": {"^s[0-9]+$": about("each statement's key (s1, s2, ...) -> its rating, 1 to 5")}},
     answers={201: obj(("answered",), answered=BOOLEAN)},
     refusals=(409,),
 )
