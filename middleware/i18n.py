@@ -88,6 +88,9 @@ def translate_panels(panels: list[dict[str, object]]) -> list[dict[str, object]]
             text = descriptor.get(key)
             if isinstance(text, str) and text:
                 descriptor[key] = _sentences(text)
+        for parameter in descriptor.get("schema") or []:  # type: ignore[attr-defined]
+            if isinstance(parameter, dict) and isinstance(parameter.get("help"), str) and parameter["help"]:
+                parameter["help"] = _sentences(parameter["help"])
     return panels
 
 

@@ -6,6 +6,7 @@ import math
 
 from flask import Blueprint, current_app, jsonify, request
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware import i18n
@@ -202,5 +203,5 @@ def occupancy_map(robot_name: str) -> ResponseReturnValue:
     except CommandRefused as refused:
         if refused.reason != "not_possible_now":
             raise
-        return jsonify({"map": None, "message": "No map yet: activate Environment modelling to build one."})
+        return jsonify({"map": None, "message": gettext("No map yet: activate Environment modelling to build one.")})
     return jsonify({"map": map_dict(grid)})

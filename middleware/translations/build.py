@@ -93,7 +93,7 @@ def js_messages(catalogue: Catalog) -> dict[str, str]:
     """The translated messages an ES module says (a location in a .js file)."""
     return {message.id: message.string for message in catalogue
             if isinstance(message.id, str) and message.id and isinstance(message.string, str) and message.string
-            and any(path.endswith(".js") for path, _ in message.locations)}
+            and any(path.endswith((".js", "robot_words.py")) for path, _ in message.locations)}
 
 
 def js_text(catalogue: Catalog) -> str:
