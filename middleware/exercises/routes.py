@@ -67,7 +67,8 @@ def page(slug: str) -> ResponseReturnValue:
     exercise = services.exercise_by_slug(session, slug)
     nonce = secrets.token_urlsafe(16)  # CodeMirror writes its styles in a <style> element carrying this nonce
     response = Response(render_template("exercises/exercise.html", exercise=exercise, style_nonce=nonce,
-                                        tutor=services.may_edit_catalogue(current_user)))
+                                        tutor=services.may_edit_catalogue(current_user),
+                                        tests=services.tests_for(session, current_user, exercise)))
     response.headers["Content-Security-Policy"] = (
         "default-src 'self'; img-src 'self' blob: data:; connect-src 'self' ws: wss:; "
         f"style-src 'self' 'nonce-{nonce}'; script-src 'self' {_map_source()}; object-src 'none'; "
@@ -146,7 +147,8 @@ def detail(slug: str) -> ResponseReturnValue:
         services.finish_if_overdue(session, run, _read_log, now())
     return jsonify({"exercise": services.exercise_dict(exercise, full=True),
                     "code": latest.code if latest else exercise.template,
-                    "runs": [services.run_dict(r) for r in runs]})
+                    "runs": [services.run_dict(r) for r in runs],
+                    "tests": services.tests_for(session, current_user, exercise)})
 
 
 @blueprint.put("/api/exercises/<slug>")
@@ -271,3 +273,15 @@ def _scene_boxes(robot_name: str) -> list[dict[str, float]]:
         return []
     return [{"x": b.center_x_m, "y": b.center_y_m, "hx": b.half_x_m, "hy": b.half_y_m, "yaw": b.yaw_rad}
             for b in info.scene_boxes]
+
+
+@blueprint.post("/api/courses/<int:course_id>/exercises")
+@login_required
+def attach(course_id: int) -> ResponseReturnValue:
+    """A course's tutor attaches an exercise as a test: {"slug", "deadline_at", "points"}."""
+    session = get_session()
+    slug, deadline, points = schemas.assignment(request.get_json(silent=True))
+    exercise = services.exercise_by_slug(session, slug)
+    test = services.attach_to_course(session, current_user, course_id, exercise, deadline, points)
+    return jsonify({"test": {"course_id": test.course_id, "slug": exercise.slug,
+                             "deadline_at": deadline.isoformat(), "points": test.points}}), 201

@@ -7,11 +7,12 @@ from __future__ import annotations
 
 import math
 import re
+from datetime import UTC, datetime
 from typing import Any
 
 from middleware.auth.schemas import InvalidField
 from middleware.exercises.grading import RUBRIC_KINDS
-from middleware.validation import unstorable, unstorable_place
+from middleware.validation import unstorable, unstorable_place, within_calendar
 
 MAX_CODE_CHARS = 20_000
 MAX_STATEMENT_CHARS = 4_000
@@ -157,3 +158,21 @@ def definition(body: object, slug_required: bool = True) -> dict[str, Any]:
     result["random_starts"] = _region(data.get("random_starts"), "random_starts")
     result["time_limit_s"] = finite(data.get("time_limit_s"), "time_limit_s", MIN_TIME_LIMIT_S, MAX_TIME_LIMIT_S)
     return result
+
+
+def assignment(body: object) -> tuple[str, datetime, float]:
+    """(slug, deadline, points) of an exercise attached to a course as a test."""
+    data = body_object(body)
+    slug = data.get("slug")
+    if not isinstance(slug, str) or not SLUG_PATTERN.fullmatch(slug):
+        raise InvalidField("slug", "slug must name an exercise of the catalogue.")
+    value = data.get("deadline_at")
+    try:
+        deadline = datetime.fromisoformat(value.strip().replace("Z", "+00:00")) if isinstance(value, str) else None
+    except ValueError:
+        deadline = None
+    if deadline is None or not within_calendar(deadline):
+        raise InvalidField("deadline_at", "deadline_at must be a date and time such as 2026-12-01T18:00:00Z.")
+    if deadline.tzinfo is None:
+        deadline = deadline.replace(tzinfo=UTC)
+    return slug, deadline, finite(data.get("points", 10.0), "points", 0.0, 1000.0)

@@ -18,13 +18,13 @@ from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
-from middleware.courses.authority import taught_student_ids, teaches_student
+from middleware.courses.authority import taught_student_ids, teaches_course, teaches_student
 from middleware.errors import ApiError, Refused
 from middleware.exercises import grading
 from middleware.exercises.catalogue import BUILT_IN
-from middleware.models import Role, User
+from middleware.models import Course, CourseMembership, Role, User
 from middleware.models.accounts import as_utc
-from middleware.models.exercises import Exercise, ExerciseCode, ExerciseRun
+from middleware.models.exercises import Exercise, ExerciseAssignment, ExerciseCode, ExerciseRun
 
 RATE_HZ = 20
 GRACE_S = 1.0  # the page's finish call may come a little after the time limit
@@ -255,7 +255,45 @@ def class_overview(session: Session, actor: User, exercise: Exercise) -> list[di
         graded = [r.fraction for r in runs if r.mode == "submission" and r.fraction is not None]
         rows.append({"user_id": student.id, "username": student.username,
                      "best_submission": max(graded) if graded else None,
+                     "tests": tests_for(session, student, exercise),
                      "codes": [{"id": v.id, "saved_at": as_utc(v.saved_at).isoformat(), "code": v.code}
                                for v in versions],
                      "runs": [run_dict(r) for r in runs]})
     return rows
+
+
+def attach_to_course(session: Session, actor: User, course_id: int, exercise: Exercise, deadline: datetime,
+                     points: float) -> ExerciseAssignment:
+    """Attaches the exercise to the course as a test (again: a new deadline and points), for its tutors."""
+    if session.get(Course, course_id) is None:
+        raise ApiError(404, "unknown_course", "There is no such course.", "course_id")
+    if not teaches_course(session, actor, course_id):
+        raise ExerciseRefused(403, "forbidden", "Only the course's tutors attach an exercise to it as a test.")
+    test = session.scalar(select(ExerciseAssignment).where(ExerciseAssignment.course_id == course_id,
+                                                           ExerciseAssignment.exercise_id == exercise.id))
+    if test is None:
+        test = ExerciseAssignment(course_id=course_id, exercise_id=exercise.id, created_by_id=actor.id,
+                                  deadline_at=deadline, points=points)
+        session.add(test)
+    test.deadline_at, test.points = deadline, points
+    session.flush()
+    return test
+
+
+def test_grade(session: Session, user_id: int, test: ExerciseAssignment) -> float | None:
+    """The student's mark on the test: the best graded submission begun before the deadline, in points."""
+    fractions = session.scalars(select(ExerciseRun.fraction).where(
+        ExerciseRun.user_id == user_id, ExerciseRun.exercise_id == test.exercise_id, ExerciseRun.mode == "submission",
+        ExerciseRun.fraction.is_not(None), ExerciseRun.started_at <= test.deadline_at))
+    best = max((f for f in fractions if f is not None), default=None)
+    return None if best is None else round(best * test.points, 2)
+
+
+def tests_for(session: Session, user: User, exercise: Exercise) -> list[dict[str, Any]]:
+    """The exercise's tests in the user's courses, with the user's mark so far."""
+    rows = session.execute(select(ExerciseAssignment, Course).join(Course, Course.id == ExerciseAssignment.course_id)
+                           .join(CourseMembership, CourseMembership.course_id == Course.id)
+                           .where(CourseMembership.user_id == user.id, ExerciseAssignment.exercise_id == exercise.id)
+                           .order_by(ExerciseAssignment.deadline_at))
+    return [{"course_id": course.id, "course": course.title, "deadline_at": as_utc(test.deadline_at).isoformat(),
+             "points": test.points, "mark": test_grade(session, user.id, test)} for test, course in rows]

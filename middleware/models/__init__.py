@@ -11,7 +11,7 @@ from middleware.models.bookings import Booking
 from middleware.models.chat import ChatMessage
 from middleware.models.class_wall import ClassHand, ClassNotice, ClassTakeover  # noqa: F401
 from middleware.models.courses import Course, CourseMembership, Invitation, LoginFailure
-from middleware.models.exercises import Exercise, ExerciseCode, ExerciseRun  # noqa: F401
+from middleware.models.exercises import Exercise, ExerciseAssignment, ExerciseCode, ExerciseRun  # noqa: F401
 from middleware.models.experiment import ExperimentProtocol, Participant, Trial, VideoDelay  # noqa: F401
 from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord  # noqa: F401
 from middleware.models.lab import ResponseTimeReport  # noqa: F401

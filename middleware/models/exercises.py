@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import DateTime, Float, ForeignKey, Integer, String, Text
+from sqlalchemy import DateTime, Float, ForeignKey, Integer, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
 from middleware.models.accounts import utc_now
@@ -67,3 +67,18 @@ class ExerciseRun(Base):
     measurements_json: Mapped[str] = mapped_column(Text, default="{}")
     trace_json: Mapped[str] = mapped_column(Text, default="[]")  # [t_s, gx, gy, gth, ox, oy, oth] from the robot
     report_json: Mapped[str] = mapped_column(Text, default="null")  # what the code reported (localization only)
+
+
+class ExerciseAssignment(Base):
+    """An exercise attached to a course as a test: its grade is the best submission begun before the deadline."""
+
+    __tablename__ = "exercise_assignments"
+    __table_args__ = (UniqueConstraint("course_id", "exercise_id", name="uq_exercise_assignments_course_exercise"),)
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    course_id: Mapped[int] = mapped_column(ForeignKey("courses.id", ondelete="CASCADE"), index=True)
+    exercise_id: Mapped[int] = mapped_column(ForeignKey("exercises.id", ondelete="CASCADE"))
+    deadline_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    points: Mapped[float] = mapped_column(Float, default=10.0)
+    created_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)

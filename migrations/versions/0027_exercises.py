@@ -84,9 +84,29 @@ def upgrade() -> None:
     )
     op.create_index(op.f("ix_exercise_runs_exercise_id"), "exercise_runs", ["exercise_id"])
     op.create_index(op.f("ix_exercise_runs_user_id"), "exercise_runs", ["user_id"])
+    op.create_table(
+        "exercise_assignments",
+        sa.Column("id", sa.Integer(), nullable=False),
+        sa.Column("course_id", sa.Integer(), nullable=False),
+        sa.Column("exercise_id", sa.Integer(), nullable=False),
+        _when("deadline_at"),
+        sa.Column("points", sa.Float(), nullable=False),
+        sa.Column("created_by_id", sa.Integer(), nullable=True),
+        _when("created_at"),
+        sa.ForeignKeyConstraint(["course_id"], ["courses.id"], name=op.f("fk_exercise_assignments_course_id_courses"),
+                                ondelete="CASCADE"),
+        sa.ForeignKeyConstraint(["exercise_id"], ["exercises.id"],
+                                name=op.f("fk_exercise_assignments_exercise_id_exercises"), ondelete="CASCADE"),
+        sa.ForeignKeyConstraint(["created_by_id"], ["users.id"],
+                                name=op.f("fk_exercise_assignments_created_by_id_users"), ondelete="SET NULL"),
+        sa.PrimaryKeyConstraint("id", name=op.f("pk_exercise_assignments")),
+        sa.UniqueConstraint("course_id", "exercise_id", name="uq_exercise_assignments_course_exercise"),
+    )
+    op.create_index(op.f("ix_exercise_assignments_course_id"), "exercise_assignments", ["course_id"])
 
 
 def downgrade() -> None:
+    op.drop_table("exercise_assignments")
     op.drop_table("exercise_runs")
     op.drop_table("exercise_codes")
     op.drop_table("exercises")

@@ -152,6 +152,7 @@ ROUTES = (
     "GET /api/exercises/<slug>/class",
     "GET /api/exercise-runs/<int:run_id>",
     "POST /api/exercise-runs/<int:run_id>/finish",
+    "POST /api/courses/<int:course_id>/exercises",
     "GET /api/plans",
     "POST /api/plans",
     "GET /api/plans/<int:plan_id>",

@@ -57,12 +57,26 @@ def test_runs_are_placed_and_graded_by_the_server_and_seen_by_owner_and_tutor_on
     assert driven["value"] < 0.05 and graded["grade"] < 0.5  # it stood still: the truth says so
     assert answer["scene_boxes"]
 
+    # The course's tutor attaches the exercise as a test; another course's tutor and a student cannot.
+    test = {"slug": "bump-and-go", "deadline_at": "2100-01-01T12:00:00Z", "points": 10}
+    for name, expected in (("student1", 403), ("tutor2", 403), ("tutor1", 201)):
+        status, answer = api(plans_lab.client(name), "POST", f"/api/courses/{plans_lab.course}/exercises", test)
+        assert status == expected, (name, answer)
+    status, answer = api(plans_lab.client("tutor1"), "POST", f"/api/courses/{plans_lab.course}/exercises",
+                         {**test, "deadline_at": "tomorrow"})
+    assert (status, answer["error"]["field"]) == (400, "deadline_at")
+
     status, answer = api(ann, "POST", "/api/exercises/bump-and-go/runs", {"code": STILL, "mode": "submission"})
     assert status == 201, answer
     submission = answer["run"]
     assert submission["start"] is None  # hidden until the run is over
     _, answer = api(ann, "POST", f"/api/exercise-runs/{submission['id']}/finish", {})
     assert answer["run"]["start"] is not None and answer["run"]["start"] != [0.0, 0.0, 0.0]
+    submitted = answer["run"]["grade"]
+    _, answer = api(ann, "GET", "/api/exercises/bump-and-go")
+    assert answer["tests"] == [{"course_id": plans_lab.course, "course": "Course ROB1",
+                                "deadline_at": "2100-01-01T12:00:00+00:00", "points": 10.0,
+                                "mark": round(submitted * 10, 2)}]
 
     # The owner and their tutor read a run; another student and another course's tutor get a 404.
     for name, expected in (("student1", 200), ("tutor1", 200), ("student2", 404), ("tutor2", 404)):
