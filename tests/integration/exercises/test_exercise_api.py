@@ -77,6 +77,12 @@ def test_runs_are_placed_and_graded_by_the_server_and_seen_by_owner_and_tutor_on
     assert answer["tests"] == [{"course_id": plans_lab.course, "course": "Course ROB1",
                                 "deadline_at": "2100-01-01T12:00:00+00:00", "points": 10.0,
                                 "mark": round(submitted * 10, 2)}]
+    status, page = api(ann, "GET", "/exercises/bump-and-go")
+    assert status == 200 and "A test of Course ROB1: submit before 2100-01-01 12:00 UTC (10.0 points)" in page["body"]
+    assert page["headers"]["Cross-Origin-Embedder-Policy"] == "require-corp"
+    status, worker = api(ann, "GET", "/exercises/python-worker.js")
+    assert "'wasm-unsafe-eval'" in worker["headers"]["Content-Security-Policy"]
+    assert "'wasm-unsafe-eval'" not in page["headers"]["Content-Security-Policy"]
 
     # The owner and their tutor read a run; another student and another course's tutor get a 404.
     for name, expected in (("student1", 200), ("tutor1", 200), ("student2", 404), ("tutor2", 404)):
