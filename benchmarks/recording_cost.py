@@ -36,8 +36,9 @@ def measure_telemetry(browser: Browser, duration_s: float) -> list[float]:
     return samples
 
 
-def replay_answer_s(lab: LabUnderTest, browser: Browser, minutes: float) -> float:
-    """Seconds the replay data of a synthetic recording of `minutes` (10 Hz, every channel) takes to answer."""
+def replay_answer_s(lab: LabUnderTest, browser: Browser, minutes: float) -> tuple[float, float]:
+    """Seconds the replay data of a synthetic recording of `minutes` (10 Hz, every channel) takes to answer: its
+    first 30 s (the page's first frame waits for these) and the whole."""
     from datetime import UTC, datetime
 
     from middleware.db import session_factory
@@ -64,10 +65,13 @@ def replay_answer_s(lab: LabUnderTest, browser: Browser, minutes: float) -> floa
         writer.write(channels.LASER, robot_pb2.LaserScan(ranges_m=[2.0] * 90), at)
     writer.finish()
     started = time.perf_counter()
-    status, _ = browser.get(f"/api/recordings/{recording_id}/data")
+    status, _ = browser.get(f"/api/recordings/{recording_id}/data?to_s=30")  # what the page asks first
     if status != 200:
         raise RuntimeError(f"replay data answered {status}")
-    return time.perf_counter() - started
+    first_s = time.perf_counter() - started
+    started = time.perf_counter()
+    status, _ = browser.get(f"/api/recordings/{recording_id}/data")  # the whole, loaded behind the first frame
+    return first_s, time.perf_counter() - started if status == 200 else float("nan")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -114,9 +118,10 @@ def main(argv: list[str] | None = None) -> int:
                                  None if args.quick or ratio is None else ratio <= RATIO_TARGET)]
         rows.append(Measurement("recording size", "bytes per minute of session",
                                 size / minutes if minutes else None, "B/min", "", None, None))
-        replay_s = replay_answer_s(lab, browser, 3.0 if args.quick else 30.0)
-        rows.append(Measurement("replay data, 30 min" if not args.quick else "replay data, 3 min",
-                                "answer time", replay_s * 1000, "ms", "", None, None))
+        first_s, whole_s = replay_answer_s(lab, browser, 3.0 if args.quick else 30.0)
+        label = "replay data, 3 min" if args.quick else "replay data, 30 min"
+        rows += [Measurement(label, "first 30 s (the first frame's data)", first_s * 1000, "ms", "", None, None),
+                 Measurement(label, "the whole (loaded behind it)", whole_s * 1000, "ms", "", None, None)]
         recordings.stop()
     finally:
         lab.stop()

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import io
 import json
+import math
 from collections.abc import Iterable, Iterator
 
 from google.protobuf.json_format import MessageToDict
@@ -14,6 +15,7 @@ from middleware.recordings import channels, files
 from middleware.robots.scene import scene_dict
 from protos.telelab.v1 import robot_pb2
 
+LASER_EVERY_S = 0.5
 CSV_CHANNELS = ("odometry", "ground_truth", "sonar", "laser", "localization", "commands", "goals")
 _TOPIC_OF = {name: f"/{name}" for name in CSV_CHANNELS}
 _GOAL_STATUS = {value.number: value.name.removeprefix("GOAL_STATUS_").lower()
@@ -51,13 +53,15 @@ def _r(value: float, digits: int = 4) -> float:
 
 
 def replay_data(messages: list[files.Recorded], truth: bool, from_s: float = 0.0,
-                to_s: float | None = None) -> dict[str, object]:
-    """The replay page's data: times in seconds from the recording's first message, from_s to to_s."""
+                to_s: float | None = None, t0_ns: int | None = None,
+                laser_every_s: float = LASER_EVERY_S) -> dict[str, object]:
+    """The replay page's data: times in seconds from the recording's first message (t0_ns), from_s to to_s."""
     visible = list(allowed(messages, truth))
-    t0 = visible[0].log_time_ns if visible else 0
+    t0 = t0_ns if t0_ns is not None else visible[0].log_time_ns if visible else 0
     data: dict[str, list[object]] = {"odometry": [], "ground_truth": [], "sonar": [], "laser": [],
                                      "localization": [], "commands": [], "goals": [], "camera": []}
     camera_index = 0
+    last_laser_t = -math.inf
     scene: dict[str, object] | None = None
     info: dict[str, object] | None = None
     end_s = 0.0
@@ -81,6 +85,10 @@ def replay_data(messages: list[files.Recorded], truth: bool, from_s: float = 0.0
             continue
         if t < from_s or (to_s is not None and t > to_s):
             continue
+        if message.topic == channels.LASER:
+            if t - last_laser_t < laser_every_s:
+                continue  # the replay draws the laser 2 times a second (the CSV and MCAP keep every scan)
+            last_laser_t = t
         _add(data, message, round(t, 3))
     return {"t0_unix_s": t0 / 1e9, "duration_s": round(end_s, 3), "truth": truth, "scene": scene, "info": info,
             **data}

@@ -18,6 +18,7 @@ from typing import IO
 import zstandard
 from google.protobuf.message import Message
 from mcap.exceptions import McapError
+from mcap.reader import make_reader
 from mcap.records import Channel, Chunk, Schema
 from mcap.records import Message as McapMessage
 from mcap.stream_reader import StreamReader, breakup_chunk
@@ -103,6 +104,16 @@ class PartWriter:
                 os.fsync(self._file.fileno())
             self._flushed_at = time.monotonic()
 
+    def close(self) -> None:
+        """Writes what is buffered and closes the file without a summary (another recorder goes on in a new
+        part; the reader reads this one up to its last chunk)."""
+        self.flush()
+        with self._lock:
+            if not self._finished:
+                self._finished = True
+                if not isinstance(self._file, io.BytesIO):
+                    self._file.close()
+
     def finish(self) -> None:
         """Writes the summary and footer and closes the file."""
         with self._lock:
@@ -129,6 +140,40 @@ class Recorded:
         return message
 
 
+def _indexed(path: Path, start_ns: int | None, end_ns: int | None) -> list[Recorded] | None:
+    """A complete part's messages from start_ns to end_ns through its chunk index (only the chunks in the window
+    are read); None when the part has no summary (its recorder is at work, or died)."""
+    try:
+        with path.open("rb") as stream:
+            reader = make_reader(stream)
+            summary = reader.get_summary()
+            if summary is None or not summary.chunk_indexes:
+                return None
+            return [Recorded(channel.topic, message.log_time, message.data) for _, channel, message in
+                    reader.iter_messages(starting_at=start_ns, ending_at=end_ns, log_time_order=False)
+                    if channel.topic in channels.MESSAGE_TYPES]
+    except (McapError, EOFError, ValueError, OSError, IndexError, struct.error, zstandard.ZstdError):
+        return None
+
+
+def first_log_ns(root: Path, recording_id: int) -> int | None:
+    """The log time of the recording's first message (the replay's zero), read from the parts' summaries."""
+    firsts = []
+    for path in part_paths(root, recording_id):
+        try:
+            with path.open("rb") as stream:
+                summary = make_reader(stream).get_summary()
+            if summary is not None and summary.statistics is not None and summary.statistics.message_count:
+                firsts.append(summary.statistics.message_start_time)
+                continue
+        except (McapError, EOFError, ValueError, OSError, IndexError, struct.error, zstandard.ZstdError):
+            pass
+        first = next(iter(read_part(path)), None)
+        if first is not None:
+            firsts.append(first.log_time_ns)
+    return min(firsts, default=None)
+
+
 def read_part(source: Path | IO[bytes]) -> Iterator[Recorded]:
     """The part's messages on known topics, up to its last complete chunk (a cut file ends there, no error)."""
     stream: IO[bytes] = open(source, "rb") if isinstance(source, Path) else source  # noqa: SIM115
@@ -153,14 +198,27 @@ def read_part(source: Path | IO[bytes]) -> Iterator[Recorded]:
             stream.close()
 
 
-def read_recording(root: Path, recording_id: int) -> list[Recorded]:
-    """Every part's messages, in log-time order (a stable sort: one topic's order is kept). A sample both recorders
-    wrote at a take-over (a new stream starts with the latest reading) is kept once."""
-    messages = [message for path in part_paths(root, recording_id) for message in read_part(path)]
+def read_recording(root: Path, recording_id: int, start_ns: int | None = None,
+                   end_ns: int | None = None) -> list[Recorded]:
+    """Every part's messages (from start_ns to end_ns when given), in log-time order (a stable sort: one topic's
+    order is kept). A sample both recorders wrote at a take-over (a new stream starts with the latest reading) is
+    kept once."""
+    messages: list[Recorded] = []
+    for path in part_paths(root, recording_id):
+        indexed = _indexed(path, start_ns, end_ns) if start_ns is not None or end_ns is not None else None
+        if indexed is not None:
+            messages += indexed
+            continue
+        messages += [m for m in read_part(path) if (start_ns is None or m.log_time_ns >= start_ns)
+                     and (end_ns is None or m.log_time_ns <= end_ns)]
     messages.sort(key=lambda m: m.log_time_ns)
+    if len(part_paths(root, recording_id)) < 2:
+        return messages
+    seen: set[tuple[str, int, bytes]] = set()
     kept: list[Recorded] = []
     for message in messages:
-        if kept and kept[-1].log_time_ns == message.log_time_ns and message in kept[-8:]:
-            continue
-        kept.append(message)
+        key = (message.topic, message.log_time_ns, message.data)
+        if key not in seen:
+            seen.add(key)
+            kept.append(message)
     return kept

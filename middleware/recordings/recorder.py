@@ -64,6 +64,8 @@ class SessionRecorder:
         self._command_cursor = 0
         self._goals: dict[str, int] = {}
         self._counts = {"commands": 0, "skills": 0, "plans": 0}
+        self._user_id = recording.user_id
+        self._plan_names: list[str] = []
         self._abandon = threading.Event()
         self._done = threading.Event()
         self._stream: object = None
@@ -113,7 +115,7 @@ class SessionRecorder:
             if ended:
                 self._complete()
             else:
-                self._writer.flush()
+                self._writer.close()
 
     def _write_context(self) -> None:
         now_ns = time.time_ns()
@@ -224,6 +226,7 @@ class SessionRecorder:
                 self._counts["skills"] += 1
             if row.accepted and row.action == "run_plan":
                 self._counts["plans"] += 1
+                self._plan_names.append(str(detail.get("plan_name", "")))
 
     def _note_goals(self) -> None:
         try:
@@ -252,6 +255,10 @@ class SessionRecorder:
                 row.skill_count += self._counts["skills"]
                 row.plan_count += self._counts["plans"]
                 row.size_bytes = files.size_on_disk(self._root, row.id)
+                if not row.source_text and self._plan_names:  # the last plan the session ran produced its run
+                    source = services.plan_source(session, self._user_id, self._plan_names[-1])
+                    if source is not None:
+                        row.source_text, row.source_name = source[0], source[1][:200]
 
 
 def _number(value: object) -> float:

@@ -22,6 +22,7 @@ from middleware.models.assessment import Attempt, Exam
 from middleware.models.courses import CourseMembership
 from middleware.models.experiment import Trial
 from middleware.models.farm import PersonalRobotRecord
+from middleware.models.plans import PlanVersion, StoredPlan
 from middleware.models.recordings import RECORDING_KINDS, RecordedCommand, Recording
 
 COMMANDS_KEPT_S = 24 * 3600  # command rows older than this are copied into their recording long ago
@@ -155,6 +156,19 @@ def attempt_measurement(session: Session, recording: Recording) -> dict[str, obj
             "feedback": result.get("feedback") if result else None,
             "points": result.get("points") if result else None, "max_points": result.get("max_points") if result
             else None}
+
+
+def plan_source(session: Session, user_id: int, plan_name: str) -> tuple[str, str] | None:
+    """The text of the plan a run sent under plan_name (the runner's own plan of that name, else a shared one),
+    at its latest version, and a file name for it; None when no stored plan has that name."""
+    plans = session.scalars(select(StoredPlan).where(StoredPlan.name == plan_name)
+                            .order_by((StoredPlan.owner_id == user_id).desc(), StoredPlan.id.desc()).limit(1))
+    plan = next(iter(plans), None)
+    if plan is None:
+        return None
+    text = session.scalar(select(PlanVersion.text).where(PlanVersion.plan_id == plan.id,
+                                                         PlanVersion.version == plan.latest_version))
+    return (text, f"{plan.name}.plan.txt") if text is not None else None
 
 
 def may_see_truth(actor: User) -> bool:

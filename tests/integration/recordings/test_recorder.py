@@ -21,6 +21,7 @@ from mcap_protobuf.decoder import DecoderFactory
 from tests.conftest import LabClient, LiveServer, add_test_account, make_course, make_test_app
 
 ROBOT = "lab-1"
+PLAN_TEXT = 'say "recorded"\nwait 0.2s\n'
 
 
 @pytest.fixture(scope="module")
@@ -138,6 +139,12 @@ def driven(recording_lab: LiveServer) -> dict:
                             {"parameters": {"heading_rad": 0.0}, "preempt": True})
     assert status == 202, body
     time.sleep(1.2)  # the goal runs a second: its start and progress are recorded
+    goal = body
+    status, plan = api_post(student, "/api/plans", {"name": "nudge", "text": PLAN_TEXT})
+    assert status == 201, plan
+    status, body = api_post(student, f"/api/plans/{plan['plan']['id']}/runs", {"target": ROBOT})
+    assert status == 202, body
+    time.sleep(0.5)
     drive.close()
     telemetry.close()
     camera.close()
@@ -146,7 +153,7 @@ def driven(recording_lab: LiveServer) -> dict:
     rows = wait_for(lambda: [r for r in recording_rows(recording_lab) if r.status == "ready"], 20,
                     "the recording was never completed after the turn ended")
     root = recordings_of(recording_lab.app).settings.directory
-    return {"sent": sent, "live": live, "goal_id": body["goal"]["goal_id"] if "goal" in body else body.get("goal_id"),
+    return {"sent": sent, "live": live, "goal": goal,
             "recording": rows[-1], "parts": files.part_paths(root, rows[-1].id), "student": student}
 
 
@@ -178,6 +185,9 @@ def test_a_driven_session_reads_back_with_every_command_in_order_each_schema_and
     goals = [m for _, c, _, m in decoded if c.topic == "/goals"]
     assert goals and goals[0].skill == "orientation_control" and skill[-1].outcome == goals[0].goal_id
     assert recording.command_count == len(commands)
+    plans = [c for c in commands if c.action == "run_plan"]
+    assert [p.plan_name for p in plans] == ["nudge"] and plans[0].source == "plan" and recording.plan_count == 1
+    assert recording.source_text == PLAN_TEXT and recording.source_name == "nudge.plan.txt", "the plan that ran"
     # The server camera was watched for about three seconds: its frames are in, thinned to about one a second.
     frames = [(raw.log_time, m) for _, c, raw, m in decoded if c.topic == "/camera"]
     assert 1 <= len(frames) <= 6 and all(m.jpeg[:2] == b"\xff\xd8" for _, m in frames), len(frames)
@@ -196,7 +206,11 @@ def test_a_driven_session_reads_back_with_every_command_in_order_each_schema_and
         (t0, p0), (t1, p1) = track[after - 1], track[after]
         w = (t - t0) / (t1 - t0) if t1 > t0 else 0.0
         x, y = p0.x_m + w * (p1.x_m - p0.x_m), p0.y_m + w * (p1.y_m - p0.y_m)
-        assert abs(x - pose["x_m"]) < 0.005 and abs(y - pose["y_m"]) < 0.005, (t, x, y, pose)
+        if t1 == t:  # the same tick in both streams: the same pose, exactly
+            assert (p1.x_m, p1.y_m, p1.theta_rad) == (pose["x_m"], pose["y_m"], pose["theta_rad"])
+        # Between ticks the wall-clock capture times of a loaded machine are not linear in the robot's motion:
+        # 2 cm is a tenth of a second at the commanded 0.2 m/s.
+        assert abs(x - pose["x_m"]) < 0.02 and abs(y - pose["y_m"]) < 0.02, (t, x, y, pose)
         matched += 1
     assert matched >= 5, f"only {matched} of {len(driven['live'])} live samples were in the recording"
 
@@ -231,6 +245,7 @@ def _chunk_message_counts(data: bytes) -> list[int]:
 
 
 ENDPOINTS = ("/recordings/{id}", "/api/recordings/{id}", "/api/recordings/{id}/data", "/api/recordings/{id}/camera/0",
+             "/api/recordings/{id}/source",
              "/api/recordings/{id}/export.mcap", "/api/recordings/{id}/export/odometry.csv",
              "/api/recordings/{id}/export/commands.csv")
 
@@ -280,7 +295,7 @@ def test_anonymous_is_sent_to_log_in_and_the_api_answers_401(recording_lab: Live
     ("/api/recordings/{id}/data?from_s=5&to_s=1", 400, "to_s"),
     ("/api/recordings/{id}/data?to_s=1e400", 400, "to_s"),
     ("/api/recordings/{id}/export/passwords.csv", 404, "channel"),
-    ("/api/recordings/{id}/source", 404, "recording_id"),
+    ("/api/recordings/{id}/export/ground_truth.csv", 404, "channel"),
     ("/api/recordings/{id}/camera/999999", 404, "index"),
     ("/api/recordings/of/turn/0", 404, "ref_id"),
     ("/api/recordings/of/%00/1", 400, None),

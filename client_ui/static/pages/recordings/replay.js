@@ -21,6 +21,7 @@ let now = 0;
 let playing = false;
 let eye = null;
 let lastFrame = 0;
+const FIRST_WINDOW_S = 30;
 
 /** The index of the last sample at or before time s (samples are [t, ...] or {t}), -1 before the first. */
 export function sampleAt(samples, s) {
@@ -290,32 +291,53 @@ function fillLists() {
   }
 }
 
-async function start() {
-  const response = await fetch(`/api/recordings/${root.dataset.recordingId}/data`, { credentials: "same-origin" });
-  if (!response.ok) {
-    status.textContent = t("The recording could not be read.");
-    return;
-  }
-  data = await response.json();
+async function fetchData(query) {
+  const response = await fetch(`/api/recordings/${root.dataset.recordingId}/data${query}`, { credentials: "same-origin" });
+  return response.ok ? response.json() : null;
+}
+
+function show(loaded) {
+  data = loaded;
   timeInput.max = String(data.duration_s);
   if (data.scene) {
-    try {
-      eye = new RobotEyeRenderer($('[data-slot="eye"]'), data.scene, { width_px: 320, height_px: 240 });
-    } catch (error) {
-      $('[data-field="eye-status"]').textContent = t("This browser cannot draw the robot's-eye view.");
+    if (!eye) {
+      try {
+        eye = new RobotEyeRenderer($('[data-slot="eye"]'), data.scene, { width_px: 320, height_px: 240 });
+      } catch (error) {
+        $('[data-field="eye-status"]').textContent = t("This browser cannot draw the robot's-eye view.");
+      }
     }
+    $('[data-slot="three"]').scene = data.scene;
   }
-  if (data.scene) $('[data-slot="three"]').scene = data.scene;
-  fillLists();
   if (data.measurement) {
     const m = data.measurement;
     $('[data-field="measurement"]').textContent = t("Graded: {points} of {max} points. {feedback}", {
       points: m.points ?? "–", max: m.max_points ?? "–", feedback: m.feedback ?? "" });
   }
   $('[data-slot="camera-card"]').hidden = !data.camera.length;
+  seek(now);
+}
+
+async function start() {
+  // The first seconds first (a long recording's first frame does not wait for all of it), then the whole.
+  const first = await fetchData(`?to_s=${FIRST_WINDOW_S}`);
+  if (!first) {
+    status.textContent = t("The recording could not be read.");
+    return;
+  }
+  show(first);
+  root.dataset.firstFrame = "true";
+  status.textContent = t("Loading the rest of the recording…");
+  const whole = first.recording_s !== undefined && first.recording_s <= FIRST_WINDOW_S ? first : await fetchData("");
+  if (!whole) {
+    status.textContent = t("The recording could not be read.");
+    return;
+  }
+  const scene = whole.scene ?? first.scene;
+  show({ ...whole, scene });
+  fillLists();
   status.textContent = t("{n} s recorded: play it, or drag the time.", { n: data.duration_s.toFixed(1) });
   root.dataset.ready = "true";
-  seek(0);
 }
 
 timeInput.addEventListener("input", () => { setPlaying(false); seek(Number(timeInput.value)); });
