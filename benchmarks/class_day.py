@@ -61,6 +61,7 @@ REQUEST_INTERVAL_S = 1.0
 RESTART_SETTLE_S = 3.0  # the class goes on at least this long after the last old worker left
 SEAT_WAIT_S = 10.0  # a student who gets no acknowledgement this long after reconnecting has lost their seat
 RATIO_TARGET = 1.10
+CONSOLE_WAIT_S = 60.0
 # What may grow however many robots: the pools with fixed ceilings (the sockets' blocking work, 16; the liveness
 # probes, 8) and a request or two in flight. A pump thread per stream was 3 a robot.
 THREADS_ALLOWANCE = 28
@@ -490,11 +491,15 @@ def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str
         restarts_seen=sum(s.restarts_seen for s in students), errors=errors[:30])
 
 
-async def _open_consoles(port: int, cookies: list[str], robots: list[str]) -> list[WebSocketUser]:
+async def _open_consoles(port: int, cookies: list[str], robots: list[str]) -> tuple[list[WebSocketUser], int]:
     """A console (camera, telemetry, localization and drive on one link) per robot, each once its channels sent
-    their first message; robots are shared out over the students (a user holds at most 40 sockets)."""
-    async def one(index: int, robot: str) -> WebSocketUser:
-        link = await WebSocketUser.open(port, "/ws/link", cookies[index % len(cookies)])
+    their first message (at most CONSOLE_WAIT_S); robots are shared out over the students (a user holds at most 40
+    sockets). The links, and how many consoles did not open whole."""
+    async def one(index: int, robot: str) -> tuple[WebSocketUser | None, bool]:
+        try:
+            link = await WebSocketUser.open(port, "/ws/link", cookies[index % len(cookies)])
+        except (Refused, OSError):
+            return None, False
         channels = ("camera", *CHANNELS)
         for sub, channel in enumerate(channels, start=1):
             link.send_text(json.dumps({"type": "subscribe", "sub": sub, "path": f"/ws/robots/{robot}/{channel}"}))
@@ -507,21 +512,24 @@ async def _open_consoles(port: int, cookies: list[str], robots: list[str]) -> li
             if not waiting:
                 done.set()
 
-        reader = asyncio.ensure_future(link.read_messages(on_message))
-        await asyncio.wait_for(done.wait(), 120)
-        link.reader = reader  # type: ignore[attr-defined]  # kept reading (pings answered) until closed
-        return link
+        link.reader = asyncio.ensure_future(link.read_messages(on_message))  # type: ignore[attr-defined]
+        try:
+            await asyncio.wait_for(done.wait(), CONSOLE_WAIT_S)
+        except TimeoutError:
+            return link, False
+        return link, True
 
-    return list(await asyncio.gather(*(one(i, robot) for i, robot in enumerate(robots))))
+    opened = await asyncio.gather(*(one(i, robot) for i, robot in enumerate(robots)))
+    return [link for link, _whole in opened if link is not None], sum(not whole for _link, whole in opened)
 
 
-def threads_with_robots(steps: tuple[int, ...], students: int) -> list[tuple[int, int]]:
+def threads_with_robots(steps: tuple[int, ...], students: int) -> list[tuple[int, int, int]]:
     """(robots with a console open, the worker's threads) at each step, on one worker (gunicorn, the shared
     configuration) with stand-in robots: a worker's threads do not grow with its robots (no pump thread per stream)."""
     names = [f"pupil{i + 1}" for i in range(students)]
     fleet = StandInFleet(max(steps), "wall-robot-")
     robots = list(fleet.addresses)
-    found: list[tuple[int, int]] = []
+    found: list[tuple[int, int, int]] = []  # (robots, threads, consoles that did not open whole)
     try:
         with fresh_database() as database_url:
             create_students(database_url, names)
@@ -535,11 +543,15 @@ def threads_with_robots(steps: tuple[int, ...], students: int) -> list[tuple[int
 
                 async def climb() -> None:
                     opened: list[WebSocketUser] = []
+                    asked = 0
                     for step in steps:
-                        opened += await _open_consoles(server.port, cookies, robots[len(opened):step])
+                        links, not_whole = await _open_consoles(server.port, cookies, robots[asked:step])
+                        opened += links
+                        asked = step
                         await asyncio.sleep(2.0)  # the handshakes' request threads return to the server
-                        found.append((step, _settled_threads(worker)))
-                        print(f"  {step} robots with a console open: {found[-1][1]} threads in the worker",
+                        found.append((step, _settled_threads(worker), not_whole))
+                        missing = f" ({not_whole} consoles not whole in {CONSOLE_WAIT_S:g} s)" if not_whole else ""
+                        print(f"  {step} robots with a console open: {found[-1][1]} threads in the worker{missing}",
                               flush=True)
                     for link in opened:
                         link.close()
@@ -596,6 +608,15 @@ def rows_for(figures: RunFigures, one_worker_cpu: float | None, graded: bool) ->
     return rows
 
 
+def _write(output: Path, rows: list[Measurement], extra: dict[str, object]) -> None:
+    for row in rows:  # a figure with no sample (no reconnect in a run) is absent, not NaN
+        if row.measured is not None and math.isnan(row.measured):
+            row.measured = None
+        if row.floor is not None and math.isnan(row.floor):
+            row.floor = None
+    write_json(output / "class_day.json", rows, extra)
+
+
 def run(quick: bool, output: Path, students: int | None = None, workers: tuple[int, ...] | None = None) -> list:
     students = students or (4 if quick else 50)
     workers = workers or ((1,) if quick else (1, 2, 3))
@@ -615,25 +636,23 @@ def run(quick: bool, output: Path, students: int | None = None, workers: tuple[i
         runs.append({"workers": count, "student_s": figures.student_s, "cpu_s": figures.cpu_s,
                      "restarts_seen": figures.restarts_seen, "reconnects": len(figures.reconnects_s),
                      "acks": len(figures.acks_s), "requests": len(figures.requests_s), "errors": figures.errors})
+    extra: dict[str, object] = {"students": students, "workers": list(workers), "login_window_s": login_window_s,
+                                "hold_s": hold_s, "machine": the_machine, "runs": runs,
+                                "recordings": os.environ.get("TELELAB_RECORDINGS", "1")}
+    _write(output, rows, extra)  # the class's figures are kept whatever the climb below does
     steps = (1, 4) if quick else (1, 50, 200)
     print(f"threads of one worker with consoles open on {', '.join(map(str, steps))} robots", flush=True)
     climb = threads_with_robots(steps, max(1, min(students, max(steps) // 4 + 1)))
     scenario = "one worker, a console per robot"
-    for step, threads in climb:
+    for step, threads, _not_whole in climb:
         rows.append(Measurement(scenario, f"worker threads with {step} robots' consoles (floor: 1 robot's)",
                                 float(threads), "count", f"<= {climb[0][1] + THREADS_ALLOWANCE}",
                                 floor=float(climb[0][1]),
                                 passed=threads <= climb[0][1] + THREADS_ALLOWANCE if not quick else None))
     print_table(f"A class of {students} on its own robots, behind nginx, with a rolling restart", rows)
-    for row in rows:  # a figure with no sample (no reconnect in a run) is absent, not NaN
-        if row.measured is not None and math.isnan(row.measured):
-            row.measured = None
-        if row.floor is not None and math.isnan(row.floor):
-            row.floor = None
-    write_json(output / "class_day.json", rows, {"students": students, "workers": list(workers),
-                                                   "login_window_s": login_window_s, "hold_s": hold_s,
-                                                   "machine": the_machine, "runs": runs,
-                                                   "threads_with_robots": climb})
+    extra["threads_with_robots"] = [{"robots": step, "threads": threads, "consoles_not_whole": not_whole}
+                                    for step, threads, not_whole in climb]
+    _write(output, rows, extra)
     return rows
 
 
