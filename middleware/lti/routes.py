@@ -47,17 +47,22 @@ def login() -> ResponseReturnValue:
 def launch() -> ResponseReturnValue:
     """The launch (the LMS posts the signed id token): every check, then the person is signed in and sent to
     the placed page, or, for a deep-linking request, shown the picker."""
-    dbs = get_session()
-    validated = flow.validate_launch(dbs)
-    accepted = accept_launch(dbs, validated, str(current_app.config["SECRET_KEY"]))
-    sessions.begin(accepted.user)
-    presentation = validated.claims.get(launches.PRESENTATION_CLAIM)
-    locale = presentation.get("locale") if isinstance(presentation, dict) else validated.claims.get("locale")
-    if isinstance(locale, str):
-        i18n.remember_launch_locale(locale)  # the language of the pages, unless the person chose one
-    if validated.is_deep_link:
-        return _picker(validated.launch_id)
-    return redirect(catalog.destination(accepted.target, accepted.course_id, accepted.teaches), 303)
+    def accept() -> ResponseReturnValue:
+        dbs = get_session()
+        validated = flow.validate_launch(dbs)
+        accepted = accept_launch(dbs, validated, str(current_app.config["SECRET_KEY"]))
+        sessions.begin(accepted.user)
+        presentation = validated.claims.get(launches.PRESENTATION_CLAIM)
+        locale = presentation.get("locale") if isinstance(presentation, dict) else validated.claims.get("locale")
+        if isinstance(locale, str):
+            i18n.remember_launch_locale(locale)  # the language of the pages, unless the person chose one
+        if validated.is_deep_link:
+            return _picker(validated.launch_id)
+        return redirect(catalog.destination(accepted.target, accepted.course_id, accepted.teaches), 303)
+
+    # A refused launch: its own page (what happened, what to do), nothing it did kept.
+    return unless_refused(accept, lambda refused: (render_template("lti/refused.html", refused=refused),
+                                                   refused.status), about_the_page=())
 
 
 def _picker(launch_id: str, error: str | None = None, status: int = 200) -> ResponseReturnValue:

@@ -177,3 +177,11 @@ def test_an_unregistered_origin_cannot_frame_telelab(page, embedded: tuple[LiveS
         page.frame_locator("#tool").locator('a.robot-card[data-robot="lab-1"]').wait_for(timeout=30000)
     finally:
         stranger.stop()
+    # A learner's deep-linking launch is refused, in words, inside the frame.
+    lms.pending["bad"] = {"sub": "x-learner", "roles": [LEARNER], "deep_link": True}
+    page.set_viewport_size({"width": 390, "height": 844})
+    page.goto(f"{lms.url}/course?login_hint=bad")
+    heading = page.frame_locator("#tool").get_by_role("heading", name="Telelab could not open this launch from the LMS")
+    heading.wait_for(timeout=30000)
+    assert "instructors" in page.frame_locator("#tool").locator("#error-message").text_content()
+    page.screenshot(path=str(ARTIFACTS_DIR / "lti-refused-in-lms-frame-phone.png"))
