@@ -21,7 +21,7 @@ MODULE_FOLDERS = tuple(ROOT / "client_ui" / "static" / name for name in ("pages"
 # Words that are the same in every language the lab speaks: names and acronyms.
 NEUTRAL = {"Telelab", "API", "LMS", "LTI", "CSV", "JSON", "MCAP", "OK", "UTC", "WebSocket", "WebGL", "IoU", "RMS",
            "JWKS", "URL", "Moodle", "Canvas", "Pyodide", "Python", "Blockly", "OpenAPI", "AsyncAPI", "ms", "fps",
-           "Hz", "MB", "KiB", "kB", "px", "min"}
+           "Hz", "MB", "KiB", "kB", "px", "min", "Robot"}
 
 # ---------------------------------------------------------------------------------------------------- templates
 
@@ -222,14 +222,27 @@ def reads_as_prose(text: str) -> bool:
         return False  # class lists
     if re.match(r"(image|text|application|video|audio)/", text):
         return False
+    if re.search(r"=[^ ]*;|;\s*\w+=|\.js$|\bimport \w+", text):
+        return False  # a cookie, a file name, code
+    if re.fullmatch(r"\s*[a-z_]+ §\s*|[^a-z]*[{}][^a-z]*(\s[a-z]+\s*[{}]?)?\s*", text):
+        return False  # a keyword of the plan language with its value: "say §", "§} else {"
     return _reads_as_words(text)
 
 
 def module_strings(source: str) -> list[tuple[int, str]]:
     """(line, text) of each literal of an ES module that reads as prose and does not go through t()."""
     found = []
+    in_call_until = -1  # the end of the last literal given to t(): "..." + "..." goes on with it
     for _kind, start, end, holes in literals(source):
         before = source[max(0, start - 60):start]
+        if re.search(r"\bt\(\s*$", before) or (in_call_until >= 0 and re.fullmatch(r"\s*\+\s*",
+                                                                            source[in_call_until:start])):
+            in_call_until = end
+            continue
+        in_call_until = -1
+        line_end = source.find("\n", end)
+        if "i18n: not prose" in source[end:line_end if line_end >= 0 else len(source)]:
+            continue  # a line that says so: plan language, a default value written in code
         if _CODE_CONTEXT.search(before):
             continue
         if re.match(r"\s*:", source[end:end + 3]) and re.search(r"[{,]\s*$", before):

@@ -5,6 +5,7 @@
 // within WATCHDOG_MS; a closed tab closes the socket, and the server (and else the robot's deadman) stops it.
 import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
 import { DriveSession } from "../../lib/drive-session.js";
+import { t } from "../../lib/i18n.js";
 
 const STOP = 0, TELEMETRY_VERSION = 1, SKILL_STATE = 2, SKILL_RESULT = 3, TELEMETRY_BYTES = 4;
 const TELEMETRY_CAPACITY = 64 * 1024;
@@ -33,7 +34,7 @@ export class PythonWorker extends EventTarget {
         else if (message.type === "failed" && !this.loaded) reject(new Error(message.message));
         this.dispatchEvent(new CustomEvent("message", { detail: message }));
       };
-      this.worker.onerror = (event) => reject(new Error(event.message || "The Python worker did not start."));
+      this.worker.onerror = (event) => reject(new Error(event.message || t("The Python worker did not start.")));
       this.worker.postMessage({ type: "init", control: this.control.buffer, telemetry: this.telemetry.buffer,
                                 interrupt: this.interrupt.buffer });
     }).then((message) => { this.loaded = true; return message; });
@@ -107,7 +108,7 @@ export class RobotRun extends EventTarget {
       this.#python.writeTelemetry(event.detail);
       this.dispatchEvent(new CustomEvent("telemetry", { detail: message }));
     });
-    this.#session.addEventListener("error", (event) => this.#print(`Robot: ${event.detail.message}`, "stderr"));
+    this.#session.addEventListener("error", (event) => this.#print(t("Robot: {message}", { message: event.detail.message }), "stderr"));
     this.#session.addEventListener("sent", (event) => {
       this.#sentAt.set(event.detail.sequence, { page: performance.now(), code: this.#codeAt });
       this.dispatchEvent(new CustomEvent("sent", { detail: event.detail }));
@@ -139,9 +140,9 @@ export class RobotRun extends EventTarget {
     clearTimeout(this.#stopTimer);
     this.#stopTimer = setTimeout(() => {
       if (this.#finished) return;
-      this.#print("The program did not stop by itself: Python is restarted.", "stderr");
+      this.#print(t("The program did not stop by itself: Python is restarted."), "stderr");
       this.#python.restart();
-      this.#end({ ok: false, stopped: true, message: "Stopped." });
+      this.#end({ ok: false, stopped: true, message: t("Stopped.") });
     }, STOP_GRACE_MS);
   }
 
@@ -198,7 +199,7 @@ export class RobotRun extends EventTarget {
       }
       this.#python.skillEnded(FINAL_GOAL[status] ?? 2);
     } catch (error) {
-      this.#print(`Skill ${name}: ${error.message}`, "stderr");
+      this.#print(t("Skill {name}: {message}", { name, message: error.message }), "stderr");
       this.#python.skillEnded(4);
     } finally {
       this.#skillPending = false;

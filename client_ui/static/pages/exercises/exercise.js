@@ -7,6 +7,7 @@ import { python } from "@codemirror/lang-python";
 import { fetchJson } from "../../lib/transport.js";
 import { PythonWorker, RobotRun } from "./exercise-run.js";
 import { drawTrace } from "./trace-map.js";
+import { t } from "../../lib/i18n.js";
 
 const root = document.getElementById("exercise");
 const slug = root.dataset.slug;
@@ -94,12 +95,12 @@ python3.ready.then((message) => {
   pythonReady = true;
   timings.pyodide_load_s = message.load_s;
   root.dataset.pythonReady = "true";
-  say(`Python ${message.version} is ready (loaded in ${message.load_s.toFixed(1)} s).`);
+  say(t("Python {version} is ready (loaded in {load_s} s).", { version: message.version, load_s: message.load_s.toFixed(1) }));
   setRunning(false);
-}, (error) => say(`Python did not load: ${error.message}`, "error"));
+}, (error) => say(t("Python did not load: {message}", { message: error.message }), "error"));
 
 if (!window.crossOriginIsolated) {
-  say("This page needs a browser that isolates it (SharedArrayBuffer): a current Chromium, Firefox or Safari.", "error");
+  say(t("This page needs a browser that isolates it (SharedArrayBuffer): a current Chromium, Firefox or Safari."), "error");
 }
 
 // ---- the practice robot ----
@@ -107,7 +108,7 @@ async function practiceRobot() {
   let state = await fetchJson("/api/practice");
   if (state.running) return state.name;
   if (!state.starting) {
-    say("Starting your practice robot…");
+    say(t("Starting your practice robot…"));
     state = await fetchJson("/api/practice", { method: "POST" });
   }
   const until = Date.now() + PRACTICE_WAIT_MS;
@@ -126,7 +127,7 @@ async function start(mode) {
   consolePane.textContent = "";
   try {
     await practiceRobot();
-    say(mode === "submission" ? "Placing the robot at a hidden start…" : "Placing the robot at the start…");
+    say(mode === "submission" ? t("Placing the robot at a hidden start…") : t("Placing the robot at the start…"));
     const answer = await fetchJson(`/api/exercises/${encodeURIComponent(slug)}/runs`, { method: "POST",
       body: { code: code(), mode } });
     const run = answer.run;
@@ -139,12 +140,12 @@ async function start(mode) {
     });
     robotRun.addEventListener("tick", (event) => { if (timings.ticks.length < 20000) timings.ticks.push(event.detail.at); });
     robotRun.addEventListener("telemetry", (event) => showOdometry(event.detail));
-    robotRun.addEventListener("state", () => print("No robot.tick() for a while: the robot was stopped.", "stderr"));
+    robotRun.addEventListener("state", () => print(t("No robot.tick() for a while: the robot was stopped."), "stderr"));
     robotRun.addEventListener("done", (event) => finish(event.detail));
     const ready = await robotRun.connect();
     if (ready.is_controller === false) throw new Error("You do not control this robot now.");
     root.dataset.running = "true";
-    say(`Running on ${run.robot_name} (${answer.exercise.time_limit_s} s at most). Stop ends it now.`);
+    say(t("Running on {robot_name} ({time_limit_s} s at most). Stop ends it now.", { robot_name: run.robot_name, time_limit_s: answer.exercise.time_limit_s }));
     robotRun.start(code(), { max_linear_mps: ready.max_linear_mps,
       max_angular_radps: ready.max_angular_radps, time_limit_s: answer.exercise.time_limit_s });
   } catch (error) {
@@ -159,23 +160,23 @@ async function finish(outcome) {
   const { run, robotRun } = current;
   robotRun.close();
   root.dataset.running = "false";
-  if (outcome.ok) print("Your program ended.");
-  else if (outcome.stopped) print("Stopped: the robot was stopped.", "stderr");
+  if (outcome.ok) print(t("Your program ended."));
+  else if (outcome.stopped) print(t("Stopped: the robot was stopped."), "stderr");
   else {
     if (outcome.traceback) print(outcome.traceback.trimEnd(), "stderr");
-    print(outcome.line ? `Line ${outcome.line}: ${outcome.message}` : outcome.message, "stderr");
+    print(outcome.line ? t("Line {line}: {message}", { line: outcome.line, message: outcome.message }) : outcome.message, "stderr");
     showError(outcome.line);
   }
-  say(outcome.ok || outcome.stopped ? "Measuring the run from the robot's record…"
-    : `Your program failed${outcome.line ? ` at line ${outcome.line}` : ""}: ${outcome.message}. Measuring what the robot did…`,
+  say(outcome.ok || outcome.stopped ? t("Measuring the run from the robot's record…")
+    : t("Your program failed{value}: {message}. Measuring what the robot did…", { value: outcome.line ? t(" at line {line}", { line: outcome.line }) : "", message: outcome.message }),
   outcome.ok || outcome.stopped ? "info" : "error");
   try {
     const body = outcome.report ? { report: outcome.report } : {};
     const answer = await fetchJson(`/api/exercise-runs/${run.id}/finish`, { method: "POST", body });
     showGrade(answer.run, answer.scene_boxes);
-    if (outcome.ok || outcome.stopped) say(answer.run.status === "graded" ? "Run graded." : answer.run.feedback);
-    else say(`Your program failed${outcome.line ? ` at line ${outcome.line}` : ""}: ${outcome.message}. `
-      + "What the robot did until then is graded below.", "error");
+    if (outcome.ok || outcome.stopped) say(answer.run.status === "graded" ? t("Run graded.") : answer.run.feedback);
+    else say(t("Your program failed{value}: {message}. ", { value: outcome.line ? t(" at line {line}", { line: outcome.line }) : "", message: outcome.message })
+      + t("What the robot did until then is graded below."), "error");
   } catch (error) {
     say(error.message, "error");
   }
@@ -187,13 +188,13 @@ async function finish(outcome) {
 function showOdometry(message) {
   const { pose, linear_mps: v } = message.odometry;
   robotLine.textContent = `${current?.run.robot_name ?? "Robot"}: x ${pose.x_m.toFixed(2)} m, y ${pose.y_m.toFixed(2)} m, `
-    + `heading ${(pose.theta_rad * 180 / Math.PI).toFixed(0)}°, speed ${v.toFixed(2)} m/s`;
+    + t("heading {value}°, speed {v} m/s", { value: (pose.theta_rad * 180 / Math.PI).toFixed(0), v: v.toFixed(2) });
   robotLine.dataset.speed = String(v);
   robotLine.dataset.x = String(pose.x_m);
 }
 
 function showGrade(run, boxes) {
-  const kind = run.mode === "submission" ? "Submission" : "Practice run";
+  const kind = run.mode === "submission" ? t("Submission") : t("Practice run");
   gradeLine.classList.remove("muted");
   gradeLine.textContent = run.grade === null ? `${kind}: ${run.feedback}`
     : `${kind} #${run.id}: ${Math.round(run.grade * 100)}% — ${run.feedback}`;
@@ -231,7 +232,7 @@ async function loadRuns() {
 
 buttons.run.addEventListener("click", () => start("practice"));
 buttons.submit.addEventListener("click", () => start("submission"));
-buttons.stop.addEventListener("click", () => { say("Stopping…"); current?.robotRun.stop(); });
+buttons.stop.addEventListener("click", () => { say(t("Stopping…")); current?.robotRun.stop(); });
 buttons.reset.addEventListener("click", () => setCode(template));
 // A closed or hidden tab: the robot stops now (the drive socket's close stops it too, and else the deadman).
 addEventListener("pagehide", () => { current?.robotRun.stop(); current?.robotRun.close(); });

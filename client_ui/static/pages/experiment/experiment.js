@@ -135,7 +135,8 @@ function showStart(slot, state) {
   }
   const select = h("select", { name: "robot_name", id: "trial-robot" },
     ...robots.map((robot) => h("option", {
-      value: robot.name, text: `${robot.own ? "Your robot, " : ""}${robot.name} (${robot.scene})` })));
+      value: robot.name, text: robot.own ? t("Your robot, {name} ({scene})", { name: robot.name, scene: robot.scene })
+        : `${robot.name} (${robot.scene})` })));
   const start = h("button", { type: "submit", class: "button button--primary",
     text: last?.status === "completed" ? t("Start the next trial") : t("Start a trial") });
   const course = courseChoice(courses);
@@ -149,7 +150,7 @@ function showStart(slot, state) {
     h("p", { text: t("Choose a course robot; the delay and the motion preview come in the order the study set for you.") }), form);
 }
 
-const EXPERIENCE = [["", "—"], ["none", "None"], ["some", "Some"], ["much", "Much"]];
+const EXPERIENCE = [["", "—"], ["none", t("None")], ["some", t("Some")], ["much", t("Much")]];
 
 function choiceField(label, name, options) {
   return h("label", {}, label, h("select", { name },
@@ -162,7 +163,7 @@ function detailsForm(slot) {
   const form = h("form", { class: "experiment__form experiment__details", "data-field": "details" },
     h("p", { class: "experiment__wide", text: t("Before your first trial: a few details about you, as the study reports them. They are kept only if you agree, your tutor sees them for the class as a whole, and they leave the lab in an export only if your tutor enables it.") }),
     h("label", {}, t("Age"), h("input", { type: "number", name: "age", min: "10", max: "120", step: "1", inputmode: "numeric" })),
-    choiceField(t("Where you drive from"), "location", [["", "—"], ["lab", "In the lab"], ["remote", "Remote"]]),
+    choiceField(t("Where you drive from"), "location", [["", "—"], ["lab", t("In the lab")], ["remote", t("Remote")]]),
     choiceField(t("Experience with video games"), "games_experience", EXPERIENCE),
     choiceField(t("Experience with robots"), "robots_experience", EXPERIENCE),
     h("label", { class: "experiment__consent" }, consent, t("I agree that these details are kept for the study.")),

@@ -71,7 +71,7 @@ function definitions() {
     lineBlock("plan_turn_to", t("turn to %1 %2"), [field("HEADING", "90deg"), field("MORE", "")], HUES.motion,
       t("The orientation skill: turn_to 90deg.")),
     lineBlock("plan_follow_wall", t("follow the wall on the %1 %2"),
-      [choice("SIDE", SIDES, [t("left"), t("right")]), field("MORE", "0.4 for 20s")], HUES.motion,
+      [choice("SIDE", SIDES, [t("left"), t("right")]), field("MORE", "0.4 for 20s")], HUES.motion,  // i18n: not prose
       t("The wall-following skill: follow_wall left 0.4 for 20s (distance, then for a time).")),
     lineBlock("plan_skill", t("skill %1 %2"), [field("NAME", "go_to_goal"), field("ARGS", "goal_x_m=1")],
       HUES.motion, t("Any skill of the robot by its name, with name=value parameters.")),
