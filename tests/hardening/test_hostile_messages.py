@@ -43,6 +43,8 @@ HOSTILE_PATHS = (
     "/ws/robots/lab-1/goals/" + "g" * 150, "/ws/tour-sessions/²", "/ws/tour-sessions/%00",
     "/ws/tour-sessions/99999999999999999999999", "/ws/tour-sessions/2147483648", "/ws/tour-sessions/-1",
     "/ws/practice/camera", "/ws/practice/camera%00", "/ws/link", "/ws/../ws/link", "/ws/%2e%2e/api/practice",
+    "/ws/courses/²/class-wall", "/ws/courses/2147483648/class-wall", "/ws/courses/1/class-wall/chat",
+    "/ws/class-session/wall", "/ws/class-session/chat",
 )
 # A channel's messages, each wrong in one way (sent as "<sub> <text>").
 HOSTILE_CHANNEL = (
