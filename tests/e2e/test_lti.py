@@ -119,6 +119,8 @@ def test_a_learner_drives_and_submits_a_test_inside_the_lms_frame_and_the_grade_
 def test_an_instructor_places_a_test_from_the_lms_and_an_admin_registers_an_lms(
         page, embedded: tuple[LiveServer, LmsPlatform]) -> None:
     server, lms = embedded
+    from middleware.db import session_factory
+
     _quiz(server, lms)
     lms.pending["place"] = {"sub": "ines-instructor", "roles": [INSTRUCTOR], "deep_link": True}
     page.goto(f"{lms.url}/course?login_hint=place")
@@ -131,7 +133,17 @@ def test_an_instructor_places_a_test_from_the_lms_and_an_admin_registers_an_lms(
     items = lms.deep_link_returns[-1]["https://purl.imsglobal.org/spec/lti-dl/claim/content_items"]
     assert sorted(item["title"] for item in items) == ["Odometry check", "lab-1"]
 
-    from middleware.db import session_factory
+    # The tutor's course page has the LMS card: roster sync, grades sent and waiting.
+    from middleware.models.lti import LtiContext
+
+    with session_factory(server.app)() as session:
+        course_id = session.scalar(select(LtiContext.course_id))
+    page.goto(f"{server.url}/courses/{course_id}")
+    page.locator("#lms-panel").get_by_role("button", name="Sync the roster from the LMS").wait_for()
+    page.locator("#lms-panel").screenshot(path=str(ARTIFACTS_DIR / "lti-course-card-desktop.png"))
+    page.set_viewport_size({"width": 390, "height": 844})
+    page.locator("#lms-panel").screenshot(path=str(ARTIFACTS_DIR / "lti-course-card-phone.png"))
+
     from tests.conftest import STUDENT_PASSWORD, add_test_account
 
     with session_factory(server.app)() as session:
