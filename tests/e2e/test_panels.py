@@ -511,7 +511,7 @@ def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(
     assert results["bad"] is False
     # Every panel module registered its kind; the skill kind's own check refuses a skill without a schema.
     assert results["kinds"] == sorted(["camera", "chat", "drive", "laser", "map", "lab-view", "low-level", "odometry",
-                                       "plan", "queue", "response-times", "skill", "sonar"])
+                                       "plan", "queue", "response-times", "room-camera", "skill", "sonar"])
     assert results["failed"] == []
     assert results["schemaless"] == "the skill panel has no parameter schema"
     assert not errors, errors
