@@ -49,8 +49,7 @@ def invitations_create() -> ResponseReturnValue:
 @login_required
 @described(
     body=obj(
-        ("role",),
-        role=about("student or tutor"),
+        role=about("student (the default) or tutor"),
         course_id=about("a course's id, or null"),
         days=about("days it stays valid"),
     ),
