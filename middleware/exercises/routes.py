@@ -277,6 +277,11 @@ def _scene_boxes(robot_name: str) -> list[dict[str, float]]:
 
 @blueprint.post("/api/courses/<int:course_id>/exercises")
 @login_required
+@described(
+    body=obj(slug=about("the exercise"), deadline_at=about("ISO 8601"), points=about("its weight in the course")),
+    answers={201: obj(("test",), test=OBJECT)},
+    refusals=(409,),
+)
 def attach(course_id: int) -> ResponseReturnValue:
     """A course's tutor attaches an exercise as a test: {"slug", "deadline_at", "points"}."""
     session = get_session()
