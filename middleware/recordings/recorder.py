@@ -67,6 +67,7 @@ class SessionRecorder:
         self._user_id = recording.user_id
         self._plan_names: list[str] = []
         self._abandon = threading.Event()
+        self._localizing = threading.Event()  # a localization goal runs: its estimate is worth a stream
         self._done = threading.Event()
         self._stream: object = None
         self._thread = threading.Thread(target=self._run, name=f"record-{recording.id}", daemon=True)
@@ -133,10 +134,22 @@ class SessionRecorder:
         self._writer.write(channels.LASER, telemetry.laser, at)
 
     def _record_localization(self) -> None:
-        """The localization estimate from the robot's fan-out hub (the live path's own stream, shared)."""
-        subscription = self._link.localization.subscribe()
+        """The localization estimate from the robot's fan-out hub (the live path's own stream, shared), only while
+        a localization goal runs or someone in this process watches it anyway: subscribing would otherwise start
+        the hub's pump (particles packed five times a second) on the live path's loop for nothing."""
+        hub = self._link.localization
+        subscription = None
         try:
             while not self._done.is_set():
+                wanted = self._localizing.is_set() or hub.viewer_count - (1 if subscription is not None else 0) > 0
+                if not wanted:
+                    if subscription is not None:
+                        subscription.close()
+                        subscription = None
+                    self._done.wait(0.5)
+                    continue
+                if subscription is None:
+                    subscription = hub.subscribe()
                 packed = subscription.next_message(timeout_s=0.5)
                 if packed is None:
                     continue
@@ -146,7 +159,8 @@ class SessionRecorder:
         except Exception as error:  # noqa: BLE001 - the hub closed: the telemetry goes on
             log.info("recording %s: localization stopped (%s)", self.recording_id, error)
         finally:
-            subscription.close()
+            if subscription is not None:
+                subscription.close()
 
     def _record_camera(self) -> None:
         """JPEG frames, thinned, only while someone else in this process watches the server camera (a view drawn
@@ -233,6 +247,11 @@ class SessionRecorder:
             goals = self._link.goals()
         except Exception:  # noqa: BLE001 - the robot busy or away for a second: next second
             return
+        running = (robot_pb2.GOAL_STATUS_ACCEPTED, robot_pb2.GOAL_STATUS_EXECUTING)
+        if any("localization" in goal.skill and goal.status in running for goal in goals):
+            self._localizing.set()
+        else:
+            self._localizing.clear()
         for goal in goals:
             if self._goals.get(goal.goal_id) != goal.status:
                 self._goals[goal.goal_id] = goal.status
