@@ -40,7 +40,8 @@ def upgrade() -> None:
         sa.CheckConstraint("kind IN ('turn', 'practice', 'plan_run', 'exercise_run', 'test_attempt', "
                            "'experiment_trial', 'class_session')", name=op.f("ck_recordings_kind_known")),
         sa.CheckConstraint("status IN ('recording', 'ready', 'failed')", name=op.f("ck_recordings_status_known")),
-        sa.ForeignKeyConstraint(["user_id"], ["users.id"], name=op.f("fk_recordings_user_id_users"), ondelete="CASCADE"),
+        sa.ForeignKeyConstraint(["user_id"], ["users.id"], name=op.f("fk_recordings_user_id_users"),
+                                ondelete="CASCADE"),
         sa.PrimaryKeyConstraint("id", name=op.f("pk_recordings")),
     )
     op.create_index("ix_recordings_user_id", "recordings", ["user_id"])
