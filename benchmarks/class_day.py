@@ -62,9 +62,13 @@ RESTART_SETTLE_S = 3.0  # the class goes on at least this long after the last ol
 SEAT_WAIT_S = 10.0  # a student who gets no acknowledgement this long after reconnecting has lost their seat
 RATIO_TARGET = 1.10
 CONSOLE_WAIT_S = 60.0
+# Consoles opened at once in the thread climb: gunicorn's gthread worker keeps the request threads that
+# simultaneous handshakes made (up to its `threads`), which would count the load's burst, not the robots.
+CONSOLES_AT_ONCE = 10
 # What may grow however many robots: the pools with fixed ceilings (the sockets' blocking work, 16; the liveness
-# probes, 8) and a request or two in flight. A pump thread per stream was 3 a robot.
-THREADS_ALLOWANCE = 28
+# probes, 8), and gunicorn's request threads kept from CONSOLES_AT_ONCE handshakes at once. A pump thread per
+# stream was 3 a robot.
+THREADS_ALLOWANCE = 16 + 8 + 10 + 4
 CHANNELS = ("telemetry", "localization", "drive")
 DRIVE_SUB = 3
 
@@ -519,7 +523,10 @@ async def _open_consoles(port: int, cookies: list[str], robots: list[str]) -> tu
             return link, False
         return link, True
 
-    opened = await asyncio.gather(*(one(i, robot) for i, robot in enumerate(robots)))
+    opened: list[tuple[WebSocketUser | None, bool]] = []
+    for start in range(0, len(robots), CONSOLES_AT_ONCE):  # as a class arrives, not all in one instant
+        opened += await asyncio.gather(*(one(start + i, robot)
+                                         for i, robot in enumerate(robots[start:start + CONSOLES_AT_ONCE])))
     return [link for link, _whole in opened if link is not None], sum(not whole for _link, whole in opened)
 
 
