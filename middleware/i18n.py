@@ -75,6 +75,34 @@ def current_language() -> str:
     return str(get_locale() or LANGUAGES[0]).split("_")[0]
 
 
+def N_(text: str) -> str:  # noqa: N802 (gettext's "mark for the catalogue, translate later")
+    return text
+
+
+# Stored English sentences with values (a grader's feedback): their pattern, and the message that says them.
+_WITH_VALUES = (
+    (re.compile(r"Correct \((?P<shown>.*)\)\."), N_("Correct (%(shown)s).")),
+    (re.compile(r"Outside the accepted range \((?P<shown>.*)\)\."), N_("Outside the accepted range (%(shown)s).")),
+    (re.compile(r"The right choice was: (?P<choice>.*)\."), N_("The right choice was: %(choice)s.")),
+    (re.compile(r"The right choices were: (?P<choices>.*)\."), N_("The right choices were: %(choices)s.")),
+    (re.compile(r"Partly right; the right choices were: (?P<choices>.*)\."),
+     N_("Partly right; the right choices were: %(choices)s.")),
+    (re.compile(r"An accepted answer: (?P<answer>.*)\."), N_("An accepted answer: %(answer)s.")),
+    (re.compile(r"(?P<unit>.*) is not a unit of the same quantity as (?P<expected>.*)\."),
+     N_("%(unit)s is not a unit of the same quantity as %(expected)s.")),
+)
+
+
+def translated(text: str) -> str:
+    """A stored English sentence the catalogue may know (a grader's feedback), in the page's language."""
+    if not text:
+        return text
+    for pattern, message in _WITH_VALUES:
+        if match := pattern.fullmatch(text):
+            return str(gettext(message, **match.groupdict()))
+    return str(gettext(text))
+
+
 def role_name(role: str) -> str:
     """A role's name in the page's language ("estudiante"); an unknown role as it is."""
     return str(ROLE_NAMES[role]) if role in ROLE_NAMES else role
@@ -112,4 +140,5 @@ def init_app(app: Flask) -> None:
 
     @app.context_processor
     def _language() -> dict[str, object]:
-        return {"page_language": current_language(), "language_names": LANGUAGE_NAMES, "role_name": role_name}
+        return {"page_language": current_language(), "language_names": LANGUAGE_NAMES, "role_name": role_name,
+                "translated": translated}

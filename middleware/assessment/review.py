@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -60,8 +61,8 @@ def my_marked_attempts(session: Session, user_id: int, exam_id: int) -> list[Mar
 
 def item_labels(questions: list[Question]) -> dict[str, str]:
     """Each item's name as the attempt shows it: questions by their place in the test, not their bank number."""
-    labels = {str(q.id): f"Question {place}" for place, q in enumerate(questions, start=1)}
-    labels["task"] = "Experimental task"
+    labels = {str(q.id): gettext("Question %(place)s", place=place) for place, q in enumerate(questions, start=1)}
+    labels["task"] = gettext("Experimental task")
     return labels
 
 

@@ -130,4 +130,24 @@ ROBOT_WORDS = (
     N_("How far off the guess may be (standard deviation of the first particles)."),
     N_("How far off the heading guess may be."),
     N_("Number of particles."),
+    # The robot's stream states, shown as they come (middleware/robots/fanout.py).
+    N_("connecting"),
+    N_("live"),
+    N_("The robot is not answering; reconnecting."),
+    # The graders' fixed feedback, stored in English with each result (middleware/assessment/grading.py).
+    N_("No answer."),
+    N_("Correct."),
+    N_("The answer is not one of the choices."),
+    N_("The answer is not a set of choices."),
+    N_("The answer names a choice that does not exist."),
+    N_("The answer is not a number."),
+    # The skills' help as the skill server words it now.
+    N_("Perceptive skill: watches the laser and sonars and announces an obstacle whenever something comes closer to "
+       "the robot's rim than the warning distance. Runs beside any motor skill; go-to-goal uses the same obstacle "
+       "data to plan around what it sees."),
+    N_("Deliberative skill: builds an occupancy grid of the lab from the laser (and near sonar echoes) while the "
+       "robot moves. Each scan is placed at the pose the robot believes (the localization estimate when localization "
+       "runs, else odometry), corrected by matching the scan to the map built so far. Drive a tour (one lap of wall "
+       "following) for a whole map. The floor-plan option is a teaching aid: it draws the lab as built first. The "
+       "map is kept after the skill ends; GetMap returns it."),
 )

@@ -19,7 +19,8 @@ PHONE = {"width": 390, "height": 844}
 ENGLISH = re.compile(
     r"\b(the|and|your|you|with|this|that|is|are|of|to|for|have|from|not|yet|Log|Save|Send|Start|Stop|Open|"
     r"Choose|Join|Leave|Loading|Waiting|Next|Back|Book|Cancel|Submit|Edit|Delete|Change|Password|Tests|Bookings|"
-    r"Teaching|Plans|Courses|Camera|Turn|Queue|Drive|Speed|Heading|Online|Offline|Checking|Review|Mark|Comment)\b")
+    r"Teaching|Plans|Courses|Camera|Turn|Queue|Drive|Speed|Heading|Online|Offline|Checking|Review|Mark|Comment|"
+    r"connected|connecting|live|closed|answering|Question|answer|Correct)\b")
 
 
 @pytest.fixture

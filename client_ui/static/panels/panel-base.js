@@ -4,6 +4,7 @@
 // Data comes in through properties; actions go out as CustomEvents (see `emit`); text only as text nodes.
 
 import { adoptStylesheet, defineOnce, h } from "../lib/dom.js";
+import { t } from "../lib/i18n.js";
 
 export class PanelElement extends HTMLElement {
   #built = false;
@@ -70,7 +71,7 @@ export class PanelElement extends HTMLElement {
 
   /** A status or error message from the panel's socket: its sentence goes to the message line. */
   set message(message) {
-    this.showMessage(message?.message ?? "");
+    this.showMessage(t(message?.message ?? ""));  // the server's fixed words ("live") are in the catalogue
   }
 
   /** Send an action out of the panel, as a bubbling CustomEvent the console's wiring listens to. */

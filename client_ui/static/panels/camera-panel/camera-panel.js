@@ -332,8 +332,8 @@ export class CameraPanel extends PanelElement {
     if (message?.type === "status" && !("robot_online" in message)) return;
     if (message?.type === "status") {
       const offline = message.robot_online === false;
-      const online = this.#videoNote || message.message; // why the video shows outlasts its "live"
-      this.#showMessage(offline ? message.message || t("The robot is offline.") : online, offline);
+      const online = this.#videoNote || t(message.message ?? ""); // why the video shows outlasts its "live"
+      this.#showMessage(offline ? t(message.message ?? "") || t("The robot is offline.") : online, offline);
       this.#placeholder.textContent = offline ? t("No video: the robot is offline.") : WORDS.video.waiting;
       if (offline) {
         this.#placeholder.hidden = false;

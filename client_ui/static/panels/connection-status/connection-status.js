@@ -15,7 +15,7 @@ const LABELS = { camera: t("Camera"), telemetry: t("Telemetry"), drive: t("Drive
 export function describeState(state, { robotName = t("the robot"), nowMs = Date.now() } = {}) {
   switch (state?.phase) {
     case "open":
-      return "connected";
+      return t("connected");
     case "connecting":
       return t("connecting…");
     case "reconnecting": {
