@@ -139,6 +139,7 @@ ROUTES = (
     "DELETE /api/lessons/videos/<name>",
     "GET /api/me/preferences/<key>",
     "PUT /api/me/preferences/<key>",
+    "POST /language",
     "GET /exercises",
     "GET /exercises/<slug>",
     "GET /exercises/python-worker.js",
