@@ -226,7 +226,7 @@ export class RoomCameraPanel extends PanelElement {
     this.#status.textContent = this.#withheld
       ? t("The room camera is off during a graded run: it would show where the robot truly stands.")
       : pose ? t("{title}: pan {pan}°, tilt {tilt}°, field {hfov}°.",
-        { title: this.#mount.title, pan: degrees(pan), tilt: degrees(tilt), hfov: fixed(hfov, 0) })
+        { title: t(this.#mount.title ?? ""), pan: degrees(pan), tilt: degrees(tilt), hfov: fixed(hfov, 0) })
         : t("Waiting for the robot's position…");
   }
 }
