@@ -17,7 +17,8 @@ def aim(page) -> tuple[float, float, float]:
     return pan, tilt, hfov
 
 
-def test_a_viewer_pans_tilts_and_zooms_the_room_camera_and_a_phone_shows_it_fixed(page, live_server: LiveServer) -> None:
+def test_a_viewer_pans_tilts_and_zooms_the_room_camera_and_a_phone_shows_it_fixed(
+        page, live_server: LiveServer) -> None:
     open_console(page, live_server)
     show_tab_of(page, "room-camera")
     camera = page.locator('room-camera[data-webgl="ok"][data-camera="room"]')
