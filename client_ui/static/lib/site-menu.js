@@ -10,6 +10,16 @@ function fit() {
 
 fit();
 PHONE.addEventListener("change", fit);
+
+// The language picker changes the language as soon as another is chosen; its button is for pages without scripts
+// (and takes room the header needs on a laptop's width).
+for (const picker of document.querySelectorAll(".language-picker")) {
+  const button = picker.querySelector('button[type="submit"]');
+  const select = picker.querySelector("select");
+  if (!button || !select) continue;
+  button.hidden = true;
+  select.addEventListener("change", () => picker.requestSubmit());
+}
 document.addEventListener("click", (event) => {
   if (PHONE.matches && menu?.open && !menu.contains(event.target)) menu.open = false;
 });
