@@ -162,13 +162,15 @@ def described(summary: str | None = None, *, body: Schema | None = None, body_re
               form: Schema | None = None,
               query: Mapping[str, Schema] | None = None,
               answers: Mapping[int, Schema | Answer] | None = None, refusals: tuple[int, ...] = (),
-              login: bool = True) -> Callable[[F], F]:
+              login: bool = True, form_read_by_view: bool = False) -> Callable[[F], F]:
     """Declares a JSON route's contract (module docstring); answers default to {200: any JSON object}. refusals
     are the statuses beyond COMMON_REFUSALS this route answers with the error shape (409 busy, 503 robot_offline).
-    body_required=False: a request with no body at all is let through (the view has defaults)."""
+    body_required=False: a request with no body at all is let through (the view has defaults). form_read_by_view:
+    the form is documented but not read here, because the view must read it itself (a large upload: the view raises
+    the size limit for that request only after checking who sends it, then names a missing field itself)."""
     shaped = {status: answer if isinstance(answer, Answer) else Answer(answer)
               for status, answer in (answers or {200: OBJECT}).items()}
-    validators = {"body": _validator(body), "form": _validator(form)}
+    validators = {"body": _validator(body), "form": None if form_read_by_view else _validator(form)}
     query = dict(query or {})
 
     def decorate(view: F) -> F:

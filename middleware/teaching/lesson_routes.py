@@ -181,6 +181,7 @@ def _receive_video() -> str:
     query={"lesson": whole(1, 2**31 - 1)},
     answers={201: obj(("video_name", "videos"), video_name=STRING, videos=array())},
     refusals=(413,),
+    form_read_by_view=True,
 )
 def upload_video() -> ResponseReturnValue:
     """Uploads a lesson video (tutors; multipart field "video", with the CSRF token).
