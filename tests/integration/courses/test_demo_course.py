@@ -126,7 +126,8 @@ def test_a_demo_course_seeded_before_the_classmates_gets_them_once(app, demo_acc
     with monkeypatch.context() as older:  # what an older `telelab up` seeded: the course, no classmates
         older.setattr(demo, "_survey_classmates", lambda *_args: [])
         assert seed_demo_course(app)
-    assert seed_demo_course(app) == [f"the lab survey answered by {len(demo.DEMO_SURVEY_ANSWERS)} demo classmates"]
+    assert seed_demo_course(app) == [f"the lab survey answered by {len(demo.DEMO_SURVEY_ANSWERS)} demo classmates",
+                                     f"{len(demo.DEMO_TRIALS) * 5} experiment trials of theirs on course-A"]
     assert seed_demo_course(app) == []
     with session_factory(app)() as session:
         course_id = demo.seed_demo_course(session).course_id

@@ -12,7 +12,7 @@ from tests.conftest import LabClient
 from tests.integration.lab.test_robot_channels import closed_with, receive_json
 
 # A value for each variable part of a channel's address; a new one must be added here, or the test fails.
-SAMPLE_VALUES = {"robot_name": "lab-1", "goal_id": "no-such-goal", "session_id": "1"}
+SAMPLE_VALUES = {"robot_name": "lab-1", "goal_id": "no-such-goal", "session_id": "1", "course_id": "1"}
 FOREIGN_ORIGINS = ["https://evil.example", "null", "http://127.0.0.1:1"]
 
 
