@@ -65,6 +65,7 @@ def test_a_plan_runs_on_a_lab_robot_only_during_the_turn(plans_lab: PlansLab) ->
     status, body = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "lab-1"})
     assert status == 403 and body["error"]["code"] == "not_controller"
     queue = take_control(ann)
+    assert api(ann, "POST", "/api/robots/lab-1/dock", {})[0] == 200  # the shared robot, wherever tests left it
     status, answer = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "lab-1"})
     assert status == 202, answer
     assert answer["goal"]["skill"] == "plan:short" and answer["goal_channel"].startswith("/ws/robots/lab-1/goals/")
@@ -198,6 +199,7 @@ def test_a_plan_on_a_lab_robot_ends_when_its_user_goes_away(plans_lab: PlansLab)
     ann = plans_lab.client("student1")
     plan_id = _create(ann, "slow-and-long", "drive 0.02 0 for 120s\n")
     queue = take_control(ann)
+    assert api(ann, "POST", "/api/robots/lab-1/dock", {})[0] == 200  # the shared robot, wherever tests left it
     status, answer = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "lab-1"})
     assert status == 202, answer
     time.sleep(0.5)
