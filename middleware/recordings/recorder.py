@@ -62,7 +62,7 @@ class SessionRecorder:
             "recording_id": str(recording.id), "robot": recording.robot_name, "user_id": str(recording.user_id),
             "kind": recording.kind, "started_at": as_utc(recording.started_at).isoformat(), "recorder": key})
         self._command_cursor = 0
-        self._goals: dict[str, int] = {}
+        self._goals: dict[str, int] | None = None  # None until the first look: goals ended before are not ours
         self._counts = {"commands": 0, "skills": 0, "plans": 0}
         self._user_id = recording.user_id
         self._plan_names: list[str] = []
@@ -252,6 +252,10 @@ class SessionRecorder:
             self._localizing.set()
         else:
             self._localizing.clear()
+        if self._goals is None:
+            # The robot lists the goals of whoever used it before, ended: they are not this session's (nor its
+            # person's to read); only the ones running now, and every later change, are recorded.
+            self._goals = {goal.goal_id: goal.status for goal in goals if goal.status not in running}
         for goal in goals:
             if self._goals.get(goal.goal_id) != goal.status:
                 self._goals[goal.goal_id] = goal.status
