@@ -88,7 +88,8 @@ def test_a_recording_whose_worker_died_is_taken_over_and_the_whole_run_is_graded
     assert any(row["item"] == "task" for row in answer["attempt"]["results"])
     gaps = [later[0] - earlier[0] for earlier, later in zip(graded, graded[1:], strict=False)]
     assert graded[0][0] < 0.5 and max(gaps) < 0.5, "graded on the robot's log: the whole run, no gap"
-    assert graded[-1][0] >= trace[-1][0] - 0.5 and len(graded) >= len(trace)
+    # one sample fewer at most: the log and the recorder sample 5 Hz on clocks of their own
+    assert graded[-1][0] >= trace[-1][0] - 0.5 and len(graded) >= len(trace) - 1
 
 
 def test_an_attempt_settled_at_its_deadline_is_graded_on_the_robot_s_run_up_to_the_deadline(app, client_as,

@@ -113,7 +113,7 @@ def test_a_reset_is_supervisory_and_forgets_grid_counts_and_readings(robot: robo
     reset = robot.ResetEvidenceGrid(robot_pb2.ResetEvidenceGridRequest(token=TOKEN), timeout=DEADLINE_S)
     assert reset.sonar_scans <= 1 and reset.static_scans <= 1  # one reading may land between reset and answer
     readings = robot.GetPerceptionReadings(robot_pb2.GetPerceptionReadingsRequest(), timeout=DEADLINE_S)
-    assert len(readings.scans) <= 1
+    assert len(readings.scans) <= 2  # and one more may land between the answer and this read (10 a second)
 
 
 def test_the_raw_readings_carry_pose_part_and_both_sensors_numbered_for_paging(
