@@ -18,6 +18,7 @@ import { feedService, registerFeedService } from "./feed-services.js";
 import { GUESS_FIELDS, goalParameterNames } from "../panel-descriptors.js";
 import { bindFeedback, savePictureChoice } from "./feedback-wiring.js";
 import { playTurnTone } from "./turn-tone.js";
+import { showTakeoverBanner } from "./takeover-banner.js";
 import { t } from "../i18n.js";
 
 const FINAL_GOAL_STATES = new Set(["succeeded", "canceled", "aborted"]);
@@ -63,6 +64,7 @@ export class ConsoleWiring {
     this.#robotPath = robotPath;
     this.#status = status;
     this.#layout = layout;
+    showTakeoverBanner(root, robotName); // a tutor's takeover of the student's class robot, shown at once
     window.addEventListener("online", () => this.#channels.forEach((channel) => channel.retryNow()));
   }
 
