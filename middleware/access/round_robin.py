@@ -24,6 +24,7 @@ from middleware import events
 from middleware.access import pools
 from middleware.locking import lock_robot_control, rows_matched
 from middleware.models import QueueEntry, RobotControl
+from middleware.models.analytics import QueueWait, RobotOutage
 
 TURN_WARNING_S = 20.0
 QUEUE_TOPIC = "queue"
@@ -90,7 +91,14 @@ def _entries(session: Session, robot_name: str) -> list[QueueEntry]:
     ))
 
 
-def _grant(control: RobotControl, user_id: int, now: datetime) -> None:
+def _grant(session: Session, control: RobotControl, user_id: int, now: datetime) -> None:
+    waited_from = _as_utc(session.scalar(select(QueueEntry.enqueued_at).where(
+        QueueEntry.robot_name == control.robot_name, QueueEntry.user_id == user_id))) or now
+    waited_from = min(waited_from, now)
+    # Usage analytics reads how long each turn was waited for (0 when the robot was free): written here, where
+    # turns are granted, in the same transaction.
+    session.add(QueueWait(robot_name=control.robot_name, user_id=user_id, waited_from=waited_from, granted_at=now,
+                          wait_s=(now - waited_from).total_seconds()))
     control.controller_id = user_id
     control.token = secrets.token_urlsafe(32)
     control.turn_started_at = now
@@ -110,7 +118,7 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
     """Applies the rule to the locked row: drops users gone past grace, grants, rotates, pauses on faults; a change
     is announced on the event bus (topic "queue", the robot's name) for every worker's queue pages. seen_before is
     the queue as it stood before the caller's own change (a join, a leave), so that change is announced too."""
-    token_before = control.token
+    token_before, faulted_before = control.token, control.faulted
     entries = _entries(session, control.robot_name) if entries is None else entries
     seen_before = _seen(control, entries) if seen_before is None else seen_before
     cutoff = now - timedelta(seconds=policy.grace_s)
@@ -131,7 +139,7 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
         present.append(priority)  # a pool booking's holder, waiting in its pool: bound here at the slot
         entries = _entries(session, control.robot_name)
     if priority is not None and priority in present and control.controller_id != priority:
-        _grant(control, priority, now)
+        _grant(session, control, priority, now)
     if robot_online and not present:
         bound = _bind_pool_waiter(session, control.robot_name, policy, now)
         if bound is not None:
@@ -147,7 +155,7 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
     elif control.controller_id is None:
         control.faulted = False
         if present:
-            _grant(control, present[0], now)
+            _grant(session, control, present[0], now)
     elif control.faulted:
         control.faulted = False
         control.turn_ends_at = None  # a fresh turn, set below if others wait
@@ -166,12 +174,13 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
             if waiting:
                 previous = next(e for e in entries if e.user_id == control.controller_id)
                 previous.enqueued_at = now  # to the end of the waiting list
-                _grant(control, waiting[0], now)
+                _grant(session, control, waiting[0], now)
                 control.turn_ends_at = now + timedelta(seconds=policy.turn_length_s(session, waiting[0]))
                 waiting = waiting[1:] + [previous.user_id]
             else:
                 control.turn_ends_at = None  # the pool waiter went (or another robot took them): no one to hand to
     control.updated_at = now
+    _note_outage(session, control.robot_name, faulted_before, control.faulted, now)
     session.flush()
     announced = _seen(control, _entries(session, control.robot_name)) != seen_before
     if announced:
@@ -186,6 +195,16 @@ def _settle(session: Session, control: RobotControl, policy: AccessPolicy, now: 
         token_changed=control.token != token_before,
         announced=announced,
     )
+
+
+def _note_outage(session: Session, robot_name: str, before: bool, after: bool, now: datetime) -> None:
+    """Opens a robot outage when the robot stops answering and closes it when it answers again (usage analytics'
+    uptime and faults are read from these rows)."""
+    if after and not before:
+        session.add(RobotOutage(robot_name=robot_name, started_at=now))
+    elif before and not after:
+        session.execute(update(RobotOutage).where(RobotOutage.robot_name == robot_name, RobotOutage.ended_at.is_(None))
+                        .values(ended_at=now))
 
 
 def _bind_pool_waiter(session: Session, robot_name: str, policy: AccessPolicy, now: datetime) -> int | None:

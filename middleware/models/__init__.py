@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from middleware.models.access import PoolQueueEntry, QueueEntry, RobotControl
 from middleware.models.accounts import Role, User
+from middleware.models.analytics import LearningEvent, QueueWait, RobotOutage, XapiStatement  # noqa: F401
 from middleware.models.assessment import Attempt, AttemptReview, Exam, Question, SurveyResponse  # noqa: F401
 from middleware.models.auth import LoginSession
 from middleware.models.base import Base

@@ -20,7 +20,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from werkzeug.exceptions import RequestEntityTooLarge
 
-from middleware.api.contract import ANY, OBJECT, STRING, about, array, described, obj, whole
+from middleware.api.contract import ANY, BOOLEAN, OBJECT, STRING, about, array, described, obj, whole
 from middleware.db import get_session
 from middleware.errors import ApiError, flashed, unless_refused
 from middleware.extensions import csrf
@@ -55,6 +55,7 @@ from middleware.teaching.lessons import (
     unused_videos,
     video_dir,
 )
+from middleware.teaching.progress import note_finished
 from middleware.teaching.targets import (
     PRACTICE_TARGET,
     authoring_catalog,
@@ -356,6 +357,16 @@ def start_lesson(lesson_id: int) -> ResponseReturnValue:
     body, _hold_s = _run_body()
     return jsonify(place_for_lesson(resolve_target(body.get("target"), _user_id()),
                                     body.get("target") == PRACTICE_TARGET))
+
+
+@blueprint.post("/api/lessons/<int:lesson_id>/watched")
+@login_required
+@described(answers={200: obj(("recorded",), recorded=BOOLEAN)})
+def watched(lesson_id: int) -> ResponseReturnValue:
+    """The player saw the lesson's video to its end: recorded for the tutors' analytics (and the xAPI statement
+    "watched"); a repeat within a minute is not recorded again."""
+    lesson = _lesson(lesson_id)
+    return jsonify({"recorded": note_finished(get_session(), _user_id(), "lesson_watched", lesson.id)})
 
 
 @blueprint.post("/api/lessons/stop")

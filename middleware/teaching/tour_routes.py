@@ -11,7 +11,7 @@ from sqlalchemy import select
 
 from middleware.access.coordinator import access_coordinator
 from middleware.accounts.schemas import clean_optional_id
-from middleware.api.contract import OBJECT, about, described, obj, one_of
+from middleware.api.contract import BOOLEAN, OBJECT, about, described, obj, one_of
 from middleware.bookings.services import tutored_courses
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
@@ -28,6 +28,7 @@ from middleware.teaching.authority import (
     require_class_member,
     require_class_rights,
 )
+from middleware.teaching.progress import note_finished
 from middleware.teaching.targets import authoring_catalog, execute, reference_info, reference_skills, resolve_target
 from middleware.teaching.tours import (
     TourInvalid,
@@ -158,6 +159,16 @@ def run_step(tour_id: int, index: int) -> ResponseReturnValue:
     if command is None:
         raise ApiError(409, "no_command", "This step runs nothing on the robot.", "index")
     return jsonify(execute(resolve_target(body.get("target"), _user_id()), command, received_at)), 202
+
+
+@blueprint.post("/api/tours/<int:tour_id>/followed")
+@login_required
+@described(answers={200: obj(("recorded",), recorded=BOOLEAN)})
+def followed(tour_id: int) -> ResponseReturnValue:
+    """The player ran the tour to its last step: recorded for the tutors' analytics (and the xAPI statement
+    "completed"); a repeat within a minute is not recorded again."""
+    tour = _tour(tour_id)
+    return jsonify({"recorded": note_finished(get_session(), _user_id(), "tour_followed", tour.id)})
 
 
 # --- live guided sessions ----------------------------------------------------------------------

@@ -130,6 +130,11 @@ function on(target, type, handler) {
   });
 }
 
+/** Tells the server the video was seen to its end (the tutors' analytics); a failure only misses that record. */
+async function noteWatched() {
+  try { await fetchJson(`/api/lessons/${lessonId}/watched`, { method: "POST" }); } catch { /* not recorded */ }
+}
+
 async function start() {
   try {
     const lesson = await fetchJson(`/api/lessons/${lessonId}`);
@@ -147,7 +152,7 @@ async function start() {
   on(video, "seeking", () => playback.seekStart());
   on(video, "seeked", () => playback.seekEnd(video.paused, activeIndex()));
   on(video, "waiting", () => playback.buffering());
-  on(video, "ended", () => playback.ended());
+  on(video, "ended", () => { playback.ended(); noteWatched(); });
   on(video, "seeked", () => { if (video.paused && video.currentTime < START_S) placeAtStart(); });
   root.dataset.ready = "true";
   await placeAtStart();

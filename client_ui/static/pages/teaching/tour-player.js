@@ -17,7 +17,13 @@ const FINAL = new Set(["succeeded", "canceled", "aborted"]);
 let engine = null;
 let robotPanels = { titles: new Map(), highlight: () => {} };
 
+let followedNoted = false;
+
 function render(state) {
+  if (state.status === "done" && root.dataset.status !== "done" && !followedNoted) {
+    followedNoted = true;  // once per page: the tutors' analytics counts the tour followed to its end
+    fetchJson(`/api/tours/${tourId}/followed`, { method: "POST" }).catch(() => { followedNoted = false; });
+  }
   root.dataset.status = state.status;
   root.dataset.index = String(state.index);
   progress.textContent = t("Step {value} of {count}", { value: state.index + 1, count: state.count });
