@@ -51,8 +51,25 @@ def make_engine(url: str, pool_size: int = 5, max_overflow: int = 10) -> Engine:
             cursor.close()
 
         event.listen(engine, "before_cursor_execute", _one_writer_per_thread)
-        return engine
-    return create_engine(url, pool_pre_ping=True, pool_size=pool_size, max_overflow=max_overflow)
+    else:
+        engine = create_engine(url, pool_pre_ping=True, pool_size=pool_size, max_overflow=max_overflow)
+    _close_what_returns_after_dispose(engine)
+    return engine
+
+
+def _close_what_returns_after_dispose(engine: Engine) -> None:
+    """A connection a thread still held when the engine was disposed (shutting down) goes back to the pool the
+    engine let go of, where nothing closes it: the server would keep the session until the garbage collector. It is
+    closed as it comes back."""
+
+    @event.listens_for(engine, "checkout")
+    def _note_the_pool(_dbapi_connection, record, _proxy) -> None:
+        record.info["telelab.pool"] = id(engine.pool)
+
+    @event.listens_for(engine, "checkin")
+    def _close_if_orphaned(dbapi_connection, record) -> None:
+        if dbapi_connection is not None and record.info.get("telelab.pool", id(engine.pool)) != id(engine.pool):
+            record.invalidate()
 
 
 _writing = threading.local()
