@@ -89,11 +89,17 @@ class WebSocketClient(simple_websocket.Client):
 
     def close(self, reason=None, message=None) -> None:
         """A close that races the server's: the reader thread may close the socket between the library's
-        `connected` check and its send, which surfaced as OSError (EBADF) instead of ConnectionClosed."""
+        `connected` check and its send, which surfaced as OSError (EBADF) instead of ConnectionClosed. A socket the
+        server already ended normally (1000, e.g. a goal channel after the goal's last status) is closed: closing
+        it again is nothing to report, as a browser's close() would not."""
         try:
             super().close(reason=reason, message=message)
+        except simple_websocket.ConnectionClosed:
+            if self.close_reason != 1000:
+                raise
         except OSError as error:
-            raise simple_websocket.ConnectionClosed(self.close_reason, self.close_message) from error
+            if self.close_reason != 1000:
+                raise simple_websocket.ConnectionClosed(self.close_reason, self.close_message) from error
 
 
 class Browser:
