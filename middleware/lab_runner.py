@@ -51,9 +51,10 @@ def seed_demo_content(app, record_video: bool = True) -> list[str]:
     """The demo data: the demo course with its tests (so the demo student can book and be assessed), then the
     teaching area's example tours and the lesson whose video is recorded from the simulator."""
     from middleware.recordings.demo import seed_demo_recording
+    from middleware.teaching.demo_class import seed_demo_class
     from middleware.teaching.demo_content import seed_demo_content as seed
 
-    return seed_demo_course(app) + seed(app, record_video) + seed_demo_recording(app)
+    return seed_demo_course(app) + seed(app, record_video) + seed_demo_recording(app) + seed_demo_class(app)
 
 
 def seed_demo_course(app) -> list[str]:

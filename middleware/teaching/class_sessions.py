@@ -112,6 +112,14 @@ def prestart_robots(sessions: Callable[[], Session], manager: PracticeManager, c
                     only_user_id: int | None = None) -> None:
     """Starts every seat's robot (or only_user_id's) in the background, a few at a time, recording each outcome on
     its seat."""
+    threading.Thread(target=start_robots, args=(sessions, manager, class_session_id, only_user_id),
+                     name=f"class-{class_session_id}-start", daemon=True).start()
+
+
+def start_robots(sessions: Callable[[], Session], manager: PracticeManager, class_session_id: int,
+                 only_user_id: int | None = None) -> None:
+    """Starts every starting seat's robot (or only_user_id's), a few at a time, recording each outcome on its seat;
+    returns once every start ended."""
     with sessions() as session:
         query = (select(ClassSeat.user_id, User.username).join(User, User.id == ClassSeat.user_id)
                  .where(ClassSeat.session_id == class_session_id))
@@ -131,12 +139,9 @@ def prestart_robots(sessions: Callable[[], Session], manager: PracticeManager, c
             state, message = "failed", "The robot did not start; the tutor can start the session again."
         _set_seat(sessions, class_session_id, user_id, state, message)
 
-    def start_all() -> None:
-        with ThreadPoolExecutor(STARTS_AT_ONCE, thread_name_prefix=f"class-{class_session_id}") as pool:
-            for user_id, username in seats:
-                pool.submit(start_one, user_id, username)
-
-    threading.Thread(target=start_all, name=f"class-{class_session_id}-start", daemon=True).start()
+    with ThreadPoolExecutor(STARTS_AT_ONCE, thread_name_prefix=f"class-{class_session_id}") as pool:
+        for user_id, username in seats:
+            pool.submit(start_one, user_id, username)
 
 
 def restart_my_robot(session: Session, actor: User) -> int:
