@@ -1,59 +1,133 @@
-"""The recorder: one process of the cluster (elected like the access ticker) records every open session, a thread
-per session reading the robot over streams of its own, writing MCAP parts to the shared directory.
+"""The recorder: one process of the cluster (elected like the access ticker) records every open session, each a task
+on the process's channel loop (live/loop.py) subscribed to the robot's fan-out hubs like any console's viewer: no
+thread per session and no second stream per robot (the robot's one telemetry stream feeds its viewers and its
+recording alike).
 
-Each second a session's thread closes its chunk (fsync), copies the commands other workers logged, notes goal
-changes and tells the database it is alive. A session that ended is completed (footer, size, counts) by its
-thread; a session whose recorder died (its process, or the election moved) is continued by the new leader in a
-new part. The live path never waits for any of this: the recorder reads the robot on streams of its own, and the
-command path only queues a note (command_log.py).
+On the loop a session only keeps a reference to each new message (packed once by the hub for every viewer); once a
+second it hands that second's messages to the recorder's pool (IO_THREADS threads for the whole process), which
+decodes them, writes them to the MCAP part, closes the chunk (fsync), copies the commands other workers logged,
+notes goal changes and tells the database it is alive. The loop never waits for the disk, the database or a unary
+call to the robot. A session that ended is completed (footer, size, counts); a session whose recorder died (its
+process, or the election moved) is continued by the new leader in a new part. The command path only queues a note
+(command_log.py).
 """
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import json
 import logging
+import os
 import threading
 import time
 import weakref
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from datetime import datetime, timedelta
 from pathlib import Path
+from typing import Any
 
 from flask import Flask
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
 from middleware.assessment.recorder import process_key
+from middleware.live.loop import channel_loop
 from middleware.locking import ClusterElection, rows_matched
 from middleware.models.accounts import as_utc, utc_now
 from middleware.models.recordings import RecordedCommand, Recording
 from middleware.recordings import channels, files, services
 from middleware.recordings.settings import RecordingSettings
+from middleware.robots.fanout import FanoutHub, Subscription
 from middleware.robots.link import RobotLink
 from middleware.robots.messages import unpack_camera_frame
 from middleware.robots.registry import RobotRegistry
 from protos.telelab.v1 import robot_pb2
 
 log = logging.getLogger(__name__)
-RATE_HZ = 10.0  # telemetry samples a second (odometry, truth, sonar, laser)
+# Telemetry (odometry, truth, sonar, laser) comes at the hub's rate: 10 samples a second (RobotLink._open_telemetry).
 CAMERA_EVERY_S = 1.0  # a JPEG frame a second while someone watches the server camera...
 CAMERA_EVERY_LONG_S = 5.0  # ...and one every 5 s after the session's first CAMERA_THIN_AFTER_S
 CAMERA_THIN_AFTER_S = 600.0
 CHECK_S = 0.5  # how often the keeper looks at the sessions
 STALE_S = 5.0  # a recording not heard of for this long lost its recorder
 SWEEP_S = 60.0  # retention and disk limits
+COMMANDS_SETTLE_S = 0.4  # at a session's end: the other workers' command logs write every 0.25 s
+IO_THREADS = 4  # the process's threads for every session's file, database and robot calls (not one per session)
 RECORDINGS_LOCK = 0x7E1E_5EC0
+
+_TELEMETRY, _LOCALIZATION, _CAMERA = "telemetry", "localization", "camera"
 
 
 def _ns(unix_s: float) -> int:
     return int(unix_s * 1e9)
 
 
+_pools: dict[int, ThreadPoolExecutor] = {}
+_pools_lock = threading.Lock()
+
+
+def io_pool() -> ThreadPoolExecutor:
+    """This process's pool for the recorders' blocking work (a forked worker makes its own)."""
+    pid = os.getpid()
+    with _pools_lock:
+        pool = _pools.get(pid)
+        if pool is None:
+            _pools.clear()
+            pool = _pools[pid] = ThreadPoolExecutor(IO_THREADS, thread_name_prefix="recorder-io")
+        return pool
+
+
+class _HubTap:
+    """The one listener this module gives a hub (a hub keeps its listeners as long as it lives): called on the hub's
+    loop after each new message, it hands the message to every session recorder attached, through each one's own
+    subscription, so none of them misses a message (a subscription alone is latest-wins) and none waits."""
+
+    def __init__(self) -> None:
+        self.sinks: dict[Subscription[Any], Callable[[Any], None]] = {}
+
+    def news(self) -> None:
+        for subscription, sink in list(self.sinks.items()):
+            message = subscription.next_message(0.0)
+            if message is None:
+                continue
+            try:
+                sink(message)
+            except Exception:  # a sink's fault must never reach the hub's pump (it would reconnect the robot)
+                log.exception("a recorder could not keep a message")
+
+
+_taps: weakref.WeakKeyDictionary[FanoutHub[Any], _HubTap] = weakref.WeakKeyDictionary()
+
+
+def _attach(hub: FanoutHub[Any], sink: Callable[[Any], None]) -> Subscription[Any]:
+    """Subscribes sink to every new message of hub (on the hub's loop; starts its pump if nobody watched)."""
+    tap = _taps.get(hub)
+    if tap is None:
+        tap = _taps[hub] = _HubTap()
+        hub.listen(tap.news)
+    subscription = hub.subscribe()
+    subscription.next_message(0.0)  # what the hub last had (maybe long ago, before its pump stopped) is not news
+    tap.sinks[subscription] = sink
+    return subscription
+
+
+def _detach(hub: FanoutHub[Any], subscription: Subscription[Any]) -> None:
+    tap = _taps.get(hub)
+    if tap is not None:
+        tap.sinks.pop(subscription, None)
+    subscription.close()
+
+
+Kept = tuple[str, Any, int]  # (what, the hub's packed message or the camera's (header, jpeg), received unix ns)
+
+
 class SessionRecorder:
     """Records one session until its row ends (then completes the file) or this process stops recording it."""
 
     def __init__(self, recording: Recording, link: RobotLink, root: Path, sessions: Callable[[], Session],
-                 key: str) -> None:
+                 key: str, loop: asyncio.AbstractEventLoop | None = None) -> None:
         self.recording_id, self._link, self._sessions, self._key = recording.id, link, sessions, key
         self._root = root
         part = files.new_part_path(root, recording.id, key)
@@ -66,141 +140,118 @@ class SessionRecorder:
         self._counts = {"commands": 0, "skills": 0, "plans": 0}
         self._user_id = recording.user_id
         self._plan_names: list[str] = []
+        self._context_written = False
+        self._localizing = False  # a localization goal runs: its estimate is worth a subscription
+        self._kept: list[Kept] = []  # this second's messages, appended on the loop, written by the pool
+        self._camera_started = time.monotonic()
+        self._last_camera_s = 0.0
         self._abandon = threading.Event()
-        self._localizing = threading.Event()  # a localization goal runs: its estimate is worth a stream
         self._done = threading.Event()
-        self._stream: object = None
-        self._thread = threading.Thread(target=self._run, name=f"record-{recording.id}", daemon=True)
-        self._localization = threading.Thread(target=self._record_localization, name=f"record-loc-{recording.id}",
-                                              daemon=True)
-        self._camera = threading.Thread(target=self._record_camera, name=f"record-cam-{recording.id}", daemon=True)
-        self._thread.start()
-        self._localization.start()
-        self._camera.start()
+        self._wake: asyncio.Event | None = None
+        self._loop = loop or channel_loop().loop
+        self._io = io_pool()
+        self._future = asyncio.run_coroutine_threadsafe(self._run(), self._loop)
 
     @property
     def running(self) -> bool:
-        """Whether its thread still records."""
-        return self._thread.is_alive()
+        """Whether it still records (or is still completing its file)."""
+        return not self._done.is_set()
 
-    def abandon(self) -> None:
-        """Stops recording without completing the session (another process goes on with it)."""
+    def abandon(self, wait: bool = True) -> None:
+        """Stops recording without completing the session (another process goes on with it); waits (at most 3 s)
+        for the part to be closed when wait."""
         self._abandon.set()
-        self._cancel_stream()
-        self._thread.join(timeout=3)
+        with contextlib.suppress(RuntimeError):  # the loop has stopped: the process is ending
+            self._loop.call_soon_threadsafe(self._wake_up)
+        if wait:
+            self.wait_closed(3.0)
 
-    def _cancel_stream(self) -> None:
-        cancel = getattr(self._stream, "cancel", None)
-        if cancel is not None:
-            cancel()
+    def wait_closed(self, timeout_s: float) -> bool:
+        """Waits until its part is closed or completed; whether it was."""
+        return self._done.wait(timeout_s)
 
-    def _run(self) -> None:
+    def _wake_up(self) -> None:
+        if self._wake is not None:
+            self._wake.set()
+
+    def _take(self) -> list[Kept]:
+        kept, self._kept = self._kept, []
+        return kept
+
+    async def _run(self) -> None:
+        loop = asyncio.get_running_loop()
+        self._wake = asyncio.Event()
         ended = False
+        attached: dict[str, tuple[FanoutHub[Any], Subscription[Any]]] = {}
         try:
-            self._write_context()
-            self._stream = self._link.stream_telemetry(RATE_HZ)
-            last_second = time.monotonic()
-            for telemetry in self._stream:
-                self._write_telemetry(telemetry)
-                if time.monotonic() - last_second >= files.FLUSH_S:
-                    last_second = time.monotonic()
-                    ended = not self._each_second()
-                    if ended or self._abandon.is_set():
-                        break
-        except Exception as error:  # noqa: BLE001 - a broken stream: the keeper starts a new part if still open
+            attached[_TELEMETRY] = (self._link.telemetry, _attach(self._link.telemetry, self._keep_telemetry))
+            while not self._abandon.is_set():
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(self._wake.wait(), files.FLUSH_S)
+                if self._abandon.is_set():
+                    break
+                ended = not await loop.run_in_executor(self._io, self._each_second, self._take())
+                if ended:
+                    break
+                self._follow(attached, _LOCALIZATION, self._link.localization, self._localizing,
+                             self._keep_localization)
+                self._follow(attached, _CAMERA, self._link.camera, False, self._keep_camera)
+        except Exception as error:  # noqa: BLE001 - the hub closed, the database away: the keeper starts a new part
             if not self._abandon.is_set():
                 log.warning("recording %s on %s stopped: %s", self.recording_id, self._link.name, error)
         finally:
-            self._done.set()
-            self._cancel_stream()
-            if ended:
-                self._complete()
-            else:
-                self._writer.close()
+            for hub, subscription in attached.values():
+                _detach(hub, subscription)
+            try:
+                if ended:
+                    await asyncio.sleep(COMMANDS_SETTLE_S)
+                    await loop.run_in_executor(self._io, self._complete, self._take())
+                else:
+                    await loop.run_in_executor(self._io, self._close, self._take())
+            except Exception:
+                log.exception("recording %s: closing its part failed", self.recording_id)
+            finally:
+                self._done.set()
 
-    def _write_context(self) -> None:
-        now_ns = time.time_ns()
-        self._writer.write(channels.ROBOT_INFO, self._link.info(), now_ns)
-        try:
-            self._writer.write(channels.SCENE, self._link.scene(max_age_s=60.0), now_ns)
-        except Exception as error:  # noqa: BLE001 - a robot with no scene: the replay draws the map alone
-            log.info("recording %s: no scene (%s)", self.recording_id, error)
+    def _follow(self, attached: dict[str, tuple[FanoutHub[Any], Subscription[Any]]], what: str,
+                hub: FanoutHub[Any], wanted: bool, sink: Callable[[Any], None]) -> None:
+        """Subscribes to hub while wanted or while someone else in this process watches it anyway (subscribing
+        alone would start its pump on the live path's loop for nothing: 200 particles packed five times a second,
+        camera frames at 15 fps); unsubscribes otherwise."""
+        mine = attached.get(what)
+        others = hub.viewer_count - (1 if mine is not None else 0) > 0
+        if (wanted or others) and mine is None and not hub.closed:
+            attached[what] = (hub, _attach(hub, sink))
+        elif not (wanted or others) and mine is not None:
+            del attached[what]
+            _detach(*mine)
 
-    def _write_telemetry(self, telemetry: robot_pb2.Telemetry) -> None:
-        at = _ns(telemetry.capture_unix_s or time.time())
-        self._writer.write(channels.ODOMETRY, telemetry.odometry, at)
-        self._writer.write(channels.GROUND_TRUTH, telemetry.ground_truth, at)
-        self._writer.write(channels.SONAR, telemetry.sonar, at)
-        self._writer.write(channels.LASER, telemetry.laser, at)
+    # The sinks: on the loop, after each new message of a hub; they only keep a reference.
+    def _keep_telemetry(self, packed: tuple[str, str]) -> None:
+        self._kept.append((_TELEMETRY, packed[0], time.time_ns()))  # [0]: packed with the truth (camera_pose)
 
-    def _record_localization(self) -> None:
-        """The localization estimate from the robot's fan-out hub (the live path's own stream, shared), only while
-        a localization goal runs or someone in this process watches it anyway: subscribing would otherwise start
-        the hub's pump (particles packed five times a second) on the live path's loop for nothing."""
-        hub = self._link.localization
-        subscription = None
-        try:
-            while not self._done.is_set():
-                wanted = self._localizing.is_set() or hub.viewer_count - (1 if subscription is not None else 0) > 0
-                if not wanted:
-                    if subscription is not None:
-                        subscription.close()
-                        subscription = None
-                    self._done.wait(0.5)
-                    continue
-                if subscription is None:
-                    subscription = hub.subscribe()
-                packed = subscription.next_message(timeout_s=0.5)
-                if packed is None:
-                    continue
-                update_message = _localization_from_packed(packed[0])
-                if update_message is not None and update_message.active:
-                    self._writer.write(channels.LOCALIZATION, update_message, time.time_ns())
-        except Exception as error:  # noqa: BLE001 - the hub closed: the telemetry goes on
-            log.info("recording %s: localization stopped (%s)", self.recording_id, error)
-        finally:
-            if subscription is not None:
-                subscription.close()
+    def _keep_localization(self, packed: tuple[str, str]) -> None:
+        self._kept.append((_LOCALIZATION, packed[0], time.time_ns()))
 
-    def _record_camera(self) -> None:
-        """JPEG frames, thinned, only while someone else in this process watches the server camera (a view drawn
-        in the browser needs none: the replay redraws it from the scene and the poses)."""
-        subscription = None
-        started, last_capture = time.monotonic(), 0.0
-        try:
-            while not self._done.wait(0.2):
-                hub = self._link.camera
-                if hub.viewer_count - (1 if subscription is not None else 0) <= 0:
-                    if subscription is not None:
-                        subscription.close()
-                        subscription = None
-                    continue
-                if subscription is None:
-                    subscription = hub.subscribe()
-                every = CAMERA_EVERY_S if time.monotonic() - started < CAMERA_THIN_AFTER_S else CAMERA_EVERY_LONG_S
-                if time.time() - last_capture < every:
-                    continue
-                packed = subscription.next_message(timeout_s=0.5)
-                if packed is None:
-                    continue
-                header, jpeg = unpack_camera_frame(packed)
-                capture = float(header.get("capture_unix_s") or time.time())  # type: ignore[arg-type]
-                if capture - last_capture < every:
-                    continue  # thinned by the frames' own capture times
-                frame = robot_pb2.CameraFrame(
-                    frame_sequence=int(header.get("frame_sequence") or 0),  # type: ignore[call-overload]
-                    capture_unix_s=capture, width_px=int(header.get("width_px") or 0),  # type: ignore[call-overload]
-                    height_px=int(header.get("height_px") or 0), jpeg=jpeg)  # type: ignore[call-overload]
-                self._writer.write(channels.CAMERA, frame, _ns(capture))
-                last_capture = capture
-        except Exception as error:  # noqa: BLE001 - the hub closed: the telemetry goes on
-            log.info("recording %s: camera frames stopped (%s)", self.recording_id, error)
-        finally:
-            if subscription is not None:
-                subscription.close()
+    def _keep_camera(self, packed: bytes) -> None:
+        """A JPEG frame, thinned by the frames' own capture times: one a second, one every 5 s after ten minutes."""
+        every = CAMERA_EVERY_S if time.monotonic() - self._camera_started < CAMERA_THIN_AFTER_S else CAMERA_EVERY_LONG_S
+        if time.time() - self._last_camera_s < every:
+            return  # before its header is even read
+        header, jpeg = unpack_camera_frame(packed)
+        capture = float(header.get("capture_unix_s") or time.time())  # type: ignore[arg-type]
+        if capture - self._last_camera_s < every:
+            return
+        self._last_camera_s = capture
+        self._kept.append((_CAMERA, (header, jpeg), _ns(capture)))
 
-    def _each_second(self) -> bool:
-        """Copies new commands, notes goal changes, flushes, heartbeats; False once the session ended."""
+    # On the pool: the file, the database, the robot's unary calls.
+    def _each_second(self, kept: list[Kept]) -> bool:
+        """Writes the second's messages, copies new commands, notes goal changes, closes the chunk, heartbeats;
+        False once the session ended."""
+        if not self._context_written:
+            self._write_context()
+        self._write_kept(kept)
         self._copy_commands(until_unix_s=None)
         self._note_goals()
         self._writer.flush()
@@ -215,6 +266,65 @@ class SessionRecorder:
                 self._abandon.set()  # deleted, or another process took it over
                 return True
             return False
+
+    def _write_context(self) -> None:
+        """The robot's description and its scene, once (the replay redraws the views from them)."""
+        now_ns = time.time_ns()
+        try:
+            info = self._link.info()
+        except Exception as error:  # noqa: BLE001 - the robot away for a second: next second
+            log.info("recording %s: no robot description yet (%s)", self.recording_id, error)
+            return
+        self._writer.write(channels.ROBOT_INFO, info, now_ns)
+        self._context_written = True
+        try:
+            self._writer.write(channels.SCENE, self._link.scene(max_age_s=60.0), now_ns)
+        except Exception as error:  # noqa: BLE001 - a robot with no scene: the replay draws the map alone
+            log.info("recording %s: no scene (%s)", self.recording_id, error)
+
+    def _write_kept(self, kept: list[Kept]) -> None:
+        for what, payload, received_ns in kept:
+            if what == _TELEMETRY:
+                self._write_telemetry(payload, received_ns)
+            elif what == _LOCALIZATION:
+                update_message = _localization_from_packed(payload)
+                if update_message is not None and update_message.active:
+                    self._writer.write(channels.LOCALIZATION, update_message, received_ns)
+            elif what == _CAMERA:
+                header, jpeg = payload
+                frame = robot_pb2.CameraFrame(
+                    frame_sequence=int(header.get("frame_sequence") or 0),
+                    capture_unix_s=float(header.get("capture_unix_s") or 0.0),
+                    width_px=int(header.get("width_px") or 0), height_px=int(header.get("height_px") or 0), jpeg=jpeg)
+                self._writer.write(channels.CAMERA, frame, received_ns)
+
+    def _write_telemetry(self, packed: str, received_ns: int) -> None:
+        """One telemetry message as the hub packed it for viewers (with the truth's pose) back into the robot's
+        messages: the poses exactly, sonar and laser ranges to the 0.1 mm the hub keeps."""
+        try:
+            message = json.loads(packed)
+        except ValueError:
+            return
+        capture = message.get("capture_unix_s")
+        at = _ns(capture) if isinstance(capture, int | float) and capture > 0 else received_ns
+        odometry = message.get("odometry") or {}
+        sonar = message.get("sonar") or {}
+        laser = message.get("laser") or {}
+        self._writer.write(channels.ODOMETRY, robot_pb2.Odometry(
+            pose=_pose(odometry.get("pose")), linear_mps=_number(odometry.get("linear_mps")),
+            angular_radps=_number(odometry.get("angular_radps"))), at)
+        self._writer.write(channels.GROUND_TRUTH, _pose(message.get("camera_pose")), at)
+        self._writer.write(channels.SONAR, robot_pb2.SonarReading(ranges_m=_numbers(sonar.get("ranges_m"))), at)
+        self._writer.write(channels.LASER, robot_pb2.LaserScan(
+            angle_min_rad=_number(laser.get("angle_min_rad")),
+            angle_increment_rad=_number(laser.get("angle_increment_rad")),
+            ranges_m=_numbers(laser.get("ranges_m"))), at)
+
+    def _close(self, kept: list[Kept]) -> None:
+        """Abandoned or broken: what was kept goes in, and the part is closed without a summary."""
+        with contextlib.suppress(Exception):
+            self._write_kept(kept)
+        self._writer.close()
 
     def _copy_commands(self, until_unix_s: float | None) -> None:
         with self._sessions() as session:
@@ -248,10 +358,7 @@ class SessionRecorder:
         except Exception:  # noqa: BLE001 - the robot busy or away for a second: next second
             return
         running = (robot_pb2.GOAL_STATUS_ACCEPTED, robot_pb2.GOAL_STATUS_EXECUTING)
-        if any("localization" in goal.skill and goal.status in running for goal in goals):
-            self._localizing.set()
-        else:
-            self._localizing.clear()
+        self._localizing = any("localization" in goal.skill and goal.status in running for goal in goals)
         if self._goals is None:
             # The robot lists the goals of whoever used it before, ended: they are not this session's (nor its
             # person's to read); only the ones running now, and every later change, are recorded.
@@ -261,12 +368,13 @@ class SessionRecorder:
                 self._goals[goal.goal_id] = goal.status
                 self._writer.write(channels.GOALS, goal, time.time_ns())
 
-    def _complete(self) -> None:
-        """The session ended: the commands up to its end, the footer, the size and the counts."""
+    def _complete(self, kept: list[Kept]) -> None:
+        """The session ended: its last messages, the commands up to its end, the footer, the size and the counts
+        (COMMANDS_SETTLE_S after the end, for the other workers' command logs)."""
+        self._write_kept(kept)
         with self._sessions() as session:
             row = session.get(Recording, self.recording_id)
             ended_unix_s = as_utc(row.ended_at).timestamp() if row is not None and row.ended_at else time.time()
-        time.sleep(0.4)  # the other workers' command logs write every 0.25 s
         self._copy_commands(until_unix_s=ended_unix_s + 0.05)
         self._note_goals()
         self._writer.finish()
@@ -288,6 +396,19 @@ def _number(value: object) -> float:
     return float(value) if isinstance(value, int | float) else 0.0
 
 
+def _numbers(values: object) -> list[float]:
+    return [float(v) for v in values if isinstance(v, int | float)] if isinstance(values, list) else []
+
+
+def _pose(value: object) -> robot_pb2.Pose2D:
+    """A packed pose ({x_m, y_m, theta_rad}) as the robot's message."""
+    if not isinstance(value, dict):
+        return robot_pb2.Pose2D()
+    return robot_pb2.Pose2D(x_m=float(value.get("x_m", value.get("x", 0.0)) or 0.0),
+                            y_m=float(value.get("y_m", value.get("y", 0.0)) or 0.0),
+                            theta_rad=float(value.get("theta_rad", value.get("theta", 0.0)) or 0.0))
+
+
 def _json_object(text: str) -> dict[str, object]:
     try:
         value = json.loads(text)
@@ -302,23 +423,15 @@ def _localization_from_packed(text: str) -> robot_pb2.LocalizationUpdate | None:
         message = json.loads(text)
     except ValueError:
         return None
-
-    def pose(value: object) -> robot_pb2.Pose2D:
-        if not isinstance(value, dict):
-            return robot_pb2.Pose2D()
-        return robot_pb2.Pose2D(x_m=float(value.get("x_m", value.get("x", 0.0)) or 0.0),
-                                y_m=float(value.get("y_m", value.get("y", 0.0)) or 0.0),
-                                theta_rad=float(value.get("theta_rad", value.get("theta", 0.0)) or 0.0))
-
     navigation = message.get("navigation") or {}
     return robot_pb2.LocalizationUpdate(
         sim_time_s=float(message.get("sim_time_s", 0.0)), active=bool(message.get("active")),
-        converged=bool(message.get("converged")), estimate=pose(message.get("estimate")),
+        converged=bool(message.get("converged")), estimate=_pose(message.get("estimate")),
         std_x_m=float(message.get("std_x_m") or 0.0), std_y_m=float(message.get("std_y_m") or 0.0),
-        std_theta_rad=float(message.get("std_theta_rad") or 0.0), odometry=pose(message.get("odometry")),
-        ground_truth=pose(message.get("ground_truth")),
+        std_theta_rad=float(message.get("std_theta_rad") or 0.0), odometry=_pose(message.get("odometry")),
+        ground_truth=_pose(message.get("ground_truth")),
         position_error_m=float(message.get("position_error_m") or 0.0),
-        navigation_pose=pose(navigation.get("pose")), navigation_source=str(navigation.get("source") or ""))
+        navigation_pose=_pose(navigation.get("pose")), navigation_source=str(navigation.get("source") or ""))
 
 
 class RecordingKeeper:
@@ -348,8 +461,12 @@ class RecordingKeeper:
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=5)
-        for recorder in list(self._recorders.values()):
-            recorder.abandon()
+        recorders = list(self._recorders.values())
+        for recorder in recorders:
+            recorder.abandon(wait=False)
+        deadline = time.monotonic() + 3.0
+        for recorder in recorders:  # their parts closed, all at once
+            recorder.wait_closed(max(0.0, deadline - time.monotonic()))
         self._recorders.clear()
         self._election.resign()
 
@@ -370,7 +487,7 @@ class RecordingKeeper:
         """One pass: follow the sessions, record the open ones here, complete orphans, sweep now and then."""
         if not self._election.leads():
             for recorder in self._recorders.values():
-                recorder.abandon()
+                recorder.abandon(wait=False)  # the next leader waits STALE_S before it goes on with them
             self._recorders.clear()
             return
         with self._sessions() as session, session.begin():
