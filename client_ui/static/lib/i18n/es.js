@@ -737,6 +737,7 @@ export default {
 "path planned to the goal": "camino planificado hasta el objetivo",
 "picture age ": "edad de la imagen ",
 "picture delay ": "retardo de la imagen ",
+"plan {name}": "plan {name}",
 "planned path of {value} waypoints": "camino planificado de {value} puntos de paso",
 "private": "privado",
 "ready": "listo",

@@ -271,8 +271,8 @@ function fillLists() {
   data.commands.forEach((c) => {
     const button = document.createElement("button");
     button.type = "button";
-    const what = c.action === "drive" ? `drive ${c.linear_mps} m/s ${c.angular_radps} rad/s`
-      : c.action === "activate" ? `${c.skill}` : c.action === "run_plan" ? `plan ${c.plan_name}` : c.action;
+    const what = c.action === "drive" ? t("drive {linear_mps} m/s, {angular_radps} rad/s", c)
+      : c.action === "activate" ? `${c.skill}` : c.action === "run_plan" ? t("plan {name}", { name: c.plan_name }) : c.action;
     button.textContent = `${c.t.toFixed(2)} s · #${c.sequence} · ${c.source} · ${what}${c.accepted ? "" : ` (${t("refused")}: ${c.outcome})`}`;
     button.addEventListener("click", () => seek(c.t));
     const item = document.createElement("li");
