@@ -9,7 +9,7 @@ from flask import Flask, Response, redirect, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user
 
-from middleware import browser_modules, db, i18n, realtime, recordings, validation
+from middleware import analytics, browser_modules, db, i18n, realtime, recordings, validation
 from middleware import config as config_module
 from middleware.access import commands
 from middleware.access import coordinator as access_coordinator
@@ -17,6 +17,7 @@ from middleware.access import sockets as access_sockets
 from middleware.access.coordinator import AccessHooks
 from middleware.access.graded_runs import with_graded_run_priority
 from middleware.accounts import routes as accounts_routes
+from middleware.analytics import routes as analytics_routes
 from middleware.api import routes as api_routes
 from middleware.assessment import attempts
 from middleware.assessment import pages as assessment_pages
@@ -145,6 +146,8 @@ def _register_areas(app: Flask) -> None:
     auth_cookies.cross_site_when(app, lti_embedding.embedded)
     app.register_blueprint(recordings_routes.blueprint)
     recordings.init_app(app)
+    app.register_blueprint(analytics_routes.blueprint)
+    analytics.init_app(app)
     app.register_blueprint(api_routes.blueprint)
     realtime.init_app(app, [lab_sockets.register, access_sockets.register, chat_sockets.register,
                             practice_routes.register, tour_live.register, class_wall_live.register], socket_login_check)

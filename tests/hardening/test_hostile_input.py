@@ -34,6 +34,8 @@ ROUTES = (
     "GET /api/recordings/of/<kind>/<int:ref_id>",
     "GET /api/recordings/<int:recording_id>/camera/<int:index>",
     "GET /recordings/of/<kind>/<int:ref_id>",
+    "GET /analytics", "GET /api/analytics/usage", "GET /api/analytics/<report>.csv",
+    "GET /api/analytics/courses/<int:course_id>/xapi",
     "GET /account/password",
     "POST /account/password",
     "GET /admin/farm",
