@@ -51,6 +51,20 @@ while robot.tick():
     robot.set_velocity(0.3, 0.2)
 '''
 
+FOLLOW_LINE = TEMPLATE_HEAD + '''
+# robot.line() gives the line sensor's five cells, left to right (1 over the tape, 0 on bare floor);
+# robot.line_position() is where the tape is under them in metres (left positive), or None when no cell sees it.
+while robot.tick():
+    offset = robot.line_position()
+    if offset is None:
+        robot.set_velocity(0.0, 0.0)  # the line is lost: where did you see it last?
+    else:
+        robot.set_velocity(0.2, 0.0)  # your controller here: turn towards the line
+'''
+
+# The lab's line of tape (skill_server/sim/scenes.py LAB_LINE), as the follow-the-line rubric measures it.
+LAB_LINE_RUBRIC = {"x_min_m": -1.7, "x_max_m": 1.3, "y_min_m": -0.8, "y_max_m": 0.8, "corner_radius_m": 0.45}
+
 BUILT_IN: list[dict[str, Any]] = [
     {
         "slug": "bump-and-go",
@@ -108,5 +122,22 @@ BUILT_IN: list[dict[str, Any]] = [
         "start": [0.0, 0.0, 0.0],
         "random_starts": {"x_m": [-0.5, 0.5], "y_m": [-0.5, 0.5], "theta_rad": [-3.1, 3.1]},
         "time_limit_s": 60.0,
+    },
+    {
+        "slug": "follow-line",
+        "title": "Follow the line",
+        "statement": ("A loop of black tape, 8.4 m long, is stuck on the lab's floor (a 3 m x 1.6 m rectangle with "
+                      "rounded corners around the middle). The robot starts on it, facing along it. Follow it "
+                      "anticlockwise with the line sensor under the robot's front (robot.line(), "
+                      "robot.line_position()) for one whole lap. Graded from where the robot truly went: the share "
+                      "of the line its centre passed within 8 cm of (85% for full marks) and the time its centre "
+                      "spent farther than that from the line (at most 3 s)."),
+        "template": FOLLOW_LINE,
+        "scene": "lab",
+        "rubric": {"kind": "follow_line", **LAB_LINE_RUBRIC, "tolerance_m": 0.08, "min_covered": 0.85,
+                   "max_off_s": 3.0},
+        "start": [-0.6, -0.8, 0.0],
+        "random_starts": {"x_m": [-1.1, 0.2], "y_m": [-0.83, -0.77], "theta_rad": [-0.2, 0.2]},
+        "time_limit_s": 50.0,
     },
 ]

@@ -13,6 +13,11 @@ named measurements and each measurement into a fraction (1 when it meets its bar
 - cover_room {x_min_m, x_max_m, y_min_m, y_max_m, cell_m, min_coverage}: the share of the region's cells the
   robot's body swept.
 - report_pose {tolerance_m}: the distance between the pose the code reported and the truth at that moment.
+- follow_line {x_min_m, x_max_m, y_min_m, y_max_m, corner_radius_m, tolerance_m, min_covered, max_off_s}: along
+  the scene's line of tape (a rounded rectangle, skill_server/sim/floor_line.py), the share of the line the robot's
+  centre passed within tolerance_m of, and the time its centre spent farther than tolerance_m from it.
+- kidnapped {tolerance_m, x_m, y_m, radius_m}: report_pose's error of the pose the code reported after the robot
+  was carried to an unknown place, and reach_goal's closest distance to the goal after that.
 """
 
 from __future__ import annotations
@@ -21,7 +26,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-RUBRIC_KINDS = ("bump_and_go", "wall_following", "reach_goal", "cover_room", "report_pose")
+RUBRIC_KINDS = ("bump_and_go", "wall_following", "reach_goal", "cover_room", "report_pose", "follow_line", "kidnapped")
+LINE_STEP_M = 0.05  # the line is measured at points this far apart
 BODY_RADIUS_M = 0.2  # the robot's footprint for the area swept
 
 
@@ -107,6 +113,62 @@ def swept_share(trace: list[list[float]], p: dict[str, Any]) -> float:
     return len(swept) / (columns * rows)
 
 
+def line_distance(x: float, y: float, p: dict[str, Any]) -> float:
+    """The distance from (x, y) to the centre of the line of tape, a rounded rectangle (exact: the magnitude of
+    its signed distance)."""
+    r = float(p["corner_radius_m"])
+    x_min, x_max, y_min, y_max = (float(p[k]) for k in ("x_min_m", "x_max_m", "y_min_m", "y_max_m"))
+    qx = abs(x - (x_min + x_max) / 2) - ((x_max - x_min) / 2 - r)
+    qy = abs(y - (y_min + y_max) / 2) - ((y_max - y_min) / 2 - r)
+    return abs(math.hypot(max(qx, 0.0), max(qy, 0.0)) + min(max(qx, qy), 0.0) - r)
+
+
+def line_points(p: dict[str, Any], step_m: float = LINE_STEP_M) -> list[tuple[float, float]]:
+    """Points along the line's centre every step_m (the straight runs, then the corners' quarter circles)."""
+    r = float(p["corner_radius_m"])
+    x_min, x_max, y_min, y_max = (float(p[k]) for k in ("x_min_m", "x_max_m", "y_min_m", "y_max_m"))
+    x0, x1, y0, y1 = x_min + r, x_max - r, y_min + r, y_max - r
+    points: list[tuple[float, float]] = []
+    for (ax, ay), (bx, by) in (((x0, y_min), (x1, y_min)), ((x_max, y0), (x_max, y1)), ((x1, y_max), (x0, y_max)),
+                               ((x_min, y1), (x_min, y0))):
+        count = max(1, round(math.hypot(bx - ax, by - ay) / step_m))
+        points += [(ax + (bx - ax) * i / count, ay + (by - ay) * i / count) for i in range(count)]
+    arc = max(1, round(math.pi / 2 * r / step_m))
+    for cx, cy, start in ((x1, y0, -math.pi / 2), (x1, y1, 0.0), (x0, y1, math.pi / 2), (x0, y0, math.pi)):
+        points += [(cx + r * math.cos(start + math.pi / 2 * i / arc), cy + r * math.sin(start + math.pi / 2 * i / arc))
+                   for i in range(arc)]
+    return points
+
+
+def _segment_distance(px: float, py: float, a: list[float], b: list[float]) -> float:
+    dx, dy = b[1] - a[1], b[2] - a[2]
+    length2 = dx * dx + dy * dy
+    t = 0.0 if length2 == 0 else max(0.0, min(1.0, ((px - a[1]) * dx + (py - a[2]) * dy) / length2))
+    return math.hypot(px - a[1] - t * dx, py - a[2] - t * dy)
+
+
+def _follow_line(trace: list[list[float]], p: dict[str, Any]) -> list[Measurement]:
+    tolerance = float(p["tolerance_m"])
+    on = [line_distance(s[1], s[2], p) <= tolerance for s in trace]
+    off_s = sum(b[0] - a[0] for a, b, a_on, b_on in zip(trace, trace[1:], on, on[1:], strict=False)
+                if not (a_on and b_on))
+    # A point of the line is covered when the robot's centre passed within tolerance of it while on the line.
+    legs = [(a, b) for a, b, a_on, b_on in zip(trace, trace[1:], on, on[1:], strict=False) if a_on and b_on]
+    points = line_points(p)
+    covered = sum(1 for x, y in points
+                  if any(_segment_distance(x, y, a, b) <= tolerance for a, b in legs
+                         if abs(a[1] - x) <= 1.0 and abs(a[2] - y) <= 1.0))
+    share, bar_share, bar_off = covered / len(points), float(p["min_covered"]), float(p["max_off_s"])
+    return [Measurement("share of the line followed", share, bar_share, "", at_least(share, bar_share)),
+            Measurement("time off the line", off_s, bar_off, "s", at_most(off_s, bar_off), True)]
+
+
+def _kidnapped(trace: list[list[float]], p: dict[str, Any], report: dict[str, Any] | None) -> list[Measurement]:
+    located = _report_pose(trace, p, report)
+    after = [s for s in trace if s[0] >= float(report.get("t_s", 0.0))] if report else trace
+    return located + _reach_goal(after or trace[-1:], p)
+
+
 def _bump_and_go(trace: list[list[float]], p: dict[str, Any]) -> list[Measurement]:
     travel, cells = travel_m(trace), cells_visited(trace, float(p.get("cell_m", 0.5)))
     stuck = longest_stuck_s(trace, float(p.get("stuck_move_m", 0.1)))
@@ -168,6 +230,10 @@ def grade(rubric: dict[str, Any], trace: list[list[float]], report: dict[str, An
         measured = _cover_room(trace, rubric)
     elif kind == "report_pose":
         measured = _report_pose(trace, rubric, report)
+    elif kind == "follow_line":
+        measured = _follow_line(trace, rubric)
+    elif kind == "kidnapped":
+        measured = _kidnapped(trace, rubric, report)
     else:
         raise ValueError(f"unknown rubric kind {kind!r}")
     fraction = round(sum(m.fraction for m in measured) / len(measured), 4)

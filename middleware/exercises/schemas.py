@@ -115,6 +115,9 @@ RUBRIC_NUMBERS = {
     "reach_goal": ("x_m", "y_m", "radius_m"),
     "cover_room": ("x_min_m", "x_max_m", "y_min_m", "y_max_m", "min_coverage"),
     "report_pose": ("tolerance_m",),
+    "follow_line": ("x_min_m", "x_max_m", "y_min_m", "y_max_m", "corner_radius_m", "tolerance_m", "min_covered",
+                    "max_off_s"),
+    "kidnapped": ("tolerance_m", "x_m", "y_m", "radius_m"),
 }
 OPTIONAL_NUMBERS = ("cell_m", "stuck_move_m", "settle_s")
 
@@ -129,8 +132,13 @@ def _rubric(value: object) -> dict[str, Any]:
     for name in OPTIONAL_NUMBERS:
         if name in value:
             rubric[name] = finite(value[name], f"rubric.{name}", 0.05, 100.0)
-    if kind == "cover_room" and (rubric["x_min_m"] >= rubric["x_max_m"] or rubric["y_min_m"] >= rubric["y_max_m"]):
+    if kind in ("cover_room", "follow_line") and (rubric["x_min_m"] >= rubric["x_max_m"]
+                                                 or rubric["y_min_m"] >= rubric["y_max_m"]):
         raise InvalidField("rubric.x_max_m", "The region's maximum must exceed its minimum.")
+    if kind == "follow_line" and not 0 <= 2 * rubric["corner_radius_m"] <= min(rubric["x_max_m"] - rubric["x_min_m"],
+                                                                             rubric["y_max_m"] - rubric["y_min_m"]):
+        raise InvalidField("rubric.corner_radius_m", "The corners' radius must be between 0 and half the line's "
+                                                     "shorter side.")
     return rubric
 
 

@@ -78,6 +78,7 @@ def pack_telemetry(telemetry: robot_pb2.Telemetry) -> tuple[str, str]:
             "angle_increment_rad": telemetry.laser.angle_increment_rad,
             "ranges_m": [round(r, 4) for r in telemetry.laser.ranges_m],
         },
+        "line": {"values": [round(v, 3) for v in telemetry.line.values]},
     }
     compact = (",", ":")
     return (json.dumps({**message, "camera_pose": pose_dict(telemetry.ground_truth)}, separators=compact),
@@ -114,6 +115,8 @@ def robot_info_dict(info: robot_pb2.RobotInfo) -> dict[str, object]:
              "half_y_m": b.half_y_m, "yaw_rad": b.yaw_rad}
             for b in info.scene_boxes
         ],
+        "line_sensor": ({"ahead_m": info.line_sensor.ahead_m, "offsets_m": list(info.line_sensor.offsets_m)}
+                        if info.HasField("line_sensor") else None),
     }
 
 

@@ -119,6 +119,9 @@ def robot_info_to_proto(robot_name: str, info: RobotDescription) -> robot_pb2.Ro
             for b in info.scene_boxes
         ],
         panels=[panel_to_proto(panel) for panel in info.panels],
+        line_sensor=(robot_pb2.LineSensorGeometry(ahead_m=info.line_sensor.ahead_m,
+                                                  offsets_m=info.line_sensor.offsets_m)
+                     if info.line_sensor is not None else None),
     )
 
 
@@ -253,6 +256,7 @@ def telemetry_to_proto(snapshot: RobotSnapshot, laser: LaserSpec, pose_only: boo
         ),
         deadman_stopped=snapshot.deadman_stopped,
         battery=pose.battery,
+        line=robot_pb2.LineSensorReading(values=snapshot.line_readings),
     )
 
 

@@ -47,4 +47,8 @@ ROOM_CAMERA = PanelSpec("room-camera", "room-camera", "Room camera",
 LOW_LEVEL = PanelSpec("low-level", "low-level", "Low-level commands",
                       "The battery, the velocity ceilings and the watchdog timeout.", "sense", "telemetry")
 
+LINE_SENSOR = PanelSpec("line-sensor", "line-sensor", "Line sensor",
+                         "Reflectance cells under the robot's front, left to right: 1 over the tape, 0 on bare floor. "
+                         "Shown in scenes with a line of tape.", "sense", "telemetry")
+
 TELEBOT_PANELS: tuple[PanelSpec, ...] = (CAMERA, ODOMETRY, MAP, LAB_VIEW, ROOM_CAMERA, SONAR, LASER, LOW_LEVEL)

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from skill_server.errors import UnknownScene
+from skill_server.sim.floor_line import FloorLine, paint_patches
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.track_monitor import BorderLine, TrackSpec
 
@@ -125,6 +126,7 @@ class SceneSpec:
     spawn: Pose2D = field(default_factory=Pose2D)
     track: TrackSpec | None = None  # track scenes: A, B and border lines the track monitor watches
     room_cameras: tuple[RoomCamera, ...] = ()
+    line: FloorLine | None = None  # a closed line of tape the line sensor reads (its paint is among the marks)
 
     def scene_boxes(self) -> list[SceneBox]:
         """Walls and obstacles as boxes; a cylinder is reported as its bounding square."""
@@ -207,6 +209,7 @@ def lab_scene() -> SceneSpec:
         FloorMark(0.0, 0.0, 0.30, 0.30, (0.15, 0.35, 0.85, 1.0)),  # the home square under the spawn
         FloorMark(-3.0, 2.2, 0.6, 0.04, (0.95, 0.90, 0.15, 1.0)),
     ]
+    marks += tape_marks(LAB_LINE)  # painted last: the tape crosses the red lane
     return SceneSpec(
         name="lab",
         floor_half_x_m=half_x,
@@ -221,7 +224,18 @@ def lab_scene() -> SceneSpec:
         marks=tuple(marks),
         spawn=Pose2D(0.0, 0.0, 0.0),
         room_cameras=(corner_camera(-half_x + 0.2, -half_y + 0.2, 2.4),),
+        line=LAB_LINE,
     )
+
+
+# The lab's line of black tape: a 3 m x 1.6 m rounded rectangle in the open middle, clear of the grid lines and at
+# least 0.25 m from every obstacle for the robot's body (the follow-the-line exercise).
+LAB_LINE = FloorLine(x_min_m=-1.7, x_max_m=1.3, y_min_m=-0.8, y_max_m=0.8, corner_radius_m=0.45)
+
+
+def tape_marks(line: FloorLine) -> list[FloorMark]:
+    """The line's tape as floor marks."""
+    return [FloorMark(x, y, hx, hy, line.rgba) for x, y, hx, hy in paint_patches(line)]
 
 
 def empty_scene() -> SceneSpec:

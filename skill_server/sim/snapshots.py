@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from skill_server.sim.battery import FULL_BATTERY, BatteryState
 from skill_server.sim.camera import CameraSpec
+from skill_server.sim.floor_line import LineSensorSpec
 from skill_server.sim.geometry import Pose2D
 from skill_server.sim.laser import LaserSpec
 from skill_server.sim.odometry import OdometryReading
@@ -31,6 +32,7 @@ class RobotSnapshot:
     commanded_linear_mps: float  # after the acceleration ramp
     commanded_angular_radps: float
     battery: BatteryState = FULL_BATTERY
+    line_readings: tuple[float, ...] = ()  # the line sensor's cells, left to right (none: the scene has no line)
 
 
 @dataclass(frozen=True)
@@ -59,3 +61,4 @@ class RobotDescription:
     laser: LaserSpec
     scene_boxes: tuple[SceneBox, ...]
     panels: tuple[PanelSpec, ...] = ()  # the resources' panels, in the order a console places them
+    line_sensor: LineSensorSpec | None = None  # where its cells look (the scene has a line to read)

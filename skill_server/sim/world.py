@@ -19,12 +19,13 @@ from skill_server.sim import robot_model
 from skill_server.sim.battery import Battery, BatteryState, at_dock
 from skill_server.sim.camera import DEFAULT_CAMERA_FPS, Camera, CameraSpec
 from skill_server.sim.drive_gate import DriveAck, DriveGate, MotionLimits
+from skill_server.sim.floor_line import LineSensor, LineSensorSpec
 from skill_server.sim.geometry import Pose2D, yaw_from_quaternion
 from skill_server.sim.health import LoopHealth
 from skill_server.sim.laser import Laser, LaserSpec
 from skill_server.sim.odometry import WheelOdometry
 from skill_server.sim.pacing import SimTimePacer
-from skill_server.sim.panels import TELEBOT_PANELS
+from skill_server.sim.panels import LINE_SENSOR, TELEBOT_PANELS
 from skill_server.sim.pose_log import PoseLog
 from skill_server.sim.publication import CameraSubscription, Publication
 from skill_server.sim.raycast import StaticSceneCaster
@@ -102,6 +103,7 @@ class World:
         self._laser = Laser(laser or LaserSpec())
         self._camera = Camera(camera or CameraSpec(), spec)
         self._gate = DriveGate(spec, float(deadman_timeout_s))
+        self._line_sensor = LineSensor(self.scene.line)
         self._caster = StaticSceneCaster(self.scene)  # the scene is static: exact hits without pybullet's cost
         self.track_monitor = TrackMonitor(self.scene.track) if self.scene.track is not None else None
         self._commands: queue.SimpleQueue[tuple[Callable[[], Any], Future[Any]]] = queue.SimpleQueue()
@@ -280,8 +282,14 @@ class World:
             sonars=self._sonar.spec.geometries(),
             laser=self._laser.spec,
             scene_boxes=tuple(self.scene.scene_boxes()),
-            panels=TELEBOT_PANELS,
+            panels=TELEBOT_PANELS + ((LINE_SENSOR,) if self.scene.line is not None else ()),
+            line_sensor=self.line_sensor_spec,
         )
+
+    @property
+    def line_sensor_spec(self) -> LineSensorSpec | None:
+        """The line sensor's cells, when the scene has a line to read."""
+        return self._line_sensor.spec if self.scene.line is not None else None
 
     def describe_scene(self) -> SceneDescription:
         """The static world as the loop builds it and the camera renders it, versioned (computed once)."""
@@ -358,7 +366,7 @@ class World:
                     self._tick += ticks
                     ground_truth = self._ground_truth()
                     self._drain_battery(ticks * self.tick_dt_s, ground_truth, 0.0, 0.0)
-                    self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(ground_truth)
+                    self._sense(ground_truth)
                     self._publish_snapshot(ground_truth)
                 if not self._at_rest():
                     self._rest_since_s = None
@@ -436,6 +444,7 @@ class World:
         self._seed = seed
         self._odometry_rng = np.random.default_rng([seed, 1])
         self._sensor_rng = np.random.default_rng([seed, 2])
+        self._line_rng = np.random.default_rng([seed, 3])  # its own: a line leaves the ranges' noise as it was
         self._sim_time_s = 0.0
         self._linear_mps = 0.0  # after the acceleration ramp
         self._angular_radps = 0.0
@@ -452,7 +461,7 @@ class World:
         self._odometry = WheelOdometry(self.spec, spawn, self._odometry_rng)
         self._apply_wheel_speeds()
         self._read_odometry()
-        self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(self._ground_truth())
+        self._sense(self._ground_truth())
         self._publish_snapshot()
         if self._autonomy is not None:
             self._autonomy.on_reset("reset")
@@ -469,7 +478,7 @@ class World:
         self._target_linear_mps = self._target_angular_radps = 0.0
         self._odometry = WheelOdometry(self.spec, pose, self._odometry_rng)
         self._read_odometry()
-        self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(self._ground_truth())
+        self._sense(self._ground_truth())
         self._publish_snapshot()
         if self._autonomy is not None:
             self._autonomy.on_reset("moved to a new pose")
@@ -506,7 +515,7 @@ class World:
             self._place_robot(self.scene.spawn)  # a border line touched: the run restarts at A
             ground_truth = self.scene.spawn
         if self._tick % SENSOR_EVERY_TICKS == 0:
-            self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(ground_truth)
+            self._sense(ground_truth)
         self._publish_snapshot(ground_truth)
         self._maybe_render()
 
@@ -558,6 +567,11 @@ class World:
         position, orientation = self._client.getBasePositionAndOrientation(self._robot)
         return Pose2D(position[0], position[1], yaw_from_quaternion(orientation))
 
+    def _sense(self, pose: Pose2D) -> None:
+        """Reads the range sensors and the line sensor at pose."""
+        self._sonar_ranges_m, self._laser_ranges_m = self._measure_ranges(pose)
+        self._line_readings = self._line_sensor.read(pose, self._line_rng)
+
     def _measure_ranges(self, pose: Pose2D) -> tuple[tuple[float, ...], tuple[float, ...]]:
         sonar_from, sonar_to = self._sonar.rays(pose)
         laser_from, laser_to = self._laser.rays(pose)
@@ -583,6 +597,7 @@ class World:
             ground_truth=ground_truth or self._ground_truth(),
             sonar_ranges_m=self._sonar_ranges_m,
             laser_ranges_m=self._laser_ranges_m,
+            line_readings=self._line_readings,
             deadman_stopped=self._deadman_stopped,
             commanded_linear_mps=self._linear_mps,
             commanded_angular_radps=self._angular_radps,

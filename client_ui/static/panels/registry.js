@@ -20,7 +20,7 @@ import { elementRegistrar } from "./panel-base.js";
 /** The folders of the panel modules the console loads; each registers one kind. */
 export const PANEL_MODULES = Object.freeze([
   "camera-panel", "map-panel", "lab-view", "room-camera", "odometry-panel", "sonar-panel", "laser-panel", "drive-pad",
-  "skill-panel", "queue-panel", "chat-panel", "response-times-panel", "low-level-panel", "plan-panel",
+  "skill-panel", "queue-panel", "chat-panel", "response-times-panel", "low-level-panel", "plan-panel", "line-sensor",
 ]);
 
 const panels = new Map();

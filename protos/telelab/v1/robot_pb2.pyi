@@ -152,7 +152,7 @@ class GetRobotInfoRequest(_message.Message):
     def __init__(self) -> None: ...
 
 class RobotInfo(_message.Message):
-    __slots__ = ("robot_name", "scene_name", "wheel_base_m", "wheel_radius_m", "body_radius_m", "max_linear_mps", "max_angular_radps", "deadman_timeout_s", "camera_hfov_deg", "camera_width_px", "camera_height_px", "sonars", "laser", "scene_boxes", "panels")
+    __slots__ = ("robot_name", "scene_name", "wheel_base_m", "wheel_radius_m", "body_radius_m", "max_linear_mps", "max_angular_radps", "deadman_timeout_s", "camera_hfov_deg", "camera_width_px", "camera_height_px", "sonars", "laser", "scene_boxes", "panels", "line_sensor")
     ROBOT_NAME_FIELD_NUMBER: _ClassVar[int]
     SCENE_NAME_FIELD_NUMBER: _ClassVar[int]
     WHEEL_BASE_M_FIELD_NUMBER: _ClassVar[int]
@@ -168,6 +168,7 @@ class RobotInfo(_message.Message):
     LASER_FIELD_NUMBER: _ClassVar[int]
     SCENE_BOXES_FIELD_NUMBER: _ClassVar[int]
     PANELS_FIELD_NUMBER: _ClassVar[int]
+    LINE_SENSOR_FIELD_NUMBER: _ClassVar[int]
     robot_name: str
     scene_name: str
     wheel_base_m: float
@@ -183,7 +184,16 @@ class RobotInfo(_message.Message):
     laser: LaserGeometry
     scene_boxes: _containers.RepeatedCompositeFieldContainer[SceneBox]
     panels: _containers.RepeatedCompositeFieldContainer[PanelDescription]
-    def __init__(self, robot_name: _Optional[str] = ..., scene_name: _Optional[str] = ..., wheel_base_m: _Optional[float] = ..., wheel_radius_m: _Optional[float] = ..., body_radius_m: _Optional[float] = ..., max_linear_mps: _Optional[float] = ..., max_angular_radps: _Optional[float] = ..., deadman_timeout_s: _Optional[float] = ..., camera_hfov_deg: _Optional[float] = ..., camera_width_px: _Optional[int] = ..., camera_height_px: _Optional[int] = ..., sonars: _Optional[_Iterable[_Union[SonarGeometry, _Mapping]]] = ..., laser: _Optional[_Union[LaserGeometry, _Mapping]] = ..., scene_boxes: _Optional[_Iterable[_Union[SceneBox, _Mapping]]] = ..., panels: _Optional[_Iterable[_Union[PanelDescription, _Mapping]]] = ...) -> None: ...
+    line_sensor: LineSensorGeometry
+    def __init__(self, robot_name: _Optional[str] = ..., scene_name: _Optional[str] = ..., wheel_base_m: _Optional[float] = ..., wheel_radius_m: _Optional[float] = ..., body_radius_m: _Optional[float] = ..., max_linear_mps: _Optional[float] = ..., max_angular_radps: _Optional[float] = ..., deadman_timeout_s: _Optional[float] = ..., camera_hfov_deg: _Optional[float] = ..., camera_width_px: _Optional[int] = ..., camera_height_px: _Optional[int] = ..., sonars: _Optional[_Iterable[_Union[SonarGeometry, _Mapping]]] = ..., laser: _Optional[_Union[LaserGeometry, _Mapping]] = ..., scene_boxes: _Optional[_Iterable[_Union[SceneBox, _Mapping]]] = ..., panels: _Optional[_Iterable[_Union[PanelDescription, _Mapping]]] = ..., line_sensor: _Optional[_Union[LineSensorGeometry, _Mapping]] = ...) -> None: ...
+
+class LineSensorGeometry(_message.Message):
+    __slots__ = ("ahead_m", "offsets_m")
+    AHEAD_M_FIELD_NUMBER: _ClassVar[int]
+    OFFSETS_M_FIELD_NUMBER: _ClassVar[int]
+    ahead_m: float
+    offsets_m: _containers.RepeatedScalarFieldContainer[float]
+    def __init__(self, ahead_m: _Optional[float] = ..., offsets_m: _Optional[_Iterable[float]] = ...) -> None: ...
 
 class PanelDescription(_message.Message):
     __slots__ = ("id", "kind", "title", "help", "view", "stream")
@@ -372,7 +382,7 @@ class LaserScan(_message.Message):
     def __init__(self, angle_min_rad: _Optional[float] = ..., angle_increment_rad: _Optional[float] = ..., ranges_m: _Optional[_Iterable[float]] = ...) -> None: ...
 
 class Telemetry(_message.Message):
-    __slots__ = ("tick", "sim_time_s", "capture_unix_s", "last_applied_sequence", "odometry", "ground_truth", "sonar", "laser", "deadman_stopped", "battery")
+    __slots__ = ("tick", "sim_time_s", "capture_unix_s", "last_applied_sequence", "odometry", "ground_truth", "sonar", "laser", "deadman_stopped", "battery", "line")
     TICK_FIELD_NUMBER: _ClassVar[int]
     SIM_TIME_S_FIELD_NUMBER: _ClassVar[int]
     CAPTURE_UNIX_S_FIELD_NUMBER: _ClassVar[int]
@@ -383,6 +393,7 @@ class Telemetry(_message.Message):
     LASER_FIELD_NUMBER: _ClassVar[int]
     DEADMAN_STOPPED_FIELD_NUMBER: _ClassVar[int]
     BATTERY_FIELD_NUMBER: _ClassVar[int]
+    LINE_FIELD_NUMBER: _ClassVar[int]
     tick: int
     sim_time_s: float
     capture_unix_s: float
@@ -393,7 +404,14 @@ class Telemetry(_message.Message):
     laser: LaserScan
     deadman_stopped: bool
     battery: Battery
-    def __init__(self, tick: _Optional[int] = ..., sim_time_s: _Optional[float] = ..., capture_unix_s: _Optional[float] = ..., last_applied_sequence: _Optional[int] = ..., odometry: _Optional[_Union[Odometry, _Mapping]] = ..., ground_truth: _Optional[_Union[Pose2D, _Mapping]] = ..., sonar: _Optional[_Union[SonarReading, _Mapping]] = ..., laser: _Optional[_Union[LaserScan, _Mapping]] = ..., deadman_stopped: _Optional[bool] = ..., battery: _Optional[_Union[Battery, _Mapping]] = ...) -> None: ...
+    line: LineSensorReading
+    def __init__(self, tick: _Optional[int] = ..., sim_time_s: _Optional[float] = ..., capture_unix_s: _Optional[float] = ..., last_applied_sequence: _Optional[int] = ..., odometry: _Optional[_Union[Odometry, _Mapping]] = ..., ground_truth: _Optional[_Union[Pose2D, _Mapping]] = ..., sonar: _Optional[_Union[SonarReading, _Mapping]] = ..., laser: _Optional[_Union[LaserScan, _Mapping]] = ..., deadman_stopped: _Optional[bool] = ..., battery: _Optional[_Union[Battery, _Mapping]] = ..., line: _Optional[_Union[LineSensorReading, _Mapping]] = ...) -> None: ...
+
+class LineSensorReading(_message.Message):
+    __slots__ = ("values",)
+    VALUES_FIELD_NUMBER: _ClassVar[int]
+    values: _containers.RepeatedScalarFieldContainer[float]
+    def __init__(self, values: _Optional[_Iterable[float]] = ...) -> None: ...
 
 class Battery(_message.Message):
     __slots__ = ("charge", "charging", "empty")

@@ -113,3 +113,23 @@ COVER_ROOM_WRONG = HEAD + '''
 while robot.tick():
     robot.set_velocity(0.1, 1.0)   # circles on the spot
 '''
+
+FOLLOW_LINE = HEAD + '''
+# A PD controller on where the tape is under the sensor; when it is lost (a corner), turn towards the side it was
+# last seen on.
+last = 0.0
+previous = 0.0
+while robot.tick():
+    offset = robot.line_position()
+    if offset is None:
+        robot.set_velocity(0.05, 1.5 if last >= 0 else -1.5)
+        continue
+    turn = 40.0 * offset + 200.0 * (offset - previous)
+    previous = last = offset
+    robot.set_velocity(0.3 - 3.0 * abs(offset), max(-1.5, min(1.5, turn)))
+'''
+
+FOLLOW_LINE_WRONG = HEAD + '''
+while robot.tick():
+    robot.set_velocity(0.3, 0.0)   # never reads the sensor: drives straight off the line at the first corner
+'''

@@ -19,7 +19,8 @@ EXERCISES = {entry["slug"]: entry for entry in BUILT_IN}
 SOLUTIONS = {"bump-and-go": (solutions.BUMP_AND_GO, solutions.BUMP_AND_GO_WRONG),
              "wall-following": (solutions.WALL_FOLLOWING, solutions.WALL_FOLLOWING_WRONG),
              "obstacle-avoidance": (solutions.OBSTACLE_AVOIDANCE, solutions.OBSTACLE_AVOIDANCE_WRONG),
-             "cover-room": (solutions.COVER_ROOM, solutions.COVER_ROOM_WRONG)}
+             "cover-room": (solutions.COVER_ROOM, solutions.COVER_ROOM_WRONG),
+             "follow-line": (solutions.FOLLOW_LINE, solutions.FOLLOW_LINE_WRONG)}
 SEEDS = (11, 12)  # two hidden starts each: the suite's time is shared (three were checked while writing them)
 LITTLE = 0.34  # at most a third of the points for a wrong solution
 

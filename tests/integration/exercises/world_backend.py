@@ -73,7 +73,8 @@ class WorldBackend:
                 "sonar": {"ranges_m": list(s.sonar_ranges_m)},
                 "laser": {"angle_min_rad": angle_min, "angle_increment_rad": increment,
                           "ranges_m": list(s.laser_ranges_m)},
-                "battery": {"charge": s.battery.charge}}
+                "battery": {"charge": s.battery.charge},
+                "line": {"values": list(s.line_readings)}}
 
     def send(self, linear_mps: float, angular_radps: float) -> None:
         self.last_sent = (linear_mps, angular_radps)

@@ -19,6 +19,8 @@ RATE_HZ = 20
 PERIOD_S = 1.0 / RATE_HZ
 CONTACT_M = 0.05  # the virtual bumper: an obstacle this close to the body, in front or on either side
 BODY_RADIUS_M = 0.2
+LINE_AHEAD_M = 0.16  # the line sensor's cells look at the floor this far ahead of the robot's centre,
+LINE_OFFSETS_M = (0.045, 0.0225, 0.0, -0.0225, -0.045)  # at these offsets, left (+) to right
 
 
 class Backend(Protocol):
@@ -156,9 +158,20 @@ class Robot:
         """The battery's charge, 0 to 1."""
         return float((self._reading.get("battery") or {}).get("charge", 1.0))
 
-    def line(self) -> None:
-        """The line sensor: no scene of this lab has a painted line yet, so it reads None."""
-        return None
+    def line(self) -> list[float] | None:
+        """The line sensor: a row of reflectance cells under the robot's front, left to right (LINE_OFFSETS_M), each
+        1 over the tape and 0 on bare floor (a little noisy); None in a scene without a line of tape."""
+        values = (self._reading.get("line") or {}).get("values") or []
+        return [float(v) for v in values] or None
+
+    def line_position(self, threshold: float = 0.5) -> float | None:
+        """Where the tape is under the sensor [m], left positive (the cells' reflectance-weighted offset), or None
+        when no cell reads above threshold (the line is lost, or the scene has none)."""
+        values = self.line() or []
+        seen = [(v, o) for v, o in zip(values, LINE_OFFSETS_M, strict=False) if v > threshold]
+        if not seen:
+            return None
+        return sum(v * o for v, o in seen) / sum(v for v, _ in seen)
 
     def _finish(self) -> None:
         self._running = False
