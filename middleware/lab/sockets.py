@@ -203,7 +203,7 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
         last_sequence = 0
         held = HeldCommands(hold, work)
 
-        async def send(command) -> None:  # noqa: ANN001 - a parsed drive message
+        async def send(command, superseded: int = 0) -> None:  # noqa: ANN001 - a parsed drive message
             try:
                 result = await robot.drive_async(sequence_base + command.sequence, command.linear_mps,
                                                  command.angular_radps, work)
@@ -218,7 +218,16 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
                 "linear_mps": result.linear_mps,
                 "angular_radps": result.angular_radps,
                 "robot_rtt_ms": round(result.round_trip_ms, 3),
+                "superseded": superseded,
             }))
+
+        async def answer_ping(ping_id: int) -> None:
+            measured = await work(measured_round_trip_ms, link)
+            await live.send(as_json(pong(ping_id, functools.partial(lambda ms: ms, measured))))
+
+        async def error(invalid: InvalidField) -> None:
+            await live.send(as_json({"type": "error", "code": "invalid_field", "message": invalid.message,
+                                     "field": invalid.field}))
 
         try:
             while True:
@@ -228,21 +237,36 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
                     continue
                 ping_id = parse_ping(raw)
                 if ping_id is not None:
-                    measured = await work(measured_round_trip_ms, link)
-                    await live.send(as_json(pong(ping_id, functools.partial(lambda ms: ms, measured))))
+                    await answer_ping(ping_id)
                     continue
                 try:
                     command = parse_drive_message(raw, limits, last_sequence)
                 except InvalidField as invalid:
-                    await live.send(as_json({"type": "error", "code": "invalid_field", "message": invalid.message,
-                                             "field": invalid.field}))
+                    await error(invalid)
                     continue
                 last_sequence = command.sequence
                 delay_s = await held.delay_s()
                 if delay_s > 0 or held.holding:
                     held.send_later(asyncio.get_running_loop().time() + delay_s, functools.partial(send, command))
-                else:
-                    await send(command)
+                    continue
+                # Behind (a slow robot, a busy worker): newer velocities wait already, and each supersedes this one.
+                # Sending only the newest keeps the robot on what the driver wants now, never seconds-old commands
+                # in turn, and the waiting messages never reach the channel's bound (which closes it: a lost seat).
+                superseded = 0
+                while len(live.inbound):
+                    newer = await live.receive(timeout=0)
+                    if newer is None:
+                        break
+                    if (ping_id := parse_ping(newer)) is not None:
+                        await answer_ping(ping_id)
+                        continue
+                    try:
+                        command, superseded = parse_drive_message(newer, limits, last_sequence), superseded + 1
+                    except InvalidField as invalid:
+                        await error(invalid)
+                        continue
+                    last_sequence = command.sequence
+                await send(command, superseded)
         finally:
             await held.close()
             await work(_stop_quietly, robot, sequence_base + last_sequence + 1)
