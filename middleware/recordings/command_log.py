@@ -18,7 +18,7 @@ from middleware.access.commands import CommandNote
 from middleware.models.recordings import RecordedCommand
 
 log = logging.getLogger(__name__)
-WRITE_EVERY_S = 0.25
+WRITE_EVERY_S = 0.5  # the recorder copies the rows once a second, and waits for one more write at a session's end
 QUEUE_LIMIT = 10_000  # notes waiting; past it a note is dropped (counted), never waited for
 
 # The page or API a command came from, when its sender named no source (the drive pad's socket has no request).
@@ -41,21 +41,17 @@ class CommandSink:
 
     def __init__(self, sessions: Callable[[], Session]) -> None:
         self._sessions = sessions
-        self._queue: queue.Queue[dict[str, object]] = queue.Queue(QUEUE_LIMIT)
+        self._queue: queue.Queue[tuple[CommandNote, str]] = queue.Queue(QUEUE_LIMIT)
         self._thread: threading.Thread | None = None
         self._lock = threading.Lock()
         self._stopped = threading.Event()
         self.dropped = 0
 
     def observe(self, note: CommandNote) -> None:
-        """The observer: turns the note into a row and queues it (never blocks)."""
-        row = {"robot_name": note.robot_name[:64], "user_id": note.user_id, "sent_unix_s": note.sent_unix_s,
-               "sequence": int(note.detail.get("sequence", 0) or 0),  # type: ignore[call-overload]
-               "source": inferred_source(note)[:24], "action": note.action[:24],
-               "detail": json.dumps(note.detail, default=str)[:20_000], "accepted": note.accepted,
-               "outcome": note.outcome[:200]}
+        """The observer, on the command's own path: queues the note with its source (which only the request can
+        tell) and returns; the row is made by the writing thread (never blocks)."""
         try:
-            self._queue.put_nowait(row)
+            self._queue.put_nowait((note, inferred_source(note)))
         except queue.Full:
             self.dropped += 1
             return
@@ -67,7 +63,7 @@ class CommandSink:
         rows: list[dict[str, object]] = []
         while True:
             try:
-                rows.append(self._queue.get_nowait())
+                rows.append(_row(*self._queue.get_nowait()))
             except queue.Empty:
                 break
         if rows:
@@ -98,3 +94,10 @@ class CommandSink:
             self.write_pending()
         except Exception:  # noqa: BLE001 - the database away for a moment: the notes wait in the queue... or go
             log.exception("writing the command log failed")
+
+
+def _row(note: CommandNote, source: str) -> dict[str, object]:
+    return {"robot_name": note.robot_name[:64], "user_id": note.user_id, "sent_unix_s": note.sent_unix_s,
+            "sequence": int(note.detail.get("sequence", 0) or 0),  # type: ignore[call-overload]
+            "source": source[:24], "action": note.action[:24], "detail": json.dumps(note.detail, default=str)[:20_000],
+            "accepted": note.accepted, "outcome": note.outcome[:200]}

@@ -53,7 +53,7 @@ CAMERA_THIN_AFTER_S = 600.0
 CHECK_S = 0.5  # how often the keeper looks at the sessions
 STALE_S = 5.0  # a recording not heard of for this long lost its recorder
 SWEEP_S = 60.0  # retention and disk limits
-COMMANDS_SETTLE_S = 0.4  # at a session's end: the other workers' command logs write every 0.25 s
+COMMANDS_SETTLE_S = 0.7  # at a session's end: the other workers' command logs write every 0.5 s
 IO_THREADS = 4  # the process's threads for every session's file, database and robot calls (not one per session)
 RECORDINGS_LOCK = 0x7E1E_5EC0
 
@@ -328,13 +328,16 @@ class SessionRecorder:
 
     def _copy_commands(self, until_unix_s: float | None) -> None:
         with self._sessions() as session:
-            query = (select(RecordedCommand).where(RecordedCommand.robot_name == self._link.name,
+            c = RecordedCommand
+            query = (select(c.id, c.sent_unix_s, c.user_id, c.sequence, c.source, c.action, c.detail, c.accepted,
+                            c.outcome)  # rows, not objects: a second of a pad's commands is fifty of them
+                     .where(RecordedCommand.robot_name == self._link.name,
                                                    RecordedCommand.id > self._command_cursor,
                                                    RecordedCommand.sent_unix_s >= self._started_unix_s - 0.5)
                      .order_by(RecordedCommand.id))
             if until_unix_s is not None:
                 query = query.where(RecordedCommand.sent_unix_s <= until_unix_s)
-            rows = list(session.scalars(query))
+            rows = list(session.execute(query))
         for row in rows:
             self._command_cursor = max(self._command_cursor, row.id)
             detail = _json_object(row.detail)
@@ -448,6 +451,14 @@ class RecordingKeeper:
         self._stop = threading.Event()
         self._lock = threading.Lock()
         self._swept_at = 0.0
+        self._orphans_at = 0.0
+        self._paused = False
+
+    def pause(self, paused: bool) -> None:
+        """While paused this process records nothing: its recorders let go at the next pass (their sessions stay
+        open, and it goes on with them in new parts once resumed). For measuring what recording costs the live path
+        in one run (benchmarks/recording_cost.py)."""
+        self._paused = paused
 
     def start(self) -> None:
         """Starts the thread once."""
@@ -485,15 +496,14 @@ class RecordingKeeper:
 
     def check(self) -> None:
         """One pass: follow the sessions, record the open ones here, complete orphans, sweep now and then."""
-        if not self._election.leads():
+        if self._paused or not self._election.leads():
             for recorder in self._recorders.values():
                 recorder.abandon(wait=False)  # the next leader waits STALE_S before it goes on with them
             self._recorders.clear()
             return
-        with self._sessions() as session, session.begin():
-            services.sync_sessions(session)
         self._recorders = {rid: r for rid, r in self._recorders.items() if r.running}
-        with self._sessions() as session, session.begin():
+        with self._sessions() as session, session.begin():  # one transaction a pass: it runs twice a second
+            services.sync_sessions(session)
             stale = utc_now() - timedelta(seconds=STALE_S)
             for recording in services.open_recordings(session):
                 if recording.id in self._recorders:
@@ -507,7 +517,9 @@ class RecordingKeeper:
                 recording.recorder_key, recording.heard_at = self._key, utc_now()
                 recorder = SessionRecorder(recording, link, self.settings.directory, self._sessions, self._key)
                 self._recorders[recording.id] = recorder
-            self._complete_orphans(session, stale)
+            if time.monotonic() - self._orphans_at >= STALE_S:  # an orphan is STALE_S quiet before it counts
+                self._orphans_at = time.monotonic()
+                self._complete_orphans(session, stale)
         if time.monotonic() - self._swept_at >= SWEEP_S:
             self._swept_at = time.monotonic()
             self.sweep()
