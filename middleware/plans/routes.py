@@ -29,7 +29,7 @@ from middleware.api.contract import (
 )
 from middleware.auth.schemas import InvalidField
 from middleware.courses.services import list_courses
-from middleware.db import get_session
+from middleware.db import after_commit, get_session
 from middleware.models import Role
 from middleware.plans import schemas, services
 from middleware.plans.language import PlanInvalid, plan_from_json
@@ -265,10 +265,12 @@ def api_import() -> ResponseReturnValue:
         version=about("a version, or the latest"),
     ),
     answers={202: obj(("plan_id", "version"), plan_id=ID, version=whole(1))},
-    refusals=(409, 503),
+    refusals=(409, 429, 503),
 )
 def api_run(plan_id: int) -> ResponseReturnValue:
-    """Runs the plan ({"target": "practice" | robot name, "beside": lab robot, "from_dock": bool, "version"?})."""
+    """Runs the plan ({"target": "practice" | robot name, "beside": lab robot, "from_dock": bool, "version"?}); a
+    practice robot not running yet is claimed and started after the commit: 202 with starting true, run it again
+    once GET /api/practice says it runs."""
     body = json_body()
     dbs = get_session()
     plan = services.readable_plan(dbs, current_user, plan_id)
@@ -277,9 +279,11 @@ def api_run(plan_id: int) -> ResponseReturnValue:
     run = RunRequest(schemas.run_target(body.get("target")),
                      None if beside in (None, "") else schemas.run_target(beside, "beside"),
                      schemas.flag(body.get("from_dock"), "from_dock"))
-    answer = run_plan(current_user.id, current_user.username, plan.name, services.stored_document(version), run,
-                      _may_set_watchdog())
-    return jsonify({**answer, "plan_id": plan.id, "version": version.version}), 202
+    ran = run_plan(dbs, current_user.id, current_user.username, plan.name, services.stored_document(version), run,
+                   _may_set_watchdog())
+    if ran.pending is not None:  # the practice robot starts once its claim is committed; the page runs again then
+        after_commit(ran.pending.run_quietly)
+    return jsonify({**ran.answer, "plan_id": plan.id, "version": version.version}), 202
 
 
 @blueprint.post("/api/plans/<int:plan_id>/predictions")

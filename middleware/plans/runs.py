@@ -12,6 +12,11 @@ return it to its dock), since a run on it then goes that far astray. Asked "from
 dock instead, the scene's spawn pose, where a lab robot starts its day. When the lab robot does not answer, the
 practice robot starts at its dock and the answer's start says why. Without a lab robot beside it, it starts where
 it stands.
+
+A practice robot that does not run yet (or runs another scene) is not started during the request: the run claims it
+in the request's unit of work (PracticeManager.begin_start) and answers 202 with starting true and no goal; the
+practice manager starts it once that is committed (the PendingStart the route hands to after_commit), GET
+/api/practice says starting then running, and the run asked again runs the plan on it.
 """
 
 from __future__ import annotations
@@ -20,13 +25,15 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from sqlalchemy.orm import Session
+
 from middleware.access.commands import Commander, robot_commands
 from middleware.errors import ApiError
 from middleware.plans.language import Plan, plan_from_json, plan_to_json
 from middleware.plans.proto_form import plan_to_proto
 from middleware.robots.link import CommandRefused, RobotUnavailable
 from middleware.robots.messages import goal_dict
-from middleware.teaching.practice_robots import practice_manager
+from middleware.teaching.practice_robots import PendingStart, practice_manager, practice_name
 from middleware.teaching.targets import PRACTICE_TARGET, skill_schemas
 from protos.telelab.v1 import robot_pb2
 
@@ -129,21 +136,32 @@ def start_practice_robot(robot: Commander, from_dock: bool, beside: LabRobotNow 
     return {"at": "dock", "message": f"Starts at its dock: {reason}."}
 
 
-def practice_commander(user_id: int, username: str, scene: str | None) -> Commander:
-    """The user's practice robot, started (or restarted) in scene when it is not running there."""
+@dataclass(frozen=True)
+class PlanRun:
+    """A run's answer for the page, and the practice robot's start to run once the request's claim is committed
+    (None when the plan runs now)."""
+
+    answer: dict[str, object]
+    pending: PendingStart | None = None
+
+
+def claim_practice_robot(session: Session, user_id: int, username: str, scene: str | None) -> PlanRun | None:
+    """None when the user's practice robot runs (in scene, when one is asked); else its claim in session (the
+    caller's unit of work) and the answer that it is starting."""
     manager = practice_manager()
     running = manager.get(user_id)
-    if running is not None and scene is not None and manager.scene_of(running.name) != scene:
-        manager.stop(user_id)
-        running = None
-    if running is None:
-        running = manager.start(user_id, username, scene=scene)
-    return robot_commands().for_user(running.name, user_id, field="target")
+    if running is not None and (scene is None or manager.scene_of(running.name) == scene):
+        return None
+    pending = manager.begin_start(session, user_id, username, scene=scene)  # None: another start is under way
+    name = pending.name if pending is not None else practice_name(username, user_id)
+    return PlanRun({"robot": name, "practice": True, "starting": True, "start": None, "goal": None,
+                    "status_url": "/api/practice"}, pending)
 
 
-def run_plan(user_id: int, username: str, name: str, document: dict[str, object], request: RunRequest,
-             may_set_watchdog: bool) -> dict[str, object]:
-    """Starts the plan on the requested robot; the goal, and where the page follows it and cancels it.
+def run_plan(session: Session, user_id: int, username: str, name: str, document: dict[str, object],
+             request: RunRequest, may_set_watchdog: bool) -> PlanRun:
+    """Starts the plan on the requested robot: the goal, and where the page follows it and cancels it; or, when the
+    practice robot must start first, its claim in session and an answer saying it is starting.
     A `set watchdog` line is refused (403) unless may_set_watchdog."""
     check_settings_permitted(document, may_set_watchdog)  # before a practice robot starts for a refused plan
     practice = request.target == PRACTICE_TARGET
@@ -151,7 +169,10 @@ def run_plan(user_id: int, username: str, name: str, document: dict[str, object]
     beside: LabRobotNow | None = None
     if practice:
         beside = lab_robot_now(request.beside, user_id) if request.beside else None
-        robot = practice_commander(user_id, username, beside.scene if beside else None)
+        claimed = claim_practice_robot(session, user_id, username, beside.scene if beside else None)
+        if claimed is not None:
+            return claimed
+        robot = robot_commands().for_user(practice_name(username, user_id), user_id, field="target")
     else:
         robot = robot_commands().for_user(request.target, user_id, field="target")
     plan = plan_from_json(document, skill_schemas(robot.link, motor_only=True))
@@ -161,8 +182,8 @@ def run_plan(user_id: int, username: str, name: str, document: dict[str, object]
     answer = goal_dict(goal)
     goal_id = str(answer["goal_id"])
     robot_name = robot.robot_name
-    return {"robot": robot_name, "practice": practice, "start": start, "goal": answer,
-            "goal_channel": f"/ws/robots/{robot_name}/goals/{goal_id}",
-            "telemetry_channel": f"/ws/robots/{robot_name}/telemetry",
-            "cancel_url": f"/api/robots/{robot_name}/goals/{goal_id}",
-            "robot_url": f"/api/robots/{robot_name}"}
+    return PlanRun({"robot": robot_name, "practice": practice, "starting": False, "start": start, "goal": answer,
+                    "goal_channel": f"/ws/robots/{robot_name}/goals/{goal_id}",
+                    "telemetry_channel": f"/ws/robots/{robot_name}/telemetry",
+                    "cancel_url": f"/api/robots/{robot_name}/goals/{goal_id}",
+                    "robot_url": f"/api/robots/{robot_name}"})

@@ -5,6 +5,10 @@ robot on the farm (middleware/farm). Any web worker finds a practice robot by na
 reaches it through its own link, so the robots do not belong to the process that started them. The token is
 given to the robot when it starts and again by the farm after a restart, so nobody else can ever control it.
 
+Looking a robot up (every request and channel of a practice robot does) writes nothing: the use, and the new
+address of a robot the farm moved, are noted in memory and written by the keeper (write_noted), the background
+duty that also stops idle robots.
+
 A start is two steps: the row is claimed in the caller's unit of work (begin_start), and the farm starts the
 robot once that is committed (PendingStart.run, an after_commit hook of the request), so other workers see the
 claim before the robot exists and nothing here commits a request's session. A claim whose start never finished
@@ -33,7 +37,8 @@ from datetime import datetime, timedelta
 
 from flask import Flask, current_app
 from sqlalchemy import delete, func, or_, select, update
-from sqlalchemy.exc import DBAPIError, IntegrityError
+from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import Session
 
 from middleware.config import ConfigError
@@ -51,7 +56,6 @@ _EXTENSION_KEY = "telelab.practice"
 DEFAULT_IDLE_S = 900.0
 PRACTICE_PREFIX = "practice-"
 PLAIN_USERNAME = re.compile(r"^[a-z0-9][a-z0-9_-]{0,22}$")  # fits the 32-character robot names as it is
-TOUCH_EVERY_S = 20.0  # a use is written to the table at most this often per robot and process
 START_DEADLINE_S = 120.0  # a claim still without an address this long after it was written is a start that died
 REFIND_AFTER_S = 1.0  # a robot unreachable this long is looked up on the farm again (it may have moved)
 
@@ -115,6 +119,17 @@ class PracticeRobot:
     token: str
 
 
+def _insert_unless_taken(session: Session, claim: dict[str, object]) -> bool:
+    """Inserts the claim's row in session unless its owner (or name) has one, committed by another request meanwhile:
+    INSERT ... ON CONFLICT DO NOTHING, which leaves the caller's transaction usable where a failed INSERT would
+    abort it (PostgreSQL), and a savepoint would commit it (SQLite's driver releases an outermost one as a COMMIT).
+    Whether it was inserted."""
+    dialect = session.get_bind().dialect.name
+    insert = postgresql.insert if dialect == "postgresql" else sqlite.insert
+    inserted = insert(PersonalRobotRecord).values(**claim).on_conflict_do_nothing()
+    return session.scalar(inserted.returning(PersonalRobotRecord.name)) is not None
+
+
 def practice_name(username: str, owner_id: int) -> str:
     """The robot name of a user's practice robot: unique, URL-safe and at most 32 characters.
 
@@ -159,7 +174,8 @@ class PracticeManager:
         self._rpc_timeout_s = rpc_timeout_s
         self._clock = clock
         self._links: dict[str, RobotLink] = {}
-        self._touched_at: dict[str, float] = {}
+        self._used_at: dict[str, datetime] = {}  # name -> its latest use in this process, not yet written
+        self._moved: dict[str, tuple[str, str]] = {}  # name -> (address in the table, where the farm has it now)
         self._refound_at: dict[str, float] = {}
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -201,16 +217,20 @@ class PracticeManager:
     def begin_start(self, session: Session, owner_id: int, username: str, class_session_id: int | None = None,
                     scene: str | None = None) -> PendingStart | None:
         """Claims owner_id's practice robot in session (the caller's unit of work, which commits it); the start to
-        run once committed, or None when the robot runs (in scene, for a class) or is starting already.
+        run once committed, or None when the robot runs (in scene, when one was asked) or is starting already.
 
-        class_session_id: the robot is the student's in that class session (kept while it is open), running scene
-        (the manager's own by default): a robot already running another scene is replaced. Refused when the lab
-        is full; the caller's unit of work then keeps nothing."""
+        scene (the manager's own by default) and class_session_id (the robot is the student's in that class
+        session, kept while it is open): a robot already running another scene than the one asked (or a class's)
+        is replaced. Refused when the lab is full; the caller's unit of work then keeps nothing.
+
+        Two claims at once (the owner's two tabs, or a plan run beside a start): the second one's insert waits for
+        the first's row, committed meanwhile, inserts nothing and answers None (starting already); no error, so the
+        caller's unit of work goes on: nothing here rolls the caller's session back."""
         wanted = scene or self.scene
         record = session.scalar(select(PersonalRobotRecord).where(PersonalRobotRecord.owner_id == owner_id))
         replaced = None
         if record is not None:
-            in_scene = class_session_id is None or record.scene == wanted
+            in_scene = (class_session_id is None and scene is None) or record.scene == wanted
             if (record.address and in_scene) or (not record.address and not self._start_died(record)):
                 if class_session_id is not None:
                     record.class_session_id = class_session_id
@@ -224,13 +244,11 @@ class PracticeManager:
             raise PracticeCapReached(f"All {limit} practice robots are in use. Try again in a few minutes, "
                                      "or watch a lab robot in the meantime.")
         name, token, now = practice_name(username, owner_id), secrets.token_urlsafe(32), self._clock()
-        session.add(PersonalRobotRecord(name=name, owner_id=owner_id, owner_name=username, scene=wanted, token=token,
-                                        address="", backend=self.farm.backend, started_at=now, last_used_at=now,
-                                        class_session_id=class_session_id))
-        try:
-            session.flush()
-        except IntegrityError:  # another request claimed it first; the caller's unit of work rolls back
-            raise PracticeStartFailed("Your practice robot is starting already; wait a few seconds.") from None
+        claim = {"name": name, "owner_id": owner_id, "owner_name": username, "scene": wanted, "token": token,
+                 "address": "", "backend": self.farm.backend, "started_at": now, "last_used_at": now,
+                 "class_session_id": class_session_id}
+        if not _insert_unless_taken(session, claim):  # another request claimed it first: that start is under way
+            return None
         self.start_keeper()  # this process releases the claim if its start dies
         return PendingStart(self, name, token, wanted, replaced)
 
@@ -250,7 +268,8 @@ class PracticeManager:
             raise
         with self._sessions() as session, session.begin():
             recorded = rows_matched(session, update(PersonalRobotRecord).where(
-                PersonalRobotRecord.name == name, PersonalRobotRecord.token == token).values(address=robot.address))
+                PersonalRobotRecord.name == name, PersonalRobotRecord.token == token)
+                .values(address=robot.address, last_used_at=self._clock()))  # running from now: not idle yet
         started = self.by_name(name) if recorded else None
         if started is None or started.token != token:
             if not recorded:  # released meanwhile: nobody's robot
@@ -260,9 +279,9 @@ class PracticeManager:
 
     def start(self, owner_id: int, username: str, class_session_id: int | None = None,
               scene: str | None = None) -> PracticeRobot:
-        """owner_id's practice robot, claimed and started now if not running (a background duty's start, such as a
-        class's, or a request's that needs the robot at once: a plan run); refused when the lab or the farm is
-        full, or while another start of it is under way."""
+        """owner_id's practice robot, claimed and started now if not running, in units of work of its own: for
+        background duties (a class's start), never a request (which claims with begin_start and starts after its
+        commit); refused when the lab or the farm is full, or while another start of it is under way."""
         with self._sessions() as session, session.begin():
             pending = self.begin_start(session, owner_id, username, class_session_id, scene)
         if pending is not None:
@@ -308,7 +327,8 @@ class PracticeManager:
         session is never idle); returns their names."""
         for name, link in list(self._links.items()):
             if watched(link):
-                self._touch(name, force=True)
+                self._touch(name)
+        self.write_noted()
         cutoff = self._clock() - timedelta(seconds=self.idle_s)
         with self._sessions() as session:
             in_open_class = select(ClassSession.id).where(ClassSession.ended_at.is_(None))
@@ -389,6 +409,9 @@ class PracticeManager:
                 return None
             name, owner_id, username, token, address = (record.name, record.owner_id, record.owner_name,
                                                          record.token, record.address)
+        moved = self._moved.get(name)
+        if moved is not None and moved[0] == address:  # found elsewhere, not written yet: go where it is now
+            address = moved[1]
         self.start_keeper()  # this process reaps idle robots once it serves one (a worker that never does, does not)
         link = self._link(name, address)
         if link.unreachable_since is not None and time.monotonic() - link.unreachable_since >= REFIND_AFTER_S:
@@ -418,20 +441,36 @@ class PracticeManager:
             return link
         if robot is None or robot.address == link.address:
             return link
-        with self._sessions() as session, session.begin():
-            record = session.get(PersonalRobotRecord, name)
-            if record is not None:
-                record.address = robot.address
+        with self._lock:  # the keeper writes it (a request's lookup writes nothing of its own)
+            self._moved[name] = (self._moved.get(name, (link.address, ""))[0], robot.address)
         return self._link(name, robot.address)
 
-    def _touch(self, name: str, force: bool = False) -> None:
-        now = time.monotonic()
-        if not force and now - self._touched_at.get(name, -1e9) < TOUCH_EVERY_S:
+    def _touch(self, name: str) -> None:
+        """Notes a use of the robot called name; the keeper writes it (a request's lookup writes nothing)."""
+        with self._lock:
+            self._used_at[name] = self._clock()
+
+    def write_noted(self) -> None:
+        """Writes the uses and moves this process noted since it last did, in a unit of work of its own: the
+        keeper's duty (every few seconds, and before it looks for idle robots), never a request's."""
+        with self._lock:
+            uses, self._used_at = self._used_at, {}
+            moves = dict(self._moved)  # kept until written: lookups meanwhile still go where the robot is now
+        if not uses and not moves:
             return
-        self._touched_at[name] = now
-        with self._sessions() as session, session.begin():  # a use, noted at most every TOUCH_EVERY_S
-            session.execute(update(PersonalRobotRecord).where(PersonalRobotRecord.name == name)
-                            .values(last_used_at=self._clock()))
+        with self._sessions() as session, session.begin():
+            for name, used_at in uses.items():  # a newer use, written by another worker meanwhile, stays
+                session.execute(update(PersonalRobotRecord).where(PersonalRobotRecord.name == name,
+                                                                  PersonalRobotRecord.last_used_at < used_at)
+                                .values(last_used_at=used_at))
+            for name, (was, now) in moves.items():
+                session.execute(update(PersonalRobotRecord).where(PersonalRobotRecord.name == name,
+                                                                  PersonalRobotRecord.address == was)
+                                .values(address=now))
+        with self._lock:
+            for name, move in moves.items():
+                if self._moved.get(name) == move:
+                    del self._moved[name]
 
     def scene_of(self, name: str) -> str | None:
         """The scene the practice robot called name runs."""
@@ -446,7 +485,8 @@ class PracticeManager:
     def _forget(self, name: str) -> None:
         with self._lock:
             link = self._links.pop(name, None)
-        self._touched_at.pop(name, None)
+            self._used_at.pop(name, None)
+            self._moved.pop(name, None)
         if link is not None:
             link.close()
 

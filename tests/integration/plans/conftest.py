@@ -80,6 +80,32 @@ def api(client: LabClient, method: str, path: str, body: object | None = None,
         raise
 
 
+def run_on_practice(client: LabClient, plan_id: int, body: dict[str, object],
+                    timeout_s: float = 60) -> tuple[int, dict]:
+    """Runs a plan on the practice robot as the page does: a robot not running yet is claimed (202, starting, no
+    goal) and started once that claim is committed; GET /api/practice follows it to running, then the run is asked
+    again. (status, answer) of the run that started the plan, or of the first refusal."""
+    import time
+
+    path = f"/api/plans/{plan_id}/runs"
+    status, answer = api(client, "POST", path, {"target": "practice", **body})
+    if status != 202 or not answer.get("starting"):
+        return status, answer
+    assert answer["goal"] is None and answer["status_url"] == "/api/practice", answer
+    deadline = time.monotonic() + timeout_s
+    while True:
+        seen_status, seen = api(client, "GET", answer["status_url"])
+        assert seen_status == 200, seen
+        if seen["running"]:
+            break
+        assert seen["starting"], f"the practice robot stopped starting without running: {seen}"
+        assert time.monotonic() < deadline, f"the practice robot did not start within {timeout_s} s"
+        time.sleep(0.2)
+    status, answer = api(client, "POST", path, {"target": "practice", **body})
+    assert status != 202 or not answer["starting"], answer  # it runs, in the scene asked: the plan runs now
+    return status, answer
+
+
 def upload(client: LabClient, path: str, filename: str, content: bytes, fields: dict[str, str] | None = None
            ) -> tuple[int, dict]:
     """A multipart upload of one file (field "file") and form fields."""

@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from tests.integration.plans.conftest import PlansLab, api
+from tests.integration.plans.conftest import PlansLab, api, run_on_practice
 
 REACTING = """on obstacle_detected 0.5 {
   say "Wall ahead: backing off"
@@ -25,8 +25,7 @@ def test_a_plan_reacts_to_an_obstacle_event_on_a_real_skill_server(plans_lab: Pl
     ann = plans_lab.client("student1")
     status, created = api(ann, "POST", "/api/plans", {"name": "reacting", "text": REACTING})
     assert status == 201, created
-    status, answer = api(ann, "POST", f"/api/plans/{created['plan']['id']}/runs",
-                         {"target": "practice", "beside": "lab-1", "from_dock": True})
+    status, answer = run_on_practice(ann, created["plan"]["id"], {"beside": "lab-1", "from_dock": True})
     assert status == 202, answer
     channel = ann.websocket(answer["goal_channel"])
     events: list[tuple[str, str]] = []

@@ -15,7 +15,7 @@ import pytest
 from middleware.robots.processes import SkillServerProcess
 from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_test_app
 from tests.integration.lab.test_skills_api import take_control
-from tests.integration.plans.conftest import PlansLab, api
+from tests.integration.plans.conftest import PlansLab, api, run_on_practice
 
 SHORT = 'say "start"\ndrive 0.2 0 for 1s\n'
 SQUARE_CORNER = "drive 0.25 0 for 2s\nturn_to 90deg\ndrive 0.25 0 for 1.5s\n"
@@ -81,10 +81,13 @@ def test_a_plan_runs_on_a_lab_robot_only_during_the_turn(plans_lab: PlansLab) ->
 def test_the_practice_robot_reports_the_line_running_and_the_failing_line(plans_lab: PlansLab) -> None:
     ann = plans_lab.client("student1")
     plan_id = _create(ann, "fails-on-3", 'say "go"\ndrive 0.2 0 for 1s\nwait_until obstacle_within 0.05 timeout 1s\n')
-    status, answer = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "practice", "beside": "lab-1",
-                                                                     "from_dock": True})
+    # Not running yet: the run claims the robot and answers at once, starting; it starts once that is committed.
+    status, claimed = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "practice", "beside": "lab-1"})
+    assert status == 202 and claimed["starting"] and claimed["goal"] is None, claimed
+    assert claimed["robot"] == "practice-student1" and "goal_channel" not in claimed
+    status, answer = run_on_practice(ann, plan_id, {"beside": "lab-1", "from_dock": True})
     assert status == 202, answer
-    assert answer["practice"] and answer["robot"].startswith("practice-")
+    assert answer["practice"] and answer["robot"] == "practice-student1" and not answer["starting"]
     lines_seen = set()
     goal_channel = ann.websocket(answer["goal_channel"])
     deadline = time.monotonic() + 60
@@ -104,7 +107,7 @@ def test_the_practice_robot_reports_the_line_running_and_the_failing_line(plans_
     assert 2 in lines_seen, lines_seen
     # A long plan is canceled and stops.
     long_id = _create(ann, "long", "drive 0.1 0 for 60s\n")
-    status, answer = api(ann, "POST", f"/api/plans/{long_id}/runs", {"target": "practice"})
+    status, answer = run_on_practice(ann, long_id, {})
     assert status == 202, answer
     time.sleep(1.0)
     status, body = api(ann, "DELETE", answer["cancel_url"])
@@ -120,7 +123,7 @@ def test_a_plan_refused_for_its_watchdog_line_starts_no_practice_robot(plans_lab
 
     ann = plans_lab.client("student1")
     plan_id = _create(ann, "watchdog-first", 'say "hi"\nrepeat 2 {\n  set watchdog 0.5s\n}\n')
-    status, answer = api(ann, "POST", f"/api/plans/{plan_id}/runs", {"target": "practice", "from_dock": True})
+    status, answer = run_on_practice(ann, plan_id, {"from_dock": True})
     assert status == 403 and answer["error"]["message"].startswith("Line 3: "), answer
     app = plans_lab.server.app
     with session_factory(app)() as session:
@@ -223,8 +226,7 @@ def test_the_practice_robot_starts_where_the_lab_robot_stands_now(fresh_lab: Liv
     assert wait_for_end(ann, moved)["status"] == "succeeded"
     lab = latest_pose(ann, "lab-1")
     still_id = _create(ann, "still", "wait 3s\n")
-    status, tried = api(ann, "POST", f"/api/plans/{still_id}/runs", {"target": "practice", "beside": "lab-1",
-                                                                     "from_dock": False})
+    status, tried = run_on_practice(ann, still_id, {"beside": "lab-1", "from_dock": False})
     assert status == 202, tried
     assert tried["start"]["at"] == "lab_robot", tried["start"]
     practice = latest_pose(ann, tried["robot"])
@@ -233,8 +235,7 @@ def test_the_practice_robot_starts_where_the_lab_robot_stands_now(fresh_lab: Liv
     print(f"lab-1 at {lab}, the practice robot starts at {practice}: {apart_m * 100:.1f} cm, {turned_rad:.3f} rad")
     assert apart_m <= 0.02 and turned_rad <= 0.02
     # "Start at the dock", the alternative, still carries it back there, away from where lab-1 stands.
-    status, docked = api(ann, "POST", f"/api/plans/{still_id}/runs", {"target": "practice", "beside": "lab-1",
-                                                                      "from_dock": True})
+    status, docked = run_on_practice(ann, still_id, {"beside": "lab-1", "from_dock": True})
     assert status == 202 and docked["start"]["at"] == "dock", docked
     at_dock = latest_pose(ann, docked["robot"])
     assert math.hypot(at_dock["x_m"] - lab["x_m"], at_dock["y_m"] - lab["y_m"]) > 0.5
@@ -249,7 +250,6 @@ def test_a_lab_robot_that_does_not_answer_leaves_the_practice_robot_at_its_dock(
     assert ann.login("student1", STUDENT_PASSWORD) == 302
     plan_id = _create(ann, "still", "wait 1s\n")
     lab_robot.stop()
-    status, tried = api(ann, "POST", f"/api/plans/{plan_id}/runs",
-                        {"target": "practice", "beside": "lab-1", "from_dock": False})
+    status, tried = run_on_practice(ann, plan_id, {"beside": "lab-1", "from_dock": False})
     assert status == 202, tried
     assert tried["start"] == {"at": "dock", "message": "Starts at its dock: lab-1 did not answer."}

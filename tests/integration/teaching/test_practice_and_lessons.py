@@ -54,6 +54,42 @@ def test_the_cap_refuses_a_second_robot_and_idle_ones_are_stopped(engine) -> Non
 
 
 @pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
+def test_a_lookup_in_a_request_writes_nothing_and_the_keeper_writes_the_use(engine) -> None:
+    """Every request and channel of a practice robot looks it up; the lookup noted the use in a commit of its own,
+    during the request (on SQLite, while the request held the write lock: WriteLockHeld). It is noted in memory and
+    the keeper writes it, and the robot used through another worker is not idle."""
+    from sqlalchemy import select, text
+    from sqlalchemy.orm import sessionmaker
+
+    from middleware.farm.local import LocalProcessFarm
+    from middleware.models.farm import PersonalRobotRecord
+
+    (ann,) = _users(engine, "ann")
+    now = [datetime(2026, 11, 25, 9, 0, tzinfo=UTC)]
+    sessions, farm = sessionmaker(engine), LocalProcessFarm()
+    manager = PracticeManager(farm, sessions, idle_s=60, clock=lambda: now[0])
+    other_worker = PracticeManager(farm, sessions, idle_s=60, clock=lambda: now[0])
+    try:
+        manager.start(ann, "ann")
+        now[0] += timedelta(seconds=50)
+        with sessions() as request, request.begin():
+            request.execute(text("UPDATE users SET username = username WHERE id = :id"), {"id": ann})  # it wrote
+            assert other_worker.get(ann) is not None  # the lookup commits nothing of its own
+        with sessions() as session:
+            written = session.scalar(select(PersonalRobotRecord.last_used_at))
+        assert written.replace(tzinfo=UTC) == now[0] - timedelta(seconds=50)  # the use is not written yet
+        other_worker.write_noted()  # the keeper's duty
+        now[0] += timedelta(seconds=20)
+        assert manager.stop_idle() == []  # used 20 s ago, through the other worker
+        now[0] += timedelta(seconds=41)
+        assert manager.stop_idle() == ["practice-ann"]
+    finally:
+        other_worker.close()
+        manager.shutdown()
+        farm.close()
+
+
+@pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
 def test_a_practice_robot_killed_is_restarted_and_obeys_its_owner_again(engine) -> None:
     import os
     import signal

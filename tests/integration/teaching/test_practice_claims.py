@@ -101,6 +101,38 @@ def test_a_claim_starts_nothing_before_its_commit_and_nothing_at_all_when_rolled
     assert robot.name == "practice-p01" and robot.link.is_online() and manager.get(user_id) is not None
 
 
+def test_a_second_claim_meeting_the_first_committed_meanwhile_is_told_it_is_starting_and_keeps_its_unit_of_work(
+        practice_lab) -> None:
+    """The race of the owner's two tabs (or a plan run beside a start): the second claim read no row, the first's
+    being uncommitted, and its insert meets that row committed meanwhile. It answered 503 "starting already"
+    (the ten students' test saw it on PostgreSQL when the second tab's claim came first); it is starting."""
+    from sqlalchemy import event, select
+
+    from middleware.db import session_factory
+    from middleware.models import User
+    from middleware.teaching.practice_robots import practice_manager
+
+    manager, sessions = practice_manager(practice_lab.app), session_factory(practice_lab.app)
+    with sessions() as session:
+        user_id = session.query(User.id).filter(User.username == "p04").scalar()
+    def commit_before_insert(state, first) -> None:
+        if state.is_insert and first.in_transaction():
+            first.commit()  # the first claim is committed as the second one inserts
+
+    def second_claim(first) -> tuple[object, str | None]:  # another request's thread (SQLite: its own connection)
+        with sessions() as second:
+            event.listen(second, "do_orm_execute", lambda state: commit_before_insert(state, first))
+            pending = manager.begin_start(second, user_id, "p04")
+            username = second.scalar(select(User.username).where(User.id == user_id))  # its unit of work goes on
+            second.commit()
+            return pending, username
+
+    with sessions() as first, ThreadPoolExecutor(1) as pool:
+        assert manager.begin_start(first, user_id, "p04") is not None  # flushed, not committed
+        assert pool.submit(second_claim, first).result() == (None, "p04")  # the first one's start is under way
+    assert manager.starting(user_id) and manager.count() == 1
+
+
 def test_a_claim_whose_start_died_is_released_by_the_keeper_or_replaced_by_its_owner(practice_lab) -> None:
     from middleware.db import session_factory
     from middleware.farm.setup import robot_farm
