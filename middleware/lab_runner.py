@@ -50,11 +50,13 @@ def ensure_demo_accounts(app) -> list[tuple[str, str, str]]:
 def seed_demo_content(app, record_video: bool = True) -> list[str]:
     """The demo data: the demo course with its tests (so the demo student can book and be assessed), then the
     teaching area's example tours and the lesson whose video is recorded from the simulator."""
+    from middleware.analytics.demo import seed_demo_usage
     from middleware.recordings.demo import seed_demo_recording
     from middleware.teaching.demo_class import seed_demo_class
     from middleware.teaching.demo_content import seed_demo_content as seed
 
-    return seed_demo_course(app) + seed(app, record_video) + seed_demo_recording(app) + seed_demo_class(app)
+    return (seed_demo_course(app) + seed(app, record_video) + seed_demo_recording(app) + seed_demo_class(app)
+            + seed_demo_usage(app))
 
 
 def seed_demo_course(app) -> list[str]:

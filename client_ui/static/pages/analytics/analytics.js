@@ -15,9 +15,12 @@ const ENDINGS = { turn_ended: t("turn ended"), handed_over: t("handed over"), ro
   superseded: t("another run began"), finished: t("finished"), ongoing: t("still going") };
 const MAINTENANCE = { restart: t("restarts"), dock: t("returns to dock"), clear_map: t("cleared maps") };
 
-/** A length of time in words: "1 h 05 min", "3 min 20 s", "12 s". */
+/** A length of time in words: "1 h 05 min", "3 min 20 s", "12 s"; whole hours and minutes said shortly ("2 h",
+ *  "30 min"). */
 export function duration(seconds) {
   const s = Math.round(seconds);
+  if (s >= 3600 && s % 3600 === 0) return t("{hours} h", { hours: s / 3600 });
+  if (s >= 60 && s % 60 === 0 && s < 3600) return t("{minutes} min", { minutes: s / 60 });
   if (s >= 3600) return t("{hours} h {minutes} min", { hours: Math.floor(s / 3600), minutes: String(Math.floor((s % 3600) / 60)).padStart(2, "0") });
   if (s >= 60) return t("{minutes} min {seconds} s", { minutes: Math.floor(s / 60), seconds: String(s % 60).padStart(2, "0") });
   return t("{seconds} s", { seconds: s });
@@ -37,6 +40,12 @@ function query() {
   return params;
 }
 
+/** el with the custom property name set through the CSSOM (the page's CSP refuses style attributes). */
+function styled(el, name, value) {
+  el.style.setProperty(name, value);
+  return el;
+}
+
 function fill(tbody, rows) {
   tbody.replaceChildren(...rows);
 }
@@ -47,7 +56,8 @@ function drawStudents(students) {
     h("td", { "data-label": t("Student") }, s.username),
     h("td", { "data-label": t("Sessions") }, number(s.sessions)),
     h("td", { "data-label": t("Time on robots") },
-      h("span", { class: "analytics__bar", style: `--share:${(s.seconds / most).toFixed(3)}` }), " ", duration(s.seconds)))));
+      styled(h("span", { class: "analytics__bar" }), "--share", (s.seconds / most).toFixed(3)), " ",
+      duration(s.seconds)))));
   root.querySelector('[data-empty="students"]').hidden = students.some((s) => s.sessions > 0);
 }
 
@@ -60,7 +70,7 @@ function drawWaits(waits) {
   const most = Math.max(1, ...waits.bins.map((b) => b.count));
   fill(root.querySelector(".analytics__bars"), waits.bins.map((bin) => h("li", { class: "analytics__bin" },
     h("span", { class: "analytics__bin-label" }, binLabel(bin)),
-    h("span", { class: "analytics__bin-bar", style: `--share:${(bin.count / most).toFixed(3)}` }),
+    styled(h("span", { class: "analytics__bin-bar" }), "--share", (bin.count / most).toFixed(3)),
     h("span", { class: "analytics__bin-count" }, number(bin.count)))));
 }
 
@@ -79,8 +89,8 @@ function drawHeatMap(grid) {
     ...hours.map((minutes, hour) => {
       const words = t("{day} {hour}:00: {minutes} min", { day: days[day], hour: String(hour).padStart(2, "0"), minutes: fixed(minutes, 0) });
       const level = most > 0 ? minutes / most : 0;
-      return h("td", { title: words, "aria-label": words, "data-minutes": String(minutes),
-        style: `--level:${level.toFixed(3)}`, class: minutes > 0 ? "is-used" : "" });
+      return styled(h("td", { title: words, "aria-label": words, "data-minutes": String(minutes),
+        class: minutes > 0 ? "is-used" : "" }), "--level", level.toFixed(3));
     }))));
 }
 
@@ -93,7 +103,7 @@ function drawRobots(robots) {
     h("td", { "data-label": t("Faults") }, number(r.outages)),
     h("td", { "data-label": t("Down") }, duration(r.downtime_s)),
     h("td", { "data-label": t("Maintenance") }, Object.entries(r.maintenance)
-      .map(([action, count]) => `${number(count)} ${MAINTENANCE[action] || action}`).join(", ") || "—"))));
+      .map(([action, count]) => `${MAINTENANCE[action] || action}: ${number(count)}`).join(", ") || "—"))));
 }
 
 function drawSessions(sessions, total) {
@@ -150,6 +160,8 @@ async function show() {
   field("summary").textContent = t("{from} to {to}: {sessions} sessions, {time} on robots, {turns} turns granted.", {
     from: data.window.from, to: data.window.to, sessions: number(data.sessions_total), time: duration(seconds),
     turns: number(data.waits.count) });
+  if (!form.elements.from.value) form.elements.from.value = data.window.from;
+  if (!form.elements.to.value) form.elements.to.value = data.window.to;
   drawStudents(data.students);
   drawWaits(data.waits);
   drawHeatMap(data.heat_map);
@@ -157,6 +169,7 @@ async function show() {
   drawSessions(data.sessions, data.sessions_total);
   drawLinks(params, data);
   status.textContent = "";
+  root.dataset.course = params.get("course_id") || "";
   root.dataset.state = "ready";
   history.replaceState(null, "", `?${new URLSearchParams([...params].filter(([k]) => k !== "utc_offset_min"))}`);
 }
