@@ -463,7 +463,8 @@ def page(chromium, request: pytest.FixtureRequest):
     errors: list[str] = []
     tab.on("pageerror", lambda error: errors.append(str(error)))
     yield tab
-    if not tab.is_closed():
+    call = getattr(request.node, "call_report", None)
+    if not tab.is_closed() and (call is None or call.failed):
         ARTIFACTS_DIR.mkdir(exist_ok=True)
         tab.screenshot(path=str(ARTIFACTS_DIR / f"{request.node.name}.png"))
     context.close()
@@ -516,6 +517,15 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log):
 
 # Figures a test wants read at the end of `make test` (record_property("summary", line)), from any xdist worker.
 _summaries: list[str] = []
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo):
+    """Keeps the test's own outcome on it, for fixtures that act on a failure only (the page's screenshot)."""
+    report = yield
+    if report.when == "call":
+        item.call_report = report  # type: ignore[attr-defined]
+    return report
 
 
 def pytest_runtest_logreport(report: pytest.TestReport) -> None:
