@@ -4,6 +4,7 @@ command path), a goal's updates and the localization estimate."""
 from __future__ import annotations
 
 import asyncio
+import collections
 import contextlib
 import functools
 import logging
@@ -21,7 +22,7 @@ from middleware.access.sockets import ChannelSeat, open_robot_channel
 from middleware.assessment.hidden_obstacles import CAMERA_REFUSAL, OBSTACLES_HIDDEN, hiding_book
 from middleware.auth.schemas import InvalidField
 from middleware.db import session_factory
-from middleware.lab.schemas import GOAL_ID_PATTERN, DriveLimits, parse_drive_message
+from middleware.lab.schemas import GOAL_ID_PATTERN, DriveLimits, DriveRequest, parse_drive_message
 from middleware.live.loop import Continuation, blocking_work
 from middleware.live.wire import LiveSocket
 from middleware.realtime import (
@@ -203,7 +204,7 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
         last_sequence = 0
         held = HeldCommands(hold, work)
 
-        async def send(command, superseded: int = 0) -> None:  # noqa: ANN001 - a parsed drive message
+        async def send(command: DriveRequest, superseded: int = 0) -> None:
             try:
                 result = await robot.drive_async(sequence_base + command.sequence, command.linear_mps,
                                                  command.angular_radps, work)
@@ -229,10 +230,35 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
             await live.send(as_json({"type": "error", "code": "invalid_field", "message": invalid.message,
                                      "field": invalid.field}))
 
+        # The commands read and not sent yet, with when each arrived. Reading the driver's messages never waits for
+        # the robot or the pool: they cannot pile up to the channel's bound, which closes the channel (a lost seat).
+        waiting: collections.deque[tuple[DriveRequest, float]] = collections.deque()
+        arrived = asyncio.Event()
+
+        async def send_in_turn() -> None:
+            while True:
+                await arrived.wait()
+                arrived.clear()
+                while waiting:
+                    delay_s = await held.delay_s()
+                    if delay_s > 0 or held.holding:  # held for the delay from its arrival, each in turn
+                        command, at = waiting.popleft()
+                        held.send_later(at + delay_s, functools.partial(send, command))
+                        continue
+                    # Behind (a slow robot, a busy worker): the newest velocity supersedes those before it, so the
+                    # robot never works through seconds-old commands in turn.
+                    command, _at = waiting.pop()
+                    superseded = len(waiting)
+                    waiting.clear()
+                    await send(command, superseded)
+
+        sending = asyncio.ensure_future(send_in_turn())
         try:
             while True:
                 raw = await live.receive(timeout=RECEIVE_WAIT_S)
                 seat.keep(live)  # an idle driver still holds the seat while its client answers pings
+                if sending.done():
+                    sending.result()  # the sender failed (the socket closed): the channel ends as it would have
                 if raw is None:
                     continue
                 ping_id = parse_ping(raw)
@@ -245,29 +271,12 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
                     await error(invalid)
                     continue
                 last_sequence = command.sequence
-                delay_s = await held.delay_s()
-                if delay_s > 0 or held.holding:
-                    held.send_later(asyncio.get_running_loop().time() + delay_s, functools.partial(send, command))
-                    continue
-                # Behind (a slow robot, a busy worker): newer velocities wait already, and each supersedes this one.
-                # Sending only the newest keeps the robot on what the driver wants now, never seconds-old commands
-                # in turn, and the waiting messages never reach the channel's bound (which closes it: a lost seat).
-                superseded = 0
-                while len(live.inbound):
-                    newer = await live.receive(timeout=0)
-                    if newer is None:
-                        break
-                    if (ping_id := parse_ping(newer)) is not None:
-                        await answer_ping(ping_id)
-                        continue
-                    try:
-                        command, superseded = parse_drive_message(newer, limits, last_sequence), superseded + 1
-                    except InvalidField as invalid:
-                        await error(invalid)
-                        continue
-                    last_sequence = command.sequence
-                await send(command, superseded)
+                waiting.append((command, asyncio.get_running_loop().time()))
+                arrived.set()
         finally:
+            sending.cancel()
+            with contextlib.suppress(asyncio.CancelledError, ConnectionClosed):
+                await sending
             await held.close()
             await work(_stop_quietly, robot, sequence_base + last_sequence + 1)
             seat.keep(live, closing=True)

@@ -53,6 +53,7 @@ def slow_robot_address() -> Iterator[str]:
         asyncio.run_coroutine_threadsafe(server.stop(0), loop).result(10)
         loop.call_soon_threadsafe(loop.stop)
         thread.join(5)
+        loop.close()
 
 
 def test_a_driver_ahead_of_a_slow_robot_keeps_the_channel_and_the_robot_gets_the_newest_command(
