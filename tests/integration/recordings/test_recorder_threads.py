@@ -152,3 +152,43 @@ def test_twenty_recorded_sessions_hold_no_more_threads_than_one_and_share_the_vi
         assert times == sorted(times), "samples in the order the robot captured them"
     _wait(lambda: not any(streams.open.get(name) for name in names), 10,
           "the robots' streams were not let go once nobody watched or recorded")
+
+
+def test_a_slow_disk_never_holds_the_loop_the_viewers_share(fleet_app, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each second's chunk is written and fsynced on the recorder's pool: a disk that takes a whole second per flush
+    leaves the channel loop (every console's sockets and hubs) answering at once."""
+    import asyncio
+
+    from middleware.db import session_factory
+    from middleware.live.loop import channel_loop
+    from middleware.recordings import files, recordings_of, services
+
+    app, fleet, _ = fleet_app
+    slow_flushes: list[float] = []
+    original = files.PartWriter.flush
+
+    def slow_flush(self) -> None:
+        time.sleep(1.0)
+        slow_flushes.append(time.monotonic())
+        original(self)
+
+    monkeypatch.setattr(files.PartWriter, "flush", slow_flush)
+    recording_id = _start(app, [list(fleet.addresses)[0]])[0]
+    keeper = recordings_of(app).keeper
+    keeper.check()
+    loop = channel_loop().loop
+
+    async def nothing() -> None:
+        return None
+
+    lags, deadline = [], time.monotonic() + 15
+    while len(slow_flushes) < 2 and time.monotonic() < deadline:  # two slow flushes, the loop pinged meanwhile
+        started = time.monotonic()
+        asyncio.run_coroutine_threadsafe(nothing(), loop).result(5)
+        lags.append(time.monotonic() - started)
+        time.sleep(0.02)
+    assert len(slow_flushes) >= 2, "the recorder never flushed in the window"
+    assert max(lags) < 0.5, f"the loop waited {max(lags):.2f} s while the recorder flushed"
+    with session_factory(app)() as session, session.begin():
+        services.stop_recording(session, recording_id, "finished")
+    keeper.check()
