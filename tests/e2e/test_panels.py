@@ -518,8 +518,8 @@ def test_the_phone_layout_is_one_column_and_the_pure_helpers_work_in_the_page(
     assert results["goal"] == {"x": "goal_x_m", "y": "goal_y_m"}
     assert results["bad"] is False
     # Every panel module registered its kind; the skill kind's own check refuses a skill without a schema.
-    assert results["kinds"] == sorted(["camera", "chat", "drive", "laser", "map", "lab-view", "low-level", "odometry",
-                                       "plan", "queue", "response-times", "room-camera", "skill", "sonar"])
+    assert results["kinds"] == sorted(["camera", "chat", "drive", "laser", "map", "lab-view", "line-sensor", "low-level",
+                                       "odometry", "plan", "queue", "response-times", "room-camera", "skill", "sonar"])
     assert results["failed"] == []
     assert results["schemaless"] == "the skill panel has no parameter schema"
     assert not errors, errors
