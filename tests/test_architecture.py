@@ -492,3 +492,96 @@ def test_the_cross_page_check_finds_a_page_or_a_library_importing_a_page() -> No
     assert found == ["lib/console/wiring.js imports pages/lab/console.js",
                      "pages/teaching/tour.js imports pages/lab/console.js",
                      "pages/teaching/tour.js imports pages/lab/x.js"]
+
+
+# The practice manager's methods that work in units of work of their own (background duties, the CLI): a view calls
+# them only in what it hands to after_commit, never in its body (it claims or removes the row in its own session).
+OWN_UNIT_PRACTICE_METHODS = {"start", "stop", "stop_named", "shutdown"}
+
+
+def own_unit_calls_in_views(source: str) -> list[int]:
+    """Lines where a function's own body (not a nested def or lambda, which after_commit may run) calls one of
+    OWN_UNIT_PRACTICE_METHODS on practice_manager(...) or on a name it assigned from it."""
+    lines = []
+
+    def body_nodes(function: ast.AST):
+        pending = list(ast.iter_child_nodes(function))
+        while pending:
+            node = pending.pop()
+            if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda):
+                yield node
+                pending.extend(ast.iter_child_nodes(node))
+
+    def from_manager(node: ast.AST) -> bool:
+        return isinstance(node, ast.Call) and getattr(node.func, "id", "") == "practice_manager"
+
+    for function in ast.walk(ast.parse(source)):
+        if not isinstance(function, ast.FunctionDef | ast.AsyncFunctionDef):
+            continue
+        nodes = list(body_nodes(function))
+        managers = set()
+        for node in nodes:
+            if isinstance(node, ast.Assign):
+                pairs = [(t, node.value) for t in node.targets]
+                for target, value in list(pairs):
+                    if isinstance(target, ast.Tuple) and isinstance(value, ast.Tuple):
+                        pairs.extend(zip(target.elts, value.elts, strict=False))
+                managers |= {t.id for t, v in pairs if isinstance(t, ast.Name) and from_manager(v)}
+        for node in nodes:
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                    and node.func.attr in OWN_UNIT_PRACTICE_METHODS
+                    and (from_manager(node.func.value) or getattr(node.func.value, "id", None) in managers)):
+                lines.append(node.lineno)
+    return sorted(lines)
+
+
+def test_views_start_and_stop_practice_robots_only_after_the_commit() -> None:
+    offenders = [f"{path.relative_to(ROOT)}:{line}" for path in sorted((ROOT / "middleware").rglob("*.py"))
+                 if is_route_file(path) for line in own_unit_calls_in_views(path.read_text())]
+    assert not offenders, ("a view claims a practice robot (begin_start) or removes it (begin_stop) in the request's "
+                           "session and hands the farm's part to after_commit; start()/stop() commit sessions of "
+                           f"their own, for background duties: {offenders}")
+
+
+def test_the_practice_check_tells_a_view_s_own_call_from_an_after_commit_callback() -> None:
+    source = ("def start():\n    manager = practice_manager()\n    robot = manager.start(1, 'ann')\n"
+              "def end():\n    owners, manager = ends(), practice_manager()\n\n"
+              "    def stop_robots():\n        for owner in owners:\n            manager.stop(owner)\n\n"
+              "    after_commit(stop_robots)\n    after_commit(lambda: manager.finish_stop('x'))\n"
+              "def admin():\n    practice_manager().stop_named('practice-ann')\n    other.stop()\n")
+    assert own_unit_calls_in_views(source) == [3, 14]
+
+
+CONSOLE = STATIC / "lib" / "console"
+REGISTERS_SERVICE = re.compile(r"\bregisterFeedService\s*\(")
+
+
+def console_wiring_problems(modules: dict[str, str]) -> list[str]:
+    """The console's wiring is composition: console-wiring.js registers no feed service (each lives in a module of
+    its own, as panels do), and no feed service module imports it (a service meets the wiring as connect's argument
+    and talks to the others through its events)."""
+    problems = []
+    for name, text in sorted(modules.items()):
+        registers = bool(REGISTERS_SERVICE.search(text))
+        if name == "console-wiring.js" and registers:
+            problems.append("console-wiring.js registers a feed service")
+        if name != "console-wiring.js" and registers and re.search(r"""from\s*["']\./console-wiring\.js["']""", text):
+            problems.append(f"{name} registers a feed service and imports console-wiring.js")
+    return problems
+
+
+def test_the_console_s_feed_services_live_in_modules_of_their_own() -> None:
+    modules = {path.name: path.read_text(encoding="utf-8") for path in CONSOLE.glob("*.js")}
+    assert not console_wiring_problems(modules), console_wiring_problems(modules)
+    services = [name for name, text in modules.items() if REGISTERS_SERVICE.search(text) and name != "feed-services.js"]
+    imported = {path.name for path in js_imports(CONSOLE / "console-wiring.js")}
+    assert set(services) <= imported, f"console-wiring.js imports every service module: {set(services) - imported}"
+
+
+def test_the_console_check_finds_a_service_registered_in_the_wiring() -> None:
+    assert console_wiring_problems({
+        "console-wiring.js": 'import "./drive-service.js";\nstatic { registerFeedService("map", () => {}); }',
+        "drive-service.js": 'import { ConsoleWiring } from "./console-wiring.js";\nregisterFeedService("drive", f);',
+        "queue-service.js": 'registerFeedService("queue", connectQueue);',
+    }) == ["console-wiring.js registers a feed service", "drive-service.js registers a feed service and imports "
+                                                          "console-wiring.js"]

@@ -9,7 +9,7 @@ from flask_login import current_user, login_required
 
 from middleware.accounts.services import require_admin
 from middleware.api.contract import OBJECT, described
-from middleware.db import session_factory
+from middleware.db import after_commit, get_session, session_factory
 from middleware.errors import Refused
 from middleware.farm.base import FarmUnavailable
 from middleware.farm.report import farm_status
@@ -48,7 +48,11 @@ def farm_api() -> ResponseReturnValue:
 def farm_stop(robot_name: str) -> ResponseReturnValue:
     """Stops one robot of the farm (a practice robot's owner sees it stopped)."""
     require_admin(current_user)
-    if not (practice_manager().stop_named(robot_name) or robot_farm().stop(robot_name)):
+    manager = practice_manager()
+    practice = manager.begin_stop_named(get_session(), robot_name)  # its row goes with the request's unit of work
+    if practice is not None:
+        after_commit(lambda: manager.finish_stop(practice))
+    elif not robot_farm().stop(robot_name):
         raise Refused(404, "unknown_robot", "The farm runs no robot of that name.", "robot_name")
     flash(f"Robot {robot_name} stopped.", "success")
     return redirect(url_for("farm.farm_page"), 303)

@@ -316,8 +316,15 @@ class PracticeManager:
         self.finish_stop(name)
         return True
 
+    def begin_stop_named(self, session: Session, name: str) -> str | None:
+        """begin_stop for the practice robot called name (an admin's stop on the farm's page), in session (the
+        caller's unit of work); its name, whose process finish_stop ends once that is committed, or None."""
+        owner_id = session.scalar(select(PersonalRobotRecord.owner_id).where(PersonalRobotRecord.name == name))
+        return None if owner_id is None else self.begin_stop(session, owner_id)
+
     def stop_named(self, name: str) -> bool:
-        """Stops the practice robot called name (an operator's `telelab farm stop`); False when there is none."""
+        """Stops the practice robot called name in a unit of work of its own (an operator's `telelab farm stop`);
+        False when there is none."""
         with self._sessions() as session:
             owner_id = session.scalar(select(PersonalRobotRecord.owner_id).where(PersonalRobotRecord.name == name))
         return owner_id is not None and self.stop(owner_id)
