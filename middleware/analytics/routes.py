@@ -15,7 +15,7 @@ from flask_login import current_user, login_required
 
 from middleware.analytics import analytics_of, figures, outbox, schemas, scope
 from middleware.analytics.statements import StatementBuilder
-from middleware.api.contract import OBJECT, about, array, described, file_answer, obj, whole
+from middleware.api.contract import OBJECT, about, array, described, file_answer, nullable, obj, whole
 from middleware.db import get_session
 from middleware.models import Role, User
 
@@ -62,8 +62,8 @@ def page() -> ResponseReturnValue:
 @described(query=QUERY, answers={200: obj(("window", "sessions", "students", "heat_map", "waits", "robots"),
                                           window=OBJECT, sessions=array(OBJECT), students=array(OBJECT),
                                           heat_map=array(array({"type": "number"})), waits=OBJECT,
-                                          robots=array(OBJECT), course=OBJECT, sessions_total={"type": "integer"},
-                                          xapi=OBJECT)})
+                                          robots=array(OBJECT), course=nullable(OBJECT),
+                                          sessions_total={"type": "integer"}, xapi=OBJECT)})
 def usage() -> ResponseReturnValue:
     """Every figure of the scope and window: sessions (the newest 200, and how many in all), time on robots per
     student, the week-by-hour heat map (minutes), queue waits (summary and bins), robots' uptime and faults."""
