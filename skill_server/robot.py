@@ -225,17 +225,18 @@ class Robot:
         dock = self.world.scene.spawn
         return self._carry_to(token, dock), dock
 
-    def place(self, token: str, pose: Pose2D) -> list[str]:
+    def place(self, token: str, pose: Pose2D, kidnap: bool = False) -> list[str]:
         """Places the robot at pose (supervisory), refused with InvalidParameter unless its body fits there on the
-        floor: every goal ends, odometry restarts there. The ids of the goals that were running."""
+        floor: every goal ends, odometry restarts there (kidnap: odometry goes on from where it believed it was).
+        The ids of the goals that were running."""
         check_placement(self.world.scene, pose, self.world.spec.body_radius_m)
-        return self._carry_to(token, pose)
+        return self._carry_to(token, pose, kidnap)
 
-    def _carry_to(self, token: str, pose: Pose2D) -> list[str]:
+    def _carry_to(self, token: str, pose: Pose2D, kidnap: bool = False) -> list[str]:
         def carry() -> list[str]:
             self.sequencer.check_supervisory_token(token)
             ended = self.sequencer.running_goal_ids()
-            self.world.set_pose(pose)
+            self.world.set_pose(pose, kidnap=kidnap)
             return ended
 
         return self.world.run_in_loop(carry)

@@ -347,12 +347,12 @@ class Commander:
         """Restarts the robot's process (telemaintenance): its goals end, it comes back at its dock, same controller."""
         return self._as_controller(self.link.restart, "restart")
 
-    def place_robot(self, pose: robot_pb2.Pose2D) -> robot_pb2.PlaceRobotResponse:
+    def place_robot(self, pose: robot_pb2.Pose2D, kidnap: bool = False) -> robot_pb2.PlaceRobotResponse:
         """Places the robot at pose (refused naming the field unless it fits there): every goal ends, odometry
-        restarts at the pose."""
+        restarts at the pose (kidnap: odometry goes on from where the robot believed it was)."""
         self._refuse_unless_by_hand_allowed()
-        return self._as_controller(lambda token: self.link.place_robot(token, pose), "place_robot",
-                                   {"x_m": pose.x_m, "y_m": pose.y_m, "theta_rad": pose.theta_rad})
+        return self._as_controller(lambda token: self.link.place_robot(token, pose, kidnap), "place_robot",
+                                   {"x_m": pose.x_m, "y_m": pose.y_m, "theta_rad": pose.theta_rad, "kidnap": kidnap})
 
     def reset_evidence(self) -> robot_pb2.EvidenceGrid:
         """Forgets the robot's teleperception evidence grid and readings (for every viewer); the emptied grid."""

@@ -1,11 +1,12 @@
 """A graded run keeps a shared robot: the priority rule for experimental test attempts and experiment trials.
 
 A student who controls a shared robot while their experimental test's attempt on it (or their delay trial on
-it) is open keeps control past the turn length until the run ends, so a run is never cut off by the turn
-passing to the next student. It ranks like a booking (the round-robin rule's priority): the controller keeps the
-robot, with no countdown, while others wait. It never takes the robot from another student's turn: the run's
-holder waits for their turn like everyone. The hold lasts at most the longest `graded_run_hold_min` of the
-student's courses from the run's start (a forgotten trial cannot keep the robot all day).
+it, or their programming exercise's submission on it) is open keeps control past the turn length until the run
+ends, so a run is never cut off by the turn passing to the next student. It ranks like a booking (the round-robin
+rule's priority): the controller keeps the robot, with no countdown, while others wait. It never takes the robot
+from another student's turn: the run's holder waits for their turn like everyone. The hold lasts at most the
+longest `graded_run_hold_min` of the student's courses from the run's start (a forgotten trial cannot keep the
+robot all day).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from middleware.models import Course, CourseMembership, RobotControl
 from middleware.models.accounts import as_utc
 from middleware.models.assessment import Attempt, Exam
 from middleware.models.courses import DEFAULT_GRADED_RUN_HOLD_MIN
+from middleware.models.exercises import ExerciseRun
 from middleware.models.experiment import TRIAL_OPEN, Trial
 
 Priority = Callable[[Session, str, datetime], int | None]
@@ -33,7 +35,12 @@ def graded_run_started_at(session: Session, robot_name: str, user_id: int, now: 
         or_(Attempt.deadline_at.is_(None), Attempt.deadline_at > now)))
     trial = session.scalar(select(func.max(Trial.created_at)).where(
         Trial.robot_name == robot_name, Trial.user_id == user_id, Trial.status == TRIAL_OPEN))
-    starts = [as_utc(moment) for moment in (attempt, trial) if moment is not None]
+    # A programming exercise's submission is graded too (the kidnapping's reported pose must not be read off the
+    # truth the streams carry).
+    submission = session.scalar(select(func.max(ExerciseRun.started_at)).where(
+        ExerciseRun.robot_name == robot_name, ExerciseRun.user_id == user_id, ExerciseRun.mode == "submission",
+        ExerciseRun.status == "running"))
+    starts = [as_utc(moment) for moment in (attempt, trial, submission) if moment is not None]
     return max(starts) if starts else None
 
 

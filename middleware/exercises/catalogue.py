@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from middleware.translations.robot_words import N_  # titles and statements are shown through the catalogue
+
 TEMPLATE_HEAD = '''from telelab import robot
 
 # The loop runs at 20 Hz: each robot.tick() waits for the next period, sends your last command and reads the
@@ -62,17 +64,31 @@ while robot.tick():
         robot.set_velocity(0.2, 0.0)  # your controller here: turn towards the line
 '''
 
+KIDNAPPED = TEMPLATE_HEAD + '''
+GOAL = (-3.0, -0.2)  # in the lab's frame
+
+# You were carried somewhere while you were not looking: odometry still believes you are where you were.
+# The lab's localization compares the laser with the lab's floor plan:
+robot.start_skill("environment_modelling", use_floor_plan=True, restart=True)
+robot.start_skill("localization")  # no guess: it searches the whole map
+while robot.tick():
+    where = robot.localization()
+    # Until it has converged, help it see the room (turn on the spot?), then robot.report_pose(x, y) and go to GOAL
+    # (robot.run_skill("go_to_goal", goal_x_m=..., goal_y_m=...) steers by the localization).
+    robot.set_velocity(0.0, 0.0)
+'''
+
 # The lab's line of tape (skill_server/sim/scenes.py LAB_LINE), as the follow-the-line rubric measures it.
 LAB_LINE_RUBRIC = {"x_min_m": -1.7, "x_max_m": 1.3, "y_min_m": -0.8, "y_max_m": 0.8, "corner_radius_m": 0.45}
 
 BUILT_IN: list[dict[str, Any]] = [
     {
         "slug": "bump-and-go",
-        "title": "Bump and go",
-        "statement": ("Drive around the lab without getting stuck: go straight, and when an obstacle comes close "
-                      "(the laser or the bumper tells you), back off, turn to a new direction and go on. Graded "
-                      "from where the robot truly went: the distance driven, how many 0.5 m floor cells it "
-                      "visited, and the longest time it stayed stuck in one spot."),
+        "title": N_("Bump and go"),
+        "statement": N_("Drive around the lab without getting stuck: go straight, and when an obstacle comes close "
+                        "(the laser or the bumper tells you), back off, turn to a new direction and go on. Graded from"
+                        " where the robot truly went: the distance driven, how many 0.5 m floor cells it visited, and "
+                        "the longest time it stayed stuck in one spot."),
         "template": BUMP_AND_GO,
         "scene": "lab",
         "rubric": {"kind": "bump_and_go", "min_travel_m": 6.0, "min_cells": 14, "cell_m": 0.5, "stuck_s": 5.0,
@@ -83,10 +99,10 @@ BUILT_IN: list[dict[str, Any]] = [
     },
     {
         "slug": "wall-following",
-        "title": "Follow the wall at 0.5 m",
-        "statement": ("The robot starts beside the north wall (y = 3 m), the wall on its left. Follow it, keeping "
-                      "its centre 0.5 m from the wall's face, for at least 3 m. Graded from the truth: the RMS "
-                      "error of the distance to the wall after the first 5 s, and the distance covered along it."),
+        "title": N_("Follow the wall at 0.5 m"),
+        "statement": N_("The robot starts beside the north wall (y = 3 m), the wall on its left. Follow it, keeping "
+                        "its centre 0.5 m from the wall's face, for at least 3 m. Graded from the truth: the RMS error"
+                        " of the distance to the wall after the first 5 s, and the distance covered along it."),
         "template": WALL_FOLLOWING,
         "scene": "lab",
         "rubric": {"kind": "wall_following", "x1_m": -4.0, "y1_m": 3.0, "x2_m": 4.0, "y2_m": 3.0,
@@ -97,11 +113,11 @@ BUILT_IN: list[dict[str, Any]] = [
     },
     {
         "slug": "obstacle-avoidance",
-        "title": "Reach the goal around the pillar",
-        "statement": ("Drive to the goal 3.7 m ahead of the start (x = 3.2 m, y = -1.5 m in the lab's frame) "
-                      "without touching anything: a pillar stands on the straight line. A virtual force field "
-                      "(the goal attracts, the laser's close hits repel) is one way. Graded from the truth: "
-                      "the closest the robot came to the goal (within 0.4 m for full marks: odometry drifts)."),
+        "title": N_("Reach the goal around the pillar"),
+        "statement": N_("Drive to the goal 3.7 m ahead of the start (x = 3.2 m, y = -1.5 m in the lab's frame) without"
+                        " touching anything: a pillar stands on the straight line. A virtual force field (the goal "
+                        "attracts, the laser's close hits repel) is one way. Graded from the truth: the closest the "
+                        "robot came to the goal (within 0.4 m for full marks: odometry drifts)."),
         "template": OBSTACLE_AVOIDANCE,
         "scene": "lab",
         "rubric": {"kind": "reach_goal", "x_m": 3.2, "y_m": -1.5, "radius_m": 0.4},
@@ -111,10 +127,10 @@ BUILT_IN: list[dict[str, Any]] = [
     },
     {
         "slug": "cover-room",
-        "title": "Vacuum the open floor",
-        "statement": ("Sweep the open floor in the middle of the lab (x from -1.5 to 1.5 m, y from -1 to 1 m) "
-                      "like a robot vacuum cleaner. Graded from the truth: the share of that floor the robot's "
-                      "body passed over (60% for full marks)."),
+        "title": N_("Vacuum the open floor"),
+        "statement": N_("Sweep the open floor in the middle of the lab (x from -1.5 to 1.5 m, y from -1 to 1 m) like a"
+                        " robot vacuum cleaner. Graded from the truth: the share of that floor the robot's body passed"
+                        " over (60% for full marks)."),
         "template": COVER_ROOM,
         "scene": "lab",
         "rubric": {"kind": "cover_room", "x_min_m": -1.5, "x_max_m": 1.5, "y_min_m": -1.0, "y_max_m": 1.0,
@@ -125,13 +141,13 @@ BUILT_IN: list[dict[str, Any]] = [
     },
     {
         "slug": "follow-line",
-        "title": "Follow the line",
-        "statement": ("A loop of black tape, 8.4 m long, is stuck on the lab's floor (a 3 m x 1.6 m rectangle with "
-                      "rounded corners around the middle). The robot starts on it, facing along it. Follow it "
-                      "anticlockwise with the line sensor under the robot's front (robot.line(), "
-                      "robot.line_position()) for one whole lap. Graded from where the robot truly went: the share "
-                      "of the line its centre passed within 8 cm of (85% for full marks) and the time its centre "
-                      "spent farther than that from the line (at most 3 s)."),
+        "title": N_("Follow the line"),
+        "statement": N_("A loop of black tape, 8.4 m long, is stuck on the lab's floor (a 3 m x 1.6 m rectangle with "
+                        "rounded corners around the middle). The robot starts on it, facing along it. Follow it "
+                        "anticlockwise with the line sensor under the robot's front (robot.line(), "
+                        "robot.line_position()) for one whole lap. Graded from where the robot truly went: the share "
+                        "of the line its centre passed within 8 cm of (85% for full marks) and the time its centre "
+                        "spent farther than that from the line (at most 3 s)."),
         "template": FOLLOW_LINE,
         "scene": "lab",
         "rubric": {"kind": "follow_line", **LAB_LINE_RUBRIC, "tolerance_m": 0.08, "min_covered": 0.85,
@@ -139,5 +155,22 @@ BUILT_IN: list[dict[str, Any]] = [
         "start": [-0.6, -0.8, 0.0],
         "random_starts": {"x_m": [-1.1, 0.2], "y_m": [-0.83, -0.77], "theta_rad": [-0.2, 0.2]},
         "time_limit_s": 50.0,
+    },
+    {
+        "slug": "kidnapped",
+        "title": N_("Localize after a kidnapping"),
+        "statement": N_("The robot is carried to a place you do not know, facing you do not know where, and nobody "
+                        "tells it: its odometry still believes it stands where it was. Find out where it is with the "
+                        "lab's localization (robot.start_skill(\"localization\") compares the laser with the lab's "
+                        "floor plan; robot.localization() reads its estimate), tell the grader with "
+                        "robot.report_pose(x, y), then drive to the goal at x = -3 m, y = -0.2 m. Graded from the "
+                        "truth: the distance between the pose you reported and where the robot truly was then (within "
+                        "0.3 m for full marks), and the closest the robot came to the goal after that (within 0.3 m)."),
+        "template": KIDNAPPED,
+        "scene": "lab",
+        "rubric": {"kind": "kidnapped", "tolerance_m": 0.3, "x_m": -3.0, "y_m": -0.2, "radius_m": 0.3},
+        "start": [2.9, -0.2, 2.5],
+        "random_starts": {"x_m": [2.5, 3.4], "y_m": [-0.7, 0.5], "theta_rad": [-3.1, 3.1]},
+        "time_limit_s": 120.0,
     },
 ]

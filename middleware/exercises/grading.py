@@ -237,9 +237,13 @@ def grade(rubric: dict[str, Any], trace: list[list[float]], report: dict[str, An
     else:
         raise ValueError(f"unknown rubric kind {kind!r}")
     fraction = round(sum(m.fraction for m in measured) / len(measured), 4)
-    parts = "; ".join(f"{m.name} {_shown(m.value)} {m.unit} (bar {m.bar:g} {m.unit}: {int(m.fraction * 100)}%)"
-                      .replace(" ()", "").replace("  ", " ") for m in measured)
+    parts = "; ".join(f"{m.name} {_shown(m.value)}{_unit(m)} (bar {m.bar:g}{_unit(m)}: {int(m.fraction * 100)}%)"
+                      for m in measured)
     return Grade(fraction, measured, f"{int(round(fraction * 100))}% of the points. {parts}.")
+
+
+def _unit(measurement: Measurement) -> str:
+    return f" {measurement.unit}" if measurement.unit else ""
 
 
 def _shown(value: float) -> str:

@@ -215,7 +215,8 @@ def start_run(slug: str) -> ResponseReturnValue:
     version = services.save_code(session, current_user, exercise, text, now())
 
     def place(start: list[float]) -> None:
-        commander.place_robot(robot_pb2.Pose2D(x_m=start[0], y_m=start[1], theta_rad=start[2]))
+        commander.place_robot(robot_pb2.Pose2D(x_m=start[0], y_m=start[1], theta_rad=start[2]),
+                              kidnap=services.kidnaps(exercise))
 
     run = services.begin_run(session, current_user, exercise, version, mode, commander.robot_name, scene, place,
                              now, _read_log)

@@ -142,6 +142,12 @@ def draw_start(exercise: Exercise, mode: str, seed: int) -> list[float]:
     return [draw.uniform(*region["x_m"]), draw.uniform(*region["y_m"]), draw.uniform(*region["theta_rad"])]
 
 
+def kidnaps(exercise: Exercise) -> bool:
+    """Whether the exercise carries the robot to its start without telling it (odometry goes on from where the robot
+    believed it was): the localize-after-a-kidnapping kind."""
+    return bool(json.loads(exercise.rubric_json).get("kind") == "kidnapped")
+
+
 def begin_run(session: Session, user: User, exercise: Exercise, code_version: ExerciseCode, mode: str,
               robot_name: str, robot_scene: str, place: Callable[[list[float]], None], now: Callable[[], datetime],
               read_log: PoseLogReader) -> ExerciseRun:

@@ -149,9 +149,9 @@ class RobotLink:
         """Restarts the robot's process (it answers first, then comes back on the same address)."""
         return self._call(self._stub.Restart, robot_pb2.RestartRequest(token=token))
 
-    def place_robot(self, token: str, pose: robot_pb2.Pose2D) -> robot_pb2.PlaceRobotResponse:
-        """Places the robot at pose; the goals that ended and the pose."""
-        return self._call(self._stub.PlaceRobot, robot_pb2.PlaceRobotRequest(token=token, pose=pose))
+    def place_robot(self, token: str, pose: robot_pb2.Pose2D, kidnap: bool = False) -> robot_pb2.PlaceRobotResponse:
+        """Places the robot at pose (kidnap: without telling it); the goals that ended and the pose."""
+        return self._call(self._stub.PlaceRobot, robot_pb2.PlaceRobotRequest(token=token, pose=pose, kidnap=kidnap))
 
     def odometry_pose(self) -> robot_pb2.Pose2D:
         """Where the robot's odometry says it stands now (what a run on it is measured in): the first message of a

@@ -13,6 +13,9 @@ def N_(text: str) -> str:  # noqa: N802 (gettext's name for "mark for translatio
 
 
 ROBOT_WORDS = (
+    N_("Line sensor"),
+    N_("Reflectance cells under the robot's front, left to right: 1 over the tape, 0 on bare floor. Shown in scenes "
+       "with a line of tape."),
     N_("Camera"),
     N_("What the robot sees: its camera's video, or the view your browser draws from its pose."),
     N_("Odometry"),

@@ -180,7 +180,7 @@ class RobotService(robot_pb2_grpc.RobotServicer):
         there. INVALID_ARGUMENT names the field at fault."""
         with domain_errors(context):
             pose = convert.pose_from_proto(request.pose)
-            ended = self._robot.place(request.token, pose)
+            ended = self._robot.place(request.token, pose, kidnap=request.kidnap)
             return robot_pb2.PlaceRobotResponse(ended_goal_ids=ended, pose=convert.pose_to_proto(pose))
 
     def GetTrackRun(self, request: robot_pb2.GetTrackRunRequest,

@@ -221,9 +221,10 @@ class World:
         monitor = self.track_monitor
         return monitor is not None and self._call_in_loop(lambda: monitor.restart(self._sim_time_s))
 
-    def set_pose(self, pose: Pose2D) -> None:
-        """Places the robot at pose (for tests, exercises and the return to the dock); odometry restarts there."""
-        self._call_in_loop(lambda: self._place_robot(pose))
+    def set_pose(self, pose: Pose2D, kidnap: bool = False) -> None:
+        """Places the robot at pose (for tests, exercises and the return to the dock); odometry restarts there, or
+        with kidnap goes on from where it believed the robot was (the robot is not told it was carried)."""
+        self._call_in_loop(lambda: self._place_robot(pose, kidnap))
 
     def step_for(self, duration_s: float) -> RobotSnapshot:
         """Advances the world by duration_s of sim time in the caller's thread (only before start())."""
@@ -466,7 +467,8 @@ class World:
         if self._autonomy is not None:
             self._autonomy.on_reset("reset")
 
-    def _place_robot(self, pose: Pose2D) -> None:
+    def _place_robot(self, pose: Pose2D, kidnap: bool = False) -> None:
+        believed = self._odometry.reading.pose
         client = self._client
         client.resetBasePositionAndOrientation(
             self._robot,
@@ -476,7 +478,7 @@ class World:
         client.resetBaseVelocity(self._robot, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
         self._linear_mps = self._angular_radps = 0.0
         self._target_linear_mps = self._target_angular_radps = 0.0
-        self._odometry = WheelOdometry(self.spec, pose, self._odometry_rng)
+        self._odometry = WheelOdometry(self.spec, believed if kidnap else pose, self._odometry_rng)
         self._read_odometry()
         self._sense(self._ground_truth())
         self._publish_snapshot()

@@ -693,12 +693,14 @@ class ReturnToDockResponse(_message.Message):
     def __init__(self, ended_goal_ids: _Optional[_Iterable[str]] = ..., dock: _Optional[_Union[Pose2D, _Mapping]] = ...) -> None: ...
 
 class PlaceRobotRequest(_message.Message):
-    __slots__ = ("token", "pose")
+    __slots__ = ("token", "pose", "kidnap")
     TOKEN_FIELD_NUMBER: _ClassVar[int]
     POSE_FIELD_NUMBER: _ClassVar[int]
+    KIDNAP_FIELD_NUMBER: _ClassVar[int]
     token: str
     pose: Pose2D
-    def __init__(self, token: _Optional[str] = ..., pose: _Optional[_Union[Pose2D, _Mapping]] = ...) -> None: ...
+    kidnap: bool
+    def __init__(self, token: _Optional[str] = ..., pose: _Optional[_Union[Pose2D, _Mapping]] = ..., kidnap: _Optional[bool] = ...) -> None: ...
 
 class PlaceRobotResponse(_message.Message):
     __slots__ = ("ended_goal_ids", "pose")

@@ -36,14 +36,20 @@ def load_api() -> ModuleType:
 
 
 class WorldBackend:
-    """The API's backend over a world the test steps: time is the world's sim time since the run began."""
+    """The API's backend over a world the test steps: time is the world's sim time since the run began.
 
-    def __init__(self, world: World, time_limit_s: float) -> None:
+    With telemetry_hz and latency_s the program reads the robot as the browser does: readings that change only at
+    the telemetry stream's rate (10 Hz to the page) and are latency_s old when they arrive."""
+
+    def __init__(self, world: World, time_limit_s: float, telemetry_hz: float = 0.0, latency_s: float = 0.0) -> None:
         self.world, self.time_limit_s = world, time_limit_s
+        self.telemetry_period_s, self.latency_s = (1.0 / telemetry_hz if telemetry_hz else 0.0), latency_s
+        self._heard: list[tuple[float, dict[str, Any]]] = []  # (sim time, reading) of the telemetry sent so far
         self.sequence, self.trace, self.reports = 0, [], []
         self.last_sent = (0.0, 0.0)
         self._t0 = world.snapshot.sim_time_s
         self._next_sample = 0.0
+        self._outgoing: list[tuple[float, dict[str, Any]]] = []
         self._sample()
 
     def now(self) -> float:
@@ -53,6 +59,8 @@ class WorldBackend:
         while self.now() < t_s - 1e-9:
             self.world.step_for(self.world.tick_dt_s)
             self._sample()
+            if self.telemetry_period_s or self.latency_s:
+                self._hear()
         return True
 
     def _sample(self) -> None:
@@ -64,6 +72,20 @@ class WorldBackend:
             self.trace.append([round(t, 3), g.x_m, g.y_m, g.theta_rad, o.x_m, o.y_m, o.theta_rad])
 
     def read(self) -> dict[str, Any]:
+        if not self.telemetry_period_s and not self.latency_s:
+            return self._reading()
+        return self._heard[-1][1] if self._heard else self._reading()
+
+    def _hear(self) -> None:
+        """Each world tick: a telemetry message leaves on the stream's grid and arrives latency_s later."""
+        now = self.now()
+        if not self._outgoing or now - self._outgoing[-1][0] >= self.telemetry_period_s - 1e-9:
+            self._outgoing.append((now, self._reading()))
+        while self._outgoing and self._outgoing[0][0] + self.latency_s <= now + 1e-9:
+            self._heard.append(self._outgoing.pop(0))
+        del self._heard[:-1]
+
+    def _reading(self) -> dict[str, Any]:
         s = self.world.snapshot
         spec = LaserSpec()  # the world's default scanner
         angle_min, increment = spec.angle_min_rad, spec.angle_increment_rad
@@ -81,7 +103,7 @@ class WorldBackend:
         self.sequence += 1
         self.world.drive(TOKEN, self.sequence, linear_mps, angular_radps)
 
-    def skill(self, name: str, parameters: dict[str, Any]) -> str:
+    def skill(self, name: str, parameters: dict[str, Any], wait: bool = True) -> str:
         raise NotImplementedError("skills need the skill server; the reference solutions drive the wheels")
 
     def report(self, x_m: float, y_m: float, t_s: float) -> None:
@@ -98,21 +120,28 @@ def random_start(region: dict[str, list[float]], seed: int) -> list[float]:
     return [draw.uniform(*region["x_m"]), draw.uniform(*region["y_m"]), draw.uniform(*region["theta_rad"])]
 
 
-def run_code(code: str, scene: str, start: list[float], time_limit_s: float, seed: int) -> WorldBackend:
-    """Runs code as the student's program from start until it ends or its time is up; the backend holds the trace."""
+def run_code(code: str, scene: str, start: list[float], time_limit_s: float, seed: int, telemetry_hz: float = 0.0,
+             latency_s: float = 0.0) -> WorldBackend:
+    """Runs code as the student's program from start until it ends or its time is up; the backend holds the trace
+    (telemetry_hz and latency_s: the readings as the browser gets them, WorldBackend)."""
     with World(scene, realtime=False, seed=seed) as world:
         world.set_controller(TOKEN)
         world.set_pose(Pose2D(*start))
-        backend = WorldBackend(world, time_limit_s)
-        api = load_api()
-        api.attach(backend)
-        previous = sys.modules.get("telelab")
-        sys.modules["telelab"] = api
-        try:
-            exec(compile(code, "<exercise>", "exec"), {"__name__": "__main__"})  # noqa: S102 - the test's own code
-        finally:
-            if previous is None:
-                sys.modules.pop("telelab", None)
-            else:
-                sys.modules["telelab"] = previous
+        backend = WorldBackend(world, time_limit_s, telemetry_hz, latency_s)
+        run_program(code, backend)
         return backend
+
+
+def run_program(code: str, backend: Any) -> None:
+    """Runs code as the student's program, `from telelab import robot` talking to backend."""
+    api = load_api()
+    api.attach(backend)
+    previous = sys.modules.get("telelab")
+    sys.modules["telelab"] = api
+    try:
+        exec(compile(code, "<exercise>", "exec"), {"__name__": "__main__"})  # noqa: S102 - the test's own code
+    finally:
+        if previous is None:
+            sys.modules.pop("telelab", None)
+        else:
+            sys.modules["telelab"] = previous

@@ -13,6 +13,7 @@ export const WATCHDOG_MS = 300;  // no tick for this long: the page stops the ro
 const STOP_GRACE_MS = 1500;  // an interrupt not answered in this time: the worker is replaced
 const SKILL_POLL_MS = 250;
 const FINAL_GOAL = { succeeded: 1, aborted: 2, canceled: 3 };
+const EXECUTING = 5;  // a skill started without waiting for its end (python-worker.js's SKILL_STATUSES)
 
 /** The Python worker with its shared memory; "ready" resolves when Pyodide has loaded (load_s in the detail). */
 export class PythonWorker extends EventTarget {
@@ -82,7 +83,7 @@ export class PythonWorker extends EventTarget {
  * "done" (detail: the worker's outcome plus the report, if the code made one).
  */
 export class RobotRun extends EventTarget {
-  #python; #robotName; #drive; #telemetry; #session; #watchdog = 0; #lastTick = 0; #skillPending = false;
+  #python; #robotName; #drive; #telemetry; #localization; #located = null; #session; #watchdog = 0; #lastTick = 0; #skillPending = false;
   #finished = false; #stopTimer = 0; #report = null; #command = { linear_mps: 0, angular_radps: 0 };
   #sentAt = new Map();
   #codeAt = null;
@@ -105,8 +106,17 @@ export class RobotRun extends EventTarget {
       if (typeof event.detail !== "string") return;
       const message = parseJsonMessage(event.detail);
       if (message?.type !== "telemetry") return;
-      this.#python.writeTelemetry(event.detail);
+      // What the program reads: the robot's readings and the localization estimate, never where it truly stands.
+      this.#python.writeTelemetry(JSON.stringify({ ...message, camera_pose: null, localization: this.#located }));
       this.dispatchEvent(new CustomEvent("telemetry", { detail: message }));
+    });
+    this.#localization = new Channel(`${path}/localization`);
+    this.#localization.addEventListener("message", (event) => {
+      const message = typeof event.detail === "string" ? parseJsonMessage(event.detail) : null;
+      if (message?.type !== "localization") return;
+      this.#located = message.active ? { converged: message.converged, estimate: message.estimate,
+        std_x_m: message.std_x_m, std_y_m: message.std_y_m, std_theta_rad: message.std_theta_rad,
+        sim_time_s: message.sim_time_s } : null;
     });
     this.#session.addEventListener("error", (event) => this.#print(t("Robot: {message}", { message: event.detail.message }), "stderr"));
     this.#session.addEventListener("sent", (event) => {
@@ -151,6 +161,7 @@ export class RobotRun extends EventTarget {
     this.#session?.stop();
     this.#drive?.close();
     this.#telemetry?.close();
+    this.#localization?.close();
     clearInterval(this.#watchdog);
   }
 
@@ -179,19 +190,23 @@ export class RobotRun extends EventTarget {
     } else if (message.type === "report") {
       this.#report = { x_m: message.x_m, y_m: message.y_m, t_s: message.t_s };
     } else if (message.type === "skill") {
-      this.#runSkill(message.name, message.parameters);
+      this.#runSkill(message.name, message.parameters, message.wait !== false);
     } else if (message.type === "done") {
       this.#end(message);
     }
   }
 
-  async #runSkill(name, parameters) {
+  async #runSkill(name, parameters, wait) {
     this.#skillPending = true;
     try {
       const answer = await fetchJson("/api/practice/commands", { method: "POST",
         body: { command: { skill: name, parameters } } });
       const goalId = answer.goal?.goal_id;
       let status = answer.goal?.status;
+      if (!wait && goalId && !(status in FINAL_GOAL)) {
+        this.#python.skillEnded(EXECUTING);
+        return;
+      }
       while (goalId && !(status in FINAL_GOAL) && !this.#finished) {
         await new Promise((resolve) => setTimeout(resolve, SKILL_POLL_MS));
         const goal = await fetchJson(`/api/robots/practice/command-goals/${encodeURIComponent(goalId)}`);

@@ -18,6 +18,7 @@ const measurements = root.querySelector("[data-slot=measurements]");
 const runsList = root.querySelector("[data-slot=runs]");
 const map = root.querySelector("[data-slot=map]");
 const robotLine = root.querySelector("[data-field=robot]");
+let rubric = null;  // what the run is measured by (the trace map draws a follow_line rubric's line)
 const buttons = Object.fromEntries([...root.querySelectorAll("[data-action]")].map((b) => [b.dataset.action, b]));
 const PRACTICE_POLL_MS = 1000;
 const PRACTICE_WAIT_MS = 120000;
@@ -189,6 +190,11 @@ function showOdometry(message) {
   const { pose, linear_mps: v } = message.odometry;
   robotLine.textContent = `${current?.run.robot_name ?? "Robot"}: x ${pose.x_m.toFixed(2)} m, y ${pose.y_m.toFixed(2)} m, `
     + t("heading {value}°, speed {v} m/s", { value: (pose.theta_rad * 180 / Math.PI).toFixed(0), v: v.toFixed(2) });
+  const line = message.line?.values;
+  if (Array.isArray(line) && line.length) {
+    robotLine.textContent += t(", line sensor {values}", { values: line.map((value) => value.toFixed(1)).join(" ") });
+    robotLine.dataset.line = line.join(" ");
+  }
   robotLine.dataset.speed = String(v);
   robotLine.dataset.x = String(pose.x_m);
 }
@@ -211,7 +217,7 @@ function showGrade(run, boxes) {
     return row;
   }));
   measurements.hidden = !run.measurements.length;
-  drawTrace(map, boxes ?? [], run.trace ?? [], run.start);
+  drawTrace(map, boxes ?? [], run.trace ?? [], run.start, rubric);
 }
 
 function formatValue(value, unit = "") {
@@ -239,6 +245,7 @@ addEventListener("pagehide", () => { current?.robotRun.stop(); current?.robotRun
 
 loadRuns().then((answer) => {
   template = answer.exercise.template;
+  rubric = answer.exercise.rubric;
   setCode(answer.code);
 }, (error) => say(error.message, "error"));
 setRunning(false);

@@ -9,7 +9,7 @@ const PYODIDE_URL = "/static/vendor/node_modules/pyodide/";
 const API_URL = "/static/pages/exercises/telelab.py";
 // control (Int32Array) slots, shared with the page (exercise-run.js has the same numbers)
 const STOP = 0, TELEMETRY_VERSION = 1, SKILL_STATE = 2, SKILL_RESULT = 3, TELEMETRY_BYTES = 4;
-const SKILL_STATUSES = ["", "SUCCEEDED", "ABORTED", "CANCELED", "REFUSED"];
+const SKILL_STATUSES = ["", "SUCCEEDED", "ABORTED", "CANCELED", "REFUSED", "EXECUTING"];
 
 let pyodide = null;
 let control = null;
@@ -47,9 +47,9 @@ const bridge = {
     // at: when the code's command left the interpreter, on the clock the page shares (for the latency figures)
     post({ type: "drive", linear_mps: linear, angular_radps: angular, at: performance.timeOrigin + performance.now() });
   },
-  skill(name, parametersJson) {
+  skill(name, parametersJson, wait) {
     Atomics.store(control, SKILL_STATE, 1);
-    post({ type: "skill", name, parameters: JSON.parse(parametersJson) });
+    post({ type: "skill", name, parameters: JSON.parse(parametersJson), wait: Boolean(wait) });
     while (Atomics.load(control, SKILL_STATE) === 1) {
       if (Atomics.load(control, STOP)) return "CANCELED";
       Atomics.wait(control, SKILL_STATE, 1, 50);
@@ -71,7 +71,7 @@ class PageBackend:
     def wait_until(self, t_s): return bool(telelab_bridge.wait_until(t_s))
     def read(self): return json.loads(telelab_bridge.read())
     def send(self, linear_mps, angular_radps): telelab_bridge.send(linear_mps, angular_radps)
-    def skill(self, name, parameters): return str(telelab_bridge.skill(name, json.dumps(parameters)))
+    def skill(self, name, parameters, wait=True): return str(telelab_bridge.skill(name, json.dumps(parameters), wait))
     def report(self, x_m, y_m, t_s): telelab_bridge.report(x_m, y_m, t_s)
     def limits(self): return tuple(float(v) for v in telelab_bridge.limits())
 

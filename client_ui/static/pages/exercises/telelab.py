@@ -30,7 +30,7 @@ class Backend(Protocol):
     def wait_until(self, t_s: float) -> bool: ...  # False when Stop was asked meanwhile
     def read(self) -> dict[str, Any]: ...  # the latest telemetry, as the page receives it
     def send(self, linear_mps: float, angular_radps: float) -> None: ...
-    def skill(self, name: str, parameters: dict[str, Any]) -> str: ...  # the goal's final status
+    def skill(self, name: str, parameters: dict[str, Any], wait: bool = True) -> str: ...  # the final status
     def report(self, x_m: float, y_m: float, t_s: float) -> None: ...
     def limits(self) -> tuple[float, float, float]: ...  # max linear, max angular, time limit [s]
 
@@ -44,6 +44,17 @@ class Pose:
     theta_rad: float
     linear_mps: float = 0.0
     angular_radps: float = 0.0
+
+
+@dataclass(frozen=True)
+class Located:
+    """The lab's localization estimate: x_m, y_m, theta_rad in the lab's frame, converged, and its spread std_m."""
+
+    x_m: float
+    y_m: float
+    theta_rad: float
+    converged: bool
+    std_m: float
 
 
 @dataclass(frozen=True)
@@ -122,6 +133,22 @@ class Robot:
         (SUCCEEDED, ABORTED, CANCELED)."""
         self._command = (0.0, 0.0)
         return self._backend.skill(str(name), parameters)
+
+    def start_skill(self, name: str, **parameters: Any) -> str:
+        """Starts one of the robot's skills and returns at once: for the perceptive skills that run until stopped
+        (environment_modelling, localization). EXECUTING, or its final status if it ended at once."""
+        return self._backend.skill(str(name), parameters, False)
+
+    def localization(self) -> Located | None:
+        """The estimate of the lab's localization (the localization skill, start_skill("localization")): where it
+        believes the robot is in the lab's frame, how sure it is, whether it converged; None while none runs."""
+        located = self._reading.get("localization")
+        if not located:
+            return None
+        estimate = located.get("estimate") or {}
+        return Located(float(estimate.get("x_m", 0.0)), float(estimate.get("y_m", 0.0)),
+                       float(estimate.get("theta_rad", 0.0)), bool(located.get("converged")),
+                       math.hypot(float(located.get("std_x_m", 0.0)), float(located.get("std_y_m", 0.0))))
 
     def report_pose(self, x_m: float, y_m: float) -> None:
         """Tells the grader where the code believes the robot is now (the localization exercise)."""

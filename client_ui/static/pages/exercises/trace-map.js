@@ -15,7 +15,19 @@ export function mapBounds(boxes, trace) {
   return [Math.min(...xs), Math.min(...ys), Math.max(...xs), Math.max(...ys)];
 }
 
-export function drawTrace(canvas, boxes, trace, start) {
+/** The line of tape a follow_line rubric measures (a rounded rectangle), drawn under the path. */
+function drawLine(context, toPx, scale, rubric) {
+  if (rubric?.kind !== "follow_line") return;
+  const r = rubric.corner_radius_m;
+  const [left, top] = toPx(rubric.x_min_m, rubric.y_max_m);
+  context.strokeStyle = "#26272b";
+  context.lineWidth = Math.max(2, 0.04 * scale);
+  context.beginPath();
+  context.roundRect(left, top, (rubric.x_max_m - rubric.x_min_m) * scale, (rubric.y_max_m - rubric.y_min_m) * scale, r * scale);
+  context.stroke();
+}
+
+export function drawTrace(canvas, boxes, trace, start, rubric = null) {
   const context = canvas.getContext("2d");
   const [x0, y0, x1, y1] = mapBounds(boxes, trace);
   const scale = Math.min((canvas.width - 2 * PADDING_PX) / (x1 - x0 || 1), (canvas.height - 2 * PADDING_PX) / (y1 - y0 || 1));
@@ -30,6 +42,7 @@ export function drawTrace(canvas, boxes, trace, start) {
     context.fillRect(-box.hx * scale, -box.hy * scale, 2 * box.hx * scale, 2 * box.hy * scale);
     context.restore();
   }
+  drawLine(context, toPx, scale, rubric);
   if (trace.length) {
     context.strokeStyle = "#1d5fc4";
     context.lineWidth = 2;
