@@ -64,7 +64,8 @@ export function connectCamera(wiring, descriptor, panel) {
     if (!detail.fallback) savePictureChoice(kind, detail.source); // not a choice: this browser cannot draw
     if (detail.source === "drawn" && current) {
       current = null;
-      wiring.closeChannel(path, "the picture is drawn by this browser");
+      const reason = "the picture is drawn by this browser"; // the close's reason, for the server's log
+      wiring.closeChannel(path, reason);
       // Closed on purpose, not a fault: the line says where the picture comes from instead, without alarm.
       wiring.status.update(name, { phase: "off", reason: DRAWN_PICTURE_STATUS });
     } else if (detail.source === "video" && !current) {
