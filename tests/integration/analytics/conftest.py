@@ -85,6 +85,7 @@ def history(app) -> dict[str, int]:
         tour = Tour(slug="an-tour", title="Sonar tour", steps_json="[]")
         session.add_all([lesson, tour])
         session.flush()
+        ids["lesson"], ids["tour"] = lesson.id, tour.id
         session.add_all([LearningEvent(user_id=users["s1"].id, kind="lesson_watched", object_id=lesson.id,
                                        at=at(3, 8)),
                          LearningEvent(user_id=users["s2"].id, kind="tour_followed", object_id=tour.id, at=at(4, 8))])

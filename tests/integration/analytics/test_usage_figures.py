@@ -11,7 +11,7 @@ from urllib.parse import urlencode
 
 import pytest
 
-from tests.integration.analytics.conftest import WINDOW
+from tests.integration.analytics.conftest import WINDOW, at
 from tests.integration.bookings.conftest import api
 
 
@@ -141,3 +141,22 @@ def test_a_courses_xapi_statements_are_its_students_and_valid_xapi_1_0_3(lab, cl
         "GET", f"/api/analytics/courses/{ids['A']}/xapi?{urlencode(WINDOW)}")
     assert [s["id"] for s in json.loads(again)["statements"]] == [s["id"] for s in statements], (
         "the same events are the same statements, whoever exports them")
+
+
+def test_a_lesson_watched_and_a_tour_followed_are_recorded_once_a_minute(lab, client_of) -> None:
+    from sqlalchemy import select
+
+    from middleware.db import session_factory
+    from middleware.models.analytics import LearningEvent
+
+    server, ids = lab
+    student = client_of("s2")
+    assert api(student, "POST", f"/api/lessons/{ids['lesson']}/watched") == (200, {"recorded": True})
+    assert api(student, "POST", f"/api/lessons/{ids['lesson']}/watched") == (200, {"recorded": False})
+    assert api(student, "POST", f"/api/tours/{ids['tour']}/followed") == (200, {"recorded": True})
+    assert api(student, "POST", "/api/lessons/987654/watched")[0] == 404
+    assert api(student, "POST", "/api/tours/987654/followed")[0] == 404
+    with session_factory(server.app)() as session:
+        kinds = sorted(session.scalars(select(LearningEvent.kind).where(LearningEvent.user_id == ids["s2"],
+                                                                        LearningEvent.at > at(20, 0))))
+    assert kinds == ["lesson_watched", "tour_followed"]
