@@ -10,15 +10,19 @@ its action in `unless_refused`, which does the same before answering.
 from __future__ import annotations
 
 from collections.abc import Callable
+from datetime import date, datetime
 from typing import ClassVar, TypeVar
 
+from babel.numbers import format_decimal
 from flask import Flask, flash, jsonify, redirect, render_template, request
 from flask.typing import ResponseReturnValue
+from flask_babel import format_date, format_datetime, get_locale, gettext  # type: ignore[import-untyped]
 from flask_wtf.csrf import CSRFError
 from werkzeug.exceptions import HTTPException
 from werkzeug.http import HTTP_STATUS_CODES
 
 from middleware.db import discard_changes
+from middleware.i18n import N_
 
 T = TypeVar("T")
 
@@ -32,6 +36,17 @@ class Refused(Exception):
         super().__init__(message)
         self.status, self.code, self.message, self.field = status, code, message, field
 
+    @property
+    def message(self) -> str:
+        """The sentence in the request's language. A service says it with gettext (English outside a request);
+        where the unit of work has failed (an IntegrityError caught), with lazy_gettext, so the language is looked
+        up when the refusal is answered, after the request's changes are discarded."""
+        return str(self._message)
+
+    @message.setter
+    def message(self, message: str) -> None:
+        self._message = message
+
     def to_dict(self) -> dict[str, object]:
         """The JSON body of the error."""
         return {"error": {"code": self.code, "message": self.message, "field": self.field}}
@@ -39,6 +54,27 @@ class Refused(Exception):
 
 class ApiError(Refused):
     """A refusal a route raises about the request itself (a body that is not JSON, an unknown robot)."""
+
+
+def written_number(value: float | None) -> str:
+    """A number as a refusal's sentence writes it: in English as Python writes it (the wording clients and tests
+    compare: 3600, 0.5, 1e-06), in another language with its decimal sign (0,5), never with a thousands separator
+    (limits and ids read as they are typed)."""
+    locale = get_locale()
+    if locale is None or locale.language == "en" or value is None or isinstance(value, bool):
+        return str(value)
+    return str(format_decimal(value, locale=locale, group_separator=False, decimal_quantization=False))
+
+
+def written_date(value: date, english: str, pattern: str) -> str:
+    """A date or moment as a sentence writes it: in English by the strftime format english (as before), in another
+    language by the CLDR pattern (dd MMM: "04 may")."""
+    locale = get_locale()
+    if locale is None or locale.language == "en":
+        return value.strftime(english)
+    if isinstance(value, datetime):
+        return str(format_datetime(value, pattern))
+    return str(format_date(value, pattern))
 
 
 def end_refused_request(refused: Refused) -> None:
@@ -83,6 +119,19 @@ def _error_response(status: int, code: str, title: str, message: str,
     return render_template("error.html", title=title, message=message), status
 
 
+# The error page's titles (werkzeug's names of the statuses) in the page's language.
+_STATUS_TITLES = {400: N_("Bad Request"), 401: N_("Unauthorized"), 403: N_("Forbidden"), 404: N_("Not Found"),
+                  405: N_("Method Not Allowed"), 409: N_("Conflict"), 410: N_("Gone"),
+                  413: N_("Request Entity Too Large"), 415: N_("Unsupported Media Type"), 423: N_("Locked"),
+                  429: N_("Too Many Requests"), 503: N_("Service Unavailable")}
+
+
+def _status_title(status: int) -> str:
+    if status in _STATUS_TITLES:
+        return str(gettext(_STATUS_TITLES[status]))
+    return HTTP_STATUS_CODES.get(status, "Refused")
+
+
 def register_error_handlers(app: Flask) -> None:
     """Installs handlers so no error reaches a user as a stack trace or a bare status line."""
 
@@ -91,15 +140,14 @@ def register_error_handlers(app: Flask) -> None:
         end_refused_request(error)
         if wants_json():
             return jsonify(error.to_dict()), error.status
-        title = HTTP_STATUS_CODES.get(error.status, "Refused")
-        return render_template("error.html", title=title, message=error.message), error.status
+        return render_template("error.html", title=_status_title(error.status), message=error.message), error.status
 
     @app.errorhandler(CSRFError)
     def _csrf_error(error: CSRFError) -> ResponseReturnValue:
         discard_changes()
         return _error_response(
-            400, "csrf_failed", "The form has expired",
-            "The form was missing its security token or it had expired. Reload the page and try again.",
+            400, "csrf_failed", gettext("The form has expired"),
+            gettext("The form was missing its security token or it had expired. Reload the page and try again."),
         )
 
     @app.errorhandler(HTTPException)
@@ -107,17 +155,19 @@ def register_error_handlers(app: Flask) -> None:
         discard_changes()
         status = error.code or 500
         messages = {
-            403: "You are not allowed to open this page.",
-            404: "There is nothing at this address. Check the link or go back to the lab.",
-            405: "This address does not accept that kind of request.",
-            413: "The request was too large.",
+            403: gettext("You are not allowed to open this page."),
+            404: gettext("There is nothing at this address. Check the link or go back to the lab."),
+            405: gettext("This address does not accept that kind of request."),
+            413: gettext("The request was too large."),
         }
-        message = messages.get(status, error.description or "The request could not be handled.")
-        return _error_response(status, error.name.lower().replace(" ", "_"), error.name, message)
+        message = messages.get(status, error.description or gettext("The request could not be handled."))
+        title = _status_title(status) if status in _STATUS_TITLES else error.name
+        return _error_response(status, error.name.lower().replace(" ", "_"), title, message)
 
     @app.errorhandler(Exception)
     def _unexpected(error: Exception) -> ResponseReturnValue:
         discard_changes()
         app.logger.exception("Unhandled error on %s", request.path)
-        return _error_response(500, "internal_error", "Something went wrong",
-                               "Something went wrong on our side. Try again; if it persists, tell your tutor.")
+        return _error_response(500, "internal_error", gettext("Something went wrong"),
+                               gettext("Something went wrong on our side. Try again; if it persists, tell your "
+                                       "tutor."))

@@ -31,9 +31,10 @@ from typing import Any
 
 from flask import Flask, Response, request
 from flask.json.provider import DefaultJSONProvider
+from flask_babel import gettext  # type: ignore[import-untyped]
 from werkzeug.routing import IntegerConverter, ValidationError
 
-from middleware.errors import Refused
+from middleware.errors import Refused, written_number
 
 INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
 MAX_ROW_ID = 2**31 - 1  # the tables' ids are INTEGER: 32 bits on PostgreSQL, which refuses a larger operand
@@ -79,16 +80,17 @@ def unstorable_place(text: str) -> str:
     start = found.start()
     line = text.count("\n", 0, start) + 1
     column = start - (text.rfind("\n", 0, start) + 1) + 1
-    what = "a NUL" if found.group() == "\x00" else "a lone surrogate"
-    place = f"line {line}, column {column}" if "\n" in text else f"column {column}"
-    return f"{place}: {what}"
+    what = gettext("a NUL") if found.group() == "\x00" else gettext("a lone surrogate")
+    if "\n" in text:
+        return str(gettext("line %(line)s, column %(column)s: %(what)s", line=line, column=column, what=what))
+    return str(gettext("column %(column)s: %(what)s", column=column, what=what))
 
 
 def refuse_unstorable(field: str, text: str) -> None:
     """InvalidInput naming field and the place of the first character that cannot be stored, if text has one."""
     if unstorable(text):
-        raise InvalidInput(field, f"{field} holds a character that cannot be stored ({unstorable_place(text)}); "
-                                  "remove it.")
+        raise InvalidInput(field, gettext("%(field)s holds a character that cannot be stored (%(place)s); remove it.",
+                                          field=field, place=unstorable_place(text)))
 
 
 def printable(text: str) -> str:
@@ -111,7 +113,8 @@ def whole_number(value: object, field: str, low: int, high: int) -> int:
     """decimal_int(value, low, high), or InvalidInput naming field and the range."""
     number = decimal_int(value, low, high)
     if number is None:
-        raise InvalidInput(field, f"{field} must be a whole number from {low} to {high}.")
+        raise InvalidInput(field, gettext("%(field)s must be a whole number from %(low)s to %(high)s.", field=field,
+                                          low=written_number(low), high=written_number(high)))
     return number
 
 
@@ -121,28 +124,36 @@ def within_calendar(moment: date | datetime) -> bool:
     return EARLIEST <= day <= LATEST
 
 
+def _too_deep(what: str = "JSON") -> str:
+    depth = written_number(MAX_JSON_DEPTH)
+    if what == "message":
+        return str(gettext("The message is nested more than %(depth)s levels deep.", depth=depth))
+    return str(gettext("The JSON is nested more than %(depth)s levels deep.", depth=depth))
+
+
 def check_json(value: Any) -> None:
     """Refuses (InvalidInput naming the field) a decoded JSON value a view must never receive."""
     pending: list[tuple[Any, str, int]] = [(value, "body", 0)]
     while pending:
         item, field, depth = pending.pop()
         if depth > MAX_JSON_DEPTH:
-            raise InvalidInput(field, f"The JSON is nested more than {MAX_JSON_DEPTH} levels deep.")
+            raise InvalidInput(field, _too_deep())
         if isinstance(item, str):
             refuse_unstorable(field, item)
         elif isinstance(item, bool) or item is None:
             continue
         elif isinstance(item, int):
             if not INT64_MIN <= item <= INT64_MAX:
-                raise InvalidInput(field, f"{field} is too large a number.")
+                raise InvalidInput(field, gettext("%(field)s is too large a number.", field=field))
         elif isinstance(item, float):
             if not math.isfinite(item):
-                raise InvalidInput(field, f"{field} must be a finite number.")
+                raise InvalidInput(field, gettext("%(field)s must be a finite number.", field=field))
         elif isinstance(item, dict):
             for key, inner in item.items():
                 name = key if field == "body" else f"{field}.{key}"
                 if not isinstance(key, str) or unstorable(key):
-                    raise InvalidInput(field, f"A name in {field} holds a character that cannot be stored.")
+                    raise InvalidInput(field, gettext("A name in %(field)s holds a character that cannot be stored.",
+                                                      field=field))
                 pending.append((inner, name, depth + 1))
         elif isinstance(item, list):
             pending.extend((inner, f"{field}[{index}]", depth + 1) for index, inner in enumerate(item))
@@ -154,7 +165,7 @@ def loads_checked(data: str | bytes) -> Any:
     try:
         value = json.loads(data)
     except RecursionError:
-        raise InvalidInput("body", f"The JSON is nested more than {MAX_JSON_DEPTH} levels deep.") from None
+        raise InvalidInput("body", _too_deep()) from None
     check_json(value)
     return value
 
@@ -162,21 +173,24 @@ def loads_checked(data: str | bytes) -> Any:
 def parse_message(raw: object, types: tuple[str, ...], max_chars: int) -> dict[str, Any]:
     """A WebSocket text message: a JSON object of at most max_chars characters, checked as a JSON body is, whose
     `type` is one of types; otherwise InvalidInput naming the field ("message", "type" or the one at fault)."""
-    expected = " or ".join(repr(kind) for kind in types)
+    expected = str(gettext(" or ")).join(repr(kind) for kind in types)
     if not isinstance(raw, str) or len(raw) > max_chars:
-        raise InvalidInput("message", f"Send JSON text of at most {max_chars} characters.")
+        raise InvalidInput("message", gettext("Send JSON text of at most %(max_chars)s characters.",
+                                              max_chars=written_number(max_chars)))
     try:
         message = loads_checked(raw)
-    except InvalidInput as refused:
-        raise InvalidInput("message" if refused.field in (None, "body") else str(refused.field),
-                           refused.message.replace("The JSON", "The message")) from None
+    except InvalidInput as refused:  # said of a message, not of a request's JSON
+        said = _too_deep("message") if refused.message == _too_deep() else refused.message
+        raise InvalidInput("message" if refused.field in (None, "body") else str(refused.field), said) from None
     except ValueError:
-        raise InvalidInput("message", f'The message is not JSON: send {{"type": {expected}, ...}}.') from None
+        raise InvalidInput("message", gettext('The message is not JSON: send {"type": %(expected)s, ...}.',
+                                              expected=expected)) from None
     if not isinstance(message, dict):
-        raise InvalidInput("message", f'The message must be a JSON object: {{"type": {expected}, ...}}.')
+        raise InvalidInput("message", gettext('The message must be a JSON object: {"type": %(expected)s, ...}.',
+                                              expected=expected))
     kind = message.get("type")
     if not isinstance(kind, str) or kind not in types:
-        raise InvalidInput("type", f"type must be {expected}.")
+        raise InvalidInput("type", gettext("type must be %(expected)s.", expected=expected))
     return message
 
 

@@ -12,6 +12,7 @@ import secrets
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
@@ -55,16 +56,17 @@ def create_invitation(session: Session, actor: User, role: object, course_id: in
     invited_role = clean_role(role)
     course = session.get(Course, course_id) if course_id is not None else None
     if course_id is not None and course is None:
-        raise Refused(404, "unknown_course", f"There is no course with id {course_id}.", "course_id")
+        raise Refused(404, "unknown_course", gettext("There is no course with id %(course_id)s.", course_id=course_id),
+                                             "course_id")
     if actor.role == Role.TUTOR:
         if course is None or not is_course_tutor(session, actor.id, course.id):
-            raise forbidden("You can invite people only into a course you teach.")
+            raise forbidden(gettext("You can invite people only into a course you teach."))
         if invited_role != Role.STUDENT:
-            raise Refused(403, "forbidden", "Tutors invite students; ask an admin to invite a tutor.", "role")
+            raise Refused(403, "forbidden", gettext("Tutors invite students; ask an admin to invite a tutor."), "role")
     elif actor.role != Role.ADMIN:
-        raise forbidden("Only tutors and admins can invite people.")
+        raise forbidden(gettext("Only tutors and admins can invite people."))
     if course is not None and invited_role == Role.ADMIN:
-        raise Refused(400, "invalid_field", "An admin is not invited into a course; leave the course empty.",
+        raise Refused(400, "invalid_field", gettext("An admin is not invited into a course; leave the course empty."),
                       "course_id")
     token = secrets.token_urlsafe(32)
     invitation = Invitation(token_hash=token_hash(token), role=invited_role.value,
@@ -92,20 +94,20 @@ def revoke_invitation(session: Session, actor: User, invitation_id: int, now: da
     """Withdraws a pending invitation (its course's tutors, admins); its link stops working. The caller commits."""
     invitation = session.get(Invitation, invitation_id)
     if invitation is None:
-        raise Refused(404, "unknown_invitation", "There is no such invitation.", "invitation_id")
+        raise Refused(404, "unknown_invitation", gettext("There is no such invitation."), "invitation_id")
     if actor.role != Role.ADMIN and (invitation.course_id is None
                                      or not is_course_tutor(session, actor.id, invitation.course_id)):
-        raise forbidden("You can withdraw invitations only of courses you teach.")
+        raise forbidden(gettext("You can withdraw invitations only of courses you teach."))
     status = _status(invitation, now)
     if status != "pending":
-        raise Refused(409, "invitation_not_pending", f"This invitation is {status}; only a pending one can be "
-                      "withdrawn.", "invitation_id")
+        raise Refused(409, "invitation_not_pending", gettext("This invitation is %(status)s; only a pending one can "
+                                                             "be withdrawn.", status=status), "invitation_id")
     # Conditional, so a link being accepted at this moment is either used or withdrawn, never both.
     withdrawn = rows_matched(session, update(Invitation).where(
         Invitation.id == invitation.id, Invitation.accepted_at.is_(None), Invitation.revoked_at.is_(None))
         .values(revoked_at=now))
     if withdrawn != 1:
-        raise Refused(409, "invitation_not_pending", "This invitation was used a moment ago.", "invitation_id")
+        raise Refused(409, "invitation_not_pending", gettext("This invitation was used a moment ago."), "invitation_id")
     session.refresh(invitation)
     course = session.get(Course, invitation.course_id) if invitation.course_id is not None else None
     return _view(invitation, course.code if course else None, now)
@@ -116,10 +118,10 @@ def list_invitations(session: Session, actor: User, course_id: int | None, now: 
     query = select(Invitation, Course.code).outerjoin(Course, Course.id == Invitation.course_id)
     if course_id is None:
         if actor.role != Role.ADMIN:
-            raise forbidden("Only an admin can list every invitation.")
+            raise forbidden(gettext("Only an admin can list every invitation."))
     else:
         if actor.role != Role.ADMIN and not is_course_tutor(session, actor.id, course_id):
-            raise forbidden("You can see the invitations only of courses you teach.")
+            raise forbidden(gettext("You can see the invitations only of courses you teach."))
         query = query.where(Invitation.course_id == course_id)
     rows = session.execute(query.order_by(Invitation.created_at.desc(), Invitation.id.desc()).limit(200))
     return [_view(invitation, code, now) for invitation, code in rows]
@@ -154,7 +156,7 @@ def accept(session: Session, token: str, username: object, password: object, pas
     name = clean_username(username)
     clean_password = clean_new_password(password)
     if password_again != clean_password:
-        raise InvalidField("password_again", "The two passwords differ; type the same password twice.")
+        raise InvalidField("password_again", gettext("The two passwords differ; type the same password twice."))
     used = rows_matched(session, update(Invitation).where(
         Invitation.id == invitation.id, Invitation.accepted_at.is_(None), Invitation.revoked_at.is_(None))
         .values(accepted_at=now))
@@ -163,7 +165,9 @@ def accept(session: Session, token: str, username: object, password: object, pas
     try:
         user = create_user(session, name, invitation.role, clean_password)
     except AccountExists:
-        raise Refused(409, "account_exists", f"The username {name!r} is taken; choose another.", "username") from None
+        raise Refused(409, "account_exists", gettext("The username %(name)s is taken; choose another.",
+                                                     name=repr(name)),
+                                             "username") from None
     session.execute(update(Invitation).where(Invitation.id == invitation.id).values(accepted_user_id=user.id))
     if course is not None and invitation.role in (Role.STUDENT, Role.TUTOR):
         session.add(CourseMembership(course_id=course.id, user_id=user.id, role=invitation.role))

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -69,7 +70,8 @@ def add_robot(session: Session, actor: User, name: object, title: object, addres
     robot = Robot(name=clean_name, title=clean_robot_title(title or clean_name), address=clean_robot_address(address),
                   kind=clean_robot_kind(kind) if kind not in (None, "") else default_kind(clean_name))
     if session.scalar(select(Robot.id).where(Robot.name == clean_name)) is not None:
-        raise Refused(409, "robot_exists", f"A robot named {clean_name!r} exists already.", "name")
+        raise Refused(409, "robot_exists", gettext("A robot named %(clean_name)s exists already.",
+                                                   clean_name=repr(clean_name)), "name")
     session.add(robot)
     session.flush()
     events.announce(session, "robots", robot.name)
@@ -82,7 +84,8 @@ def update_robot(session: Session, actor: User, robot_id: int, *, title: object 
     require_admin(actor)
     robot = session.get(Robot, robot_id)
     if robot is None:
-        raise Refused(404, "unknown_robot", f"There is no robot with id {robot_id}.", "robot_id")
+        raise Refused(404, "unknown_robot", gettext("There is no robot with id %(robot_id)s.", robot_id=robot_id),
+                                            "robot_id")
     if title is not None:
         robot.title = clean_robot_title(title)
     if address is not None:
@@ -112,10 +115,12 @@ def set_kind_picture(session: Session, actor: User, kind: object, picture: objec
     require_admin(actor)
     clean_kind = clean_robot_kind(kind)
     if picture not in CAMERA_PICTURES:
-        raise InvalidField("picture", "picture must be 'video' (the robot's camera) or 'drawn' (drawn by the browser).")
+        raise InvalidField("picture", gettext("picture must be 'video' (the robot's camera) or 'drawn' (drawn by "
+                                              "the browser)."))
     robots = session.scalars(select(Robot).where(Robot.kind == clean_kind).order_by(Robot.id)).all()
     if not robots:
-        raise Refused(404, "unknown_kind", f"No robot is of the kind {clean_kind!r}.", "kind")
+        raise Refused(404, "unknown_kind", gettext("No robot is of the kind %(clean_kind)s.",
+                                                   clean_kind=repr(clean_kind)), "kind")
     if picture == "drawn":
         _require_scenes(clean_kind, robots, has_scene)
     setting = session.get(RobotKindSetting, clean_kind)
@@ -135,10 +140,13 @@ def _require_scenes(kind: str, robots: Sequence[Robot], has_scene: SceneCheck) -
     answers = {robot.name: True if robot.farm_managed else has_scene(robot.name) for robot in robots}
     without = [name for name, answer in answers.items() if answer is False]
     if without:
-        raise Refused(409, "no_scene", f"picture cannot be 'drawn' for the kind {kind}: {', '.join(without)} describes "
-                      "no scene to draw from (a robot standing for a real one keeps its video). Choose 'video'.",
+        raise Refused(409, "no_scene", gettext("picture cannot be 'drawn' for the kind %(kind)s: %(value)s "
+                                               "describes no scene to draw from (a robot standing for a real one "
+                                               "keeps its video). Choose 'video'.", kind=kind,
+                                               value=', '.join(without)),
                       "picture")
     if True not in answers.values():
-        raise Refused(409, "scene_unknown", f"picture cannot be 'drawn' for the kind {kind} now: none of its robots "
-                      "answers, so whether they describe a scene to draw from cannot be checked. Try again once one "
-                      "is online.", "picture")
+        raise Refused(409, "scene_unknown", gettext("picture cannot be 'drawn' for the kind %(kind)s now: none of "
+                                                    "its robots answers, so whether they describe a scene to draw "
+                                                    "from cannot be checked. Try again once one is online.",
+                                                    kind=kind), "picture")

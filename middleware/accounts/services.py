@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from datetime import datetime
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import exists, func, select
 from sqlalchemy.orm import Session, aliased
 
@@ -21,22 +22,23 @@ from middleware.errors import Refused
 from middleware.models import CourseMembership, Role, User
 
 
-def forbidden(message: str = "You are not allowed to do that.") -> Refused:
-    """A 403 refusal."""
-    return Refused(403, "forbidden", message)
+def forbidden(message: str | None = None) -> Refused:
+    """A 403 refusal (message: said through gettext)."""
+    return Refused(403, "forbidden", message or gettext("You are not allowed to do that."))
 
 
 def require_admin(actor: User) -> None:
     """Refuses anyone but an admin."""
     if actor.role != Role.ADMIN:
-        raise forbidden("Only an admin can do that.")
+        raise forbidden(gettext("Only an admin can do that."))
 
 
 def get_user(session: Session, user_id: int) -> User:
     """The account with that id, or a 404 refusal."""
     user = session.get(User, user_id)
     if user is None:
-        raise Refused(404, "unknown_user", f"There is no account with id {user_id}.", "user_id")
+        raise Refused(404, "unknown_user", gettext("There is no account with id %(user_id)s.", user_id=user_id),
+                                           "user_id")
     return user
 
 
@@ -102,7 +104,7 @@ def set_active(session: Session, actor: User, user_id: int, active: bool) -> Use
     require_admin(actor)
     user = get_user(session, user_id)
     if user.id == actor.id and not active:
-        raise Refused(409, "own_account", "You cannot disable your own account.", "is_active")
+        raise Refused(409, "own_account", gettext("You cannot disable your own account."), "is_active")
     user.is_active = active
     return user
 
@@ -113,7 +115,7 @@ def change_role(session: Session, actor: User, user_id: int, role: object) -> Us
     user = get_user(session, user_id)
     new_role = clean_role(role)
     if user.id == actor.id and new_role != Role.ADMIN:
-        raise Refused(409, "own_account", "You cannot take the admin role from your own account.", "role")
+        raise Refused(409, "own_account", gettext("You cannot take the admin role from your own account."), "role")
     user.role = new_role.value
     return user
 
@@ -122,9 +124,9 @@ def reset_password(session: Session, actor: User, user_id: int) -> tuple[User, s
     """Gives the account a generated password, shown once; admins, or a tutor for their students."""
     target = get_user(session, user_id)
     if not may_reset_password(session, actor, target):
-        raise forbidden("You can reset passwords only of students in the courses you teach.")
+        raise forbidden(gettext("You can reset passwords only of students in the courses you teach."))
     if target.id == actor.id:
-        raise Refused(409, "own_account", "Change your own password on the password page instead.", "user_id")
+        raise Refused(409, "own_account", gettext("Change your own password on the password page instead."), "user_id")
     password = generate_password()
     target.password_hash = hash_password(password)
     return target, password
@@ -134,7 +136,7 @@ def set_active_by_name(session: Session, username: str, active: bool) -> User:
     """Disables or enables an account by name (the CLI, which acts as the machine's owner)."""
     user = session.scalar(select(User).where(User.username == clean_username(username)))
     if user is None:
-        raise InvalidField("username", f"There is no account named {username!r}.")
+        raise InvalidField("username", gettext("There is no account named %(username)s.", username=repr(username)))
     user.is_active = active
     return user
 

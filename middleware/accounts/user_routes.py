@@ -7,6 +7,7 @@ from collections.abc import Callable
 
 from flask import flash, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware.accounts import services
@@ -50,7 +51,7 @@ def password_submit() -> ResponseReturnValue:
 
     def change() -> ResponseReturnValue:
         if new != again:
-            raise InvalidField("new_password_again", "The two new passwords differ; type the same one twice.")
+            raise InvalidField("new_password_again", gettext("The two new passwords differ; type the same one twice."))
         _change_own_password(request.form.get("current_password", ""), new)
         flash("Your password has been changed.", "success")
         return redirect(url_for("lab.index"), 303)

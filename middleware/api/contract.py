@@ -21,9 +21,12 @@ from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 from flask import request
+from flask_babel import gettext  # type: ignore[import-untyped]
 from jsonschema import Draft202012Validator  # type: ignore[import-untyped]
 from jsonschema.exceptions import ValidationError  # type: ignore[import-untyped]
 
+from middleware.errors import written_number
+from middleware.i18n import N_
 from middleware.validation import InvalidInput, decimal_int
 
 Schema = dict[str, Any]
@@ -228,14 +231,14 @@ def _field_name(path: Any, start: str) -> str:
 
 def _check(validator: Draft202012Validator, value: Any, start: str) -> None:
     if start == "body" and not isinstance(value, dict):
-        raise InvalidInput("body", "Send a JSON object.")
+        raise InvalidInput("body", gettext("Send a JSON object."))
     error = min(validator.iter_errors(value), key=lambda e: (len(e.path), list(map(str, e.path))), default=None)
     if error is not None:
         raise _refusal(error, start)
 
 
-_KINDS = {"string": "text", "integer": "a whole number", "number": "a number", "boolean": "true or false",
-          "object": "a JSON object", "array": "a list", "null": "null"}
+_KINDS = {"string": N_("text"), "integer": N_("a whole number"), "number": N_("a number"),
+          "boolean": N_("true or false"), "object": N_("a JSON object"), "array": N_("a list"), "null": "null"}
 
 
 def _refusal(error: ValidationError, start: str) -> InvalidInput:
@@ -245,29 +248,44 @@ def _refusal(error: ValidationError, start: str) -> InvalidInput:
     if kind == "required":
         missing = str(error.message).split("'")[1] if "'" in str(error.message) else "a field"
         name = missing if name in ("body", "form") else f"{name}.{missing}"
-        return InvalidInput(name, f"{name} is required.")
+        return InvalidInput(name, gettext("%(name)s is required.", name=name))
     if kind == "type":
         kinds = schema.get("type")
         named = [str(k) for k in (kinds if isinstance(kinds, list) else [kinds])]
-        wanted = " or ".join(_KINDS.get(k, k) for k in named)
-        return InvalidInput(name, f"{name} must be {wanted}.")
+        wanted = str(gettext(" or ")).join(gettext(_KINDS[k]) if k in _KINDS else k for k in named)
+        return InvalidInput(name, gettext("%(name)s must be %(wanted)s.", name=name, wanted=wanted))
     if kind in ("minimum", "maximum"):
         low, high = schema.get("minimum"), schema.get("maximum")
-        span = f"from {low} to {high}" if low is not None and high is not None else (
-            f"at least {low}" if low is not None else f"at most {high}")
-        return InvalidInput(name, f"{name} must be {span}.")
+        return InvalidInput(name, _within(name, low, high))
     if kind in ("minLength", "maxLength"):
         low, high = schema.get("minLength", 0), schema.get("maxLength")
-        span = f"{low} to {high}" if high is not None else f"at least {low}"
-        return InvalidInput(name, f"{name} must be {span} characters long.")
+        if high is not None:
+            return InvalidInput(name, gettext("%(name)s must be %(low)s to %(high)s characters long.", name=name,
+                                              low=written_number(low), high=written_number(high)))
+        return InvalidInput(name, gettext("%(name)s must be at least %(low)s characters long.", name=name,
+                                          low=written_number(low)))
     if kind == "maxItems":
-        return InvalidInput(name, f"{name} holds at most {schema.get('maxItems')} items.")
+        return InvalidInput(name, gettext("%(name)s holds at most %(count)s items.", name=name,
+                                          count=written_number(schema.get("maxItems"))))
     if kind in ("enum", "const"):
         allowed = ", ".join(map(str, schema.get("enum", [schema.get("const")])))
-        return InvalidInput(name, f"{name} must be one of: {allowed}.")
+        return InvalidInput(name, gettext("%(name)s must be one of: %(allowed)s.", name=name, allowed=allowed))
     if kind == "pattern":
-        return InvalidInput(name, f"{name} must be {schema.get('description', 'in the expected form')}.")
-    return InvalidInput(name, f"{name} is not allowed here: {schema.get('description', error.message)}.")
+        # A schema's description is English (the API's document): said as it is.
+        form = schema.get("description") or gettext("in the expected form")
+        return InvalidInput(name, gettext("%(name)s must be %(form)s.", name=name, form=form))
+    return InvalidInput(name, gettext("%(name)s is not allowed here: %(reason)s.", name=name,
+                                      reason=schema.get("description", error.message)))
+
+
+def _within(name: str, low: float | None, high: float | None) -> str:
+    """The sentence for a number outside its schema's minimum and maximum."""
+    if low is not None and high is not None:
+        return str(gettext("%(name)s must be from %(low)s to %(high)s.", name=name, low=written_number(low),
+                           high=written_number(high)))
+    if low is not None:
+        return str(gettext("%(name)s must be at least %(low)s.", name=name, low=written_number(low)))
+    return str(gettext("%(name)s must be at most %(high)s.", name=name, high=written_number(high)))
 
 
 def _check_query(query: Mapping[str, Schema]) -> None:
@@ -280,9 +298,13 @@ def _check_query(query: Mapping[str, Schema]) -> None:
         if schema.get("type") == "integer":
             if decimal_int(value, schema.get("minimum", -(2**63)), schema.get("maximum", 2**63 - 1)) is None:
                 low, high = schema.get("minimum"), schema.get("maximum")
-                raise InvalidInput(name, f"{name} must be a whole number" + (
-                    f" from {low} to {high}." if low is not None and high is not None else "."))
+                if low is not None and high is not None:
+                    raise InvalidInput(name, gettext("%(name)s must be a whole number from %(low)s to %(high)s.",
+                                                     name=name, low=written_number(low), high=written_number(high)))
+                raise InvalidInput(name, gettext("%(name)s must be a whole number.", name=name))
         elif "enum" in schema and value not in schema["enum"]:
-            raise InvalidInput(name, f"{name} must be one of: {', '.join(map(str, schema['enum']))}.")
+            raise InvalidInput(name, gettext("%(name)s must be one of: %(allowed)s.", name=name,
+                                             allowed=", ".join(map(str, schema["enum"]))))
         elif len(value) > schema.get("maxLength", len(value)):
-            raise InvalidInput(name, f"{name} must be at most {schema['maxLength']} characters long.")
+            raise InvalidInput(name, gettext("%(name)s must be at most %(high)s characters long.", name=name,
+                                             high=written_number(schema["maxLength"])))

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from datetime import datetime, timedelta
 from typing import Any
 
+from flask_babel import gettext, lazy_gettext  # type: ignore[import-untyped]
 from sqlalchemy import func, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
@@ -171,20 +172,22 @@ def start_attempt(session: Session, actor: User, exam_id: int, now: datetime,
         return current
     state = window_state(exam, now)
     if state != "open":
-        raise Refused(409, f"exam_{state}", "This test is not open yet." if state == "upcoming"
-                      else "This test has closed; no new attempts are accepted.", "exam_id")
+        raise Refused(409, f"exam_{state}", gettext("This test is not open yet.") if state == "upcoming"
+                      else gettext("This test has closed; no new attempts are accepted."), "exam_id")
     done = session.scalar(select(func.count()).select_from(Attempt).where(
         Attempt.exam_id == exam.id, Attempt.user_id == actor.id)) or 0
     if exam.max_attempts is not None and done >= exam.max_attempts:
-        raise Refused(409, "no_attempts_left", f"You have used your {exam.max_attempts} attempt(s) at this test.",
+        raise Refused(409, "no_attempts_left", gettext("You have used your %(max_attempts)s attempt(s) at this test.",
+                                                       max_attempts=exam.max_attempts),
                       "exam_id")
     robot_name = None
     if exam.kind == "experimental":
         robot_name = (own_robot(exam, actor.id) if own_robot else None) or exam.robot_name
         if robot_name == exam.robot_name and (controls_robot is None or not controls_robot(robot_name or "",
                                                                                             actor.id)):
-            raise Refused(409, "no_robot", f"Take control of {exam.robot_name} first (open it in the lab, or during "
-                                           "your booking), then start the test.", "robot_name")
+            raise Refused(409, "no_robot", gettext("Take control of %(robot_name)s first (open it in the lab, or "
+                                                   "during your booking), then start the test.",
+                                                   robot_name=exam.robot_name), "robot_name")
     deadline = None
     if exam.duration_s is not None:
         deadline = now + timedelta(seconds=exam.duration_s)
@@ -196,7 +199,7 @@ def start_attempt(session: Session, actor: User, exam_id: int, now: datetime,
     try:
         session.flush()
     except IntegrityError:
-        raise Refused(409, "attempt_in_progress", "An attempt at this test is already in progress.",
+        raise Refused(409, "attempt_in_progress", lazy_gettext("An attempt at this test is already in progress."),
                       "exam_id") from None
     if _is_zone_test(exam):
         hidden_obstacles.announce_change(session, actor.id)
@@ -206,10 +209,10 @@ def start_attempt(session: Session, actor: User, exam_id: int, now: datetime,
 def _own_open_attempt(session: Session, actor: User, attempt_id: int, now: datetime) -> tuple[Attempt, Exam]:
     attempt = _lock_attempt(session, attempt_id)
     if attempt.user_id != actor.id:
-        raise forbidden("You can answer only your own attempts.")
+        raise forbidden(gettext("You can answer only your own attempts."))
     exam = get_exam(session, attempt.exam_id)
     if attempt.status != "in_progress":
-        raise Refused(409, "already_submitted", "This attempt was submitted; it cannot change.", "attempt_id")
+        raise Refused(409, "already_submitted", gettext("This attempt was submitted; it cannot change."), "attempt_id")
     if attempt.deadline_at is not None and now > as_utc(attempt.deadline_at):
         _finalise(session, exam, attempt, as_utc(attempt.deadline_at), "deadline", None)
         raise TimeUp()
@@ -218,18 +221,18 @@ def _own_open_attempt(session: Session, actor: User, attempt_id: int, now: datet
 
 def _clean_answer(exam_items: set[str], item: str, answer: object, started: datetime, now: datetime) -> object:
     if item not in exam_items:
-        raise Refused(400, "invalid_field", f"{item} is not a question of this test.", "item")
+        raise Refused(400, "invalid_field", gettext("%(item)s is not a question of this test.", item=item), "item")
     if item == "report":
         if not isinstance(answer, dict):
-            raise Refused(400, "invalid_field", "A pose report is {x_m, y_m}.", "report")
+            raise Refused(400, "invalid_field", gettext("A pose report is {x_m, y_m}."), "report")
         # The moment of the report is the server's, never the browser's.
         return {"x_m": answer.get("x_m"), "y_m": answer.get("y_m"), "t_s": (now - started).total_seconds()}
     if item == obstacle_zone.ZONE_ITEM:
         return obstacle_zone.clean_zone(answer)
     if len(repr(answer)) > MAX_ANSWER_CHARS:
-        raise Refused(400, "invalid_field", "The answer is too long.", item)
+        raise Refused(400, "invalid_field", gettext("The answer is too long."), item)
     if answer is not None and not isinstance(answer, str | int | float | list | dict):
-        raise Refused(400, "invalid_field", "The answer has an unknown shape.", item)
+        raise Refused(400, "invalid_field", gettext("The answer has an unknown shape."), item)
     return answer
 
 
@@ -237,7 +240,8 @@ def _clean_rating(item: str, answer: object) -> int:
     try:
         return read_rating(answer, item)
     except InvalidField:
-        raise Refused(400, "invalid_field", f"Question {item}: choose a rating from 1 to 5.", item) from None
+        raise Refused(400, "invalid_field", gettext("Question %(item)s: choose a rating from 1 to 5.", item=item),
+                                            item) from None
 
 
 def _items(exam: Exam) -> set[str]:

@@ -6,6 +6,7 @@ import json
 from dataclasses import replace
 from typing import Any
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -50,7 +51,8 @@ def course_question(session: Session, actor: User, question_id: int) -> Question
     """A question of a course the actor teaches."""
     question = session.get(Question, question_id)
     if question is None:
-        raise Refused(404, "unknown_question", f"There is no question with id {question_id}.", "question_id")
+        raise Refused(404, "unknown_question", gettext("There is no question with id %(question_id)s.",
+                                                       question_id=question_id), "question_id")
     teaching_course(session, actor, question.course_id)
     return question
 
@@ -101,7 +103,8 @@ def _check_questions(session: Session, course_id: int, ids: list[int]) -> None:
     found = set(session.scalars(select(Question.id).where(Question.course_id == course_id, Question.id.in_(ids))))
     missing = [i for i in ids if i not in found]
     if missing:
-        raise InvalidField("question_ids", f"Questions {', '.join(map(str, missing))} are not in this course's bank.")
+        raise InvalidField("question_ids", gettext("Questions %(value)s are not in this course's bank.",
+                                                   value=', '.join(map(str, missing))))
 
 
 def create_exam(session: Session, actor: User, course_id: int, data: ExamInput) -> Exam:
@@ -131,7 +134,8 @@ def update_exam(session: Session, actor: User, exam_id: int, data: ExamInput) ->
     data = replace(data, task=with_scene_truth(data.task, data.robot_name))
     started = has_attempts(session, exam.id)
     if started and (data.question_ids != exam.question_ids or data.task != exam.task or data.kind != exam.kind):
-        raise Refused(409, "exam_started", "Students have started this test: only its title and times can change.",
+        raise Refused(409, "exam_started", gettext("Students have started this test: only its title and times can "
+                                                   "change."),
                       "question_ids")
     exam.title, exam.kind, exam.opens_at, exam.closes_at = data.title, data.kind, data.opens_at, data.closes_at
     exam.duration_s, exam.max_attempts, exam.question_ids = data.duration_s, data.max_attempts, data.question_ids
@@ -143,8 +147,9 @@ def delete_exam(session: Session, actor: User, exam_id: int) -> None:
     """Deletes a test nobody has attempted; one with attempts is kept (its marks are grades)."""
     exam = managed_exam(session, actor, exam_id)
     if has_attempts(session, exam.id):
-        raise Refused(409, "exam_has_attempts", f"“{exam.title}” has attempts, so it cannot be deleted: their marks "
-                      "are grades. Change its closing time to close it instead.", "exam_id")
+        raise Refused(409, "exam_has_attempts", gettext("“%(title)s” has attempts, so it cannot be deleted: their "
+                                                        "marks are grades. Change its closing time to close it "
+                                                        "instead.", title=exam.title), "exam_id")
     session.delete(exam)
     session.flush()
 

@@ -16,6 +16,7 @@ import math
 from typing import Any
 
 import numpy as np
+from flask_babel import format_decimal, gettext  # type: ignore[import-untyped]
 
 from middleware.errors import Refused
 from middleware.robots.link import RobotUnavailable
@@ -50,15 +51,18 @@ def clean_zone(answer: object) -> dict[str, list[list[float]]]:
     """The student's marks, checked: at most MAX_RECTS rectangles of four finite numbers (corners in any order)."""
     rects = answer.get("rects") if isinstance(answer, dict) else None
     if not isinstance(rects, list) or len(rects) > MAX_RECTS:
-        raise Refused(400, "invalid_field", f"A zone is {{rects: [[x_min, y_min, x_max, y_max], ...]}} in metres, "
-                                            f"at most {MAX_RECTS} rectangles.", ZONE_ITEM)
+        raise Refused(400, "invalid_field", gettext("A zone is {rects: [[x_min, y_min, x_max, y_max], ...]} in "
+                                                    "metres, at most %(max_rects)s rectangles.", max_rects=MAX_RECTS),
+                      ZONE_ITEM)
     cleaned = []
     for index, rect in enumerate(rects):
         if (not isinstance(rect, list) or len(rect) != 4
                 or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in rect)
                 or not all(math.isfinite(v) and abs(v) <= COORDINATE_LIMIT_M for v in rect)):
-            raise Refused(400, "invalid_field", f"Rectangle {index + 1} must be four numbers within "
-                          f"{COORDINATE_LIMIT_M:g} m of the origin.", f"{ZONE_ITEM}.rects[{index}]")
+            raise Refused(400, "invalid_field", gettext("Rectangle %(number)s must be four numbers within "
+                                                        "%(coordinate_limit_m)s m of the origin.", number=index + 1,
+                                                        coordinate_limit_m=format_decimal(COORDINATE_LIMIT_M)),
+                          f"{ZONE_ITEM}.rects[{index}]")
         x0, y0, x1, y1 = (float(v) for v in rect)
         cleaned.append([min(x0, x1), min(y0, y1), max(x0, x1), max(y0, y1)])
     return {"rects": cleaned}
@@ -112,10 +116,12 @@ def with_scene_truth(task: dict[str, Any] | None, robot_name: str | None) -> dic
         return task
     link = robot_registry().get(robot_name or "")
     if link is None:
-        raise Refused(400, "invalid_field", f"There is no robot named {str(robot_name)[:64]!r}.", "robot_name")
+        raise Refused(400, "invalid_field", gettext("There is no robot named %(value)s.",
+                                                    value=repr(str(robot_name)[:64])), "robot_name")
     try:
         info = link.info(max_age_s=5.0)
     except RobotUnavailable:
-        raise Refused(503, "robot_offline", f"{robot_name} does not answer, and this test is graded against its "
-                                            "scene: start the robot and save again.", "robot_name") from None
+        raise Refused(503, "robot_offline", gettext("%(robot_name)s does not answer, and this test is graded "
+                                                    "against its scene: start the robot and save again.",
+                                                    robot_name=robot_name), "robot_name") from None
     return {**task, **scene_obstacles(info)}

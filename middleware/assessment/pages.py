@@ -220,14 +220,15 @@ def _course_action(course_id: int, action: Callable[[Session, dict[str, Any]], o
 def _own_question(dbs: Any, course_id: int, question_id: int) -> Any:
     question = bank.course_question(dbs, current_user, question_id)
     if question.course_id != course_id:
-        raise Refused(404, "unknown_question", f"There is no question with id {question_id} here.", "question_id")
+        raise Refused(404, "unknown_question", _("There is no question with id %(question_id)s here.",
+                                                       question_id=question_id), "question_id")
     return question
 
 
 def _own_exam(dbs: Any, course_id: int, exam_id: int) -> Any:
     exam = bank.managed_exam(dbs, current_user, exam_id)
     if exam.course_id != course_id:
-        raise Refused(404, "unknown_exam", f"There is no test with id {exam_id} here.", "exam_id")
+        raise Refused(404, "unknown_exam", _("There is no test with id %(exam_id)s here.", exam_id=exam_id), "exam_id")
     return exam
 
 
@@ -271,7 +272,7 @@ def import_bank(course_id: int) -> ResponseReturnValue:
     def action(dbs: Session, _form: dict[str, Any]) -> None:
         upload = request.files.get("file")
         if upload is None or not upload.filename:
-            raise InvalidField("file", "Choose a question bank file (JSON) to import.")
+            raise InvalidField("file", _("Choose a question bank file (JSON) to import."))
         bank.import_bank(dbs, current_user, course_id, upload.read())
 
     return _course_action(course_id, action, "Question bank imported.", "file")

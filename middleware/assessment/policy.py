@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy.orm import Session
 
 from middleware.accounts.services import forbidden
@@ -20,7 +21,7 @@ def student_course(session: Session, actor: User, course_id: int) -> Course:
     """The course when actor is one of its students; 404 or 403 otherwise."""
     course = get_course(session, course_id)
     if actor.role != Role.STUDENT or not is_student_of(session, actor.id, course_id):
-        raise forbidden("Only the students of this course can do that.")
+        raise forbidden(gettext("Only the students of this course can do that."))
     return course
 
 
@@ -28,7 +29,7 @@ def get_exam(session: Session, exam_id: int) -> Exam:
     """The exam, or a 404 refusal."""
     exam = session.get(Exam, exam_id)
     if exam is None:
-        raise Refused(404, "unknown_exam", f"There is no test with id {exam_id}.", "exam_id")
+        raise Refused(404, "unknown_exam", gettext("There is no test with id %(exam_id)s.", exam_id=exam_id), "exam_id")
     return exam
 
 
@@ -36,7 +37,8 @@ def get_attempt(session: Session, attempt_id: int) -> Attempt:
     """The attempt, or a 404 refusal."""
     attempt = session.get(Attempt, attempt_id)
     if attempt is None:
-        raise Refused(404, "unknown_attempt", f"There is no attempt with id {attempt_id}.", "attempt_id")
+        raise Refused(404, "unknown_attempt", gettext("There is no attempt with id %(attempt_id)s.",
+                                                      attempt_id=attempt_id), "attempt_id")
     return attempt
 
 
@@ -55,4 +57,4 @@ def readable_attempt(session: Session, actor: User, attempt_id: int) -> tuple[At
     exam = get_exam(session, attempt.exam_id)
     if attempt.user_id == actor.id or may_teach(session, actor, exam.course_id):
         return attempt, exam
-    raise forbidden("You can open only your own attempts.")
+    raise forbidden(gettext("You can open only your own attempts."))

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.auth.schemas import InvalidField
 from middleware.validation import decimal_int
 
@@ -17,7 +19,8 @@ def read_rating(value: object, field: str) -> int:
     rating = value if isinstance(value, int) and not isinstance(value, bool) else (
         decimal_int(value, LOWEST, HIGHEST) if isinstance(value, str) else None)
     if rating is None or not LOWEST <= rating <= HIGHEST:
-        raise InvalidField(field, f"{field}: choose a rating from {LOWEST} to {HIGHEST}.")
+        raise InvalidField(field, gettext("%(field)s: choose a rating from %(lowest)s to %(highest)s.", field=field,
+                                          lowest=LOWEST, highest=HIGHEST))
     return rating
 
 
@@ -33,7 +36,8 @@ def _end(value: object, field: str, default: str) -> str:
     if value in (None, ""):
         return default
     if not isinstance(value, str) or not value.strip() or len(value.strip()) > MAX_END_LABEL:
-        raise InvalidField(field, f"{field} must be text of 1 to {MAX_END_LABEL} characters.")
+        raise InvalidField(field, gettext("%(field)s must be text of 1 to %(max_end_label)s characters.", field=field,
+                                          max_end_label=MAX_END_LABEL))
     return " ".join(value.split())
 
 

@@ -148,10 +148,10 @@ def list_attempts(session: Session, actor: User, exam_id: int, now: datetime) ->
 def _reviewable(session: Session, actor: User, attempt_id: int, now: datetime) -> Attempt:
     attempt, exam = readable_attempt(session, actor, attempt_id)
     if not may_teach(session, actor, exam.course_id):
-        raise Refused(403, "forbidden", "Only the course's tutors review attempts.")
+        raise Refused(403, "forbidden", gettext("Only the course's tutors review attempts."))
     settle(session, attempt, now)
     if attempt.status != "submitted":
-        raise Refused(409, "not_submitted", "The attempt is still in progress; review it once submitted.",
+        raise Refused(409, "not_submitted", gettext("The attempt is still in progress; review it once submitted."),
                       "attempt_id")
     return attempt
 
@@ -162,15 +162,16 @@ def override_mark(session: Session, actor: User, attempt_id: int, item: object, 
     attempt = _reviewable(session, actor, attempt_id, now)
     result = next((r for r in attempt.results or [] if r["item"] == str(item)), None)
     if result is None:
-        raise Refused(400, "invalid_field", "Choose an item of this attempt.", "item")
+        raise Refused(400, "invalid_field", gettext("Choose an item of this attempt."), "item")
     try:
         value = float(points)  # type: ignore[arg-type]
     except (TypeError, ValueError):
         value = float("nan")
     if not 0 <= value <= float(result["max_points"]):
-        raise Refused(400, "invalid_field", f"points must be from 0 to {result['max_points']:g}.", "points")
+        raise Refused(400, "invalid_field", gettext("points must be from 0 to %(max_points)s.",
+                                                    max_points=format(result['max_points'], 'g')), "points")
     if not isinstance(reason, str) or not reason.strip() or len(reason) > 2000:
-        raise Refused(400, "invalid_field", "Say why the mark changes (1 to 2000 characters).", "reason")
+        raise Refused(400, "invalid_field", gettext("Say why the mark changes (1 to 2000 characters)."), "reason")
     text = comment.strip() if isinstance(comment, str) else ""
     review = AttemptReview(attempt_id=attempt.id, author_id=actor.id, item=str(item), points=round(value, 4),
                            reason=reason.strip(), comment=text[:4000], created_at=now)
@@ -185,9 +186,9 @@ def add_comment(session: Session, actor: User, attempt_id: int, item: object, co
     """A tutor's comment on the attempt (item None) or on one item."""
     attempt = _reviewable(session, actor, attempt_id, now)
     if not isinstance(comment, str) or not comment.strip() or len(comment) > 4000:
-        raise Refused(400, "invalid_field", "Write a comment of 1 to 4000 characters.", "comment")
+        raise Refused(400, "invalid_field", gettext("Write a comment of 1 to 4000 characters."), "comment")
     if item not in (None, "") and str(item) not in {r["item"] for r in attempt.results or []}:
-        raise Refused(400, "invalid_field", "Choose an item of this attempt.", "item")
+        raise Refused(400, "invalid_field", gettext("Choose an item of this attempt."), "item")
     review = AttemptReview(attempt_id=attempt.id, author_id=actor.id, item=str(item) if item else None,
                            points=None, reason="", comment=comment.strip(), created_at=now)
     session.add(review)

@@ -8,6 +8,7 @@ from typing import Any
 
 from flask import Blueprint, Response, current_app, jsonify, request
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 from sqlalchemy.orm import Session
 
@@ -281,7 +282,7 @@ def api_save_answers(attempt_id: int) -> ResponseReturnValue:
     data = json_body()
     answers = data.get("answers")
     if not isinstance(answers, dict):
-        raise ApiError(400, "invalid_field", "answers must be an object of item -> answer.", "answers")
+        raise ApiError(400, "invalid_field", gettext("answers must be an object of item -> answer."), "answers")
 
     def action(dbs: Session) -> dict[str, Any]:
         attempt = attempts.save_answers(dbs, current_user, attempt_id, answers, server_now())

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from flask_babel import gettext, lazy_gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
@@ -78,8 +79,10 @@ def write_survey(session: Session, actor: User, course_id: int, title: str,
     teaching_course(session, actor, course_id)
     answered = respondent_count(session, course_id)
     if answered:
-        raise Refused(409, "survey_answered", f"{answered} {'student has' if answered == 1 else 'students have'} "
-                      "answered this survey, so its statements stay as they are: their answers are to these.",
+        raise Refused(409, "survey_answered", gettext("%(answered)s %(value)s answered this survey, so its "
+                                                      "statements stay as they are: their answers are to these.",
+                                                      answered=answered,
+                                                      value='student has' if answered == 1 else 'students have'),
                       "statements")
     row = session.scalar(select(CourseSurvey).where(CourseSurvey.course_id == course_id))
     if row is None:
@@ -101,12 +104,13 @@ def submit_survey(session: Session, actor: User, course_id: int, ratings: dict[s
     """Stores the student's answers, once per course (a unique constraint, so also across workers)."""
     student_course(session, actor, course_id)
     if has_answered(session, actor.id, course_id):
-        raise Refused(409, "already_answered", "You have answered this questionnaire already. Thank you!")
+        raise Refused(409, "already_answered", gettext("You have answered this questionnaire already. Thank you!"))
     session.add(SurveyResponse(course_id=course_id, user_id=actor.id, ratings=ratings, comments=comments))
     try:
         session.flush()
     except IntegrityError:
-        raise Refused(409, "already_answered", "You have answered this questionnaire already. Thank you!") from None
+        raise Refused(409, "already_answered", lazy_gettext("You have answered this questionnaire "
+                                                                    "already. Thank you!")) from None
 
 
 def aggregate(responses: list[dict[str, int]],

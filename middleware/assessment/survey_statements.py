@@ -9,6 +9,8 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.assessment.rating import DEFAULT_ENDS, read_ends, read_rating
 from middleware.auth.schemas import InvalidField
 
@@ -47,10 +49,11 @@ FIXED_STATEMENTS = tuple(Statement(key, text) for key, text in SURVEY_ITEMS)
 
 def _statement_text(value: object, where: str) -> str:
     if not isinstance(value, str) or not value.strip():
-        raise InvalidField("statements", f"statements: {where} needs the statement's text.")
+        raise InvalidField("statements", gettext("statements: %(where)s needs the statement's text.", where=where))
     text = " ".join(value.split())
     if len(text) > MAX_STATEMENT:
-        raise InvalidField("statements", f"statements: {where} is longer than {MAX_STATEMENT} characters.")
+        raise InvalidField("statements", gettext("statements: %(where)s is longer than %(max_statement)s characters.",
+                                                 where=where, max_statement=MAX_STATEMENT))
     return text
 
 
@@ -58,8 +61,8 @@ def _from_line(line: str, number: int) -> dict[str, Any]:
     """"Statement | what 1 means | what 5 means" (the ends optional) as the API's object."""
     parts = [part.strip() for part in line.split("|")]
     if len(parts) > 3:
-        raise InvalidField("statements", f"statements: line {number} has more than two '|'; write "
-                                         "'statement | what 1 means | what 5 means'.")
+        raise InvalidField("statements", gettext("statements: line %(number)s has more than two '|'; write "
+                                                 "'statement | what 1 means | what 5 means'.", number=number))
     return dict(zip(("text", "low_label", "high_label"), parts, strict=False))
 
 
@@ -72,19 +75,23 @@ def parse_statements(value: object) -> list[Statement]:
     elif isinstance(value, list):
         items = [(f"statement {n}", item) for n, item in enumerate(value, start=1)]
     else:
-        raise InvalidField("statements", "statements must be a list of statements, or text with one per line.")
+        raise InvalidField("statements", gettext("statements must be a list of statements, or text with one per "
+                                                 "line."))
     if not items:
-        raise InvalidField("statements", "Write at least one statement for the students to rate.")
+        raise InvalidField("statements", gettext("Write at least one statement for the students to rate."))
     if len(items) > MAX_STATEMENTS:
-        raise InvalidField("statements", f"A survey has at most {MAX_STATEMENTS} statements.")
+        raise InvalidField("statements", gettext("A survey has at most %(max_statements)s statements.",
+                                                 max_statements=MAX_STATEMENTS))
     out = []
     for number, (where, item) in enumerate(items, start=1):
         if not isinstance(item, dict):
-            raise InvalidField("statements", f"statements: {where} must be an object with its text.")
+            raise InvalidField("statements", gettext("statements: %(where)s must be an object with its text.",
+                                                     where=where))
         try:
             ends = read_ends(item)
         except InvalidField as invalid:
-            raise InvalidField("statements", f"statements: {where}: {invalid.message}") from None
+            raise InvalidField("statements", gettext("statements: %(where)s: %(message)s", where=where,
+                                                     message=invalid.message)) from None
         out.append(Statement(f"s{number}", _statement_text(item.get("text"), where), **ends))
     return out
 
@@ -94,7 +101,8 @@ def parse_title(value: object) -> str:
     if value in (None, ""):
         return DEFAULT_TITLE
     if not isinstance(value, str) or not value.strip() or len(value.strip()) > MAX_TITLE:
-        raise InvalidField("title", f"title must be text of 1 to {MAX_TITLE} characters.")
+        raise InvalidField("title", gettext("title must be text of 1 to %(max_title)s characters.",
+                                            max_title=MAX_TITLE))
     return " ".join(value.split())
 
 
@@ -109,5 +117,5 @@ def parse_answers(data: dict[str, Any], statements: Sequence[Statement]) -> tupl
     ratings = {s.key: read_rating(source.get(s.key), s.key) for s in statements}  # type: ignore[union-attr]
     comments = data.get("comments") or ""
     if not isinstance(comments, str) or len(comments) > 4000:
-        raise InvalidField("comments", "comments must be text of at most 4000 characters.")
+        raise InvalidField("comments", gettext("comments must be text of at most 4000 characters."))
     return ratings, comments.strip()

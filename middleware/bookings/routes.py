@@ -8,6 +8,7 @@ from urllib.parse import urlencode
 
 from flask import Blueprint, Response, abort, current_app, flash, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware.api.contract import OBJECT, STRING, about, array, described, obj, text
@@ -43,7 +44,8 @@ def _now() -> datetime:
 
 def _require_robot(robot_name: str) -> str:
     if robot_name not in robot_registry().names():  # lab robots only: a practice robot is never booked
-        raise ApiError(404, "unknown_robot", f"There is no robot named {robot_name[:64]!r}.", "robot_name")
+        raise ApiError(404, "unknown_robot", gettext("There is no robot named %(value)s.", value=repr(robot_name[:64])),
+                                             "robot_name")
     return robot_name
 
 
@@ -81,7 +83,7 @@ def api_create_booking() -> ResponseReturnValue:
     """Books a slot: {robot_name | pool, starts_at, ends_at | duration_min, kind?, course_id?}."""
     data = request.get_json(silent=True)
     if not isinstance(data, dict):
-        raise ApiError(400, "invalid_field", "Send the booking as a JSON object.", "body")
+        raise ApiError(400, "invalid_field", gettext("Send the booking as a JSON object."), "body")
     session, now = get_session(), _now()
     booking_request = parse_booking_request(data)
     if booking_request.pool_kind is None:
@@ -119,7 +121,7 @@ def api_robot_bookings(robot_name: str) -> ResponseReturnValue:
     if request.args.get("to"):
         end = parse_instant(request.args["to"], "to")
     if end <= start or end - start > timedelta(days=62):
-        raise ApiError(400, "invalid_field", "to must be after from, at most 62 days later.", "to")
+        raise ApiError(400, "invalid_field", gettext("to must be after from, at most 62 days later."), "to")
     session = get_session()
     views = services.describe(session, current_user, services.robot_bookings(session, robot_name, start, end), now)
     return jsonify({"robot_name": robot_name, "from": start.strftime("%Y-%m-%dT%H:%M:%SZ"),

@@ -8,6 +8,8 @@ from dataclasses import dataclass
 from datetime import UTC, date, datetime, time, timedelta
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.auth.schemas import InvalidField
 from middleware.validation import decimal_int, within_calendar
 
@@ -33,15 +35,17 @@ class BookingRequest:
 def parse_instant(value: object, field: str) -> datetime:
     """An ISO 8601 date-time with a zone ('Z' or an offset), as aware UTC."""
     if not isinstance(value, str) or len(value) > 40:
-        raise InvalidField(field, f"{field} must be an ISO 8601 date and time such as 2026-11-23T09:00:00Z.")
+        raise InvalidField(field, gettext("%(field)s must be an ISO 8601 date and time such as 2026-11-23T09:00:00Z.",
+                                          field=field))
     try:
         moment = datetime.fromisoformat(value.strip())
     except ValueError:
-        raise InvalidField(field, f"{field} must be an ISO 8601 date and time such as 2026-11-23T09:00:00Z.") from None
+        raise InvalidField(field, gettext("%(field)s must be an ISO 8601 date and time such as 2026-11-23T09:00:00Z.",
+                                          field=field)) from None
     if moment.tzinfo is None:
-        raise InvalidField(field, f"{field} must say its time zone, e.g. end with 'Z' for UTC.")
+        raise InvalidField(field, gettext("%(field)s must say its time zone, e.g. end with 'Z' for UTC.", field=field))
     if not within_calendar(moment):
-        raise InvalidField(field, f"{field} must be a date between the years 1900 and 9000.")
+        raise InvalidField(field, gettext("%(field)s must be a date between the years 1900 and 9000.", field=field))
     return moment.astimezone(UTC)
 
 
@@ -51,7 +55,7 @@ def parse_optional_id(value: object, field: str) -> int | None:
         return None
     value = decimal_int(value, 1, MAX_ID)
     if value is None:
-        raise InvalidField(field, f"{field} must be a positive whole number.")
+        raise InvalidField(field, gettext("%(field)s must be a positive whole number.", field=field))
     return value
 
 
@@ -62,26 +66,26 @@ def parse_booking_request(data: Mapping[str, object]) -> BookingRequest:
     if pool in (None, ""):
         pool = None
     elif not isinstance(pool, str) or not pool.strip() or len(pool) > 32:
-        raise InvalidField("pool", "pool must name a kind of robot, such as 'lab'.")
+        raise InvalidField("pool", gettext("pool must name a kind of robot, such as 'lab'."))
     robot_name = data.get("robot_name")
     if pool is not None and robot_name in (None, ""):
         robot_name = ""
     elif not isinstance(robot_name, str) or not robot_name.strip() or len(robot_name) > 32:
-        raise InvalidField("robot_name", "robot_name must name one of the lab's robots.")
+        raise InvalidField("robot_name", gettext("robot_name must name one of the lab's robots."))
     starts_at = parse_instant(data.get("starts_at"), "starts_at")
     if data.get("ends_at") not in (None, ""):
         ends_at = parse_instant(data.get("ends_at"), "ends_at")
     else:
         minutes = parse_optional_id(data.get("duration_min"), "duration_min")
         if minutes is None:
-            raise InvalidField("ends_at", "Give ends_at (or duration_min) for the booking.")
+            raise InvalidField("ends_at", gettext("Give ends_at (or duration_min) for the booking."))
         ends_at = starts_at + timedelta(minutes=min(minutes, 100_000))
     kind = data.get("kind") or "personal"
     if kind not in KINDS:
-        raise InvalidField("kind", "kind must be 'personal' or 'class'.")
+        raise InvalidField("kind", gettext("kind must be 'personal' or 'class'."))
     course_id = parse_optional_id(data.get("course_id"), "course_id")
     if kind == "class" and course_id is None:
-        raise InvalidField("course_id", "A class booking needs the course it is for (course_id).")
+        raise InvalidField("course_id", gettext("A class booking needs the course it is for (course_id)."))
     return BookingRequest(robot_name.strip(), starts_at, ends_at, str(kind), course_id,
                           pool.strip() if pool is not None else None)
 
@@ -90,13 +94,14 @@ def check_slot_shape(starts_at: datetime, ends_at: datetime, now: datetime) -> N
     """Refuses bookings off the 30-minute grid, not ending after they start, too long, or in the past."""
     for field, moment in (("starts_at", starts_at), ("ends_at", ends_at)):
         if moment.second or moment.microsecond or moment.minute % SLOT_MINUTES:
-            raise InvalidField(field, f"{field} must be on the {SLOT_MINUTES}-minute grid (:00 or :30).")
+            raise InvalidField(field, gettext("%(field)s must be on the %(slot_minutes)s-minute grid (:00 or :30).",
+                                              field=field, slot_minutes=SLOT_MINUTES))
     if ends_at <= starts_at:
-        raise InvalidField("ends_at", "ends_at must be after starts_at.")
+        raise InvalidField("ends_at", gettext("ends_at must be after starts_at."))
     if ends_at - starts_at > MAX_BOOKING:
-        raise InvalidField("ends_at", "A booking may last at most 4 hours.")
+        raise InvalidField("ends_at", gettext("A booking may last at most 4 hours."))
     if starts_at < now:
-        raise InvalidField("starts_at", "That slot has already started; choose one in the future.")
+        raise InvalidField("starts_at", gettext("That slot has already started; choose one in the future."))
 
 
 def parse_time_zone(value: object) -> ZoneInfo:

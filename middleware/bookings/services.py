@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
 from flask import current_app, has_app_context  # config only, never the request
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -18,7 +19,7 @@ from middleware.auth.schemas import InvalidField
 from middleware.bookings import pool_slots
 from middleware.bookings.schemas import SLOT_MINUTES, BookingRequest, check_slot_shape
 from middleware.courses.services import is_course_tutor
-from middleware.errors import Refused
+from middleware.errors import Refused, written_date, written_number
 from middleware.locking import lock_robot_control, lock_user
 from middleware.models import Booking, Course, CourseMembership, User
 
@@ -142,20 +143,22 @@ def unbookable_weeks(session: Session, actor: User, mondays: Iterable[datetime])
     weeks = sorted(set(mondays))
     allowance, course_id = student_allowance(session, actor.id)
     if course_id is None:
-        blocked = Unbookable("not in a course", "You are not enrolled in any course, so you cannot book a robot "
-                                                "yet; ask your tutor to enrol you.")
+        blocked = Unbookable("not in a course", gettext("You are not enrolled in any course, so you cannot book a "
+                                                        "robot yet; ask your tutor to enrol you."))
         return dict.fromkeys(weeks, blocked)
     if allowance < SLOT_MINUTES:
-        blocked = Unbookable("no allowance", "Your course allows no bookings; ask your tutor if you need one. "
-                                             "You can still use a robot when it is free, in turn with others.")
+        blocked = Unbookable("no allowance", gettext("Your course allows no bookings; ask your tutor if you need "
+                                                     "one. You can still use a robot when it is free, in turn with "
+                                                     "others."))
         return dict.fromkeys(weeks, blocked)
     out = {}
     for monday in weeks:
         used = minutes_booked_in_week(session, actor.id, monday)
         if allowance - used < SLOT_MINUTES:
-            out[monday] = Unbookable("no minutes left", f"You have booked all {allowance} minutes your course allows "
-                                     f"in the week of {monday:%d %b}; cancel a booking to free some, or choose "
-                                     "another week.")
+            out[monday] = Unbookable("no minutes left", gettext(
+                "You have booked all %(allowance)s minutes your course allows in the week of %(monday)s; cancel a "
+                "booking to free some, or choose another week.", allowance=written_number(allowance),
+                monday=written_date(monday, "%d %b", "dd MMM")))
     return out
 
 
@@ -166,15 +169,17 @@ def _check_role(session: Session, actor: User, request: BookingRequest) -> int |
     """The course id to store on the booking, after checking the actor may make this kind of booking."""
     if request.kind == "class":
         if actor.role == "student":
-            raise BookingRefused(403, "forbidden", "Only tutors can book class sessions.", "kind")
+            raise BookingRefused(403, "forbidden", gettext("Only tutors can book class sessions."), "kind")
         if session.get(Course, request.course_id) is None:
-            raise BookingRefused(404, "unknown_course", f"There is no course with id {request.course_id}.", "course_id")
+            raise BookingRefused(404, "unknown_course", gettext("There is no course with id %(course_id)s.",
+                                                                course_id=request.course_id), "course_id")
         if actor.role == "tutor" and not is_course_tutor(session, actor.id, request.course_id):
-            raise BookingRefused(403, "forbidden", "You can book class sessions only for courses you tutor.",
+            raise BookingRefused(403, "forbidden", gettext("You can book class sessions only for courses you tutor."),
                                  "course_id")
         return request.course_id
     if request.course_id is not None and session.get(Course, request.course_id) is None:
-        raise BookingRefused(404, "unknown_course", f"There is no course with id {request.course_id}.", "course_id")
+        raise BookingRefused(404, "unknown_course", gettext("There is no course with id %(course_id)s.",
+                                                            course_id=request.course_id), "course_id")
     return request.course_id
 
 
@@ -188,13 +193,16 @@ def _lock_and_check_slot(session: Session, request: BookingRequest) -> str | Non
     if request.pool_kind is not None:
         kind = request.pool_kind
         if not robots:
-            raise BookingRefused(404, "unknown_pool", f"There is no pool of robots of kind {kind!r}.", "pool")
+            raise BookingRefused(404, "unknown_pool", gettext("There is no pool of robots of kind %(kind)s.",
+                                                              kind=repr(kind)), "pool")
         if pool_slots.most_held(session, kind, robots, request.starts_at, request.ends_at) >= len(robots):
             free_at = pool_slots.first_free_start(session, kind, robots, request.starts_at, request.ends_at)
-            when = (f"the first slot as long that fits starts at {free_at:%Y-%m-%d %H:%M} UTC" if free_at
-                    else "no slot as long fits within two weeks")
-            raise BookingRefused(409, "pool_full", f"All {len(robots)} robots of kind {kind!r} are booked for part "
-                                 f"of that time; {when}.", "starts_at")
+            when = (gettext("the first slot as long that fits starts at %(moment)s UTC",
+                            moment=free_at.strftime("%Y-%m-%d %H:%M")) if free_at
+                    else gettext("no slot as long fits within two weeks"))
+            raise BookingRefused(409, "pool_full", gettext("All %(count)s robots of kind %(kind)s are booked for "
+                                                           "part of that time; %(when)s.", count=len(robots),
+                                                           kind=repr(kind), when=when), "starts_at")
         return None
     if request.robot_name not in robots:
         lock_robot_control(session, request.robot_name)
@@ -205,11 +213,13 @@ def _lock_and_check_slot(session: Session, request: BookingRequest) -> str | Non
     )
     if clash is not None:
         raise BookingRefused(409, "slot_taken",
-                             "Someone has already booked part of that time on this robot; choose a free slot.",
+                             gettext("Someone has already booked part of that time on this robot; choose a free "
+                                     "slot."),
                              "starts_at")
     if kind and pool_slots.most_held(session, kind, robots, request.starts_at, request.ends_at) >= len(robots):
-        raise BookingRefused(409, "slot_taken", f"Bookings of any {kind} robot hold every robot of the kind for "
-                             "part of that time; choose a free slot.", "starts_at")
+        raise BookingRefused(409, "slot_taken", gettext("Bookings of any %(kind)s robot hold every robot of the "
+                                                        "kind for part of that time; choose a free slot.", kind=kind),
+                             "starts_at")
     return request.robot_name
 
 
@@ -234,8 +244,9 @@ def create_booking(session: Session, actor: User, request: BookingRequest, now: 
         if used + wanted > allowance:
             raise BookingRefused(
                 409, "allowance_exceeded",
-                f"Your course allows {allowance} minutes of bookings a week; you have {max(0, allowance - used)} "
-                f"left that week and asked for {wanted}.", "ends_at")
+                gettext("Your course allows %(allowance)s minutes of bookings a week; you have %(left)s left that "
+                        "week and asked for %(wanted)s.", allowance=written_number(allowance),
+                        left=written_number(max(0, allowance - used)), wanted=written_number(wanted)), "ends_at")
         course_id = course_id or allowance_course
     booking = Booking(robot_name=robot_name, pool_kind=request.pool_kind, user_id=actor.id, course_id=course_id,
                       kind=request.kind, starts_at=request.starts_at, ends_at=request.ends_at, created_at=as_utc(now))
@@ -254,14 +265,15 @@ def cancel_booking(session: Session, actor: User, booking_id: int, now: datetime
     """Cancels the booking, freeing its slot; the caller commits."""
     booking = session.get(Booking, booking_id)
     if booking is None:
-        raise BookingRefused(404, "unknown_booking", f"There is no booking with id {booking_id}.", "id")
+        raise BookingRefused(404, "unknown_booking", gettext("There is no booking with id %(booking_id)s.",
+                                                             booking_id=booking_id), "id")
     if not may_cancel(session, actor, booking):
-        raise BookingRefused(403, "forbidden", "Only the person who booked, a tutor of the course or an admin "
-                             "can cancel this booking.", "id")
+        raise BookingRefused(403, "forbidden", gettext("Only the person who booked, a tutor of the course or an "
+                                                       "admin can cancel this booking."), "id")
     if booking.cancelled_at is not None:
-        raise BookingRefused(409, "already_cancelled", "This booking is already cancelled.", "id")
+        raise BookingRefused(409, "already_cancelled", gettext("This booking is already cancelled."), "id")
     if as_utc(booking.ends_at) <= as_utc(now):
-        raise BookingRefused(409, "booking_over", "This booking is over and cannot be cancelled.", "id")
+        raise BookingRefused(409, "booking_over", gettext("This booking is over and cannot be cancelled."), "id")
     booking.cancelled_at = as_utc(now)
     return booking
 

@@ -6,6 +6,7 @@ from datetime import UTC, datetime
 
 from flask import Blueprint, jsonify, request
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
@@ -33,7 +34,8 @@ def list_messages(robot_name: str) -> ResponseReturnValue:
     _require_robot(robot_name)
     after_id = decimal_int(request.args.get("after_id", "0"), 0)
     if after_id is None:
-        raise ApiError(400, "invalid_field", "after_id must be a whole number (0 for the latest messages).", "after_id")
+        raise ApiError(400, "invalid_field", gettext("after_id must be a whole number (0 for the latest messages)."),
+                                             "after_id")
     views = services.recent_messages(get_session(), robot_name, after_id=after_id)
     moderator = services.may_moderate(current_user)
     return jsonify({"robot_name": robot_name, "can_moderate": moderator,
@@ -52,7 +54,7 @@ def post_message(robot_name: str) -> ResponseReturnValue:
     _require_robot(robot_name)
     data = request.get_json(silent=True)
     if not isinstance(data, dict):
-        raise ApiError(400, "invalid_field", "Send the message as a JSON object with a body.", "body")
+        raise ApiError(400, "invalid_field", gettext("Send the message as a JSON object with a body."), "body")
     view = services.post_message(get_session(), robot_name, current_user, data.get("body"), datetime.now(UTC))
     return jsonify({"message": view.to_dict(current_user.id, True)}), 201
 

@@ -6,6 +6,8 @@ import re
 import unicodedata
 from dataclasses import dataclass
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.auth.schemas import InvalidField
 from middleware.validation import parse_message
 
@@ -18,22 +20,23 @@ LINE_KEY = re.compile(r"[A-Za-z0-9_-]{1,64}")
 def clean_body(value: object) -> str:
     """The message text, trimmed: 1 to 500 characters, with no control characters."""
     if not isinstance(value, str):
-        raise InvalidField("body", "body must be text.")
+        raise InvalidField("body", gettext("body must be text."))
     body = value.strip()
     if not body:
-        raise InvalidField("body", "Write something before sending.")
+        raise InvalidField("body", gettext("Write something before sending."))
     if len(body) > MAX_BODY_CHARS:
-        raise InvalidField("body", f"A message may have at most {MAX_BODY_CHARS} characters; this has {len(body)}.")
+        raise InvalidField("body", gettext("A message may have at most %(max_body_chars)s characters; this has "
+                                           "%(count)s.", max_body_chars=MAX_BODY_CHARS, count=len(body)))
     # Cc: control characters (newlines included, a message is one line); Cs: lone surrogates no database stores.
     if any(unicodedata.category(char) in ("Cc", "Cs") for char in body):
-        raise InvalidField("body", "The message contains control characters; send plain text on one line.")
+        raise InvalidField("body", gettext("The message contains control characters; send plain text on one line."))
     return body
 
 
 def clean_message_id(value: object, field: str = "id") -> int:
     """A message id: a positive whole number."""
     if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_ID:
-        raise InvalidField(field, f"{field} must be a positive whole number.")
+        raise InvalidField(field, gettext("%(field)s must be a positive whole number.", field=field))
     return value
 
 
@@ -43,7 +46,7 @@ def clean_line_key(value: object) -> str | None:
     if value is None:
         return None
     if not isinstance(value, str) or not LINE_KEY.fullmatch(value):
-        raise InvalidField("line", "line must be 1 to 64 letters, digits, '-' or '_'.")
+        raise InvalidField("line", gettext("line must be 1 to 64 letters, digits, '-' or '_'."))
     return value
 
 

@@ -6,6 +6,7 @@ import re
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
@@ -66,8 +67,10 @@ def post_message(session: Session, robot_name: str, user: User, body: object, no
     recent = session.execute(select(func.count()).select_from(ChatMessage).where(
         ChatMessage.user_id == user.id, ChatMessage.created_at > now - RATE_LIMIT_WINDOW)).scalar_one()
     if recent >= RATE_LIMIT_MESSAGES:
-        raise ChatRefused(429, "rate_limited", f"You can send {RATE_LIMIT_MESSAGES} messages every "
-                          f"{RATE_LIMIT_WINDOW.seconds} seconds; wait a moment and send it again.", "body")
+        raise ChatRefused(429, "rate_limited", gettext("You can send %(rate_limit_messages)s messages every "
+                                                       "%(seconds)s seconds; wait a moment and send it again.",
+                                                       rate_limit_messages=RATE_LIMIT_MESSAGES,
+                                                       seconds=RATE_LIMIT_WINDOW.seconds), "body")
     message = ChatMessage(robot_name=robot_name, user_id=user.id, body=text, created_at=now)
     lock_chat_room(session, robot_name)  # ids in commit order: the live cursor never passes one still in flight
     session.add(message)
@@ -105,10 +108,11 @@ def may_moderate(user: User) -> bool:
 def delete_message(session: Session, robot_name: str, actor: User, message_id: int, now: datetime) -> None:
     """Soft-deletes a message of this room (tutors and admins only); the caller commits."""
     if not may_moderate(actor):
-        raise ChatRefused(403, "forbidden", "Only tutors and admins can delete messages.", "id")
+        raise ChatRefused(403, "forbidden", gettext("Only tutors and admins can delete messages."), "id")
     message = session.get(ChatMessage, message_id)
     if message is None or message.robot_name != robot_name or message.deleted_at is not None:
-        raise ChatRefused(404, "unknown_message", f"There is no message {message_id} in this chat.", "id")
+        raise ChatRefused(404, "unknown_message", gettext("There is no message %(message_id)s in this chat.",
+                                                          message_id=message_id), "id")
     message.deleted_at = now
     message.deleted_by_id = actor.id
     events.announce(session, "chat", robot_name)

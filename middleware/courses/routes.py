@@ -8,6 +8,7 @@ from typing import Any
 
 from flask import Blueprint, Response, flash, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 from sqlalchemy.orm import Session
 
@@ -32,7 +33,7 @@ blueprint = Blueprint("courses", __name__)
 
 def _require_teacher() -> None:
     if current_user.role not in (Role.TUTOR, Role.ADMIN):
-        raise forbidden("Only tutors and admins manage courses.")
+        raise forbidden(gettext("Only tutors and admins manage courses."))
 
 
 def _page(template: str, status: int = 200, **context: Any) -> tuple[str, int]:
@@ -142,7 +143,7 @@ def unenrol(course_id: int, user_id: int) -> ResponseReturnValue:
 def _uploaded_bytes() -> bytes:
     upload = request.files.get("file")
     if upload is None or not upload.filename:
-        raise InvalidField("file", "Choose a CSV file to upload.")
+        raise InvalidField("file", gettext("Choose a CSV file to upload."))
     return upload.read()
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
@@ -17,6 +18,7 @@ from middleware.auth.schemas import InvalidField, clean_username
 from middleware.auth.services import create_user, generate_password
 from middleware.courses.schemas import CourseSettings, clean_code, clean_title, parse_enrolment_csv
 from middleware.errors import Refused
+from middleware.i18n import role_name
 from middleware.models import Course, CourseMembership, Role, User
 from middleware.models.courses import (
     DEFAULT_BOOKING_ALLOWANCE_MIN,
@@ -67,7 +69,8 @@ def get_course(session: Session, course_id: int) -> Course:
     """The course with that id, or a 404 refusal."""
     course = session.get(Course, course_id)
     if course is None:
-        raise Refused(404, "unknown_course", f"There is no course with id {course_id}.", "course_id")
+        raise Refused(404, "unknown_course", gettext("There is no course with id %(course_id)s.", course_id=course_id),
+                                             "course_id")
     return course
 
 
@@ -83,7 +86,7 @@ def managed_course(session: Session, actor: User, course_id: int) -> Course:
     course = get_course(session, course_id)
     if actor.role == Role.ADMIN or (actor.role == Role.TUTOR and is_course_tutor(session, actor.id, course.id)):
         return course
-    raise forbidden("You can manage only the courses you teach.")
+    raise forbidden(gettext("You can manage only the courses you teach."))
 
 
 def _views(session: Session, courses: list[Course], actor: User) -> list[CourseView]:
@@ -116,7 +119,7 @@ def describe(session: Session, actor: User, course: Course) -> CourseView:
 def create_course(session: Session, actor: User, code: object, title: object, settings: CourseSettings) -> Course:
     """A new course (tutors and admins); a tutor creator becomes its tutor."""
     if actor.role not in (Role.TUTOR, Role.ADMIN):
-        raise forbidden("Only tutors and admins can create courses.")
+        raise forbidden(gettext("Only tutors and admins can create courses."))
     clean = clean_code(code)
     course = Course(code=clean, title=clean_title(title),
                     turn_length_s=settings.turn_length_s or DEFAULT_TURN_LENGTH_S,
@@ -124,7 +127,8 @@ def create_course(session: Session, actor: User, code: object, title: object, se
                                            else settings.booking_allowance_min),
                     graded_run_hold_min=settings.graded_run_hold_min or DEFAULT_GRADED_RUN_HOLD_MIN)
     if session.scalar(select(Course.id).where(Course.code == clean)) is not None:
-        raise Refused(409, "course_exists", f"A course with code {clean} exists already; choose another code.", "code")
+        raise Refused(409, "course_exists", gettext("A course with code %(clean)s exists already; choose another "
+                                                    "code.", clean=clean), "code")
     session.add(course)
     session.flush()
     if actor.role == Role.TUTOR:
@@ -165,13 +169,14 @@ def members(session: Session, actor: User, course_id: int) -> list[MemberView]:
 def _refusal_to_enrol(session: Session, course_id: int, user: User) -> str | None:
     """Why user cannot be enrolled as a student of the course, or None."""
     if user.role != Role.STUDENT:
-        return f"{user.username} is a {user.role} account; only student accounts are enrolled as students."
+        return str(gettext("%(username)s is a %(role)s account; only student accounts are enrolled as students.",
+                           username=user.username, role=role_name(user.role)))
     if not user.is_active:
-        return f"{user.username}'s account is disabled; an admin can enable it."
+        return str(gettext("%(username)s's account is disabled; an admin can enable it.", username=user.username))
     already = session.scalar(select(CourseMembership.role).where(
         CourseMembership.course_id == course_id, CourseMembership.user_id == user.id))
     if already is not None:
-        return f"{user.username} is already enrolled in this course."
+        return str(gettext("%(username)s is already enrolled in this course.", username=user.username))
     return None
 
 
@@ -181,8 +186,9 @@ def enrol(session: Session, actor: User, course_id: int, username: object) -> Us
     name = clean_username(username)
     user = session.scalar(select(User).where(User.username == name))
     if user is None:
-        raise Refused(404, "unknown_user", f"There is no account named {name!r}. Check the spelling, or "
-                                           "upload a CSV file to create accounts.", "username")
+        raise Refused(404, "unknown_user", gettext("There is no account named %(name)s. Check the spelling, or "
+                                                   "upload a CSV file to create accounts.", name=repr(name)),
+                      "username")
     reason = _refusal_to_enrol(session, course.id, user)
     if reason is not None:
         raise Refused(409, "not_enrolled", reason, "username")
@@ -197,7 +203,7 @@ def unenrol(session: Session, actor: User, course_id: int, user_id: int) -> None
     membership = session.scalar(select(CourseMembership).where(
         CourseMembership.course_id == course.id, CourseMembership.user_id == user_id))
     if membership is None or membership.role != "student":
-        raise Refused(404, "not_a_student", "That account is not a student of this course.", "user_id")
+        raise Refused(404, "not_a_student", gettext("That account is not a student of this course."), "user_id")
     session.delete(membership)
     session.flush()
 

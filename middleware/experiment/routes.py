@@ -9,6 +9,7 @@ from typing import TypeVar
 
 from flask import Blueprint, Response, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 from sqlalchemy import select
 from sqlalchemy.orm import Session
@@ -55,7 +56,7 @@ def _trial_dict(trial: Trial) -> dict[str, object]:
 def _json_object() -> dict[str, object]:
     body = request.get_json(silent=True)
     if not isinstance(body, dict):
-        raise ApiError(400, "invalid_field", "Send a JSON object.", "body")
+        raise ApiError(400, "invalid_field", gettext("Send a JSON object."), "body")
     return body
 
 
@@ -192,7 +193,7 @@ def start_trial() -> ResponseReturnValue:
     robot_name = body.get("robot_name")
     robots = {str(r["name"]): str(r["scene"]) for r in track_robots(int(current_user.get_id()))}
     if not isinstance(robot_name, str) or robot_name not in robots:
-        raise ApiError(400, "invalid_field", "Choose a robot that runs a course scene.", "robot_name")
+        raise ApiError(400, "invalid_field", gettext("Choose a robot that runs a course scene."), "robot_name")
 
     def action(session: Session) -> Trial:
         open_before = services.current_trial(session, _actor())
@@ -247,7 +248,7 @@ def protocols() -> ResponseReturnValue:
     session = get_session()
     actor = _actor()
     if actor.role not in ("tutor", "admin"):
-        raise ApiError(403, "forbidden", "Only tutors and admins set experiment protocols.")
+        raise ApiError(403, "forbidden", gettext("Only tutors and admins set experiment protocols."))
     query = select(Course).order_by(Course.code)
     if actor.role != "admin":
         query = query.where(Course.id.in_(taught_course_ids(actor)))
@@ -279,14 +280,16 @@ def finish(trial_id: int) -> ResponseReturnValue:
     session = get_session()
     trial = session.get(Trial, trial_id)
     if trial is None or trial.user_id != int(current_user.get_id()):
-        raise ApiError(404, "unknown_trial", "There is no such trial of yours.", "trial_id")
+        raise ApiError(404, "unknown_trial", gettext("There is no such trial of yours."), "trial_id")
     if trial.status == TRIAL_OPEN and not robot_commands().for_user(trial.robot_name, trial.user_id).is_controller():
-        raise ApiError(403, "not_controller", f"Only the person driving {trial.robot_name} can record its run: take "
-                       "your turn in its console and drive the course yourself.")
+        raise ApiError(403, "not_controller", gettext("Only the person driving %(robot_name)s can record its run: "
+                                                      "take your turn in its console and drive the course yourself.",
+                                                      robot_name=trial.robot_name))
     run = _track_run_now(robot_registry().get(trial.robot_name))
     if run is None or not finished_in_trial(trial, run):
-        raise ApiError(409, "run_not_finished", "The robot has not seen you finish the course since this trial "
-                       f"began. Drive from {track_route(trial)} first.")
+        raise ApiError(409, "run_not_finished", gettext("The robot has not seen you finish the course since this "
+                                                        "trial began. Drive from %(track_route)s first.",
+                                                        track_route=track_route(trial)))
     result = services.RunResult(run.last_total_time_s, run.last_errors)
     return jsonify({"trial": _trial_dict(_run(lambda s: services.finish_trial(s, _actor(), trial_id, result)))})
 
@@ -315,7 +318,7 @@ def put_delay(username: str) -> ResponseReturnValue:
     """A tutor sets one user's added video delay: {"delay_s": 0..7}."""
     body = request.get_json(silent=True)
     if not isinstance(body, dict) or "delay_s" not in body:
-        raise ApiError(400, "invalid_field", "Send a JSON object with delay_s.", "delay_s")
+        raise ApiError(400, "invalid_field", gettext("Send a JSON object with delay_s."), "delay_s")
     session = get_session()
     user = session.scalar(select(User).where(User.username == username.lower()))
     user_id = user.id if user is not None else -1

@@ -11,6 +11,7 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 
 from middleware import events
@@ -34,7 +35,7 @@ MAX_TRIAL_ERRORS = 1000
 
 def _require_teacher(actor: User) -> None:
     if actor.role not in (Role.TUTOR, Role.ADMIN):
-        raise Refused(403, "forbidden", "Only tutors and admins can do that.")
+        raise Refused(403, "forbidden", gettext("Only tutors and admins can do that."))
 
 
 def get_video_delay(session, user_id: int) -> float:
@@ -62,9 +63,9 @@ def set_video_delay(session, actor: User, user_id: object, delay_s: object) -> V
     delay = parse_delay_s(delay_s)
     target = None if isinstance(user_id, bool) or not isinstance(user_id, int) else session.get(User, user_id)
     if target is None:
-        raise Refused(404, "unknown_user", "There is no such account.", "user_id")
+        raise Refused(404, "unknown_user", gettext("There is no such account."), "user_id")
     if not teaches_student(session, actor, target):
-        raise Refused(403, "forbidden", "You can set the delay only of students in the courses you teach.",
+        raise Refused(403, "forbidden", gettext("You can set the delay only of students in the courses you teach."),
                       "user_id")
     return _store_delay(session, target.id, delay, actor.id)
 
@@ -95,9 +96,9 @@ def trial_course_id(session, student: User, course_id: object) -> int | None:
     if course_id is None and len(mine) <= 1:
         return next(iter(mine), None)
     if course_id is None:
-        raise Refused(400, "invalid_field", "Choose the course this trial counts for.", "course_id")
+        raise Refused(400, "invalid_field", gettext("Choose the course this trial counts for."), "course_id")
     if isinstance(course_id, bool) or not isinstance(course_id, int) or course_id not in mine:
-        raise Refused(400, "invalid_field", "Choose one of your courses.", "course_id")
+        raise Refused(400, "invalid_field", gettext("Choose one of your courses."), "course_id")
     return course_id
 
 
@@ -118,7 +119,8 @@ def assign_trial(session, student: User, robot_name: str, robot_scene: str, cour
     if existing is not None:
         return existing
     if robot_scene not in COURSES:
-        raise Refused(409, "not_a_course", f"The robot {robot_name} does not run a course scene.", "robot_name")
+        raise Refused(409, "not_a_course", gettext("The robot %(robot_name)s does not run a course scene.",
+                                                   robot_name=robot_name), "robot_name")
     class_course_id = trial_course_id(session, student, course_id)
     settings = protocol.protocol_for(session, class_course_id)
     protocol.require_ready(session, student, settings)
@@ -144,18 +146,19 @@ def _check_result(result: RunResult) -> None:
     time_s, errors = result.total_time_s, result.errors
     if isinstance(time_s, bool) or not isinstance(time_s, int | float) or not math.isfinite(time_s) \
             or not 0 < time_s <= MAX_TRIAL_TIME_S:
-        raise Refused(400, "invalid_field", f"total_time_s must be from 0 to {MAX_TRIAL_TIME_S:g} s.", "total_time_s")
+        raise Refused(400, "invalid_field", gettext("total_time_s must be from 0 to %(max_trial_time_s)s s.",
+                                                    max_trial_time_s=format(MAX_TRIAL_TIME_S, 'g')), "total_time_s")
     if isinstance(errors, bool) or not isinstance(errors, int) or not 0 <= errors <= MAX_TRIAL_ERRORS:
-        raise Refused(400, "invalid_field", "errors must be a whole number from 0.", "errors")
+        raise Refused(400, "invalid_field", gettext("errors must be a whole number from 0."), "errors")
 
 
 def finish_trial(session, student: User, trial_id: int, result: RunResult) -> Trial:
     """Records a completed run (time and errors as the robot measured them); the trial's delay ends with it."""
     trial = session.get(Trial, trial_id)
     if trial is None or trial.user_id != student.id:
-        raise Refused(404, "unknown_trial", "There is no such trial of yours.", "trial_id")
+        raise Refused(404, "unknown_trial", gettext("There is no such trial of yours."), "trial_id")
     if trial.status != TRIAL_OPEN:
-        raise Refused(409, "trial_finished", "This trial is already finished.", "trial_id")
+        raise Refused(409, "trial_finished", gettext("This trial is already finished."), "trial_id")
     _check_result(result)
     trial.status, trial.total_time_s, trial.errors = "completed", float(result.total_time_s), int(result.errors)
     trial.finished_at = utc_now()
@@ -167,7 +170,8 @@ def abandon_trial(session, student: User, trial_id: int) -> Trial:
     """Gives up a trial in progress (it is not counted); the trial's delay ends with it."""
     trial = session.get(Trial, trial_id)
     if trial is None or trial.user_id != student.id or trial.status != TRIAL_OPEN:
-        raise Refused(404, "unknown_trial", "There is no trial of yours in progress with that number.", "trial_id")
+        raise Refused(404, "unknown_trial", gettext("There is no trial of yours in progress with that number."),
+                                            "trial_id")
     trial.status, trial.finished_at = "abandoned", utc_now()
     events.announce(session, DELAYS_TOPIC, str(student.id))
     return trial

@@ -42,23 +42,26 @@ def _user_id() -> int:
 def parse_activation(body: object) -> tuple[dict[str, object], bool]:
     """The parameters and the preempt flag of an activation request, checked for shape and finiteness."""
     if not isinstance(body, dict):
-        raise ApiError(400, "invalid_field", "Send a JSON object with 'parameters' and 'preempt'.", "body")
+        raise ApiError(400, "invalid_field", gettext("Send a JSON object with 'parameters' and 'preempt'."), "body")
     parameters = body.get("parameters", {})
     preempt = body.get("preempt", False)
     if not isinstance(preempt, bool):
-        raise ApiError(400, "invalid_field", "preempt must be true or false.", "preempt")
+        raise ApiError(400, "invalid_field", gettext("preempt must be true or false."), "preempt")
     if not isinstance(parameters, dict) or len(parameters) > MAX_PARAMETERS:
-        raise ApiError(400, "invalid_field", f"parameters must be an object of at most {MAX_PARAMETERS} values.",
+        raise ApiError(400, "invalid_field", gettext("parameters must be an object of at most %(max_parameters)s "
+                                                     "values.", max_parameters=MAX_PARAMETERS),
                        "parameters")
     for name, value in parameters.items():
         if not NAME_PATTERN.fullmatch(name):
-            raise ApiError(400, "invalid_field", f"{name[:64]!r} is not a parameter name.", "parameters")
+            raise ApiError(400, "invalid_field", gettext("%(value)s is not a parameter name.", value=repr(name[:64])),
+                                                 "parameters")
         if isinstance(value, float) and not math.isfinite(value):
-            raise ApiError(400, "invalid_field", f"{name} must be a finite number.", name)
+            raise ApiError(400, "invalid_field", gettext("%(name)s must be a finite number.", name=name), name)
         if isinstance(value, str) and len(value) > MAX_TEXT_VALUE:
-            raise ApiError(400, "invalid_field", f"{name} is too long.", name)
+            raise ApiError(400, "invalid_field", gettext("%(name)s is too long.", name=name), name)
         if not isinstance(value, bool | int | float | str):
-            raise ApiError(400, "invalid_field", f"{name} must be a number, true/false or a word.", name)
+            raise ApiError(400, "invalid_field", gettext("%(name)s must be a number, true/false or a word.", name=name),
+                                                 name)
     return parameters, preempt
 
 
@@ -92,7 +95,7 @@ def activate(robot_name: str, skill: str) -> ResponseReturnValue:
     """Starts a skill as a goal for the controller."""
     robot = robot_commands().for_user(robot_name, _user_id())
     if not NAME_PATTERN.fullmatch(skill):
-        raise ApiError(404, "unknown_skill", "There is no skill by that name.", "skill")
+        raise ApiError(404, "unknown_skill", gettext("There is no skill by that name."), "skill")
     parameters, preempt = parse_activation(request.get_json(silent=True))
     goal = robot.activate(skill, parameters, preempt)
     return jsonify({"goal": goal_dict(goal), "robot_rtt_ms": _robot_leg_ms(robot)}), 202
@@ -117,7 +120,7 @@ def report_response_times(robot_name: str) -> ResponseReturnValue:
 
 def _goal_id(goal_id: str) -> str:
     if not GOAL_ID_PATTERN.fullmatch(goal_id):
-        raise ApiError(404, "unknown_goal", "There is no goal with that id.", "goal_id")
+        raise ApiError(404, "unknown_goal", gettext("There is no goal with that id."), "goal_id")
     return goal_id
 
 

@@ -7,6 +7,7 @@ import json
 
 from flask import Blueprint, redirect, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user
 from sqlalchemy import select
 
@@ -25,7 +26,8 @@ def choose() -> ResponseReturnValue:
     """Form fields: language (en or es), next (a path on this site; the lab's first page otherwise)."""
     language = i18n.supported(request.form.get("language"))
     if language is None or request.form.get("language") not in i18n.LANGUAGES:
-        raise ApiError(400, "invalid_field", f"language must be one of: {', '.join(i18n.LANGUAGES)}.", "language")
+        raise ApiError(400, "invalid_field", gettext("language must be one of: %(value)s.",
+                                                     value=', '.join(i18n.LANGUAGES)), "language")
     i18n.remember_chosen_language(language)
     if current_user.is_authenticated:
         user_id = int(current_user.get_id())

@@ -8,6 +8,7 @@ from collections.abc import Callable
 
 from flask import Blueprint, jsonify, request
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 from sqlalchemy import select
 from sqlalchemy.orm import Session
@@ -39,7 +40,7 @@ def _locked_because(key: str) -> str | None:
 
 def _key(key: str) -> str:
     if not KEY_PATTERN.fullmatch(key):
-        raise ApiError(404, "unknown_preference", "Preference names are lowercase words joined by '-'.", "key")
+        raise ApiError(404, "unknown_preference", gettext("Preference names are lowercase words joined by '-'."), "key")
     return key
 
 
@@ -76,13 +77,14 @@ def write(key: str) -> ResponseReturnValue:
         raise ApiError(409, "preference_locked", locked, "value")
     body = request.get_json(silent=True)
     if not isinstance(body, dict) or "value" not in body:
-        raise ApiError(400, "invalid_field", "Send a JSON object with a 'value'.", "value")
+        raise ApiError(400, "invalid_field", gettext("Send a JSON object with a 'value'."), "value")
     try:
         text: str | None = json.dumps(body["value"], separators=(",", ":"), allow_nan=False)
     except ValueError:
         text = None
     if text is None or len(text.encode()) > MAX_VALUE_BYTES:
-        raise ApiError(400, "invalid_field", f"value must be finite JSON of at most {MAX_VALUE_BYTES} bytes.", "value")
+        raise ApiError(400, "invalid_field", gettext("value must be finite JSON of at most %(max_value_bytes)s "
+                                                     "bytes.", max_value_bytes=MAX_VALUE_BYTES), "value")
     session = get_session()
     preference = _find(name)
     if preference is None:

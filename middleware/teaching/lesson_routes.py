@@ -17,6 +17,7 @@ from flask import (
     url_for,
 )
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 from werkzeug.exceptions import RequestEntityTooLarge
 
@@ -74,7 +75,7 @@ def _user_id() -> int:
 
 def _require_tutor() -> None:
     if current_user.role not in ("tutor", "admin"):
-        raise ApiError(403, "not_tutor", "Only tutors write lessons.")
+        raise ApiError(403, "not_tutor", gettext("Only tutors write lessons."))
 
 
 def _editable_lesson(lesson_id: int | None) -> Lesson | None:
@@ -90,7 +91,7 @@ def _editable_lesson(lesson_id: int | None) -> Lesson | None:
 def _lesson(lesson_id: int) -> Lesson:
     lesson = get_session().get(Lesson, lesson_id)
     if lesson is None:
-        raise ApiError(404, "unknown_lesson", "There is no such lesson.", "lesson_id")
+        raise ApiError(404, "unknown_lesson", gettext("There is no such lesson."), "lesson_id")
     return lesson
 
 
@@ -166,7 +167,7 @@ def _receive_video() -> str:
     except RequestEntityTooLarge:
         raise UploadRefused(413, "video_too_large", too_large_message(limit)) from None
     if upload is None or not upload.filename:
-        raise UploadRefused(400, "missing_video", "video: choose a .webm or .mp4 file to upload.")
+        raise UploadRefused(400, "missing_video", gettext("video: choose a .webm or .mp4 file to upload."))
     try:
         return store_video(current_app.instance_path, upload.filename, upload.stream, limit)
     finally:
@@ -244,7 +245,7 @@ def preview_video(name: str) -> ResponseReturnValue:
     """A video of the lessons folder by name, for the editor's preview (tutors)."""
     _require_tutor()
     if name not in available_videos(current_app.instance_path):
-        raise ApiError(404, "unknown_video", "There is no video by that name in the lessons folder.", "name")
+        raise ApiError(404, "unknown_video", gettext("There is no video by that name in the lessons folder."), "name")
     return send_from_directory(video_dir(current_app.instance_path), name, conditional=True)
 
 
@@ -276,7 +277,7 @@ def check() -> ResponseReturnValue:
     _require_tutor()
     body = request.get_json(silent=True)
     if not isinstance(body, dict):
-        raise ApiError(400, "invalid_field", 'Send a JSON object: {"cues": "WEBVTT ..."}.', "body")
+        raise ApiError(400, "invalid_field", gettext("Send a JSON object: {\"cues\": \"WEBVTT ...\"}."), "body")
     cues, errors = parse_cue_track(body.get("cues"), reference_skills(_user_id()))
     return jsonify({"cues": [c.to_dict() for c in cues], "errors": [e.to_dict() for e in errors]})
 
@@ -310,10 +311,10 @@ def save(lesson_id: int | None = None) -> ResponseReturnValue:
 def _run_body() -> tuple[dict[str, object], float]:
     body = request.get_json(silent=True)
     if not isinstance(body, dict):
-        raise ApiError(400, "invalid_field", 'Send a JSON object: {"target": "practice"}.', "body")
+        raise ApiError(400, "invalid_field", gettext("Send a JSON object: {\"target\": \"practice\"}."), "body")
     hold_s = body.get("hold_s", 10.0)
     if isinstance(hold_s, bool) or not isinstance(hold_s, int | float) or not 0.1 <= hold_s <= 10:
-        raise ApiError(400, "invalid_field", "hold_s must be a number of seconds from 0.1 to 10.", "hold_s")
+        raise ApiError(400, "invalid_field", gettext("hold_s must be a number of seconds from 0.1 to 10."), "hold_s")
     return body, float(hold_s)
 
 
@@ -334,7 +335,7 @@ def run_cue(lesson_id: int, index: int) -> ResponseReturnValue:
     require_before_test(get_session(), lesson, _user())
     cues = stored_cues(lesson)
     if not 1 <= index <= len(cues):
-        raise ApiError(404, "unknown_cue", "The lesson has no such cue.", "index")
+        raise ApiError(404, "unknown_cue", gettext("The lesson has no such cue."), "index")
     command = cues[index - 1].command
     # A sound cue: the robot stands still (the 2022 paper's third part) while the page plays the tone and its caption.
     sound = command.to_dict()["sound"] if command.kind == "sound" else None

@@ -12,6 +12,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -125,7 +126,7 @@ class LessonResults:
 def lesson_results(session: Session, lesson: Lesson, actor: User) -> LessonResults:
     """A student's own before/after per part; the class's (students who took both) for the tests' tutors."""
     if lesson.before_exam_id is None or lesson.after_exam_id is None:
-        raise Refused(404, "no_tests", "This lesson has no test before and after to compare.", "lesson_id")
+        raise Refused(404, "no_tests", gettext("This lesson has no test before and after to compare."), "lesson_id")
     exam = session.get(Exam, lesson.after_exam_id)
     class_view = actor.role != Role.STUDENT and exam is not None and teaches_course(session, actor, exam.course_id)
     users = None if class_view else {actor.id}
@@ -165,8 +166,9 @@ def require_before_test(session: Session, lesson: Lesson, user: User) -> None:
     """Refuses the lesson's robot commands until the user has submitted its test before (409)."""
     gate = lesson_gate(session, lesson, user)
     if gate.blocked and gate.before_exam is not None:
-        raise Refused(409, "before_test_required", f"Take “{gate.before_exam.title}” first: this lesson compares "
-                      "what you knew before it with what you know after.", "before_exam_id")
+        raise Refused(409, "before_test_required", gettext("Take “%(title)s” first: this lesson compares what you "
+                                                           "knew before it with what you know after.",
+                                                           title=gate.before_exam.title), "before_exam_id")
 
 
 def check_lesson_tests(session: Session, actor: User, before_id: int | None, after_id: int | None) -> None:
@@ -174,10 +176,11 @@ def check_lesson_tests(session: Session, actor: User, before_id: int | None, aft
     for name, exam_id in (("before_exam_id", before_id), ("after_exam_id", after_id)):
         exam = session.get(Exam, exam_id) if exam_id is not None else None
         if exam_id is not None and (exam is None or not teaches_course(session, actor, exam.course_id)):
-            raise Refused(400, "invalid_field", f"{name}: choose a test of a course you teach.", name)
+            raise Refused(400, "invalid_field", gettext("%(name)s: choose a test of a course you teach.", name=name),
+                                                name)
     if before_id is not None and before_id == after_id:
-        raise Refused(400, "invalid_field", "after_exam_id: choose another test than the one before, so each "
-                      "student's two attempts are told apart.", "after_exam_id")
+        raise Refused(400, "invalid_field", gettext("after_exam_id: choose another test than the one before, so "
+                                                    "each student's two attempts are told apart."), "after_exam_id")
 
 
 def teachable_exams(session: Session, actor: User) -> list[Exam]:

@@ -10,7 +10,9 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import IO
 
-from middleware.errors import Refused
+from flask_babel import gettext  # type: ignore[import-untyped]
+
+from middleware.errors import Refused, written_number
 from middleware.teaching.lessons import VIDEO_NAME, video_dir
 
 DEFAULT_MAX_VIDEO_BYTES = 200 * 1024 * 1024
@@ -31,7 +33,7 @@ def extension_of(filename: str | None) -> str:
     """The lower-case extension of the client's file name ("webm" or "mp4"); UploadRefused otherwise."""
     suffix = Path((filename or "").replace("\\", "/")).suffix.lower().lstrip(".")
     if suffix not in {"webm", "mp4"}:
-        raise UploadRefused(400, "invalid_video_type", "video must be a .webm or .mp4 file.")
+        raise UploadRefused(400, "invalid_video_type", gettext("video must be a .webm or .mp4 file."))
     return suffix
 
 
@@ -55,11 +57,12 @@ def store_video(instance_path: str, filename: str | None, stream: IO[bytes], max
     extension = extension_of(filename)
     head = stream.read(12)
     if not head:
-        raise UploadRefused(400, "empty_video", "video is empty: choose a .webm or .mp4 file.")
+        raise UploadRefused(400, "empty_video", gettext("video is empty: choose a .webm or .mp4 file."))
     if not matches_magic(extension, head):
         kind = "WebM" if extension == "webm" else "MP4"
         raise UploadRefused(400, "invalid_video_content",
-                            f"video is not a {kind} file: its content does not match the .{extension} extension.")
+                            gettext("video is not a %(kind)s file: its content does not match the .%(extension)s "
+                                    "extension.", kind=kind, extension=extension))
     folder = video_dir(instance_path)
     folder.mkdir(parents=True, exist_ok=True)
     name = generated_name(extension)
@@ -81,4 +84,5 @@ def store_video(instance_path: str, filename: str | None, stream: IO[bytes], max
 
 def too_large_message(max_bytes: int) -> str:
     """The sentence for a video over the limit."""
-    return f"video is too large: at most {max_bytes // (1024 * 1024)} MB."
+    return str(gettext("video is too large: at most %(megabytes)s MB.",
+                       megabytes=written_number(max_bytes // (1024 * 1024))))

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import time
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.access.commands import MAX_DRIVE_HOLD_S, Commander, robot_commands
 from middleware.errors import ApiError
 from middleware.robots.link import RobotLink, RobotUnavailable
@@ -32,10 +34,10 @@ def resolve_target(target: object, user_id: int) -> Commander:
     if target == PRACTICE_TARGET:
         robot = practice_manager().get(user_id)
         if robot is None:
-            raise ApiError(409, "no_practice_robot", "Start your practice robot first.", "target")
+            raise ApiError(409, "no_practice_robot", gettext("Start your practice robot first."), "target")
         target = robot.name
     if not isinstance(target, str) or not 0 < len(target) <= 64:
-        raise ApiError(400, "invalid_field", 'target must be "practice" or a lab robot\'s name.', "target")
+        raise ApiError(400, "invalid_field", gettext("target must be \"practice\" or a lab robot's name."), "target")
     return robot_commands().for_user(target, user_id, field="target")
 
 
@@ -94,8 +96,8 @@ def reference_catalog(user_id: int | None = None) -> list[dict[str, object]]:
                     for s in link.skills()]
         except RobotUnavailable:
             continue
-    raise ApiError(503, "no_robot_to_check", "No robot answers now, so the skills cannot be checked. "
-                                             "Start your practice robot or try again in a moment.")
+    raise ApiError(503, "no_robot_to_check", gettext("No robot answers now, so the skills cannot be checked. Start "
+                                                     "your practice robot or try again in a moment."))
 
 
 def authoring_catalog(user_id: int | None = None) -> list[dict[str, object]] | None:

@@ -6,6 +6,7 @@ import time
 
 from flask import Blueprint, current_app, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 from sqlalchemy import select
 
@@ -56,20 +57,20 @@ def _actor() -> User:
 
 def _require_tutor() -> None:
     if current_user.role not in ("tutor", "admin"):
-        raise ApiError(403, "not_tutor", "Only tutors write and lead tours.")
+        raise ApiError(403, "not_tutor", gettext("Only tutors write and lead tours."))
 
 
 def _tour(tour_id: int) -> Tour:
     tour = get_session().get(Tour, tour_id)
     if tour is None:
-        raise ApiError(404, "unknown_tour", "There is no such tour.", "tour_id")
+        raise ApiError(404, "unknown_tour", gettext("There is no such tour."), "tour_id")
     return tour
 
 
 def _live(session_id: int) -> GuidedSession:
     found = get_session().get(GuidedSession, session_id)
     if found is None:
-        raise ApiError(404, "unknown_session", "There is no such class.", "session_id")
+        raise ApiError(404, "unknown_session", gettext("There is no such class."), "session_id")
     return found
 
 
@@ -151,13 +152,13 @@ def run_step(tour_id: int, index: int) -> ResponseReturnValue:
     received_at = time.perf_counter()
     body = request.get_json(silent=True)
     if not isinstance(body, dict):
-        raise ApiError(400, "invalid_field", 'Send a JSON object: {"target": "practice"}.', "body")
+        raise ApiError(400, "invalid_field", gettext("Send a JSON object: {\"target\": \"practice\"}."), "body")
     steps = tour_steps(_tour(tour_id))
     if not 0 <= index < len(steps):
-        raise ApiError(404, "unknown_step", "The tour has no such step.", "index")
+        raise ApiError(404, "unknown_step", gettext("The tour has no such step."), "index")
     command = steps[index].command
     if command is None:
-        raise ApiError(409, "no_command", "This step runs nothing on the robot.", "index")
+        raise ApiError(409, "no_command", gettext("This step runs nothing on the robot."), "index")
     return jsonify(execute(resolve_target(body.get("target"), _user_id()), command, received_at)), 202
 
 
@@ -203,17 +204,17 @@ def start_live(tour_id: int) -> ResponseReturnValue:
     tour = _tour(tour_id)
     body = request.get_json(silent=True)
     if not isinstance(body, dict):
-        raise ApiError(400, "invalid_field", 'Send a JSON object: {"robot": "lab-1"}.', "body")
+        raise ApiError(400, "invalid_field", gettext("Send a JSON object: {\"robot\": \"lab-1\"}."), "body")
     robot = body.get("robot")
     if not isinstance(robot, str) or robot not in robot_registry().names():
-        raise ApiError(400, "invalid_field", "Choose one of the lab robots.", "robot")
+        raise ApiError(400, "invalid_field", gettext("Choose one of the lab robots."), "robot")
     course_id = clean_optional_id(body.get("course_id"), "course_id")
     session = get_session()
     if course_id is not None and session.get(Course, course_id) is None:
-        raise ApiError(400, "invalid_field", "course_id must be one of the courses, or null.", "course_id")
+        raise ApiError(400, "invalid_field", gettext("course_id must be one of the courses, or null."), "course_id")
     override = body.get("override", False)
     if not isinstance(override, bool):
-        raise ApiError(400, "invalid_field", "override must be true or false.", "override")
+        raise ApiError(400, "invalid_field", gettext("override must be true or false."), "override")
     actor = _actor()
     check_class_start(session, actor, course_id, override, active_session(session, robot))
     created = start_session(session, tour, robot, actor.id, course_id, access_coordinator().now(),
@@ -261,14 +262,14 @@ def session_action(session_id: int) -> ResponseReturnValue:
     found = _live(session_id)
     require_class_rights(session, _actor(), found)
     if found.ended_at is not None:
-        raise ApiError(409, "session_ended", "This class has ended.")
+        raise ApiError(409, "session_ended", gettext("This class has ended."))
     body = request.get_json(silent=True)
     body = body if isinstance(body, dict) else {}
     action = body.get("action")
     if action == "step":
         index = body.get("index")
         if isinstance(index, bool) or not isinstance(index, int):
-            raise TourInvalid("index", "index must be a whole number.")
+            raise TourInvalid("index", gettext("index must be a whole number."))
         go_to_step(found, index, len(tour_steps(_tour(found.tour_id))))
     elif action == "control":
         name = body.get("user")
@@ -276,14 +277,14 @@ def session_action(session_id: int) -> ResponseReturnValue:
         if name is not None:
             user = session.scalar(select(User).where(User.username == name)) if isinstance(name, str) else None
             if user is None:
-                raise TourInvalid("user", "user must be the name of someone in the class, or null.")
+                raise TourInvalid("user", gettext("user must be the name of someone in the class, or null."))
             require_class_member(session, found, user)
             user_id = user.id
         hand_control(found, user_id)
     elif action == "end":
         end_session(found, access_coordinator().now())
     else:
-        raise TourInvalid("action", 'action must be "step", "control" or "end".')
+        raise TourInvalid("action", gettext("action must be \"step\", \"control\" or \"end\"."))
     live.announce(session, found.id)
     after_commit(lambda: _class_changed(found.id, found.robot_name, handover=action in ("control", "end")))
     return jsonify(live.state(session, found))

@@ -51,9 +51,10 @@ def client_as(live_server: LiveServer, course_people) -> Callable[[str | None], 
     return make
 
 
-def api(client: LabClient, method: str, path: str, body: object = None) -> tuple[int, dict]:
-    """A JSON request carrying the session and a CSRF token; (status, decoded body)."""
-    headers = {"Accept": "application/json"}
+def api(client: LabClient, method: str, path: str, body: object = None,
+        extra_headers: dict[str, str] | None = None) -> tuple[int, dict]:
+    """A JSON request carrying the session, a CSRF token and extra_headers (Accept-Language); (status, body)."""
+    headers = {"Accept": "application/json", **(extra_headers or {})}
     if method not in ("GET", "HEAD"):
         status, _, _ = client.request("GET", "/login")
         headers["X-CSRFToken"] = client.csrf_token("/login" if status == 200 else "/bookings?tz=UTC")

@@ -1,0 +1,88 @@
+"""A student's and a tutor's refusals in their language, over HTTP on the live app: with Accept-Language: es (or the
+person's language preference) a booking refused, a field missing, a test not open yet, a chat message too long, a
+course not one's own and an address with nothing at it answer in Spanish, with the same code and field; without
+either, in English as before."""
+
+from __future__ import annotations
+
+from datetime import UTC, datetime, timedelta
+
+from tests.conftest import LabClient
+from tests.integration.bookings.conftest import api, client_as, course_people
+
+__all__ = ["client_as", "course_people"]
+
+SPANISH = {"Accept-Language": "es-ES,es;q=0.9"}
+
+
+def _slot(days: int) -> str:
+    day = datetime.now(UTC).replace(hour=9, minute=0, second=0, microsecond=0) + timedelta(days=days)
+    return day.isoformat().replace("+00:00", "Z")
+
+
+def _refusals(student: LabClient, tutor2: LabClient, course_id: int, exam_id: int,
+              headers: dict[str, str] | None) -> dict[str, tuple[int, dict]]:
+    return {
+        "past slot": api(student, "POST", "/api/bookings",
+                          {"robot_name": "lab-1", "starts_at": _slot(-1), "duration_min": 30}, headers),
+        "no start": api(student, "POST", "/api/bookings", {"robot_name": "lab-1"}, headers),
+        "not open": api(student, "POST", f"/api/exams/{exam_id}/attempts", {}, headers),
+        "too long": api(student, "POST", "/api/robots/lab-1/chat", {"body": "x" * 501}, headers),
+        "not yours": api(tutor2, "POST", f"/api/courses/{course_id}/exams",
+                          {"title": "Quiz", "kind": "theory"}, headers),
+    }
+
+
+def test_a_students_and_a_tutors_refusals_speak_spanish_when_asked_and_english_otherwise(client_as,
+                                                                                         course_people) -> None:
+    tutor, student, tutor2 = client_as("tutor1"), client_as("student1"), client_as("tutor2")
+    course_id = course_people["course"]
+    status, body = api(tutor, "POST", f"/api/courses/{course_id}/questions",
+                        {"kind": "single", "prompt": "Odometry drifts?", "choices": ["no", "yes"], "correct": 1})
+    assert status == 201, body
+    question_id = body["question"]["id"]
+    opens = datetime.now(UTC) + timedelta(days=2)
+    status, body = api(tutor, "POST", f"/api/courses/{course_id}/exams", {
+        "title": "Midterm", "kind": "theory", "opens_at": opens.isoformat(),
+        "closes_at": (opens + timedelta(hours=1)).isoformat(), "duration_s": 600, "question_ids": [question_id]})
+    assert status == 201, body
+    exam_id = body["exam"]["id"]
+
+    english = _refusals(student, tutor2, course_id, exam_id, None)
+    spanish = _refusals(student, tutor2, course_id, exam_id, SPANISH)
+    said = {what: answer["error"]["message"] for what, (_, answer) in spanish.items()}
+    assert said == {
+        "past slot": "Esa franja ya ha empezado; elige una en el futuro.",
+        "no start": "starts_at es obligatorio.",
+        "not open": "Esta prueba aún no está abierta.",
+        "too long": "Un mensaje puede tener como mucho 500 caracteres; este tiene 501.",
+        "not yours": "Solo puedes gestionar los cursos que impartes.",
+    }
+    assert {what: answer["error"]["message"] for what, (_, answer) in english.items()} == {
+        "past slot": "That slot has already started; choose one in the future.",
+        "no start": "starts_at is required.",
+        "not open": "This test is not open yet.",
+        "too long": "A message may have at most 500 characters; this has 501.",
+        "not yours": "You can manage only the courses you teach.",
+    }
+    for what, (status, answer) in spanish.items():  # the same refusal: only its sentence changes
+        english_status, english_answer = english[what]
+        assert status == english_status and 400 <= status < 500
+        assert {k: v for k, v in answer["error"].items() if k != "message"} == {
+            k: v for k, v in english_answer["error"].items() if k != "message"}
+
+
+def test_the_persons_language_preference_speaks_spanish_without_the_browser_asking(client_as) -> None:
+    student = client_as("student1")
+    assert api(student, "PUT", "/api/me/preferences/language", {"value": "es"})[0] == 200
+    status, answer = api(student, "POST", "/api/bookings", {"robot_name": "lab-1", "starts_at": _slot(1),
+                                                             "duration_min": 300})
+    assert (status, answer["error"]["message"]) == (400, "Una reserva puede durar como mucho 4 horas.")
+    status, answer = api(student, "POST", "/api/robots/lab-1/chat", [])
+    assert status == 400 and answer["error"]["message"] in ("Envía un objeto JSON.",
+                                                            "Envía el mensaje como un objeto JSON con un body.")
+    status, _, page = student.request("GET", "/no-such-page")
+    assert status == 404 and "No encontrado" in page and "No hay nada en esta dirección." in page
+    assert api(student, "PUT", "/api/me/preferences/language", {"value": "en"})[0] == 200
+    status, _, page = student.request("GET", "/no-such-page")
+    assert status == 404 and "Not Found" in page and "There is nothing at this address." in page
