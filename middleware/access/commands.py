@@ -67,6 +67,9 @@ class TokenSource(Protocol):
     def token(self, fresh: bool) -> str | None:
         """The user's token (fresh: re-read from the authority), or None when they do not control the robot."""
 
+    def remembered(self) -> str | None:
+        """token(False) when it needs no read nor lock (this process knows it); None: ask token() off the loop."""
+
     def resend(self, token: str) -> bool:
         """Hands the robot token again (it restarted and forgot it); False if that failed."""
 
@@ -82,6 +85,9 @@ class Seats(Protocol):
 
     def known_controller_token(self, robot_name: str, user_id: int) -> str | None:
         """controller_token, without a read when this process knows user_id controls the robot."""
+
+    def remembered_controller_token(self, robot_name: str, user_id: int) -> str | None:
+        """user_id's token when this process knows they control the robot, else None (memory only)."""
 
     def resend_token(self, robot_name: str) -> bool:
         """Hands the robot its current controller's token again."""
@@ -100,6 +106,10 @@ class SeatTokens:
         """The known token (no database read) unless fresh; a "no" is always read from the database."""
         read = self._coordinator.controller_token if fresh else self._coordinator.known_controller_token
         return read(self._robot_name, self._user_id)
+
+    def remembered(self) -> str | None:
+        """The token this process knows the user holds, if it does."""
+        return self._coordinator.remembered_controller_token(self._robot_name, self._user_id)
 
     def resend(self, token: str) -> bool:
         """Re-sends the current controller's token to the robot."""
@@ -120,6 +130,10 @@ class SupervisorTokens:
         """The current controller's token, or "" while nobody has control (always read: supervision is rare)."""
         return self._coordinator.current_token(self._robot_name)
 
+    def remembered(self) -> str | None:
+        """Never: supervision always reads who holds the robot."""
+        return None
+
     def resend(self, token: str) -> bool:
         """Re-sends the current controller's token to the robot."""
         return self._coordinator.resend_token(self._robot_name)
@@ -137,6 +151,10 @@ class OwnerToken:
 
     def token(self, fresh: bool) -> str | None:
         """The owner's token."""
+        return self._token() or None
+
+    def remembered(self) -> str | None:
+        """The owner's token (kept in memory)."""
         return self._token() or None
 
     def resend(self, token: str) -> bool:
@@ -201,18 +219,28 @@ class Oversight(Protocol):
     def held_by(self, robot_name: str) -> int | None:
         """The overseer who holds the personal robot now, or None (its owner commands it)."""
 
+    def remembered_holder(self, robot_name: str) -> tuple[bool, int | None]:
+        """(True, held_by()) when this process's answer is fresh (no read), else (False, None)."""
+
 
 class HeldTokens:
     """A personal robot's owner token, given to whoever holds the robot now: its owner, or an overseer who took
     it over (everyone else observes)."""
 
-    def __init__(self, owner: OwnerToken, held_by: Callable[[], int | None], user_id: int, owner_id: int) -> None:
+    def __init__(self, owner: OwnerToken, held_by: Callable[[], int | None], user_id: int, owner_id: int,
+                 remembered_holder: Callable[[], tuple[bool, int | None]] = lambda: (False, None)) -> None:
         self._owner, self._held_by, self._user_id, self._owner_id = owner, held_by, user_id, owner_id
+        self._remembered_holder = remembered_holder
 
     def token(self, fresh: bool) -> str | None:
         """The owner's token while this user holds the robot."""
         holder = self._held_by()
         return self._owner.token(fresh) if (holder or self._owner_id) == self._user_id else None
+
+    def remembered(self) -> str | None:
+        """The owner's token when this process knows, fresh, that this user holds the robot."""
+        known, holder = self._remembered_holder()
+        return self._owner.remembered() if known and (holder or self._owner_id) == self._user_id else None
 
     def resend(self, token: str) -> bool:
         """Hands the robot the owner's token again."""
@@ -286,7 +314,9 @@ class Commander:
             finally:
                 self.robot_round_trip_ms = (self.robot_round_trip_ms or 0.0) + (time.perf_counter() - started) * 1000
 
-        token = await blocking(self._tokens.token, False)
+        token = self._tokens.remembered()  # the usual case, 20 times a second: no thread, no read
+        if token is None:
+            token = await blocking(self._tokens.token, False)
         if token is None:
             raise NotController(self._field, await blocking(self._tokens.nobody_controls))
         try:
@@ -476,7 +506,8 @@ class RobotCommands:
         oversight = self._oversight
         if oversight is None:
             return owner
-        return HeldTokens(owner, lambda: oversight.held_by(link.name), user_id, personal.owner_id)
+        return HeldTokens(owner, lambda: oversight.held_by(link.name), user_id, personal.owner_id,
+                          lambda: oversight.remembered_holder(link.name))
 
     def require(self, robot_name: str, user_id: int | None, field: str = "robot_name") -> RobotLink:
         """reachable(), or a 404 naming field (a robot of someone else's is answered like a missing one)."""

@@ -182,10 +182,14 @@ class AccessCoordinator:
         in another process, and the caller asks controller_token again. A "no" is never taken from here, so
         a turn given elsewhere is seen at once.
         """
+        return self.remembered_controller_token(robot_name, user_id) or self.controller_token(robot_name, user_id,
+                                                                                              session)
+
+    def remembered_controller_token(self, robot_name: str, user_id: int) -> str | None:
+        """user_id's token when this process already knows they control the robot, else None: memory only, never
+        a database read (the drive channel asks it on the loop, 20 times a second per driver)."""
         known = self._known_controllers.get(robot_name)
-        if known is not None and known[0] == user_id and known[1]:
-            return known[1]
-        return self.controller_token(robot_name, user_id, session)
+        return known[1] if known is not None and known[0] == user_id and known[1] else None
 
     def now(self) -> datetime:
         """The coordinator's clock."""

@@ -382,6 +382,13 @@ class WallOversight:
         self._held[robot_name] = (holder, now + HELD_CACHE_S)
         return holder
 
+    def remembered_holder(self, robot_name: str) -> tuple[bool, int | None]:
+        """(True, the tutor holding robot_name or None) when this process's answer is fresh, else (False, None)."""
+        cached = self._held.get(robot_name)
+        if cached is not None and cached[1] > time.monotonic():
+            return True, cached[0]
+        return False, None
+
     def oversees(self, robot_name: str, user_id: int) -> bool:
         """Whether user_id teaches the course of the open class session robot_name was started for."""
         self._listen()
