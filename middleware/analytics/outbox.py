@@ -42,18 +42,20 @@ XAPI_OUTBOX_LOCK = 0x7E1E_A9A1  # the advisory lock that elects the one process 
 def queue_new(session: Session, homepage: str, now: datetime) -> int:
     """Queues the statements of what ended within LOOKBACK that are not queued yet; how many were queued. One that
     fails the statement schema is queued as failed, with the reason (it would never be accepted)."""
-    built = StatementBuilder(session, homepage).all(None, now - LOOKBACK, now)
-    ids = [s["id"] for s in built]
+    built = StatementBuilder(session, homepage).built(None, now - LOOKBACK, now)
+    ids = [b.statement["id"] for b in built]
     known: set[str] = set()
     for start in range(0, len(ids), 500):
         known |= set(session.scalars(select(XapiStatement.statement_id)
                                      .where(XapiStatement.statement_id.in_(ids[start:start + 500]))))
     added = 0
-    for statement in built:
+    for one in built:
+        statement = one.statement
         if statement["id"] in known:
             continue
         errors = statement_errors(statement)
-        session.add(XapiStatement(statement_id=statement["id"], statement_json=json.dumps(statement, sort_keys=True),
+        session.add(XapiStatement(statement_id=statement["id"], user_id=one.user_id,
+                                  statement_json=json.dumps(statement, sort_keys=True),
                                   status="failed" if errors else "pending", tries=0, next_try_at=now,
                                   last_error="; ".join(errors)[:2000] if errors else None, created_at=now))
         known.add(statement["id"])

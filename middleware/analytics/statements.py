@@ -46,6 +46,7 @@ class Built:
 
     at: datetime
     statement: dict[str, Any]
+    user_id: int
 
 
 def _duration(seconds: float) -> str:
@@ -102,7 +103,7 @@ class StatementBuilder:
             del statement["context"]["contextActivities"]
         if result is not None:
             statement["result"] = result
-        return Built(as_utc(at), statement)
+        return Built(as_utc(at), statement, user_id)
 
     def learning_events(self, user_ids: Iterable[int] | None, since: datetime, until: datetime) -> list[Built]:
         """Lessons watched and tours followed."""
@@ -194,10 +195,15 @@ class StatementBuilder:
                 built.append(one)
         return built
 
-    def all(self, user_ids: Iterable[int] | None, since: datetime, until: datetime,
-            course_id: int | None = None) -> list[dict[str, Any]]:
+    def built(self, user_ids: Iterable[int] | None, since: datetime, until: datetime,
+              course_id: int | None = None) -> list[Built]:
         """Every statement of the people (None: everyone) for what happened in [since, until), oldest first."""
         ids = None if user_ids is None else sorted(user_ids)
-        built = (self.learning_events(ids, since, until) + self.tests(ids, since, until, course_id)
+        found = (self.learning_events(ids, since, until) + self.tests(ids, since, until, course_id)
                  + self.exercises(ids, since, until, course_id) + self.sessions(ids, since, until))
-        return [b.statement for b in sorted(built, key=lambda b: (b.at, b.statement["id"]))]
+        return sorted(found, key=lambda b: (b.at, b.statement["id"]))
+
+    def all(self, user_ids: Iterable[int] | None, since: datetime, until: datetime,
+            course_id: int | None = None) -> list[dict[str, Any]]:
+        """The statements alone (an export)."""
+        return [b.statement for b in self.built(user_ids, since, until, course_id)]

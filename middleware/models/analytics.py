@@ -61,7 +61,8 @@ class LearningEvent(Base):
 
 class XapiStatement(Base):
     """An xAPI statement waiting for (or sent to) the Learning Record Store: the outbox, retried until sent; the
-    statement's id is unique, so a statement is queued once whichever worker builds it."""
+    statement's id is unique, so a statement is queued once whichever worker builds it. A deleted account's
+    statements go with it (never sent after)."""
 
     __tablename__ = "xapi_outbox"
     __table_args__ = (
@@ -71,6 +72,8 @@ class XapiStatement(Base):
 
     id: Mapped[int] = mapped_column(primary_key=True)
     statement_id: Mapped[str] = mapped_column(String(36), unique=True)
+    # Whose learning record it is: deleting the account deletes its statements, sent or not.
+    user_id: Mapped[int] = mapped_column(ForeignKey("users.id", ondelete="CASCADE"), index=True)
     statement_json: Mapped[str] = mapped_column(Text)
     status: Mapped[str] = mapped_column(String(16), default="pending")
     tries: Mapped[int] = mapped_column(default=0)

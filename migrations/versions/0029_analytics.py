@@ -65,6 +65,7 @@ def upgrade() -> None:
         "xapi_outbox",
         sa.Column("id", sa.Integer(), nullable=False),
         sa.Column("statement_id", sa.String(36), nullable=False),
+        sa.Column("user_id", sa.Integer(), nullable=False),
         sa.Column("statement_json", sa.Text(), nullable=False),
         sa.Column("status", sa.String(16), nullable=False),
         sa.Column("tries", sa.Integer(), nullable=False),
@@ -75,13 +76,16 @@ def upgrade() -> None:
         sa.Column("created_at", sa.DateTime(timezone=True), nullable=False),
         sa.Column("sent_at", sa.DateTime(timezone=True), nullable=True),
         sa.CheckConstraint("status IN ('pending', 'sent', 'failed')", name=op.f("ck_xapi_outbox_status_known")),
+        _user_fk("xapi_outbox"),
         sa.PrimaryKeyConstraint("id", name=op.f("pk_xapi_outbox")),
         sa.UniqueConstraint("statement_id", name=op.f("uq_xapi_outbox_statement_id")),
     )
     op.create_index("ix_xapi_outbox_due", "xapi_outbox", ["status", "next_try_at"])
+    op.create_index("ix_xapi_outbox_user_id", "xapi_outbox", ["user_id"])
 
 
 def downgrade() -> None:
+    op.drop_index("ix_xapi_outbox_user_id", table_name="xapi_outbox")
     op.drop_index("ix_xapi_outbox_due", table_name="xapi_outbox")
     op.drop_table("xapi_outbox")
     op.drop_index("ix_analytics_learning_events_at", table_name="analytics_learning_events")

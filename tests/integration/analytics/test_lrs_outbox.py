@@ -137,6 +137,20 @@ def test_statements_are_sent_once_retried_after_a_failure_and_sent_after_a_resta
     with session_factory(again)() as session:
         refused = session.query(XapiStatement).filter_by(status="failed").one()
         assert refused.last_error is not None and "400" in refused.last_error and refused.tries == 1
+
+    # A deleted account's statements go with it, waiting or sent: none is sent after.
+    lrs.answers = [503]
+    with session_factory(again)() as session:
+        s2 = session.query(User).filter_by(username="s2").one()
+        session.add(LearningEvent(user_id=s2.id, kind="tour_followed", object_id=1, at=now + timedelta(minutes=35)))
+        session.commit()
+    assert sender.run_once(now + timedelta(minutes=40)) == (0, 1)
+    with session_factory(again)() as session:
+        session.delete(session.query(User).filter_by(username="s2").one())
+        session.commit()
+        assert session.query(XapiStatement).filter_by(user_id=s2.id).count() == 0
+    heard = len(lrs.received)
+    assert sender.run_once(now + timedelta(hours=2)) == (0, 0) and len(lrs.received) == heard
     sender.stop()
     _let_go(again)
 
