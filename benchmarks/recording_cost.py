@@ -101,19 +101,36 @@ def switch(lab: LabUnderTest, on: bool) -> None:
 
 
 def live_path(lab: LabUnderTest, browser: Browser, pairs: int, drives: int) -> dict[str, Any]:
-    """Alternating off/on blocks; every block's drive and viewer samples."""
+    """Alternating off/on blocks; every block's drive and viewer samples, and the process's CPU seconds a second
+    (middleware, recorder and client alike: only the recorder differs between the blocks)."""
     blocks: list[tuple[str, list[float], list[float]]] = []
+    cpu: list[tuple[str, float]] = []
     viewer = TelemetryViewer(browser)
     try:
         for pair in range(pairs):
             for state in (("off", "on") if pair % 2 == 0 else ("on", "off")):
                 switch(lab, state == "on")
                 viewer.take()
+                cpu_started, started = time.process_time(), time.monotonic()
                 drive = measure_drive(browser, drives)
+                cpu.append((state, (time.process_time() - cpu_started) / (time.monotonic() - started)))
                 blocks.append((state, drive, viewer.take()))
     finally:
         viewer.close()
-    return {"blocks": blocks}
+    return {"blocks": blocks, "cpu": cpu}
+
+
+def cpu_rows(cpu: list[tuple[str, float]]) -> list[Measurement]:
+    """The process's CPU while recording, beside its CPU with the recorder off (a load on the machine slows a
+    block, but does not add CPU seconds to this process: steadier than the latencies on a shared machine)."""
+    on = [share for state, share in cpu if state == "on"]
+    off = [share for state, share in cpu if state == "off"]
+    if not on or not off:
+        return []
+    on_ms, off_ms = statistics.median(on) * 1000, statistics.median(off) * 1000
+    return [Measurement("process CPU, recording on", "CPU a second (median of blocks)", on_ms, "ms/s", "", off_ms,
+                        None, f"recording adds {on_ms - off_ms:.1f} ms/s"),
+            Measurement("process CPU", "on / off", on_ms / off_ms, "x", "", 1.0, None)]
 
 
 def ratio_rows(name: str, blocks: list[tuple[str, list[float]]], quick: bool) -> list[Measurement]:
@@ -253,7 +270,7 @@ def main(argv: list[str] | None = None) -> int:
     pairs, drives, window_s, minutes = (2, 40, 15.0, 3.0) if args.quick else (12, 150, 60.0, 30.0)
     lab = LabUnderTest(users=1)
     rows: list[Measurement] = []
-    extra: dict[str, Any] = {"load_average_at_start": os.getloadavg(), "cores": os.cpu_count()}
+    extra: dict[str, Any] = {"quick": args.quick, "load_average_at_start": os.getloadavg(), "cores": os.cpu_count()}
     try:
         recordings = recordings_of(lab.app)
         recordings.keeper.pause(True)
@@ -264,6 +281,8 @@ def main(argv: list[str] | None = None) -> int:
         blocks = measured["blocks"]
         rows += ratio_rows("drive -> ack", [(state, drive) for state, drive, _ in blocks], args.quick)
         rows += ratio_rows("telemetry -> viewer", [(state, view) for state, _, view in blocks], args.quick)
+        rows += cpu_rows(measured["cpu"])
+        extra["cpu_s_per_s"] = measured["cpu"]
         extra["blocks"] = [{"state": state, "drive_p50_ms": percentile_ms(drive, 50), "drives": len(drive),
                             "viewer_p50_ms": percentile_ms(view, 50), "views": len(view)}
                            for state, drive, view in blocks]
