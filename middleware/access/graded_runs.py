@@ -44,6 +44,15 @@ def graded_run_started_at(session: Session, robot_name: str, user_id: int, now: 
     return max(starts) if starts else None
 
 
+def open_graded_runs(session: Session, now: datetime) -> set[tuple[str, int]]:
+    """(robot name, user id) of every graded run open now: what graded_run_started_at finds, for everyone at once."""
+    attempts = session.execute(select(func.coalesce(Attempt.robot_name, Exam.robot_name), Attempt.user_id).join(
+        Exam, Exam.id == Attempt.exam_id).where(Attempt.status == "in_progress",
+                                                or_(Attempt.deadline_at.is_(None), Attempt.deadline_at > now))).all()
+    trials = session.execute(select(Trial.robot_name, Trial.user_id).where(Trial.status == TRIAL_OPEN)).all()
+    return {(robot, user_id) for robot, user_id in [*attempts, *trials] if robot}
+
+
 def graded_run_hold_s(session: Session, user_id: int) -> float:
     """The longest a graded run of user_id keeps a shared robot: the longest of their courses' settings."""
     longest = session.scalar(select(func.max(Course.graded_run_hold_min))
