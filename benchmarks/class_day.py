@@ -14,7 +14,9 @@ Reported per worker count, each beside a floor from the same run: web CPU per st
 workers' CPU over the same time), its ratio to 1 worker's (target: within 10 %), threads per worker (floor: idle),
 PostgreSQL transactions per student-second (floor: idle), the p99 of ordinary requests (floor: the same request
 with nobody in) and of drive acknowledgements (floor: the robot's own Drive round trip over gRPC), the reconnect
-time after the restart (floor: a console's first opening), and seats lost (target 0). The tutor's wall is not in
+time after the restart (floor: a console's first opening), and seats lost (target 0); beside them, the share of drive
+commands the server superseded by a newer one waiting (each timed to the ack that answered it) and, among the
+errors, every channel the server closed. The tutor's wall is not in
 the load (it is another part of issue 31). `--quick`: 4 students over 1 s, a 4 s hold, 1 worker only.
 """
 
