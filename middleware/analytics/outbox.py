@@ -17,6 +17,7 @@ from urllib.parse import quote
 import requests
 from flask import Flask
 from sqlalchemy import delete, func, or_, select, update
+from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from middleware import db
@@ -179,9 +180,12 @@ class XapiSender:
         """One pass: queue, send, prune; (sent, not sent)."""
         moment = now or utc_now()
         assert self.settings.homepage is not None
-        with self._sessions() as session, session.begin():
-            queue_new(session, self.settings.homepage, moment)
-            prune(session, moment)
+        try:
+            with self._sessions() as session, session.begin():
+                queue_new(session, self.settings.homepage, moment)
+                prune(session, moment)
+        except IntegrityError:  # a former leader queued the same statements a moment ago: theirs stand
+            log.info("xAPI statements were queued by another process at the same time")
         return send_due(self._sessions, self.settings, moment)
 
     def _run(self) -> None:

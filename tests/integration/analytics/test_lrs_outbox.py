@@ -174,3 +174,42 @@ def test_the_sender_thread_sends_a_new_statement_within_its_interval(tmp_path, l
     analytics_of(app).sender.stop()
     _let_go(app)
     assert [r["body"]["verb"]["display"]["en"] for r in lrs.received] == ["completed"]
+
+
+def test_two_processes_sending_at_once_send_each_statement_once(database_url, tmp_path, lrs) -> None:
+    """Two web processes (two apps on one database) queue and send at the same moment, as a former leader and the
+    new one may for one pass: every statement reaches the LRS once, and both passes end without an error."""
+    from middleware import create_app
+    from middleware.analytics import analytics_of
+    from tests.conftest import _let_go
+
+    first = make_test_app(database_url, "lab-1=127.0.0.1:9", tmp_path / "one")
+    history(first)
+    second = create_app({"DATABASE_URL": database_url, "SECRET_KEY": "y" * 32, "TESTING": True, "ROBOTS": {}})
+    second.instance_path = str(tmp_path / "two")
+    apps = [first, second]
+    for app in apps:
+        configured(app, lrs)
+    start = threading.Barrier(2)
+    outcomes: list[object] = []
+
+    def run(app) -> None:
+        start.wait(10)
+        try:
+            outcomes.append(analytics_of(app).sender.run_once(at(9, 0)))
+        except Exception as error:  # noqa: BLE001 - the test reports it below
+            outcomes.append(error)
+
+    threads = [threading.Thread(target=run, args=(app,)) for app in apps]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(60)
+    for app in apps:
+        analytics_of(app).sender.stop()
+        _let_go(app)
+    assert all(isinstance(o, tuple) for o in outcomes) and len(outcomes) == 2, outcomes
+    assert sum(sent for sent, _missed in outcomes) == 9  # type: ignore[misc]
+    ids = [r["statement_id"] for r in lrs.received]
+    assert len(ids) == len(set(ids)) == 9, ids
+    assert statuses(first) == {"sent": 9}
