@@ -7,7 +7,9 @@ worker's the only one whose CSP allows WebAssembly ('wasm-unsafe-eval', which Py
 
 from __future__ import annotations
 
+import logging
 import secrets
+import time
 from datetime import datetime
 from pathlib import Path
 
@@ -15,18 +17,21 @@ from flask import Blueprint, Response, current_app, jsonify, render_template, re
 from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
-from middleware.access.commands import robot_commands
+from middleware.access.commands import Commander, robot_commands
 from middleware.api.contract import ANY, ID, OBJECT, about, array, described, obj, one_of
 from middleware.assessment.recording import robot_run
 from middleware.browser_modules import csp_hash_source, import_map_text
 from middleware.db import get_session
+from middleware.errors import ApiError, Refused
 from middleware.exercises import schemas, services
 from middleware.robots.link import RobotUnavailable
 from middleware.teaching.targets import PRACTICE_TARGET, resolve_target
 from middleware.web import now
 from protos.telelab.v1 import robot_pb2
 
+log = logging.getLogger(__name__)
 blueprint = Blueprint("exercises", __name__)
+FRESH_ROBOT_WAIT_S = 40.0  # a submission's robot restarting: how long the request waits for it to answer again
 PAGE_FOLDER = "pages/exercises"
 ISOLATION_HEADERS = {"Cross-Origin-Opener-Policy": "same-origin", "Cross-Origin-Embedder-Policy": "require-corp"}
 
@@ -215,6 +220,8 @@ def start_run(slug: str) -> ResponseReturnValue:
     version = services.save_code(session, current_user, exercise, text, now())
 
     def place(start: list[float]) -> None:
+        if mode == "submission":
+            _fresh_robot(commander)
         commander.place_robot(robot_pb2.Pose2D(x_m=start[0], y_m=start[1], theta_rad=start[2]),
                               kidnap=services.kidnaps(exercise))
 
@@ -261,6 +268,29 @@ def class_work(slug: str) -> ResponseReturnValue:
     session = get_session()
     exercise = services.exercise_by_slug(session, slug)
     return jsonify({"students": services.class_overview(session, current_user, exercise)})
+
+
+def _fresh_robot(commander: Commander) -> None:
+    """A submission runs on a fresh robot, not one drifted and mapped by practice: the robot's process is restarted
+    (a new world: odometry, battery, map and goals as a robot started for the grade has them) and the request
+    waits until it answers again. A robot that cannot restart itself (one run inside another program) is graded as
+    it is; one that does not come back is a 503."""
+    try:
+        before = commander.link.health().restarts
+        commander.restart()
+    except Refused as refusal:
+        log.info("a submission on %s runs on the robot as it is: %s", commander.robot_name, refusal)
+        return
+    deadline = time.monotonic() + FRESH_ROBOT_WAIT_S
+    while time.monotonic() < deadline:
+        try:
+            if commander.link.health().restarts > before:
+                return
+        except RobotUnavailable:
+            pass
+        time.sleep(0.2)
+    raise ApiError(503, "robot_offline", "The robot started for your submission did not answer in time; submit "
+                                         "again.", "robot")
 
 
 def _scene_boxes(robot_name: str) -> list[dict[str, float]]:

@@ -195,6 +195,15 @@ print("skill", status, "odometry heading", round(robot.odometry().theta_rad, 2))
 """
 
 
+def run_program(page, server: LiveServer, slug: str, code: str) -> None:
+    """Logs student1 in, opens the exercise, waits for Python, types code and runs it on the practice robot."""
+    log_in(page, server)
+    page.goto(f"{server.url}/exercises/{slug}")
+    page.get_by_role("status").filter(has_text="is ready").wait_for(timeout=90_000)
+    set_code(page, code)
+    page.get_by_role("button", name="Run on my practice robot").click()
+
+
 def test_a_student_writes_a_line_follower_runs_it_and_sees_it_graded(page, exercise_lab: LiveServer) -> None:
     log_in(page, exercise_lab)
     page.set_viewport_size({"width": 1280, "height": 900})
@@ -227,11 +236,7 @@ def test_a_student_writes_a_line_follower_runs_it_and_sees_it_graded(page, exerc
 
 def test_run_skill_from_the_students_code_runs_the_robots_skill_and_answers_its_status(
         page, exercise_lab: LiveServer) -> None:
-    log_in(page, exercise_lab)
-    page.goto(f"{exercise_lab.url}/exercises/bump-and-go")
-    page.get_by_role("status").filter(has_text="is ready").wait_for(timeout=90_000)
-    set_code(page, SKILL_CALL)
-    page.get_by_role("button", name="Run on my practice robot").click()
+    run_program(page, exercise_lab, "bump-and-go", SKILL_CALL)
     console = page.locator("[data-field=console]")
     console.filter(has_text="skill ").wait_for(timeout=60_000)
     assert "skill SUCCEEDED odometry heading" in console.inner_text(), console.inner_text()
@@ -248,11 +253,7 @@ def test_on_a_phone_the_line_sensor_shows_and_a_stopped_run_is_graded(chromium, 
     phone = chromium.new_context(viewport={"width": 390, "height": 844}, is_mobile=True, has_touch=True)
     page = phone.new_page()
     try:
-        log_in(page, exercise_lab)
-        page.goto(f"{exercise_lab.url}/exercises/follow-line")
-        page.get_by_role("status").filter(has_text="is ready").wait_for(timeout=90_000)
-        set_code(page, LINE_FOLLOWER)
-        page.get_by_role("button", name="Run on my practice robot").click()
+        run_program(page, exercise_lab, "follow-line", LINE_FOLLOWER)
         page.get_by_role("status").filter(has_text="Running on").wait_for(timeout=90_000)
         page.locator("[data-field=robot]").filter(has_text="line sensor").wait_for(timeout=15_000)
         wait_until(lambda: truth_speed(exercise_lab, "practice-student1") > 0.1, 15, "the robot did not move")
@@ -265,3 +266,38 @@ def test_on_a_phone_the_line_sensor_shows_and_a_stopped_run_is_graded(chromium, 
         page.screenshot(path=str(ARTIFACTS_DIR / "exercise-line-phone-graded.png"), full_page=True)
     finally:
         phone.close()
+
+
+SHORT_DRIVE = "from telelab import robot\nwhile robot.tick() and robot.time() < 2:\n    robot.set_velocity(0.2, 0.0)\n"
+
+
+def test_a_submission_runs_on_a_robot_started_fresh_for_it(page, exercise_lab: LiveServer) -> None:
+    from middleware.robots.registry import robot_registry
+
+    def restarts() -> int:
+        with exercise_lab.app.app_context():
+            return robot_registry().get("practice-student1").health().restarts
+
+    run_program(page, exercise_lab, "bump-and-go", SHORT_DRIVE)
+    page.locator("[data-field=grade]").filter(has_text="Practice run").wait_for(timeout=60_000)
+    before = restarts()  # practice runs on the robot as it is
+    page.get_by_role("button", name="Submit for a grade").click()
+    page.locator("[data-field=grade]").filter(has_text="Submission").wait_for(timeout=90_000)
+    assert restarts() == before + 1  # the submission's robot is a new process: a fresh world, odometry, battery
+    assert page.locator("[data-slot=measurements] tbody tr").count() == 3
+
+
+def test_the_consoles_line_sensor_panel_reads_the_tape_under_the_robot(page, exercise_lab: LiveServer) -> None:
+    from tests.e2e.test_panels import open_console, show_tab_of
+
+    open_console(page, exercise_lab, robot="lab-1")
+    page.locator('section[data-panel-id="line-sensor"]').wait_for(state="attached", timeout=20_000)
+    show_tab_of(page, "line-sensor")
+    panel = page.locator("line-sensor-panel")
+    assert panel.locator("[data-line-cell]").count() == 5
+    words = panel.locator('[data-field="line-position"]')
+    wait_until(lambda: (words.text_content() or "—") != "—", 10, "the line sensor panel showed no reading")
+    # lab-1 stands wherever earlier tests left it: over bare floor, or over the tape.
+    assert words.text_content() in ("No line under the sensor.", "Line under the middle.") \
+        or "cm to the" in (words.text_content() or "")
+    panel.screenshot(path=str(ARTIFACTS_DIR / "line-sensor-panel.png"))
