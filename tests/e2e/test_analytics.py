@@ -90,3 +90,33 @@ def test_the_demo_tutor_reads_the_demo_courses_usage(chromium, app, demo_account
     finally:
         context.close()
     assert not errors, errors
+
+
+def test_an_admin_reads_everyones_usage_and_whether_statements_reach_an_lrs(chromium, app, demo_accounts,
+                                                                            live_server: LiveServer) -> None:
+    from middleware.analytics.demo import seed_demo_usage
+    from middleware.lab_runner import seed_demo_course
+
+    seed_demo_course(app)
+    seed_demo_usage(app)
+    context = chromium.new_context(viewport=SIZES["desktop"])
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    try:
+        page.goto(f"{live_server.url}/login")
+        page.get_by_label("Username").fill("admin")
+        page.get_by_label("Password").fill(demo_accounts["admin"])
+        page.get_by_role("button", name="Log in").click()
+        page.locator('[data-field="username"]').wait_for()
+        page.goto(f"{live_server.url}/analytics")
+        page.locator('#analytics[data-state=ready][data-course=""]').wait_for()
+        assert page.get_by_label("Course").locator("option").first.text_content() == "Every course"
+        assert "28 sessions" in (page.get_by_test_id("summary").text_content() or "")
+        status = page.get_by_test_id("lrs-status")
+        assert status.is_visible() and "No Learning Record Store is configured" in (status.text_content() or "")
+        assert not page.get_by_test_id("xapi-link").is_visible(), "statements are per course"
+        page.screenshot(path=str(ARTIFACTS_DIR / "analytics-admin-desktop.png"))
+    finally:
+        context.close()
+    assert not errors, errors
