@@ -18,6 +18,21 @@ NEW_EXERCISE = {"slug": "reach-the-crate", "title": "Reach the crate", "statemen
                 "rubric": {"kind": "reach_goal", "x_m": 2.0, "y_m": 1.4, "radius_m": 0.4}, "time_limit_s": 30}
 
 
+def graded_run_open(lab: PlansLab, robot_name: str, username: str) -> bool:
+    """Whether the access rules count username's run on robot_name as a graded one now (the truth hidden)."""
+    from datetime import UTC, datetime
+
+    from sqlalchemy import select
+
+    from middleware.access.graded_runs import graded_run_started_at
+    from middleware.db import session_factory
+    from middleware.models import User
+
+    with lab.server.app.app_context(), session_factory(lab.server.app)() as session:
+        user_id = session.scalar(select(User.id).where(User.username == username))
+        return graded_run_started_at(session, robot_name, user_id, datetime.now(UTC)) is not None
+
+
 def wait_for_practice_robot(client) -> None:
     status, answer = api(client, "POST", "/api/practice", {})
     assert status in (200, 202), answer
@@ -70,7 +85,9 @@ def test_runs_are_placed_and_graded_by_the_server_and_seen_by_owner_and_tutor_on
     assert status == 201, answer
     submission = answer["run"]
     assert submission["start"] is None  # hidden until the run is over
+    assert graded_run_open(plans_lab, "practice-student1", "student1")  # its streams carry no truth meanwhile
     _, answer = api(ann, "POST", f"/api/exercise-runs/{submission['id']}/finish", {})
+    assert not graded_run_open(plans_lab, "practice-student1", "student1")
     assert answer["run"]["start"] is not None and answer["run"]["start"] != [0.0, 0.0, 0.0]
     submitted = answer["run"]["grade"]
     _, answer = api(ann, "GET", "/api/exercises/bump-and-go")
