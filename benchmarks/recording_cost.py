@@ -128,9 +128,9 @@ def cpu_rows(cpu: list[tuple[str, float]]) -> list[Measurement]:
     if not on or not off:
         return []
     on_ms, off_ms = statistics.median(on) * 1000, statistics.median(off) * 1000
-    return [Measurement("process CPU, recording on", "CPU a second (median of blocks)", on_ms, "ms/s", "", off_ms,
+    return [Measurement("process CPU, recording on", "CPU a second (median of blocks)", on_ms, "ms/s", "-", off_ms,
                         None, f"recording adds {on_ms - off_ms:.1f} ms/s"),
-            Measurement("process CPU", "on / off", on_ms / off_ms, "x", "", 1.0, None)]
+            Measurement("process CPU", "on / off", on_ms / off_ms, "x", "-", 1.0, None)]
 
 
 def ratio_rows(name: str, blocks: list[tuple[str, list[float]]], quick: bool) -> list[Measurement]:
@@ -145,8 +145,8 @@ def ratio_rows(name: str, blocks: list[tuple[str, list[float]]], quick: bool) ->
     median = statistics.median(ratios) if ratios else None
     spread = f"{len(ratios)} pairs: {min(ratios):.3f}-{max(ratios):.3f}" if ratios else "no pairs"
     return [
-        Measurement(f"{name}, recording on", "p50", percentile_ms(on, 50), "ms", "", percentile_ms(off, 50)),
-        Measurement(f"{name}, recording on", "p99", percentile_ms(on, 99), "ms", "", percentile_ms(off, 99)),
+        Measurement(f"{name}, recording on", "p50", percentile_ms(on, 50), "ms", "-", percentile_ms(off, 50)),
+        Measurement(f"{name}, recording on", "p99", percentile_ms(on, 99), "ms", "-", percentile_ms(off, 99)),
         Measurement(name, "p50 on / p50 off, median of pairs", median, "x", f"<= {RATIO_TARGET}", 1.0,
                     None if quick or median is None else median <= RATIO_TARGET, spread),
     ]
@@ -287,7 +287,7 @@ def main(argv: list[str] | None = None) -> int:
                             "viewer_p50_ms": percentile_ms(view, 50), "views": len(view)}
                            for state, drive, view in blocks]
         on_disk, own, seconds = bytes_window(lab, browser, window_s)
-        rows.append(Measurement("recording size", "bytes per minute of session (disk)", on_disk, "B/min", "", own,
+        rows.append(Measurement("recording size", "bytes per minute of session (disk)", on_disk, "B/min", "-", own,
                                 None, f"floor: the messages' own bytes; a {seconds:.0f} s part, driving"))
         queue.send(json.dumps({"type": "leave"}))
         queue.close()
@@ -296,9 +296,9 @@ def main(argv: list[str] | None = None) -> int:
         times = replay_times(lab, long_id, short_id, 1 if args.quick else REPLAY_LOADS)
         label = f"replay page, {minutes:g} min"
         rows += [Measurement(label, "time to first frame", statistics.median(times["long"]["first_frame"]), "ms",
-                             "", statistics.median(times["short"]["first_frame"]), None,
+                             "-", statistics.median(times["short"]["first_frame"]), None,
                              "floor: the same page on a 10 s recording"),
-                 Measurement(label, "whole recording loaded", statistics.median(times["long"]["ready"]), "ms", "",
+                 Measurement(label, "whole recording loaded", statistics.median(times["long"]["ready"]), "ms", "-",
                              statistics.median(times["short"]["ready"]), None)]
         extra["replay_ms"] = times
         extra["load_average_at_end"] = os.getloadavg()
