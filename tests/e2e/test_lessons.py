@@ -141,8 +141,11 @@ def test_the_video_drives_the_practice_robot_by_the_exact_rule(page, live_server
         _wait_for(page, "cue 2 (seek)")
         page.evaluate(f"{video}.dispatchEvent(new Event('waiting'))")
         _wait_for(page, "stop (buffering) acknowledged")
-        # the end stops the robot
-        page.evaluate(f"{video}.currentTime = 9.5")
+        # the end stops the robot, and the lesson counts as watched (the tutors' usage page, xAPI "watched")
+        with page.expect_response(lambda r: r.url.endswith(f"/api/lessons/{lesson_id}/watched"),
+                                  timeout=20000) as watched:
+            page.evaluate(f"{video}.currentTime = 9.5")
+        assert watched.value.status == 200 and watched.value.json() == {"recorded": True}
         _wait_for(page, "stop (end) acknowledged", 20000)
         log = [line for line in _log(page) if not line.startswith("ack")]
         runs_and_stops = [line.split(" →")[0] for line in log]
