@@ -301,3 +301,19 @@ def test_the_consoles_line_sensor_panel_reads_the_tape_under_the_robot(page, exe
     assert words.text_content() in ("No line under the sensor.", "Line under the middle.") \
         or "cm to the" in (words.text_content() or "")
     panel.screenshot(path=str(ARTIFACTS_DIR / "line-sensor-panel.png"))
+
+
+def test_after_a_kidnapping_the_students_code_localizes_with_the_labs_localization_and_is_graded(
+        page, exercise_lab: LiveServer) -> None:
+    run_program(page, exercise_lab, "kidnapped", solutions.KIDNAPPED)
+    console = page.locator("[data-field=console]")
+    console.filter(has_text="localization: EXECUTING").wait_for(timeout=60_000)  # start_skill returned at once
+    console.filter(has_text="localized at").wait_for(timeout=90_000)  # robot.localization() converged in Chromium
+    grade = page.locator("[data-field=grade]").filter(has_text="Practice run")
+    grade.wait_for(timeout=120_000)
+    reported = page.locator("[data-slot=measurements] tbody tr").first.inner_text()
+    assert "reported pose error" in reported
+    # The pose the code reported, graded against where the robot truly stood then (the practice start is known).
+    assert float(grade.get_attribute("data-grade") or 0) >= 0.5, grade.inner_text()
+    page.locator("[data-slot=map]").scroll_into_view_if_needed()
+    page.screenshot(path=str(ARTIFACTS_DIR / "exercise-kidnapped-graded.png"), full_page=True)
