@@ -115,13 +115,14 @@ def test_a_second_claim_meeting_the_first_committed_meanwhile_is_told_it_is_star
     manager, sessions = practice_manager(practice_lab.app), session_factory(practice_lab.app)
     with sessions() as session:
         user_id = session.query(User.id).filter(User.username == "p04").scalar()
-    def commit_before_insert(state, first) -> None:
-        if state.is_insert and first.in_transaction():
-            first.commit()  # the first claim is committed as the second one inserts
+    def commit_before_insert(first, inserting: bool = True) -> None:
+        if inserting and first.in_transaction():
+            first.commit()  # the first claim is committed as the second one inserts (a statement, or a flush)
 
     def second_claim(first) -> tuple[object, str | None]:  # another request's thread (SQLite: its own connection)
         with sessions() as second:
-            event.listen(second, "do_orm_execute", lambda state: commit_before_insert(state, first))
+            event.listen(second, "do_orm_execute", lambda state: commit_before_insert(first, state.is_insert))
+            event.listen(second, "before_flush", lambda *_: commit_before_insert(first))
             pending = manager.begin_start(second, user_id, "p04")
             username = second.scalar(select(User.username).where(User.id == user_id))  # its unit of work goes on
             second.commit()
