@@ -10,13 +10,14 @@ its action in `unless_refused`, which does the same before answering.
 from __future__ import annotations
 
 from collections.abc import Callable
-from datetime import date, datetime
+from datetime import UTC, date, datetime
 from typing import ClassVar, TypeVar
 
+from babel.dates import format_date, format_datetime
 from babel.numbers import format_decimal
 from flask import Flask, flash, jsonify, redirect, render_template, request
 from flask.typing import ResponseReturnValue
-from flask_babel import format_date, format_datetime, get_locale, gettext  # type: ignore[import-untyped]
+from flask_babel import get_locale, gettext  # type: ignore[import-untyped]
 from flask_wtf.csrf import CSRFError
 from werkzeug.exceptions import HTTPException
 from werkzeug.http import HTTP_STATUS_CODES
@@ -68,13 +69,13 @@ def written_number(value: float | None) -> str:
 
 def written_date(value: date, english: str, pattern: str) -> str:
     """A date or moment as a sentence writes it: in English by the strftime format english (as before), in another
-    language by the CLDR pattern (dd MMM: "04 may")."""
+    language by the CLDR pattern (dd MMM: "04 may"); a moment in its own time zone."""
     locale = get_locale()
     if locale is None or locale.language == "en":
         return value.strftime(english)
     if isinstance(value, datetime):
-        return str(format_datetime(value, pattern))
-    return str(format_date(value, pattern))
+        return str(format_datetime(value, pattern, tzinfo=value.tzinfo or UTC, locale=locale))
+    return str(format_date(value, pattern, locale=locale))
 
 
 def end_refused_request(refused: Refused) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from flask import flash, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required, logout_user
 from sqlalchemy import select
 
@@ -14,6 +15,7 @@ from middleware.api.contract import ID, OBJECT, STRING, about, described, nullab
 from middleware.auth import sessions
 from middleware.db import discard_changes, get_session
 from middleware.errors import Refused, flashed, unless_refused
+from middleware.i18n import N_
 from middleware.models import Course
 from middleware.web import json_body, now
 
@@ -74,7 +76,7 @@ def invitations_revoke(invitation_id: int) -> ResponseReturnValue:
 
     def revoke() -> ResponseReturnValue:
         invitations.revoke_invitation(get_session(), current_user, invitation_id, now())
-        flash("The invitation was withdrawn: its link no longer works.", "success")
+        flash(gettext("The invitation was withdrawn: its link no longer works."), "success")
         return redirect(back, 303)
 
     return unless_refused(revoke, flashed(back))
@@ -89,21 +91,23 @@ def api_revoke_invitation(invitation_id: int) -> ResponseReturnValue:
     return jsonify({"invitation": view.to_dict()})
 
 
-UNUSABLE = {
-    "unknown": (404, "This invitation link is not valid",
-                "The link is not one we issued. Check that you copied all of it, or ask your tutor for a new one."),
-    "expired": (410, "This invitation has expired",
-                "Invitation links last a few days. Ask your tutor or the lab's admin for a new one."),
-    "used": (410, "This invitation has already been used",
-             "Each link creates one account. If it was you, log in; otherwise ask for a new link."),
-    "revoked": (410, "This invitation was withdrawn",
-                "The person who invited you withdrew this link. Ask them for a new one if you still need an account."),
+UNUSABLE = {  # said through gettext when shown
+    "unknown": (404, N_("This invitation link is not valid"),
+                N_("The link is not one we issued. Check that you copied all of it, or ask your tutor for a new one.")),
+    "expired": (410, N_("This invitation has expired"),
+                N_("Invitation links last a few days. Ask your tutor or the lab's admin for a new one.")),
+    "used": (410, N_("This invitation has already been used"),
+             N_("Each link creates one account. If it was you, log in; otherwise ask for a new link.")),
+    "revoked": (410, N_("This invitation was withdrawn"),
+                N_("The person who invited you withdrew this link. Ask them for a new one if you still need an "
+                   "account.")),
 }
 
 
 def _join_unusable(reason: str) -> ResponseReturnValue:
     status, title, message = UNUSABLE[reason]
-    return render_template("accounts/join_invalid.html", title=title, message=message, reason=reason), status
+    return render_template("accounts/join_invalid.html", title=gettext(title), message=gettext(message),
+                           reason=reason), status
 
 
 @blueprint.get("/join/<token>")
@@ -128,7 +132,7 @@ def join_submit(token: str) -> ResponseReturnValue:
         if current_user.is_authenticated:
             logout_user()
         sessions.begin(user)
-        flash(f"Welcome, {user.username}. Your account is ready.", "success")
+        flash(gettext("Welcome, %(username)s. Your account is ready.", username=user.username), "success")
         return redirect(url_for("lab.index"), 303)
 
     def form_again(refused: Refused) -> ResponseReturnValue:

@@ -96,7 +96,8 @@ def create_account(session: Session, actor: User, username: object, role: object
     try:
         return create_user(session, name, user_role, password), password
     except AccountExists as error:
-        raise Refused(409, "account_exists", str(error), "username") from None
+        raise Refused(409, "account_exists", gettext("An account named %(name)s already exists.", name=repr(name)),
+                      "username") from error
 
 
 def set_active(session: Session, actor: User, user_id: int, active: bool) -> User:

@@ -53,7 +53,7 @@ def password_submit() -> ResponseReturnValue:
         if new != again:
             raise InvalidField("new_password_again", gettext("The two new passwords differ; type the same one twice."))
         _change_own_password(request.form.get("current_password", ""), new)
-        flash("Your password has been changed.", "success")
+        flash(gettext("Your password has been changed."), "success")
         return redirect(url_for("lab.index"), 303)
 
     return unless_refused(change, lambda refused: (render_template(

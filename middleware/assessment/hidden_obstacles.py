@@ -22,16 +22,17 @@ from sqlalchemy.orm import Session
 from middleware import events
 from middleware.assessment.obstacle_zone import TASK_KIND, is_wall
 from middleware.db import session_factory
+from middleware.i18n import N_
 from middleware.models.accounts import as_utc
 from middleware.models.assessment import Attempt, Exam
 
 OBSTACLES_HIDDEN = "obstacles_hidden"  # the stable code of every refusal and the scene's field naming the rule
 HIDDEN_NOTE = ("Obstacles hidden during your obstacle-zone test: find them from the sonar and laser readings. "
                "They come back when you submit.")
-CAMERA_REFUSAL = ("No camera during your obstacle-zone test: the picture would show the obstacles. Find them from "
-                  "the sonar and laser readings; the camera comes back when you submit.")
-MAP_REFUSAL = ("No map during your obstacle-zone test: a map can hold the lab's floor plan. Find the obstacles "
-               "from the sonar and laser readings; the map comes back when you submit.")
+CAMERA_REFUSAL = N_("No camera during your obstacle-zone test: the picture would show the obstacles. Find them from "
+                    "the sonar and laser readings; the camera comes back when you submit.")
+MAP_REFUSAL = N_("No map during your obstacle-zone test: a map can hold the lab's floor plan. Find the obstacles "
+                 "from the sonar and laser readings; the map comes back when you submit.")
 HIDDEN_VERSION_SUFFIX = "-obstacles-hidden"  # a scene version (its ETag) of its own: a cached full one is not reused
 
 

@@ -238,7 +238,7 @@ def add_question(course_id: int) -> ResponseReturnValue:
     """Adds a question from the bank editor's form."""
     return _course_action(course_id, lambda dbs, form: bank.add_question(dbs, current_user, course_id,
                                                                          _form_question(form)),
-                          "Question added to the bank.", "question")
+                          _("Question added to the bank."), "question")
 
 
 @blueprint.post("/courses/<int:course_id>/assessment/questions/<int:question_id>")
@@ -275,7 +275,7 @@ def import_bank(course_id: int) -> ResponseReturnValue:
             raise InvalidField("file", _("Choose a question bank file (JSON) to import."))
         bank.import_bank(dbs, current_user, course_id, upload.read())
 
-    return _course_action(course_id, action, "Question bank imported.", "file")
+    return _course_action(course_id, action, _("Question bank imported."), "file")
 
 
 @blueprint.post("/courses/<int:course_id>/assessment/exams")
@@ -283,7 +283,7 @@ def import_bank(course_id: int) -> ResponseReturnValue:
 def create_exam(course_id: int) -> ResponseReturnValue:
     """Creates a quiz or a timed test from the test editor's form."""
     return _course_action(course_id, lambda dbs, form: bank.create_exam(dbs, current_user, course_id,
-                                                                        _form_exam(form)), "Test created.", "exam")
+                                                                        _form_exam(form)), _("Test created."), "exam")
 
 
 @blueprint.post("/courses/<int:course_id>/assessment/exams/<int:exam_id>")
@@ -297,7 +297,7 @@ def edit_exam(course_id: int, exam_id: int) -> ResponseReturnValue:
             data = replace(data, question_ids=list(exam.question_ids))
         bank.update_exam(dbs, current_user, exam_id, data)
 
-    return _course_action(course_id, action, "Test saved.", "exam", ("exam", exam_id))
+    return _course_action(course_id, action, _("Test saved."), "exam", ("exam", exam_id))
 
 
 @blueprint.post("/courses/<int:course_id>/assessment/exams/<int:exam_id>/delete")
@@ -308,7 +308,7 @@ def delete_exam(course_id: int, exam_id: int) -> ResponseReturnValue:
         _own_exam(dbs, course_id, exam_id)
         bank.delete_exam(dbs, current_user, exam_id)
 
-    return _course_action(course_id, action, "Test deleted.", "exam", ("exam", exam_id), keep_form=False)
+    return _course_action(course_id, action, _("Test deleted."), "exam", ("exam", exam_id), keep_form=False)
 
 
 @blueprint.get("/assessment/exams/<int:exam_id>")
@@ -434,7 +434,7 @@ def survey_page(course_id: int) -> ResponseReturnValue:
     def answer() -> ResponseReturnValue:
         ratings, comments = parse_survey(request.form.to_dict(), survey.survey_of(get_session(), course_id).statements)
         survey.submit_survey(get_session(), current_user, course_id, ratings, comments)
-        flash("Thank you: your answers were recorded.", "success")
+        flash(_("Thank you: your answers were recorded."), "success")
         return redirect(url_for("assessment_pages.hub"), 303)
 
     if request.method != "POST":
@@ -460,7 +460,7 @@ def survey_editor(course_id: int) -> ResponseReturnValue:
     def save() -> ResponseReturnValue:
         survey.write_survey(dbs, current_user, course_id, parse_title(request.form.get("title")),
                             parse_statements(request.form.get("statements", "")))
-        flash("The survey is saved: students of the course now rate these statements.", "success")
+        flash(_("The survey is saved: students of the course now rate these statements."), "success")
         return redirect(url_for("assessment_pages.survey_editor", course_id=course_id), 303)
 
     if request.method != "POST":

@@ -24,7 +24,7 @@ from middleware.bookings.schemas import (
 )
 from middleware.bookings.week import form_default_start, week_days
 from middleware.db import get_session
-from middleware.errors import ApiError, flashed, unless_refused
+from middleware.errors import ApiError, flashed, unless_refused, written_date
 from middleware.models import Booking
 from middleware.robots.registry import RobotRegistry, robot_registry
 from middleware.validation import within_calendar
@@ -221,7 +221,7 @@ def create_from_form() -> ResponseReturnValue:
     back = _page_url(form.get("robot_name"), form.get("week"), form.get("tz"))
     form["starts_at"] = _form_starts_at(form) or ""
     if not form["starts_at"]:
-        flash("Choose a free slot, or a date and a time, to book.", "error")
+        flash(gettext("Choose a free slot, or a date and a time, to book."), "error")
         return redirect(back, 303)
 
     def book() -> ResponseReturnValue:
@@ -230,9 +230,12 @@ def create_from_form() -> ResponseReturnValue:
             _require_robot(booking_request.robot_name)
         booking = services.create_booking(get_session(), current_user, booking_request, _now())
         zone = parse_time_zone(form.get("tz"))
-        what = booking.robot_name or f"any {booking.pool_kind} robot (assigned when the slot starts)"
-        flash(f"Booked {what} on {booking_request.starts_at.astimezone(zone):%a %d %b, %H:%M}"
-              f"–{booking_request.ends_at.astimezone(zone):%H:%M}.", "success")
+        what = booking.robot_name or gettext("any %(kind)s robot (assigned when the slot starts)",
+                                             kind=booking.pool_kind)
+        starts, ends = booking_request.starts_at.astimezone(zone), booking_request.ends_at.astimezone(zone)
+        flash(gettext("Booked %(what)s on %(starts)s–%(ends)s.", what=what,
+                      starts=written_date(starts, "%a %d %b, %H:%M", "EEE dd MMM, HH:mm"),
+                      ends=written_date(ends, "%H:%M", "HH:mm")), "success")
         return redirect(back, 303)
 
     # Every refusal is the form's, an unknown robot or someone else's booking too: the week shows the sentence.
@@ -248,7 +251,7 @@ def cancel_from_form(booking_id: int) -> ResponseReturnValue:
 
     def cancel() -> ResponseReturnValue:
         services.cancel_booking(get_session(), current_user, booking_id, _now())
-        flash("Booking cancelled; the slot is free again.", "success")
+        flash(gettext("Booking cancelled; the slot is free again."), "success")
         return redirect(back, 303)
 
     return unless_refused(cancel, flashed(back), about_the_page=())

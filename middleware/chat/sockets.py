@@ -7,6 +7,7 @@ import functools
 from datetime import UTC, datetime
 
 from flask import current_app
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user
 
 from middleware.access.sockets import open_robot_channel
@@ -37,7 +38,7 @@ def _handle(robot_name: str, user_id: int, raw: object) -> dict[str, object] | N
         with unit_of_work(current_app) as session:  # one message, one transaction
             user = session.get(User, user_id)
             if user is None or not user.is_active:
-                return _error("not_logged_in", "Your account is no longer active.", None)
+                return _error("not_logged_in", gettext("Your account is no longer active."), None)
             if command.kind == "say":
                 sent = services.post_message(session, robot_name, user, command.body, datetime.now(UTC)).id
             else:

@@ -68,7 +68,7 @@ def create() -> ResponseReturnValue:
         settings = parse_settings({k: form.get(k) for k in ("turn_length_s", "booking_allowance_min",
                                                          "graded_run_hold_min")})
         course = services.create_course(get_session(), current_user, form.get("code"), form.get("title"), settings)
-        flash(f"Course {course.code} created. Enrol students or invite them below.", "success")
+        flash(gettext("Course %(code)s created. Enrol students or invite them below.", code=course.code), "success")
         return redirect(url_for("courses.detail", course_id=course.id), 303)
 
     return unless_refused(create, lambda refused: _index({refused.field or "code": refused.message}, form,
@@ -119,7 +119,7 @@ def _course_form(course_id: int, action: Callable[[Session, dict[str, str]], obj
 def settings(course_id: int) -> ResponseReturnValue:
     """Saves the title, turn length, booking allowance and graded run hold."""
     return _course_form(course_id, lambda dbs, form: services.update_settings(
-        dbs, current_user, course_id, parse_settings(form)), "Course settings saved.")
+        dbs, current_user, course_id, parse_settings(form)), gettext("Course settings saved."))
 
 
 @blueprint.post("/courses/<int:course_id>/members")
@@ -129,7 +129,7 @@ def enrol(course_id: int) -> ResponseReturnValue:
     name = request.form.get("username", "").strip().lower()
     # A mistyped username (404) is the form's error; a course that is not there still fails in _detail.
     return _course_form(course_id, lambda dbs, form: services.enrol(dbs, current_user, course_id, form.get("username")),
-                        f"{name} enrolled.", about_the_page=())
+                        gettext("%(name)s enrolled.", name=name), about_the_page=())
 
 
 @blueprint.post("/courses/<int:course_id>/members/<int:user_id>/remove")
@@ -137,7 +137,7 @@ def enrol(course_id: int) -> ResponseReturnValue:
 def unenrol(course_id: int, user_id: int) -> ResponseReturnValue:
     """Removes a student from the course."""
     return _course_form(course_id, lambda dbs, _form: services.unenrol(dbs, current_user, course_id, user_id),
-                        "Student removed from the course.")
+                        gettext("Student removed from the course."))
 
 
 def _uploaded_bytes() -> bytes:

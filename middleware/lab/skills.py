@@ -200,7 +200,7 @@ def occupancy_map(robot_name: str) -> ResponseReturnValue:
     """
     link = robot_commands().require(robot_name, _user_id())
     if hiding_book(current_app).hides(_user_id(), get_session()):
-        raise ApiError(403, OBSTACLES_HIDDEN, MAP_REFUSAL)
+        raise ApiError(403, OBSTACLES_HIDDEN, gettext(MAP_REFUSAL))
     try:
         grid = link.get_map()
     except CommandRefused as refused:

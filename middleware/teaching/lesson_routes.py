@@ -200,7 +200,7 @@ def upload_video() -> ResponseReturnValue:
         name = _receive_video()
         if api:
             return jsonify({"video_name": name, "videos": available_videos(current_app.instance_path)}), 201
-        flash(f"Uploaded as {name}; it is chosen below as the lesson's video.", "success")
+        flash(gettext("Uploaded as %(name)s; it is chosen below as the lesson's video.", name=name), "success")
         return redirect(f"{back}?video={name}", 303)
 
     return upload() if api else unless_refused(upload, flashed(back), about_the_page=())
@@ -226,7 +226,7 @@ def delete_video(name: str) -> ResponseReturnValue:
         delete_unused_video(get_session(), current_app.instance_path, name)
         if api:
             return jsonify({"deleted": name, "videos": available_videos(current_app.instance_path)})
-        flash(f"Deleted {name}.", "success")
+        flash(gettext("Deleted %(name)s.", name=name), "success")
         return redirect(back, 303)
 
     return delete() if api else unless_refused(delete, flashed(back), about_the_page=())

@@ -72,6 +72,14 @@ def test_a_students_and_a_tutors_refusals_speak_spanish_when_asked_and_english_o
             k: v for k, v in english_answer["error"].items() if k != "message"}
 
 
+def test_an_invitation_link_that_cannot_be_used_says_why_in_the_browsers_language(client_as) -> None:
+    visitor = client_as(None)
+    status, _, page = visitor.request("GET", "/join/not-a-token", headers=SPANISH)
+    assert status == 404 and "Este enlace de invitación no es válido" in page and "pide a tu tutor" in page
+    status, _, page = visitor.request("GET", "/join/not-a-token")
+    assert status == 404 and "This invitation link is not valid" in page
+
+
 def test_the_persons_language_preference_speaks_spanish_without_the_browser_asking(client_as) -> None:
     student = client_as("student1")
     assert api(student, "PUT", "/api/me/preferences/language", {"value": "es"})[0] == 200
