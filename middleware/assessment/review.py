@@ -16,7 +16,7 @@ from middleware.assessment.attempts import _items, final_mark_changed, my_attemp
 from middleware.assessment.bank import list_exams, managed_exam, question_dict, questions_of
 from middleware.assessment.policy import may_teach, readable_attempt, teaching_course
 from middleware.courses.schemas import csv_safe
-from middleware.errors import Refused
+from middleware.errors import Refused, written_number
 from middleware.models import CourseMembership, User
 from middleware.models.accounts import as_utc
 from middleware.models.assessment import Attempt, AttemptReview, Exam, Question
@@ -106,11 +106,13 @@ def attempt_view(session: Session, actor: User, attempt_id: int, now: datetime) 
 
 def task_goal(task: dict[str, Any], robot_name: str | None) -> str:
     """The task's goal in one sentence, stated once by the page; the tutor's instructions add to it."""
-    robot = robot_name or "the robot"
+    robot = robot_name or gettext("the robot")
     if task.get("kind") == "reach_point":
-        return f"Bring {robot} to ({task.get('x_m')}, {task.get('y_m')}) m, then submit."
+        return str(gettext("Bring %(robot)s to (%(x)s, %(y)s) m, then submit.", robot=robot,
+                           x=written_number(task.get("x_m")), y=written_number(task.get("y_m"))))
     if task.get("kind") == "wall_following":
-        return f"Follow the wall at {task.get('distance_m')} m, then submit."
+        return str(gettext("Follow the wall at %(distance)s m, then submit.",
+                           distance=written_number(task.get("distance_m"))))
     return ""
 
 

@@ -234,7 +234,7 @@ def enrol_from_csv(session: Session, actor: User, course_id: int, data: bytes) -
     seen: dict[str, int] = {}
     for row in rows:
         if row.empty or not row.username:
-            report.refused.append((row.line, row.username, "The row has no username."))
+            report.refused.append((row.line, row.username, gettext("The row has no username.")))
             continue
         try:
             name = clean_username(row.username)
@@ -242,7 +242,8 @@ def enrol_from_csv(session: Session, actor: User, course_id: int, data: bytes) -
             report.refused.append((row.line, row.username, invalid.message))
             continue
         if name in seen:
-            report.refused.append((row.line, row.username, f"{name} appears earlier in the file (line {seen[name]})."))
+            report.refused.append((row.line, row.username, gettext(
+                "%(name)s appears earlier in the file (line %(line)s).", name=name, line=seen[name])))
             continue
         seen[name] = row.line
         user = session.scalar(select(User).where(User.username == name))

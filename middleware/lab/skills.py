@@ -173,7 +173,7 @@ def clear_map(robot_name: str) -> ResponseReturnValue:
     robot = _supervision(robot_name)
     ended = robot.clear_map()
     return jsonify({"map": None, "ended_goal_ids": ended,
-                    "message": "The map was cleared. Activate Environment modelling to build a new one."})
+                    "message": gettext("The map was cleared. Activate Environment modelling to build a new one.")})
 
 
 @blueprint.post("/api/robots/<robot_name>/dock")
@@ -186,7 +186,8 @@ def return_to_dock(robot_name: str) -> ResponseReturnValue:
     dock = answer.dock
     return jsonify({"ended_goal_ids": list(answer.ended_goal_ids),
                     "dock": {"x_m": dock.x_m, "y_m": dock.y_m, "theta_rad": dock.theta_rad},
-                    "message": "The robot is back at its dock; its odometry restarts there. The map was kept."})
+                    "message": gettext("The robot is back at its dock; its odometry restarts there. The map "
+                                       "was kept.")})
 
 
 @blueprint.get("/api/robots/<robot_name>/map")
