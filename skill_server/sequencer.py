@@ -214,6 +214,7 @@ class Sequencer:
             sensors=self.sensors,
             obstacles=self.perception.obstacles,
             battery_charge=snapshot.battery.charge,
+            line_readings=snapshot.line_readings,
         )
         # Pose estimators first, so the others (and the obstacle grid) use the pose they believe.
         tracker = self._pose_tracker()

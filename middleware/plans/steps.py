@@ -23,7 +23,7 @@ MAX_ERRORS = 50  # reported at most; a plan this broken is better rewritten than
 PLAN_NAME_CHARACTERS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-")
 MAX_PLAN_NAME = 64
 
-CONDITION_KINDS = ("obstacle_within", "goal_reached", "battery_below")
+CONDITION_KINDS = ("obstacle_within", "goal_reached", "battery_below", "line_seen")
 SETTINGS = ("max_speed", "max_turn_rate", "watchdog")
 # The events an on block reacts to (issue 33; the skill server's EVENTS in skill_server/plans/validation.py):
 # obstacle_detected (detect_obstacle's rule; value: warning distance, m), wall_lost (wall_following), goal_reached
@@ -66,7 +66,8 @@ class PlanInvalid(Refused, ValueError):
 
 @dataclass(frozen=True)
 class Condition:
-    """What a wait or an if tests: obstacle_within (metres), goal_reached (no value), battery_below (fraction)."""
+    """What a wait or an if tests: obstacle_within (metres), goal_reached (no value), battery_below (fraction),
+    line_seen (no value: the line sensor sees the tape)."""
 
     kind: str
     value: float | None = None

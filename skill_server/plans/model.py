@@ -15,7 +15,8 @@ ParameterValue = float | int | bool | str
 
 @dataclass(frozen=True)
 class PlanCondition:
-    """obstacle_within (metres), goal_reached (no value) or battery_below (fraction), maybe negated."""
+    """obstacle_within (metres), goal_reached (no value), battery_below (fraction) or line_seen (no value: a cell of
+    the line sensor is over the tape), maybe negated."""
 
     kind: str
     value: float = 0.0

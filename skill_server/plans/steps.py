@@ -50,12 +50,17 @@ class DriveWatchdog(Protocol):
         """Gives back the value the plan replaced, unless the controller or the watchdog changed since."""
 
 
+LINE_SEEN = 0.5  # a line sensor cell reading above this sees the tape
+
+
 def condition_holds(condition: PlanCondition, tick: TickInput, goal_reached: bool) -> bool:
     """Evaluates a checked condition on this tick's readings."""
     if condition.kind == "obstacle_within":
         holds = nearest_obstacle_m(tick) <= condition.value
     elif condition.kind == "goal_reached":
         holds = goal_reached
+    elif condition.kind == "line_seen":  # a cell of the line sensor over the tape
+        holds = any(value > LINE_SEEN for value in tick.line_readings)
     else:  # battery_below: validation let it through only when the tick carries a battery
         charge = getattr(tick, BATTERY_FIELD, None)
         holds = charge is not None and float(charge) < condition.value
@@ -72,7 +77,7 @@ def nearest_obstacle_m(tick: TickInput) -> float:
 
 def describe_condition(condition: PlanCondition) -> str:
     """A condition as the plan's text writes it."""
-    value = "" if condition.kind == "goal_reached" else f" {condition.value:g}"
+    value = "" if condition.kind in ("goal_reached", "line_seen") else f" {condition.value:g}"
     return f"{'not ' if condition.negate else ''}{condition.kind}{value}"
 
 

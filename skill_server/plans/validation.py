@@ -38,7 +38,7 @@ MAX_SAY_CHARS = 200
 MAX_OBSTACLE_DISTANCE_M = 10.0
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]{1,64}")
 BATTERY_FIELD = "battery_charge"  # TickInput's battery reading, 0..1 of full
-CONDITIONS = ("obstacle_within", "goal_reached", "battery_below")
+CONDITIONS = ("obstacle_within", "goal_reached", "battery_below", "line_seen")
 SETTINGS = ("max_speed", "max_turn_rate", "watchdog")
 
 

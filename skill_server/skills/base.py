@@ -51,6 +51,7 @@ class TickInput:
     sensors: SensorLayout
     obstacles: object = None  # the detect-obstacle skill's ObstacleMap (typed loosely to avoid an import cycle)
     battery_charge: float = 1.0  # 0..1 of full (the simulated battery)
+    line_readings: tuple[float, ...] = ()  # the line sensor's cells, 0..1, left to right (none: no line to read)
 
 
 @dataclass(frozen=True)

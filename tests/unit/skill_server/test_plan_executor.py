@@ -243,3 +243,20 @@ def test_the_planned_path_of_a_go_to_reaches_the_watchers_through_a_plan_and_a_r
     world.step_for(0.5)
     in_trip = sequencer.goals.get(trip.goal_id)
     assert in_trip is not None and in_trip.feedback.planned_path[-1] == (1.0, -0.5)
+
+
+def test_line_seen_reads_the_line_sensor_over_the_tape(lab: tuple[World, Sequencer]) -> None:
+    from skill_server.sim.geometry import Pose2D
+    from skill_server.sim.scenes import LAB_LINE
+
+    world, sequencer = lab
+    goal_id = start(sequencer, WaitLine(1, 1, PlanCondition("line_seen"), 0.5))  # at the dock, off the tape
+    final = run(world, sequencer, goal_id)
+    assert final.message.startswith("line 1: line_seen did not hold within 0.5 s"), final.message
+    world.set_pose(Pose2D(-0.5 - LAB_LINE.sensor.ahead_m, LAB_LINE.y_min_m, 0.0))  # the sensor over the bottom run
+    goal_id = start(sequencer, IfLine(1, 1, PlanCondition("line_seen"), (SayLine(2, 3, "on the tape"),)),
+                    IfLine(3, 1, PlanCondition("line_seen", negate=True), (SayLine(4, 3, "lost"),)))
+    final = run(world, sequencer, goal_id)
+    assert final.status is GoalStatus.SUCCEEDED, final.message
+    assert messages(sequencer, goal_id, EventKind.STEP_STARTED) == [
+        "line 1: if line_seen: yes, then", "line 2: on the tape", "line 3: if not line_seen: no, else"]

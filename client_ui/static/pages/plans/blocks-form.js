@@ -10,7 +10,7 @@
 // does (POST /api/plans/check), and names the line, which the page marks on its block.
 
 export const INDENT = "  ";
-export const CONDITIONS = ["obstacle_within", "goal_reached", "battery_below"];
+export const CONDITIONS = ["obstacle_within", "goal_reached", "battery_below", "line_seen"];
 export const SETTINGS = ["max_speed", "max_turn_rate", "watchdog"];
 export const EVENTS = ["obstacle_detected", "wall_lost", "goal_reached", "localized", "battery_low"];
 export const SIDES = ["left", "right"];
