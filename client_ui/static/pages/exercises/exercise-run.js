@@ -199,8 +199,10 @@ export class RobotRun extends EventTarget {
   async #runSkill(name, parameters, wait) {
     this.#skillPending = true;
     try {
-      const answer = await fetchJson("/api/practice/commands", { method: "POST",
-        body: { command: { skill: name, parameters } } });
+      // The run's own robot: the practice robot, or the lab robot the run is on.
+      const robot = encodeURIComponent(this.#robotName);
+      const answer = await fetchJson(`/api/robots/${robot}/skills/${encodeURIComponent(name)}/goals`, { method: "POST",
+        body: { parameters, preempt: true } });
       const goalId = answer.goal?.goal_id;
       let status = answer.goal?.status;
       if (!wait && goalId && !(status in FINAL_GOAL)) {
@@ -209,7 +211,7 @@ export class RobotRun extends EventTarget {
       }
       while (goalId && !(status in FINAL_GOAL) && !this.#finished) {
         await new Promise((resolve) => setTimeout(resolve, SKILL_POLL_MS));
-        const goal = await fetchJson(`/api/robots/practice/command-goals/${encodeURIComponent(goalId)}`);
+        const goal = await fetchJson(`/api/robots/${robot}/goals/${encodeURIComponent(goalId)}`);
         status = goal.goal?.status ?? goal.status;
       }
       this.#python.skillEnded(FINAL_GOAL[status] ?? 2);
