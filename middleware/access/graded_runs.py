@@ -50,7 +50,9 @@ def open_graded_runs(session: Session, now: datetime) -> set[tuple[str, int]]:
         Exam, Exam.id == Attempt.exam_id).where(Attempt.status == "in_progress",
                                                 or_(Attempt.deadline_at.is_(None), Attempt.deadline_at > now))).all()
     trials = session.execute(select(Trial.robot_name, Trial.user_id).where(Trial.status == TRIAL_OPEN)).all()
-    return {(robot, user_id) for robot, user_id in [*attempts, *trials] if robot}
+    submissions = session.execute(select(ExerciseRun.robot_name, ExerciseRun.user_id).where(
+        ExerciseRun.mode == "submission", ExerciseRun.status == "running")).all()
+    return {(robot, user_id) for robot, user_id in [*attempts, *trials, *submissions] if robot}
 
 
 def graded_run_hold_s(session: Session, user_id: int) -> float:

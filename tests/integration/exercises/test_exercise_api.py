@@ -19,18 +19,22 @@ NEW_EXERCISE = {"slug": "reach-the-crate", "title": "Reach the crate", "statemen
 
 
 def graded_run_open(lab: PlansLab, robot_name: str, username: str) -> bool:
-    """Whether the access rules count username's run on robot_name as a graded one now (the truth hidden)."""
+    """Whether the access rules count username's run on robot_name as a graded one now (the truth hidden), read
+    fresh and as the sockets' shared read of every open run sees it."""
     from datetime import UTC, datetime
 
     from sqlalchemy import select
 
-    from middleware.access.graded_runs import graded_run_started_at
+    from middleware.access.graded_runs import graded_run_started_at, open_graded_runs
     from middleware.db import session_factory
     from middleware.models import User
 
     with lab.server.app.app_context(), session_factory(lab.server.app)() as session:
         user_id = session.scalar(select(User.id).where(User.username == username))
-        return graded_run_started_at(session, robot_name, user_id, datetime.now(UTC)) is not None
+        now = datetime.now(UTC)
+        fresh = graded_run_started_at(session, robot_name, user_id, now) is not None
+        assert ((robot_name, user_id) in open_graded_runs(session, now)) == fresh  # the sockets' once-a-second read
+        return fresh
 
 
 def wait_for_practice_robot(client) -> None:
