@@ -20,6 +20,7 @@ from middleware.bookings import pool_slots
 from middleware.bookings.schemas import SLOT_MINUTES, BookingRequest, check_slot_shape
 from middleware.courses.services import is_course_tutor
 from middleware.errors import Refused, written_date, written_number
+from middleware.i18n import N_
 from middleware.locking import lock_robot_control, lock_user
 from middleware.models import Booking, Course, CourseMembership, User
 
@@ -143,11 +144,11 @@ def unbookable_weeks(session: Session, actor: User, mondays: Iterable[datetime])
     weeks = sorted(set(mondays))
     allowance, course_id = student_allowance(session, actor.id)
     if course_id is None:
-        blocked = Unbookable("not in a course", gettext("You are not enrolled in any course, so you cannot book a "
+        blocked = Unbookable(N_("not in a course"), gettext("You are not enrolled in any course, so you cannot book a "
                                                         "robot yet; ask your tutor to enrol you."))
         return dict.fromkeys(weeks, blocked)
     if allowance < SLOT_MINUTES:
-        blocked = Unbookable("no allowance", gettext("Your course allows no bookings; ask your tutor if you need "
+        blocked = Unbookable(N_("no allowance"), gettext("Your course allows no bookings; ask your tutor if you need "
                                                      "one. You can still use a robot when it is free, in turn with "
                                                      "others."))
         return dict.fromkeys(weeks, blocked)
@@ -155,7 +156,7 @@ def unbookable_weeks(session: Session, actor: User, mondays: Iterable[datetime])
     for monday in weeks:
         used = minutes_booked_in_week(session, actor.id, monday)
         if allowance - used < SLOT_MINUTES:
-            out[monday] = Unbookable("no minutes left", gettext(
+            out[monday] = Unbookable(N_("no minutes left"), gettext(
                 "You have booked all %(allowance)s minutes your course allows in the week of %(monday)s; cancel a "
                 "booking to free some, or choose another week.", allowance=written_number(allowance),
                 monday=written_date(monday, "%d %b", "dd MMM")))

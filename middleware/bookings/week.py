@@ -8,6 +8,7 @@ from zoneinfo import ZoneInfo
 
 from middleware.bookings.schemas import SLOT_MINUTES, local_midnight
 from middleware.bookings.services import BookingView, Unbookable, iso_week_bounds
+from middleware.errors import written_date
 
 DAY_HOURS = range(7, 22)  # shown unless the whole day is asked for
 
@@ -59,7 +60,7 @@ def week_days(monday: date, zone: ZoneInfo, views: list[BookingView], now: datet
                     state = "free"
                 slots.append(Slot(moment, local.strftime("%H:%M"), state, holder))
             moment += step
-        days.append(Day(day, day.strftime("%a %d %b"), day == today, slots))
+        days.append(Day(day, written_date(day, "%a %d %b", "EEE dd MMM"), day == today, slots))
     return days
 
 
