@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import re
 
-from flask import Flask, has_request_context, request, session
+from flask import Flask, current_app, g, has_request_context, request, session
 from flask_babel import Babel, get_locale, gettext, lazy_gettext  # type: ignore[import-untyped]
 from flask_login import current_user
 from sqlalchemy import select
 
-from middleware.db import get_session
+from middleware.db import session_factory
 from middleware.models import UserPreference
 
 LANGUAGES = ("en", "es")
@@ -56,8 +56,15 @@ def remember_chosen_language(language: str) -> None:
 def _user_choice() -> str | None:
     if not current_user.is_authenticated:
         return None
-    text = get_session().scalar(select(UserPreference.value_json).where(
-        UserPreference.user_id == int(current_user.get_id()), UserPreference.key == LANGUAGE_PREFERENCE_KEY))
+    query = select(UserPreference.value_json).where(
+        UserPreference.user_id == int(current_user.get_id()), UserPreference.key == LANGUAGE_PREFERENCE_KEY)
+    if "db_session" in g:  # the request's unit of work, as it stands (nothing of it flushed to ask)
+        with g.db_session.no_autoflush:
+            text = g.db_session.scalar(query)
+    else:  # none yet (a WebSocket's refusal, a page that reads nothing): a session of its own, closed at once, so
+        # no connection is held for the rest of a long-lived context
+        with session_factory(current_app)() as own:
+            text = own.scalar(query)
     return supported(text.strip('"')) if text else None
 
 

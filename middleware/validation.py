@@ -170,10 +170,15 @@ def loads_checked(data: str | bytes) -> Any:
     return value
 
 
+def _either(types: tuple[str, ...]) -> str:
+    """'drive' or 'stop', in the request's language. Said only when refusing: a message taken says nothing, so the
+    channel's many messages never look up the language (nor hold a database connection to learn it)."""
+    return str(gettext(" or ")).join(repr(kind) for kind in types)
+
+
 def parse_message(raw: object, types: tuple[str, ...], max_chars: int) -> dict[str, Any]:
     """A WebSocket text message: a JSON object of at most max_chars characters, checked as a JSON body is, whose
     `type` is one of types; otherwise InvalidInput naming the field ("message", "type" or the one at fault)."""
-    expected = str(gettext(" or ")).join(repr(kind) for kind in types)
     if not isinstance(raw, str) or len(raw) > max_chars:
         raise InvalidInput("message", gettext("Send JSON text of at most %(max_chars)s characters.",
                                               max_chars=written_number(max_chars)))
@@ -184,13 +189,13 @@ def parse_message(raw: object, types: tuple[str, ...], max_chars: int) -> dict[s
         raise InvalidInput("message" if refused.field in (None, "body") else str(refused.field), said) from None
     except ValueError:
         raise InvalidInput("message", gettext('The message is not JSON: send {"type": %(expected)s, ...}.',
-                                              expected=expected)) from None
+                                              expected=_either(types))) from None
     if not isinstance(message, dict):
         raise InvalidInput("message", gettext('The message must be a JSON object: {"type": %(expected)s, ...}.',
-                                              expected=expected))
+                                              expected=_either(types)))
     kind = message.get("type")
     if not isinstance(kind, str) or kind not in types:
-        raise InvalidInput("type", gettext("type must be %(expected)s.", expected=expected))
+        raise InvalidInput("type", gettext("type must be %(expected)s.", expected=_either(types)))
     return message
 
 

@@ -94,3 +94,34 @@ def test_the_persons_language_preference_speaks_spanish_without_the_browser_aski
     assert api(student, "PUT", "/api/me/preferences/language", {"value": "en"})[0] == 200
     status, _, page = student.request("GET", "/no-such-page")
     assert status == 404 and "Not Found" in page and "There is nothing at this address." in page
+
+
+def test_a_channels_messages_hold_no_database_connection_to_learn_the_language(app) -> None:
+    """A socket's context lives as long as the socket: a message taken never looks the language up, and a refusal
+    looks the person's preference up in a session closed at once (a drive socket held a connection otherwise, and
+    a restarted worker's sockets ran the pool dry)."""
+    from flask import g
+    from flask_login import login_user
+    from sqlalchemy import select
+
+    from middleware.db import session_factory
+    from middleware.models import User, UserPreference
+    from middleware.validation import InvalidInput, parse_message
+
+    factory = session_factory(app)
+    with factory() as session:
+        student = session.scalar(select(User).where(User.username == "student1"))
+        session.add(UserPreference(user_id=student.id, key="language", value_json='"es"'))
+        session.commit()
+    pool = factory.kw["bind"].pool
+    with app.test_request_context("/ws/robots/lab-1/drive"):
+        login_user(student)
+        assert parse_message('{"type": "drive"}', ("drive", "stop"), 100) == {"type": "drive"}
+        assert "db_session" not in g
+        try:
+            parse_message('{"type": "fly"}', ("drive", "stop"), 100)
+        except InvalidInput as refused:
+            assert refused.message == "type debe ser 'drive' o 'stop'."
+        else:
+            raise AssertionError("a type the channel does not take was accepted")
+        assert "db_session" not in g and pool.checkedout() == 0
