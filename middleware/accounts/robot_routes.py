@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from flask import flash, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware.accounts import robot_admin
@@ -67,7 +68,7 @@ def robots_add() -> ResponseReturnValue:
         robot = robot_admin.add_robot(get_session(), current_user, form.get("name"), form.get("title"),
                                       form.get("address"), form.get("kind"))
         _refresh_robots_after_commit()
-        flash(f"Robot {robot.name} added.", "success")
+        flash(gettext("Robot %(name)s added.", name=robot.name), "success")
         return redirect(url_for("accounts.robots_page"), 303)
 
     return unless_refused(add, lambda refused: _robots_page({refused.field or "name": refused.message}, form,
@@ -85,7 +86,8 @@ def robots_update(robot_id: int) -> ResponseReturnValue:
             get_session(), current_user, robot_id, title=form.get("title"), address=form.get("address"),
             kind=form.get("kind"), enabled=clean_flag(form["enabled"], "enabled") if "enabled" in form else None)
         _refresh_robots_after_commit()
-        flash(f"Robot {robot.name} saved ({'enabled' if robot.enabled else 'disabled'}).", "success")
+        flash(gettext("Robot %(name)s saved (enabled).", name=robot.name) if robot.enabled
+              else gettext("Robot %(name)s saved (disabled).", name=robot.name), "success")
         return redirect(url_for("accounts.robots_page"), 303)
 
     return unless_refused(update, flashed(url_for("accounts.robots_page")))
@@ -152,8 +154,10 @@ def robots_kind_picture(kind: str) -> ResponseReturnValue:
 
     def update() -> ResponseReturnValue:
         setting = robot_admin.set_kind_picture(get_session(), current_user, kind, picture, _robot_has_scene)
-        words = "the picture drawn by the browser" if setting.camera_picture == "drawn" else "the robot's video"
-        flash(f"Robots of the kind {setting.kind} now show {words} unless a person chooses otherwise.", "success")
+        words = (gettext("the picture drawn by the browser") if setting.camera_picture == "drawn"
+                 else gettext("the robot's video"))
+        flash(gettext("Robots of the kind %(kind)s now show %(words)s unless a person chooses otherwise.",
+                      kind=setting.kind, words=words), "success")
         return redirect(url_for("accounts.robots_page"), 303)
 
     return unless_refused(update, flashed(url_for("accounts.robots_page")))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from flask import flash, jsonify, redirect, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware.accounts import services
@@ -23,8 +24,10 @@ def throttles_clear() -> ResponseReturnValue:
 
     def clear() -> ResponseReturnValue:
         cleared = services.clear_login_throttle(get_session(), current_user, address, username)
-        whose = f"{username} from {address}" if username else f"every account from {address}"
-        flash(f"Cleared {cleared} failed login{'s' if cleared != 1 else ''} of {whose}.", "success")
+        whose = (gettext("%(username)s from %(address)s", username=username, address=address) if username
+                 else gettext("every account from %(address)s", address=address))
+        flash(gettext("Cleared %(count)s failed login of %(whose)s.", count=cleared, whose=whose) if cleared == 1
+              else gettext("Cleared %(count)s failed logins of %(whose)s.", count=cleared, whose=whose), "success")
         return redirect(back, 303)
 
     return unless_refused(clear, flashed(back))

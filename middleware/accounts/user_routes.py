@@ -19,6 +19,7 @@ from middleware.auth.schemas import InvalidField
 from middleware.auth.services import change_own_password
 from middleware.db import get_session
 from middleware.errors import flashed, unless_refused
+from middleware.i18n import role_name
 from middleware.models import User
 from middleware.web import json_body, now
 
@@ -113,7 +114,9 @@ def _password_shown(username: str, password: str, created: bool = False) -> Resp
 def _admin_form_action(action: Callable[[], User]) -> ResponseReturnValue:
     def act() -> ResponseReturnValue:
         user = action()
-        flash(f"{user.username}: {'active' if user.is_active else 'disabled'}, {user.role}.", "success")
+        flash(gettext("%(username)s: active, %(role)s.", username=user.username, role=role_name(user.role))
+              if user.is_active else gettext("%(username)s: disabled, %(role)s.", username=user.username,
+                                             role=role_name(user.role)), "success")
         return redirect(url_for("accounts.users_page"), 303)
 
     return unless_refused(act, flashed(url_for("accounts.users_page")))

@@ -30,6 +30,7 @@ from middleware.robots.registry import RobotRegistry, robot_registry
 from middleware.validation import within_calendar
 
 blueprint = Blueprint("bookings", __name__)
+blueprint.add_app_template_global(written_date, "written_date")  # a day and time in the page's language
 DURATIONS_MIN = list(range(SLOT_MINUTES, int(MAX_BOOKING.total_seconds() // 60) + 1, SLOT_MINUTES))
 
 

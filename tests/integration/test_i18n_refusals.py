@@ -125,3 +125,18 @@ def test_a_channels_messages_hold_no_database_connection_to_learn_the_language(a
         else:
             raise AssertionError("a type the channel does not take was accepted")
         assert "db_session" not in g and pool.checkedout() == 0
+
+
+def test_a_booking_is_written_with_the_days_and_months_of_the_pages_language(client_as) -> None:
+    from babel.dates import format_datetime
+
+    student = client_as("student1")
+    status, answer = api(student, "POST", "/api/bookings", {"robot_name": "lab-1", "starts_at": _slot(1),
+                                                             "duration_min": 30})
+    assert status == 201, answer
+    starts = datetime.fromisoformat(_slot(1))
+    _, _, page = student.request("GET", "/bookings?tz=UTC", headers=SPANISH)
+    spanish = format_datetime(starts, "EEE dd MMM, HH:mm", tzinfo=UTC, locale="es")
+    assert spanish in page and starts.strftime("%a %d %b") not in page, spanish
+    _, _, page = student.request("GET", "/bookings?tz=UTC")
+    assert starts.strftime("%a %d %b, %H:%M") in page
