@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
@@ -47,7 +48,10 @@ def _drive_twenty(address: str, tokens_of) -> tuple[list[str], int]:  # noqa: AN
             await asyncio.sleep(0.1)
         return applied
 
-    return pooled, asyncio.run(drive())
+    # A loop of its own on a thread of its own, as the channel loop runs: this process's main thread may hold the
+    # browser tests' Playwright loop (then asyncio.run here refuses, "called from a running event loop").
+    with ThreadPoolExecutor(1) as thread:
+        return pooled, thread.submit(lambda: asyncio.run(drive())).result(60)
 
 
 def test_a_remembered_token_drives_with_no_trip_through_the_pool(robot_address: str) -> None:

@@ -94,8 +94,10 @@ def test_a_body_outside_its_declared_contract_is_refused_naming_the_field_before
 
 def test_the_document_names_a_route_that_declares_nothing_and_checks_what_one_declares() -> None:
     from flask import Flask
+    from flask_babel import Babel
 
     app = Flask(__name__)
+    Babel(app)  # the contract's refusals speak the request's language, as in every Telelab app
 
     @app.post("/api/things")
     @described(body={"type": "object", "required": ["name"], "properties": {"name": {"type": "string",
