@@ -173,6 +173,8 @@ class StandInFleet:
         asyncio.run_coroutine_threadsafe(stop_all(), self._loop).result(30)
         self._loop.call_soon_threadsafe(self._loop.stop)
         self._thread.join(5)
+        if not self._thread.is_alive():
+            self._loop.close()  # its self-pipe sockets, else left to the garbage collector (ResourceWarning)
 
 
 def main() -> None:

@@ -78,6 +78,7 @@ def test_a_failing_plan_is_predicted_aborted_at_its_line(plans_lab: PlansLab) ->
 def test_a_prediction_starts_where_the_lab_robot_stands_now(plans_lab: PlansLab) -> None:
     ann = plans_lab.client("student1")
     queue = take_control(ann)
+    assert api(ann, "POST", "/api/robots/lab-1/dock", {})[0] == 200  # the shared robot, wherever tests left it
     status, moved = api(ann, "POST", f"/api/plans/{_create(ann, 'corner', SQUARE_CORNER)}/runs", {"target": "lab-1"})
     assert status == 202, moved
     assert wait_for_end(ann, moved)["status"] == "succeeded"
