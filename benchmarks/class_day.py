@@ -10,8 +10,11 @@ localization and drive, driving at the console's rate (a command every 50 ms), a
 second (GET /api/robots/<name>). Halfway through the hold, SIGHUP to the gunicorn master restarts the workers one
 at a time; each console reconnects when its link closes with 1012.
 
-Reported per worker count, each beside a floor from the same run: web CPU per student-second (floor: the idle
-workers' CPU over the same time), its ratio to 1 worker's (target: within 10 %), threads per worker (floor: idle),
+Reported per worker count, each beside a floor from the same run: web CPU per student-second (the workers and their
+child processes; floor: the idle workers' CPU over the same time), its ratio to 1 worker's (target: within 10 %),
+the same with everyone in before the restart (neither logins nor the restart in it; the rest of the run apart) and
+per 1000 messages (a worker that falls behind supersedes drive commands, so it works less per student-second: the
+commands sent on to the robot per student-second are beside it), threads per worker (floor: idle),
 PostgreSQL transactions per student-second (floor: idle), the p99 of ordinary requests (floor: the same request
 with nobody in) and of drive acknowledgements (floor: the robot's own Drive round trip over gRPC), the reconnect
 time after the restart (floor: a console's first opening), and seats lost (target 0); beside them, the share of drive
@@ -25,6 +28,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import dataclasses
 import json
 import math
 import os
@@ -63,6 +67,7 @@ REQUEST_INTERVAL_S = 1.0
 RESTART_SETTLE_S = 3.0  # the class goes on at least this long after the last old worker left
 SEAT_WAIT_S = 10.0  # a student who gets no acknowledgement this long after reconnecting has lost their seat
 RATIO_TARGET = 1.10
+STEADY_AFTER_LOGINS_S = 3.0  # the steady class is measured from this long after the last login to the restart
 CONSOLE_WAIT_S = 60.0
 # Consoles opened at once in the thread climb: gunicorn's gthread worker keeps the request threads that
 # simultaneous handshakes made (up to its `threads`), which would count the load's burst, not the robots.
@@ -94,7 +99,13 @@ class Student:
     telemetry: int = 0
     superseded: int = 0  # drive commands the server replaced by a newer one waiting behind them
     drives_sent: int = 0
+    received: int = 0  # every message the console's link brought (stream messages, acks, the link's own)
     errors: list[str] = field(default_factory=list)
+
+    @property
+    def messages(self) -> int:
+        """The messages this student's console exchanged: drive commands sent, messages received, requests."""
+        return self.drives_sent + self.received + len(self.requests_s) + self.request_errors
 
 
 class ClassLoad:
@@ -154,6 +165,7 @@ class ClassLoad:
         acked = asyncio.Event()
 
         def on_message(opcode: int, payload: bytes) -> None:
+            student.received += 1
             if opcode != 1:
                 return
             head, _, text = payload.decode().partition(" ")
@@ -298,6 +310,17 @@ def worker_pids(server: WebServer) -> list[int]:
     return []
 
 
+def _descendants(pid: int) -> list[int]:
+    """The processes under pid (its children, theirs, ...), from /proc/<pid>/task/<tid>/children."""
+    found: list[int] = []
+    with contextlib.suppress(OSError):
+        for task in Path(f"/proc/{pid}/task").iterdir():
+            with contextlib.suppress(OSError, ValueError):
+                for child in map(int, (task / "children").read_text().split()):
+                    found += [child, *_descendants(child)]
+    return found
+
+
 def _threads(pid: int) -> int:
     try:
         for line in Path(f"/proc/{pid}/status").read_text().splitlines():
@@ -317,6 +340,7 @@ class WorkerMeter:
         self._last: dict[int, float] = {}
         self.threads: list[int] = []
         self._stop = threading.Event()
+        self._lock = threading.Lock()
         self._thread = threading.Thread(target=self._sample_forever, daemon=True)
 
     def start(self) -> None:
@@ -324,13 +348,21 @@ class WorkerMeter:
         self._thread.start()
 
     def _sample(self, first: bool = False) -> None:
-        for pid in worker_pids(self._server):
+        # A worker's own child processes (a recordings writer, say) are web CPU too.
+        for pid in [found for worker in worker_pids(self._server) for found in (worker, *_descendants(worker))]:
             try:
                 used = cpu_seconds(pid)
             except OSError:
                 continue
-            self._first.setdefault(pid, used if first else 0.0)
-            self._last[pid] = used
+            with self._lock:
+                self._first.setdefault(pid, used if first else 0.0)
+                self._last[pid] = used
+
+    def used_s(self) -> float:
+        """The workers' CPU seconds since start, now (a phase's CPU is the difference of two readings)."""
+        self._sample()
+        with self._lock:
+            return sum(self._last[pid] - self._first[pid] for pid in self._last)
 
     def _sample_forever(self) -> None:
         while not self._stop.wait(0.2):
@@ -343,8 +375,7 @@ class WorkerMeter:
         """The workers' CPU seconds since start."""
         self._stop.set()
         self._thread.join(5)
-        self._sample()
-        return sum(self._last[pid] - self._first[pid] for pid in self._last)
+        return self.used_s()
 
 
 def _transactions(database_url: str) -> int:
@@ -386,6 +417,21 @@ async def _idle_requests(port: int, cookie: str, path: str, seconds: float) -> l
 
 
 @dataclass
+class Stretch:
+    """What the web tier did in a stretch of a class: its workers' CPU, the student-seconds, PostgreSQL's
+    transactions and the consoles' messages (drive commands sent, messages received, requests)."""
+
+    cpu_s: float = 0.0
+    student_s: float = 0.0
+    transactions: float = 0.0
+    messages: float = 0.0
+
+    @property
+    def cpu_per_student_s(self) -> float:
+        return self.cpu_s / self.student_s if self.student_s else float("nan")
+
+
+@dataclass
 class RunFigures:
     workers: int
     students: int
@@ -409,10 +455,14 @@ class RunFigures:
     superseded: int
     restarts_seen: int
     errors: list[str]
+    steady: Stretch = field(default_factory=Stretch)
+    idle_cpu_per_s: float = 0.0
+    messages: int = 0
 
     @property
     def cpu_per_student_s(self) -> float:
         return self.cpu_s / self.student_s if self.student_s else float("nan")
+
 
 
 def run_class(workers: int, students: int, login_window_s: float, hold_s: float, idle_s: float,
@@ -472,11 +522,23 @@ def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str
     restart_at = started + login_window_s + hold_s / 2
     load = ClassLoad(port, students, end_at)
 
+    # The steady class: everyone in (the last login a moment ago) until the restart; its CPU and transactions apart,
+    # as neither the logins nor the restart weigh on them.
+    steady_from = started + login_window_s + min(STEADY_AFTER_LOGINS_S, hold_s / 4)
+    readings: list[tuple[float, Stretch]] = []  # (when, the totals so far) at the stretch's start and end
+
+    def read_totals() -> None:
+        readings.append((time.monotonic(), Stretch(meter.used_s(), 0.0, _transactions(database_url),
+                                                   sum(s.messages for s in students))))
+
     def restart_in_the_middle() -> None:
         try:
+            time.sleep(max(0.0, steady_from - time.monotonic()))
+            read_totals()
             time.sleep(max(0.0, restart_at - 1.0 - time.monotonic()))
             meter.sample_threads()  # everyone is in, before the restart
             time.sleep(max(0.0, restart_at - time.monotonic()))
+            read_totals()
             print(f"rolling restart of the {workers} worker(s)", flush=True)
             leaving = set(worker_pids(server))
             server.process.send_signal(signal.SIGHUP)
@@ -497,7 +559,13 @@ def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str
     transactions = _transactions(database_url) - transactions_before
     student_s = sum((s.out_at or 0) - (s.in_at or 0) for s in students if s.in_at is not None)
     errors = [f"{s.name}: {e}" for s in students for e in s.errors]
+    steady = Stretch()
+    if len(readings) == 2:
+        (start, first), (end, last) = readings
+        steady = Stretch(last.cpu_s - first.cpu_s, _student_s_between(students, start, end),
+                         last.transactions - first.transactions, last.messages - first.messages)
     return RunFigures(
+        steady=steady, idle_cpu_per_s=idle_cpu_per_s, messages=sum(s.messages for s in students),
         workers=workers, students=len(students), student_s=student_s, cpu_s=cpu_s,
         idle_cpu_s=idle_cpu_per_s * elapsed_s, threads_per_worker=max(meter.threads or [0]),
         idle_threads_per_worker=idle_threads, transactions=transactions,
@@ -509,6 +577,11 @@ def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str
         seats_lost=sum(s.seat_lost for s in students), never_in=sum(s.in_at is None for s in students),
         drives_sent=sum(s.drives_sent for s in students), superseded=sum(s.superseded for s in students),
         restarts_seen=sum(s.restarts_seen for s in students), errors=errors[:30])
+
+
+def _student_s_between(students: list[Student], start: float, end: float) -> float:
+    """The student-seconds of the class between two moments (each student from their login to their leaving)."""
+    return sum(max(0.0, min(end, s.out_at or end) - max(start, s.in_at)) for s in students if s.in_at is not None)
 
 
 async def _open_consoles(port: int, cookies: list[str], robots: list[str]) -> tuple[list[WebSocketUser], int]:
@@ -598,14 +671,28 @@ def machine() -> dict[str, object]:
             "python": platform.python_version(), "load_average_at_start": os.getloadavg()[0]}
 
 
-def rows_for(figures: RunFigures, one_worker_cpu: float | None, graded: bool) -> list[Measurement]:
+def rows_for(figures: RunFigures, one_worker_cpu: float | None, graded: bool,
+             one_worker_steady_cpu: float | None = None) -> list[Measurement]:
     scenario = f"{figures.students} students, {figures.workers} worker(s)"
     reconnect_p50 = statistics.median(figures.reconnects_s) if figures.reconnects_s else float("nan")
     ratio = figures.cpu_per_student_s / one_worker_cpu if one_worker_cpu else None
+    steady = figures.steady
+    steady_ratio = (steady.cpu_per_student_s / one_worker_steady_cpu
+                    if one_worker_steady_cpu and not math.isnan(steady.cpu_per_student_s) else None)
     request_p99, ack_p99 = percentile_ms(figures.requests_s, 99), percentile_ms(figures.acks_s, 99)
     rows = [
         Measurement(scenario, "web CPU per student-second (floor: idle workers)", figures.cpu_per_student_s * 1000,
                     "ms", "-", floor=figures.idle_cpu_s / figures.student_s * 1000 if figures.student_s else None),
+        Measurement(scenario, "web CPU per student-second, everyone in before the restart (floor: idle workers)",
+                    steady.cpu_per_student_s * 1000, "ms", "-", floor=figures.idle_cpu_per_s / figures.students * 1000),
+        Measurement(scenario, "web CPU per 1000 messages, everyone in before the restart (drive commands, messages "
+                              "received, requests)", steady.cpu_s / steady.messages * 1e6 if steady.messages else None,
+                    "ms", "-"),
+        Measurement(scenario, "PostgreSQL transactions per student-second, everyone in before the restart",
+                    steady.transactions / steady.student_s if steady.student_s else None, "count", "-"),
+        Measurement(scenario, "web CPU per student-second of the rest: the logins, the restart and after",
+                    (figures.cpu_s - steady.cpu_s) / (figures.student_s - steady.student_s) * 1000
+                    if figures.student_s > steady.student_s else None, "ms", "-"),
         Measurement(scenario, "threads per worker, everyone in (floor: idle)", float(figures.threads_per_worker),
                     "count", "-", floor=float(figures.idle_threads_per_worker)),
         Measurement(scenario, "PostgreSQL transactions per student-second (floor: idle)",
@@ -620,12 +707,18 @@ def rows_for(figures: RunFigures, one_worker_cpu: float | None, graded: bool) ->
                     floor=statistics.median(figures.first_consoles_s) * 1000 if figures.first_consoles_s else None),
         Measurement(scenario, "reconnect after the restart, max", max(figures.reconnects_s, default=float("nan"))
                     * 1000, "ms", "-"),
+        Measurement(scenario, "drive commands sent on to the robot per student-second (the rest superseded)",
+                    (figures.drives_sent - figures.superseded) / figures.student_s if figures.student_s else None,
+                    "count", "-"),
         Measurement(scenario, "drive commands superseded by a newer one waiting (share of those sent)",
                     figures.superseded / figures.drives_sent * 100 if figures.drives_sent else None, "%", "-"),
         Measurement(scenario, "seats lost", float(figures.seats_lost + figures.never_in), "count", "= 0",
                     passed=figures.seats_lost + figures.never_in == 0 if graded else None),
         Measurement(scenario, "ordinary request errors", float(figures.request_errors), "count", "-"),
     ]
+    if steady_ratio is not None and figures.workers > 1:
+        rows.insert(3, Measurement(scenario, "web CPU per student-second before the restart / 1 worker's",
+                                   steady_ratio, "ratio", "-", floor=1.0))
     if ratio is not None and figures.workers > 1:
         rows.insert(1, Measurement(scenario, "web CPU per student-second / 1 worker's", ratio, "ratio",
                                    f"<= {RATIO_TARGET:g}", floor=1.0,
@@ -642,23 +735,28 @@ def _write(output: Path, rows: list[Measurement], extra: dict[str, object]) -> N
     write_json(output / "class_day.json", rows, extra)
 
 
-def run(quick: bool, output: Path, students: int | None = None, workers: tuple[int, ...] | None = None) -> list:
+def run(quick: bool, output: Path, students: int | None = None, workers: tuple[int, ...] | None = None,
+        login_window_s: float | None = None, hold_s: float | None = None, thread_climb: bool = True) -> list:
     students = students or (4 if quick else 50)
     workers = workers or ((1,) if quick else (1, 2, 3))
-    login_window_s, hold_s, idle_s = (1.0, 4.0, 1.0) if quick else (60.0, 40.0, 10.0)
+    default_login_s, default_hold_s, idle_s = (1.0, 4.0, 1.0) if quick else (60.0, 40.0, 10.0)
+    login_window_s = default_login_s if login_window_s is None else login_window_s
+    hold_s = default_hold_s if hold_s is None else hold_s
     output.mkdir(parents=True, exist_ok=True)
     the_machine = machine()
     rows: list[Measurement] = []
     runs = []
     one_worker_cpu: float | None = None
+    one_worker_steady_cpu: float | None = None
     for count in workers:
         print(f"a class of {students} on {count} worker(s): logins over {login_window_s:g} s, {hold_s:g} s held, "
               "a rolling restart halfway", flush=True)
         figures = run_class(count, students, login_window_s, hold_s, idle_s, output / "class-day")
         if count == 1:
-            one_worker_cpu = figures.cpu_per_student_s
-        rows += rows_for(figures, one_worker_cpu, graded=not quick)
+            one_worker_cpu, one_worker_steady_cpu = figures.cpu_per_student_s, figures.steady.cpu_per_student_s
+        rows += rows_for(figures, one_worker_cpu, not quick, one_worker_steady_cpu)
         runs.append({"workers": count, "student_s": figures.student_s, "cpu_s": figures.cpu_s,
+                     "steady": dataclasses.asdict(figures.steady), "messages": figures.messages,
                      "restarts_seen": figures.restarts_seen, "reconnects": len(figures.reconnects_s),
                      "acks": len(figures.acks_s), "drives_sent": figures.drives_sent,
                      "superseded": figures.superseded, "requests": len(figures.requests_s),
@@ -667,6 +765,9 @@ def run(quick: bool, output: Path, students: int | None = None, workers: tuple[i
                                 "hold_s": hold_s, "machine": the_machine, "runs": runs,
                                 "recordings": os.environ.get("TELELAB_RECORDINGS", "1")}
     _write(output, rows, extra)  # the class's figures are kept whatever the climb below does
+    if not thread_climb:
+        print_table(f"A class of {students} on its own robots, behind nginx, with a rolling restart", rows)
+        return rows
     steps = (1, 4) if quick else (1, 50, 200)
     print(f"threads of one worker with consoles open on {', '.join(map(str, steps))} robots", flush=True)
     climb = threads_with_robots(steps, max(1, min(students, max(steps) // 4 + 1)))
@@ -689,8 +790,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--output", default="bench-results")
     parser.add_argument("--students", type=int, default=None, help="the class's size (50 here, 200 on bigger hosts)")
     parser.add_argument("--workers", type=int, nargs="+", default=None)
+    parser.add_argument("--login-window", type=float, default=None, help="seconds the logins spread over (60)")
+    parser.add_argument("--hold", type=float, default=None, help="seconds the class is held after (40)")
+    parser.add_argument("--no-thread-climb", action="store_true",
+                        help="leave out the threads-with-robots climb (a comparison of the class alone)")
     args = parser.parse_args(argv)
-    run(args.quick, Path(args.output), args.students, tuple(args.workers) if args.workers else None)
+    run(args.quick, Path(args.output), args.students, tuple(args.workers) if args.workers else None,
+        args.login_window, args.hold, not args.no_thread_climb)
     return 0
 
 

@@ -2,10 +2,19 @@
 
 - the live path: drive -> ack and telemetry -> viewer latency with the recorder off and on, in blocks that
   alternate off/on, on/off, ... (so both see the machine in the same state; the machine is shared), each pair
-  giving a ratio of the on p50 to the off p50. The figure is the median of the pairs' ratios (graded <= 1.05), the
-  spread is their range; the floor of each latency is the off blocks' own. During every block a console watches
-  the robot's telemetry (its socket is the telemetry -> viewer sample) while the drive pad sends, as in a session.
-  "Off" is the keeper paused (no recorder, no command notes), "on" the elected keeper recording lab-1's turn.
+  giving a ratio of the on p50 to the off p50 (and of the p99s). The figure is the median of the pairs' p50 ratios
+  with a distribution-free 95 % interval for it (order statistics, the sign test's binomial: no assumption about
+  the host's noise), graded by the interval: within 1.05 when all of it is, a miss when all of it is over, and
+  undecided when it straddles 1.05 (more pairs narrow it: `--pairs`). The floor of each latency is the off blocks'
+  own. During every block a console watches the robot's telemetry (its socket is the telemetry -> viewer sample)
+  while the drive pad sends, as in a session. "Off" is the keeper paused (no tap, no command notes; its tick goes
+  on), "on" the keeper recording lab-1's turn. The client's sockets are read by threads of this process, which also
+  serves the middleware: what the recorder costs the interpreter, the client pays too (a browser would not), so the
+  ratios are an upper bound. Each block's load average is kept in the JSON: the machine is shared.
+- CPU time, which a loaded machine slows but does not add to: the recorder's threads in the worker (the keeper's
+  tick; the interpreter the live path shares) beside the 0 floor, each thread by its own CPU clock; the channel
+  loop's thread (the tap's, and every console socket's), on minus off in each pair; the worker's whole CPU, on over
+  off; the writer child's (middleware/recordings/writer.py), each with its 95 % interval.
 - bytes per minute of session: one part recorded while driving with the console open, against the floor of its
   messages' own bytes (serialized, before MCAP's framing and zstd).
 - the replay page's time to first frame for a 30-minute recording (10 Hz odometry, truth, sonar and laser with
@@ -14,7 +23,8 @@
   frame after the page marks its first frame, against the floor of the same page on a 10-second recording; and
   the time until the whole recording is loaded behind it.
 
-Run `python -m benchmarks.recording_cost [--quick] [--output DIR]`: prints a table, writes DIR/recording_cost.json.
+Run `python -m benchmarks.recording_cost [--quick] [--pairs N] [--live-only] [--output DIR]`: prints a table, writes
+DIR/recording_cost.json.
 """
 
 from __future__ import annotations
@@ -22,6 +32,7 @@ from __future__ import annotations
 import argparse
 import io
 import json
+import math
 import os
 import statistics
 import threading
@@ -35,6 +46,7 @@ from benchmarks.latency import measure_drive, take_control
 from benchmarks.report import Measurement, percentile_ms, print_table, write_json
 
 RATIO_TARGET = 1.05
+PAIRS, DRIVES = 40, 150  # 40 pairs: the median's 95 % interval spans the 14th to 27th of the sorted pair ratios
 SETTLE_ON_S = 2.0  # the keeper's pass, the recorder's subscription and its first second on the pool
 SETTLE_OFF_S = 1.0
 REPLAY_LOADS = 3  # page loads of each recording, alternated: the median counts
@@ -100,55 +112,162 @@ def switch(lab: LabUnderTest, on: bool) -> None:
     time.sleep(SETTLE_ON_S if on else SETTLE_OFF_S)
 
 
+# The recorder's own threads in the worker: the keeper's (now its only one); the command log's thread and the
+# recorder pool's before (counted when they exist, so the same harness measures the code before and after).
+RECORDER_THREADS = ("recordings", "command-log", "recorder-io")
+LOOP_THREAD = "channel-loop"  # the tap's thread (every console's sockets and hubs run on it too)
+CONFIDENCE = 0.95
+
+
+def _stat_cpu_s(path: Path) -> float:
+    """utime + stime of a /proc stat file, in seconds (0 when it is gone)."""
+    try:
+        fields = path.read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, IndexError, ValueError):
+        return 0.0  # it just ended: the next block counts its successor
+
+
+def _thread_cpu_s() -> dict[int, tuple[str, float]]:
+    """Each live thread of this process: its name and CPU seconds so far (its own CPU clock: nanoseconds, not ticks)."""
+    found = {}
+    for thread in threading.enumerate():
+        if thread.ident is None:
+            continue
+        try:
+            found[thread.ident] = (thread.name, time.clock_gettime(time.pthread_getcpuclockid(thread.ident)))
+        except (OSError, ProcessLookupError):
+            continue  # it just ended
+    return found
+
+
+def cpu_seconds(lab: LabUnderTest) -> dict[str, Any]:
+    """CPU seconds so far: this process ("worker": the middleware, its recorder and the benchmark's client), its
+    recording writer child, and each thread of this process."""
+    from middleware.recordings import recordings_of
+
+    pid = recordings_of(lab.app).keeper.writer.pid
+    child = _stat_cpu_s(Path(f"/proc/{pid}/stat")) if pid is not None else 0.0
+    return {"worker": time.process_time(), "writer_child": child, "threads": _thread_cpu_s()}
+
+
+def cpu_shares(started: dict[str, Any], ended: dict[str, Any], wall_s: float) -> dict[str, float]:
+    """CPU seconds a second over a block: the worker, the writer child, the recorder's threads, the channel loop."""
+    def threads(prefixes: tuple[str, ...]) -> float:
+        return sum(cpu - started["threads"].get(ident, (name, 0.0))[1]
+                   for ident, (name, cpu) in ended["threads"].items() if name.startswith(prefixes))
+
+    return {"worker": (ended["worker"] - started["worker"]) / wall_s,
+            "writer_child": max(0.0, ended["writer_child"] - started["writer_child"]) / wall_s,
+            "recorder_threads": threads(RECORDER_THREADS) / wall_s, "loop_thread": threads((LOOP_THREAD,)) / wall_s}
+
+
 def live_path(lab: LabUnderTest, browser: Browser, pairs: int, drives: int) -> dict[str, Any]:
-    """Alternating off/on blocks; every block's drive and viewer samples, and the process's CPU seconds a second
-    (middleware, recorder and client alike: only the recorder differs between the blocks)."""
+    """Alternating off/on blocks; every block's drive and viewer samples, its CPU a second (the worker, its writer
+    child, the recorder's threads, the channel loop) and the load average at its end."""
     blocks: list[tuple[str, list[float], list[float]]] = []
-    cpu: list[tuple[str, float]] = []
+    parts: list[tuple[str, dict[str, float]]] = []
+    loads: list[float] = []
     viewer = TelemetryViewer(browser)
     try:
         for pair in range(pairs):
             for state in (("off", "on") if pair % 2 == 0 else ("on", "off")):
                 switch(lab, state == "on")
                 viewer.take()
-                cpu_started, started = time.process_time(), time.monotonic()
+                cpu_started, started = cpu_seconds(lab), time.monotonic()
                 drive = measure_drive(browser, drives)
-                cpu.append((state, (time.process_time() - cpu_started) / (time.monotonic() - started)))
+                parts.append((state, cpu_shares(cpu_started, cpu_seconds(lab), time.monotonic() - started)))
                 blocks.append((state, drive, viewer.take()))
+                loads.append(os.getloadavg()[0])
     finally:
         viewer.close()
-    return {"blocks": blocks, "cpu": cpu}
+    return {"blocks": blocks, "cpu_parts": parts, "loads": loads}
 
 
-def cpu_rows(cpu: list[tuple[str, float]]) -> list[Measurement]:
-    """The process's CPU while recording, beside its CPU with the recorder off (a load on the machine slows a
-    block, but does not add CPU seconds to this process: steadier than the latencies on a shared machine)."""
-    on = [share for state, share in cpu if state == "on"]
-    off = [share for state, share in cpu if state == "off"]
-    if not on or not off:
+def median_interval(values: list[float], confidence: float = CONFIDENCE) -> tuple[float, float, float]:
+    """(low, median, high): the median of values and a distribution-free interval for the median of what they were
+    drawn from, at confidence or more (order statistics: x(k) and x(n+1-k), k from the sign test's binomial); low and
+    high are nan when there are too few values for that confidence (fewer than 6 at 95 %)."""
+    ordered = sorted(values)
+    n = len(ordered)
+    if not n:
+        return math.nan, math.nan, math.nan
+    tail, below, k = (1 - confidence) / 2, 0.0, 0
+    while k < n and below + math.comb(n, k) / 2 ** n <= tail:
+        below += math.comb(n, k) / 2 ** n
+        k += 1
+    median = statistics.median(ordered)
+    return (ordered[k - 1], median, ordered[n - k]) if k >= 1 else (math.nan, median, math.nan)
+
+
+def within(interval: tuple[float, float, float], target: float) -> bool | None:
+    """True when the whole interval is at or under target, False when it is all over it, None when it straddles it
+    (the run cannot tell at its confidence)."""
+    low, _, high = interval
+    if math.isnan(low):
+        return None
+    return True if high <= target else False if low > target else None
+
+
+def _said(interval: tuple[float, float, float], count: int, what: str = "pairs") -> str:
+    low, _, high = interval
+    if math.isnan(low):
+        return f"{count} {what}: too few for a {CONFIDENCE:.0%} interval"
+    return f"{CONFIDENCE:.0%} interval {low:.3f}-{high:.3f} ({count} {what})"
+
+
+def pair_values(parts: list[tuple[str, Any]]) -> list[tuple[Any, Any]]:
+    """(on, off) of each pair of consecutive blocks."""
+    found = []
+    for index in range(0, len(parts) - 1, 2):
+        pair = dict(parts[index:index + 2])
+        if "on" in pair and "off" in pair:
+            found.append((pair["on"], pair["off"]))
+    return found
+
+
+def cpu_rows(parts: list[tuple[str, dict[str, float]]]) -> list[Measurement]:
+    """CPU time, which a loaded machine slows but does not add to (steadier than latencies on a shared machine): the
+    recorder's threads in the worker beside the 0 floor; the channel loop's thread (where the tap runs) and the
+    worker's whole CPU, on against off in each pair; the writer child's."""
+    pairs = pair_values(parts)
+    if not pairs:
         return []
-    on_ms, off_ms = statistics.median(on) * 1000, statistics.median(off) * 1000
-    return [Measurement("process CPU, recording on", "CPU a second (median of blocks)", on_ms, "ms/s", "-", off_ms,
-                        None, f"recording adds {on_ms - off_ms:.1f} ms/s"),
-            Measurement("process CPU", "on / off", on_ms / off_ms, "x", "-", 1.0, None)]
+    recorder = median_interval([on["recorder_threads"] * 1000 for on, _ in pairs])
+    loop = median_interval([(on["loop_thread"] - off["loop_thread"]) * 1000 for on, off in pairs])
+    worker = median_interval([on["worker"] / off["worker"] for on, off in pairs if off["worker"] > 0])
+    added = median_interval([(on["worker"] - off["worker"]) * 1000 for on, off in pairs])
+    child = median_interval([on["writer_child"] * 1000 for on, _ in pairs])
+    n = len(pairs)
+    return [
+        Measurement("recorder's threads in the worker", "CPU a second, recording on (median of blocks)", recorder[1],
+                    "ms/s", "-", 0.0, None, f"{', '.join(RECORDER_THREADS)}; {_said(recorder, n, 'blocks')}"),
+        Measurement("channel loop (the tap's thread)", "CPU a second, on - off (median of pairs)", loop[1], "ms/s",
+                    "-", 0.0, None, f"{_said(loop, n)}; the consoles' sockets run on it too"),
+        Measurement("worker process CPU", "on / off (median of pairs)", worker[1], "x", "-", 1.0, None,
+                    f"{_said(worker, n)}; adds {added[1]:.1f} ms/s ({added[0]:.1f}-{added[2]:.1f}); the benchmark's "
+                    "client is in the process too"),
+        Measurement("recording writer child", "CPU a second, recording on (median of blocks)", child[1], "ms/s", "-",
+                    0.0, None, f"a process of its own: not the worker's interpreter; {_said(child, n, 'blocks')}"),
+    ]
 
 
 def ratio_rows(name: str, blocks: list[tuple[str, list[float]]], quick: bool) -> list[Measurement]:
-    """The pooled p50/p99 on beside off, and the median and range of the pairs' p50 ratios."""
+    """The pooled p50/p99 on beside off; the median of the pairs' p50 ratios with its interval, graded by it (within
+    1.05 only when the whole interval is), and the same for the p99 ratios (reported)."""
     on = [s for state, samples in blocks if state == "on" for s in samples]
     off = [s for state, samples in blocks if state == "off" for s in samples]
-    ratios = []
-    for index in range(0, len(blocks) - 1, 2):
-        pair = dict(blocks[index:index + 2])
-        if pair.get("on") and pair.get("off"):
-            ratios.append(percentile_ms(pair["on"], 50) / percentile_ms(pair["off"], 50))
-    median = statistics.median(ratios) if ratios else None
-    spread = f"{len(ratios)} pairs: {min(ratios):.3f}-{max(ratios):.3f}" if ratios else "no pairs"
+    pairs = [(a, b) for a, b in pair_values(blocks) if a and b]
+    ratios = {q: [percentile_ms(a, q) / percentile_ms(b, q) for a, b in pairs] for q in (50, 99)}
+    p50, p99 = median_interval(ratios[50]), median_interval(ratios[99])
+    verdict = None if quick else within(p50, RATIO_TARGET)
+    undecided = "" if quick or verdict is not None else f"; undecided: the interval straddles {RATIO_TARGET}"
     return [
         Measurement(f"{name}, recording on", "p50", percentile_ms(on, 50), "ms", "-", percentile_ms(off, 50)),
         Measurement(f"{name}, recording on", "p99", percentile_ms(on, 99), "ms", "-", percentile_ms(off, 99)),
-        Measurement(name, "p50 on / p50 off, median of pairs", median, "x", f"<= {RATIO_TARGET}", 1.0,
-                    None if quick or median is None else median <= RATIO_TARGET, spread),
+        Measurement(name, "p50 on / p50 off, median of pairs", p50[1], "x", f"<= {RATIO_TARGET} at {CONFIDENCE:.0%}",
+                    1.0, verdict, _said(p50, len(pairs)) + undecided),
+        Measurement(name, "p99 on / p99 off, median of pairs", p99[1], "x", "-", 1.0, None, _said(p99, len(pairs))),
     ]
 
 
@@ -190,6 +309,7 @@ def synthetic_recording(lab: LabUnderTest, seconds: float) -> int:
     from protos.telelab.v1 import robot_pb2
 
     link = robot_registry(lab.app).get("lab-1")
+    assert link is not None, "the lab under test has lab-1"
     info, scene = link.info(), link.scene(max_age_s=60.0)
     sonars, beams = len(info.sonars) or 16, info.laser.beam_count or 181
     start = time.time() - seconds - 60
@@ -264,10 +384,13 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--output", type=Path, default=Path("bench-results"))
+    parser.add_argument("--pairs", type=int, help=f"on/off pairs (default {PAIRS}; 2 with --quick)")
+    parser.add_argument("--live-only", action="store_true", help="the live path's figures only (no size, no replay)")
     args = parser.parse_args(argv)
     from middleware.recordings import recordings_of
 
-    pairs, drives, window_s, minutes = (2, 40, 15.0, 3.0) if args.quick else (12, 150, 60.0, 30.0)
+    pairs, drives, window_s, minutes = (2, 40, 15.0, 3.0) if args.quick else (PAIRS, DRIVES, 60.0, 30.0)
+    pairs = args.pairs or pairs
     lab = LabUnderTest(users=1)
     rows: list[Measurement] = []
     extra: dict[str, Any] = {"quick": args.quick, "load_average_at_start": os.getloadavg(), "cores": os.cpu_count()}
@@ -281,11 +404,17 @@ def main(argv: list[str] | None = None) -> int:
         blocks = measured["blocks"]
         rows += ratio_rows("drive -> ack", [(state, drive) for state, drive, _ in blocks], args.quick)
         rows += ratio_rows("telemetry -> viewer", [(state, view) for state, _, view in blocks], args.quick)
-        rows += cpu_rows(measured["cpu"])
-        extra["cpu_s_per_s"] = measured["cpu"]
-        extra["blocks"] = [{"state": state, "drive_p50_ms": percentile_ms(drive, 50), "drives": len(drive),
-                            "viewer_p50_ms": percentile_ms(view, 50), "views": len(view)}
-                           for state, drive, view in blocks]
+        rows += cpu_rows(measured["cpu_parts"])
+        extra["cpu_parts_s_per_s"] = measured["cpu_parts"]
+        extra["load_average_per_block"] = measured["loads"]
+        extra["blocks"] = [{"state": state, "drive_p50_ms": percentile_ms(drive, 50),
+                            "drive_p99_ms": percentile_ms(drive, 99), "drives": len(drive),
+                            "viewer_p50_ms": percentile_ms(view, 50), "viewer_p99_ms": percentile_ms(view, 99),
+                            "views": len(view)} for state, drive, view in blocks]
+        extra["load_average_at_live_end"] = os.getloadavg()
+        if args.live_only:
+            recordings.stop()
+            return 0
         on_disk, own, seconds = bytes_window(lab, browser, window_s)
         rows.append(Measurement("recording size", "bytes per minute of session (disk)", on_disk, "B/min", "-", own,
                                 None, f"floor: the messages' own bytes; a {seconds:.0f} s part, driving"))
@@ -305,8 +434,8 @@ def main(argv: list[str] | None = None) -> int:
         recordings.stop()
     finally:
         lab.stop()
-    print_table("Recording cost on the live path", rows)
-    write_json(args.output / "recording_cost.json", rows, extra)
+        print_table("Recording cost on the live path", rows)
+        write_json(args.output / "recording_cost.json", rows, extra)
     return 0
 
 

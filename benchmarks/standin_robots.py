@@ -45,7 +45,9 @@ class StandInRobot(robot_pb2_grpc.RobotServicer):
         self.x_m = self.y_m = self.theta_rad = 0.0
         self.moved_at = time.monotonic()
         self.started = time.monotonic()
-        self.drives = 0
+        self.drives = 0  # commands applied
+        self.drive_calls = 0  # unary Drive calls
+        self.drive_streams = 0  # DriveStream calls opened
 
     def _advance(self) -> None:
         now = time.monotonic()
@@ -75,9 +77,11 @@ class StandInRobot(robot_pb2_grpc.RobotServicer):
     async def GetLimits(self, request, context):  # noqa: N802
         return robot_pb2.Limits(max_linear_mps=0.5, max_angular_radps=1.5, watchdog_s=DEADMAN_S)
 
-    async def Drive(self, request, context):  # noqa: N802
+    def _apply_drive(self, request: robot_pb2.DriveCommand) -> robot_pb2.DriveStreamAck:
+        """Drive's rule: the controller's token only, a sequence above the last in force, the velocities clamped."""
         if not request.token or request.token != self.token:
-            await context.abort(grpc.StatusCode.PERMISSION_DENIED, "not the controller's token")
+            return robot_pb2.DriveStreamAck(sequence=request.sequence, refusal=robot_pb2.CommandRefusal(
+                status_code=grpc.StatusCode.PERMISSION_DENIED.value[0], message="not the controller's token"))
         self._advance()
         if request.sequence > self.applied_sequence:
             self.applied_sequence = request.sequence
@@ -85,8 +89,24 @@ class StandInRobot(robot_pb2_grpc.RobotServicer):
             self.angular_radps = max(-1.5, min(1.5, request.angular_radps))
             self.commanded_at = time.monotonic()
             self.drives += 1
-        return robot_pb2.DriveAck(applied_sequence=self.applied_sequence, linear_mps=self.linear_mps,
-                                  angular_radps=self.angular_radps)
+        return robot_pb2.DriveStreamAck(sequence=request.sequence, ack=robot_pb2.DriveAck(
+            applied_sequence=self.applied_sequence, linear_mps=self.linear_mps, angular_radps=self.angular_radps))
+
+    async def answer_drive(self, request: robot_pb2.DriveCommand) -> robot_pb2.DriveStreamAck:
+        """One drive command's answer, for Drive and DriveStream alike (a test's slow robot waits here)."""
+        return self._apply_drive(request)
+
+    async def Drive(self, request, context):  # noqa: N802
+        self.drive_calls += 1
+        answer = await self.answer_drive(request)
+        if answer.WhichOneof("outcome") == "refusal":
+            await context.abort(grpc.StatusCode.PERMISSION_DENIED, answer.refusal.message)  # its only refusal
+        return answer.ack
+
+    async def DriveStream(self, request_iterator, context) -> AsyncIterator[robot_pb2.DriveStreamAck]:  # noqa: N802
+        self.drive_streams += 1
+        async for command in request_iterator:
+            yield await self.answer_drive(command)
 
     async def StreamTelemetry(self, request, context) -> AsyncIterator[robot_pb2.Telemetry]:  # noqa: N802
         period_s = 1.0 / (request.rate_hz or TELEMETRY_HZ)

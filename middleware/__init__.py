@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from datetime import datetime
 from pathlib import Path
 from typing import Any
 
 from flask import Flask, Response, redirect, url_for
 from flask.typing import ResponseReturnValue
 from flask_login import current_user
+from sqlalchemy.orm import Session
 
 from middleware import analytics, browser_modules, db, i18n, realtime, recordings, validation
 from middleware import config as config_module
@@ -15,7 +17,7 @@ from middleware.access import commands
 from middleware.access import coordinator as access_coordinator
 from middleware.access import sockets as access_sockets
 from middleware.access.coordinator import AccessHooks
-from middleware.access.graded_runs import with_graded_run_priority
+from middleware.access.graded_runs import robots_in_graded_runs, with_graded_run_priority
 from middleware.accounts import routes as accounts_routes
 from middleware.analytics import routes as analytics_routes
 from middleware.api import routes as api_routes
@@ -61,8 +63,8 @@ from middleware.teaching import (
     tour_live,
     tour_routes,
 )
-from middleware.teaching.tours import with_guided_priority
-from middleware.wording import moment_words
+from middleware.teaching.tours import robots_in_live_classes, with_guided_priority
+from middleware.wording import moment_words, number_words
 
 CLIENT_UI_DIR = Path(__file__).resolve().parent.parent / "client_ui"
 
@@ -81,6 +83,7 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
     validation.init_app(app)
     i18n.init_app(app)
     app.add_template_filter(moment_words, "moment")
+    app.add_template_filter(number_words, "number")
     db.init_app(app)
     auth_cookies.init_app(app)
     csrf.init_app(app)
@@ -120,7 +123,13 @@ def _compose_robot_access(app: Flask) -> None:
     and the one command path over them (the areas themselves never import one another for these)."""
     robots = registry.init_app(app)
     priority = with_graded_run_priority(with_guided_priority(bookings_services.priority_user_id))
-    coordinator = access_coordinator.init_app(app, AccessHooks(priority, bookings_services.check_in))
+
+    def priority_robots(session: Session, now: datetime) -> set[str]:  # the robots priority may speak of now
+        return (bookings_services.robots_with_bookings_now(session, now) | robots_in_live_classes(session)
+                | robots_in_graded_runs(session, now))
+
+    coordinator = access_coordinator.init_app(app, AccessHooks(priority, bookings_services.check_in,
+                                                               priority_robots))
     practice_robots.init_app(app, robots, farm_setup.init_app(app))
     commands.init_app(app, robots, coordinator, (trial_rules.teleoperation_only(db.session_factory(app)),))
     commands.robot_commands(app).oversee(class_wall.WallOversight(db.session_factory(app)))

@@ -6,6 +6,9 @@ experimental test on lab-1, both open now for a long window; and the course's la
 it: the 2003 paper's seven statements and one rated from "Not at all" to "A great deal"), already answered by
 three demo classmates (disabled accounts that exist for their answers alone), so the tutor sees its charts
 (shown from MIN_RESPONDENTS answers on) while the demo student can still answer it.
+Beside it, its Spanish twin "Robótica móvil (demo)" (seed_spanish_demo_course): the same questions, tests and
+survey written in Spanish, the same grading, the demo student enrolled and the survey answered by three
+Spanish-speaking classmates, so a student who reads the lab in Spanish finds every kind of demo content in Spanish.
 Everything goes through the courses and assessment services, so the seed obeys the same validation as a
 tutor's forms.
 
@@ -115,6 +118,68 @@ QUIZ_TITLE = "Practice quiz: sensors and odometry"
 TIMED_TITLE = "Timed test: mobile robotics basics"
 EXPERIMENTAL_TITLE = "Experimental test: reach the orange tile"
 
+# The demo course in Spanish, beside the English one (docs/languages.md), as a Spanish-speaking tutor writes it: the
+# same questions, told in Spanish, with the same kinds, answers and tolerances (so the same grading), in the same
+# order (the indices above hold for it); its tests, its survey answered by three Spanish-speaking classmates, and
+# the demo student enrolled, so a student reading the lab in Spanish finds every kind of content in Spanish.
+DEMO_COURSE_ES_CODE = "DEMO-ROBOTICA"
+DEMO_COURSE_ES_TITLE = "Robótica móvil (demo)"
+AGREEMENT_ES = {"low_label": "Totalmente en desacuerdo", "high_label": "Totalmente de acuerdo"}
+DEMO_QUESTIONS_ES: list[dict[str, Any]] = [
+    {"kind": "single", "prompt": "¿Por qué la estimación de la odometría se aleja de la pose real del robot?",
+     "choices": ["Las ruedas patinan y las vueltas que miden llevan pequeños errores que se acumulan",
+                 "El láser es demasiado lento", "La cámara no está calibrada"], "correct": 0,
+     "topics": ["odometría"]},
+    {"kind": "numeric", "prompt": "¿Cuántos sonares rodean al robot del laboratorio?", "value": 16, "tolerance": 0,
+     "topics": ["sensores", "sonar"]},
+    {"kind": "numeric", "prompt": "¿Cuál es el alcance máximo del láser?", "value": 8, "tolerance": 0.5, "unit": "m",
+     "topics": ["láser", "sensores"]},
+    {"kind": "multiple", "prompt": "¿Qué sensores miden distancias a los obstáculos?",
+     "choices": ["Sonar", "Láser", "Codificadores de las ruedas", "Cámara (sola)"], "correct": [0, 1],
+     "topics": ["sensores"]},
+    {"kind": "single", "prompt": "Para estimar la pose, ¿con qué compara la localización el barrido del láser?",
+     "choices": ["Con el mapa del laboratorio", "Con el anillo de sonares", "Con el fotograma anterior del vídeo"],
+     "correct": 0, "topics": ["láser", "localización"]},
+    {"kind": "text", "prompt": "¿Qué habilidad mantiene una distancia fija a una pared (tres palabras)?",
+     "accepted": ["seguimiento de paredes", "seguimiento de pared", "seguir la pared", "wall_following"],
+     "topics": ["seguimiento de paredes"]},
+    {"kind": "rating", "prompt": "Conducir yo mismo el robot me ayudó a entender los sensores.", **AGREEMENT_ES,
+     "topics": ["sensores"]},
+    {"kind": "single", "prompt": "Una orden de conducción de 0,2 m/s y 0 rad/s hace que el robot…",
+     "choices": ["Avance en línea recta", "Gire sobre sí mismo", "Se pare"], "correct": 0,
+     "topics": ["parte 1: adelante"]},
+    {"kind": "numeric", "prompt": "Si el robot gira sobre sí mismo a 0,8 rad/s durante 3 s, ¿cuánto gira?",
+     "value": 2.4, "tolerance": 0.1, "unit": "rad", "topics": ["parte 2: giro"]},
+    {"kind": "single", "prompt": "¿Qué parámetros necesita ir al objetivo?",
+     "choices": ["La x y la y del objetivo", "Solo una duración", "Las velocidades de las ruedas"], "correct": 0,
+     "topics": ["parte 3: ir al objetivo"]},
+    {"kind": "rating", "prompt": "La parte 1 (el robot avanzó con el vídeo) me ayudó a aprender.", **AGREEMENT_ES,
+     "topics": ["parte 1: adelante"]},
+    {"kind": "rating", "prompt": "La parte 2 (el robot giró con el vídeo) me ayudó a aprender.", **AGREEMENT_ES,
+     "topics": ["parte 2: giro"]},
+    {"kind": "rating", "prompt": "La parte 3 (el robot fue a un objetivo con el vídeo) me ayudó a aprender.",
+     **AGREEMENT_ES, "topics": ["parte 3: ir al objetivo"]},
+]
+QUIZ_TITLE_ES = "Cuestionario de práctica: sensores y odometría"
+TIMED_TITLE_ES = "Prueba cronometrada: fundamentos de robótica móvil"
+EXPERIMENTAL_TITLE_ES = "Prueba experimental: llega a la baldosa naranja"
+LESSON_BEFORE_TITLE_ES = "Antes de la lección: primeros movimientos"
+LESSON_AFTER_TITLE_ES = "Después de la lección: primeros movimientos"
+EXPERIMENTAL_INSTRUCTIONS_ES = (f"El objetivo es la baldosa naranja. Toma el control de {DEMO_ROBOT} y llévalo hasta "
+                                "allí o usa ir al objetivo. La nota es la distancia real del robot al objetivo.")
+DEMO_SURVEY_TITLE_ES = "Evalúa el laboratorio"
+DEMO_SURVEY_STATEMENTS_ES = [{"text": text, **AGREEMENT_ES} for text in (
+    "Los objetivos de aprendizaje estaban claros", "El curso estaba bien presentado",
+    "Era fácil acceder al laboratorio", "Los ejercicios corregidos traían comentarios útiles",
+    "El sistema era esencial para el curso", "El sistema era fiable", "El sistema era fácil de usar")] + [
+    {"text": "Ver moverse el robot con el vídeo de la lección me ayudó a aprender", "low_label": "Nada",
+     "high_label": "Muchísimo"}]
+DEMO_SURVEY_ANSWERS_ES: dict[str, tuple[tuple[int, ...], str]] = {
+    "demo-companera-1": ((5, 5, 4, 4, 5, 4, 4, 5), "Conducir el robot desde casa me aclaró la lección de odometría."),
+    "demo-companero-2": ((4, 3, 3, 4, 4, 4, 5, 4), "Reservar un turno costó en la semana antes de la prueba."),
+    "demo-companera-3": ((4, 4, 2, 3, 5, 3, 4, 4), ""),
+}
+
 
 @dataclass(frozen=True)
 class DemoCourse:
@@ -158,23 +223,72 @@ def seed_demo_course(session: Session, now: datetime | None = None) -> DemoCours
     return DemoCourse(course.id, added)
 
 
-def _demo_exams(ids: list[int], now: datetime) -> list[tuple[str, dict[str, Any]]]:
+EXAM_WORDS = (QUIZ_TITLE, TIMED_TITLE, EXPERIMENTAL_TITLE, LESSON_BEFORE_TITLE, LESSON_AFTER_TITLE,
+              f"The target is the orange tile. Take control of {DEMO_ROBOT} and drive it there or use go-to-goal. "
+              "The mark is the robot's true distance to the target.", "navigation")
+EXAM_WORDS_ES = (QUIZ_TITLE_ES, TIMED_TITLE_ES, EXPERIMENTAL_TITLE_ES, LESSON_BEFORE_TITLE_ES, LESSON_AFTER_TITLE_ES,
+                 EXPERIMENTAL_INSTRUCTIONS_ES, "navegación")
+
+
+def _demo_exams(ids: list[int], now: datetime,
+                words: tuple[str, ...] = EXAM_WORDS) -> list[tuple[str, dict[str, Any]]]:
     """(what the banner calls it, the test as the editor's form sends it): a practice quiz, then a timed test
-    and an experimental test open from just before now for OPEN_FOR."""
+    and an experimental test open from just before now for OPEN_FOR, then the lesson's tests; their titles, the
+    experimental test's instructions and topic in one language (`words`)."""
+    quiz_title, timed_title, experimental_title, before_title, after_title, instructions, topic = words
     window = {"opens_at": (now - timedelta(minutes=5)).isoformat(), "closes_at": (now + OPEN_FOR).isoformat()}
-    quiz = {"title": QUIZ_TITLE, "kind": "quiz", "question_ids": [ids[i] for i in QUIZ_QUESTIONS]}
-    timed = {"title": TIMED_TITLE, "kind": "theory", **window, "duration_s": 900, "max_attempts": 3,
+    quiz = {"title": quiz_title, "kind": "quiz", "question_ids": [ids[i] for i in QUIZ_QUESTIONS]}
+    timed = {"title": timed_title, "kind": "theory", **window, "duration_s": 900, "max_attempts": 3,
              "question_ids": [ids[i] for i in TIMED_QUESTIONS]}
     experimental = {
-        "title": EXPERIMENTAL_TITLE, "kind": "experimental", **window, "duration_s": 600, "max_attempts": 3,
+        "title": experimental_title, "kind": "experimental", **window, "duration_s": 600, "max_attempts": 3,
         "robot_name": DEMO_ROBOT, "task_kind": "reach_point", "x_m": 1.5, "y_m": 1.5, "task_points": 10,
-        "task_topics": ["navigation"],
-        "instructions": f"The target is the orange tile. Take control of {DEMO_ROBOT} and drive it there or use "
-                        "go-to-goal. The mark is the robot's true distance to the target."}
-    before = {"title": LESSON_BEFORE_TITLE, "kind": "quiz", "question_ids": [ids[i] for i in LESSON_BEFORE_QUESTIONS]}
-    after = {"title": LESSON_AFTER_TITLE, "kind": "quiz", "question_ids": [ids[i] for i in LESSON_AFTER_QUESTIONS]}
+        "task_topics": [topic], "instructions": instructions}
+    before = {"title": before_title, "kind": "quiz", "question_ids": [ids[i] for i in LESSON_BEFORE_QUESTIONS]}
+    after = {"title": after_title, "kind": "quiz", "question_ids": [ids[i] for i in LESSON_AFTER_QUESTIONS]}
     return [("practice quiz", quiz), ("timed test", timed), (f"experimental test on {DEMO_ROBOT}", experimental),
             ("the lesson's test before", before), ("the lesson's test after", after)]
+
+
+def seed_spanish_demo_course(session: Session, now: datetime | None = None) -> DemoCourse:
+    """The demo course in Spanish ("Robótica móvil (demo)") when it does not exist yet; the caller commits.
+
+    As the English one: the demo `tutor` teaches it, the demo `student` is enrolled, the same questions in Spanish,
+    the same five tests, and the tutor's survey in Spanish, answered by three Spanish-speaking classmates (created
+    with the course, then disabled) so its charts show. Nothing when the course exists or the demo tutor is gone.
+    """
+    existing = session.scalar(select(Course.id).where(Course.code == DEMO_COURSE_ES_CODE))
+    tutor = find_user(session, "tutor")
+    if existing is not None:
+        return DemoCourse(existing, [])
+    if tutor is None or tutor.role != Role.TUTOR:
+        return DemoCourse(None, [])
+    now = now or datetime.now(UTC)
+    course = courses.create_course(session, tutor, DEMO_COURSE_ES_CODE, DEMO_COURSE_ES_TITLE, CourseSettings(
+        turn_length_s=DEMO_TURN_LENGTH_S, booking_allowance_min=DEMO_ALLOWANCE_MIN))
+    added = [f"course {DEMO_COURSE_ES_TITLE}"]
+    student = find_user(session, "student")
+    if student is not None and student.role == Role.STUDENT and student.is_active:
+        courses.enrol(session, tutor, course.id, student.username)
+        added.append(f"the demo student enrolled in {DEMO_COURSE_ES_TITLE}")
+    ids = [bank.add_question(session, tutor, course.id, parse_question(q)).id for q in DEMO_QUESTIONS_ES]
+    added.append(f"{len(ids)} questions in Spanish")
+    for label, data in _demo_exams(ids, now, EXAM_WORDS_ES):
+        bank.create_exam(session, tutor, course.id, parse_exam(data))
+        added.append(f"{label} in Spanish")
+    statements = survey.write_survey(session, tutor, course.id, DEMO_SURVEY_TITLE_ES,
+                                     parse_statements(DEMO_SURVEY_STATEMENTS_ES)).statements
+    added.append(f"the lab survey in Spanish ({len(statements)} statements)")
+    if not any(find_user(session, name) for name in DEMO_SURVEY_ANSWERS_ES):
+        for username, (ratings, comments) in DEMO_SURVEY_ANSWERS_ES.items():
+            classmate = create_user(session, username, Role.STUDENT, generate_password())
+            courses.enrol(session, tutor, course.id, username)
+            survey.submit_survey(session, classmate, course.id, *parse_survey(
+                {"ratings": {s.key: rating for s, rating in zip(statements, ratings, strict=True)},
+                 "comments": comments}, statements))
+            set_active_by_name(session, username, False)
+        added.append(f"the Spanish lab survey answered by {len(DEMO_SURVEY_ANSWERS_ES)} demo classmates")
+    return DemoCourse(course.id, added)
 
 
 def _survey_classmates(session: Session, tutor: Any, course_id: int) -> list[str]:

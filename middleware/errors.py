@@ -57,13 +57,18 @@ class ApiError(Refused):
     """A refusal a route raises about the request itself (a body that is not JSON, an unknown robot)."""
 
 
-def written_number(value: float | None) -> str:
+def written_number(value: float | None, spec: str = "") -> str:
     """A number as a refusal's sentence writes it: in English as Python writes it (the wording clients and tests
-    compare: 3600, 0.5, 1e-06), in another language with its decimal sign (0,5), never with a thousands separator
-    (limits and ids read as they are typed)."""
+    compare: 3600, 0.5, 1e-06), or by the format spec given ("g", ".0f"), in another language with its decimal sign
+    (0,5), rounded as spec rounds, never with a thousands separator (limits and ids read as they are typed)."""
     locale = get_locale()
     if locale is None or locale.language == "en" or value is None or isinstance(value, bool):
-        return str(value)
+        return format(value, spec)
+    if spec.startswith(".") and spec.endswith("f"):  # a fixed number of decimals, as the spec says (3,90)
+        places = int(spec[1:-1])
+        return str(format_decimal(value, "0" + ("." + "0" * places if places else ""), locale=locale))
+    if spec:
+        value = float(format(value, spec))
     return str(format_decimal(value, locale=locale, group_separator=False, decimal_quantization=False))
 
 

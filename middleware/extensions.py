@@ -7,6 +7,7 @@ from collections.abc import Callable
 
 from flask import redirect, request, session, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import LoginManager
 from flask_wtf.csrf import CSRFProtect
 
@@ -47,5 +48,5 @@ def socket_login_check() -> Callable[[int], bool]:
 @login_manager.unauthorized_handler
 def _unauthorized() -> ResponseReturnValue:
     if request.path.startswith("/api/"):
-        raise ApiError(401, "not_logged_in", "Log in first; your session may have ended.")
+        raise ApiError(401, "not_logged_in", gettext("Log in first; your session may have ended."))
     return redirect(url_for("auth.login", next=request.full_path.rstrip("?")))

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 
+from babel.numbers import get_decimal_symbol
 from flask import Flask, current_app, g, has_request_context, request, session
 from flask_babel import Babel, get_locale, gettext, lazy_gettext  # type: ignore[import-untyped]
 from flask_login import current_user
@@ -97,17 +98,52 @@ _WITH_VALUES = (
     (re.compile(r"An accepted answer: (?P<answer>.*)\."), N_("An accepted answer: %(answer)s.")),
     (re.compile(r"(?P<unit>.*) is not a unit of the same quantity as (?P<expected>.*)\."),
      N_("%(unit)s is not a unit of the same quantity as %(expected)s.")),
+    # The experimental task's grader (trace_grading.py): a measure, then the rubric's share, two sentences.
+    (re.compile(r"The robot ended (?P<error>\S+) m from \((?P<x>[^,]+), (?P<y>[^)]+)\)\."),
+     N_("The robot ended %(error)s m from (%(x)s, %(y)s).")),
+    (re.compile(r"The robot travelled (?P<travel>\S+) m; the task needs at least (?P<needed>\S+) m along the wall\."),
+     N_("The robot travelled %(travel)s m; the task needs at least %(needed)s m along the wall.")),
+    (re.compile(r"The RMS distance error to the wall was (?P<error>\S+) m over (?P<travel>\S+) m\."),
+     N_("The RMS distance error to the wall was %(error)s m over %(travel)s m.")),
+    (re.compile(r"The reported pose was (?P<error>\S+) m from the robot's true position\."),
+     N_("The reported pose was %(error)s m from the robot's true position.")),
+    (re.compile(r"The zone you marked overlaps the obstacles with IoU (?P<iou>\S+) \(precision (?P<precision>\S+), "
+                r"recall (?P<recall>\S+)\)\."),
+     N_("The zone you marked overlaps the obstacles with IoU %(iou)s (precision %(precision)s, recall %(recall)s).")),
+    (re.compile(r"Rubric: (?P<percent>\d+)% of the points\."), N_("Rubric: %(percent)s%% of the points.")),
 )
+# The values above that are the grader's numbers (a choice's or unit's text stays as its author wrote it).
+_NUMBERS = {"shown", "error", "x", "y", "travel", "needed", "iou", "precision", "recall", "percent"}
+# Where a stored feedback of several sentences is cut to say each (a full stop, a space, a capital).
+_SENTENCE_END = re.compile(r"(?<=\.) (?=[A-Z])")
+
+
+_DECIMAL_POINT = re.compile(r"(?<=\d)\.(?=\d)")
 
 
 def translated(text: str) -> str:
-    """A stored English sentence the catalogue may know (a grader's feedback), in the page's language."""
+    """A stored English sentence the catalogue may know (a grader's feedback), in the page's language; a feedback
+    of several sentences is said sentence by sentence when the catalogue has it only so."""
     if not text:
         return text
+    whole = _translated_sentence(text)
+    if whole != text or current_language() == LANGUAGES[0]:
+        return whole
+    return " ".join(_translated_sentence(sentence) for sentence in _SENTENCE_END.split(text))
+
+
+def _translated_sentence(text: str) -> str:
     for pattern, message in _WITH_VALUES:
-        if match := pattern.fullmatch(text):
-            return str(gettext(message, **match.groupdict()))
+        if match := pattern.fullmatch(text):  # the grader's numbers ("8 ± 0.5 m") with the page's decimal sign
+            values = {name: _DECIMAL_POINT.sub(_decimal_sign(), value) if name in _NUMBERS else value
+                      for name, value in match.groupdict().items()}
+            return str(gettext(message, **values))
     return str(gettext(text))
+
+
+def _decimal_sign() -> str:
+    """The decimal sign of the page's language ("." in English, "," in Spanish)."""
+    return str(get_decimal_symbol(current_language()))
 
 
 def role_name(role: str) -> str:

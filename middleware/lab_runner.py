@@ -48,21 +48,33 @@ def ensure_demo_accounts(app) -> list[tuple[str, str, str]]:
 
 
 def seed_demo_content(app, record_video: bool = True) -> list[str]:
-    """The demo data: the demo course with its tests (so the demo student can book and be assessed), then the
-    teaching area's example tours and the lesson whose video is recorded from the simulator."""
+    """The demo data: the demo course with its tests (so the demo student can book and be assessed) and its Spanish
+    twin, then the teaching area's example tours and the lesson whose video is recorded from the simulator."""
     from middleware.analytics.demo import seed_demo_usage
     from middleware.recordings.demo import seed_demo_recording
     from middleware.teaching.demo_class import seed_demo_class
     from middleware.teaching.demo_content import seed_demo_content as seed
 
-    return (seed_demo_course(app) + seed(app, record_video) + seed_demo_recording(app) + seed_demo_class(app)
-            + seed_demo_usage(app))
+    return (seed_demo_course(app) + seed_spanish_demo_course(app) + seed(app, record_video) + seed_demo_recording(app)
+            + seed_demo_class(app) + seed_demo_usage(app))
 
 
 def seed_demo_course(app) -> list[str]:
     """The demo course "Mobile robotics (demo)" when it does not exist yet; returns what was added."""
     from middleware.db import session_factory
     from middleware.demo_course import seed_demo_course as seed
+
+    with session_factory(app)() as session:
+        added = seed(session).added
+        session.commit()
+    return added
+
+
+def seed_spanish_demo_course(app) -> list[str]:
+    """The demo course in Spanish, "Robótica móvil (demo)", when it does not exist yet (before the teaching area's
+    content, whose Spanish lesson takes its tests); returns what was added."""
+    from middleware.db import session_factory
+    from middleware.demo_course import seed_spanish_demo_course as seed
 
     with session_factory(app)() as session:
         added = seed(session).added
@@ -115,10 +127,12 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
     from middleware.db import upgrade_to_head
     from middleware.farm.base import FarmUnavailable
     from middleware.farm.owner import FarmOwner
+    from middleware.lti.demo_setup import DemoLmsProcess
     from middleware.serve import serve_with_gunicorn
 
     robots = lab_robots(robot_count, scene, course_robots)
     owner: FarmOwner | None = None
+    demo_lms: DemoLmsProcess | None = None
     launcher = os.getpid()
     stop_on_termination_signals()
     try:
@@ -135,8 +149,9 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
         upgrade_to_head(app.config["DATABASE_URL"])
         created = ensure_demo_accounts(app)
         seeded = seed_demo_content(app, demo_video)
+        demo_lms, lms_seeded = start_demo_lms(app, host, port)
         _let_go(app)
-        _print_banner(host, port, created, seeded, worker_count)
+        _print_banner(host, port, created, seeded + lms_seeded, worker_count, demo_lms.url if demo_lms else None)
         serve_with_gunicorn(host, port, worker_count)
     except (SkillServerStartError, FarmUnavailable) as error:
         print(f"error: {error}", file=sys.stderr)
@@ -149,10 +164,28 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
         if os.getpid() == launcher:
             if owner is not None:
                 owner.stop()
+            if demo_lms is not None:
+                demo_lms.stop()
             for robot in robots:
                 robot.stop()
     print("the lab has stopped", flush=True)
     return 0
+
+
+def start_demo_lms(app, host: str, port: int):
+    """The demo LMS (a stand-in, for trying LTI) on the next port, registered and linked to the demo course;
+    (its process or None when it could not start, what was added). The lab runs on without it."""
+    from middleware.demo_course import DEMO_COURSE_CODE
+    from middleware.lti.demo_setup import DemoLmsError, seed_demo_lms
+    from middleware.lti.demo_setup import start_demo_lms as start
+
+    tool_host = "127.0.0.1" if host in ("0.0.0.0", "::", "") else host
+    try:
+        lms = start(app, f"http://{tool_host}:{port}", port + 1)
+    except DemoLmsError as error:
+        print(f"warning: {error}", file=sys.stderr)
+        return None, []
+    return lms, seed_demo_lms(app, lms.url, DEMO_COURSE_CODE)
 
 
 def _let_go(app) -> None:
@@ -167,7 +200,7 @@ def _let_go(app) -> None:
 
 
 def _print_banner(host: str, port: int, created: list[tuple[str, str, str]], seeded: list[str] | None = None,
-                  workers: int = 1) -> None:
+                  workers: int = 1, lms_url: str | None = None) -> None:
     served_by = f"{workers} web worker{'s' if workers > 1 else ''}"
     lines = ["", f"Telelab is running at http://{host}:{port} with {served_by}  (Ctrl-C stops it)"]
     if seeded:
@@ -179,4 +212,7 @@ def _print_banner(host: str, port: int, created: list[tuple[str, str, str]], see
     else:
         lines.append("The demo accounts student, tutor and admin exist already; "
                      "`telelab users set-password NAME` gives one a new password.")
+    if lms_url:
+        lines.append(f"Demo LMS (a stand-in for Moodle or Canvas, to try LTI): {lms_url}  (its learner and "
+                     "instructor open Telelab from its course page; docs/lti.md)")
     print("\n".join(lines) + "\n", flush=True)

@@ -104,9 +104,13 @@ class ClusterElection:
             return False
 
     def resign(self) -> None:
-        """Gives the job up (closing the connection releases the lock for another process)."""
-        self._held = False
+        """Gives the job up: unlocks, then closes the connection (a closed connection releases the lock too, but
+        only once the server has seen it close, which another process asking at once could miss)."""
+        held, self._held = self._held, False
         if self._connection is not None:
+            if held:
+                with contextlib.suppress(DBAPIError):
+                    self._connection.execute(text("SELECT pg_advisory_unlock(:key)"), {"key": self._key})
             with contextlib.suppress(DBAPIError):
                 self._connection.invalidate()  # closed for real: back in the pool it would keep holding the lock
                 self._connection.close()

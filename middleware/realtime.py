@@ -22,6 +22,7 @@ from typing import Any, Protocol
 from urllib.parse import urlsplit
 
 from flask import Flask, Response, current_app, request
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user
 from flask_sock import Sock
 from simple_websocket import ConnectionClosed
@@ -203,8 +204,9 @@ class Channels(Sock):
                 request.environ.pop("HTTP_SEC_WEBSOCKET_EXTENSIONS", None)
                 counted = int(current_user.get_id()) if current_user.is_authenticated else None
                 if counted is not None and not self.sockets.open(counted):
-                    raise ApiError(429, "too_many_sockets", f"You have {MAX_SOCKETS_PER_USER} connections open "
-                                                            "already; close some of your lab tabs.")
+                    raise ApiError(429, "too_many_sockets", gettext("You have %(count)s connections open already; "
+                                                                    "close some of your lab tabs.",
+                                                                    count=MAX_SOCKETS_PER_USER))
                 served: concurrent.futures.Future[None] | None = None
                 try:
                     raw = accept_websocket(request.environ)
@@ -305,7 +307,8 @@ class Channels(Sock):
         wait_s = self.floods.wait_s(rule.rule, int(current_user.get_id()))
         if wait_s > 0:
             raise ApiError(429, "too_many_messages",
-                           f"This channel was closed for too many messages; try again in {math.ceil(wait_s)} s.")
+                           gettext("This channel was closed for too many messages; try again in %(seconds)s s.",
+                                   seconds=math.ceil(wait_s)))
 
 
 ChannelDeclarations = Callable[[Channels], None]
@@ -327,7 +330,7 @@ def init_app(app: Flask, channels: Iterable[ChannelDeclarations],
     @app.before_request
     def _websocket_only() -> None:
         if request.path.startswith("/ws/") and request.headers.get("Upgrade", "").lower() != "websocket":
-            raise ApiError(400, "websocket_required", "This address takes WebSocket connections only.")
+            raise ApiError(400, "websocket_required", gettext("This address takes WebSocket connections only."))
         sock.refuse_while_cooling_down()
 
     return sock
@@ -399,12 +402,12 @@ def open_channel(ws: WebSocket) -> bool:
     """The checks every channel makes first (logged in, same origin); False once the socket is refused.
     `Channels.route` makes them before any handler runs."""
     if not current_user.is_authenticated:
-        refuse(ws, CLOSE_NOT_LOGGED_IN, "not_logged_in", "Your session has ended. Log in again.")
+        refuse(ws, CLOSE_NOT_LOGGED_IN, "not_logged_in", gettext("Your session has ended. Log in again."))
         return False
     # A socket lives for hours: release the database connection the login check used.
     get_session().close()
     if not same_origin():
-        refuse(ws, CLOSE_FORBIDDEN, "forbidden_origin", "This page may not open this channel.")
+        refuse(ws, CLOSE_FORBIDDEN, "forbidden_origin", gettext("This page may not open this channel."))
         return False
     return True
 

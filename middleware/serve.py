@@ -34,9 +34,21 @@ def quiet_websocket_endings(wsgi_app: Any) -> Any:
         if "werkzeug.socket" in environ and environ.get(WEBSOCKET_ENDED):  # not a handshake refused over HTTP
             _linger_and_close(environ["werkzeug.socket"])
             raise ConnectionError("WebSocket finished")
-        return body
+        return _closed_at_the_end(body)
 
     return app
+
+
+def _closed_at_the_end(body: Any) -> Any:
+    """Yields body and closes it however its sending ends. Werkzeug's server closes the body only after draining
+    the request socket, and a browser that resets the connection mid-file (a page left while a module loads) makes
+    that draining raise first: the static file's handle was then left to the collector, a ResourceWarning."""
+    try:
+        yield from body
+    finally:
+        close = getattr(body, "close", None)
+        if close is not None:
+            close()
 
 
 def _linger_and_close(sock: socket.socket, linger_s: float = 1.0) -> None:

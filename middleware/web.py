@@ -6,6 +6,7 @@ from datetime import UTC, datetime
 from typing import Any
 
 from flask import request
+from flask_babel import gettext  # type: ignore[import-untyped]
 
 from middleware.errors import ApiError
 
@@ -19,5 +20,5 @@ def json_body() -> dict[str, Any]:
     """The request's JSON object, or a 400."""
     data = request.get_json(silent=True)
     if not isinstance(data, dict):
-        raise ApiError(400, "invalid_field", "Send a JSON object.", "body")
+        raise ApiError(400, "invalid_field", gettext("Send a JSON object."), "body")
     return data

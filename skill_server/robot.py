@@ -9,11 +9,11 @@ event (and calls `wake_streams()`), when the world stops, or when what they foll
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, replace
 from typing import TypeVar
 
-from skill_server.errors import NoMap, NoTrack, NotRestartable, UnknownGoal, WorldStopped
+from skill_server.errors import NoMap, NoTrack, NotRestartable, RobotError, UnknownGoal, WorldStopped
 from skill_server.goals import Goal, GoalEvent, GoalFeedback, GoalSnapshot, GoalStatus
 from skill_server.plans.model import (
     DriveLine,
@@ -58,6 +58,7 @@ from skill_server.skills.teleperception import EvidenceState, PerceptionScan, Te
 # The value types adapters convert come from here too, so that they import nothing from sim/ or skills/.
 __all__ = [
     "DEFAULT_CAMERA_FPS", "MAX_CAMERA_FPS", "Activation", "BatterySpec", "BatteryState", "CameraFrame", "DriveAck",
+    "DriveOrder", "DriveOutcome",
     "FloorPatch", "GoalUpdate", "LaserSpec", "LocalizationEstimate", "MotionLimits", "NavigationPose", "NumberedEvent",
     "PanelSpec", "Pose2D", "PublishedGrid", "Robot", "RobotDescription", "RobotSnapshot", "SceneDescription",
     "SkillEntry", "TrackEvent", "TrackState",
@@ -82,6 +83,25 @@ class NumberedEvent:
 
 
 GoalUpdate = GoalSnapshot | NumberedEvent | GoalFeedback
+
+
+@dataclass(frozen=True)
+class DriveOrder:
+    """One drive command of a driver's stream, as it arrived (values checked by the drive gate)."""
+
+    token: str
+    sequence: int
+    linear_mps: object
+    angular_radps: object
+
+
+@dataclass(frozen=True)
+class DriveOutcome:
+    """What one command of a driver's stream came to: the ack, or the refusal a unary Drive would have raised."""
+
+    sequence: int
+    ack: DriveAck | None
+    refusal: RobotError | None
 
 
 
@@ -173,6 +193,20 @@ class Robot:
         if self.sequencer.motor_goal_running:  # a goal was activated while this command was on its way
             self.world.run_in_loop(self._take_wheels_back)
         return ack
+
+    def drive_each(self, orders: Iterable[DriveOrder]) -> Iterator[DriveOutcome]:
+        """One driver's commands, each applied as drive() applies it (the deadman alike) and answered in order as it
+        comes: a refused command is answered with its refusal and the driver's stream goes on; a stopped world ends
+        it (WorldStopped), since no later command could be taken either."""
+        for order in orders:
+            try:
+                ack = self.drive(order.token, order.sequence, order.linear_mps, order.angular_radps)
+            except WorldStopped:
+                raise
+            except RobotError as refused:
+                yield DriveOutcome(order.sequence, None, refused)
+            else:
+                yield DriveOutcome(order.sequence, ack, None)
 
     def limits(self) -> MotionLimits:
         """The velocity ceilings and the deadman timeout in force, with the ranges SetLimits accepts."""

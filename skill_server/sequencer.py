@@ -21,6 +21,7 @@ from skill_server.plans.executor import PlanObserver, PlanRunner
 from skill_server.plans.steps import DriveWatchdog, WatchdogChange
 from skill_server.plans.validation import CheckedPlan
 from skill_server.sim.drive_gate import BATTERY_EMPTY_MESSAGE
+from skill_server.sim.geometry import Pose2D
 from skill_server.sim.robot_model import RobotSpec
 from skill_server.sim.snapshots import RobotSnapshot
 from skill_server.skills.base import SensorLayout, SkillController, TickInput
@@ -30,8 +31,12 @@ from skill_server.skills.obstacles import ObstacleMap
 from skill_server.skills.perception import NavigationPose, Perception
 from skill_server.skills.pose_tracking import POSE_SOURCE, PoseTracker
 from skill_server.skills.registry import SkillRegistry
+from skill_server.skills.scan_matching import compose, relative
 
 PLAN_GOAL_PREFIX = "plan:"  # a plan's goal is named "plan:<name>"
+# A believed pose that moves this much more than odometry did in one tick has jumped: a localization found the
+# robot elsewhere (after a kidnapping), or a source that had lost track took over again.
+BELIEF_JUMP_M, BELIEF_JUMP_RAD = 0.3, math.radians(20.0)
 FEEDBACK_PERIOD_S = 0.1  # feedback reaches the goal records at 10 Hz of sim time; events go at once
 
 
@@ -79,6 +84,7 @@ class Sequencer:
         self._last_feedback_s: dict[str, float] = {}
         self._tracker: PoseTracker | None = None  # built at the first tick once the floor plan is known
         self._tracker_built = False
+        self._last_belief: tuple[Pose2D, Pose2D] | None = None  # the pose steered by and odometry, last tick
         self.plan_observer: PlanObserver | None = None  # told when each plan's skill line starts (benchmarks)
         self.drive_watchdog: DriveWatchdog | None = None  # what a plan's `set watchdog` sets (attach_sequencer)
         self.on_fault: Callable[[str, str], None] | None = None  # told of each goal aborted (the robot's health)
@@ -190,6 +196,7 @@ class Sequencer:
         for running in [*([self._motor] if self._motor else []), *self._perceptive.values()]:
             self._end(running, GoalStatus.ABORTED, "RESET", f"the world was {reason}", EventKind.FAILED)
         self.perception.obstacles = ObstacleMap()
+        self._last_belief = None
         if self._tracker is not None:
             self._tracker.restart()  # the robot was placed: its pose is known again
         self._last_laser = None
@@ -219,13 +226,21 @@ class Sequencer:
         # Pose estimators first, so the others (and the obstacle grid) use the pose they believe.
         tracker = self._pose_tracker()
         if tracker is not None:
-            tracker.update(tick)
+            tracker.update(tick, defer_search=self.perception.localizer is not None)
         perceptive = list(self._perceptive.values())
         for running in perceptive:
             if running[1].estimates_pose:
                 self._step(running, tick)
         tick = self._with_believed_pose(tick)
+        if tracker is not None and tick.pose_source == "localization" \
+                and tracker.believed_pose(tick.odometry.pose) is None:
+            tracker.adopt(tick.pose, tick.odometry.pose)  # lost, while the localization skill knows the place
         self.perception.navigation = NavigationPose(tick.pose, tick.pose_source)
+        if self._belief_jumped(tick):
+            # The obstacle grid's echoes were placed at the poses believed before the jump, wrong by the jump: after
+            # a kidnapping, the scans of the search drawn where odometry believed the robot was walled go_to_goal in
+            # (UNREACHABLE). They are dropped; the laser draws the grid again from the pose found.
+            self.perception.obstacles.forget()
         for running in perceptive:
             if not running[1].estimates_pose:
                 self._step(running, tick)
@@ -256,6 +271,15 @@ class Sequencer:
             except NoMap:
                 self._tracker = None  # a floor plan with nothing to see: odometry it is
         return self._tracker
+
+    def _belief_jumped(self, tick: TickInput) -> bool:
+        """Whether the pose the skills steer by moved BELIEF_JUMP further than odometry since the last tick."""
+        last, self._last_belief = self._last_belief, (tick.pose, tick.odometry.pose)
+        if last is None:
+            return False
+        expected = compose(last[0], relative(last[1], tick.odometry.pose))
+        turn = abs(math.remainder(tick.pose.theta_rad - expected.theta_rad, 2 * math.pi))
+        return tick.pose.distance_to(expected) > BELIEF_JUMP_M or turn > BELIEF_JUMP_RAD
 
     def _with_believed_pose(self, tick: TickInput) -> TickInput:
         """The best pose the robot has: the localization skill's (a person runs it), else the navigation stack's

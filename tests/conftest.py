@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import secrets
@@ -515,6 +516,46 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log):
     return LoadFileSharingMachineResources(config, log)
 
 
+# A test marked `alone` measures wall-clock bounds across processes ("another host takes the duty over within a
+# second", a restart's chat lines answered in time): with several suite processes it starts only once every other
+# process has ended its current test, and they start none until it ends, so its bounds are not the other tests' load.
+# flock(2) on one file per run, shared by every other test and held alone by a marked one, behind a turnstile that
+# the marked test holds while it waits (else the others' overlapping turns could hold the file shared forever).
+def _suite_lock_files() -> tuple[Path, Path] | None:
+    run = os.environ.get("PYTEST_XDIST_TESTRUNUID")
+    if run is None:
+        return None
+    base = Path(tempfile.gettempdir()) / f"telelab-suite-{run}"
+    return base.with_suffix(".turnstile"), base.with_suffix(".share")
+
+
+@contextmanager
+def share_of_the_machine(alone: bool) -> Iterator[None]:
+    """The machine shared with the suite's other processes' tests, or, alone, to this test by itself."""
+    files = _suite_lock_files()
+    if files is None:
+        yield
+        return
+    import fcntl
+
+    with files[0].open("a") as turnstile, files[1].open("a") as share:
+        fcntl.flock(turnstile, fcntl.LOCK_EX)
+        try:
+            fcntl.flock(share, fcntl.LOCK_EX if alone else fcntl.LOCK_SH)
+        finally:
+            fcntl.flock(turnstile, fcntl.LOCK_UN)
+        try:
+            yield
+        finally:
+            fcntl.flock(share, fcntl.LOCK_UN)
+
+
+@pytest.fixture(autouse=True)
+def _share_of_the_machine(request: pytest.FixtureRequest) -> Iterator[None]:
+    with share_of_the_machine(alone=request.node.get_closest_marker("alone") is not None):
+        yield
+
+
 # Figures a test wants read at the end of `make test` (record_property("summary", line)), from any xdist worker.
 _summaries: list[str] = []
 
@@ -531,6 +572,11 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo):
 def pytest_runtest_logreport(report: pytest.TestReport) -> None:
     if report.when == "call":
         _summaries.extend(str(value) for name, value in report.user_properties if name == "summary")
+    timeline = os.environ.get("TELELAB_TEST_TIMELINE")
+    if timeline and hasattr(report, "node"):  # the controller, hearing a suite process's report: where time goes
+        with open(timeline, "a", encoding="utf-8") as out:
+            out.write(json.dumps({"process": report.node.gateway.id, "test": report.nodeid, "when": report.when,
+                                  "outcome": report.outcome, "start": report.start, "stop": report.stop}) + "\n")
 
 
 def pytest_terminal_summary(terminalreporter) -> None:

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import ast
+import pickle
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -11,10 +14,24 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 
 
+def parse(source: str, filename: str = "<unknown>") -> ast.Module:
+    """ast.parse, once more in a fresh interpreter when CPython 3.11's AST constructor reports a recursion depth
+    mismatch: a process of the suite that drove Chromium through Playwright's greenlets can trip it (python/cpython
+    gh-106905), which says nothing about the source read."""
+    try:
+        return ast.parse(source, filename)
+    except SystemError:
+        parsed = subprocess.run(
+            [sys.executable, "-c", "import ast, pickle, sys; "
+             "sys.stdout.buffer.write(pickle.dumps(ast.parse(sys.stdin.read(), sys.argv[1])))", filename],
+            input=source.encode(), capture_output=True, check=True)
+        return pickle.loads(parsed.stdout)
+
+
 def imports_in(path: Path) -> set[str]:
     """The absolute imports of a source file, anywhere in it."""
     names: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+    for node in ast.walk(parse(path.read_text(), str(path))):
         if isinstance(node, ast.Import):
             names.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
@@ -77,7 +94,7 @@ def import_graph(packages: tuple[str, ...] = PRODUCT_PACKAGES) -> dict[str, set[
             continue
         package = module if path.name == "__init__.py" else module.rpartition(".")[0]
         targets: list[str] = []
-        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        for node in ast.walk(parse(path.read_text(), str(path))):
             if isinstance(node, ast.Import):
                 targets += [alias.name for alias in node.names]
             elif isinstance(node, ast.ImportFrom):
@@ -201,7 +218,7 @@ FUNCTION_LEVEL_IMPORTS_ALLOW_LIST = {
 
 def function_level_imports(source: str) -> list[int]:
     """Lines of the imports made inside a function of source."""
-    return sorted({node.lineno for function in ast.walk(ast.parse(source))
+    return sorted({node.lineno for function in ast.walk(parse(source))
                    if isinstance(function, ast.FunctionDef | ast.AsyncFunctionDef)
                    for node in ast.walk(function) if isinstance(node, ast.Import | ast.ImportFrom)})
 
@@ -224,7 +241,7 @@ def robot_command_calls(source: str) -> list[str]:
     whose text mentions it (or one that is itself a call's result) is a link; the command path's own
     Commander.drive(...) on a "robot" is not."""
     calls = []
-    for node in ast.walk(ast.parse(source)):
+    for node in ast.walk(parse(source)):
         if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
                 and node.func.attr in ROBOT_COMMAND_METHODS):
             receiver = node.func.value
@@ -254,7 +271,7 @@ def test_services_never_read_the_request() -> None:
                      or p.name in {"lessons.py", "tours.py", "cues.py", "command_form.py", "practice_robots.py"}]
     offenders = {}
     for path in service_files:
-        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        for node in ast.walk(parse(path.read_text(), str(path))):
             if isinstance(node, ast.ImportFrom) and node.module:
                 names = {(node.module, alias.name) for alias in node.names} & REQUEST_STATE
                 if names:
@@ -286,7 +303,7 @@ def test_the_servicer_reaches_the_robot_core_only_through_the_facade() -> None:
     reached = sorted(
         f"{path.relative_to(ROOT)}:{node.lineno} .{node.attr}"
         for path in (ROOT / "skill_server" / "service").rglob("*.py")
-        for node in ast.walk(ast.parse(path.read_text(), str(path)))
+        for node in ast.walk(parse(path.read_text(), str(path)))
         if isinstance(node, ast.Attribute) and node.attr in internals
     )
     assert not reached, f"the servicer calls the Robot facade, never the world or sequencer behind it: {reached}"
@@ -309,7 +326,7 @@ ROBOT_ERROR_REWORDING_ALLOW_LIST = {
 
 def declares_views(source: str) -> bool:
     """Whether source makes a Blueprint or declares a WebSocket channel (sock.route(...)), whatever its name."""
-    for node in ast.walk(ast.parse(source)):
+    for node in ast.walk(parse(source)):
         if isinstance(node, ast.Call):
             called = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", "")
             if called == "Blueprint" or (called == "route" and ast.unparse(node.func) == "sock.route"):
@@ -333,7 +350,7 @@ def robot_error_translations(source: str) -> list[int]:
     """Lines of every `except` that catches a robot error (CommandRefused, RobotUnavailable) only to raise
     another error in its place: those are Refused already, and the one handler renders them."""
     lines = []
-    for node in ast.walk(ast.parse(source)):
+    for node in ast.walk(parse(source)):
         if not isinstance(node, ast.ExceptHandler) or node.type is None:
             continue
         caught = {n.id if isinstance(n, ast.Name) else n.attr for n in ast.walk(node.type)
@@ -371,7 +388,7 @@ def transaction_calls(source: str) -> list[tuple[str, str, int]]:
                 calls.append((function, child.func.attr, child.lineno))
             visit(child, name)
 
-    visit(ast.parse(source), "<module>")
+    visit(parse(source), "<module>")
     return calls
 
 
@@ -414,7 +431,7 @@ def coded_exception_classes() -> list[str]:
     found = []
     for path in (ROOT / "middleware").rglob("*.py"):
         module = ".".join(path.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__")
-        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        for node in ast.walk(parse(path.read_text(), str(path))):
             if not isinstance(node, ast.ClassDef):
                 continue
             targets = [t for n in ast.walk(node) if isinstance(n, ast.Assign | ast.AnnAssign)
@@ -515,7 +532,7 @@ def own_unit_calls_in_views(source: str) -> list[int]:
     def from_manager(node: ast.AST) -> bool:
         return isinstance(node, ast.Call) and getattr(node.func, "id", "") == "practice_manager"
 
-    for function in ast.walk(ast.parse(source)):
+    for function in ast.walk(parse(source)):
         if not isinstance(function, ast.FunctionDef | ast.AsyncFunctionDef):
             continue
         nodes = list(body_nodes(function))

@@ -21,10 +21,11 @@ def dry_run(*arguments: str) -> str:
     return result.stdout
 
 
-def test_make_bench_installs_three_js_and_chromium_for_the_browser_benchmarks() -> None:
+def test_make_bench_installs_three_js_chromium_and_nginx_for_the_browser_and_proxy_benchmarks() -> None:
     commands = dry_run("bench")
     assert "npm ci" in commands, commands
     assert "apt-get install -y -qq chromium" in commands, commands
+    assert "apt-get install -y -qq nginx" in commands, commands  # sticky and class_day run behind Debian's nginx
     assert commands.rstrip().endswith("telelab bench"), commands
 
 

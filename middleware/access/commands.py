@@ -30,8 +30,11 @@ from dataclasses import field as dataclass_field
 from typing import Any, Protocol, TypeVar
 
 from flask import Flask, current_app
+from flask_babel import gettext  # type: ignore[import-untyped]
 
 from middleware.errors import ApiError, Refused
+from middleware.i18n import N_
+from middleware.robots.drive_stream import DriveStream
 from middleware.robots.link import DriveResult, RobotLink
 from middleware.robots.refusals import NOT_CONTROLLER_MESSAGE, STALE_TOKEN_CODES, CommandRefused, RobotUnavailable
 from middleware.robots.registry import PersonalRobot, RobotRegistry
@@ -45,8 +48,8 @@ MAX_DRIVE_HOLD_S = 10.0  # direct_control's own limit; a longer hold is renewed 
 MIN_DRIVE_HOLD_S = 0.1
 
 
-NOBODY_IN_CONTROL_MESSAGE = ("Nobody has control of this robot now: take a turn first (the Turn panel, on the "
-                             "console or on this page, gives you one).")
+NOBODY_IN_CONTROL_MESSAGE = N_("Nobody has control of this robot now: take a turn first (the Turn panel, on the "
+                                "console or on this page, gives you one).")
 
 
 class NotController(CommandRefused):
@@ -57,7 +60,7 @@ class NotController(CommandRefused):
         super().__init__("not_controller", NOT_CONTROLLER_MESSAGE, field)
         self.field = field
         if nobody_controls:
-            self.message = NOBODY_IN_CONTROL_MESSAGE
+            self.message = gettext(NOBODY_IN_CONTROL_MESSAGE)
             self.args = (self.message,)
 
 
@@ -267,6 +270,8 @@ class Commander:
         self._user_id, self._observers = user_id, observers
         # The paper's second leg: how long this commander's last command spent in its calls to the robot [ms].
         self.robot_round_trip_ms: float | None = None
+        # The driver's commands from the drive channel, on one call to the robot, opened at the first (drive_async).
+        self.drive_stream: DriveStream | None = None
 
     @property
     def robot_name(self) -> str:
@@ -286,8 +291,10 @@ class Commander:
     async def drive_async(self, sequence: int, linear_mps: float, angular_radps: float,
                           blocking: Callable[..., Awaitable[Any]]) -> DriveResult:
         """drive() for a caller on the channel loop (the drive channel): the command reaches the robot over grpc.aio on
-        the loop, so no thread waits for the robot; the token's lookups, which may read the database, go through
-        blocking (`await blocking(fn, *args)`: the loop's pool). The same stale-token rule and notes as drive()."""
+        the loop, so no thread waits for the robot, on this driver's one drive stream (opened at the first command,
+        ended by end_driving; a unary Drive whenever the stream cannot carry it); the token's lookups, which may read
+        the database, go through blocking (`await blocking(fn, *args)`: the loop's pool). The same stale-token rule
+        and notes as drive()."""
         detail: dict[str, object] = {"sequence": sequence, "linear_mps": linear_mps, "angular_radps": angular_radps}
         sent_unix_s = time.time()
         try:
@@ -307,10 +314,14 @@ class Commander:
         """_as_controller_unobserved's rule for a drive, awaited."""
         self.robot_round_trip_ms = None
 
+        if self.drive_stream is None:
+            self.drive_stream = DriveStream(self.link)
+        stream = self.drive_stream
+
         async def attempt(token: str) -> DriveResult:
             started = time.perf_counter()
             try:
-                return await self.link.drive_async(token, sequence, linear_mps, angular_radps)
+                return await stream.drive(token, sequence, linear_mps, angular_radps)
             finally:
                 self.robot_round_trip_ms = (self.robot_round_trip_ms or 0.0) + (time.perf_counter() - started) * 1000
 
@@ -330,6 +341,11 @@ class Commander:
             if fresh == token and not await blocking(self._tokens.resend, fresh):
                 raise
         return await attempt(fresh)
+
+    async def end_driving(self) -> None:
+        """Ends the driver's drive stream (their drive channel closed); the robot's deadman covers what follows."""
+        if self.drive_stream is not None:
+            await self.drive_stream.close()
 
     def stop(self) -> DriveResult:
         """A zero drive, which preempts any motor goal at once; numbered again above the robot's when another
@@ -513,7 +529,8 @@ class RobotCommands:
         """reachable(), or a 404 naming field (a robot of someone else's is answered like a missing one)."""
         link = self.reachable(robot_name, user_id)
         if link is None:
-            raise ApiError(404, "unknown_robot", f"There is no robot named {robot_name[:64]!r}.", field)
+            raise ApiError(404, "unknown_robot", gettext("There is no robot named %(value)s.",
+                                                         value=repr(robot_name[:64])), field)
         return link
 
     def for_user(self, robot_name: str, user_id: int, field: str = "robot_name") -> Commander:
@@ -553,7 +570,8 @@ class RobotCommands:
         under its owner's token for a personal robot, else under the current controller's, whoever holds it."""
         link = self._registry.get(robot_name)
         if link is None:
-            raise ApiError(404, "unknown_robot", f"There is no robot named {robot_name[:64]!r}.", field)
+            raise ApiError(404, "unknown_robot", gettext("There is no robot named %(value)s.",
+                                                         value=repr(robot_name[:64])), field)
         personal = self._registry.personal(robot_name)
         if personal is not None:
             return Commander(link, OwnerToken(link, lambda: personal.token), field)
@@ -572,7 +590,7 @@ def _as_tutor(observer: CommandObserver) -> CommandObserver:
 def owned_robot(link: RobotLink, token: str) -> Commander:
     """Commands to a robot this process owns outright (the demo recorder's), after handing it token."""
     if not hand_over(link, token):
-        raise RobotUnavailable(f"{link.name} did not take its controller token.")
+        raise RobotUnavailable(gettext("%(robot)s did not take its controller token.", robot=link.name))
     return Commander(link, OwnerToken(link, lambda: token))
 
 

@@ -35,6 +35,7 @@ def _utc_now() -> datetime:
 
 PriorityHook = Callable[[Session, str, datetime], int | None]
 CheckInHook = Callable[[Session, str, int, datetime], object]
+PriorityRobotsHook = Callable[[Session, datetime], "set[str] | None"]
 
 
 @dataclass(frozen=True)
@@ -42,11 +43,14 @@ class AccessHooks:
     """What other areas add to the rule, handed in by create_app (access/ imports none of them).
 
     priority_user_id(session, robot, now): a user who goes first now (a booked slot, a live class);
-    check_in(session, robot, user_id, now): called when a user joins a robot's queue (a booking's check-in).
+    check_in(session, robot, user_id, now): called when a user joins a robot's queue (a booking's check-in);
+    priority_robots(session, now): every robot priority_user_id may say something of (or keep its bookkeeping on)
+    now, read for all robots at once; None: any robot may (the ticker then ticks every robot in turn).
     """
 
     priority_user_id: PriorityHook = lambda _session, _robot, _now: None
     check_in: CheckInHook = lambda _session, _robot, _user_id, _now: None
+    priority_robots: PriorityRobotsHook = lambda _session, _now: None
 
 
 def policy_for(app: Flask, hooks: AccessHooks) -> AccessPolicy:
@@ -253,14 +257,35 @@ class AccessCoordinator:
                 continue
             names = robot_registry(self.app).names()
             liveness.probe(names)
-            for robot_name in names:
-                online = liveness.last(robot_name)
-                if online is None:
-                    continue  # ticked once its first probe answers (within one call deadline)
-                try:
-                    self.apply(round_robin.tick, robot_name, online=online)
-                except Exception:  # noqa: BLE001 - one bad tick must not stop the ticker
-                    log.exception("access tick of %s failed", robot_name)
+            answers = {name: online for name in names if (online := liveness.last(name)) is not None}
+            try:
+                self.tick_all(answers)  # a robot is ticked once its first probe answers (within a call deadline)
+            except Exception:  # noqa: BLE001 - one bad pass must not stop the ticker
+                log.exception("an access tick failed")
+
+    def tick_all(self, online: dict[str, bool]) -> list[str]:
+        """One pass of the ticker over the robots of online (each with whether it answered its last probe): one
+        read of every robot's queue at once (round_robin.robots_due), then the locked rule in a transaction of its
+        own for each robot with something due. A transaction per robot every tick was a fifth of a worker's time in
+        a class of 50 (each with its priority reads: bookings, live classes, graded runs). The robots ticked."""
+        for robot_name, answers in online.items():
+            if not answers:
+                self._robot_online(robot_name, False)  # a robot that stopped answering forgets its token
+        registry = robot_registry(self.app)
+
+        def handed(robot_name: str, token: str | None) -> bool:  # as sync_token would find it
+            return registry.owner_of(robot_name) is not None or self._pushed_tokens.get(robot_name, "unset") == token
+
+        with self._sessions() as session:
+            now = self.clock()
+            due = round_robin.robots_due(session, online, now, self.policy.grace_s, online,
+                                         self.hooks.priority_robots(session, now), handed)
+        for robot_name in due:
+            try:
+                self.apply(round_robin.tick, robot_name, online=online[robot_name])
+            except Exception:  # noqa: BLE001 - one bad tick must not stop the others
+                log.exception("access tick of %s failed", robot_name)
+        return due
 
     def _answers_now(self, robot_name: str) -> bool:
         link = robot_registry(self.app).get(robot_name)

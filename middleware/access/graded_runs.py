@@ -55,6 +55,11 @@ def open_graded_runs(session: Session, now: datetime) -> set[tuple[str, int]]:
     return {(robot, user_id) for robot, user_id in [*attempts, *trials, *submissions] if robot}
 
 
+def robots_in_graded_runs(session: Session, now: datetime) -> set[str]:
+    """Every robot with a graded run open now (graded_run_holder may name a holder of these only)."""
+    return {robot_name for robot_name, _user_id in open_graded_runs(session, now)}
+
+
 def graded_run_hold_s(session: Session, user_id: int) -> float:
     """The longest a graded run of user_id keeps a shared robot: the longest of their courses' settings."""
     longest = session.scalar(select(func.max(Course.graded_run_hold_min))

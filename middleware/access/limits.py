@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -39,23 +40,26 @@ def changeable_fields(session: Session, user: User) -> tuple[str, ...]:
 def parse_limits_request(body: object) -> dict[str, float]:
     """The settings asked for ({field: value}, 0 keeps a value): numbers, finite, not negative, known fields."""
     if not isinstance(body, dict):
-        raise ApiError(400, "invalid_field", "Send a JSON object such as {\"max_linear_mps\": 0.3}.", "body")
+        raise ApiError(400, "invalid_field", gettext("Send a JSON object such as {\"max_linear_mps\": 0.3}."), "body")
     for name in body:
         if name not in LIMIT_FIELDS:
-            raise ApiError(400, "invalid_field", f"{str(name)[:64]!r} is not a setting; the settings are "
-                           f"{', '.join(LIMIT_FIELDS)}.", str(name)[:64])
+            raise ApiError(400, "invalid_field", gettext("%(name)s is not a setting; the settings are %(settings)s.",
+                                                         name=repr(str(name)[:64]),
+                                                         settings=", ".join(LIMIT_FIELDS)), str(name)[:64])
     values: dict[str, float] = {}
     for name in LIMIT_FIELDS:
         value = body.get(name)
         if value is None:
             continue
         if isinstance(value, bool) or not isinstance(value, int | float) or not _finite(value) or value < 0:
-            raise ApiError(400, "invalid_field", f"{name} must be a finite number of {UNITS[name]}, 0 or more "
-                           "(0 keeps the current value).", name)
+            raise ApiError(400, "invalid_field", gettext("%(name)s must be a finite number of %(unit)s, 0 or more (0 "
+                                                         "keeps the current value).", name=name, unit=UNITS[name]),
+                           name)
         if value:
             values[name] = float(value)
     if not values:
-        raise ApiError(400, "invalid_field", f"Send at least one of {', '.join(LIMIT_FIELDS)} above 0.", "body")
+        raise ApiError(400, "invalid_field", gettext("Send at least one of %(settings)s above 0.",
+                                                     settings=", ".join(LIMIT_FIELDS)), "body")
     return values
 
 
@@ -70,5 +74,5 @@ def check_permitted(values: dict[str, float], permitted: tuple[str, ...]) -> Non
     """A 403 naming the first setting asked for that the user may not change."""
     for name in values:
         if name not in permitted:
-            raise ApiError(403, "not_permitted", f"Your course does not let students change {name}; ask your tutor "
-                           "to allow it on the course's page.", name)
+            raise ApiError(403, "not_permitted", gettext("Your course does not let students change %(name)s; ask your "
+                                                         "tutor to allow it on the course's page.", name=name), name)

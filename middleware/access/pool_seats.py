@@ -11,6 +11,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy.orm import Session
 
 from middleware.access import pools, round_robin
@@ -77,7 +78,8 @@ class PoolSeats:
         """The kind's enabled robots; a 404 naming the field when the kind has none (an unknown pool)."""
         names = pools.robots_of_kind(self._session, kind)
         if not names:
-            raise Refused(404, "unknown_pool", f"There is no pool of robots of kind {kind[:32]!r}.", "kind")
+            raise Refused(404, "unknown_pool", gettext("There is no pool of robots of kind %(kind)s.",
+                                                       kind=repr(kind[:32])), "kind")
         return names
 
     def join(self, kind: str, user_id: int) -> PoolSeat:

@@ -88,6 +88,12 @@ def _servable(session: Session, robot_name: str, now: datetime, grace_s: float):
             & PoolQueueEntry.user_id.not_in(_seated_in_kind(kind)))
 
 
+def robots_with_pool_waiters(session: Session, robot_names: list[str]) -> set[str]:
+    """The robots among robot_names whose kind's pool queue holds anyone (live or not), in one query."""
+    return set(session.scalars(select(Robot.name).where(Robot.name.in_(robot_names),
+                                                        Robot.kind.in_(select(PoolQueueEntry.kind)))))
+
+
 def next_waiter(session: Session, robot_name: str, now: datetime, grace_s: float,
                 only_user: int | None = None) -> int | None:
     """The first live pool waiter robot_name could serve (one of its kind's queue, not seated on a robot of the

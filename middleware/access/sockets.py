@@ -7,6 +7,7 @@ import asyncio
 import time
 import weakref
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user
 from sqlalchemy import select
 
@@ -35,7 +36,8 @@ def open_robot_channel(ws: WebSocket, robot_name: str) -> RobotLink | None:
     the login and Origin checks), or None once the socket is refused."""
     link = robot_commands().reachable(robot_name, int(current_user.get_id()))
     if link is None:
-        refuse(ws, CLOSE_NOT_FOUND, "unknown_robot", f"There is no robot named {robot_name[:64]!r}.", "robot_name")
+        refuse(ws, CLOSE_NOT_FOUND, "unknown_robot", gettext("There is no robot named %(value)s.",
+                                                              value=repr(robot_name[:64])), "robot_name")
     return link
 
 

@@ -15,7 +15,19 @@ from flask_login import current_user, login_required
 
 from middleware.analytics import analytics_of, figures, outbox, schemas, scope
 from middleware.analytics.statements import StatementBuilder
-from middleware.api.contract import OBJECT, about, array, described, file_answer, nullable, obj, whole
+from middleware.api.contract import (
+    OBJECT,
+    STRING,
+    about,
+    array,
+    described,
+    file_answer,
+    nullable,
+    obj,
+    obj_of,
+    one_of,
+    whole,
+)
 from middleware.db import get_session
 from middleware.models import Role, User
 
@@ -145,7 +157,11 @@ def _ascii(name: str) -> str:
 @blueprint.get("/api/analytics/courses/<int:course_id>/xapi")
 @login_required
 @described(query={k: v for k, v in QUERY.items() if k != "course_id"},
-           answers={200: file_answer("application/json", "the course's xAPI 1.0.3 statements")})
+           answers={200: file_answer("application/json", "the course's xAPI 1.0.3 statements", schema=obj(
+               ("version", "course_id", "window", "statements"), version=one_of("1.0.3"), course_id=whole(0),
+               window=obj_of(("from", "to", "utc_offset_min", "start", "end"),
+                             {"utc_offset_min": whole(), "from": STRING, "to": STRING, "start": STRING, "end": STRING}),
+               statements=array(OBJECT)))})
 def course_statements(course_id: int) -> ResponseReturnValue:
     """The course's xAPI 1.0.3 statements for the window (lessons watched, tours followed, tests and exercises
     submitted, robot sessions held by its students), as a JSON document {"version", "statements"}."""

@@ -110,6 +110,12 @@ def obj(required: tuple[str, ...] | list[str] = (), *, description: str | None =
     return schema
 
 
+def obj_of(required: tuple[str, ...] | list[str], properties: dict[str, Schema],
+           description: str | None = None) -> Schema:
+    """obj() for properties named as Python's keywords ("from"), which cannot be passed by name."""
+    return obj(required, description=description) | {"properties": properties}
+
+
 def about(description: str) -> Schema:
     """A field the view reads and checks itself (several forms accepted): documented, its shape not fixed here."""
     return {"description": description}
@@ -152,12 +158,14 @@ class Operation:
     tags: tuple[str, ...] = ()
 
 
-def file_answer(media_type: str, description: str = "", alternatives: Mapping[str, Schema] | None = None) -> Answer:
+def file_answer(media_type: str, description: str = "", alternatives: Mapping[str, Schema] | None = None,
+                schema: Schema | None = None) -> Answer:
     """An answer that is a file (CSV, MCAP, a JSON document to download); alternatives: other media types it may
-    come as (?format=txt)."""
+    come as (?format=txt); schema: a JSON file's shape (its properties, as any JSON answer says them)."""
     textual = media_type in ("text/csv", "text/plain", "text/calendar", "application/x-ndjson")
-    schema: Schema = OBJECT if media_type == MEDIA_JSON else (
-        {"type": "string"} if textual else {"type": "string", "format": "binary"})
+    if schema is None:
+        schema = OBJECT if media_type == MEDIA_JSON else (
+            {"type": "string"} if textual else {"type": "string", "format": "binary"})
     return Answer(schema, media_type, description, dict(alternatives or {}))
 
 

@@ -13,14 +13,16 @@ from flask import Blueprint, current_app, jsonify, render_template
 from flask.typing import ResponseReturnValue
 
 from middleware.api import document
-from middleware.api.contract import OBJECT, Answer, described
+from middleware.api.contract import OBJECT, STRING, Answer, described, obj, one_of
 
 blueprint = Blueprint("api", __name__)
 
 
 @blueprint.get("/api/openapi.json")
-@described("The OpenAPI 3.1 document of every JSON route and WebSocket channel", answers={200: OBJECT},
-           login=False)
+@described("The OpenAPI 3.1 document of every JSON route and WebSocket channel", answers={200: obj(
+    ("openapi", "info", "paths", "components", "x-websocket"), description="OpenAPI 3.1 (its own schema says the rest)",
+    openapi=one_of("3.1.0"), info=obj(("title", "version"), title=STRING, version=STRING), paths=OBJECT,
+    components=OBJECT, **{"x-websocket": obj(("channels",), channels=OBJECT)})}, login=False)
 def openapi() -> ResponseReturnValue:
     """The OpenAPI 3.1 document of every JSON route and WebSocket channel."""
     return jsonify(document.build(current_app))

@@ -165,13 +165,13 @@ def override_mark(session: Session, actor: User, attempt_id: int, item: object, 
     result = next((r for r in attempt.results or [] if r["item"] == str(item)), None)
     if result is None:
         raise Refused(400, "invalid_field", gettext("Choose an item of this attempt."), "item")
-    try:
-        value = float(points)  # type: ignore[arg-type]
+    try:  # typed on the page as the tutor's language writes it: 0.5, or 0,5 in Spanish
+        value = float(points.strip().replace(",", ".") if isinstance(points, str) else points)  # type: ignore[arg-type]
     except (TypeError, ValueError):
         value = float("nan")
     if not 0 <= value <= float(result["max_points"]):
         raise Refused(400, "invalid_field", gettext("points must be from 0 to %(max_points)s.",
-                                                    max_points=format(result['max_points'], 'g')), "points")
+                                                    max_points=written_number(result["max_points"], "g")), "points")
     if not isinstance(reason, str) or not reason.strip() or len(reason) > 2000:
         raise Refused(400, "invalid_field", gettext("Say why the mark changes (1 to 2000 characters)."), "reason")
     text = comment.strip() if isinstance(comment, str) else ""

@@ -13,10 +13,23 @@ from flask_login import current_user, login_required
 from sqlalchemy.orm import Session
 
 from middleware.access.coordinator import access_coordinator
-from middleware.api.contract import BOOLEAN, ID, OBJECT, STRING, about, array, described, file_answer, obj, whole
+from middleware.api.contract import (
+    BOOLEAN,
+    ID,
+    OBJECT,
+    STRING,
+    about,
+    array,
+    described,
+    file_answer,
+    number,
+    obj,
+    one_of,
+    whole,
+)
 from middleware.assessment import attempts, bank, recommendations, review, survey
 from middleware.assessment.recording import finish_recording, record_after_commit, robot_run
-from middleware.assessment.schemas import parse_exam, parse_question, parse_survey
+from middleware.assessment.schemas import BANK_FORMAT, parse_exam, parse_question, parse_survey
 from middleware.assessment.survey_statements import parse_statements, parse_title
 from middleware.db import get_session
 from middleware.errors import ApiError
@@ -131,7 +144,10 @@ def api_delete_question(question_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/courses/<int:course_id>/bank.json")
 @login_required
-@described(answers={200: file_answer("application/json", "the bank as a file")})
+@described(answers={200: file_answer("application/json", "the bank as a file", schema=obj(
+    ("format", "questions"), format=one_of(BANK_FORMAT),
+    questions=array(obj(("kind", "prompt", "topics", "points"), description="a question and its kind's fields",
+                        kind=STRING, prompt=STRING, topics=array(STRING), points=number()))))})
 def api_export_bank(course_id: int) -> ResponseReturnValue:
     """The bank as a file to download."""
     text = bank.export_bank(get_session(), current_user, course_id)
@@ -418,13 +434,19 @@ def api_survey_results(course_id: int) -> ResponseReturnValue:
     return run(action)
 
 
+# A course's survey (_survey_dict): its title, whether its tutor wrote it, and its statements.
+SURVEY = obj(("title", "written", "statements"), title=STRING, written=BOOLEAN,
+             statements=array(obj(("key", "text", "low_label", "high_label"), key=STRING, text=STRING,
+                                  low_label=STRING, high_label=STRING)))
+
+
 def _survey_dict(form: survey.CourseSurveyForm) -> dict[str, Any]:
     return {"title": form.title, "written": form.written, "statements": [s.to_dict() for s in form.statements]}
 
 
 @blueprint.get("/api/courses/<int:course_id>/survey/statements")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: SURVEY})
 def api_survey_statements(course_id: int) -> ResponseReturnValue:
     """The course's survey as its students rate it (students and tutors of the course, admins)."""
     def action(dbs: Session) -> dict[str, Any]:
@@ -443,7 +465,7 @@ def api_survey_statements(course_id: int) -> ResponseReturnValue:
         title=about("the survey's title (a default when none)"),
         statements=about("[{text, low_label, high_label}], or a line each: text | what 1 means | what 5 means"),
     ),
-    answers={200: OBJECT},
+    answers={200: SURVEY},
     refusals=(409,),
 )
 def api_write_survey(course_id: int) -> ResponseReturnValue:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import re
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.errors import Refused
 from middleware.models import Role
 
@@ -25,12 +27,12 @@ class InvalidField(Refused, ValueError):
 def clean_username(value: object) -> str:
     """A username: 2-64 lowercase letters, digits, '.', '_' or '-', starting with a letter or digit."""
     if not isinstance(value, str):
-        raise InvalidField("username", "username must be text.")
+        raise InvalidField("username", gettext("username must be text."))
     username = value.strip().lower()
     if not USERNAME_PATTERN.fullmatch(username):
         raise InvalidField(
             "username",
-            "username must be 2 to 64 characters: lowercase letters, digits, '.', '_' or '-'.",
+            gettext("username must be 2 to 64 characters: lowercase letters, digits, '.', '_' or '-'."),
         )
     return username
 
@@ -41,7 +43,7 @@ def clean_role(value: object) -> Role:
         return Role(str(value).strip().lower())
     except ValueError:
         allowed = ", ".join(r.value for r in Role)
-        raise InvalidField("role", f"role must be one of: {allowed}.") from None
+        raise InvalidField("role", gettext("role must be one of: %(allowed)s.", allowed=allowed)) from None
 
 
 def clean_new_password(value: object) -> str:
@@ -49,6 +51,7 @@ def clean_new_password(value: object) -> str:
     if not isinstance(value, str) or not (MIN_PASSWORD_LENGTH <= len(value) <= MAX_PASSWORD_LENGTH):
         raise InvalidField(
             "password",
-            f"password must be between {MIN_PASSWORD_LENGTH} and {MAX_PASSWORD_LENGTH} characters.",
+            gettext("password must be between %(low)s and %(high)s characters.", low=MIN_PASSWORD_LENGTH,
+                    high=MAX_PASSWORD_LENGTH),
         )
     return value

@@ -6,6 +6,7 @@ import secrets
 from dataclasses import dataclass
 from datetime import datetime
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 from werkzeug.security import check_password_hash, generate_password_hash
@@ -54,7 +55,7 @@ def set_password(session: Session, username: str, password: str) -> User:
     """Replaces an account's password; the caller commits."""
     user = find_user(session, username)
     if user is None:
-        raise InvalidField("username", f"There is no account named {username!r}.")
+        raise InvalidField("username", gettext("There is no account named %(username)s.", username=repr(username)))
     user.password_hash = generate_password_hash(clean_new_password(password), method=PASSWORD_METHOD)
     return user
 
@@ -114,8 +115,8 @@ def hash_password(password: str) -> str:
 def change_own_password(session: Session, user: User, current_password: str, new_password: str) -> None:
     """Replaces the user's password when current_password is right; the caller commits."""
     if not check_password_hash(user.password_hash, current_password or ""):
-        raise InvalidField("current_password", "Your current password is not right. Type it again.")
+        raise InvalidField("current_password", gettext("Your current password is not right. Type it again."))
     clean = clean_new_password(new_password)
     if clean == current_password:
-        raise InvalidField("new_password", "Choose a new password different from the current one.")
+        raise InvalidField("new_password", gettext("Choose a new password different from the current one."))
     user.password_hash = hash_password(clean)

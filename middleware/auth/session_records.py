@@ -2,9 +2,12 @@
 
 The cookie carries a random key; the `login_sessions` row, found by the key's SHA-256, says whether the
 login is still open. Every worker reads the same rows, so logout, a password change or reset and disabling
-an account end the login in every process. A process keeps each verdict at most RECHECK_S (so a request
-usually costs no read) and drops it at once when it ends a session itself, or when it hears that a login of
-the user ended in another process (forget_verdicts, on the ACCOUNTS_TOPIC announcement). No request state in here.
+an account end the login in every process. A process keeps each "open" verdict and drops it at once when it ends a
+session itself, or when it hears that a login of the user ended in another process (forget_verdicts, on the
+ACCOUNTS_TOPIC announcement). While it hears those (PostgreSQL's listener connected) it keeps a verdict
+HEARD_RECHECK_S, else RECHECK_S, and never past the login's lifetime or idle end as read: a console's request a
+second read the row every time with a verdict of RECHECK_S, two thirds of a request's cost in a class of 50.
+A listener that reconnects drops every verdict (what it missed meanwhile). No request state in here.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ import time
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
-from sqlalchemy import Connection, event, inspect, select, update
+from sqlalchemy import Connection, Engine, event, inspect, select, update
 from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, object_session
 
@@ -26,15 +29,16 @@ from middleware.models import LoginSession, User
 from middleware.models.accounts import as_utc
 
 log = logging.getLogger(__name__)
-RECHECK_S = 1.0
+RECHECK_S = 1.0  # a verdict's lifetime while this process may miss an ended login's announcement
+HEARD_RECHECK_S = 15.0  # while it hears them: the announcement drops the verdict at once (within milliseconds)
 # Announced (middleware/events.py) with the user's id when logins of the user end, so every worker's sockets of
 # that user check their login at once instead of on their next periodic check.
 ACCOUNTS_TOPIC = "accounts"
 # last_seen_at is written at most this often per session (a write per request would serialise SQLite).
 TOUCH_EVERY = timedelta(minutes=1)
 
-# key hash -> (user id, monotonic time of the check); only open sessions are kept.
-_verdicts: dict[str, tuple[int, float]] = {}
+# key hash -> (user id, monotonic time of the check, when the login ends unless used again); only open ones are kept.
+_verdicts: dict[str, tuple[int, float, datetime]] = {}
 _lock = threading.Lock()
 
 
@@ -64,19 +68,30 @@ def is_open(session: Session, key: str, user_id: int, limits: SessionLimits, now
     digest = _key_hash(key)
     with _lock:
         verdict = _verdicts.get(digest)
-    if verdict is not None and verdict[0] == user_id and time.monotonic() - verdict[1] <= RECHECK_S:
+    if (verdict is not None and verdict[0] == user_id and now < verdict[2]
+            and time.monotonic() - verdict[1] <= _verdict_lifetime_s(session)):
         return True
     row = session.scalar(select(LoginSession).where(LoginSession.key_hash == digest))
     if row is None or row.user_id != user_id or row.ended_at is not None:
         return _forget(digest)
     last_seen = as_utc(row.last_seen_at)
-    if now >= as_utc(row.created_at) + limits.lifetime or now >= last_seen + limits.idle:
+    ends_at = as_utc(row.created_at) + limits.lifetime
+    if now >= ends_at or now >= last_seen + limits.idle:
         return _forget(digest)
     if now - last_seen >= TOUCH_EVERY:
         _touch(session, digest, now)
+        last_seen = now
     with _lock:
-        _verdicts[digest] = (user_id, time.monotonic())
+        _verdicts[digest] = (user_id, time.monotonic(), min(ends_at, last_seen + limits.idle))
     return True
+
+
+def _verdict_lifetime_s(session: Session) -> float:
+    """How long a verdict holds: HEARD_RECHECK_S while this process hears ended logins announced, else RECHECK_S
+    (SQLite's bus reaches no other process; a PostgreSQL listener may be reconnecting)."""
+    bind = session.get_bind()
+    bus = events.bus_of(bind if isinstance(bind, Engine) else bind.engine)
+    return HEARD_RECHECK_S if bus.shared and bus.listening.is_set() else RECHECK_S
 
 
 def _touch(session: Session, digest: str, now: datetime) -> None:
@@ -117,7 +132,7 @@ def forget_verdicts(user_id: int | None) -> None:
     """Drops this process's verdicts on user_id's logins (None: everyone's), so their next check reads the rows:
     another process announced that a login of theirs ended."""
     with _lock:
-        for digest in [d for d, (owner, _) in _verdicts.items() if user_id is None or owner == user_id]:
+        for digest in [d for d, (owner, _, _) in _verdicts.items() if user_id is None or owner == user_id]:
             del _verdicts[digest]
 
 

@@ -22,7 +22,7 @@ from middleware.courses.services import is_course_tutor
 from middleware.errors import Refused, written_date, written_number
 from middleware.i18n import N_
 from middleware.locking import lock_robot_control, lock_user
-from middleware.models import Booking, Course, CourseMembership, User
+from middleware.models import Booking, Course, CourseMembership, Robot, User
 
 DEFAULT_GRACE_S = 600.0
 
@@ -80,6 +80,18 @@ def priority_user_id(session: Session, robot_name: str, now: datetime, *, grace_
     if booking is None or _release_if_no_show(booking, now, grace_period_s(grace_s)):
         return None
     return booking.user_id
+
+
+def robots_with_bookings_now(session: Session, now: datetime) -> set[str]:
+    """Every robot priority_user_id may say something of, or release or bind a booking on, now (the access ticker
+    leaves the others' queues alone): those with a booking under way, and the robots of a kind whose pool booking's
+    slot has started unbound."""
+    now = as_utc(now)
+    under_way = (Booking.cancelled_at.is_(None), Booking.released_at.is_(None), Booking.starts_at <= now,
+                 Booking.ends_at > now)
+    named = set(session.scalars(select(Booking.robot_name).where(Booking.robot_name.is_not(None), *under_way)))
+    unbound = select(Booking.pool_kind).where(Booking.robot_name.is_(None), *under_way)
+    return {name for name in named if name} | set(session.scalars(select(Robot.name).where(Robot.kind.in_(unbound))))
 
 
 def check_in(session: Session, robot_name: str, user_id: int, now: datetime, *, grace_s: float | None = None) -> None:

@@ -14,7 +14,7 @@ from sqlalchemy.orm import Session
 
 from middleware.accounts.invitations import list_invitations
 from middleware.accounts.services import forbidden
-from middleware.api.contract import ID, OBJECT, STRING, about, array, described, obj, one_of
+from middleware.api.contract import ID, OBJECT, STRING, Answer, about, array, described, obj, one_of, whole
 from middleware.auth.schemas import InvalidField
 from middleware.courses import services
 from middleware.courses.schemas import (
@@ -267,7 +267,13 @@ def api_unenrol(course_id: int, user_id: int) -> ResponseReturnValue:
 @described(
     form=obj(("file",), file={"type": "string", "format": "binary", "description": "a CSV of usernames"}),
     query={"format": one_of("json", "csv")},
-    answers={200: OBJECT},
+    answers={200: Answer(obj(("enrolled", "created", "refused"), description="services.EnrolmentReport",
+                             enrolled=array(STRING),
+                             created=array(obj(("username", "password"), username=STRING, password=STRING)),
+                             refused=array(obj(("line", "value", "reason"), line=whole(), value=STRING,
+                                               reason=STRING))),
+                         description="the enrolment report (as CSV with ?format=csv)",
+                         alternatives={"text/csv": STRING})},
     refusals=(413,),
 )
 def api_enrol_csv(course_id: int) -> ResponseReturnValue:

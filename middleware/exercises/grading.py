@@ -23,12 +23,22 @@ named measurements and each measurement into a fraction (1 when it meets its bar
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
+
+from flask_babel import force_locale, gettext  # type: ignore[import-untyped]
+
+from middleware.errors import written_number
+from middleware.i18n import N_
 
 RUBRIC_KINDS = ("bump_and_go", "wall_following", "reach_goal", "cover_room", "report_pose", "follow_line", "kidnapped")
 LINE_STEP_M = 0.05  # the line is measured at points this far apart
 BODY_RADIUS_M = 0.2  # the robot's footprint for the area swept
+# Words stored with a result in English and said in the reader's language (feedback_sentence, exercises/services.py).
+NO_RUN = N_("The robot recorded no run: nothing to grade.")
+REPORTED_POSE_ERROR = N_("reported pose error")
+CELLS = N_("cells")  # the one unit that is a word
 
 
 @dataclass(frozen=True)
@@ -159,8 +169,8 @@ def _follow_line(trace: list[list[float]], p: dict[str, Any]) -> list[Measuremen
                   if any(_segment_distance(x, y, a, b) <= tolerance for a, b in legs
                          if abs(a[1] - x) <= 1.0 and abs(a[2] - y) <= 1.0))
     share, bar_share, bar_off = covered / len(points), float(p["min_covered"]), float(p["max_off_s"])
-    return [Measurement("share of the line followed", share, bar_share, "", at_least(share, bar_share)),
-            Measurement("time off the line", off_s, bar_off, "s", at_most(off_s, bar_off), True)]
+    return [Measurement(N_("share of the line followed"), share, bar_share, "", at_least(share, bar_share)),
+            Measurement(N_("time off the line"), off_s, bar_off, "s", at_most(off_s, bar_off), True)]
 
 
 def _kidnapped(trace: list[list[float]], p: dict[str, Any], report: dict[str, Any] | None) -> list[Measurement]:
@@ -173,9 +183,9 @@ def _bump_and_go(trace: list[list[float]], p: dict[str, Any]) -> list[Measuremen
     travel, cells = travel_m(trace), cells_visited(trace, float(p.get("cell_m", 0.5)))
     stuck = longest_stuck_s(trace, float(p.get("stuck_move_m", 0.1)))
     bar_travel, bar_cells, bar_stuck = float(p["min_travel_m"]), float(p["min_cells"]), float(p["stuck_s"])
-    return [Measurement("distance driven", travel, bar_travel, "m", at_least(travel, bar_travel)),
-            Measurement("floor cells visited", cells, bar_cells, "cells", at_least(cells, bar_cells)),
-            Measurement("longest time stuck", stuck, bar_stuck, "s", at_most(stuck, bar_stuck), True)]
+    return [Measurement(N_("distance driven"), travel, bar_travel, "m", at_least(travel, bar_travel)),
+            Measurement(N_("floor cells visited"), cells, bar_cells, CELLS, at_least(cells, bar_cells)),
+            Measurement(N_("longest time stuck"), stuck, bar_stuck, "s", at_most(stuck, bar_stuck), True)]
 
 
 def _wall_following(trace: list[list[float]], p: dict[str, Any]) -> list[Measurement]:
@@ -189,36 +199,37 @@ def _wall_following(trace: list[list[float]], p: dict[str, Any]) -> list[Measure
     along = [((s[1] - line[0]) * ux + (s[2] - line[1]) * uy) / norm for s in settled]
     span = max(along) - min(along)
     tolerance, bar_travel = float(p["tolerance_m"]), float(p["min_travel_m"])
-    return [Measurement("RMS error of the distance to the wall", rms, tolerance, "m", at_most(rms, tolerance), True),
-            Measurement("distance covered along the wall", span, bar_travel, "m", at_least(span, bar_travel))]
+    return [Measurement(N_("RMS error of the distance to the wall"), rms, tolerance, "m", at_most(rms, tolerance),
+                        True),
+            Measurement(N_("distance covered along the wall"), span, bar_travel, "m", at_least(span, bar_travel))]
 
 
 def _reach_goal(trace: list[list[float]], p: dict[str, Any]) -> list[Measurement]:
     gx, gy, radius = float(p["x_m"]), float(p["y_m"]), float(p["radius_m"])
     distances = [math.hypot(s[1] - gx, s[2] - gy) for s in trace]
     closest = min(distances)
-    return [Measurement("closest distance to the goal", closest, radius, "m", at_most(closest, radius), True)]
+    return [Measurement(N_("closest distance to the goal"), closest, radius, "m", at_most(closest, radius), True)]
 
 
 def _cover_room(trace: list[list[float]], p: dict[str, Any]) -> list[Measurement]:
     share, bar = swept_share(trace, p), float(p["min_coverage"])
-    return [Measurement("share of the room swept", share, bar, "", at_least(share, bar))]
+    return [Measurement(N_("share of the room swept"), share, bar, "", at_least(share, bar))]
 
 
 def _report_pose(trace: list[list[float]], p: dict[str, Any], report: dict[str, Any] | None) -> list[Measurement]:
     tolerance = float(p["tolerance_m"])
     if not report:
-        return [Measurement("reported pose error", math.inf, tolerance, "m", 0.0, True)]
+        return [Measurement(REPORTED_POSE_ERROR, math.inf, tolerance, "m", 0.0, True)]
     at = float(report.get("t_s", trace[-1][0]))
     sample = min(trace, key=lambda s: abs(s[0] - at))
     error = math.hypot(float(report["x_m"]) - sample[1], float(report["y_m"]) - sample[2])
-    return [Measurement("reported pose error", error, tolerance, "m", at_most(error, tolerance), True)]
+    return [Measurement(REPORTED_POSE_ERROR, error, tolerance, "m", at_most(error, tolerance), True)]
 
 
 def grade(rubric: dict[str, Any], trace: list[list[float]], report: dict[str, Any] | None = None) -> Grade:
     """The run's grade from the robot's trace (and, for report_pose, what the code reported)."""
     if len(trace) < 2:
-        return Grade(0.0, [], "The robot recorded no run: nothing to grade.")
+        return Grade(0.0, [], NO_RUN)
     kind = rubric["kind"]
     if kind == "bump_and_go":
         measured = _bump_and_go(trace, rubric)
@@ -237,16 +248,27 @@ def grade(rubric: dict[str, Any], trace: list[list[float]], report: dict[str, An
     else:
         raise ValueError(f"unknown rubric kind {kind!r}")
     fraction = round(sum(m.fraction for m in measured) / len(measured), 4)
-    parts = "; ".join(f"{m.name} {_shown(m.value)}{_unit(m)} (bar {m.bar:g}{_unit(m)}: {int(m.fraction * 100)}%)"
-                      for m in measured)
-    return Grade(fraction, measured, f"{int(round(fraction * 100))}% of the points. {parts}.")
+    with force_locale("en"):  # stored in English, as every grader's feedback; said in the reader's language
+        feedback = feedback_sentence(fraction, [{"name": m.name, "value": m.value, "bar": m.bar, "unit": m.unit,
+                                                 "fraction": m.fraction} for m in measured])
+    return Grade(fraction, measured, feedback)
 
 
-def _unit(measurement: Measurement) -> str:
-    return f" {measurement.unit}" if measurement.unit else ""
+def feedback_sentence(fraction: float, measurements: Iterable[Mapping[str, Any]]) -> str:
+    """The grade's sentence for the student, in the request's language (English outside a request), from its
+    measurements as measurements_dict gives them: "72% of the points. distance driven 3.10 m (bar 3 m: 100%); ..."."""
+    parts = "; ".join(gettext("%(name)s %(value)s%(unit)s (bar %(bar)s%(unit)s: %(percent)s%%)",
+                              name=gettext(m["name"]), value=_shown(m["value"]), unit=_unit(m["unit"]),
+                              bar=written_number(m["bar"], "g"), percent=int(m["fraction"] * 100))
+                      for m in measurements)
+    return str(gettext("%(percent)s%% of the points. %(parts)s.", percent=int(round(fraction * 100)), parts=parts))
+
+
+def _unit(unit: str) -> str:
+    return f" {gettext(unit)}" if unit == CELLS else f" {unit}" if unit else ""
 
 
 def _shown(value: float) -> str:
     if not math.isfinite(value):
-        return "none"
-    return f"{value:.0f}" if float(value).is_integer() else f"{value:.2f}"
+        return str(gettext("none"))
+    return written_number(value, ".0f") if float(value).is_integer() else written_number(value, ".2f")

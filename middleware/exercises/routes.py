@@ -15,6 +15,7 @@ from pathlib import Path
 
 from flask import Blueprint, Response, current_app, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware.access.commands import Commander, robot_commands
@@ -73,6 +74,7 @@ def page(slug: str) -> ResponseReturnValue:
     nonce = secrets.token_urlsafe(16)  # CodeMirror writes its styles in a <style> element carrying this nonce
     response = Response(render_template("exercises/exercise.html", exercise=exercise, style_nonce=nonce,
                                         tutor=services.may_edit_catalogue(current_user),
+                                        courses=services.attachable_courses(session, current_user, exercise),
                                         tests=services.tests_for(session, current_user, exercise)))
     response.headers["Content-Security-Policy"] = (
         "default-src 'self'; img-src 'self' blob: data:; connect-src 'self' ws: wss:; "
@@ -289,8 +291,8 @@ def _fresh_robot(commander: Commander) -> None:
         except RobotUnavailable:
             pass
         time.sleep(0.2)
-    raise ApiError(503, "robot_offline", "The robot started for your submission did not answer in time; submit "
-                                         "again.", "robot")
+    raise ApiError(503, "robot_offline", gettext("The robot started for your submission did not answer in time; "
+                                                 "submit again."), "robot")
 
 
 def _scene_boxes(robot_name: str) -> list[dict[str, float]]:

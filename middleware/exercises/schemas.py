@@ -10,8 +10,12 @@ import re
 from datetime import UTC, datetime
 from typing import Any
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.auth.schemas import InvalidField
+from middleware.errors import written_number
 from middleware.exercises.grading import RUBRIC_KINDS
+from middleware.i18n import N_
 from middleware.validation import unstorable, unstorable_place, within_calendar
 
 MAX_CODE_CHARS = 20_000
@@ -25,25 +29,26 @@ MIN_TIME_LIMIT_S, MAX_TIME_LIMIT_S = 5.0, 600.0
 def body_object(body: object) -> dict[str, Any]:
     """The request's JSON object, or a 400."""
     if not isinstance(body, dict):
-        raise InvalidField("body", "Send a JSON object.")
+        raise InvalidField("body", gettext("Send a JSON object."))
     return body
 
 
 def text(value: object, field: str, max_chars: int, what: str) -> str:
-    """Stored text of at most max_chars, or a 400 naming field."""
+    """Stored text of at most max_chars, or a 400 naming field (what: what it must be, marked with N_)."""
     if not isinstance(value, str):
-        raise InvalidField(field, f"{field} must be {what}.")
+        raise InvalidField(field, gettext("%(field)s must be %(what)s.", field=field, what=gettext(what)))
     if len(value) > max_chars:
-        raise InvalidField(field, f"{field} is at most {max_chars} characters; it has {len(value)}.")
+        raise InvalidField(field, gettext("%(field)s is at most %(limit)s characters; it has %(length)s.", field=field,
+                                          limit=max_chars, length=len(value)))
     if unstorable(value):
-        raise InvalidField(field, f"{field} holds a character that cannot be stored ({unstorable_place(value)}); "
-                                  "remove it.")
+        raise InvalidField(field, gettext("%(field)s holds a character that cannot be stored (%(place)s); remove it.",
+                                          field=field, place=unstorable_place(value)))
     return value
 
 
 def code(value: object, field: str = "code") -> str:
     """A student's Python source."""
-    return text(value, field, MAX_CODE_CHARS, "the program's Python text")
+    return text(value, field, MAX_CODE_CHARS, N_("the program's Python text"))
 
 
 def run_request(body: object) -> tuple[str, str]:
@@ -52,7 +57,7 @@ def run_request(body: object) -> tuple[str, str]:
     refuse_forged(data)
     mode = data.get("mode", "practice")
     if mode not in MODES:
-        raise InvalidField("mode", 'mode must be "practice" or "submission".')
+        raise InvalidField("mode", gettext('mode must be "practice" or "submission".'))
     return code(data.get("code")), str(mode)
 
 
@@ -60,16 +65,18 @@ def refuse_forged(data: dict[str, Any]) -> None:
     """A 400 for any field only the server may write (the grade, the trace, the start)."""
     for name in FORGED_FIELDS:
         if name in data:
-            raise InvalidField(name, f"{name} is measured by the lab from the robot's own record; a request cannot "
-                                     "set it.")
+            raise InvalidField(name, gettext("%(name)s is measured by the lab from the robot's own record; a "
+                                             "request cannot set it.", name=name))
 
 
 def finite(value: object, field: str, low: float = -1e6, high: float = 1e6) -> float:
     """A finite number within [low, high], or a 400 naming field."""
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise InvalidField(field, f"{field} must be a finite number.")
+        raise InvalidField(field, gettext("%(field)s must be a finite number.", field=field))
     if not low <= value <= high:
-        raise InvalidField(field, f"{field} must be between {low:g} and {high:g}; got {value:g}.")
+        raise InvalidField(field, gettext("%(field)s must be between %(low)s and %(high)s; got %(value)s.", field=field,
+                                          low=written_number(low, "g"), high=written_number(high, "g"),
+                                          value=written_number(value, "g")))
     return float(value)
 
 
@@ -81,14 +88,14 @@ def finish_request(body: object) -> dict[str, float] | None:
     if report is None:
         return None
     if not isinstance(report, dict):
-        raise InvalidField("report", 'report must be {"x_m": ..., "y_m": ..., "t_s": ...}.')
+        raise InvalidField("report", gettext('report must be {"x_m": ..., "y_m": ..., "t_s": ...}.'))
     return {"x_m": finite(report.get("x_m"), "report.x_m"), "y_m": finite(report.get("y_m"), "report.y_m"),
             "t_s": finite(report.get("t_s", 0.0), "report.t_s", 0.0, MAX_TIME_LIMIT_S)}
 
 
 def _pose(value: object, field: str) -> list[float]:
     if not isinstance(value, list) or len(value) != 3:
-        raise InvalidField(field, f"{field} must be [x_m, y_m, theta_rad].")
+        raise InvalidField(field, gettext("%(field)s must be [x_m, y_m, theta_rad].", field=field))
     return [finite(v, f"{field}[{i}]", -50.0, 50.0) for i, v in enumerate(value)]
 
 
@@ -96,15 +103,17 @@ def _region(value: object, field: str) -> dict[str, list[float]] | None:
     if value is None:
         return None
     if not isinstance(value, dict):
-        raise InvalidField(field, f'{field} must be {{"x_m": [low, high], "y_m": [...], "theta_rad": [...]}}.')
+        raise InvalidField(field, gettext('%(field)s must be {"x_m": [low, high], "y_m": [...], "theta_rad": [...]}.',
+                                          field=field))
     region = {}
     for key in ("x_m", "y_m", "theta_rad"):
         pair = value.get(key)
         if not isinstance(pair, list) or len(pair) != 2:
-            raise InvalidField(f"{field}.{key}", f"{field}.{key} must be [low, high].")
+            raise InvalidField(f"{field}.{key}", gettext("%(field)s must be [low, high].", field=f"{field}.{key}"))
         low, high = (finite(v, f"{field}.{key}[{i}]", -50.0, 50.0) for i, v in enumerate(pair))
         if low > high:
-            raise InvalidField(f"{field}.{key}", f"{field}.{key}: low must not exceed high.")
+            raise InvalidField(f"{field}.{key}", gettext("%(field)s: low must not exceed high.",
+                                                         field=f"{field}.{key}"))
         region[key] = [low, high]
     return region
 
@@ -124,7 +133,8 @@ OPTIONAL_NUMBERS = ("cell_m", "stuck_move_m", "settle_s")
 
 def _rubric(value: object) -> dict[str, Any]:
     if not isinstance(value, dict) or value.get("kind") not in RUBRIC_KINDS:
-        raise InvalidField("rubric.kind", f"rubric.kind must be one of {', '.join(RUBRIC_KINDS)}.")
+        raise InvalidField("rubric.kind", gettext("rubric.kind must be one of %(kinds)s.",
+                                                  kinds=", ".join(RUBRIC_KINDS)))
     kind = str(value["kind"])
     rubric: dict[str, Any] = {"kind": kind}
     for name in RUBRIC_NUMBERS[kind]:
@@ -134,11 +144,11 @@ def _rubric(value: object) -> dict[str, Any]:
             rubric[name] = finite(value[name], f"rubric.{name}", 0.05, 100.0)
     if kind in ("cover_room", "follow_line") and (rubric["x_min_m"] >= rubric["x_max_m"]
                                                  or rubric["y_min_m"] >= rubric["y_max_m"]):
-        raise InvalidField("rubric.x_max_m", "The region's maximum must exceed its minimum.")
+        raise InvalidField("rubric.x_max_m", gettext("The region's maximum must exceed its minimum."))
     if kind == "follow_line" and not 0 <= 2 * rubric["corner_radius_m"] <= min(rubric["x_max_m"] - rubric["x_min_m"],
                                                                              rubric["y_max_m"] - rubric["y_min_m"]):
-        raise InvalidField("rubric.corner_radius_m", "The corners' radius must be between 0 and half the line's "
-                                                     "shorter side.")
+        raise InvalidField("rubric.corner_radius_m", gettext("The corners' radius must be between 0 and half the "
+                                                             "line's shorter side."))
     return rubric
 
 
@@ -149,17 +159,17 @@ def definition(body: object, slug_required: bool = True) -> dict[str, Any]:
     if slug_required:
         slug = data.get("slug")
         if not isinstance(slug, str) or not SLUG_PATTERN.fullmatch(slug):
-            raise InvalidField("slug", "slug is 1 to 63 lower-case letters, digits and -, starting with a letter "
-                                       "or digit.")
+            raise InvalidField("slug", gettext("slug is 1 to 63 lower-case letters, digits and -, starting with a "
+                                               "letter or digit."))
         result["slug"] = slug
-    result["title"] = text(data.get("title"), "title", 120, "the exercise's title")
+    result["title"] = text(data.get("title"), "title", 120, N_("the exercise's title"))
     if not result["title"].strip():
-        raise InvalidField("title", "title must not be empty.")
-    result["statement"] = text(data.get("statement"), "statement", MAX_STATEMENT_CHARS, "what the student reads")
+        raise InvalidField("title", gettext("%(field)s must not be empty.", field="title"))
+    result["statement"] = text(data.get("statement"), "statement", MAX_STATEMENT_CHARS, N_("what the student reads"))
     result["template"] = code(data.get("template"), "template")
     scene = data.get("scene", "lab")
     if not isinstance(scene, str) or not re.fullmatch(r"[A-Za-z0-9_-]{1,64}", scene):
-        raise InvalidField("scene", "scene must be a scene's name, such as lab.")
+        raise InvalidField("scene", gettext("scene must be a scene's name, such as lab."))
     result["scene"] = scene
     result["rubric"] = _rubric(data.get("rubric"))
     result["start"] = _pose(data.get("start"), "start")
@@ -173,14 +183,15 @@ def assignment(body: object) -> tuple[str, datetime, float]:
     data = body_object(body)
     slug = data.get("slug")
     if not isinstance(slug, str) or not SLUG_PATTERN.fullmatch(slug):
-        raise InvalidField("slug", "slug must name an exercise of the catalogue.")
+        raise InvalidField("slug", gettext("slug must name an exercise of the catalogue."))
     value = data.get("deadline_at")
     try:
         deadline = datetime.fromisoformat(value.strip().replace("Z", "+00:00")) if isinstance(value, str) else None
     except ValueError:
         deadline = None
     if deadline is None or not within_calendar(deadline):
-        raise InvalidField("deadline_at", "deadline_at must be a date and time such as 2026-12-01T18:00:00Z.")
+        raise InvalidField("deadline_at", gettext("%(field)s must be a date and time such as 2026-12-01T18:00:00Z.",
+                                                  field="deadline_at"))
     if deadline.tzinfo is None:
         deadline = deadline.replace(tzinfo=UTC)
     return slug, deadline, finite(data.get("points", 10.0), "points", 0.0, 1000.0)

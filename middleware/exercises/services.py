@@ -14,11 +14,13 @@ from collections.abc import Callable
 from datetime import datetime, timedelta
 from typing import Any
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
-from middleware.courses.authority import taught_student_ids, teaches_course, teaches_student
+from middleware import i18n
+from middleware.courses.authority import taught_course_ids, taught_student_ids, teaches_course, teaches_student
 from middleware.errors import ApiError, Refused
 from middleware.exercises import grading
 from middleware.exercises.catalogue import BUILT_IN
@@ -28,6 +30,8 @@ from middleware.models.exercises import Exercise, ExerciseAssignment, ExerciseCo
 
 RATE_HZ = 20
 GRACE_S = 1.0  # the page's finish call may come a little after the time limit
+NO_RECORD = i18n.N_("The robot could not give its record of the run (it restarted or stopped meanwhile), so it cannot "
+                    "be graded. Run it again.")
 # (robot name, since, until) -> the robot's trace [t_s, gx, gy, gth, ox, oy, oth], or None when it cannot tell
 PoseLogReader = Callable[[str, datetime, datetime], list[list[float]] | None]
 
@@ -69,7 +73,7 @@ def exercise_by_slug(session: Session, slug: str) -> Exercise:
         ensure_catalogue(session)
         exercise = session.scalar(select(Exercise).where(Exercise.slug == slug))
     if exercise is None:
-        raise ApiError(404, "unknown_exercise", "There is no such exercise.", "slug")
+        raise ApiError(404, "unknown_exercise", gettext("There is no such exercise."), "slug")
     return exercise
 
 
@@ -80,14 +84,14 @@ def may_edit_catalogue(actor: User) -> bool:
 
 def _require_editor(actor: User) -> None:
     if not may_edit_catalogue(actor):
-        raise ExerciseRefused(403, "forbidden", "Only tutors and admins change the exercise catalogue.")
+        raise ExerciseRefused(403, "forbidden", gettext("Only tutors and admins change the exercise catalogue."))
 
 
 def add_exercise(session: Session, actor: User, fields: dict[str, Any]) -> Exercise:
     """A new exercise of the catalogue (409 when its slug is taken)."""
     _require_editor(actor)
     if session.scalar(select(Exercise.id).where(Exercise.slug == fields["slug"])) is not None:
-        raise ExerciseRefused(409, "slug_taken", "An exercise with that slug exists; choose another.", "slug")
+        raise ExerciseRefused(409, "slug_taken", gettext("An exercise with that slug exists; choose another."), "slug")
     exercise = _new_exercise(fields, actor.id)
     session.add(exercise)
     session.flush()
@@ -154,8 +158,9 @@ def begin_run(session: Session, user: User, exercise: Exercise, code_version: Ex
     """Places the user's robot at the run's start and opens the run from that moment; a run of theirs still open
     is graded first, up to now (a bad submission cannot be dropped by starting another)."""
     if robot_scene != exercise.scene:
-        raise ExerciseRefused(409, "wrong_scene", f"This exercise runs in the {exercise.scene!r} scene and your robot "
-                                                  f"runs {robot_scene!r}; start a robot in that scene.", "robot")
+        raise ExerciseRefused(409, "wrong_scene", gettext(
+            "This exercise runs in the %(scene)s scene and your robot runs %(robot_scene)s; start a robot in that "
+            "scene.", scene=repr(exercise.scene), robot_scene=repr(robot_scene)), "robot")
     for open_run in session.scalars(select(ExerciseRun).where(ExerciseRun.user_id == user.id,
                                                               ExerciseRun.status == "running")):
         finish_run(session, user, open_run, None, read_log, now())
@@ -174,7 +179,7 @@ def run_for(session: Session, viewer: User, run_id: int) -> ExerciseRun:
     """A run its owner, or a tutor teaching them, may read; 404 for anyone else."""
     run = session.get(ExerciseRun, run_id)
     if run is None or not (run.user_id == viewer.id or _teaches(session, viewer, run.user_id)):
-        raise ApiError(404, "unknown_run", "There is no such run.", "run_id")
+        raise ApiError(404, "unknown_run", gettext("There is no such run."), "run_id")
     return run
 
 
@@ -187,7 +192,7 @@ def finish_run(session: Session, user: User, run: ExerciseRun, report: dict[str,
                read_log: PoseLogReader, now: datetime) -> ExerciseRun:
     """Grades the run from the robot's pose log between its start and now (at most its time limit)."""
     if run.user_id != user.id:
-        raise ApiError(404, "unknown_run", "There is no such run.", "run_id")
+        raise ApiError(404, "unknown_run", gettext("There is no such run."), "run_id")
     if run.status != "running":
         return run
     exercise = session.get(Exercise, run.exercise_id)
@@ -198,8 +203,7 @@ def finish_run(session: Session, user: User, run: ExerciseRun, report: dict[str,
     run.ended_at, run.report_json = ended, json.dumps(report)
     if trace is None:
         run.status, run.fraction = "failed", None
-        run.feedback = ("The robot could not give its record of the run (it restarted or stopped meanwhile), so it "
-                        "cannot be graded. Run it again.")
+        run.feedback = NO_RECORD  # stored in English, said in the reader's language by run_dict
         session.flush()
         return run
     result = grading.grade(json.loads(exercise.rubric_json), trace, report)
@@ -220,14 +224,27 @@ def finish_if_overdue(session: Session, run: ExerciseRun, read_log: PoseLogReade
             finish_run(session, owner, run, None, read_log, now)
 
 
+def shown_feedback(run: ExerciseRun) -> tuple[str, list[dict[str, Any]]]:
+    """The run's feedback and measurements in the reader's language: they are stored in English; a graded run's
+    sentence is said again from its measurements, other feedback by the catalogue (as stored when it has it not)."""
+    measurements = json.loads(run.measurements_json)
+    if i18n.current_language() == i18n.LANGUAGES[0]:
+        return run.feedback, measurements
+    feedback = (grading.feedback_sentence(run.fraction, measurements)
+                if run.status == "graded" and run.fraction is not None and measurements
+                else str(gettext(run.feedback)) if run.feedback else run.feedback)
+    return feedback, [{**m, "name": str(gettext(m["name"]))} for m in measurements]
+
+
 def run_dict(run: ExerciseRun, with_trace: bool = False) -> dict[str, Any]:
     """A run as the pages show it: the start only once it is over (a submission's start is hidden until then)."""
     over = run.status != "running"
+    feedback, measurements = shown_feedback(run)
     answer: dict[str, Any] = {
         "id": run.id, "mode": run.mode, "status": run.status, "robot_name": run.robot_name,
         "started_at": as_utc(run.started_at).isoformat(), "code_id": run.code_id,
         "ended_at": as_utc(run.ended_at).isoformat() if run.ended_at else None,
-        "grade": run.fraction, "feedback": run.feedback, "measurements": json.loads(run.measurements_json),
+        "grade": run.fraction, "feedback": feedback, "measurements": measurements,
         "start": json.loads(run.start_json) if over or run.mode == "practice" else None,
     }
     if with_trace:
@@ -245,7 +262,7 @@ def own_runs(session: Session, user: User, exercise: Exercise, limit: int = 20) 
 def class_overview(session: Session, actor: User, exercise: Exercise) -> list[dict[str, Any]]:
     """For a tutor (their students) or an admin (everyone): each student's code versions, runs and best grade."""
     if actor.role not in (Role.TUTOR, Role.ADMIN):
-        raise ExerciseRefused(403, "forbidden", "Only tutors and admins see the class's work.")
+        raise ExerciseRefused(403, "forbidden", gettext("Only tutors and admins see the class's work."))
     taught = taught_student_ids(actor)
     users_query = select(User).where(User.role == Role.STUDENT).order_by(User.username)
     if taught is not None:
@@ -272,9 +289,10 @@ def attach_to_course(session: Session, actor: User, course_id: int, exercise: Ex
                      points: float) -> ExerciseAssignment:
     """Attaches the exercise to the course as a test (again: a new deadline and points), for its tutors."""
     if session.get(Course, course_id) is None:
-        raise ApiError(404, "unknown_course", "There is no such course.", "course_id")
+        raise ApiError(404, "unknown_course", gettext("There is no such course."), "course_id")
     if not teaches_course(session, actor, course_id):
-        raise ExerciseRefused(403, "forbidden", "Only the course's tutors attach an exercise to it as a test.")
+        raise ExerciseRefused(403, "forbidden", gettext("Only the course's tutors attach an exercise to it as a "
+                                                         "test."))
     test = session.scalar(select(ExerciseAssignment).where(ExerciseAssignment.course_id == course_id,
                                                            ExerciseAssignment.exercise_id == exercise.id))
     if test is None:
@@ -284,6 +302,24 @@ def attach_to_course(session: Session, actor: User, course_id: int, exercise: Ex
     test.deadline_at, test.points = deadline, points
     session.flush()
     return test
+
+
+def attachable_courses(session: Session, actor: User, exercise: Exercise) -> list[dict[str, Any]]:
+    """The courses actor may attach the exercise to as a test (an admin: every course; a tutor: those they teach),
+    each with the test it is already, if any (its deadline and points)."""
+    if actor.role not in (Role.TUTOR, Role.ADMIN):
+        return []
+    query = select(Course).order_by(Course.title, Course.id)
+    if actor.role != Role.ADMIN:
+        query = query.where(Course.id.in_(taught_course_ids(actor)))
+    tests = {test.course_id: test for test in session.scalars(select(ExerciseAssignment).where(
+        ExerciseAssignment.exercise_id == exercise.id))}
+    return [{"id": course.id, "title": course.title, "test": _test_terms(tests.get(course.id))}
+            for course in session.scalars(query)]
+
+
+def _test_terms(test: ExerciseAssignment | None) -> dict[str, Any] | None:
+    return None if test is None else {"deadline_at": as_utc(test.deadline_at).isoformat(), "points": test.points}
 
 
 def test_grade(session: Session, user_id: int, test: ExerciseAssignment) -> float | None:

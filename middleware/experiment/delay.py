@@ -24,11 +24,13 @@ from collections import deque
 from collections.abc import Callable
 
 from flask import current_app
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import String, literal, select, union_all
 
 from middleware import events
 from middleware.auth.schemas import InvalidField
 from middleware.db import session_factory
+from middleware.errors import written_number
 from middleware.models.experiment import MAX_INJECTED_DELAY_S, TRIAL_OPEN, Trial, VideoDelay
 
 DEFAULT_MAX_MESSAGES = 600  # 7 s of 20 Hz telemetry or 30 fps video, with room to spare
@@ -43,10 +45,12 @@ Delays = dict[tuple[int, str | None], float]
 def parse_delay_s(value: object, field: str = "delay_s") -> float:
     """A delay in seconds, 0 to 7; anything else (negative, absurd, NaN, text, bool) is refused naming field."""
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise InvalidField(field, f"{field} must be a number of seconds from 0 to {MAX_INJECTED_DELAY_S:g}.")
+        raise InvalidField(field, gettext("%(field)s must be a number of seconds from 0 to %(high)s.", field=field,
+                                          high=written_number(MAX_INJECTED_DELAY_S, "g")))
     delay = float(value)
     if not math.isfinite(delay) or delay < 0 or delay > MAX_INJECTED_DELAY_S:
-        raise InvalidField(field, f"{field} must be from 0 to {MAX_INJECTED_DELAY_S:g} seconds.")
+        raise InvalidField(field, gettext("%(field)s must be from 0 to %(high)s seconds.", field=field,
+                                          high=written_number(MAX_INJECTED_DELAY_S, "g")))
     return round(delay, 3)
 
 

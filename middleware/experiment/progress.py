@@ -1,6 +1,7 @@
 """A trial's run as it happens: whether the robot's finished run counts for the trial, and what to tell the student.
 
-Pure functions over the robot's track run (copied from GetTrackRun by the routes) and the trial; no Flask, no gRPC.
+Pure functions over the robot's track run (copied from GetTrackRun by the routes) and the trial; no gRPC. The
+sentences are said through gettext, in the request's language (English outside a request).
 The page polls these twice a second, so arrival at A and B and every line contact show while the student drives.
 """
 
@@ -9,6 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from datetime import UTC, datetime
 
+from flask_babel import gettext, ngettext  # type: ignore[import-untyped]
+
+from middleware.errors import written_number
 from middleware.models.experiment import Trial
 
 
@@ -48,7 +52,7 @@ def finished_in_trial(trial: Trial, run: TrackRunNow) -> bool:
 
 def track_route(trial: Trial) -> str:
     """The drive the trial's track asks for: "A to B", and back on track A."""
-    return "A to B" + (" and back" if trial.course == "course-A" else "")
+    return str(gettext("A to B and back") if trial.course == "course-A" else gettext("A to B"))
 
 
 def _sent_back_to_a(run: TrackRunNow) -> bool:
@@ -63,21 +67,27 @@ def _attempt_under_way(run: TrackRunNow) -> bool:
 def progress_message(trial: Trial, run: TrackRunNow) -> str:
     """One sentence for the student: where the run is and what to do next."""
     if finished_in_trial(trial, run):
-        return (f"Finished in {run.last_total_time_s:.1f} s with {run.last_errors} line "
-                f"contact{'' if run.last_errors == 1 else 's'}.")
+        return str(ngettext("Finished in %(time)s s with %(num)d line contact.",
+                            "Finished in %(time)s s with %(num)d line contacts.", run.last_errors,
+                            time=written_number(run.last_total_time_s, ".1f")))
     if _attempt_under_way(run) and run.started_unix_s < _unix_s(trial.created_at) - CLOCK_SLACK_S:
-        return (f"This run began before your trial, so it will not count: finish it ({track_route(trial)}), return "
-                "to A (blue) and start again.")
+        return str(gettext("This run began before your trial, so it will not count: finish it (%(route)s), return "
+                           "to A (blue) and start again.", route=track_route(trial)))
     if run.phase == "to_b":
-        contacts = f" {run.errors} line contact{'' if run.errors == 1 else 's'} so far." if run.errors else ""
-        return f"Run {run.attempt} under way: drive to B (orange).{contacts}"
+        if run.errors:
+            return str(ngettext("Run %(attempt)s under way: drive to B (orange). %(num)d line contact so far.",
+                                "Run %(attempt)s under way: drive to B (orange). %(num)d line contacts so far.",
+                                run.errors, attempt=run.attempt))
+        return str(gettext("Run %(attempt)s under way: drive to B (orange).", attempt=run.attempt))
     if run.phase == "to_a":
-        return "Reached B: now drive back to A (blue)."
+        return str(gettext("Reached B: now drive back to A (blue)."))
     if _sent_back_to_a(run):
-        return "The robot touched a white line and is back at A; the clock keeps running. Drive to B again."
+        return str(gettext("The robot touched a white line and is back at A; the clock keeps running. Drive to B "
+                           "again."))
     if run.phase == "finished":
-        return "The last run ended or was given up away from A: drive the robot back to A (blue) to begin."
-    return "The robot is at A (blue): drive off to start the clock."
+        return str(gettext("The last run ended or was given up away from A: drive the robot back to A (blue) to "
+                           "begin."))
+    return str(gettext("The robot is at A (blue): drive off to start the clock."))
 
 
 def progress_view(trial: Trial, run: TrackRunNow) -> dict[str, object]:

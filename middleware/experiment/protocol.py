@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import func, select, text
 from sqlalchemy.orm import Session
 
@@ -70,7 +71,7 @@ def protocol_for(session: Session, course_id: int | None) -> Protocol:
 def _flag(body: dict[str, object], field: str, current: bool) -> bool:
     value = body.get(field, current)
     if not isinstance(value, bool):
-        raise Refused(400, "invalid_field", f"{field} must be true or false.", field)
+        raise Refused(400, "invalid_field", gettext("%(field)s must be true or false.", field=field), field)
     return value
 
 
@@ -78,14 +79,15 @@ def set_protocol(session: Session, actor: User, course_id: int, body: dict[str, 
     """A tutor of the course (or an admin) sets its learning period (0-3600 s) and the two switches."""
     course = session.get(Course, course_id)
     if course is None:
-        raise Refused(404, "unknown_course", "There is no such course.", "course_id")
+        raise Refused(404, "unknown_course", gettext("There is no such course."), "course_id")
     if actor.role != Role.ADMIN and not teaches_course(session, actor, course.id):
-        raise Refused(403, "forbidden", "Only the course's tutors set its experiment protocol.", "course_id")
+        raise Refused(403, "forbidden", gettext("Only the course's tutors set its experiment protocol."), "course_id")
     current = protocol_for(session, course.id)
     learning = body.get("learning_s", current.learning_s)
     if isinstance(learning, bool) or not isinstance(learning, int | float) or not math.isfinite(learning) \
             or not 0 <= learning <= MAX_LEARNING_S:
-        raise Refused(400, "invalid_field", f"learning_s must be from 0 to {MAX_LEARNING_S} seconds.", "learning_s")
+        raise Refused(400, "invalid_field", gettext("learning_s must be from 0 to %(high)s seconds.",
+                                                    high=MAX_LEARNING_S), "learning_s")
     settings = Protocol(int(learning), _flag(body, "delay_commands", current.delay_commands),
                         _flag(body, "export_participants", current.export_participants))
     row = session.get(ExperimentProtocol, course.id)
@@ -116,7 +118,8 @@ def _choice(body: dict[str, object], field: str, allowed: tuple[str, ...]) -> st
     if value is None or value == "":
         return None
     if value not in allowed:
-        raise Refused(400, "invalid_field", f"{field} must be one of {', '.join(allowed)}.", field)
+        raise Refused(400, "invalid_field", gettext("%(field)s must be one of %(allowed)s.", field=field,
+                                                    allowed=", ".join(allowed)), field)
     return str(value)
 
 
@@ -125,7 +128,8 @@ def answer_details(session: Session, student: User, body: dict[str, object]) -> 
     left empty); without consent nothing but the refusal is kept, and they are not asked again."""
     consent = body.get("consent")
     if not isinstance(consent, bool):
-        raise Refused(400, "invalid_field", "Say whether you agree to your details being kept (consent).", "consent")
+        raise Refused(400, "invalid_field", gettext("Say whether you agree to your details being kept (consent)."),
+                      "consent")
     row = _participant_row(session, student.id)
     row.consent, row.answered_at = consent, utc_now()
     row.age = row.location = row.games_experience = row.robots_experience = None
@@ -133,7 +137,8 @@ def answer_details(session: Session, student: User, body: dict[str, object]) -> 
         age = body.get("age")
         if age not in (None, ""):
             if isinstance(age, bool) or not isinstance(age, int) or not 10 <= age <= 120:
-                raise Refused(400, "invalid_field", "age must be a whole number of years from 10 to 120.", "age")
+                raise Refused(400, "invalid_field", gettext("age must be a whole number of years from 10 to 120."),
+                              "age")
             row.age = age
         row.location = _choice(body, "location", LOCATIONS)
         row.games_experience = _choice(body, "games_experience", EXPERIENCE)
@@ -167,15 +172,16 @@ def require_ready(session: Session, student: User, protocol: Protocol) -> None:
     """A trial begins only once the student has answered the details question and their learning period is over."""
     row = participant(session, student.id)
     if row is None or row.answered_at is None:
-        raise Refused(409, "details_missing", "Answer the participant questions (or decline them) before your first "
-                      "trial.", "consent")
+        raise Refused(409, "details_missing", gettext("Answer the participant questions (or decline them) before "
+                                                     "your first trial."), "consent")
     left = learning_left_s(row, protocol, utc_now())
     if left is None:
-        raise Refused(409, "learning_not_started", f"Start your learning period first: {protocol.learning_s // 60} "
-                      "min to drive the course freely before the trials.", "learning")
+        raise Refused(409, "learning_not_started", gettext(
+            "Start your learning period first: %(minutes)s min to drive the course freely before the trials.",
+            minutes=protocol.learning_s // 60), "learning")
     if left > 0:
-        raise Refused(409, "learning_period", f"Your learning period ends in {math.ceil(left)} s: drive the course "
-                      "freely until then.", "learning")
+        raise Refused(409, "learning_period", gettext("Your learning period ends in %(seconds)s s: drive the course "
+                                                     "freely until then.", seconds=math.ceil(left)), "learning")
 
 
 def _lock_orders(session: Session, student: User, course_id: int | None) -> None:

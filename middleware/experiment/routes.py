@@ -15,7 +15,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware.access.commands import robot_commands
-from middleware.api.contract import BOOLEAN, ID, OBJECT, STRING, about, array, described, number, obj
+from middleware.api.contract import BOOLEAN, ID, OBJECT, STRING, about, array, described, nullable, number, obj, whole
 from middleware.courses.authority import taught_course_ids
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
@@ -45,6 +45,45 @@ def _run(action: Callable[[Session], T]) -> T:
     result = action(get_session())
     after_commit(delay_book().forget)
     return result
+
+
+TRIAL = obj(("id", "course_id", "robot_name", "course", "delay_s", "feedback", "commands_delayed", "status",
+             "total_time_s", "errors"),
+            id=ID, course_id=nullable(ID), robot_name=STRING, course=STRING, delay_s=number(), feedback=BOOLEAN,
+            commands_delayed=BOOLEAN, status=STRING, total_time_s=nullable(number()), errors=whole())
+# The student's page (state): the protocol's step, their trial and its run, what a new trial may use.
+STATE = obj(("protocol", "trial", "run", "last_trial", "robots", "courses", "delay_s"),
+            protocol=obj(("details_answered", "consent", "learning_s", "learning_left_s", "learning_started",
+                          "learning_done", "commands_delayed"),
+                         details_answered=BOOLEAN, consent=BOOLEAN, learning_s=number(),
+                         learning_left_s=nullable(number()), learning_started=BOOLEAN, learning_done=BOOLEAN,
+                         commands_delayed=BOOLEAN),
+            trial=nullable(TRIAL), run=nullable(obj(("online", "finished", "message"), online=BOOLEAN,
+                                                   finished=BOOLEAN, message=STRING)),
+            last_trial=nullable(TRIAL),
+            robots=array(obj(("name", "scene", "own"), name=STRING, scene=STRING, own=BOOLEAN)),
+            courses=array(obj(("id", "code", "title"), id=ID, code=STRING, title=STRING)), delay_s=number())
+PARTICIPANT = obj(("consent", "age", "location", "games_experience", "robots_experience"), consent=BOOLEAN,
+                  age=nullable(whole()), location=nullable(STRING), games_experience=nullable(STRING),
+                  robots_experience=nullable(STRING))
+_COUNTS = {"type": "object", "additionalProperties": whole(0)}
+# The tutor's results: every trial, the means per condition, their comparisons, the participants' table.
+RESULTS = obj(("trials", "summary", "comparisons", "participants", "orders"),
+              trials=array({**TRIAL, "required": [*TRIAL["required"], "username"],
+                            "properties": {**TRIAL["properties"], "username": STRING}}),
+              summary=array(obj(("course", "delay_s", "feedback", "n", "mean_time_s", "standard_error_s",
+                                 "mean_errors"),
+                                course=STRING, delay_s=number(), feedback=BOOLEAN, n=whole(0), mean_time_s=number(),
+                                standard_error_s=nullable(number()), mean_errors=number())),
+              comparisons=array(obj(("course", "delay_s", "preview_saves", "on_vs_control", "off_vs_control"),
+                                    course=STRING, delay_s=number(), preview_saves=nullable(number()),
+                                    on_vs_control=nullable(number()), off_vs_control=nullable(number()))),
+              participants=obj(("participants", "consenting", "age_min", "age_max", "age_mean", "location",
+                                "games_experience", "robots_experience", "orders_in_use"),
+                               participants=whole(0), consenting=whole(0), age_min=nullable(whole()),
+                               age_max=nullable(whole()), age_mean=nullable(number()), location=_COUNTS,
+                               games_experience=_COUNTS, robots_experience=_COUNTS, orders_in_use=array(whole(0))),
+              orders=whole(0))
 
 
 def _trial_dict(trial: Trial) -> dict[str, object]:
@@ -132,8 +171,8 @@ def _run_progress(trial: Trial) -> dict[str, object]:
         run = None
     if run is None:
         return {"online": False, "finished": False,
-                "message": f"The robot {trial.robot_name} does not answer right now; its progress shows again "
-                           "when it does."}
+                "message": gettext("The robot %(robot)s does not answer right now; its progress shows again when "
+                                   "it does.", robot=trial.robot_name)}
     return progress_view(trial, run)
 
 
@@ -157,7 +196,7 @@ def page() -> ResponseReturnValue:
 
 @blueprint.get("/api/experiment/state")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: STATE})
 def state() -> ResponseReturnValue:
     """The student's trial in progress with its run now, their video delay (the trial's, on its robot; else a
     tutor's), their last trial ended (recorded or given up), and, while no trial is in progress, the robots that
@@ -219,7 +258,7 @@ def start_trial() -> ResponseReturnValue:
         games_experience=about("a level"),
         robots_experience=about("a level"),
     ),
-    answers={200: OBJECT},
+    answers={200: PARTICIPANT},
     refusals=(409,),
 )
 def put_participant() -> ResponseReturnValue:
@@ -328,7 +367,7 @@ def put_delay(username: str) -> ResponseReturnValue:
 
 @blueprint.get("/api/experiment/results")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: RESULTS})
 def results() -> ResponseReturnValue:
     """Every completed trial and the means with standard errors per condition (tutors)."""
     rows = _run(lambda s: services.class_trials(s, _actor()))

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import threading
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.farm.base import Capacity, FarmFull, FarmRobot, FarmUnavailable, RobotSpec
 from middleware.farm.costs import available_memory_mb, host_cores, robot_cpu_share, robots_per_host
 from middleware.farm.load import CpuMeter, resident_mb
@@ -35,17 +37,18 @@ class LocalProcessFarm:
     def start(self, spec: RobotSpec) -> FarmRobot:
         with self._lock:
             if self._closed:
-                raise FarmUnavailable("The lab is shutting down; no robot starts now.")
+                raise FarmUnavailable(gettext("The lab is shutting down; no robot starts now."))
             running = self._processes.get(spec.name)
             if running is not None and running.controller_token == spec.controller_token:
                 return self._describe(running)
             if running is not None:  # its owner lost track of it (its record was removed): a fresh one replaces it
                 del self._processes[spec.name]
             if spec.name in self._starting:
-                raise FarmUnavailable(f"{spec.name} is starting already; wait a few seconds.")
+                raise FarmUnavailable(gettext("%(robot)s is starting already; wait a few seconds.", robot=spec.name))
             if len(self._processes) + len(self._starting) >= self._capacity:
-                raise FarmFull(f"This host runs as many simulated robots as it can ({self._capacity}). "
-                               "Try again when a robot is stopped, or add a host to the lab's Ray farm.")
+                raise FarmFull(gettext("This host runs as many simulated robots as it can (%(capacity)s). Try again "
+                                       "when a robot is stopped, or add a host to the lab's Ray farm.",
+                                       capacity=self._capacity))
             self._starting.add(spec.name)
         if running is not None:
             running.stop()
@@ -57,7 +60,7 @@ class LocalProcessFarm:
             process.serve()
         except SkillServerStartError as error:
             process.stop()
-            raise FarmUnavailable(f"{spec.name} did not start: {error}") from None
+            raise FarmUnavailable(gettext("%(robot)s did not start: %(error)s", robot=spec.name, error=error)) from None
         finally:
             with self._lock:
                 self._starting.discard(spec.name)
@@ -67,7 +70,7 @@ class LocalProcessFarm:
                 self._processes[spec.name] = process
         if closed:  # the farm closed while this robot started: nobody would ever stop it
             process.stop()
-            raise FarmUnavailable("The lab is shutting down; no robot starts now.")
+            raise FarmUnavailable(gettext("The lab is shutting down; no robot starts now."))
         return self._describe(process)
 
     def find(self, name: str) -> FarmRobot | None:

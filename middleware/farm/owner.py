@@ -21,6 +21,8 @@ from multiprocessing import AuthenticationError
 from multiprocessing.managers import BaseManager
 from pathlib import Path
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.config import ConfigError
 from middleware.farm.base import Capacity, FarmRobot, FarmUnavailable, RobotSpec
 from middleware.farm.local import LocalProcessFarm
@@ -84,7 +86,8 @@ class FarmOwner:
         while not SharedLocalFarm(self.address, self.key.hex()).answers():
             if self._process.poll() is not None or time.monotonic() > deadline:
                 self.stop()
-                raise FarmUnavailable("The lab's robot farm process did not start; its error is printed above.")
+                raise FarmUnavailable(gettext("The lab's robot farm process did not start; its error is printed "
+                                              "above."))
             time.sleep(0.1)
         os.environ.update({ADDRESS_VARIABLE: self.address, KEY_VARIABLE: self.key.hex()})
 
@@ -127,8 +130,8 @@ class SharedLocalFarm:
         except (OSError, EOFError, AuthenticationError) as error:
             with self._lock:
                 self._farm = None
-            raise FarmUnavailable("The lab's robot farm process is not running; restart the lab "
-                                  f"(`telelab up`). ({error.__class__.__name__})") from None
+            raise FarmUnavailable(gettext("The lab's robot farm process is not running; restart the lab (`telelab "
+                                          "up`). (%(error)s)", error=error.__class__.__name__)) from None
 
     def start(self, spec: RobotSpec) -> FarmRobot:
         return self._call("start", spec)

@@ -13,6 +13,7 @@ import re
 import threading
 from collections.abc import Callable
 
+from flask_babel import gettext, lazy_gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.orm import Session
@@ -35,9 +36,10 @@ _SCENE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,63}")
 def clean_pool_request(kind: object, scene: object, count: object) -> tuple[str, str, int]:
     """(kind, scene, count) of a request to start a pool's robots; InvalidInput names the field at fault."""
     if not isinstance(kind, str) or not _SLUG.fullmatch(kind.strip()):
-        raise InvalidInput("kind", "kind must be 1 to 24 letters, digits, '-' or '_' (the robots are named kind-1...).")
+        raise InvalidInput("kind", gettext("kind must be 1 to 24 letters, digits, '-' or '_' (the robots are named "
+                                           "kind-1...)."))
     if not isinstance(scene, str) or not _SCENE.fullmatch(scene.strip()):
-        raise InvalidInput("scene", "scene must name a simulator scene such as 'lab' or 'course-A'.")
+        raise InvalidInput("scene", gettext("scene must name a simulator scene such as 'lab' or 'course-A'."))
     return kind.strip(), scene.strip(), whole_number(count, "count", 1, MAX_POOL_START)
 
 
@@ -50,8 +52,9 @@ def start_pool_robots(farm: RobotFarm, session: Session, kind: str, scene: str, 
     other_kind = session.scalar(select(Robot.kind).where(Robot.kind == kind, Robot.farm_managed.is_(True),
                                                          Robot.scene != scene).limit(1))
     if other_kind is not None:
-        raise Refused(409, "scene_mismatch", f"The farm's robots of kind {kind!r} run another scene; a kind is one "
-                      "scene and model, so choose that scene or another kind.", "scene")
+        raise Refused(409, "scene_mismatch", gettext("The farm's robots of kind %(kind)s run another scene; a kind is "
+                                                     "one scene and model, so choose that scene or another kind.",
+                                                     kind=repr(kind)), "scene")
     names: list[str] = []
     number = 0
     while len(names) < count:
@@ -69,8 +72,8 @@ def start_pool_robots(farm: RobotFarm, session: Session, kind: str, scene: str, 
         session.flush()
     except IntegrityError:  # another admin took a name meanwhile; the caller's unit of work rolls back
         stop_pool_processes(farm, started)
-        raise Refused(409, "robot_exists", "A robot of that name was added meanwhile; no robot was started. "
-                      "Try again.", "kind") from None
+        raise Refused(409, "robot_exists", lazy_gettext("A robot of that name was added meanwhile; no robot was "
+                                                       "started. Try again."), "kind") from None
     except BaseException:
         stop_pool_processes(farm, started)
         raise
@@ -83,7 +86,8 @@ def remove_pool_rows(session: Session, kind: str) -> list[str]:
     a keeper never starts again a robot whose row is gone, where it did restart one stopped before its row went."""
     rows = list(session.scalars(select(Robot).where(Robot.kind == kind, Robot.farm_managed.is_(True))))
     if not rows:
-        raise Refused(404, "unknown_pool", f"The farm runs no robots of kind {kind[:32]!r}.", "kind")
+        raise Refused(404, "unknown_pool", gettext("The farm runs no robots of kind %(kind)s.", kind=repr(kind[:32])),
+                      "kind")
     for row in rows:
         session.delete(row)
         events.announce(session, "robots", row.name)

@@ -17,6 +17,8 @@ import socket
 import threading
 from typing import Any, cast
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.farm.base import Capacity, FarmFull, FarmRobot, FarmUnavailable, RobotSpec
 from middleware.farm.costs import RAY_ROBOT_MEMORY_MB, robot_cpu_share, robots_per_host
 from middleware.farm.load import CpuMeter, cpu_seconds, resident_mb
@@ -112,8 +114,9 @@ class RayFarm:
             self.stop(spec.name)  # its owner lost track of it (its record was removed): a fresh one replaces it
         capacity = self.capacity()
         if capacity.free <= 0:
-            raise FarmFull(f"The lab's Ray farm runs as many simulated robots as its {capacity.hosts} host(s) can "
-                           f"({capacity.robots}). Try again when a robot is stopped, or add a robot host.")
+            raise FarmFull(gettext("The lab's Ray farm runs as many simulated robots as its %(hosts)s host(s) can "
+                                   "(%(robots)s). Try again when a robot is stopped, or add a robot host.",
+                                   hosts=capacity.hosts, robots=capacity.robots))
         # A fast robot (a prediction) is owned by this process, not detached: Ray ends it with its owner, and never
         # restarts it. It steps flat out for the seconds a prediction lasts; placement declares the usual share, so a
         # busy node still takes it (a whole core would leave it waiting behind the class's robots).
@@ -130,9 +133,10 @@ class RayFarm:
         except Exception as error:  # noqa: BLE001 - Ray raises several kinds; none may leave an actor behind
             ray.kill(actor, no_restart=True)
             log.warning("robot %s did not start on the Ray farm: %s", spec.name, error)
-            reason = "its skill server did not start" if _caused_by(error, SkillServerStartError) else \
-                f"no host took it within {START_TIMEOUT_S:.0f} s"
-            raise FarmUnavailable(f"{spec.name} did not start on the lab's Ray farm: {reason}.") from None
+            reason = gettext("its skill server did not start") if _caused_by(error, SkillServerStartError) else \
+                gettext("no host took it within %(seconds)s s", seconds=f"{START_TIMEOUT_S:.0f}")
+            raise FarmUnavailable(gettext("%(robot)s did not start on the lab's Ray farm: %(reason)s.", robot=spec.name,
+                                          reason=reason)) from None
 
     def find(self, name: str) -> FarmRobot | None:
         ray = self._ray()
@@ -145,8 +149,9 @@ class RayFarm:
         except ray.exceptions.RayActorError:
             return None  # stopped meanwhile
         except ray.exceptions.GetTimeoutError:
-            raise FarmUnavailable(f"{name} did not answer the farm within {CALL_TIMEOUT_S:.0f} s; "
-                                  "it may be restarting. Try again in a moment.") from None
+            raise FarmUnavailable(gettext("%(robot)s did not answer the farm within %(seconds)s s; it may be "
+                                          "restarting. Try again in a moment.", robot=name,
+                                          seconds=f"{CALL_TIMEOUT_S:.0f}")) from None
 
     def stop(self, name: str) -> bool:
         ray = self._ray()
@@ -194,13 +199,14 @@ class RayFarm:
 
         known = {entry["node_id"] for entry in self.nodes()}
         if node not in known:
-            raise FarmUnavailable(f"The farm has no live node {node!r}; `telelab farm status` lists them.")
+            raise FarmUnavailable(gettext("The farm has no live node %(node)s; `telelab farm status` lists them.",
+                                          node=repr(node)))
         # The GCS call behind Ray's own `ray drain-node`: the node takes no new actors from now on.
         accepted, why = ray._raylet.GcsClient(address=self.address).drain_node(
             node, autoscaler_pb2.DrainNodeReason.Value("DRAIN_NODE_REASON_PREEMPTION"),  # type: ignore[attr-defined]
             "telelab farm drain", 0)
         if not accepted:
-            raise FarmUnavailable(f"The cluster did not drain {node}: {why}")
+            raise FarmUnavailable(gettext("The cluster did not drain %(node)s: %(why)s", node=node, why=why))
         moved = [robot.name for robot in self.robots() if robot.node == node]
         for name in moved:
             ray.kill(ray.get_actor(ACTOR_PREFIX + name, namespace=NAMESPACE), no_restart=False)
@@ -235,14 +241,15 @@ class RayFarm:
             try:
                 import ray
             except ImportError:
-                raise FarmUnavailable("This web host has no Ray; install it with pip install 'telelab[ray]'.") from None
+                raise FarmUnavailable(gettext("This web host has no Ray; install it with pip install "
+                                              "'telelab[ray]'.")) from None
 
             try:
                 ray.init(address=self.address, namespace=NAMESPACE, log_to_driver=False,
                          logging_level=logging.WARNING, ignore_reinit_error=True)
             except (ConnectionError, RuntimeError) as error:
-                raise FarmUnavailable(f"The lab's Ray farm at {self.address} did not accept this process: "
-                                      f"{error}") from None
+                raise FarmUnavailable(gettext("The lab's Ray farm at %(address)s did not accept this process: "
+                                              "%(error)s", address=self.address, error=error)) from None
             self._actor_class = ray.remote(RobotActor)
             self._connected_pid = os.getpid()
             return ray
@@ -268,8 +275,8 @@ def _check_reachable(address: str) -> None:
         with socket.create_connection((host.strip("[]"), int(port)), timeout=REACH_TIMEOUT_S):
             pass
     except (OSError, ValueError):
-        raise FarmUnavailable(f"The lab's Ray farm at {address} cannot be reached. Check that its head runs "
-                              "(`ray start --head`) and TELELAB_RAY_ADDRESS.") from None
+        raise FarmUnavailable(gettext("The lab's Ray farm at %(address)s cannot be reached. Check that its head runs "
+                                      "(`ray start --head`) and TELELAB_RAY_ADDRESS.", address=address)) from None
 
 
 def _caused_by(error: BaseException, kind: type[BaseException]) -> bool:

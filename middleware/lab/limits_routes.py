@@ -4,12 +4,14 @@ from __future__ import annotations
 
 from flask import Blueprint, jsonify, request
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
 from middleware.access.limits import UNITS, changeable_fields, check_permitted, parse_limits_request
 from middleware.api.contract import OBJECT, STRING, array, described, number, obj
 from middleware.db import get_session
+from middleware.errors import written_number
 from middleware.robots.messages import limits_dict
 
 blueprint = Blueprint("limits", __name__)
@@ -45,5 +47,6 @@ def set_limits(robot_name: str) -> ResponseReturnValue:
     check_permitted(values, permitted)
     answer = robot.set_limits(values.get("max_linear_mps", 0.0), values.get("max_angular_radps", 0.0),
                               values.get("watchdog_s", 0.0))
-    saved = ", ".join(f"{name} {value:g} {UNITS[name]}" for name, value in values.items())
-    return jsonify({"limits": limits_dict(answer), "may_change": list(permitted), "message": f"Saved: {saved}."})
+    saved = ", ".join(f"{name} {written_number(value, 'g')} {UNITS[name]}" for name, value in values.items())
+    return jsonify({"limits": limits_dict(answer), "may_change": list(permitted),
+                    "message": gettext("Saved: %(settings)s.", settings=saved)})

@@ -4,6 +4,7 @@ student's own robot of a course they teach. Services take the session and never 
 
 from __future__ import annotations
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -27,8 +28,8 @@ def require_maintainer(session: Session, actor: User, owner_id: int | None) -> N
         owner = session.get(User, owner_id)
         if owner is not None and teaches_student(session, actor, owner):
             return
-    raise Refused(403, "forbidden", "Only the tutors of the robot's courses and admins diagnose and restart robots.",
-                  "robot_name")
+    raise Refused(403, "forbidden", gettext("Only the tutors of the robot's courses and admins diagnose and restart "
+                                            "robots."), "robot_name")
 
 
 def record(session: Session, actor: User, robot_name: str, action: str, outcome: str) -> RobotMaintenance:

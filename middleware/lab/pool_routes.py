@@ -7,6 +7,7 @@ from typing import Any
 
 from flask import Blueprint, flash, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 from sqlalchemy import select
 
@@ -14,7 +15,7 @@ from middleware.access import pools
 from middleware.access.coordinator import access_coordinator
 from middleware.access.pool_seats import PoolSeats
 from middleware.accounts.services import require_admin
-from middleware.api.contract import ANY, OBJECT, about, array, described, obj
+from middleware.api.contract import ANY, OBJECT, STRING, about, array, described, nullable, number, obj, whole
 from middleware.db import after_commit, get_session
 from middleware.errors import Refused, flashed, unless_refused
 from middleware.farm.base import FarmUnavailable
@@ -36,6 +37,14 @@ def _user_id() -> int:
     return int(current_user.get_id())
 
 
+SEAT = obj(("kind", "robot_name", "position", "queue_size", "robots", "estimated_wait_s", "console_url"),
+           description="where the user stands for a kind (access/pool_seats.PoolSeat)",
+           kind=STRING, robot_name=nullable(STRING),
+           position=whole(-1, description="1.. waiting, 0 bound, -1 not queued"),
+           queue_size=whole(0), robots=whole(0), estimated_wait_s=nullable(number()),
+           console_url=nullable(STRING))
+
+
 def _seat_dict(kind: str) -> dict[str, object]:
     seat = _seats().seat(kind, _user_id())
     body = seat.to_dict()
@@ -53,7 +62,7 @@ def wait_page(kind: str) -> ResponseReturnValue:
 
 @blueprint.get("/api/pools/<kind>/seat")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: SEAT})
 def api_seat(kind: str) -> ResponseReturnValue:
     """Where the user stands for kind: bound to a robot, waiting (position, expected wait), or not queued."""
     return jsonify(_seat_dict(kind))
@@ -61,7 +70,7 @@ def api_seat(kind: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/pools/<kind>/queue")
 @login_required
-@described(answers={200: OBJECT}, refusals=(409,))
+@described(answers={200: SEAT}, refusals=(409,))
 def api_join(kind: str) -> ResponseReturnValue:
     """Waits for any robot of kind (or keeps waiting: the page calls this every few seconds)."""
     _seats().join(kind, _user_id())
@@ -70,7 +79,7 @@ def api_join(kind: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/pools/<kind>/claim")
 @login_required
-@described(answers={200: OBJECT}, refusals=(409, 503))
+@described(answers={200: SEAT}, refusals=(409, 503))
 def api_claim(kind: str) -> ResponseReturnValue:
     """A free robot of kind now; 409 pool_full with the expected wait when none is free (nothing queued)."""
     _seats().claim(kind, _user_id())
@@ -79,7 +88,7 @@ def api_claim(kind: str) -> ResponseReturnValue:
 
 @blueprint.delete("/api/pools/<kind>/queue")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: SEAT})
 def api_leave(kind: str) -> ResponseReturnValue:
     """Stops waiting for kind."""
     _seats().leave(kind, _user_id())
@@ -179,7 +188,8 @@ def admin_start() -> ResponseReturnValue:
 
     def start() -> ResponseReturnValue:
         started = _start(form.get("kind"), form.get("scene"), form.get("count"))
-        flash(f"Started {len(started)} robot(s): {', '.join(started)}.", "success")
+        flash(gettext("Started %(count)s robot(s): %(names)s.", count=len(started), names=", ".join(started)),
+              "success")
         return redirect(url_for("pools.admin_page"), 303)
 
     def again(refused: Refused) -> ResponseReturnValue:
@@ -195,7 +205,7 @@ def admin_stop(kind: str) -> ResponseReturnValue:
     """Stops the farm's robots of a pool (the form)."""
     def stop() -> ResponseReturnValue:
         stopped = _stop(kind)
-        flash(f"Stopped {len(stopped)} robot(s) of {kind}.", "success")
+        flash(gettext("Stopped %(count)s robot(s) of %(kind)s.", count=len(stopped), kind=kind), "success")
         return redirect(url_for("pools.admin_page"), 303)
 
     return unless_refused(stop, flashed(url_for("pools.admin_page")))
@@ -217,7 +227,7 @@ def admin_api_start() -> ResponseReturnValue:
     """{kind, scene, count}: starts simulated robots of a pool on the farm (admins)."""
     data = request.get_json(silent=True)
     if not isinstance(data, dict):
-        raise Refused(400, "invalid_field", "Send a JSON object with kind, scene and count.", "kind")
+        raise Refused(400, "invalid_field", gettext("Send a JSON object with kind, scene and count."), "kind")
     return jsonify({"started": _start(data.get("kind"), data.get("scene"), data.get("count"))}), 201
 
 

@@ -7,6 +7,7 @@ import time
 
 from flask import Blueprint, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
@@ -29,7 +30,8 @@ def _maintainer(robot_name: str) -> None:
     """404 for a robot nobody knows, 403 for someone who may not maintain it."""
     registry = robot_registry()
     if registry.get(robot_name) is None:
-        raise ApiError(404, "unknown_robot", f"There is no robot named {robot_name[:64]!r}.", "robot_name")
+        raise ApiError(404, "unknown_robot", gettext("There is no robot named %(value)s.", value=repr(robot_name[:64])),
+                       "robot_name")
     maintenance.require_maintainer(get_session(), _actor(), registry.owner_of(robot_name))
 
 

@@ -9,7 +9,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
-from middleware.api.contract import ANY, BOOLEAN, OBJECT, STRING, described, obj
+from middleware.api.contract import ANY, BOOLEAN, OBJECT, STRING, array, described, nullable, number, obj
 from middleware.assessment.hidden_obstacles import hiding_book, info_without_obstacles, scene_without_obstacles
 from middleware.db import get_session
 from middleware.lab.skills import SUPERVISOR_ROLES
@@ -80,13 +80,21 @@ def robot_description(robot_name: str) -> ResponseReturnValue:
     return jsonify({"name": robot_name, "title": title, "online": info is not None, "info": info})
 
 
+# The scene's JSON form (robots/scene.scene_dict); obstacles_hidden only during an obstacle-zone test.
+SCENE = obj(("version", "scene_name", "floor", "marks", "blocks", "cylinders", "track", "spawn", "body_radius_m",
+             "robot_parts", "camera", "laser", "sonar", "room_cameras"),
+            version=STRING, scene_name=STRING, floor=OBJECT, marks=array(OBJECT), blocks=array(OBJECT),
+            cylinders=array(OBJECT), track=nullable(OBJECT), spawn=OBJECT, body_radius_m=number(),
+            robot_parts=array(OBJECT), camera=OBJECT, laser=OBJECT, sonar=OBJECT, room_cameras=array(OBJECT),
+            obstacles_hidden=STRING)
+
 # The scene does not change while a skill server runs; a robot restarted in another scene is noticed within this.
 SCENE_RECHECK_S = 5.0
 
 
 @blueprint.get("/api/robots/<robot_name>/scene")
 @login_required
-@described(answers={200: OBJECT}, refusals=(503,))
+@described(answers={200: SCENE}, refusals=(503,))
 def robot_scene(robot_name: str) -> ResponseReturnValue:
     """The robot's static world for the browser's 3D views, to whoever may see the robot (its camera's rule).
 

@@ -6,7 +6,10 @@ import math
 import re
 from dataclasses import dataclass
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.auth.schemas import InvalidField
+from middleware.errors import written_number
 from middleware.validation import InvalidInput, parse_message
 
 NAME_PATTERN = re.compile(r"^[a-z][a-z0-9_]{0,63}$")  # skills and their parameters
@@ -36,9 +39,14 @@ class DriveRequest:
 def _finite_within(message: dict[str, object], field: str, limit: float, unit: str) -> float:
     value = message.get(field)
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise InvalidField(field, f"{field} must be a finite number between {-limit:g} and {limit:g} {unit}.")
+        raise InvalidField(field, gettext("%(field)s must be a finite number between %(low)s and %(high)s %(unit)s.",
+                                          field=field, low=written_number(-limit, "g"),
+                                          high=written_number(limit, "g"), unit=unit))
     if abs(value) > limit:
-        raise InvalidField(field, f"{field} must be between {-limit:g} and {limit:g} {unit}; got {value:g}.")
+        raise InvalidField(field, gettext("%(field)s must be between %(low)s and %(high)s %(unit)s; got %(value)s.",
+                                          field=field, low=written_number(-limit, "g"),
+                                          high=written_number(limit, "g"), unit=unit,
+                                          value=written_number(value, "g")))
     return float(value)
 
 
@@ -51,9 +59,11 @@ def parse_drive_message(raw: object, limits: DriveLimits, previous_sequence: int
     kind = message["type"]
     sequence = message.get("sequence")
     if isinstance(sequence, bool) or not isinstance(sequence, int) or not 1 <= sequence <= MAX_SEQUENCE:
-        raise InvalidField("sequence", f"sequence must be a whole number from 1 to {MAX_SEQUENCE}.")
+        raise InvalidField("sequence", gettext("sequence must be a whole number from 1 to %(high)s.",
+                                               high=MAX_SEQUENCE))
     if sequence <= previous_sequence:
-        raise InvalidField("sequence", f"sequence must be greater than the previous command's ({previous_sequence}).")
+        raise InvalidField("sequence", gettext("sequence must be greater than the previous command's (%(previous)s).",
+                                               previous=previous_sequence))
     if kind == "stop":
         return DriveRequest(sequence, 0.0, 0.0)
     return DriveRequest(

@@ -11,7 +11,7 @@ from flask_login import current_user, login_required
 
 from middleware import i18n
 from middleware.access.commands import Commander, robot_commands
-from middleware.api.contract import ANY, BOOLEAN, OBJECT, STRING, array, described, obj
+from middleware.api.contract import ANY, BOOLEAN, OBJECT, STRING, array, described, number, obj
 from middleware.assessment.hidden_obstacles import MAP_REFUSAL, OBSTACLES_HIDDEN, hiding_book
 from middleware.db import get_session
 from middleware.errors import ApiError
@@ -167,7 +167,8 @@ def _supervision(robot_name: str) -> Commander:
 
 @blueprint.delete("/api/robots/<robot_name>/map")
 @login_required
-@described(answers={200: OBJECT}, refusals=(409, 503))
+@described(answers={200: obj(("map", "ended_goal_ids", "message"), map={"type": "null"},
+                            ended_goal_ids=array(STRING), message=STRING)}, refusals=(409, 503))
 def clear_map(robot_name: str) -> ResponseReturnValue:
     """Forgets the robot's map (supervisory): a map gone wrong would otherwise mislead every later user."""
     robot = _supervision(robot_name)
@@ -178,7 +179,9 @@ def clear_map(robot_name: str) -> ResponseReturnValue:
 
 @blueprint.post("/api/robots/<robot_name>/dock")
 @login_required
-@described(answers={200: OBJECT}, refusals=(409, 503))
+@described(answers={200: obj(("ended_goal_ids", "dock", "message"), ended_goal_ids=array(STRING),
+                            dock=obj(("x_m", "y_m", "theta_rad"), x_m=number(), y_m=number(), theta_rad=number()),
+                            message=STRING)}, refusals=(409, 503))
 def return_to_dock(robot_name: str) -> ResponseReturnValue:
     """Carries the robot back to its dock (supervisory): the way out of a drifted pose or a robot stuck on a wall."""
     robot = _supervision(robot_name)

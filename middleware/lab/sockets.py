@@ -15,6 +15,7 @@ from datetime import UTC, datetime
 
 import grpc
 from flask import Flask, current_app
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user
 from simple_websocket import ConnectionClosed
 
@@ -280,6 +281,7 @@ def drive_channel(ws: WebSocket, robot_name: str) -> Continuation | None:
             with contextlib.suppress(asyncio.CancelledError, ConnectionClosed):
                 await sending
             await held.close()
+            await robot.end_driving()
             await work(_stop_quietly, robot, sequence_base + last_sequence + 1)
             seat.keep(live, closing=True)
 
@@ -305,7 +307,7 @@ def goal_channel(ws: WebSocket, robot_name: str, goal_id: str) -> Continuation |
     if link is None:
         return None
     if not GOAL_ID_PATTERN.fullmatch(goal_id):
-        refuse(ws, CLOSE_NOT_FOUND, "unknown_goal", "There is no goal with that id.", "goal_id")
+        refuse(ws, CLOSE_NOT_FOUND, "unknown_goal", gettext("There is no goal with that id."), "goal_id")
         return None
 
     async def relay(live: LiveSocket) -> None:

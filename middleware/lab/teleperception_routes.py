@@ -13,6 +13,7 @@ from typing import TypeVar
 
 from flask import Blueprint, Response, abort, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware.access.commands import robot_commands
@@ -43,7 +44,8 @@ def _user_id() -> int:
 def _choice(name: str, choices: dict[str, Choice]) -> Choice:
     value = request.args.get(name, "both")
     if value not in choices:
-        raise ApiError(400, "invalid_field", f"{name} must be one of {', '.join(choices)}.", name)
+        raise ApiError(400, "invalid_field", gettext("%(name)s must be one of %(choices)s.", name=name,
+                                                     choices=", ".join(choices)), name)
     return choices[value]
 
 
@@ -89,8 +91,8 @@ def reset(robot_name: str) -> ResponseReturnValue:
     """Forgets the evidence grid and the readings (supervisory: the controller, or a tutor or admin at any time)."""
     robot = _supervision(robot_name)
     answer = robot.reset_evidence()
-    return jsonify({"evidence": evidence_dict(answer), "message": "The evidence grid was reset: readings gather "
-                                                                  "again from now."})
+    return jsonify({"evidence": evidence_dict(answer), "message": gettext("The evidence grid was reset: readings "
+                                                                          "gather again from now.")})
 
 
 def _readings(link: RobotLink) -> tuple[list[robot_pb2.PerceptionScan], SensorAngles]:

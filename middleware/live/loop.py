@@ -183,6 +183,11 @@ class StreamWatch:
         hub.listen(self._news)
 
     def _news(self) -> None:
+        # The hub's pump runs on this loop, so its news wakes the viewers at once: a hop through
+        # call_soon_threadsafe wrote the loop's self-pipe and woke its selector once per message per robot.
+        if _running_loop() is self._loop:
+            self._wake()
+            return
         with contextlib.suppress(RuntimeError):  # the loop is closed: the process is ending
             self._loop.call_soon_threadsafe(self._wake)
 
@@ -197,6 +202,14 @@ class StreamWatch:
 
     def leave(self, event: asyncio.Event) -> None:
         self._viewers.discard(event)
+
+
+def _running_loop() -> asyncio.AbstractEventLoop | None:
+    """The loop running in this thread, or None (a thread with no loop: a hub closed from a request)."""
+    try:
+        return asyncio.get_running_loop()
+    except RuntimeError:
+        return None
 
 
 _loops: dict[int, ChannelLoop] = {}

@@ -19,6 +19,7 @@ import time
 from collections.abc import Awaitable, Callable
 from typing import Any
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from simple_websocket import ConnectionClosed
 from wsproto.connection import Connection, ConnectionType
 from wsproto.events import BytesMessage, CloseConnection, Message, Ping, TextMessage
@@ -43,8 +44,8 @@ def accept_websocket(environ: dict) -> socket.socket:
     key = environ.get("HTTP_SEC_WEBSOCKET_KEY", "")
     raw = environ.get("gunicorn.socket") or environ.get("werkzeug.socket")
     if not _is_handshake_key(key) or environ.get("HTTP_SEC_WEBSOCKET_VERSION") != "13" or raw is None:
-        raise ApiError(400, "websocket_required", "This address takes WebSocket connections (version 13) only.",
-                       "Sec-WebSocket-Key")
+        raise ApiError(400, "websocket_required", gettext("This address takes WebSocket connections (version 13) "
+                                                          "only."), "Sec-WebSocket-Key")
     raw.sendall(b"HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
                 b"Sec-WebSocket-Accept: " + generate_accept_token(key.encode("ascii")) + b"\r\n\r\n")
     return raw
@@ -337,7 +338,7 @@ class LiveSocket(Inbox):
             await wait_at_most(self._recheck, every_s())
             self._recheck.clear()
             if self.connected and not await login_still_open():
-                message = "Your session has ended. Log in again."
+                message = gettext("Your session has ended. Log in again.")
                 with contextlib.suppress(ConnectionClosed):
                     self.write(json.dumps({"type": "error", "code": "not_logged_in", "message": message,
                                            "field": None}, separators=(",", ":")))

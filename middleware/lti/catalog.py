@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from flask import url_for
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -28,28 +29,29 @@ class Placeable:
     """One item of the deep-linking picker."""
 
     target: str
-    kind: str  # what a person reads: "Robot console", "Test", ...
+    kind: str  # what a person reads, in their language: "Robot console", "Test", ...
     title: str
     score_maximum: float | None = None
 
 
 def placeable(session: Session, actor: User, robot_names: list[str]) -> list[Placeable]:
     """Everything actor may place, grouped by kind."""
-    items = [Placeable(f"console:{name}", "Robot console", name) for name in robot_names]
-    items += [Placeable(f"pool:{kind}", "Pool of robots", f"Any free robot of kind {kind}")
+    items = [Placeable(f"console:{name}", gettext("Robot console"), name) for name in robot_names]
+    items += [Placeable(f"pool:{kind}", gettext("Pool of robots"), gettext("Any free robot of kind %(kind)s",
+                                                                           kind=kind))
               for kind in kinds(session)]
-    items += [Placeable(f"lesson:{lesson.id}", "Lesson", lesson.title)
+    items += [Placeable(f"lesson:{lesson.id}", gettext("Lesson"), lesson.title)
               for lesson in session.scalars(select(Lesson).order_by(Lesson.title, Lesson.id))]
-    items += [Placeable(f"tour:{tour.id}", "Tour", tour.title)
+    items += [Placeable(f"tour:{tour.id}", gettext("Tour"), tour.title)
               for tour in session.scalars(select(Tour).order_by(Tour.title, Tour.id))]
     exams = select(Exam).order_by(Exam.title, Exam.id)
     if actor.role != Role.ADMIN:
         exams = exams.where(Exam.course_id.in_(taught_course_ids(actor)))
-    items += [Placeable(f"exam:{exam.id}", "Test", exam.title, 100.0) for exam in session.scalars(exams)]
+    items += [Placeable(f"exam:{exam.id}", gettext("Test"), exam.title, 100.0) for exam in session.scalars(exams)]
     ensure_catalogue(session)  # the built-in exercises exist once asked for
-    items += [Placeable(f"exercise:{exercise.slug}", "Python exercise", exercise.title)
+    items += [Placeable(f"exercise:{exercise.slug}", gettext("Python exercise"), exercise.title)
               for exercise in exercise_catalogue(session)]
-    items.append(Placeable("class:", "Class session", "The course's class session"))
+    items.append(Placeable("class:", gettext("Class session"), gettext("The course's class session")))
     return items
 
 

@@ -28,6 +28,7 @@ from sqlalchemy.orm import Session
 
 from middleware import db
 from middleware.assessment.review import final_score, reviews_of
+from middleware.i18n import N_
 from middleware.lti import services
 from middleware.models.accounts import as_utc, utc_now
 from middleware.models.assessment import Attempt
@@ -100,7 +101,7 @@ def _send_one(session: Session, row: LtiGradePassback, http: requests.Session) -
     platform = session.get(LtiPlatform, context.platform_id) if context else None
     subject = session.scalar(select(LtiIdentity.subject).where(LtiIdentity.user_id == row.user_id))
     if item is None or context is None or platform is None or subject is None:
-        raise LtiException("The LMS course or its registration is gone; the grade cannot be sent.")
+        raise LtiException(N_("The LMS course or its registration is gone."))  # stored; said by services.said
     scopes = list(context.ags_scopes or []) or [SCORE_SCOPE]
     ags = AssignmentsGradesService(services.connector(session, platform, http),
                                    {"lineitem": item.lineitem_url, "scope": scopes})  # type: ignore[typeddict-item]

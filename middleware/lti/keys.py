@@ -10,6 +10,7 @@ import json
 from datetime import datetime
 from typing import Any
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from jwcrypto.jwk import JWK  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
@@ -57,10 +58,10 @@ def retire(session: Session, kid: str) -> LtiToolKey:
     """Takes a key out of the JWKS; the signing key cannot be retired (rotate first)."""
     key = session.scalar(select(LtiToolKey).where(LtiToolKey.kid == kid, LtiToolKey.retired_at.is_(None)))
     if key is None:
-        raise Refused(404, "unknown_key", "There is no key in use with that id.", "kid")
+        raise Refused(404, "unknown_key", gettext("There is no key in use with that id."), "kid")
     if key.id == signing_key(session).id:
-        raise Refused(409, "signing_key", "That key signs now: rotate to a new key first, then retire this one.",
-                      "kid")
+        raise Refused(409, "signing_key", gettext("That key signs now: rotate to a new key first, then retire this "
+                                                  "one."), "kid")
     key.retired_at = utc_now()
     session.flush()
     return key

@@ -16,10 +16,13 @@ import secrets
 from dataclasses import dataclass
 from typing import Any
 
+from flask_babel import gettext, lazy_gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
+from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from middleware.auth.services import hash_password
+from middleware.courses.authority import taught_course_ids
 from middleware.errors import Refused
 from middleware.models import Course, CourseMembership, Role, User
 from middleware.models.lti import LtiContext, LtiIdentity, LtiLineItem, LtiPlatform
@@ -57,9 +60,9 @@ def check_audience(claims: dict[str, Any], client_id: str) -> None:
     aud = claims.get("aud")
     audiences = aud if isinstance(aud, list) else [aud]
     if client_id not in audiences or (len(audiences) > 1 and claims.get("azp") != client_id):
-        raise LaunchRefused("wrong_audience", "This launch was meant for another tool (its audience is not "
-                                              "Telelab's client id). Ask the LMS's administrator to check the "
-                                              "registration.")
+        raise LaunchRefused("wrong_audience", gettext("This launch was meant for another tool (its audience is "
+                                                      "not Telelab's client id). Ask the LMS's administrator to "
+                                                      "check the registration."))
 
 
 def _slug(text: object, fallback: str) -> str:
@@ -80,14 +83,15 @@ def match_user(session: Session, issuer: str, claims: dict[str, Any], teaches: b
     """The account of (issuer, sub), made on the first launch; a tutor of the LMS course gets a tutor account."""
     subject = claims.get("sub")
     if not isinstance(subject, str) or not subject or len(subject) > 255:
-        raise LaunchRefused("missing_claims", "The launch names no person (its sub claim is missing).")
+        raise LaunchRefused("missing_claims", gettext("The launch names no person (its sub claim is missing)."))
     identity = session.scalar(select(LtiIdentity).where(LtiIdentity.issuer == issuer,
                                                         LtiIdentity.subject == subject))
     if identity is not None:
         user = session.get(User, identity.user_id)
         assert user is not None  # the foreign key cascades
         if not user.is_active:
-            raise LaunchRefused("disabled", "Your Telelab account is disabled. Ask the lab's administrator.", 403)
+            raise LaunchRefused("disabled", gettext("Your Telelab account is disabled. Ask the lab's "
+                                                    "administrator."), 403)
         if teaches and user.role == Role.STUDENT:
             user.role = Role.TUTOR.value  # never less than it is, never admin
         return user
@@ -109,25 +113,58 @@ def _free_code(session: Session, label: str, salt: str) -> str:
     return f"{base}-{hashlib.sha256(salt.encode()).hexdigest()[:6]}".upper()[:32]
 
 
-def map_context(session: Session, platform: LtiPlatform, claims: dict[str, Any]) -> LtiContext | None:
-    """The Telelab course of the launch's LMS course (made on its first launch), with the service URLs it gave."""
+def _context_id(claims: dict[str, Any]) -> tuple[str, dict[str, Any]] | None:
+    """(the LMS course's id, its claim), None for a launch from no LMS course."""
     context = claims.get(CONTEXT_CLAIM)
     if not isinstance(context, dict):
         return None
     context_id = context.get("id")
     if not isinstance(context_id, str) or not context_id or len(context_id) > 255:
-        raise LaunchRefused("missing_claims", "The launch's course (context) has no id.")
+        raise LaunchRefused("missing_claims", gettext("The launch's course (context) has no id."))
+    return context_id, context
+
+
+def is_new_context(session: Session, platform: LtiPlatform, claims: dict[str, Any]) -> bool:
+    """True when the launch comes from an LMS course Telelab has no course for yet."""
+    found = _context_id(claims)
+    return found is not None and session.scalar(select(LtiContext.id).where(
+        LtiContext.issuer == platform.issuer, LtiContext.context_id == found[0])) is None
+
+
+def linkable_courses(session: Session, user: User) -> list[Course]:
+    """The courses user tutors that no LMS course is linked to yet (one LMS course per Telelab course)."""
+    linked = select(LtiContext.course_id)
+    return list(session.scalars(select(Course).where(Course.id.in_(taught_course_ids(user)), Course.id.not_in(linked))
+                                .order_by(Course.title, Course.id)))
+
+
+def map_context(session: Session, platform: LtiPlatform, claims: dict[str, Any],
+                course_id: int | None = None) -> LtiContext | None:
+    """The Telelab course of the launch's LMS course, with the service URLs it gave. On its first launch the LMS
+    course is linked to course_id (an existing course the caller checked), or to a new course made for it."""
+    found = _context_id(claims)
+    if found is None:
+        return None
+    context_id, context = found
     row = session.scalar(select(LtiContext).where(LtiContext.issuer == platform.issuer,
                                                   LtiContext.context_id == context_id))
     if row is None:
-        label = context.get("label") or context.get("title") or "LMS"
-        title = str(context.get("title") or label)[:200]
-        course = Course(code=_free_code(session, str(label), f"{platform.issuer}|{context_id}"), title=title)
-        session.add(course)
-        session.flush()
+        if course_id is None:
+            label = context.get("label") or context.get("title") or "LMS"
+            title = str(context.get("title") or label)[:200]
+            course = Course(code=_free_code(session, str(label), f"{platform.issuer}|{context_id}"), title=title)
+            session.add(course)
+            session.flush()
+            course_id = course.id
         row = LtiContext(platform_id=platform.id, issuer=platform.issuer, context_id=context_id,
-                         course_id=course.id, ags_scopes=[])
+                         course_id=course_id, ags_scopes=[])
         session.add(row)
+        try:
+            session.flush()
+        except IntegrityError:  # another launch linked this LMS course, or another one to that course, meanwhile
+            raise LaunchRefused("already_linked", lazy_gettext(
+                "That course was linked to an LMS course at the same moment. Launch Telelab from the LMS again."),
+                409) from None
     nrps = claims.get(NRPS_CLAIM)
     if isinstance(nrps, dict) and isinstance(nrps.get("context_memberships_url"), str):
         row.memberships_url = nrps["context_memberships_url"][:1000]
@@ -179,8 +216,8 @@ def read_target(claims: dict[str, Any], secret: str) -> Target | None:
     match = _TARGET.fullmatch(target) if isinstance(target, str) else None
     if match is None or not isinstance(signature, str) or not hmac.compare_digest(
             signature, sign_target(secret, str(context_id), str(target))):
-        raise LaunchRefused("unknown_target", "This link was not placed by Telelab in this LMS course. Ask your "
-                                              "tutor to place it again with \"Select content\".")
+        raise LaunchRefused("unknown_target", gettext("This link was not placed by Telelab in this LMS course. Ask "
+                                                      "your tutor to place it again with \"Select content\"."))
     return Target(match.group(1), match.group(2))
 
 

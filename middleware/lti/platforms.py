@@ -12,17 +12,24 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from urllib.parse import urlsplit
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import Engine, delete, select
 from sqlalchemy.orm import Session
 
 from middleware import events
-from middleware.errors import Refused
+from middleware.errors import Refused, written_number
+from middleware.i18n import N_
 from middleware.models.lti import LtiDeployment, LtiPlatform
 
 EVENT_TOPIC = "lti"
 _LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
 MAX_DEPLOYMENTS = 50
 ORIGINS_TTL_S = 60.0
+# The fields as a refusal names them (marked here, said in the request's language).
+_ISSUER = N_("the issuer")
+_LOGIN_URL = N_("the login (authorization) URL")
+_TOKEN_URL = N_("the access-token URL")
+_KEY_SET_URL = N_("the key-set (JWKS) URL")
 
 
 class InvalidPlatform(Refused):
@@ -32,25 +39,33 @@ class InvalidPlatform(Refused):
         super().__init__(400, "invalid_field", message, field)
 
 
+def _capital(text: str) -> str:
+    return text[:1].upper() + text[1:]
+
+
 def _text(fields: Mapping[str, object], name: str, label: str, limit: int = 255) -> str:
     value = fields.get(name)
     if not isinstance(value, str) or not value.strip():
-        raise InvalidPlatform(name, f"Fill in {label}.")
+        raise InvalidPlatform(name, gettext("Fill in %(label)s.", label=gettext(label)))
     value = value.strip()
     if len(value) > limit:
-        raise InvalidPlatform(name, f"{label} is at most {limit} characters.")
+        raise InvalidPlatform(name, gettext("%(label)s is at most %(limit)s characters.",
+                                            label=_capital(gettext(label)), limit=written_number(limit)))
     return value
 
 
-def clean_url(value: str, field: str, label: str) -> str:
-    """An https URL (http only for this machine, when testing), with a host."""
+def clean_url(value: str, field: str, label: str, **names: str) -> str:
+    """An https URL (http only for this machine, when testing), with a host; label is a marked message (N_) that
+    names the field, filled with names."""
+    said = _capital(gettext(label, **names))
     parts = urlsplit(value)
     if parts.scheme not in ("https", "http") or not parts.hostname:
-        raise InvalidPlatform(field, f"{label} must be a full address starting with https://.")
+        raise InvalidPlatform(field, gettext("%(label)s must be a full address starting with https://.", label=said))
     if parts.scheme == "http" and parts.hostname not in _LOCAL_HOSTS:
-        raise InvalidPlatform(field, f"{label} must use https:// (plain http only for 127.0.0.1).")
+        raise InvalidPlatform(field, gettext("%(label)s must use https:// (plain http only for 127.0.0.1).",
+                                             label=said))
     if any(ch.isspace() for ch in value):
-        raise InvalidPlatform(field, f"{label} must not contain spaces.")
+        raise InvalidPlatform(field, gettext("%(label)s must not contain spaces.", label=said))
     return value
 
 
@@ -86,23 +101,22 @@ class PlatformFields:
 
 def clean_platform(fields: Mapping[str, object]) -> PlatformFields:
     """Every field checked, the first wrong one named."""
-    issuer = clean_url(_text(fields, "issuer", "The issuer"), "issuer", "The issuer")
-    client_id = _text(fields, "client_id", "The client id")
-    login = clean_url(_text(fields, "auth_login_url", "The login (authorization) URL", 1000), "auth_login_url",
-                      "The login (authorization) URL")
-    token = clean_url(_text(fields, "auth_token_url", "The access-token URL", 1000), "auth_token_url",
-                      "The access-token URL")
-    key_set = clean_url(_text(fields, "key_set_url", "The key-set (JWKS) URL", 1000), "key_set_url",
-                        "The key-set (JWKS) URL")
+    issuer = clean_url(_text(fields, "issuer", _ISSUER), "issuer", _ISSUER)
+    client_id = _text(fields, "client_id", N_("the client id"))
+    login = clean_url(_text(fields, "auth_login_url", _LOGIN_URL, 1000), "auth_login_url", _LOGIN_URL)
+    token = clean_url(_text(fields, "auth_token_url", _TOKEN_URL, 1000), "auth_token_url", _TOKEN_URL)
+    key_set = clean_url(_text(fields, "key_set_url", _KEY_SET_URL, 1000), "key_set_url", _KEY_SET_URL)
     deployments = _list(fields.get("deployment_ids"))
     if not deployments:
-        raise InvalidPlatform("deployment_ids", "Give at least one deployment id (the LMS shows it once the tool "
-                                                "is added).")
+        raise InvalidPlatform("deployment_ids", gettext("Give at least one deployment id (the LMS shows it once "
+                                                        "the tool is added)."))
     if len(deployments) > MAX_DEPLOYMENTS or any(len(d) > 255 for d in deployments):
-        raise InvalidPlatform("deployment_ids", f"Give at most {MAX_DEPLOYMENTS} deployment ids of at most 255 "
-                                                "characters each.")
-    origins = [origin_of(clean_url(o, "frame_origins", f"The page origin {o!r}")) for o in
-               _list(fields.get("frame_origins"))]
+        raise InvalidPlatform("deployment_ids", gettext("Give at most %(count)s deployment ids of at most "
+                                                        "%(limit)s characters each.",
+                                                        count=written_number(MAX_DEPLOYMENTS),
+                                                        limit=written_number(255)))
+    origins = [origin_of(clean_url(o, "frame_origins", N_("the page origin %(origin)s"), origin=repr(o)))
+               for o in _list(fields.get("frame_origins"))]
     name = fields.get("name")
     title = name.strip()[:200] if isinstance(name, str) and name.strip() else urlsplit(issuer).hostname or issuer
     return PlatformFields(title, issuer, client_id, login, token, key_set, list(dict.fromkeys(deployments)),
@@ -132,7 +146,7 @@ def remove(session: Session, platform_id: int) -> None:
     """Removes a platform: its launches stop working; accounts and courses it made stay."""
     platform = session.get(LtiPlatform, platform_id)
     if platform is None:
-        raise Refused(404, "unknown_platform", "There is no such platform.", "platform_id")
+        raise Refused(404, "unknown_platform", gettext("There is no such platform."), "platform_id")
     session.delete(platform)
     session.flush()
     events.announce(session, EVENT_TOPIC, "platforms")

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import requests
+from flask_babel import gettext  # type: ignore[import-untyped]
 from pylti1p3.exception import LtiException
 from pylti1p3.names_roles import NamesRolesProvisioningService
 from sqlalchemy import delete, select
@@ -37,8 +38,9 @@ class RosterReport:
 
     def sentence(self) -> str:
         """The tutor's summary."""
-        return (f"Roster synced from the LMS: {self.enrolled} enrolled, {self.already} already here, "
-                f"{self.removed} removed (no longer active in the LMS).")
+        return str(gettext("Roster synced from the LMS: %(enrolled)s enrolled, %(already)s already here, "
+                           "%(removed)s removed (no longer active in the LMS).", enrolled=self.enrolled,
+                           already=self.already, removed=self.removed))
 
 
 def linked_context(session: Session, course_id: int) -> LtiContext | None:
@@ -49,27 +51,30 @@ def linked_context(session: Session, course_id: int) -> LtiContext | None:
 def _fetch(session: Session, context: LtiContext, http: requests.Session | None) -> list[dict[str, Any]]:
     platform = session.get(LtiPlatform, context.platform_id)
     if platform is None or not context.memberships_url:
-        raise Refused(409, "no_roster_service", "The LMS has not offered its roster to Telelab for this course "
-                                                "(no Names and Role Provisioning service in its launches).")
+        raise Refused(409, "no_roster_service", gettext("The LMS has not offered its roster to Telelab for this "
+                                                        "course (no Names and Role Provisioning service in its "
+                                                        "launches)."))
     nrps = NamesRolesProvisioningService(services.connector(session, platform, http),
                                          {"context_memberships_url": context.memberships_url,
                                           "service_versions": ["2.0"]})  # type: ignore[typeddict-unknown-key]
     try:
         members = nrps.get_members()
     except (LtiException, requests.RequestException, ValueError) as error:
-        raise Refused(502, "lms_unreachable", "The roster could not be read: " +
-                      services.failure_reason(error)) from None
+        answer = services.lms_answer(error)
+        raise Refused(502, "lms_unreachable", gettext("The roster could not be read: %(reason)s",
+                                                      reason=services.said(answer) if answer else str(error)[:200])) \
+            from None
     return [dict(m) for m in members if isinstance(m, dict)][:MAX_MEMBERS]
 
 
 def sync(session: Session, actor: User, course_id: int, http: requests.Session | None = None) -> RosterReport:
     """Reads the LMS roster of the course and enrols or removes its people (the course's tutors, admins)."""
     if not teaches_course(session, actor, course_id):
-        raise Refused(403, "forbidden", "Only the course's tutors sync its roster.")
+        raise Refused(403, "forbidden", gettext("Only the course's tutors sync its roster."))
     context = linked_context(session, course_id)
     if context is None:
-        raise Refused(409, "not_from_lms", "This course is not linked to an LMS course: launch Telelab from the "
-                                           "LMS course once to link it.")
+        raise Refused(409, "not_from_lms", gettext("This course is not linked to an LMS course: launch Telelab "
+                                                   "from the LMS course once to link it."))
     members = _fetch(session, context, http)
     enrolled = already = 0
     active_users: set[int] = set()

@@ -3,21 +3,23 @@ admin's platform registrations and keys, and the tutor's roster sync and grade r
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 from urllib.parse import urlencode
 
 from flask import Blueprint, current_app, flash, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware import i18n
 from middleware.accounts.services import require_admin
 from middleware.auth import sessions
 from middleware.db import get_session
-from middleware.errors import Refused, flashed, unless_refused
+from middleware.errors import Refused, flashed, unless_refused, written_number
 from middleware.extensions import csrf
 from middleware.lti import catalog, flow, grades, keys, launches, platforms, roster
-from middleware.lti.accept import accept_launch, deep_link_owner
+from middleware.lti.accept import accept_launch, deep_link_owner, link_new_context
 from middleware.robots.registry import robot_registry
 
 blueprint = Blueprint("lti", __name__)
@@ -56,6 +58,8 @@ def launch() -> ResponseReturnValue:
         locale = presentation.get("locale") if isinstance(presentation, dict) else validated.claims.get("locale")
         if isinstance(locale, str):
             i18n.remember_launch_locale(locale)  # the language of the pages, unless the person chose one
+        if accepted.choose_course:
+            return _link_page(validated.launch_id, validated.claims)
         if validated.is_deep_link:
             return _picker(validated.launch_id)
         return redirect(catalog.destination(accepted.target, accepted.course_id, accepted.teaches), 303)
@@ -63,6 +67,34 @@ def launch() -> ResponseReturnValue:
     # A refused launch: its own page (what happened, what to do), nothing it did kept.
     return unless_refused(accept, lambda refused: (render_template("lti/refused.html", refused=refused),
                                                    refused.status), about_the_page=())
+
+
+def _link_page(launch_id: str, claims: Mapping[str, Any], error: str | None = None,
+               status: int = 200) -> ResponseReturnValue:
+    context = claims.get(launches.CONTEXT_CLAIM)
+    title = str((context.get("title") or context.get("label") or "") if isinstance(context, dict) else "")[:200]
+    return render_template("lti/link_course.html", launch_id=launch_id, lms_course=title, error=error,
+                           courses=launches.linkable_courses(get_session(), current_user)), status
+
+
+@blueprint.post("/lti/link-course")
+@login_required
+def link_course() -> ResponseReturnValue:
+    """An instructor's first launch from a new LMS course: links it to the chosen course (or a new one), then goes
+    on where the launch was going."""
+    dbs = get_session()
+    launch_id = request.form.get("launch_id", "")[:200]
+    restored = flow.restore_launch(dbs, launch_id)
+    claims = restored.get_launch_data()
+
+    def link() -> ResponseReturnValue:
+        accepted = link_new_context(dbs, claims, flow.launch_platform(dbs, restored), current_user,
+                                    request.form.get("course", "")[:20], str(current_app.config["SECRET_KEY"]))
+        if restored.is_deep_link_launch():
+            return _picker(launch_id)
+        return redirect(catalog.destination(accepted.target, accepted.course_id, accepted.teaches), 303)
+
+    return unless_refused(link, lambda refused: _link_page(launch_id, claims, refused.message, refused.status))
 
 
 def _picker(launch_id: str, error: str | None = None, status: int = 200) -> ResponseReturnValue:
@@ -80,10 +112,10 @@ def deep_link() -> ResponseReturnValue:
     deep_link_owner(dbs, restored.get_launch_data(), current_user)
     chosen = request.form.getlist("target")[:50]
     if not chosen:
-        return _picker(launch_id, "Choose at least one item to place in the LMS course.", 400)
+        return _picker(launch_id, gettext("Choose at least one item to place in the LMS course."), 400)
     known = {item.target: item for item in catalog.placeable(dbs, current_user, robot_registry(current_app).names())}
     if any(target not in known for target in chosen):
-        return _picker(launch_id, "One of the chosen items is not offered any more. Choose again.", 400)
+        return _picker(launch_id, gettext("One of the chosen items is not offered any more. Choose again."), 400)
     launch_url = url_for("lti.launch", _external=True)
     items = [(known[t].title[:200], launch_url, t, known[t].score_maximum) for t in chosen]
     return_url, token = flow.deep_link_response(restored, items, str(current_app.config["SECRET_KEY"]))
@@ -122,7 +154,7 @@ def admin_register() -> ResponseReturnValue:
     def register() -> ResponseReturnValue:
         require_admin(current_user)
         platform = platforms.register(get_session(), request.form.to_dict())
-        flash(f"Registered {platform.name}. Its launches are accepted from now on.", "success")
+        flash(gettext("Registered %(name)s. Its launches are accepted from now on.", name=platform.name), "success")
         return redirect(url_for("lti.admin_page"), 303)
 
     return unless_refused(register, lambda refused: _admin_page({refused.field or "form": refused.message},
@@ -135,7 +167,7 @@ def admin_remove(platform_id: int) -> ResponseReturnValue:
     """Removes a platform registration."""
     require_admin(current_user)
     platforms.remove(get_session(), platform_id)
-    flash("The platform was removed: its launches are refused from now on.", "success")
+    flash(gettext("The platform was removed: its launches are refused from now on."), "success")
     return redirect(url_for("lti.admin_page"), 303)
 
 
@@ -145,7 +177,8 @@ def admin_rotate() -> ResponseReturnValue:
     """A new signing key; the old one stays published until retired."""
     require_admin(current_user)
     key = keys.rotate(get_session())
-    flash(f"New signing key {key.kid[:12]}… The previous key stays in the key set until you retire it.", "success")
+    flash(gettext("New signing key %(kid)s… The previous key stays in the key set until you retire it.",
+                  kid=key.kid[:12]), "success")
     return redirect(url_for("lti.admin_page"), 303)
 
 
@@ -156,7 +189,7 @@ def admin_retire(kid: str) -> ResponseReturnValue:
     def retire() -> ResponseReturnValue:
         require_admin(current_user)
         keys.retire(get_session(), kid[:64])
-        flash("The key was retired: platforms no longer find it in the key set.", "success")
+        flash(gettext("The key was retired: platforms no longer find it in the key set."), "success")
         return redirect(url_for("lti.admin_page"), 303)
 
     return unless_refused(retire, flashed(url_for("lti.admin_page")))
@@ -180,7 +213,7 @@ def grades_retry(course_id: int) -> ResponseReturnValue:
     """Sends the course's waiting grades now (its tutors)."""
     dbs = get_session()
     if not roster.teaches_course(dbs, current_user, course_id):
-        raise Refused(403, "forbidden", "Only the course's tutors send its grades.")
+        raise Refused(403, "forbidden", gettext("Only the course's tutors send its grades."))
     count = grades.retry_now(dbs, course_id)
-    flash(f"Sending {count} waiting grade{'s' if count != 1 else ''} to the LMS now.", "success")
+    flash(gettext("Grades waiting for the LMS, sent again now: %(count)s.", count=written_number(count)), "success")
     return redirect(url_for("courses.detail", course_id=course_id), 303)

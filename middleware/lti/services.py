@@ -3,11 +3,15 @@ connector that asks the platform for an access token signed with the tool's key.
 
 from __future__ import annotations
 
+import re
+
 import requests
+from flask_babel import gettext  # type: ignore[import-untyped]
 from pylti1p3.registration import Registration
 from pylti1p3.service_connector import ServiceConnector
 from sqlalchemy.orm import Session
 
+from middleware.i18n import N_
 from middleware.lti.tool_conf import DatabaseToolConf
 from middleware.models.lti import LtiPlatform
 
@@ -42,8 +46,9 @@ def connector(session: Session, platform: LtiPlatform, http: requests.Session | 
     return ServiceConnector(registration_of(session, platform), http or http_session())
 
 
-def failure_reason(error: Exception) -> str:
-    """A sentence a tutor reads: what the LMS answered, or why it could not be reached."""
+def lms_answer(error: Exception) -> str | None:
+    """What the LMS answered (its status and text), or why it could not be reached, in English (it is stored: `said`
+    says it in the reader's language); None for an error of another kind."""
     response = getattr(error, "response", None)
     if isinstance(response, requests.Response):
         body = " ".join(response.text.split())[:200]
@@ -51,4 +56,30 @@ def failure_reason(error: Exception) -> str:
             (f": {body}" if body else ".")
     if isinstance(error, requests.RequestException):
         return f"The LMS could not be reached ({type(error).__name__})."
-    return f"The grade could not be sent: {str(error)[:200]}"
+    return None
+
+
+def failure_reason(error: Exception) -> str:
+    """Why a grade was not sent, in English (stored with the grade; `said` says it in the reader's language)."""
+    return lms_answer(error) or f"The grade could not be sent: {str(error)[:200]}"
+
+
+# The stored sentences above, and the messages that say them in the reader's language (the LMS's own text stays).
+_STORED = (
+    (re.compile(r"The LMS answered (?P<status>\d{3}[^:]*): (?P<answer>.*)", re.DOTALL),
+     N_("The LMS answered %(status)s: %(answer)s")),
+    (re.compile(r"The LMS answered (?P<status>\d{3}[^:]*)\."), N_("The LMS answered %(status)s.")),
+    (re.compile(r"The LMS could not be reached \((?P<kind>\w+)\)\."), N_("The LMS could not be reached (%(kind)s).")),
+    (re.compile(r"The grade could not be sent: (?P<reason>.*)", re.DOTALL),
+     N_("The grade could not be sent: %(reason)s")),
+)
+
+
+def said(text: str) -> str:
+    """A stored reason of lms_answer or failure_reason in the request's language (English outside a request)."""
+    for pattern, message in _STORED:
+        if match := pattern.fullmatch(text):
+            values = {name: str(gettext(value)) if name == "reason" else value
+                      for name, value in match.groupdict().items()}  # a reason of Telelab's own is in the catalogue
+            return str(gettext(message, **values))
+    return str(gettext(text))

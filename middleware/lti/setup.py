@@ -11,7 +11,7 @@ from sqlalchemy import select
 
 from middleware.courses.authority import teaches_course
 from middleware.db import get_session
-from middleware.lti import embedding
+from middleware.lti import embedding, services
 from middleware.lti.grades import GradeSender
 from middleware.lti.roster import linked_context
 from middleware.models import User
@@ -55,7 +55,8 @@ def course_panel(course_id: int) -> CoursePanel | None:
                                   LtiGradePassback.status.in_(("pending", "sent")))
                            .order_by(LtiGradePassback.id.desc())).all()
     waiting = [WaitingGrade(name, f"{row.score_given:g} / {row.score_maximum:g}", row.tries, row.next_try_at,
-                            row.last_error) for row, name in rows if row.status == "pending"]
+                            services.said(row.last_error) if row.last_error else None)
+               for row, name in rows if row.status == "pending"]
     return CoursePanel(context.roster_synced_at, bool(context.memberships_url),
                        sum(1 for row, _ in rows if row.status == "sent"), waiting)
 

@@ -6,6 +6,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import replace
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.plans import checks
 from middleware.plans.checks import StepProblem, place_error, shown
 from middleware.plans.steps import (
@@ -82,13 +84,14 @@ def plan_from_json(doc: object, skills: SkillSchemas) -> Plan:
     reader = _Reader(skills)
     steps: list[Step] = []
     if not isinstance(doc, dict):
-        reader.report(0, 0, "plan", 'A plan is a JSON object: {"format": "telelab-plan/1", "steps": [...]}.')
+        reader.report(0, 0, "plan", gettext('A plan is a JSON object: {"format": "telelab-plan/1", "steps": [...]}.'))
     else:
         reader.unknown_keys(doc, ("format", "steps"), "", 0, 0)
         if "format" in doc and doc["format"] != FORMAT:
-            reader.report(0, 0, "format", f"format must be {FORMAT!r}; got {shown(doc['format'])}.")
+            reader.report(0, 0, "format", gettext("format must be %(format)s; got %(value)s.", format=repr(FORMAT),
+                                                  value=shown(doc["format"])))
         if "steps" not in doc:
-            reader.report(0, 0, "steps", "A plan needs its steps: a list of commands.")
+            reader.report(0, 0, "steps", gettext("A plan needs its steps: a list of commands."))
         else:
             try:
                 steps = reader.block(doc["steps"], "steps", 0)
@@ -132,20 +135,22 @@ class _Reader:
         if extra:
             key = _safe_key(extra[0])
             where = f"{path}.{key}" if path else key
-            self.report(line, column, where, f"unknown key {key} (allowed: {', '.join(allowed)}).")
+            self.report(line, column, where, gettext("unknown key %(key)s (allowed: %(allowed)s).", key=key,
+                                                     allowed=", ".join(allowed)))
         return bool(extra)
 
     def block(self, value: object, path: str, depth: int) -> list[Step]:
         """The steps of a list."""
         if not isinstance(value, list):
-            self.report(0, 0, path, f"{path} must be a list of steps; got {shown(value)}.")
+            self.report(0, 0, path, gettext("%(field)s must be a list of steps; got %(value)s.", field=path,
+                                            value=shown(value)))
             return []
         steps: list[Step] = []
         failed = False
         for index, item in enumerate(value):
             self.count += 1
             if self.count > MAX_STEPS:
-                self.report(0, 0, f"{path}[{index}]", f"A plan has at most {MAX_STEPS} steps.")
+                self.report(0, 0, f"{path}[{index}]", gettext("A plan has at most %(max)s steps.", max=MAX_STEPS))
                 return steps
             step = self.step(item, f"{path}[{index}]", depth)
             if step is None:
@@ -157,20 +162,23 @@ class _Reader:
     def step(self, value: object, path: str, depth: int) -> Step | None:
         """One step, or None when it is refused (reported)."""
         if not isinstance(value, dict):
-            self.report(0, 0, path, f"A step is a JSON object with a kind; got {shown(value)}.")
+            self.report(0, 0, path, gettext("A step is a JSON object with a kind; got %(value)s.", value=shown(value)))
             return None
         line, column = self._position(value, path)
         kind = value.get("kind")
         if not isinstance(kind, str) or kind not in KEYS:
-            self.report(line, column, f"{path}.kind", f"kind must be one of {', '.join(KEYS)}; got {shown(kind)}.")
+            self.report(line, column, f"{path}.kind", gettext("%(field)s must be one of %(choices)s; got %(value)s.",
+                                                              field="kind", choices=", ".join(KEYS),
+                                                              value=shown(kind)))
             return None
         required, optional = KEYS[kind]
         if self.unknown_keys(value, (*_COMMON, *required, *optional), path, line, column):
             return None
         missing = [key for key in required if key not in value]
         if missing:
-            article = "an" if kind == "if" else "a"
-            self.report(line, column, f"{path}.{missing[0]}", f"{article} {kind} step needs {', '.join(missing)}.")
+            needs = (gettext("an if step needs %(missing)s.", missing=", ".join(missing)) if kind == "if" else
+                     gettext("a %(kind)s step needs %(missing)s.", kind=kind, missing=", ".join(missing)))
+            self.report(line, column, f"{path}.{missing[0]}", needs)
             return None
         readers: Mapping[str, Callable[[dict[str, object], str, int], Step | None]] = {
             "skill": self._skill, "drive": self._drive, "wait": self._wait, "repeat": self._repeat, "if": self._if,
@@ -191,8 +199,9 @@ class _Reader:
         for key in ("line", "column"):
             number = value.get(key, 0)
             if isinstance(number, bool) or not isinstance(number, int) or not 0 <= number <= MAX_POSITION:
-                self.report(0, 0, f"{path}.{key}", f"{key} must be a whole number from 0 to {MAX_POSITION:,}; "
-                                                   f"got {shown(number)}.")
+                self.report(0, 0, f"{path}.{key}", gettext("%(field)s must be a whole number from 0 to %(max)s; got "
+                                                           "%(value)s.", field=key, max=checks.grouped(MAX_POSITION),
+                                                           value=shown(number)))
                 number = 0
             place.append(number)
         return place[0], place[1]
@@ -200,14 +209,14 @@ class _Reader:
     def _skill(self, value: dict[str, object], path: str, depth: int) -> Step | None:
         skill = value["skill"]
         if not isinstance(skill, str):
-            raise StepProblem("skill", f"skill must be a skill's name; got {shown(skill)}.")
+            raise StepProblem("skill", gettext("skill must be a skill's name; got %(value)s.", value=shown(skill)))
         schema = checks.skill_schema(skill, self.skills)
         parameters = value.get("parameters", {})
         if parameters is None:
             parameters = {}
         if not isinstance(parameters, dict) or len(parameters) > checks.MAX_PARAMETERS:
-            raise StepProblem("parameters", f"parameters must be an object of at most {checks.MAX_PARAMETERS} "
-                                            f"values; got {shown(parameters)}.")
+            raise StepProblem("parameters", gettext("parameters must be an object of at most %(max)s values; got "
+                                                    "%(value)s.", max=checks.MAX_PARAMETERS, value=shown(parameters)))
         checked: list[tuple[str, object]] = []
         for name, item in parameters.items():
             checked.append((name, checks.skill_parameter(skill, schema, name, item)))
@@ -221,18 +230,21 @@ class _Reader:
 
     def _condition(self, value: object, field: str) -> Condition:
         if not isinstance(value, dict):
-            raise StepProblem(field, f"{field} must be an object such as "
-                                     f'{{"kind": "obstacle_within", "value": 0.5}}; got {shown(value)}.')
+            raise StepProblem(field, gettext('%(field)s must be an object such as {"kind": "obstacle_within", '
+                                             '"value": 0.5}; got %(value)s.', field=field, value=shown(value)))
         extra = [key for key in value if key not in ("kind", "value", "negate")]
         if extra:
-            raise StepProblem(f"{field}.{_safe_key(extra[0])}", f"unknown key {_safe_key(extra[0])} "
-                                                                "(allowed: kind, value, negate).")
+            raise StepProblem(f"{field}.{_safe_key(extra[0])}", gettext("unknown key %(key)s (allowed: %(allowed)s).",
+                                                                        key=_safe_key(extra[0]),
+                                                                        allowed="kind, value, negate"))
         kind, negate = value.get("kind"), value.get("negate", False)
         if not isinstance(negate, bool):
-            raise StepProblem(f"{field}.negate", f"negate must be true or false; got {shown(negate)}.")
+            raise StepProblem(f"{field}.negate", gettext("negate must be true or false; got %(value)s.",
+                                                         value=shown(negate)))
         if not isinstance(kind, str):
-            raise StepProblem(f"{field}.kind", f"kind must be one of {', '.join(checks.CONDITION_KINDS)}; "
-                                               f"got {shown(kind)}.")
+            raise StepProblem(f"{field}.kind", gettext("%(field)s must be one of %(choices)s; got %(value)s.",
+                                                       field="kind", choices=", ".join(checks.CONDITION_KINDS),
+                                                       value=shown(kind)))
         try:
             return checks.condition(kind, value.get("value"), negate)
         except StepProblem as problem:
@@ -242,13 +254,14 @@ class _Reader:
         condition = value.get("condition")
         duration = value.get("duration_s")
         if condition is None and duration is None:
-            raise StepProblem("duration_s", "a wait needs a duration_s, a condition, or both.")
+            raise StepProblem("duration_s", gettext("a wait needs a duration_s, a condition, or both."))
         return WaitStep(None if condition is None else self._condition(condition, "condition"),
                         None if duration is None else checks.duration(duration))
 
     def _nested(self, value: object, path: str, depth: int, line: int) -> list[Step] | None:
         if depth + 1 > MAX_DEPTH:
-            self.report(line, 0, path, f"blocks nest at most {MAX_DEPTH} deep; this one would be {depth + 1} deep.")
+            self.report(line, 0, path, gettext("blocks nest at most %(max)s deep; this one would be %(depth)s deep.",
+                                               max=MAX_DEPTH, depth=depth + 1))
             return None
         before = len(self.errors)
         steps = self.block(value, path, depth + 1)
@@ -264,7 +277,7 @@ class _Reader:
         if count is None or body is None:
             return None
         if not body:
-            raise StepProblem("body", "this repeat has nothing in its body.")
+            raise StepProblem("body", gettext("this repeat has nothing in its body."))
         return RepeatStep(count, tuple(body))
 
     def _if(self, value: dict[str, object], path: str, depth: int) -> Step | None:
@@ -282,14 +295,17 @@ class _Reader:
     def _set(self, value: dict[str, object], path: str, depth: int) -> Step | None:
         setting = value["setting"]
         if not isinstance(setting, str):
-            raise StepProblem("setting", f"setting must be one of {', '.join(checks.SETTINGS)}; got {shown(setting)}.")
+            raise StepProblem("setting", gettext("%(field)s must be one of %(choices)s; got %(value)s.",
+                                                 field="setting", choices=", ".join(checks.SETTINGS),
+                                                 value=shown(setting)))
         return SetStep(setting, checks.setting_value(setting, value["value"], self.skills))
 
     def _on(self, value: dict[str, object], path: str, depth: int) -> Step | None:
         event = value["event"]
         try:
             if not isinstance(event, str):
-                raise StepProblem("event", f"event must be one of {', '.join(checks.EVENTS)}; got {shown(event)}.")
+                raise StepProblem("event", gettext("%(field)s must be one of %(choices)s; got %(value)s.",
+                                                   field="event", choices=", ".join(checks.EVENTS), value=shown(event)))
             threshold: float | None = checks.event_value(event, value.get("value"))
         except StepProblem as problem:
             self.report(_line(value), _column(value), f"{path}.{problem.field}", problem.message)

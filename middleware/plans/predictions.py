@@ -27,9 +27,10 @@ from contextlib import suppress
 from dataclasses import dataclass, field
 
 from flask import Flask
+from flask_babel import gettext  # type: ignore[import-untyped]
 
 from middleware.access.commands import owned_robot
-from middleware.errors import ApiError, Refused
+from middleware.errors import ApiError, Refused, written_number
 from middleware.farm.base import FarmUnavailable, RobotFarm, RobotSpec
 from middleware.plans.language import plan_from_json
 from middleware.plans.proto_form import plan_to_proto
@@ -88,10 +89,10 @@ class PredictionSlots:
 
     def _refusal(self, user_id: int) -> None:
         if user_id in self._running:
-            raise ApiError(409, "busy", "A prediction of yours is running already: wait for its outcome.")
+            raise ApiError(409, "busy", gettext("A prediction of yours is running already: wait for its outcome."))
         if len(self._running) >= self.cap:
-            raise ApiError(409, "busy", "The lab is predicting as many plans as it can right now. Try again in a "
-                                        "few seconds.")
+            raise ApiError(409, "busy", gettext("The lab is predicting as many plans as it can right now. Try again "
+                                                "in a few seconds."))
 
 
 def prediction_slots(app: Flask) -> PredictionSlots:
@@ -200,9 +201,10 @@ def _predict(copy: PredictionCopy, request: PredictionRequest
              ) -> Generator[dict[str, object], None, dict[str, object]]:
     """Starts the copy, runs the plan on it and follows it: progress messages; returns the outcome's message."""
     token = secrets.token_urlsafe(32)
-    where = f" of {request.beside.name}" if request.beside else ""
-    yield {"type": "progress", "phase": "starting",
-           "message": f"Starting a simulated copy{where} in the scene {request.scene}…"}
+    starting = (gettext("Starting a simulated copy of %(robot)s in the scene %(scene)s…", robot=request.beside.name,
+                        scene=request.scene) if request.beside
+                else gettext("Starting a simulated copy in the scene %(scene)s…", scene=request.scene))
+    yield {"type": "progress", "phase": "starting", "message": starting}
     robot = copy.farm.start(RobotSpec(copy.name, request.scene, token, fast=True))
     copy.started = True
     link = copy.link = RobotLink(copy.name, robot.address, rpc_timeout_s=5.0)
@@ -217,8 +219,9 @@ def _predict(copy: PredictionCopy, request: PredictionRequest
     if final is None:
         with suppress(CommandRefused, RobotUnavailable):
             owned.cancel(goal.goal_id)
-        too_long = ApiError(409, "prediction_too_long", f"The prediction ran past {PREDICTION_WALL_S:.0f} s and "
-                            "was stopped: shorten the plan, or run it on the lab robot.")
+        too_long = ApiError(409, "prediction_too_long", gettext(
+            "The prediction ran past %(seconds)s s and was stopped: shorten the plan, or run it on the lab robot.",
+            seconds=written_number(PREDICTION_WALL_S, ".0f")))
         return {"type": "error", **too_long.to_dict(), "trace": recorder.points()}
     recorder.add(link.odometry_pose())  # where it came to rest: the end point the lab run is compared with
     return {"type": "end", "goal": goal_dict(final), "trace": recorder.points(), "start": start,

@@ -7,16 +7,21 @@ robot): with none answering, saving is refused with a sentence (503 no_robot_to_
 
 from __future__ import annotations
 
-from flask import Blueprint, Response, abort, current_app, jsonify, render_template, request
+from collections.abc import Iterator
+
+from flask import Blueprint, Flask, Response, abort, current_app, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
+from flask_babel import force_locale, gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
+from middleware import i18n
 from middleware.access.limits import WATCHDOG_FIELD, changeable_fields
 from middleware.api.contract import (
     ANY,
     BOOLEAN,
     ID,
     OBJECT,
+    STRING,
     about,
     array,
     described,
@@ -192,7 +197,7 @@ def api_share(plan_id: int) -> ResponseReturnValue:
     """Shares my plan with a course I teach ({"course_id": id}) or stops sharing it ({"course_id": null})."""
     body = json_body()
     if "course_id" not in body:
-        raise InvalidField("course_id", "course_id must be a course's id or null.")
+        raise InvalidField("course_id", gettext("course_id must be a course's id or null."))
     services.share_plan(get_session(), current_user, plan_id, schemas.optional_course_id(body["course_id"]))
     return _plan_answer(plan_id)
 
@@ -204,7 +209,7 @@ def api_use_as_skill(plan_id: int) -> ResponseReturnValue:
     """Shows my plan as a panel in my consoles ({"console_skill": true}) or stops ({"console_skill": false})."""
     body = json_body()
     if not isinstance(body.get("console_skill"), bool):
-        raise InvalidField("console_skill", "console_skill must be true or false.")
+        raise InvalidField("console_skill", gettext("%(field)s must be true or false.", field="console_skill"))
     services.use_as_skill(get_session(), current_user, plan_id, bool(body["console_skill"]))
     return _plan_answer(plan_id)
 
@@ -214,7 +219,9 @@ def api_use_as_skill(plan_id: int) -> ResponseReturnValue:
 @described(
     query={"format": one_of("json", "txt"), "version": whole(1, 2**31 - 1)},
     answers={200: file_answer("application/json", "the plan as a file (text/plain with ?format=txt)",
-                              {"text/plain": {"type": "string"}})},
+                              {"text/plain": {"type": "string"}},
+                              schema=obj(("format", "steps"), description="the canonical form (json_form.py)",
+                                         format=STRING, steps=array(OBJECT)))},
 )
 def api_export(plan_id: int) -> ResponseReturnValue:
     """The plan as a file: ?format=json (canonical, the default) or txt; ?version=N for an older one."""
@@ -245,7 +252,7 @@ def api_import() -> ResponseReturnValue:
     """Imports a plan file (multipart "file", optional "name"); 201 with the new plan, or 400 naming the line."""
     upload = request.files.get("file")
     if upload is None or not upload.filename:
-        raise InvalidField("file", "Choose a plan file (.json or .txt) to import.")
+        raise InvalidField("file", gettext("Choose a plan file (.json or .txt) to import."))
     plan_file = schemas.read_plan_file(upload.filename, upload.read(schemas.MAX_JSON_FILE_BYTES + 1))
     raw_name = request.form.get("name")
     name = schemas.plan_name(raw_name) if raw_name else schemas.plan_name(plan_file.suggested_name, "file")
@@ -286,6 +293,13 @@ def api_run(plan_id: int) -> ResponseReturnValue:
     return jsonify({**ran.answer, "plan_id": plan.id, "version": version.version}), 202
 
 
+def _in_language(lines: Iterator[bytes], app: Flask, language: str) -> Iterator[bytes]:
+    """lines, said in the request's language: a stream runs after its request has ended (as Flask's
+    stream_with_context keeps the request, this keeps an app context and the language for it)."""
+    with app.app_context(), force_locale(language):
+        yield from lines
+
+
 @blueprint.post("/api/plans/<int:plan_id>/predictions")
 @login_required
 @described(
@@ -313,7 +327,8 @@ def api_predict(plan_id: int) -> ResponseReturnValue:
     manager = practice_manager()
     prediction = PredictionRequest(current_user.id, plan.name, document, (beside.scene if beside else None)
                                    or manager.scene, beside, from_dock)
-    response = Response(prediction_stream(manager.farm, slots, prediction), mimetype="application/x-ndjson")
+    response = Response(_in_language(prediction_stream(manager.farm, slots, prediction), app,
+                                     i18n.current_language()), mimetype="application/x-ndjson")
     response.headers["Cache-Control"] = "no-store"
     response.headers["X-Accel-Buffering"] = "no"  # nginx passes each line on as it comes
     return response

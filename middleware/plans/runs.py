@@ -25,10 +25,11 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy.orm import Session
 
 from middleware.access.commands import Commander, robot_commands
-from middleware.errors import ApiError
+from middleware.errors import ApiError, written_number
 from middleware.plans.language import Plan, plan_from_json, plan_to_json
 from middleware.plans.proto_form import plan_to_proto
 from middleware.robots.link import CommandRefused, RobotUnavailable
@@ -71,9 +72,10 @@ def check_settings_permitted(plan: Plan | Mapping[str, object], may_set_watchdog
     """403 not_permitted naming the first `set watchdog` line when the user may not set the robot's watchdog."""
     lines = [] if may_set_watchdog else watchdog_lines(plan)
     if lines:
-        raise ApiError(403, "not_permitted", f"Line {lines[0]}: your course does not let students set the watchdog "
-                       "(the time the base keeps a drive command); remove the line or ask your tutor to allow it "
-                       "on the course's page.", "watchdog_s")
+        raise ApiError(403, "not_permitted", gettext(
+            "Line %(line)s: your course does not let students set the watchdog (the time the base keeps a drive "
+            "command); remove the line or ask your tutor to allow it on the course's page.", line=lines[0]),
+            "watchdog_s")
 
 
 @dataclass(frozen=True)
@@ -106,9 +108,9 @@ def drift_note(beside: LabRobotNow) -> str:
     """Why a run on the drifted lab robot will not go where this one goes, and the ways back; "" when it will."""
     if beside.odometry_off_m < DRIFT_NOTED_M:
         return ""
-    return (f" {beside.name}'s odometry is {beside.odometry_off_m:.1f} m off where it stands, so a run on it goes "
-            "that far astray: localize it (Localization on the console's Navigate tab) or return it to its dock "
-            "first.")
+    return " " + gettext("%(robot)s's odometry is %(off)s m off where it stands, so a run on it goes that far astray: "
+                         "localize it (Localization on the console's Navigate tab) or return it to its dock first.",
+                         robot=beside.name, off=written_number(beside.odometry_off_m, ".1f"))
 
 
 def start_practice_robot(robot: Commander, from_dock: bool, beside: LabRobotNow | None) -> dict[str, object]:
@@ -116,24 +118,26 @@ def start_practice_robot(robot: Commander, from_dock: bool, beside: LabRobotNow 
     sentence for the page."""
     if from_dock:
         robot.return_to_dock()
-        return {"at": "dock", "message": "Starts at its dock."}
+        return {"at": "dock", "message": gettext("Starts at its dock.")}
     if beside is None:
-        return {"at": "here", "message": "Starts where it stands."}
+        return {"at": "here", "message": gettext("Starts where it stands.")}
     if beside.pose is None:
-        reason = f"{beside.name} did not answer"
+        reason = gettext("%(robot)s did not answer", robot=beside.name)
     else:
         pose = beside.pose
         try:
             robot.place_robot(pose)
             x_m, y_m = round(pose.x_m, 2) + 0.0, round(pose.y_m, 2) + 0.0  # + 0.0: no "-0.00"
-            return {"at": "lab_robot", "message": f"Starts where {beside.name} stands now "
-                                                  f"(x {x_m:.2f} m, y {y_m:.2f} m).{drift_note(beside)}"}
+            return {"at": "lab_robot", "message": gettext(
+                "Starts where %(robot)s stands now (x %(x)s m, y %(y)s m).", robot=beside.name,
+                x=written_number(x_m, ".2f"), y=written_number(y_m, ".2f")) + drift_note(beside)}
         except CommandRefused as refused:
             if refused.code != "invalid_field":
                 raise
-            reason = f"{beside.name}'s pose is no place to stand ({refused.message})"
+            reason = gettext("%(robot)s's pose is no place to stand (%(why)s)", robot=beside.name,
+                             why=refused.message)
     robot.return_to_dock()
-    return {"at": "dock", "message": f"Starts at its dock: {reason}."}
+    return {"at": "dock", "message": gettext("Starts at its dock: %(reason)s.", reason=reason)}
 
 
 @dataclass(frozen=True)

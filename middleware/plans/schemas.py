@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import PurePath
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.auth.schemas import InvalidField
 from middleware.plans.language import MAX_TEXT_BYTES, PlanError, PlanInvalid, is_plan_name
 from middleware.validation import InvalidInput, decimal_int, loads_checked, unstorable, unstorable_place
@@ -16,13 +18,12 @@ from middleware.validation import InvalidInput, decimal_int, loads_checked, unst
 MAX_JSON_FILE_BYTES = 4 * MAX_TEXT_BYTES  # the canonical JSON is wordier than the text it comes from
 EXPORT_FORMATS = ("json", "txt")
 IMPORT_SUFFIXES = {".json": "json", ".txt": "txt", ".plan": "txt"}
-NAME_RULE = "1 to 64 letters, digits, - and _ (no spaces)"
 
 
 def plan_name(value: object, field: str = "name") -> str:
     """A plan's name, or a 400 naming field."""
     if not is_plan_name(value):
-        raise InvalidField(field, f"A plan's name is {NAME_RULE}.")
+        raise InvalidField(field, gettext("A plan's name is 1 to 64 letters, digits, - and _ (no spaces)."))
     assert isinstance(value, str)
     return value
 
@@ -30,12 +31,12 @@ def plan_name(value: object, field: str = "name") -> str:
 def plan_text(value: object, field: str = "text") -> str:
     """A plan's text as written (the language checks what it says), or a 400 naming field."""
     if not isinstance(value, str):
-        raise InvalidField(field, "text must be the plan's text, one command a line.")
+        raise InvalidField(field, gettext("text must be the plan's text, one command a line."))
     if len(value.encode("utf-8", "surrogatepass")) > MAX_TEXT_BYTES:
-        raise InvalidField(field, f"A plan's text is at most {MAX_TEXT_BYTES} bytes.")
+        raise InvalidField(field, gettext("A plan's text is at most %(limit)s bytes.", limit=MAX_TEXT_BYTES))
     if unstorable(value):
-        raise InvalidField(field, f"The text holds a character that cannot be stored ({unstorable_place(value)}); "
-                                  "remove it.")
+        raise InvalidField(field, gettext("The text holds a character that cannot be stored (%(place)s); remove it.",
+                                          place=unstorable_place(value)))
     return value
 
 
@@ -45,7 +46,7 @@ def optional_course_id(value: object, field: str = "course_id") -> int | None:
         return None
     number = decimal_int(value, 1, 2**31 - 1)
     if number is None or isinstance(value, str):
-        raise InvalidField(field, "course_id must be a course's id (a whole number) or null.")
+        raise InvalidField(field, gettext("course_id must be a course's id (a whole number) or null."))
     return number
 
 
@@ -55,7 +56,7 @@ def optional_version(value: object, field: str = "version") -> int | None:
         return None
     number = decimal_int(value, 1, 2**31 - 1)
     if number is None:
-        raise InvalidField(field, "version must be a whole number from 1.")
+        raise InvalidField(field, gettext("version must be a whole number from 1."))
     return number
 
 
@@ -64,7 +65,7 @@ def export_format(value: object) -> str:
     if value is None or value == "":
         return "json"
     if value not in EXPORT_FORMATS:
-        raise InvalidField("format", "format must be json or txt.")
+        raise InvalidField("format", gettext("format must be json or txt."))
     assert isinstance(value, str)
     return value
 
@@ -72,7 +73,7 @@ def export_format(value: object) -> str:
 def run_target(value: object, field: str = "target") -> str:
     """Where a plan runs: "practice" (the user's practice robot) or a lab robot's name."""
     if not isinstance(value, str) or not 0 < len(value) <= 64 or unstorable(value):
-        raise InvalidField(field, f'{field} must be "practice" or a lab robot\'s name.')
+        raise InvalidField(field, gettext('%(field)s must be "practice" or a lab robot\'s name.', field=field))
     return value
 
 
@@ -81,7 +82,7 @@ def flag(value: object, field: str) -> bool:
     if value is None:
         return False
     if not isinstance(value, bool):
-        raise InvalidField(field, f"{field} must be true or false.")
+        raise InvalidField(field, gettext("%(field)s must be true or false.", field=field))
     return value
 
 
@@ -99,19 +100,20 @@ def read_plan_file(filename: object, content: bytes) -> PlanFile:
     """An uploaded plan file (.json in the canonical form, or .txt/.plan text); 400 naming "file" otherwise, with
     the line when the JSON does not parse."""
     if not isinstance(filename, str) or not filename:
-        raise InvalidField("file", "Choose a plan file (.json or .txt) to import.")
+        raise InvalidField("file", gettext("Choose a plan file (.json or .txt) to import."))
     path = PurePath(filename.replace("\\", "/"))
     kind = IMPORT_SUFFIXES.get(path.suffix.lower())
     if kind is None:
-        raise InvalidField("file", "A plan file ends in .json (the exported form) or .txt (the plan's text).")
+        raise InvalidField("file", gettext("A plan file ends in .json (the exported form) or .txt (the plan's text)."))
     limit = MAX_JSON_FILE_BYTES if kind == "json" else MAX_TEXT_BYTES
     if len(content) > limit:
-        raise InvalidField("file", f"The file is larger than {limit // 1024} KiB; a plan file is at most that.")
+        raise InvalidField("file", gettext("The file is larger than %(kib)s KiB; a plan file is at most that.",
+                                           kib=limit // 1024))
     try:
         decoded = content.decode("utf-8-sig")
     except UnicodeDecodeError as error:
         line = content[:error.start].count(b"\n") + 1
-        raise InvalidField("file", f"line {line}: the file is not UTF-8 text.") from None
+        raise InvalidField("file", gettext("line %(line)s: the file is not UTF-8 text.", line=line)) from None
     suggested = "".join(c if c.isascii() and (c.isalnum() or c in "-_") else "_" for c in path.stem)[:64] or "plan"
     if kind == "txt":
         return PlanFile(suggested, kind, plan_text(decoded, "file"), None)
@@ -121,7 +123,8 @@ def read_plan_file(filename: object, content: bytes) -> PlanFile:
         raise InvalidField("file", refused.message) from None
     except ValueError as error:
         line, column = getattr(error, "lineno", 0), getattr(error, "colno", 0)
-        reason = getattr(error, "msg", "not JSON")
-        raise PlanInvalid([PlanError(line, column, "file",
-                                     f"line {line}, column {column}: the file is not JSON ({reason}).")]) from None
+        reason = getattr(error, "msg", "not JSON")  # the JSON parser's own words
+        raise PlanInvalid([PlanError(line, column, "file", gettext(
+            "line %(line)s, column %(column)s: the file is not JSON (%(reason)s).", line=line, column=column,
+            reason=reason))]) from None
     return PlanFile(suggested, kind, None, document)

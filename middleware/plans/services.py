@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import ColumnElement, delete, exists, func, or_, select
 from sqlalchemy.orm import Session
 
@@ -39,7 +40,7 @@ class PlanRefused(Refused):
 
 def unknown_plan(field: str = "plan_id") -> PlanRefused:
     """The one answer for a plan that does not exist or is someone else's private plan."""
-    return PlanRefused(404, "unknown_plan", "There is no plan with that id.", field)
+    return PlanRefused(404, "unknown_plan", gettext("There is no plan with that id."), field)
 
 
 @dataclass(frozen=True)
@@ -100,8 +101,8 @@ def owned_plan(session: Session, user: User, plan_id: int, *, lock: bool = False
     """The plan if user owns it; 404 if they may not read it, 403 read_only if it is shared with them."""
     plan = readable_plan(session, user, plan_id)
     if plan.owner_id != user.id:
-        raise PlanRefused(403, "read_only", "This plan is shared with you to read and run: copy it into your own "
-                                            "plans to change it.", "plan_id")
+        raise PlanRefused(403, "read_only", gettext("This plan is shared with you to read and run: copy it into "
+                                                    "your own plans to change it."), "plan_id")
     if lock:
         session.refresh(plan, with_for_update=True)  # two saves at once number their versions one after the other
     return plan
@@ -112,14 +113,16 @@ def plan_version(session: Session, plan: StoredPlan, version: int | None) -> Pla
     number = plan.latest_version if version is None else version
     row = session.scalar(select(PlanVersion).where(PlanVersion.plan_id == plan.id, PlanVersion.version == number))
     if row is None:
-        raise PlanRefused(404, "unknown_version", f"This plan has no version {number}.", "version")
+        raise PlanRefused(404, "unknown_version", gettext("This plan has no version %(number)s.", number=number),
+                          "version")
     return row
 
 
 def _name_free(session: Session, owner_id: int, name: str, except_id: int | None = None) -> None:
     taken = session.scalar(select(StoredPlan.id).where(StoredPlan.owner_id == owner_id, StoredPlan.name == name))
     if taken is not None and taken != except_id:
-        raise PlanRefused(409, "name_taken", f"You already have a plan named {name}: choose another name.", "name")
+        raise PlanRefused(409, "name_taken", gettext("You already have a plan named %(name)s: choose another name.",
+                                                     name=name), "name")
 
 
 def _add_version(session: Session, plan: StoredPlan, user: User, checked: CheckedPlan) -> PlanVersion:
@@ -135,8 +138,8 @@ def create_plan(session: Session, user: User, name: str, checked: CheckedPlan) -
     _name_free(session, user.id, name)
     count = session.scalar(select(func.count()).select_from(StoredPlan).where(StoredPlan.owner_id == user.id)) or 0
     if count >= MAX_PLANS_PER_USER:
-        raise PlanRefused(409, "too_many_plans", f"You have {MAX_PLANS_PER_USER} plans, the most one person keeps: "
-                                                 "delete some first.", "name")
+        raise PlanRefused(409, "too_many_plans", gettext("You have %(count)s plans, the most one person keeps: "
+                                                         "delete some first.", count=MAX_PLANS_PER_USER), "name")
     plan = StoredPlan(owner_id=user.id, name=name, latest_version=1)
     session.add(plan)
     session.flush()
@@ -186,7 +189,7 @@ def _free_name(session: Session, owner_id: int, base: str) -> str:
         candidate = base[:64 - len(suffix)] + suffix
         if candidate not in taken:
             return candidate
-    raise PlanRefused(409, "name_taken", "Choose a name for the copy.", "name")
+    raise PlanRefused(409, "name_taken", gettext("Choose a name for the copy."), "name")
 
 
 def share_plan(session: Session, user: User, plan_id: int, course_id: int | None) -> StoredPlan:
@@ -194,9 +197,9 @@ def share_plan(session: Session, user: User, plan_id: int, course_id: int | None
     plan = owned_plan(session, user, plan_id)
     if course_id is not None:
         if user.role not in (Role.TUTOR, Role.ADMIN):
-            raise PlanRefused(403, "forbidden", "Only tutors share plans with a course.", "course_id")
+            raise PlanRefused(403, "forbidden", gettext("Only tutors share plans with a course."), "course_id")
         if session.get(Course, course_id) is None or not teaches_course(session, user, course_id):
-            raise PlanRefused(404, "unknown_course", "You teach no course with that id.", "course_id")
+            raise PlanRefused(404, "unknown_course", gettext("You teach no course with that id."), "course_id")
     plan.shared_course_id = course_id
     plan.updated_at = utc_now()
     session.flush()

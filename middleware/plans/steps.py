@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from flask_babel import gettext, ngettext  # type: ignore[import-untyped]
+
 from middleware.errors import Refused
 
 FORMAT = "telelab-plan/1"
@@ -52,9 +54,11 @@ class PlanInvalid(Refused, ValueError):
 
     def __init__(self, errors: tuple[PlanError, ...] | list[PlanError]) -> None:
         self.errors = tuple(errors)
-        first = self.errors[0] if self.errors else PlanError(0, 0, "plan", "The plan is not valid.")
+        first = self.errors[0] if self.errors else PlanError(0, 0, "plan", gettext("The plan is not valid."))
         more = len(self.errors) - 1
-        message = first.message + (f" (and {more} more problem{'s' if more > 1 else ''})" if more > 0 else "")
+        message = first.message if more <= 0 else ngettext("%(first)s (and %(num)s more problem)",
+                                                           "%(first)s (and %(num)s more problems)", more,
+                                                           first=first.message)
         super().__init__(400, "invalid_plan", message, first.field)
 
     def to_dict(self) -> dict[str, object]:

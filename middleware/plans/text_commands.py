@@ -6,6 +6,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
+from flask_babel import gettext, ngettext  # type: ignore[import-untyped]
+
 from middleware.plans import checks
 from middleware.plans.aliases import ALIASES, Alias, parameter_for_key
 from middleware.plans.checks import StepProblem
@@ -58,19 +60,20 @@ class CommandReader:
             return self._skill(head, self._arguments(tokens, ("for",), path), path, name, None)
         known = (*COMMANDS, *self.skills)
         joined = f"{name}_{tokens[0].text}" if tokens and tokens[0].kind is Kind.WORD else ""
-        hint = f" (did you mean {joined}, with _?)" if joined in known else checks.did_you_mean(name, known)
-        raise self.at(head, f"{path}.skill", f"{name[:40]!r} is not a command or a skill of this robot"
-                                             f"{hint}; commands: {', '.join(COMMANDS)}; skills a plan can "
-                                             f"run (those that drive the wheels): "
-                                             f"{', '.join(sorted(self.skills)) or 'none'}.")
+        hint = (" " + gettext("(did you mean %(name)s, with _?)", name=joined) if joined in known
+                else checks.did_you_mean(name, known))
+        raise self.at(head, f"{path}.skill", gettext(
+            "%(name)s is not a command or a skill of this robot%(hint)s; commands: %(commands)s; skills a plan can run "
+            "(those that drive the wheels): %(skills)s.", name=repr(name[:40]), hint=hint,
+            commands=", ".join(COMMANDS), skills=checks.listed(sorted(self.skills))))
 
     def _units_apart(self, tokens: list[Token], path: str) -> None:
         """Refuses 90 deg (a unit standing apart from its number) with the way to write it."""
         for previous, token in zip(tokens, tokens[1:], strict=False):
             if (token.kind is Kind.WORD and token.text in checks.UNITS and previous.kind is Kind.NUMBER
                     and not previous.unit):
-                raise self.at(token, path, f"write a unit against its number, without a space: "
-                                           f"{previous.written}{token.text}.")
+                raise self.at(token, path, gettext("write a unit against its number, without a space: %(written)s.",
+                                                   written=f"{previous.written}{token.text}"))
 
     def _arguments(self, tokens: list[Token], clause_words: tuple[str, ...], path: str) -> _Arguments:
         self._units_apart(tokens, path)
@@ -82,21 +85,23 @@ class CommandReader:
             if token.kind is Kind.WORD and following is not None and following.kind is Kind.EQUALS:
                 value = tokens[index + 2] if index + 2 < len(tokens) else None
                 if value is None or value.kind is Kind.EQUALS:
-                    raise self.at(following, path, f"{token.text}= needs a value, as in {token.text}=0.3.")
+                    raise self.at(following, path, gettext("%(name)s= needs a value, as in %(name)s=0.3.",
+                                                           name=token.text))
                 arguments.keywords.append((token, value))
                 index += 3
             elif token.kind is Kind.WORD and token.text in clause_words:
                 if following is None or following.kind is Kind.EQUALS:
-                    raise self.at(token, path, f"{token.text} needs a time, as in {token.text} 20s.")
+                    raise self.at(token, path, gettext("%(word)s needs a time, as in %(word)s 20s.", word=token.text))
                 if token.text in arguments.clauses:
-                    raise self.at(token, path, f"{token.text} is given twice.")
+                    raise self.at(token, path, gettext("%(name)s is given twice.", name=token.text))
                 arguments.clauses[token.text] = (token, following)
                 index += 2
             elif token.kind is Kind.EQUALS:
-                raise self.at(token, path, "= stands between a name and its value, as in speed=0.3.")
+                raise self.at(token, path, gettext("= stands between a name and its value, as in speed=0.3."))
             else:
                 if arguments.keywords or arguments.clauses:
-                    raise self.at(token, path, "values without a name come first, before name=value and for.")
+                    raise self.at(token, path, gettext("values without a name come first, before name=value and "
+                                                       "for."))
                 arguments.positional.append(token)
                 index += 1
         return arguments
@@ -117,9 +122,11 @@ class CommandReader:
             return None
         keyword, token = clause
         if token.kind is not Kind.NUMBER:
-            raise self.at(token, f"{path}.duration_s", f"{keyword.text} needs a time, as in {keyword.text} 20s.")
+            raise self.at(token, f"{path}.duration_s", gettext("%(word)s needs a time, as in %(word)s 20s.",
+                                                               word=keyword.text))
         try:
-            return checks.duration(self.number(token, "s", "a duration", f"{path}.duration_s"), written=token.written)
+            return checks.duration(self.number(token, "s", gettext("a duration"), f"{path}.duration_s"),
+                                   written=token.written)
         except StepProblem as problem:
             raise self.at(token, f"{path}.duration_s", problem.message) from None
 
@@ -127,23 +134,27 @@ class CommandReader:
         try:
             schema = checks.skill_schema(skill, self.skills)
         except StepProblem as problem:
-            message = (f"{head.text} needs the skill {skill}, which this robot does not have." if alias
-                       else problem.message)
+            message = (gettext("%(command)s needs the skill %(skill)s, which this robot does not have.",
+                               command=head.text, skill=skill) if alias else problem.message)
             raise self.at(head, f"{path}.skill", message) from None
         names = alias.positional if alias else ()
         if len(arguments.positional) > len(names):
             extra = arguments.positional[len(names)]
             first = next(iter(schema), "name")
-            message = (f"{head.text} takes at most {len(names)} value{'s' if len(names) > 1 else ''} without a name "
-                       f"({', '.join(names)}), as in {alias.example}." if alias else
-                       f"{skill} takes its parameters as name=value, as in {first}=...")
+            message = (ngettext("%(command)s takes at most %(num)s value without a name (%(names)s), as in "
+                                "%(example)s.", "%(command)s takes at most %(num)s values without a name (%(names)s), "
+                                "as in %(example)s.", max(len(names), 1), command=head.text,
+                                names=", ".join(names), example=alias.example) if alias else
+                       gettext("%(skill)s takes its parameters as name=value, as in %(first)s=...", skill=skill,
+                               first=first))
             raise self.at(extra, path, message)
         pairs = [(name, token, token) for name, token in zip(names, arguments.positional, strict=False)]
         pairs += [(parameter_for_key(key.text, schema, alias), key, value) for key, value in arguments.keywords]
         given = [name for name, _, _ in pairs]
         if alias and (missing := [n for n in names[:alias.required] if n not in given]):
             raise self.at(head, f"{path}.parameters.{missing[0]}",
-                          f"{head.text} needs {', '.join(missing)}, as in {alias.example}.")
+                          gettext("%(command)s needs %(missing)s, as in %(example)s.", command=head.text,
+                                  missing=", ".join(missing), example=alias.example))
         parameters: list[tuple[str, object]] = []
         seen: set[str] = set()
         failed = False
@@ -151,7 +162,7 @@ class CommandReader:
             at = key if name in seen or name not in schema else token  # a name's problem at the name
             try:
                 if name in seen:
-                    raise StepProblem(f"parameters.{name}", f"{name} is given twice.")
+                    raise StepProblem(f"parameters.{name}", gettext("%(name)s is given twice.", name=name))
                 seen.add(name)
                 unit = str(schema[name].get("unit") or "") if name in schema else ""
                 value = self.number(at, unit, name, f"{path}.parameters.{name}")
@@ -169,8 +180,8 @@ class CommandReader:
     def _drive(self, head: Token, tokens: list[Token], path: str) -> Step:
         arguments = self._arguments(tokens, ("for",), path)
         if not 1 <= len(arguments.positional) <= 2 or arguments.keywords or "for" not in arguments.clauses:
-            raise self.at(head, path, "drive takes a speed, a turn rate and a time: drive 0.2 0 for 2s "
-                                      "(m/s, rad/s).")
+            raise self.at(head, path, gettext("drive takes a speed, a turn rate and a time: drive 0.2 0 for 2s "
+                                              "(m/s, rad/s)."))
         velocities = []
         measures = (("linear_mps", "m/s"), ("angular_radps", "rad/s"))
         for (name, unit), token in zip(measures, arguments.positional, strict=False):
@@ -188,15 +199,15 @@ class CommandReader:
         self._units_apart(tokens, path)
         if len(tokens) != 1:
             raise self.at(tokens[1] if len(tokens) > 1 else head, path,
-                          "wait takes one time, as in wait 2s (wait_until waits for a condition).")
+                          gettext("wait takes one time, as in wait 2s (wait_until waits for a condition)."))
         duration = self._duration((head, tokens[0]), path)
         return WaitStep(None, duration, head.line, head.column)
 
     def _wait_until(self, head: Token, tokens: list[Token], path: str) -> Step:
         arguments = self._arguments(tokens, ("timeout",), path)
         if arguments.keywords:
-            raise self.at(arguments.keywords[0][0], path, "wait_until takes a condition and maybe a timeout: "
-                                                          "wait_until not obstacle_within 0.5 timeout 10s.")
+            raise self.at(arguments.keywords[0][0], path, gettext(
+                "wait_until takes a condition and maybe a timeout: wait_until not obstacle_within 0.5 timeout 10s."))
         condition = self.condition(head, arguments.positional, f"{path}.condition")
         duration = self._duration(arguments.clauses.get("timeout"), path)
         return WaitStep(condition, duration, head.line, head.column)
@@ -209,17 +220,19 @@ class CommandReader:
         negate = bool(tokens) and tokens[0].kind is Kind.WORD and tokens[0].text == "not"
         tokens = tokens[1:] if negate else tokens
         if not tokens:
-            raise self.at(head, f"{path}.kind", f"{head.text} needs a condition: obstacle_within 0.5, goal_reached "
-                                                "or battery_below 0.2 (not before one turns it round).")
+            raise self.at(head, f"{path}.kind", gettext(
+                "%(command)s needs a condition: obstacle_within 0.5, goal_reached or battery_below 0.2 (not before one "
+                "turns it round).", command=head.text))
         kind, values = tokens[0], tokens[1:]
         try:
             if kind.kind is not Kind.WORD:
-                raise StepProblem("kind", f"a condition is a name such as obstacle_within; got {kind.written[:40]!r}.")
+                raise StepProblem("kind", gettext("a condition is a name such as obstacle_within; got %(written)s.",
+                                                  written=repr(kind.written[:40])))
             schema = checks.condition_schema(kind.text)
         except StepProblem as problem:
             raise self.at(kind, f"{path}.kind", problem.message) from None
         if len(values) > 1:
-            raise self.at(values[1], f"{path}.value", f"{kind.text} takes at most one value.")
+            raise self.at(values[1], f"{path}.value", gettext("%(name)s takes at most one value.", name=kind.text))
         value = self.number(values[0], str((schema or {}).get("unit", "")), kind.text, f"{path}.value") if values \
             else None
         try:
@@ -233,17 +246,18 @@ class CommandReader:
             raise Reported()
         self._units_apart(tokens, path)
         if not tokens:
-            raise self.at(head, f"{path}.event", f"on needs an event: {', '.join(checks.EVENTS)}, as in "
-                                                 "on obstacle_detected { ... }.")
+            raise self.at(head, f"{path}.event", gettext("on needs an event: %(events)s, as in on obstacle_detected "
+                                                         "{ ... }.", events=", ".join(checks.EVENTS)))
         name, values = tokens[0], tokens[1:]
         try:
             if name.kind is not Kind.WORD:
-                raise StepProblem("event", f"an event is a name such as obstacle_detected; got {name.written[:40]!r}.")
+                raise StepProblem("event", gettext("an event is a name such as obstacle_detected; got %(written)s.",
+                                                   written=repr(name.written[:40])))
             schema = checks.event_schema(name.text)
         except StepProblem as problem:
             raise self.at(name, f"{path}.event", problem.message) from None
         if len(values) > 1:
-            raise self.at(values[1], f"{path}.value", f"{name.text} takes at most one value.")
+            raise self.at(values[1], f"{path}.value", gettext("%(name)s takes at most one value.", name=name.text))
         value = self.number(values[0], str((schema or {}).get("unit", "")), name.text, f"{path}.value") if values \
             else None
         try:
@@ -254,8 +268,8 @@ class CommandReader:
     def _set(self, head: Token, tokens: list[Token], path: str) -> Step:
         self._units_apart(tokens, path)
         if len(tokens) != 2 or tokens[0].kind is not Kind.WORD:
-            raise self.at(head, path, "set takes a setting and a value: set max_speed 0.3, set max_turn_rate 1, "
-                                      "set watchdog 0.5s.")
+            raise self.at(head, path, gettext("set takes a setting and a value: set max_speed 0.3, set max_turn_rate "
+                                              "1, set watchdog 0.5s."))
         setting, token = tokens
         try:
             schema = checks.setting_schema(setting.text, self.skills)
@@ -271,7 +285,7 @@ class CommandReader:
     def _say(self, head: Token, tokens: list[Token], path: str) -> Step:
         if len(tokens) != 1 or tokens[0].kind is not Kind.TEXT:
             raise self.at(tokens[0] if tokens else head, f"{path}.text",
-                          'say takes one text in double quotes: say "hello".')
+                          gettext('say takes one text in double quotes: say "hello".'))
         try:
             return SayStep(checks.say_text(tokens[0].text), head.line, head.column)
         except StepProblem as problem:

@@ -3,6 +3,8 @@ blocks in braces, every problem reported with its line and column, as many as on
 
 from __future__ import annotations
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.plans import checks
 from middleware.plans.checks import StepProblem, place_error
 from middleware.plans.steps import (
@@ -28,17 +30,19 @@ _LINE_ENDS = (Kind.NEWLINE, Kind.END, Kind.CLOSE, Kind.OPEN)
 def parse_plan_text(text: str, skills: SkillSchemas) -> Plan:
     """The plan a text describes, or PlanInvalid with every problem found (each with its line and column)."""
     if not isinstance(text, str):
-        raise PlanInvalid([place_error(0, 0, "text", "The plan's text must be a string.")])
+        raise PlanInvalid([place_error(0, 0, "text", gettext("The plan's text must be a string."))])
     size = len(text) if len(text) > MAX_TEXT_BYTES else len(text.encode("utf-8", "surrogatepass"))
     if size > MAX_TEXT_BYTES:
-        raise PlanInvalid([place_error(0, 0, "text", f"The plan is {size:,} bytes long or more; a plan has at "
-                                                     f"most {MAX_TEXT_BYTES:,} bytes (UTF-8).")])
+        raise PlanInvalid([place_error(0, 0, "text", gettext(
+            "The plan is %(size)s bytes long or more; a plan has at most %(max)s bytes (UTF-8).",
+            size=checks.grouped(size), max=checks.grouped(MAX_TEXT_BYTES)))])
     lines = text.removeprefix("\ufeff").replace("\r\n", "\n").replace("\r", "\n").split("\n")
     if lines[-1] == "":
         lines.pop()
     if len(lines) > MAX_LINES:
-        raise PlanInvalid([place_error(0, 0, "text", f"The plan has {len(lines):,} lines; a plan has at most "
-                                                     f"{MAX_LINES} lines.")])
+        raise PlanInvalid([place_error(0, 0, "text", gettext("The plan has %(count)s lines; a plan has at most "
+                                                             "%(max)s lines.", count=checks.grouped(len(lines)),
+                                                             max=MAX_LINES))])
     parser = _Parser(skills)
     try:
         parser.tokens = Tokenizer(parser.report).read(lines)
@@ -94,13 +98,14 @@ class _Parser:
                 self.advance()
             elif token.kind is Kind.END:
                 if opener is not None:
-                    self.report(opener.line, opener.column, "this { is never closed; end its block with }.", path)
+                    self.report(opener.line, opener.column, gettext("this { is never closed; end its block with }."),
+                                path)
                 return steps
             elif token.kind is Kind.CLOSE:
                 self.advance()
                 if opener is not None:
                     return steps
-                self.report(token.line, token.column, "this } closes no block; remove it.", path)
+                self.report(token.line, token.column, gettext("this } closes no block; remove it."), path)
             else:
                 step = self.statement(f"{path}[{written}]", depth)
                 written += 1
@@ -117,11 +122,12 @@ class _Parser:
         if head.kind is Kind.WORD and head.text == "on":
             return self._on(head, path, depth)
         if head.kind is Kind.OPEN:
-            self.report(head.line, head.column, "a { block } belongs after repeat, if, else or on.", path)
+            self.report(head.line, head.column, gettext("a { block } belongs after repeat, if, else or on."), path)
             self._skip_block(head, path)
             return None
         if head.kind is Kind.WORD and head.text == "else":
-            self.report(head.line, head.column, "else must follow the } of an if: if ... { } else { }.", path)
+            self.report(head.line, head.column, gettext("else must follow the } of an if: if ... { } else { }."),
+                        path)
             self._line_tokens()
             if self.peek().kind is Kind.OPEN:
                 self._skip_block(self.advance(), path)
@@ -129,15 +135,16 @@ class _Parser:
         arguments = self._line_tokens()
         if self.peek().kind is Kind.OPEN:
             opener = self.advance()
-            self.report(opener.line, opener.column, "only repeat, if, else and on take a { block }.", path)
+            self.report(opener.line, opener.column, gettext("only repeat, if, else and on take a { block }."),
+                        path)
             self._skip_block(opener, path)
             return None
         try:
             if head.kind is Kind.BAD or any(t.kind is Kind.BAD for t in arguments):
                 raise Reported()
             if head.kind is not Kind.WORD:
-                raise self.commands.at(head, path, f"a command starts with its name, such as go_to or say; got "
-                                                   f"{head.written[:40]!r}.")
+                raise self.commands.at(head, path, gettext("a command starts with its name, such as go_to or say; "
+                                                           "got %(written)s.", written=repr(head.written[:40])))
             return self.commands.simple(head, arguments, path)
         except Reported:
             return None
@@ -153,7 +160,8 @@ class _Parser:
         while depth:
             token = self.advance()
             if token.kind is Kind.END:
-                self.report(opener.line, opener.column, "this { is never closed; end its block with }.", path)
+                self.report(opener.line, opener.column, gettext("this { is never closed; end its block with }."),
+                            path)
                 return
             depth += {Kind.OPEN: 1, Kind.CLOSE: -1}.get(token.kind, 0)
 
@@ -165,7 +173,8 @@ class _Parser:
         if self.peek().kind is Kind.OPEN:
             return self.advance()
         self.position = start
-        self.report(head.line, head.column, f"{head.text} needs a block: {head.text} ... {{ commands }}.", path)
+        self.report(head.line, head.column, gettext("%(command)s needs a block: %(command)s ... { commands }.",
+                                                    command=head.text), path)
         return None
 
     def _nested_block(self, head: Token, path: str, depth: int) -> list[Step] | None:
@@ -173,8 +182,8 @@ class _Parser:
         if opener is None:
             return None
         if depth + 1 > MAX_DEPTH:
-            self.report(opener.line, opener.column, f"blocks nest at most {MAX_DEPTH} deep; this one would be "
-                                                    f"{depth + 1} deep.", path)
+            self.report(opener.line, opener.column, gettext("blocks nest at most %(max)s deep; this one would be "
+                                                            "%(depth)s deep.", max=MAX_DEPTH, depth=depth + 1), path)
             self._skip_block(opener, path)
             return None
         body = self.block(path, depth + 1, opener)
@@ -185,7 +194,8 @@ class _Parser:
         token = self.peek()
         if token.kind in (Kind.NEWLINE, Kind.END, Kind.CLOSE) or (token.kind is Kind.WORD and token.text == "else"):
             return
-        self.report(token.line, token.column, "after a block's }, start the next command on a new line.", path)
+        self.report(token.line, token.column, gettext("after a block's }, start the next command on a new line."),
+                    path)
         self._line_tokens()
 
     def _repeat(self, head: Token, path: str, depth: int) -> Step | None:
@@ -196,7 +206,7 @@ class _Parser:
                 raise Reported()
             if len(header) != 1:
                 raise self.commands.at(header[1] if len(header) > 1 else head, f"{path}.count",
-                                       "repeat takes one count and a block: repeat 3 { ... }.")
+                                       gettext("repeat takes one count and a block: repeat 3 { ... }."))
             value = self.commands.number(header[0], "", "count", f"{path}.count")
             count = checks.repeat_count(value, header[0].written)
         except StepProblem as problem:
@@ -208,7 +218,7 @@ class _Parser:
         if count is None or body is None or len(self.errors) > before:
             return None
         if not body:
-            self.report(head.line, head.column, "this repeat has nothing in its block.", f"{path}.body")
+            self.report(head.line, head.column, gettext("this repeat has nothing in its block."), f"{path}.body")
             return None
         return RepeatStep(count, tuple(body), head.line, head.column)
 
@@ -239,7 +249,8 @@ class _Parser:
             otherwise_head = self.advance()
             stray = self._line_tokens()
             if stray:
-                self.report(stray[0].line, stray[0].column, "else takes no condition: else { ... }.", f"{path}.else")
+                self.report(stray[0].line, stray[0].column, gettext("else takes no condition: else { ... }."),
+                            f"{path}.else")
             otherwise = self._nested_block(otherwise_head, f"{path}.else", depth)
         else:
             self.position = start

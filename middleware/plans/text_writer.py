@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import math
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.plans.aliases import ALIAS_OF_SKILL, ALIASES
-from middleware.plans.checks import place_error
+from middleware.plans.checks import grouped, place_error
 from middleware.plans.steps import (
     MAX_LINES,
     MAX_TEXT_BYTES,
@@ -42,9 +44,10 @@ def check_written_form(plan: Plan) -> list[PlanError]:
     text = plan_to_text(plan)
     size, lines = len(text.encode("utf-8", "surrogatepass")), text.count("\n")
     if size > MAX_TEXT_BYTES or lines > MAX_LINES:
-        return [place_error(0, 0, "steps", f"Written out one command a line this plan has {lines:,} lines and "
-                                           f"{size:,} bytes; a plan has at most {MAX_LINES} lines and "
-                                           f"{MAX_TEXT_BYTES:,} bytes.")]
+        return [place_error(0, 0, "steps", gettext(
+            "Written out one command a line this plan has %(lines)s lines and %(size)s bytes; a plan has at most "
+            "%(max_lines)s lines and %(max_size)s bytes.", lines=grouped(lines), size=grouped(size),
+            max_lines=MAX_LINES, max_size=grouped(MAX_TEXT_BYTES)))]
     return []
 
 

@@ -7,7 +7,9 @@ import enum
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from middleware.plans.checks import TAB_IN_TEXT, character_problem
+from flask_babel import gettext  # type: ignore[import-untyped]
+
+from middleware.plans.checks import character_problem, text_character_problem
 
 _LETTERS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ_")
 _DIGITS = frozenset("0123456789")
@@ -104,30 +106,32 @@ class Tokenizer:
             return self._bad_word(line, number, position, end)
         problem = character_problem(character)
         if problem:
-            self._bad(number, position, character, problem + ".")
+            self._bad(number, position, character, gettext("%(problem)s.", problem=problem))
         elif character == "'":
-            self._bad(number, position, character, 'texts are written in double quotes, as in say "hello".')
+            self._bad(number, position, character, gettext('texts are written in double quotes, as in say "hello".'))
         elif character == ",":
-            self._bad(number, position, character, "values are separated by spaces, and decimals written with a point "
-                                                   "(go_to 1.5 0.5).")
+            self._bad(number, position, character, gettext("values are separated by spaces, and decimals written with "
+                                                           "a point (go_to 1.5 0.5)."))
         else:
-            self._bad(number, position, character,
-                      f"{character!r} has no meaning here; a command is words, numbers, \"texts\", {{ }} and =.")
+            self._bad(number, position, character, gettext(
+                '%(character)s has no meaning here; a command is words, numbers, "texts", { } and =.',
+                character=repr(character)))
         return position + 1
 
     def _bad_word(self, line: str, number: int, start: int, end: int) -> int:
         while end < len(line) and (line[end] in _WORD_CHARACTERS or _is_other_letter(line[end])):
             end += 1
         word = line[start:end]
-        self._bad(number, start, word, f"{word[:40]!r}: names use the letters a-z, digits and _ only "
-                                        '(other letters may stand inside a quoted text, as in say "héllo").')
+        self._bad(number, start, word, gettext('%(word)s: names use the letters a-z, digits and _ only (other letters '
+                                               'may stand inside a quoted text, as in say "héllo").',
+                                               word=repr(word[:40])))
         return end
 
     def _check_comment(self, line: str, number: int, position: int) -> None:
         for offset, character in enumerate(line[position:]):
             problem = character_problem(character)
             if problem:
-                self._report(number, position + offset + 1, f"in a comment, {problem}.")
+                self._report(number, position + offset + 1, gettext("in a comment, %(problem)s.", problem=problem))
                 return
 
     def _read_text(self, line: str, number: int, start: int) -> int:
@@ -140,18 +144,18 @@ class Tokenizer:
             if character == "\\":
                 following = line[position + 1:position + 2]
                 if following not in _ESCAPES:
-                    self._bad(number, position, "\\", 'in a text, \\ may only come before " or \\.')
+                    self._bad(number, position, "\\", gettext('in a text, \\ may only come before " or \\.'))
                     return _closing_quote(line, position + 1)
                 parts.append(_ESCAPES[following])
                 position += 2
                 continue
-            problem = character_problem(character) or (TAB_IN_TEXT if character == "\t" else None)
+            problem = text_character_problem(character)
             if problem:
-                self._bad(number, position, character, f"in a text, {problem}.")
+                self._bad(number, position, character, gettext("in a text, %(problem)s.", problem=problem))
                 return _closing_quote(line, position + 1)
             parts.append(character)
             position += 1
-        self._bad(number, start, line[start:], 'this text has no closing " on its line.')
+        self._bad(number, start, line[start:], gettext('this text has no closing " on its line.'))
         return len(line)
 
     def _read_number(self, line: str, number: int, start: int) -> int:
@@ -177,8 +181,9 @@ class Tokenizer:
             end += 1
         written = line[start:end]
         if end > position or digits_start == position:
-            self._bad(number, start, written, f"{written[:40]!r} is not a number (numbers are written 1.5, -2, "
-                                              "0.25, 3e-2, with a unit if any stuck to them: 90deg, 2s).")
+            self._bad(number, start, written, gettext("%(written)s is not a number (numbers are written 1.5, -2, 0.25, "
+                                                      "3e-2, with a unit if any stuck to them: 90deg, 2s).",
+                                                      written=repr(written[:40])))
             return end
         self.tokens.append(Token(Kind.NUMBER, written, number, start + 1, number=float(numeral), unit=unit))
         return end

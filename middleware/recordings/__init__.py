@@ -15,11 +15,11 @@ _KEY = "telelab.recordings"
 
 
 class Recordings:
-    """The app's recorder parts: the command log every worker keeps, and the keeper the elected one runs."""
+    """The app's recorder parts: the command notes and the keeper every worker has (writer child: the rest)."""
 
     def __init__(self, app: Flask) -> None:
         self._app = app
-        self.sink = CommandSink(session_factory(app))
+        self.sink = CommandSink()
         self._keeper: RecordingKeeper | None = None
         self._active: bool | None = None
 
@@ -45,14 +45,13 @@ class Recordings:
         """The keeper (made once, not started)."""
         if self._keeper is None:
             self._keeper = RecordingKeeper(self._app, session_factory(self._app), robot_registry(self._app),
-                                           recording_settings.load(self._app))
+                                           recording_settings.load(self._app), self.sink)
         return self._keeper
 
     def stop(self) -> None:
-        """Stops the keeper and the command log (tests, shut-down)."""
+        """Stops the keeper, which hands its last notes and seconds to its writer child (tests, shut-down)."""
         if self._keeper is not None:
             self._keeper.stop()
-        self.sink.stop()
 
 
 def enabled(app: Flask) -> bool:

@@ -1,24 +1,18 @@
-"""The command observer the one command path calls (create_app hands it in): it only queues the note, so the
-command's answer never waits for the recorder; a thread of this process writes the queued notes to the database,
-where the recorder of the robot's session (in whichever process is elected) reads them."""
+"""The command observer the one command path calls (create_app hands it in): it only keeps the note, so the
+command's answer never waits for the recorder; the keeper's tick hands the notes to the worker's writer child once a
+second (recorder.py), which writes them to the command log, where the recorder of the robot's session (in whichever
+process records it) reads them. No thread of its own and no database work in the worker."""
 
 from __future__ import annotations
 
+import contextlib
 import json
-import logging
-import queue
-import threading
-from collections.abc import Callable
+from collections import deque
 
 from flask import has_request_context, request
-from sqlalchemy import insert
-from sqlalchemy.orm import Session
 
 from middleware.access.commands import CommandNote
-from middleware.models.recordings import RecordedCommand
 
-log = logging.getLogger(__name__)
-WRITE_EVERY_S = 0.5  # the recorder copies the rows once a second, and waits for one more write at a session's end
 QUEUE_LIMIT = 10_000  # notes waiting; past it a note is dropped (counted), never waited for
 
 # The page or API a command came from, when its sender named no source (the drive pad's socket has no request).
@@ -37,63 +31,33 @@ def inferred_source(note: CommandNote) -> str:
 
 
 class CommandSink:
-    """Queues notes from any thread and writes them in batches from a thread of its own."""
+    """Keeps notes from any thread until the keeper's next tick hands them to the writer child (no thread, no
+    database work here)."""
 
-    def __init__(self, sessions: Callable[[], Session]) -> None:
-        self._sessions = sessions
-        self._queue: queue.Queue[tuple[CommandNote, str]] = queue.Queue(QUEUE_LIMIT)
-        self._thread: threading.Thread | None = None
-        self._lock = threading.Lock()
-        self._stopped = threading.Event()
+    def __init__(self) -> None:
+        self._notes: deque[tuple[CommandNote, str]] = deque()
+        self._back: list[dict[str, object]] = []  # rows a failed tick handed back
         self.dropped = 0
 
     def observe(self, note: CommandNote) -> None:
-        """The observer, on the command's own path: queues the note with its source (which only the request can
-        tell) and returns; the row is made by the writing thread (never blocks)."""
-        try:
-            self._queue.put_nowait((note, inferred_source(note)))
-        except queue.Full:
+        """The observer, on the command's own path: keeps the note with its source (which only the request can
+        tell) and returns (never blocks)."""
+        if len(self._notes) >= QUEUE_LIMIT:
             self.dropped += 1
             return
-        if self._thread is None:
-            self._start()
+        self._notes.append((note, inferred_source(note)))
 
-    def write_pending(self) -> int:
-        """Writes every queued note now; how many."""
-        rows: list[dict[str, object]] = []
-        while True:
-            try:
-                rows.append(_row(*self._queue.get_nowait()))
-            except queue.Empty:
-                break
-        if rows:
-            with self._sessions() as session, session.begin():
-                session.execute(insert(RecordedCommand), rows)
-        return len(rows)
+    def take(self) -> list[dict[str, object]]:
+        """The notes kept since the last take, as command log rows."""
+        rows, self._back = self._back, []
+        with contextlib.suppress(IndexError):
+            while True:
+                rows.append(_row(*self._notes.popleft()))
+        return rows
 
-    def stop(self) -> None:
-        """Writes what is queued and ends the thread."""
-        self._stopped.set()
-        thread = self._thread
-        if thread is not None:
-            thread.join(timeout=3)
-
-    def _start(self) -> None:
-        with self._lock:
-            if self._thread is None:
-                self._thread = threading.Thread(target=self._write_forever, name="command-log", daemon=True)
-                self._thread.start()
-
-    def _write_forever(self) -> None:
-        while not self._stopped.wait(WRITE_EVERY_S):
-            self._write_once()
-        self._write_once()
-
-    def _write_once(self) -> None:
-        try:
-            self.write_pending()
-        except Exception:  # noqa: BLE001 - the database away for a moment: the notes wait in the queue... or go
-            log.exception("writing the command log failed")
+    def put_back(self, rows: list[dict[str, object]]) -> None:
+        """Rows the writer could not take this tick: they go with the next one."""
+        self._back = [*rows, *self._back][:QUEUE_LIMIT]
 
 
 def _row(note: CommandNote, source: str) -> dict[str, object]:

@@ -77,17 +77,24 @@ class PartWriter:
 
     def write(self, topic: str, message: Message, log_time_ns: int) -> None:
         """Adds one message (log time in unix ns)."""
+        self._add(topic, type(message), message.SerializeToString(), log_time_ns)
+
+    def write_serialized(self, topic: str, data: bytes, log_time_ns: int) -> None:
+        """Adds one message already serialized as its topic's type (channels.MESSAGE_TYPES)."""
+        self._add(topic, channels.MESSAGE_TYPES[topic], data, log_time_ns)
+
+    def _add(self, topic: str, message_type: type[Message], data: bytes, log_time_ns: int) -> None:
         with self._lock:
             if self._finished:
                 return
             channel_id = self._channels.get(topic)
             if channel_id is None:
-                schema_id = register_schema(self._writer, type(message))
+                schema_id = register_schema(self._writer, message_type)
                 channel_id = self._channels[topic] = self._writer.register_channel(
                     topic=topic, message_encoding="protobuf", schema_id=schema_id)
             sequence = self._sequences[topic] = self._sequences.get(topic, -1) + 1
             self._writer.add_message(channel_id=channel_id, log_time=log_time_ns, publish_time=log_time_ns,
-                                     data=message.SerializeToString(), sequence=sequence)
+                                     data=data, sequence=sequence)
 
     def flush_if_due(self) -> None:
         """Closes the chunk in progress and writes it to disk when FLUSH_S has passed since the last time."""

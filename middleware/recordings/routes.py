@@ -9,11 +9,12 @@ from pathlib import Path
 
 from flask import Blueprint, Response, current_app, jsonify, redirect, render_template, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
-from middleware.api.contract import ID, OBJECT, array, described, file_answer, number, obj, whole
+from middleware.api.contract import BOOLEAN, ID, OBJECT, array, described, file_answer, nullable, number, obj, whole
 from middleware.db import after_commit, get_session
-from middleware.errors import ApiError, Refused
+from middleware.errors import ApiError, Refused, written_number
 from middleware.models.accounts import Role, User, as_utc
 from middleware.models.recordings import RECORDING_KINDS, Recording
 from middleware.recordings import export, files, recordings_of, services
@@ -47,6 +48,9 @@ def _root() -> Path:
     return recordings_of(current_app).settings.directory
 
 
+_CHANNELS = ("odometry", "ground_truth", "sonar", "laser", "localization", "commands", "goals", "camera")
+
+
 def _data(recording: Recording, from_s: float = 0.0, to_s: float | None = None) -> dict[str, object]:
     """The decoded window: only the chunks in it are read from a complete part (the page asks for its first
     seconds first, so a long recording's first frame does not wait for all of it)."""
@@ -71,14 +75,15 @@ def _seconds(name: str) -> float | None:
     except ValueError:
         value = math.nan
     if not math.isfinite(value) or not 0.0 <= value <= MAX_RANGE_S or len(raw) > 32:
-        raise ApiError(400, "invalid_field", f"{name} must be a number of seconds from 0 to {MAX_RANGE_S:.0f}.", name)
+        raise ApiError(400, "invalid_field", gettext("%(name)s must be a number of seconds from 0 to %(high)s.",
+                                                     name=name, high=written_number(MAX_RANGE_S, ".0f")), name)
     return value
 
 
 def _range() -> tuple[float, float | None]:
     from_s, to_s = _seconds("from_s") or 0.0, _seconds("to_s")
     if to_s is not None and to_s < from_s:
-        raise ApiError(400, "invalid_field", "to_s must not be before from_s.", "to_s")
+        raise ApiError(400, "invalid_field", gettext("to_s must not be before from_s."), "to_s")
     return from_s, to_s
 
 
@@ -108,7 +113,7 @@ def run_of(kind: str, ref_id: int) -> ResponseReturnValue:
     """The replay of an attempt's, a trial's or an exercise run's session (the result pages link here)."""
     recording = services.recording_for(get_session(), _user(), kind, ref_id) if kind in RECORDING_KINDS else None
     if recording is None:
-        raise Refused(404, "unknown_recording", "This run was not recorded, or you may not see it.")
+        raise Refused(404, "unknown_recording", gettext("This run was not recorded, or you may not see it."))
     return redirect(url_for("recordings.replay_page", recording_id=recording.id))
 
 
@@ -117,7 +122,7 @@ def run_of(kind: str, ref_id: int) -> ResponseReturnValue:
 def storage_page() -> ResponseReturnValue:
     """Admins: the recordings' disk use per user against the limits."""
     if _user().role != Role.ADMIN:
-        raise Refused(403, "forbidden", "Only an admin sees the recordings' storage.")
+        raise Refused(403, "forbidden", gettext("Only an admin sees the recordings' storage."))
     settings = recordings_of(current_app).settings
     rows = services.storage_by_user(get_session())
     return render_template("recordings/storage.html", rows=rows, total=sum(r[3] for r in rows), settings=settings)
@@ -146,7 +151,11 @@ def recording_summary(recording_id: int) -> ResponseReturnValue:
 @blueprint.get("/api/recordings/<int:recording_id>/data")
 @login_required
 @described(query={"from_s": number(0, MAX_RANGE_S), "to_s": number(0, MAX_RANGE_S)},
-           answers={200: OBJECT})
+           answers={200: obj(("t0_unix_s", "duration_s", "truth", "scene", "info", *_CHANNELS, "measurement"),
+                             description="export.replay_data: each channel a list of [t_s, ...] rows",
+                             t0_unix_s=number(), duration_s=number(), truth=BOOLEAN, scene=nullable(OBJECT),
+                             info=nullable(OBJECT), recording_s=number(), measurement=nullable(OBJECT),
+                             **{channel: array() for channel in _CHANNELS})})
 def recording_data(recording_id: int) -> ResponseReturnValue:
     """The decoded channels from from_s to to_s (seconds from the first message): what the replay page draws."""
     recording = services.visible_recording(get_session(), _user(), recording_id)
@@ -175,7 +184,7 @@ def export_csv(recording_id: int, channel: str) -> ResponseReturnValue:
     """One channel (odometry, ground_truth, sonar, laser, localization, commands, goals) as CSV."""
     recording = services.visible_recording(get_session(), _user(), recording_id)
     if channel not in export.CSV_CHANNELS or (channel == "ground_truth" and not services.may_see_truth(_user())):
-        raise ApiError(404, "unknown_channel", "There is no such channel in this recording.", "channel")
+        raise ApiError(404, "unknown_channel", gettext("There is no such channel in this recording."), "channel")
     root = _root()
     data = export.replay_data(files.read_recording(root, recording.id), services.may_see_truth(_user()),
                               t0_ns=files.first_log_ns(root, recording.id), laser_every_s=0.0)
@@ -192,7 +201,7 @@ def camera_frame(recording_id: int, index: int) -> ResponseReturnValue:
     recording = services.visible_recording(get_session(), _user(), recording_id)
     jpeg = export.camera_frame(files.read_recording(_root(), recording.id), index)
     if jpeg is None:
-        raise ApiError(404, "unknown_frame", "This recording has no such camera frame.", "index")
+        raise ApiError(404, "unknown_frame", gettext("This recording has no such camera frame."), "index")
     return Response(jpeg, mimetype="image/jpeg", headers={"Cache-Control": "private, max-age=3600"})
 
 
@@ -203,7 +212,8 @@ def export_source(recording_id: int) -> ResponseReturnValue:
     """The plan or code that produced the run."""
     recording = services.visible_recording(get_session(), _user(), recording_id)
     if not recording.source_text:
-        raise ApiError(404, "no_source", "No plan or code produced this run: it was driven by hand.", "recording_id")
+        raise ApiError(404, "no_source", gettext("No plan or code produced this run: it was driven by hand."),
+                       "recording_id")
     name = re.sub(r"[^A-Za-z0-9_.-]", "_", recording.source_name or f"recording-{recording.id}.txt")[:80]
     return Response(recording.source_text, mimetype="text/plain", headers={
         "Content-Disposition": f'attachment; filename="{name}"'})
@@ -215,10 +225,10 @@ def export_source(recording_id: int) -> ResponseReturnValue:
 def recording_of(kind: str, ref_id: int) -> ResponseReturnValue:
     """The newest recording of an attempt, a trial, an exercise run (kind) the user may see."""
     if kind not in RECORDING_KINDS:
-        raise ApiError(404, "unknown_kind", "There is no such kind of session.", "kind")
+        raise ApiError(404, "unknown_kind", gettext("There is no such kind of session."), "kind")
     recording = services.recording_for(get_session(), _user(), kind, ref_id)
     if recording is None:
-        raise ApiError(404, "unknown_recording", "This run was not recorded.", "ref_id")
+        raise ApiError(404, "unknown_recording", gettext("This run was not recorded."), "ref_id")
     return jsonify({"recording": _summary(recording)})
 
 
@@ -230,9 +240,10 @@ def delete_recording(recording_id: int) -> ResponseReturnValue:
     user = _user()
     recording = services.visible_recording(get_session(), user, recording_id)
     if recording.user_id != user.id and user.role != Role.ADMIN:
-        raise Refused(403, "forbidden", "Only its owner or an admin deletes a recording.")
+        raise Refused(403, "forbidden", gettext("Only its owner or an admin deletes a recording."))
     if recording.ended_at is None:
-        raise Refused(409, "still_recording", "This session is still being recorded: delete it once it ended.")
+        raise Refused(409, "still_recording", gettext("This session is still being recorded: delete it once it "
+                                                      "ended."))
     get_session().delete(recording)
     root = _root()
     after_commit(lambda: files.remove_recording(root, recording_id))

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import delete, func, select, update
 from sqlalchemy.orm import Session
 
@@ -181,7 +182,7 @@ def visible_recording(session: Session, actor: User, recording_id: int) -> Recor
     (another's recording is answered like a missing one)."""
     recording = session.get(Recording, recording_id)
     if recording is None or not may_see(session, actor, recording):
-        raise ApiError(404, "unknown_recording", "There is no such recording.", "recording_id")
+        raise ApiError(404, "unknown_recording", gettext("There is no such recording."), "recording_id")
     return recording
 
 

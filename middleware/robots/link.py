@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Protocol, TypeVar
 
 import grpc
+from flask_babel import gettext  # type: ignore[import-untyped]
 
 from middleware.robots.fanout import FanoutHub
 from middleware.robots.messages import pack_camera_frame, pack_localization, pack_telemetry
@@ -174,7 +175,7 @@ class RobotLink:
         except grpc.RpcError as error:
             raise _translate(error) from None
         except StopIteration:
-            raise RobotUnavailable(f"{self.name} sent no telemetry.") from None
+            raise RobotUnavailable(gettext("%(robot)s sent no telemetry.", robot=self.name)) from None
         finally:
             stream.cancel()
 
@@ -300,7 +301,7 @@ class RobotLink:
     async def drive_async(self, token: str, sequence: int, linear_mps: float, angular_radps: float) -> DriveResult:
         """drive() on the running asyncio loop (grpc.aio): no thread waits for the robot, however slow it is."""
         if self._closed:
-            raise RobotUnavailable(f"The link to {self.name} is closed.")
+            raise RobotUnavailable(gettext("The link to %(robot)s is closed.", robot=self.name))
         with self._sequence_lock:
             self._highest_sequence = max(self._highest_sequence, sequence)
         command = robot_pb2.DriveCommand(
@@ -319,6 +320,30 @@ class RobotLink:
         with self._sequence_lock:
             self._highest_sequence = max(self._highest_sequence, ack.applied_sequence)
         return DriveResult(ack.applied_sequence, ack.linear_mps, ack.angular_radps, round_trip_ms)
+
+    def open_drive_call(self) -> grpc.aio.StreamStreamCall:
+        """A DriveStream call on the running loop (grpc.aio), for one driver's commands: drive_stream.DriveStream
+        writes them and reads the answers; RobotUnavailable once the link is closed."""
+        if self._closed:
+            raise RobotUnavailable(gettext("The link to %(robot)s is closed.", robot=self.name))
+        return self._aio_stub().DriveStream()
+
+    def note_drive_sent(self, sequence: int) -> None:
+        """A drive command numbered sequence is on its way (a later single command is numbered above it)."""
+        with self._sequence_lock:
+            self._highest_sequence = max(self._highest_sequence, sequence)
+
+    def note_drive_answer(self, applied_sequence: int) -> None:
+        """The robot answered a drive command: it is reachable, and a newer sequence in force (sent by another
+        process) is numbered above."""
+        self.unreachable_since = None
+        with self._sequence_lock:
+            self._highest_sequence = max(self._highest_sequence, applied_sequence)
+
+    def note_unreachable(self) -> None:
+        """A call to the robot failed as unreachable (the first of a row starts the count)."""
+        if self.unreachable_since is None:
+            self.unreachable_since = time.monotonic()
 
     def get_limits(self) -> robot_pb2.Limits:
         """The velocity ceilings and the deadman (watchdog) timeout in force, with the ranges the robot accepts."""
@@ -365,7 +390,7 @@ class RobotLink:
             if not self._closed:
                 raise
             # A handler still running while the app shuts down, such as a driver's parting stop.
-            raise RobotUnavailable(f"The link to {self.name} is closed.") from None
+            raise RobotUnavailable(gettext("The link to %(robot)s is closed.", robot=self.name)) from None
         self.unreachable_since = None
         return reply
 
@@ -390,16 +415,22 @@ def answers_at(name: str, address: str, rpc_timeout_s: float = 1.0) -> bool:
 
 def _translate(error: grpc.RpcError, not_found_code: str = "unknown_skill") -> CommandRefused | RobotUnavailable:
     code = error.code()
-    details = error.details() or ""
+    field = None
+    if code == grpc.StatusCode.INVALID_ARGUMENT:
+        field = dict(error.trailing_metadata() or ()).get("field")
+    return translate_status(code, error.details() or "", field, not_found_code)
+
+
+def translate_status(code: grpc.StatusCode, details: str, field: str | None = None,
+                     not_found_code: str = "unknown_skill") -> CommandRefused | RobotUnavailable:
+    """A robot's status (a call's, or a refusal a drive stream answered with) as the middleware's refusal: the one
+    map from status codes to refusal codes."""
     if code in _REFUSAL_CODES:
-        field = None
-        if code == grpc.StatusCode.INVALID_ARGUMENT:
-            trailing = dict(error.trailing_metadata() or ())
-            field = trailing.get("field") or details.split(" ", 1)[0]
-        return CommandRefused(_REFUSAL_CODES[code], details, field, not_found_code)
+        named = (field or details.split(" ", 1)[0]) if code == grpc.StatusCode.INVALID_ARGUMENT else None
+        return CommandRefused(_REFUSAL_CODES[code], details, named, not_found_code)
     if code == grpc.StatusCode.DEADLINE_EXCEEDED:
-        return RobotUnavailable("The robot did not answer in time.")
-    return RobotUnavailable("The robot is not reachable right now.")
+        return RobotUnavailable(gettext("The robot did not answer in time."))
+    return RobotUnavailable(gettext("The robot is not reachable right now."))
 
 
 def _cancel_call(stream: AsyncIterator[object]) -> None:

@@ -7,12 +7,15 @@ status and stable code of this table. Both are `Refused`, so routes let them pas
 
 from __future__ import annotations
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
 from middleware.errors import Refused
+from middleware.i18n import N_
 
 STALE_TOKEN_CODES = frozenset({"not_controller", "unauthenticated"})
 STATUS_OF_REFUSAL = {"invalid_field": 400, "not_found": 404, "not_controller": 403, "unauthenticated": 403,
                      "not_possible_now": 409}
-NOT_CONTROLLER_MESSAGE = "You are observing: someone else has control. Wait for your turn."
+NOT_CONTROLLER_MESSAGE = N_("You are observing: someone else has control. Wait for your turn.")
 
 
 class RobotUnavailable(Refused):
@@ -22,7 +25,7 @@ class RobotUnavailable(Refused):
     """
 
     def __init__(self, reason: str) -> None:
-        super().__init__(503, "robot_offline", f"{reason} Try again in a moment.")
+        super().__init__(503, "robot_offline", gettext("%(reason)s Try again in a moment.", reason=reason))
         self.reason = reason
 
     def __str__(self) -> str:
@@ -42,7 +45,7 @@ class CommandRefused(Refused):
         if reason == "not_possible_now":
             super().__init__(status, "busy", detail, field)
         elif reason in STALE_TOKEN_CODES:
-            super().__init__(status, "not_controller", NOT_CONTROLLER_MESSAGE)
+            super().__init__(status, "not_controller", gettext(NOT_CONTROLLER_MESSAGE))
         else:
             super().__init__(status, not_found_code if reason == "not_found" else reason, detail, field)
         self.reason, self.detail = reason, detail

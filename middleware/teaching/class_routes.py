@@ -9,7 +9,7 @@ from flask.typing import ResponseReturnValue
 from flask_login import current_user, login_required
 from sqlalchemy.exc import DBAPIError
 
-from middleware.api.contract import OBJECT, about, described, obj
+from middleware.api.contract import BOOLEAN, ID, OBJECT, STRING, about, array, described, nullable, obj, whole
 from middleware.courses.services import get_course
 from middleware.db import after_commit, get_session, session_factory
 from middleware.models import User
@@ -45,6 +45,20 @@ def _actor() -> User:
     return get_session().get(User, int(current_user.get_id()))  # type: ignore[return-value]
 
 
+SEAT = obj(("user_id", "username", "state", "message", "robot", "response_times"),
+           user_id=ID, username=STRING, state=STRING, message=STRING, robot=STRING, response_times=nullable(OBJECT))
+# A course's class session as its tutor sees it (_session_dict).
+CLASS_SESSION = obj(("course_id", "open", "scene", "booking_id", "started_at", "seats", "counts"),
+                    course_id=whole(0), open=BOOLEAN, scene=nullable(STRING), booking_id=nullable(whole()),
+                    started_at=nullable(STRING), seats=array(SEAT),
+                    counts=obj(("starting", "ready", "failed", "stopped"), starting=whole(0), ready=whole(0),
+                               failed=whole(0), stopped=whole(0)))
+# The student's own seat (_my_seat_dict): only "open" when they have none.
+MY_SEAT = obj(("open",), open=BOOLEAN,
+              course=obj(("id", "code", "title"), id=ID, code=STRING, title=STRING),
+              state=STRING, message=STRING, robot=STRING, console_url=nullable(STRING))
+
+
 def _session_dict(course_id: int) -> dict[str, object]:
     opened, seats = class_sessions.seats(get_session(), _actor(), course_id)
     states = ("starting", "ready", "failed", "stopped")
@@ -66,7 +80,7 @@ def tutor_page(course_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/courses/<int:course_id>/class-session")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: CLASS_SESSION})
 def status(course_id: int) -> ResponseReturnValue:
     """The open session and every seat's robot state."""
     return jsonify(_session_dict(course_id))
@@ -77,7 +91,7 @@ def status(course_id: int) -> ResponseReturnValue:
 @described(
     body=obj(scene=about("the scene every student's robot starts in")),
     body_required=False,
-    answers={201: OBJECT},
+    answers={201: CLASS_SESSION},
     refusals=(409, 503),
 )
 def start(course_id: int) -> ResponseReturnValue:
@@ -93,7 +107,7 @@ def start(course_id: int) -> ResponseReturnValue:
 
 @blueprint.delete("/api/courses/<int:course_id>/class-session")
 @login_required
-@described(answers={200: OBJECT}, refusals=(409,))
+@described(answers={200: CLASS_SESSION}, refusals=(409,))
 def end(course_id: int) -> ResponseReturnValue:
     """Ends the open session: every student's robot is stopped."""
     owners, manager = class_sessions.end_session(get_session(), _actor(), course_id), practice_manager()
@@ -113,8 +127,9 @@ def _my_seat_dict() -> dict[str, object]:
     course, seat = found
     name = practice_name(current_user.username, seat.user_id)
     state = class_sessions.my_seat_state(get_session(), _actor(), seat)
+    message = class_sessions.seat_message(seat.message) if state == seat.state else ""
     return {"open": True, "course": {"id": course.id, "code": course.code, "title": course.title},
-            "state": state, "message": seat.message if state == seat.state else "", "robot": name,
+            "state": state, "message": message, "robot": name,
             "console_url": url_for("lab.console", robot_name=name) if state == "ready" else None}
 
 
@@ -127,7 +142,7 @@ def student_page() -> ResponseReturnValue:
 
 @blueprint.get("/api/class-session")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: MY_SEAT})
 def my_seat() -> ResponseReturnValue:
     """The open class session the user has a seat in, and their robot's state."""
     return jsonify(_my_seat_dict())
@@ -135,7 +150,7 @@ def my_seat() -> ResponseReturnValue:
 
 @blueprint.post("/api/class-session/robot")
 @login_required
-@described(answers={202: OBJECT}, refusals=(409, 503))
+@described(answers={202: MY_SEAT}, refusals=(409, 503))
 def restart_my_robot() -> ResponseReturnValue:
     """Starts the user's class robot again after they stopped it (or it was lost), in the background."""
     class_session_id = class_sessions.restart_my_robot(get_session(), _actor())

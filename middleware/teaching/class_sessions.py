@@ -16,12 +16,14 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
+from flask_babel import gettext, lazy_gettext  # type: ignore[import-untyped]
 from sqlalchemy import select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from middleware.courses.services import get_course, managed_course
 from middleware.errors import Refused
+from middleware.i18n import N_
 from middleware.models import Course, CourseMembership, User
 from middleware.models.accounts import utc_now
 from middleware.models.farm import ClassSeat, ClassSession, PersonalRobotRecord
@@ -30,8 +32,9 @@ from middleware.teaching.practice_robots import PracticeManager, practice_name
 
 STARTS_AT_ONCE = 8  # robots started in parallel: enough to fill a host's cores, few enough to share them
 # The scenes a class may run: the lab arena (lessons, tours, most tests) or a course of the delay experiment.
-CLASS_SCENES = {"lab": "The lab arena", "course-A": "Course A of the delay experiment",
-                "course-B": "Course B of the delay experiment"}
+# Their titles are marked for the catalogue; the page says them in its language.
+CLASS_SCENES = {"lab": N_("The lab arena"), "course-A": N_("Course A of the delay experiment"),
+                "course-B": N_("Course B of the delay experiment")}
 log = logging.getLogger(__name__)
 
 
@@ -63,7 +66,8 @@ def clean_scene(value: object) -> str:
     if value in (None, ""):
         return "lab"
     if not isinstance(value, str) or value not in CLASS_SCENES:
-        raise Refused(400, "invalid_field", f"scene must be one of {', '.join(CLASS_SCENES)}.", "scene")
+        raise Refused(400, "invalid_field", gettext("scene must be one of %(scenes)s.", scenes=", ".join(CLASS_SCENES)),
+                      "scene")
     return value
 
 
@@ -85,24 +89,26 @@ def start_session(session: Session, actor: User, course_id: int, manager: Practi
     """
     course = managed_course(session, actor, course_id)
     if open_session(session, course.id) is not None:
-        raise Refused(409, "class_session_open", "A class session is open for this course already; end it first.")
+        raise Refused(409, "class_session_open", gettext("A class session is open for this course already; end it "
+                                                         "first."))
     students = _students(session, course)
     if not students:
-        raise Refused(409, "no_students", "The course has no enrolled student yet; enrol the class first.")
+        raise Refused(409, "no_students", gettext("The course has no enrolled student yet; enrol the class first."))
     free = manager.limit() - manager.count()
     running = set(session.scalars(select(PersonalRobotRecord.owner_id).where(
         PersonalRobotRecord.owner_id.in_([user.id for user in students]))))
     needed = len(students) - len(running)
     if needed > free:
-        raise Refused(409, "farm_full", f"The robot farm can start {max(free, 0)} more robots now and the class "
-                                        f"needs {needed}. Ask an administrator to add a robot host, or try again "
-                                        "when other classes have ended.")
+        raise Refused(409, "farm_full", gettext("The robot farm can start %(free)s more robots now and the class needs "
+                                                "%(needed)s. Ask an administrator to add a robot host, or try again "
+                                                "when other classes have ended.", free=max(free, 0), needed=needed))
     opened = ClassSession(course_id=course.id, started_by_id=actor.id, scene=scene, booking_id=booking_id)
     session.add(opened)
     try:
         session.flush()
     except IntegrityError:  # another tutor opened it at the same moment; the unit of work's owner rolls back
-        raise Refused(409, "class_session_open", "A class session is open for this course already.") from None
+        raise Refused(409, "class_session_open", lazy_gettext("A class session is open for this course already.")) \
+            from None
     session.add_all(ClassSeat(session_id=opened.id, user_id=user.id) for user in students)
     session.flush()
     return opened
@@ -136,7 +142,7 @@ def start_robots(sessions: Callable[[], Session], manager: PracticeManager, clas
             state, message = "failed", refusal.message
         except Exception:  # noqa: BLE001 - one student's robot must not stop the others'
             log.exception("class session %s: the robot of %s did not start", class_session_id, username)
-            state, message = "failed", "The robot did not start; the tutor can start the session again."
+            state, message = "failed", NOT_STARTED
         _set_seat(sessions, class_session_id, user_id, state, message)
 
     with ThreadPoolExecutor(STARTS_AT_ONCE, thread_name_prefix=f"class-{class_session_id}") as pool:
@@ -149,10 +155,10 @@ def restart_my_robot(session: Session, actor: User) -> int:
     lost); the class session's id, whose robot the caller starts once this is committed. 409 while it runs."""
     found = my_seat(session, actor)
     if found is None:
-        raise Refused(409, "no_class_session", "No class session is open for your courses now.")
+        raise Refused(409, "no_class_session", gettext("No class session is open for your courses now."))
     _course, seat = found
     if live_state(seat.state, _robot_runs(session, seat.session_id, actor.id)) in ("starting", "ready"):
-        raise Refused(409, "robot_running", "Your robot is running or starting already.")
+        raise Refused(409, "robot_running", gettext("Your robot is running or starting already."))
     seat.state, seat.message, seat.updated_at = "starting", "", utc_now()
     session.flush()
     return seat.session_id
@@ -164,7 +170,7 @@ def end_session(session: Session, actor: User, course_id: int) -> list[int]:
     course = managed_course(session, actor, course_id)
     opened = open_session(session, course.id)
     if opened is None:
-        raise Refused(409, "no_class_session", "No class session is open for this course.")
+        raise Refused(409, "no_class_session", gettext("No class session is open for this course."))
     opened.ended_at = utc_now()
     owners = session.scalars(select(PersonalRobotRecord.owner_id).where(
         PersonalRobotRecord.class_session_id == opened.id)).all()
@@ -173,7 +179,15 @@ def end_session(session: Session, actor: User, course_id: int) -> list[int]:
     return list(owners)
 
 
-STOPPED_WHILE_OPEN = "The robot was stopped; the student can start it again from their class page."
+STOPPED_WHILE_OPEN = N_("The robot was stopped; the student can start it again from their class page.")
+NOT_STARTED = N_("The robot did not start; the tutor can start the session again.")
+
+
+def seat_message(stored: str) -> str:
+    """A seat's stored sentence in the reader's language: a seat's robot starts on a thread with no request, so its
+    outcome is stored in English, and a sentence of the catalogue is said again here (one with values in it stays
+    as stored)."""
+    return gettext(stored) if stored else ""
 
 
 def live_state(stored: str, running: bool) -> str:
@@ -205,7 +219,7 @@ def seats(session: Session, actor: User, course_id: int) -> tuple[ClassSession |
     views = []
     for seat, username in rows:
         state = live_state(seat.state, seat.user_id in running)
-        message = STOPPED_WHILE_OPEN if state != seat.state else seat.message
+        message = gettext(STOPPED_WHILE_OPEN) if state != seat.state else seat_message(seat.message)
         views.append(SeatView(seat.user_id, username, state, message, robots[seat.user_id],
                               measured.get(seat.user_id)))
     return opened, views

@@ -15,6 +15,7 @@ import time
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
+from flask_babel import gettext, lazy_gettext  # type: ignore[import-untyped]
 from sqlalchemy import select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session, sessionmaker
@@ -22,6 +23,7 @@ from sqlalchemy.orm import Session, sessionmaker
 from middleware import events
 from middleware.courses.services import managed_course
 from middleware.errors import Refused
+from middleware.i18n import N_
 from middleware.models import Course, Lesson, StoredPlan, User
 from middleware.models.accounts import utc_now
 from middleware.models.assessment import Attempt, Exam
@@ -41,6 +43,11 @@ HAND_TEXT_MAX = 200
 NOTE_TEXT_MAX = 300
 NOTICES_SHOWN = 10
 PUSH_KINDS = {"lesson": "a lesson", "plan": "a plan", "test": "a test", "exercise": "an exercise"}
+# The refusal of a push whose item is not there, said per kind (each language words a kind its own way).
+_NOT_SENDABLE = {"lesson": N_("There is no lesson %(id)s you can send to this class."),
+                 "plan": N_("There is no plan %(id)s you can send to this class."),
+                 "test": N_("There is no test %(id)s you can send to this class."),
+                 "exercise": N_("There is no exercise %(id)s you can send to this class.")}
 
 
 def announce(session: Session, class_session_id: int) -> None:
@@ -57,7 +64,7 @@ def wall_session(session: Session, actor: User, course_id: int) -> tuple[Course,
     course = managed_course(session, actor, course_id)
     opened = class_sessions.open_session(session, course.id)
     if opened is None:
-        raise Refused(409, "no_class_session", "No class session is open for this course; start one first.")
+        raise Refused(409, "no_class_session", gettext("No class session is open for this course; start one first."))
     return course, opened
 
 
@@ -65,7 +72,7 @@ def _seat(session: Session, opened: ClassSession, user_id: int) -> tuple[ClassSe
     row = session.execute(select(ClassSeat, User.username).join(User, User.id == ClassSeat.user_id).where(
         ClassSeat.session_id == opened.id, ClassSeat.user_id == user_id)).first()
     if row is None:
-        raise Refused(404, "unknown_seat", "That student has no seat in this class session.", "user_id")
+        raise Refused(404, "unknown_seat", gettext("That student has no seat in this class session."), "user_id")
     return row[0], row[1]
 
 
@@ -123,9 +130,10 @@ def wall_seats(session: Session, class_session_id: int) -> list[WallSeat]:
     for seat, username in rows:
         state = class_sessions.live_state(seat.state, seat.user_id in running)
         hand = hands.get(seat.user_id)
+        message = (gettext(class_sessions.STOPPED_WHILE_OPEN) if state != seat.state
+                   else class_sessions.seat_message(seat.message))
         seats.append(WallSeat(
-            seat.user_id, username, practice_name(username, seat.user_id), state,
-            class_sessions.STOPPED_WHILE_OPEN if state != seat.state else seat.message,
+            seat.user_id, username, practice_name(username, seat.user_id), state, message,
             None if hand is None else {"text": hand.text, "raised_at": _iso(hand.raised_at)},
             held.get(seat.user_id), seat.user_id in testing))
     return seats
@@ -141,19 +149,20 @@ def clean_text(value: object, field: str, limit: int, required: bool = False) ->
     if value is None:
         value = ""
     if not isinstance(value, str):
-        raise Refused(400, "invalid_field", f"{field} must be text.", field)
+        raise Refused(400, "invalid_field", gettext("%(field)s must be text.", field=field), field)
     text = " ".join(value.split())
     if len(text) > limit:
-        raise Refused(400, "invalid_field", f"{field} is {len(text)} characters long; at most {limit} fit.", field)
+        raise Refused(400, "invalid_field", gettext("%(field)s is %(length)s characters long; at most %(limit)s fit.",
+                                                    field=field, length=len(text), limit=limit), field)
     if required and not text:
-        raise Refused(400, "invalid_field", f"{field} is empty: write a sentence first.", field)
+        raise Refused(400, "invalid_field", gettext("%(field)s is empty: write a sentence first.", field=field), field)
     return text
 
 
 def _my_open_seat(session: Session, actor: User) -> ClassSeat:
     found = class_sessions.my_seat(session, actor)
     if found is None:
-        raise Refused(409, "no_class_session", "No class session is open for your courses now.")
+        raise Refused(409, "no_class_session", gettext("No class session is open for your courses now."))
     return found[1]
 
 
@@ -171,7 +180,7 @@ def raise_hand(session: Session, actor: User, text: object) -> ClassHand:
     try:
         session.flush()
     except IntegrityError:  # the same student raised it twice at once in two workers; the owner rolls back
-        raise Refused(409, "hand_raised", "Your hand is up already.") from None
+        raise Refused(409, "hand_raised", lazy_gettext("Your hand is up already.")) from None
     announce(session, seat.session_id)
     return hand
 
@@ -203,14 +212,15 @@ def take_over(session: Session, actor: User, course_id: int, user_id: int) -> st
     holder = session.scalar(select(ClassTakeover.tutor_id).where(
         ClassTakeover.robot_name == robot, ClassTakeover.ended_at.is_(None), ClassTakeover.heard_at > _fresh_after()))
     if holder is not None and holder != actor.id:
-        raise Refused(409, "taken_over", "Another tutor holds this robot now.", "user_id")
+        raise Refused(409, "taken_over", gettext("Another tutor holds this robot now."), "user_id")
     session.execute(update(ClassTakeover).where(ClassTakeover.robot_name == robot, ClassTakeover.ended_at.is_(None))
                     .values(ended_at=utc_now()))
     session.add(ClassTakeover(session_id=opened.id, user_id=user_id, tutor_id=actor.id, robot_name=robot))
     try:
         session.flush()
     except IntegrityError:
-        raise Refused(409, "taken_over", "Another tutor took this robot over at the same moment.", "user_id") from None
+        raise Refused(409, "taken_over", lazy_gettext("Another tutor took this robot over at the same moment."),
+                      "user_id") from None
     announce(session, opened.id)
     return robot
 
@@ -258,13 +268,13 @@ def send_note(session: Session, actor: User, course_id: int, user_id: int, text:
 
 def _point(value: object) -> tuple[float, float]:
     if not isinstance(value, dict):
-        raise Refused(400, "invalid_field", "point must be an object with x_m and y_m in metres.", "point")
+        raise Refused(400, "invalid_field", gettext("point must be an object with x_m and y_m in metres."), "point")
     coordinates = []
     for name in ("x_m", "y_m"):
         number = value.get(name)
         if isinstance(number, bool) or not isinstance(number, int | float) or not -50 <= number <= 50:
-            raise Refused(400, "invalid_field", f"point.{name} must be a number of metres from -50 to 50.",
-                          f"point.{name}")
+            raise Refused(400, "invalid_field", gettext("point.%(name)s must be a number of metres from -50 to 50.",
+                                                        name=name), f"point.{name}")
         coordinates.append(round(float(number), 3))
     return coordinates[0], coordinates[1]
 
@@ -274,9 +284,10 @@ def push(session: Session, actor: User, course_id: int, kind: object, item_id: o
     course."""
     course, opened = wall_session(session, actor, course_id)
     if not isinstance(kind, str) or kind not in PUSH_KINDS:
-        raise Refused(400, "invalid_field", f"kind must be one of {', '.join(PUSH_KINDS)}.", "kind")
+        raise Refused(400, "invalid_field", gettext("kind must be one of %(kinds)s.", kinds=", ".join(PUSH_KINDS)),
+                      "kind")
     if isinstance(item_id, bool) or not isinstance(item_id, int) or not 1 <= item_id <= MAX_ROW_ID:
-        raise Refused(400, "invalid_field", "id must be the number of what you send.", "id")
+        raise Refused(400, "invalid_field", gettext("id must be the number of what you send."), "id")
     title, url = _pushed(session, course, kind, item_id)
     notice = ClassNotice(session_id=opened.id, user_id=None, from_id=actor.id, kind="push",
                          body={"what": kind, "id": item_id, "title": title, "url": url})
@@ -296,8 +307,8 @@ def _pushed(session: Session, course: Course, kind: str, item_id: int) -> tuple[
         if plan is not None and plan.shared_course_id == course.id:
             return plan.name, f"/plans/{plan.id}"
         if plan is not None:
-            raise Refused(400, "invalid_field", "Share the plan with the course first: its students cannot open "
-                                                "it otherwise.", "id")
+            raise Refused(400, "invalid_field", gettext("Share the plan with the course first: its students cannot "
+                                                        "open it otherwise."), "id")
     elif kind == "exercise":
         exercise = session.get(Exercise, item_id)
         if exercise is not None:
@@ -306,7 +317,7 @@ def _pushed(session: Session, course: Course, kind: str, item_id: int) -> tuple[
         exam = session.get(Exam, item_id)
         if exam is not None and exam.course_id == course.id:
             return exam.title, f"/assessment/exams/{exam.id}"
-    raise Refused(400, "invalid_field", f"There is no {kind} {item_id} you can send to this class.", "id")
+    raise Refused(400, "invalid_field", gettext(_NOT_SENDABLE[kind], id=item_id), "id")
 
 
 def choices(session: Session, course: Course) -> dict[str, list[dict[str, object]]]:

@@ -23,6 +23,7 @@ from collections.abc import Callable
 from typing import Any
 
 from flask import current_app
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user
 from sqlalchemy.orm import Session
 
@@ -235,7 +236,7 @@ def wall_channel(ws: WebSocket, course_id: int) -> Continuation | None:
     actor = db.get(User, tutor_id)
     try:
         if actor is None:
-            raise Refused(403, "forbidden", "Log in again.")
+            raise Refused(403, "forbidden", gettext("Log in again."))
         _course, opened = class_wall.wall_session(db, actor, course_id)
     except Refused as refused:
         _refusal_close(ws, refused)
@@ -301,7 +302,7 @@ def student_channel(ws: WebSocket) -> Continuation | None:
     actor = db.get(User, user_id)
     found = class_sessions.my_seat(db, actor) if actor is not None else None
     if found is None:
-        refuse(ws, CLOSE_NOT_FOUND, "no_class_session", "No class session is open for your courses now.")
+        refuse(ws, CLOSE_NOT_FOUND, "no_class_session", gettext("No class session is open for your courses now."))
         return None
     class_session_id = found[1].session_id
     _listen(db)
@@ -340,7 +341,7 @@ def student_chat_channel(ws: WebSocket) -> Continuation | None:
     found = class_sessions.my_seat(db, actor) if actor is not None else None
     db.close()
     if found is None:
-        refuse(ws, CLOSE_NOT_FOUND, "no_class_session", "No class session is open for your courses now.")
+        refuse(ws, CLOSE_NOT_FOUND, "no_class_session", gettext("No class session is open for your courses now."))
         return None
     return room_channel(ws, chat_room(found[1].session_id))
 
@@ -351,7 +352,7 @@ def tutor_chat_channel(ws: WebSocket, course_id: int) -> Continuation | None:
     actor = db.get(User, int(current_user.get_id()))
     try:
         if actor is None:
-            raise Refused(403, "forbidden", "Log in again.")
+            raise Refused(403, "forbidden", gettext("Log in again."))
         room = chat_room(class_wall.wall_session(db, actor, course_id)[1].id)
     except Refused as refused:
         _refusal_close(ws, refused)

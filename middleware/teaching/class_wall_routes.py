@@ -8,12 +8,14 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-from flask import Blueprint, jsonify, render_template, request, url_for
+from flask import Blueprint, current_app, jsonify, render_template, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import force_locale, gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
+from middleware import i18n
 from middleware.access.commands import Commander, robot_commands
-from middleware.api.contract import OBJECT, STRING, about, described, obj, one_of
+from middleware.api.contract import BOOLEAN, ID, STRING, about, array, described, nullable, obj, obj_of, one_of, whole
 from middleware.courses.services import managed_course
 from middleware.db import after_commit, get_session
 from middleware.errors import Refused
@@ -34,19 +36,40 @@ def _actor() -> User:
 def _body() -> dict[str, Any]:
     body = request.get_json(silent=True)
     if not isinstance(body, dict):
-        raise Refused(400, "invalid_field", "Send a JSON object with an action.", "action")
+        raise Refused(400, "invalid_field", gettext("Send a JSON object with an action."), "action")
     return body
 
 
 def _action(body: dict[str, Any], allowed: tuple[str, ...]) -> str:
     action = body.get("action")
     if not isinstance(action, str) or action not in allowed:
-        raise Refused(400, "invalid_field", f"action must be one of {', '.join(allowed)}.", "action")
+        raise Refused(400, "invalid_field", gettext("action must be one of %(actions)s.", actions=", ".join(allowed)),
+                      "action")
     return action
 
 
 def _supervision(robot: str, actor_id: int, field: str) -> Commander:
     return robot_commands().for_supervision(robot, actor_id, supervisor=True, field=field)
+
+
+HAND = nullable(obj(("text", "raised_at"), text=STRING, raised_at=STRING))
+_CHOICE = array(obj(("id", "title"), id=ID, title=STRING))
+# The tutor's wall (wall_dict): every seat of the open session and what may be pushed to the class.
+WALL = obj(("course", "session_id", "scene", "seats", "choices"),
+           course=obj(("id", "code", "title"), id=ID, code=STRING, title=STRING), session_id=ID, scene=STRING,
+           seats=array(obj(("user_id", "username", "robot", "seat_state", "message", "hand", "held_by", "testing",
+                            "watch_url"),
+                           user_id=ID, username=STRING, robot=STRING, seat_state=STRING, message=STRING, hand=HAND,
+                           held_by=nullable(STRING), testing=BOOLEAN, watch_url=STRING)),
+           choices=obj(("lesson", "exercise", "plan", "test"), lesson=_CHOICE, exercise=_CHOICE, plan=_CHOICE,
+                       test=_CHOICE))
+# The student's side (class_wall.student_view): only "open" when they have no seat in an open session.
+STUDENT_WALL = obj(("open",), open=BOOLEAN, session_id=ID, course_id=ID, robot=STRING, hand=HAND,
+                   held_by=nullable(STRING),
+                   notices=array(obj_of(("id", "kind", "from", "at"),
+                                        {"id": ID, "kind": STRING, "at": STRING, "from": nullable(STRING)})))
+SEAT_ACTION = obj(("action", "user_id"), action=STRING, user_id=whole(0), robot=STRING, watch_url=STRING,
+                  notice_id=ID)
 
 
 def wall_dict(course_id: int) -> dict[str, object]:
@@ -70,7 +93,7 @@ def wall_page(course_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/courses/<int:course_id>/class-wall")
 @login_required
-@described(answers={200: OBJECT}, refusals=(409,))
+@described(answers={200: WALL}, refusals=(409,))
 def wall_state(course_id: int) -> ResponseReturnValue:
     """Every seat of the open class session as the wall shows it (409 when none is open)."""
     return jsonify(wall_dict(course_id))
@@ -85,7 +108,7 @@ def wall_state(course_id: int) -> ResponseReturnValue:
         text=about("note: its sentence"),
         point=about("note: a pointer on the map"),
     ),
-    answers={200: OBJECT},
+    answers={200: SEAT_ACTION},
     refusals=(409, 503),
 )
 def seat_action(course_id: int, user_id: int) -> ResponseReturnValue:
@@ -122,7 +145,7 @@ def _quietly(robot: str, act: Callable[[], object]) -> str:
         return refused.message
     except Exception:  # noqa: BLE001 - one robot's failure must not stop the others'
         log.exception("class wall: an action on %s failed", robot)
-        return "The robot did not answer."
+        return str(gettext("The robot did not answer."))
     return ""
 
 
@@ -149,12 +172,14 @@ def class_action(course_id: int) -> ResponseReturnValue:
         return jsonify({"action": action, "notice_id": notice.id, **notice.body})
     robots = [robot for _user_id, robot in class_wall.class_robots(session, opened)]
     commands, actor_id = robot_commands(), actor.id
+    app, language = current_app._get_current_object(), i18n.current_language()  # type: ignore[attr-defined]
 
     def act(robot: str) -> str:
         def command() -> object:
             commander = commands.for_supervision(robot, actor_id, supervisor=True)
             return commander.stop() if action == "stop_all" else commander.return_to_dock()
-        return _quietly(robot, command)
+        with app.app_context(), force_locale(language):  # a refusal's sentence in the tutor's language
+            return _quietly(robot, command)
 
     with ThreadPoolExecutor(min(ACTIONS_AT_ONCE, max(1, len(robots))), thread_name_prefix="class-wall") as pool:
         outcomes = dict(zip(robots, pool.map(act, robots), strict=True))
@@ -164,7 +189,7 @@ def class_action(course_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/class-session/wall")
 @login_required
-@described(answers={200: OBJECT}, refusals=(409,))
+@described(answers={200: STUDENT_WALL}, refusals=(409,))
 def my_wall() -> ResponseReturnValue:
     """The student's side of the wall: their hand, who holds their robot, the tutor's notes and pushes."""
     return jsonify(class_wall.student_view(get_session(), _actor()))
@@ -172,7 +197,8 @@ def my_wall() -> ResponseReturnValue:
 
 @blueprint.post("/api/class-session/hand")
 @login_required
-@described(body=obj(text=about("an optional sentence")), body_required=False, answers={201: OBJECT}, refusals=(409,))
+@described(body=obj(text=about("an optional sentence")), body_required=False, answers={201: STUDENT_WALL},
+           refusals=(409,))
 def raise_hand() -> ResponseReturnValue:
     """Raises the student's hand (with an optional sentence, `text`)."""
     body = request.get_json(silent=True)
@@ -183,7 +209,7 @@ def raise_hand() -> ResponseReturnValue:
 
 @blueprint.delete("/api/class-session/hand")
 @login_required
-@described(answers={200: OBJECT}, refusals=(409,))
+@described(answers={200: STUDENT_WALL}, refusals=(409,))
 def lower_hand() -> ResponseReturnValue:
     """Lowers the student's hand."""
     class_wall.lower_hand(get_session(), _actor())

@@ -12,6 +12,9 @@ import json
 import re
 from dataclasses import dataclass
 
+from flask_babel import gettext  # type: ignore[import-untyped]
+
+from middleware.errors import written_number
 from middleware.teaching.command_form import CommandInvalid, RobotCommand, SkillSchemas, parse_command
 from middleware.validation import decimal_int
 
@@ -101,11 +104,13 @@ def _blocks(lines: list[str], first: int) -> list[tuple[int, list[str]]]:
 def parse_cue_track(text: object, skills: SkillSchemas | None) -> tuple[list[Cue], list[CueError]]:
     """The cues of a WebVTT or SRT track and every error found, each naming its line."""
     if not isinstance(text, str):
-        return [], [CueError(0, "cues", "The cue track must be text (WebVTT or SRT).")]
+        return [], [CueError(0, "cues", gettext("The cue track must be text (WebVTT or SRT)."))]
     if len(text) > MAX_TRACK_CHARS:
-        return [], [CueError(0, "cues", f"The cue track is longer than {MAX_TRACK_CHARS} characters.")]
+        return [], [CueError(0, "cues", gettext("The cue track is longer than %(limit)s characters.",
+                                                 limit=MAX_TRACK_CHARS))]
     if "\x00" in text:
-        return [], [CueError(0, "cues", "The cue track contains a NUL character; save it as plain UTF-8 text.")]
+        return [], [CueError(0, "cues", gettext("The cue track contains a NUL character; save it as plain UTF-8 "
+                                                 "text."))]
     lines = text.lstrip("\ufeff").replace("\r\n", "\n").replace("\r", "\n").split("\n")
     first = 0
     is_vtt = bool(lines) and (lines[0] == "WEBVTT" or lines[0].startswith(("WEBVTT ", "WEBVTT\t")))
@@ -122,34 +127,36 @@ def parse_cue_track(text: object, skills: SkillSchemas | None) -> tuple[list[Cue
         if head.startswith("NOTE") and (len(head) == 4 or head[4] in " \t"):
             continue
         if head in {"STYLE", "REGION"}:
-            errors.append(CueError(start_line, "cues", f"{head} blocks are not allowed in a lesson's cue track."))
+            errors.append(CueError(start_line, "cues", gettext("%(head)s blocks are not allowed in a lesson's cue "
+                                                                  "track.", head=head)))
             continue
         timing_at = next((i for i, line in enumerate(block[:2]) if "-->" in line), None)
         if timing_at is None:
             if not is_vtt and decimal_int(head, 0) is not None and len(block) == 1:
-                errors.append(CueError(start_line, "cues", "A cue number with no timing line after it."))
+                errors.append(CueError(start_line, "cues", gettext("A cue number with no timing line after it.")))
             else:
                 errors.append(CueError(start_line, "cues",
-                                       "Expected a timing line such as 00:00:01.000 --> 00:00:04.000."))
+                                       gettext("Expected a timing line such as 00:00:01.000 --> 00:00:04.000.")))
             continue
         line_number = start_line + timing_at
         if len(cues) >= MAX_CUES:
-            errors.append(CueError(line_number, "cues", f"A track has at most {MAX_CUES} cues."))
+            errors.append(CueError(line_number, "cues", gettext("A track has at most %(limit)s cues.", limit=MAX_CUES)))
             break
         cue = _parse_cue(block[timing_at].strip(), "\n".join(block[timing_at + 1:]), line_number, len(cues) + 1,
                          skills, errors)
         if cue is None:
             continue
         if cues and cue.start_s < cues[-1].start_s:
-            errors.append(CueError(line_number, "start", "Cues must be in order of their start times."))
+            errors.append(CueError(line_number, "start", gettext("Cues must be in order of their start times.")))
             continue
         if cues and cue.start_s < cues[-1].end_s:
-            errors.append(CueError(line_number, "start", f"This cue starts before the cue on line {cues[-1].line} "
-                                                         "ends; cues must not overlap (one command at a time)."))
+            errors.append(CueError(line_number, "start", gettext(
+                "This cue starts before the cue on line %(line)s ends; cues must not overlap (one command at a "
+                "time).", line=cues[-1].line)))
             continue
         cues.append(cue)
     if not errors and not cues:
-        errors.append(CueError(0, "cues", "The cue track has no cues."))
+        errors.append(CueError(0, "cues", gettext("The cue track has no cues.")))
     return cues, errors
 
 
@@ -157,29 +164,34 @@ def _parse_cue(timing: str, body: str, line: int, index: int, skills: SkillSchem
                errors: list[CueError]) -> Cue | None:
     match = TIMING.fullmatch(timing)
     if match is None:
-        errors.append(CueError(line, "timing", "Expected a timing line such as 00:00:01.000 --> 00:00:04.000."))
+        errors.append(CueError(line, "timing", gettext("Expected a timing line such as 00:00:01.000 --> "
+                                                       "00:00:04.000.")))
         return None
     start_s, end_s = parse_timestamp(match["start"]), parse_timestamp(match["end"])
     if start_s is None or end_s is None:
-        errors.append(CueError(line, "timing", "A timestamp has minutes or seconds above 59."))
+        errors.append(CueError(line, "timing", gettext("A timestamp has minutes or seconds above 59.")))
         return None
     if start_s > MAX_TIME_S or end_s > MAX_TIME_S:
-        errors.append(CueError(line, "timing", f"Cue times must be within {MAX_TIME_S / 3600:g} hours."))
+        errors.append(CueError(line, "timing", gettext("Cue times must be within %(hours)s hours.",
+                                                       hours=written_number(MAX_TIME_S / 3600, "g"))))
         return None
     if end_s <= start_s:
-        errors.append(CueError(line, "end", "A cue must end after it starts."))
+        errors.append(CueError(line, "end", gettext("A cue must end after it starts.")))
         return None
     if not body.strip():
-        errors.append(CueError(line + 1, "command", "A cue needs a command as its body, e.g. {\"stop\": true}."))
+        errors.append(CueError(line + 1, "command", gettext("A cue needs a command as its body, e.g. {\"stop\": "
+                                                               "true}.")))
         return None
     if len(body) > MAX_BODY_CHARS:
-        errors.append(CueError(line + 1, "command", f"A cue body has at most {MAX_BODY_CHARS} characters."))
+        errors.append(CueError(line + 1, "command", gettext("A cue body has at most %(limit)s characters.",
+                                                               limit=MAX_BODY_CHARS)))
         return None
     try:
         value = json.loads(body)
     except ValueError:
-        errors.append(CueError(line + 1, "command", 'A cue body must be one JSON command, e.g. '
-                                                    '{"skill": "go_to_goal", "parameters": {"goal_x_m": 1}}.'))
+        errors.append(CueError(line + 1, "command", gettext('A cue body must be one JSON command, e.g. '
+                                                            '{"skill": "go_to_goal", "parameters": {"goal_x_m": '
+                                                            '1}}.')))
         return None
     try:
         command = parse_command(value, skills, sounds=True)

@@ -1,4 +1,5 @@
-"""The demo data of the teaching area: four example tours and one video lesson recorded from the simulator."""
+"""The demo data of the teaching area: four example tours and one video lesson recorded from the simulator, and the
+first tour and the lesson in Spanish (the Spanish lesson's tests are the Spanish demo course's)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,12 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware.db import session_factory
-from middleware.demo_course import LESSON_AFTER_TITLE, LESSON_BEFORE_TITLE
+from middleware.demo_course import (
+    LESSON_AFTER_TITLE,
+    LESSON_AFTER_TITLE_ES,
+    LESSON_BEFORE_TITLE,
+    LESSON_BEFORE_TITLE_ES,
+)
 from middleware.models import User
 from middleware.models.assessment import Exam
 from middleware.models.teaching import Lesson, Tour
@@ -139,13 +145,16 @@ def seed_demo_content(app: Flask, record_video: bool = True) -> list[str]:
             save_lesson(session, LessonDraft(  # the same video and cues, told in Spanish (docs/languages.md)
                 "primeros-movimientos", "Primeros movimientos", "El vídeo conduce tu robot: adelante, un giro y "
                 "luego un objetivo. Si pausas, el robot se para.", DEMO_VIDEO, cues,
-                "control directo, navegación, odometría", None, None), author)
+                "control directo, navegación, odometría", *_lesson_tests(session, LESSON_BEFORE_TITLE_ES,
+                                                                         LESSON_AFTER_TITLE_ES)), author)
             added.append("lesson primeros-movimientos")
         session.commit()
     return added
 
 
-def _lesson_tests(session: Session) -> tuple[int | None, int | None]:
-    """The demo course's tests before and after the demo lesson (None where the course has none)."""
+def _lesson_tests(session: Session, before: str = LESSON_BEFORE_TITLE,
+                  after: str = LESSON_AFTER_TITLE) -> tuple[int | None, int | None]:
+    """The demo course's tests before and after the demo lesson, found by title: the English course's, or the
+    Spanish course's for the Spanish lesson (None where the course has none)."""
     return tuple(session.scalar(select(Exam.id).where(Exam.title == title).order_by(Exam.id))  # type: ignore[return-value]
-                 for title in (LESSON_BEFORE_TITLE, LESSON_AFTER_TITLE))
+                 for title in (before, after))

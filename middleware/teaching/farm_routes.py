@@ -5,10 +5,11 @@ from __future__ import annotations
 
 from flask import Blueprint, current_app, flash, jsonify, redirect, render_template, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware.accounts.services import require_admin
-from middleware.api.contract import OBJECT, described
+from middleware.api.contract import BOOLEAN, STRING, array, described, nullable, number, obj, whole
 from middleware.db import after_commit, get_session, session_factory
 from middleware.errors import Refused
 from middleware.farm.base import FarmUnavailable
@@ -37,7 +38,18 @@ def farm_page() -> ResponseReturnValue:
 
 @blueprint.get("/api/admin/farm")
 @login_required
-@described(answers={200: OBJECT}, refusals=(503,))
+@described(answers={200: obj(
+    ("backend", "capacity", "hosts", "robots"), description="farm/report.farm_status",
+    backend=STRING,
+    capacity=obj(("robots", "running", "free", "hosts"), robots=whole(0), running=whole(0), free=whole(0),
+                 hosts=whole(0)),
+    hosts=array(obj(("host", "cpus", "node_id", "robots"), host=STRING, cpus=nullable(number()), node_id=STRING,
+                    robots=whole(0))),
+    robots=array(obj(("name", "owner", "scene", "host", "node", "address", "restarted", "cpu_share", "memory_mb",
+                      "elsewhere"),
+                     name=STRING, owner=nullable(STRING), scene=STRING, host=STRING, node=STRING, address=STRING,
+                     restarted=BOOLEAN, cpu_share=nullable(number()), memory_mb=nullable(number()),
+                     elsewhere=BOOLEAN)))}, refusals=(503,))
 def farm_api() -> ResponseReturnValue:
     """The farm's state as JSON (admins)."""
     return jsonify(_status())
@@ -53,6 +65,6 @@ def farm_stop(robot_name: str) -> ResponseReturnValue:
     if practice is not None:
         after_commit(lambda: manager.finish_stop(practice))
     elif not robot_farm().stop(robot_name):
-        raise Refused(404, "unknown_robot", "The farm runs no robot of that name.", "robot_name")
-    flash(f"Robot {robot_name} stopped.", "success")
+        raise Refused(404, "unknown_robot", gettext("The farm runs no robot of that name."), "robot_name")
+    flash(gettext("Robot %(robot)s stopped.", robot=robot_name), "success")
     return redirect(url_for("farm.farm_page"), 303)

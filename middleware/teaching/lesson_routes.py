@@ -21,7 +21,21 @@ from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 from werkzeug.exceptions import RequestEntityTooLarge
 
-from middleware.api.contract import ANY, BOOLEAN, OBJECT, STRING, about, array, described, obj, whole
+from middleware.api.contract import (
+    ANY,
+    BOOLEAN,
+    ID,
+    OBJECT,
+    STRING,
+    about,
+    array,
+    described,
+    nullable,
+    number,
+    obj,
+    one_of,
+    whole,
+)
 from middleware.db import get_session
 from middleware.errors import ApiError, flashed, unless_refused
 from middleware.extensions import csrf
@@ -58,6 +72,7 @@ from middleware.teaching.lessons import (
 )
 from middleware.teaching.progress import note_finished
 from middleware.teaching.targets import (
+    COMMAND_ANSWER,
     PRACTICE_TARGET,
     authoring_catalog,
     execute,
@@ -66,6 +81,19 @@ from middleware.teaching.targets import (
 )
 
 blueprint = Blueprint("lessons", __name__)
+CUE = obj(("id", "index", "start_s", "end_s", "command", "line"), id=STRING, index=whole(1), start_s=number(),
+          end_s=number(), command=OBJECT, line=whole())
+# A lesson with its cues (lessons.lesson_dict).
+LESSON = obj(("id", "slug", "title", "summary", "video_name", "topics", "before_exam_id", "after_exam_id", "cues",
+              "cues_vtt"),
+             id=ID, slug=STRING, title=STRING, summary=STRING, video_name=STRING, topics=array(STRING),
+             before_exam_id=nullable(ID), after_exam_id=nullable(ID), cues=array(CUE), cues_vtt=STRING)
+# A cue sent, or the stop: the command's answer, the cue's index, when it was heard (a sound cue: its tone).
+CUE_RUN = {**COMMAND_ANSWER, "required": [*COMMAND_ANSWER["required"], "cue", "received_unix_ms"],
+           "properties": {**COMMAND_ANSWER["properties"], "cue": whole(1), "received_unix_ms": number(),
+                          "sound": OBJECT}}
+STOPPED = {**COMMAND_ANSWER, "required": [*COMMAND_ANSWER["required"], "received_unix_ms"],
+           "properties": {**COMMAND_ANSWER["properties"], "received_unix_ms": number()}}
 PAPER_FIGURES = {"cue_to_robot_ms": [652.88, 543.94], "pause_detection_ms": 15.4}
 
 
@@ -259,7 +287,7 @@ def video(lesson_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/lessons/<int:lesson_id>")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: LESSON})
 def lesson_api(lesson_id: int) -> ResponseReturnValue:
     """A lesson with its cues."""
     return jsonify(lesson_dict(_lesson(lesson_id)))
@@ -294,7 +322,7 @@ def check() -> ResponseReturnValue:
         video_name=about("its video's name"),
         cues=about("the cue track (WebVTT or SRT); a wrong one is answered with every error by line"),
     ),
-    answers={200: OBJECT, 201: OBJECT},
+    answers={200: LESSON, 201: LESSON},
     refusals=(409, 503),
 )
 def save(lesson_id: int | None = None) -> ResponseReturnValue:
@@ -323,7 +351,7 @@ def _run_body() -> tuple[dict[str, object], float]:
 @described(
     body=obj(target=about('"practice" or a robot the user controls')),
     body_required=False,
-    answers={200: OBJECT, 202: OBJECT},
+    answers={202: CUE_RUN},
     refusals=(409, 503),
 )
 def run_cue(lesson_id: int, index: int) -> ResponseReturnValue:
@@ -349,7 +377,7 @@ def run_cue(lesson_id: int, index: int) -> ResponseReturnValue:
 @described(
     body=obj(target=about('"practice" or a robot the user controls')),
     body_required=False,
-    answers={200: OBJECT},
+    answers={200: obj(("at", "message"), at=one_of("dock", "here"), message=STRING)},
     refusals=(409, 503),
 )
 def start_lesson(lesson_id: int) -> ResponseReturnValue:
@@ -375,7 +403,7 @@ def watched(lesson_id: int) -> ResponseReturnValue:
 @described(
     body=obj(target=about('"practice" or a robot the user controls')),
     body_required=False,
-    answers={200: OBJECT},
+    answers={200: STOPPED},
     refusals=(409, 503),
 )
 def stop() -> ResponseReturnValue:

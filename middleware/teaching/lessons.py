@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flask import current_app, has_app_context
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -33,10 +34,11 @@ def normalise_topics(value: object) -> str:
     if isinstance(value, str):
         value = value.split(",")
     if not isinstance(value, list) or not all(isinstance(t, str) for t in value):
-        raise ValueError("topics must be text: names separated by commas.")
+        raise ValueError(gettext("topics must be text: names separated by commas."))
     topics = sorted({" ".join(t.split()).lower() for t in value} - {""})
     if len(topics) > MAX_TOPICS or any(len(t) > MAX_TOPIC for t in topics):
-        raise ValueError(f"topics: at most {MAX_TOPICS} names of at most {MAX_TOPIC} characters each.")
+        raise ValueError(gettext("topics: at most %(max_topics)s names of at most %(max_topic)s characters each.",
+                                 max_topics=MAX_TOPICS, max_topic=MAX_TOPIC))
     return ", ".join(topics)
 
 
@@ -50,9 +52,10 @@ class LessonInvalid(Refused):
     the first one is the refusal's message and field, and the JSON lists them all."""
 
     def __init__(self, errors: list[CueError]) -> None:
-        first = errors[0] if errors else CueError(0, "body", "The lesson is not valid.")
-        where = f" (line {first.line})" if first.line else ""
-        super().__init__(400, "invalid_lesson", first.message + where, first.field)
+        first = errors[0] if errors else CueError(0, "body", gettext("The lesson is not valid."))
+        message = (gettext("%(message)s (line %(line)s)", message=first.message, line=first.line) if first.line
+                   else first.message)
+        super().__init__(400, "invalid_lesson", message, first.field)
         self.errors = errors
 
     def to_dict(self) -> dict[str, object]:
@@ -106,39 +109,43 @@ def unused_videos(session: Session, instance_path: str) -> list[str]:
 def delete_unused_video(session: Session, instance_path: str, name: str) -> None:
     """Deletes a lesson video that no lesson plays; VideoNotDeletable otherwise, and nothing changes."""
     if not VIDEO_NAME.fullmatch(name) or not (video_dir(instance_path) / name).is_file():
-        raise VideoNotDeletable(404, "unknown_video", "There is no lesson video by that name.")
+        raise VideoNotDeletable(404, "unknown_video", gettext("There is no lesson video by that name."))
     users = session.scalars(select(Lesson.title).where(Lesson.video_name == name).order_by(Lesson.title)).all()
     if users:
-        raise VideoNotDeletable(409, "video_in_use", f"{name} is the video of {', '.join(users)}: "
-                                "give that lesson another video first.")
+        raise VideoNotDeletable(409, "video_in_use", gettext("%(name)s is the video of %(lessons)s: give that lesson "
+                                                               "another video first.", name=name,
+                                                               lessons=", ".join(users)))
     (video_dir(instance_path) / name).unlink(missing_ok=True)
 
 
 def _text(data: dict[str, object], name: str, limit: int, required: bool = True) -> str:
     value = data.get(name, "")
     if not isinstance(value, str):
-        raise LessonInvalid([CueError(0, name, f"{name} must be text.")])
+        raise LessonInvalid([CueError(0, name, gettext("%(field)s must be text.", field=name))])
     value = value.strip()
     if required and not value:
-        raise LessonInvalid([CueError(0, name, f"Give the lesson a {name}.")])
+        raise LessonInvalid([CueError(0, name, gettext("Give the lesson a %(name)s.", name=name))])
     if len(value) > limit:
-        raise LessonInvalid([CueError(0, name, f"{name} has at most {limit} characters.")])
+        raise LessonInvalid([CueError(0, name, gettext("%(field)s has at most %(limit)s characters.", field=name,
+                                                         limit=limit))])
     return value
 
 
 def check_lesson(data: object, skills: SkillSchemas, videos: list[str]) -> LessonDraft:
     """A checked lesson from the editor's JSON: title, summary, slug, topics, video_name, cues (WebVTT or SRT)."""
     if not isinstance(data, dict):
-        raise LessonInvalid([CueError(0, "body", "Send a JSON object with title, video_name and cues.")])
+        raise LessonInvalid([CueError(0, "body", gettext("Send a JSON object with title, video_name and cues."))])
     title = _text(data, "title", MAX_TITLE)
     summary = _text(data, "summary", MAX_SUMMARY, required=False)
     slug = data.get("slug") or re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-")[:64] or "lesson"
     if not isinstance(slug, str) or not SLUG.fullmatch(slug):
-        raise LessonInvalid([CueError(0, "slug", "slug may use lower-case letters, digits and '-' (at most 64).")])
+        raise LessonInvalid([CueError(0, "slug", gettext("slug may use lower-case letters, digits and '-' (at most "
+                                                          "64)."))])
     video = data.get("video_name")
     if not isinstance(video, str) or video not in videos:
-        choices = ", ".join(videos) or "none yet: put a .webm or .mp4 file in the instance's lessons folder"
-        raise LessonInvalid([CueError(0, "video_name", f"Choose one of the lesson videos ({choices}).")])
+        choices = ", ".join(videos) or gettext("none yet: put a .webm or .mp4 file in the instance's lessons folder")
+        raise LessonInvalid([CueError(0, "video_name", gettext("Choose one of the lesson videos (%(choices)s).",
+                                                               choices=choices))])
     try:
         topics = normalise_topics(data.get("topics"))
     except ValueError as error:
@@ -157,7 +164,8 @@ def _exam_id(data: dict[str, object], name: str) -> int | None:
         return None
     number = decimal_int(value, 1) if isinstance(value, str) else value
     if isinstance(number, bool) or not isinstance(number, int) or not 1 <= number <= 2**62:
-        raise LessonInvalid([CueError(0, name, f"{name} must name a test by its id, or be empty for none.")])
+        raise LessonInvalid([CueError(0, name, gettext("%(name)s must name a test by its id, or be empty for none.",
+                                                         name=name))])
     return number
 
 
@@ -165,7 +173,8 @@ def save_lesson(session: Session, draft: LessonDraft, author_id: int | None, les
     """Creates or updates a lesson from a checked draft; the caller commits."""
     clash = session.scalar(select(Lesson).where(Lesson.slug == draft.slug))
     if clash is not None and clash is not lesson:
-        raise LessonInvalid([CueError(0, "slug", f"Another lesson is called {draft.slug!r} already.")])
+        raise LessonInvalid([CueError(0, "slug", gettext("Another lesson is called %(slug)s already.",
+                                                          slug=repr(draft.slug)))])
     if lesson is None:
         lesson = Lesson(author_id=author_id)
         session.add(lesson)
@@ -203,6 +212,8 @@ def place_for_lesson(robot: Commander, practice: bool) -> dict[str, str]:
     is carried there and its picture starts as the video's; a lab robot is shared and stays where it stands."""
     if practice:
         robot.return_to_dock()
-        return {"at": "dock", "message": "Your practice robot is at its dock, where the lesson's video starts."}
-    return {"at": "here", "message": f"{robot.robot_name} starts where it stands; the video starts at the dock, so "
-                                     "their pictures differ until it is docked (Return to the dock, on its map)."}
+        return {"at": "dock", "message": gettext("Your practice robot is at its dock, where the lesson's video "
+                                                 "starts.")}
+    return {"at": "here", "message": gettext("%(robot)s starts where it stands; the video starts at the dock, so their "
+                                             "pictures differ until it is docked (Return to the dock, on its map).",
+                                             robot=robot.robot_name)}

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 
 from flask import Flask, current_app
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import delete, func, or_, select, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.exc import DBAPIError
@@ -241,8 +242,8 @@ class PracticeManager:
             session.flush()
         limit = self.limit()
         if (session.scalar(select(func.count()).select_from(PersonalRobotRecord)) or 0) >= limit:
-            raise PracticeCapReached(f"All {limit} practice robots are in use. Try again in a few minutes, "
-                                     "or watch a lab robot in the meantime.")
+            raise PracticeCapReached(gettext("All %(limit)s practice robots are in use. Try again in a few minutes, "
+                                             "or watch a lab robot in the meantime.", limit=limit))
         name, token, now = practice_name(username, owner_id), secrets.token_urlsafe(32), self._clock()
         claim = {"name": name, "owner_id": owner_id, "owner_name": username, "scene": wanted, "token": token,
                  "address": "", "backend": self.farm.backend, "started_at": now, "last_used_at": now,
@@ -262,7 +263,7 @@ class PracticeManager:
             log.warning("practice robot %s did not start: %s", name, error.message)
             if isinstance(error, FarmFull):
                 raise PracticeCapReached(error.message) from None
-            raise PracticeStartFailed("Your practice robot did not start. Try again in a moment.") from None
+            raise PracticeStartFailed(gettext("Your practice robot did not start. Try again in a moment.")) from None
         except BaseException:
             self._release(name, token)
             raise
@@ -274,7 +275,7 @@ class PracticeManager:
         if started is None or started.token != token:
             if not recorded:  # released meanwhile: nobody's robot
                 self.farm.stop(name)
-            raise PracticeStartFailed("Your practice robot was stopped while it started. Start it again.")
+            raise PracticeStartFailed(gettext("Your practice robot was stopped while it started. Start it again."))
         return started
 
     def start(self, owner_id: int, username: str, class_session_id: int | None = None,
@@ -288,7 +289,7 @@ class PracticeManager:
             return pending.run()
         running = self.get(owner_id)
         if running is None:
-            raise PracticeStartFailed("Your practice robot is starting already; wait a few seconds.")
+            raise PracticeStartFailed(gettext("Your practice robot is starting already; wait a few seconds."))
         return running
 
     def begin_stop(self, session: Session, owner_id: int) -> str | None:

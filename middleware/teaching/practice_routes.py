@@ -7,9 +7,10 @@ import time
 
 from flask import Blueprint, jsonify, render_template, request, url_for
 from flask.typing import ResponseReturnValue
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
-from middleware.api.contract import OBJECT, described, obj
+from middleware.api.contract import BOOLEAN, OBJECT, STRING, described, nullable, number, obj, whole
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
 from middleware.lab.sockets import camera_relay
@@ -17,7 +18,14 @@ from middleware.live.loop import Continuation
 from middleware.realtime import CLOSE_NOT_FOUND, Channels, WebSocket, refuse
 from middleware.teaching.command_form import parse_command
 from middleware.teaching.practice_robots import practice_manager, practice_name
-from middleware.teaching.targets import PRACTICE_TARGET, execute, goal_state, resolve_target, skill_schemas
+from middleware.teaching.targets import (
+    COMMAND_ANSWER,
+    PRACTICE_TARGET,
+    execute,
+    goal_state,
+    resolve_target,
+    skill_schemas,
+)
 
 blueprint = Blueprint("practice", __name__)
 GOAL_ID = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
@@ -25,6 +33,12 @@ GOAL_ID = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 
 def _user_id() -> int:
     return int(current_user.get_id())
+
+
+# The user's practice robot, as status_dict and _answer say it (stopped: only DELETE's answer).
+PRACTICE = obj(("running", "starting", "name", "console_url", "in_use", "cap", "idle_stop_s"),
+               running=BOOLEAN, starting=BOOLEAN, name=nullable(STRING), console_url=nullable(STRING),
+               in_use=whole(0), cap=whole(0), idle_stop_s=number(), stopped=BOOLEAN)
 
 
 def status_dict(user_id: int) -> dict[str, object]:
@@ -53,7 +67,7 @@ def page() -> ResponseReturnValue:
 
 @blueprint.get("/api/practice")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: PRACTICE})
 def status() -> ResponseReturnValue:
     """Whether the user's practice robot runs."""
     return jsonify(status_dict(_user_id()))
@@ -61,7 +75,7 @@ def status() -> ResponseReturnValue:
 
 @blueprint.post("/api/practice")
 @login_required
-@described(answers={200: OBJECT, 202: OBJECT}, refusals=(409, 429, 503))
+@described(answers={200: PRACTICE, 202: PRACTICE}, refusals=(409, 429, 503))
 def start() -> ResponseReturnValue:
     """Claims the user's practice robot, which the farm starts once the claim is committed (202: the page follows
     it to running), or answers the running one (200)."""
@@ -75,7 +89,7 @@ def start() -> ResponseReturnValue:
 
 @blueprint.delete("/api/practice")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: PRACTICE})
 def stop() -> ResponseReturnValue:
     """Stops the user's practice robot."""
     manager = practice_manager()
@@ -89,7 +103,7 @@ def stop() -> ResponseReturnValue:
 @login_required
 @described(
     body=obj(("command",), command=obj(description="a declarative command: {kind, ...}")),
-    answers={202: OBJECT},
+    answers={202: COMMAND_ANSWER},
     refusals=(409, 503),
 )
 def command() -> ResponseReturnValue:
@@ -97,7 +111,7 @@ def command() -> ResponseReturnValue:
     received_at = time.perf_counter()
     body = request.get_json(silent=True)
     if not isinstance(body, dict):
-        raise ApiError(400, "invalid_field", 'Send a JSON object: {"command": {...}}.', "body")
+        raise ApiError(400, "invalid_field", gettext('Send a JSON object: {"command": {...}}.'), "body")
     target = resolve_target(PRACTICE_TARGET, _user_id())
     schemas = skill_schemas(target.link)
     return jsonify(execute(target, parse_command(body.get("command"), schemas), received_at)), 202
@@ -109,7 +123,7 @@ def command() -> ResponseReturnValue:
 def goal(target_name: str, goal_id: str) -> ResponseReturnValue:
     """A goal of the practice robot ("practice") or of a lab robot the user controls."""
     if not GOAL_ID.fullmatch(goal_id):
-        raise ApiError(404, "unknown_goal", "There is no goal with that id.", "goal_id")
+        raise ApiError(404, "unknown_goal", gettext("There is no goal with that id."), "goal_id")
     return jsonify({"goal": goal_state(resolve_target(target_name, _user_id()), goal_id)})
 
 
@@ -117,7 +131,7 @@ def camera_channel(ws: WebSocket) -> Continuation | None:
     """The camera of the user's own practice robot (none during their obstacle-zone test, as every camera)."""
     robot = practice_manager().get(_user_id())
     if robot is None:
-        refuse(ws, CLOSE_NOT_FOUND, "no_practice_robot", "Start your practice robot first.")
+        refuse(ws, CLOSE_NOT_FOUND, "no_practice_robot", gettext("Start your practice robot first."))
         return None
     return camera_relay(ws, robot.link.camera)
 

@@ -10,6 +10,7 @@ import time
 from flask_babel import gettext  # type: ignore[import-untyped]
 
 from middleware.access.commands import MAX_DRIVE_HOLD_S, Commander, robot_commands
+from middleware.api.contract import OBJECT, STRING, nullable, number, obj, whole
 from middleware.errors import ApiError
 from middleware.robots.link import RobotLink, RobotUnavailable
 from middleware.robots.messages import goal_dict, parameter_schema_dict
@@ -39,6 +40,12 @@ def resolve_target(target: object, user_id: int) -> Commander:
     if not isinstance(target, str) or not 0 < len(target) <= 64:
         raise ApiError(400, "invalid_field", gettext("target must be \"practice\" or a lab robot's name."), "target")
     return robot_commands().for_user(target, user_id, field="target")
+
+
+# execute's answer, as a route's contract says it: the goal started (none for a stop) and the time to the ack.
+COMMAND_ANSWER = obj(("robot", "command", "goal", "applied_sequence", "middleware_to_ack_ms", "acked_unix_ms"),
+                     robot=STRING, command=OBJECT, goal=nullable(OBJECT), applied_sequence=nullable(whole()),
+                     middleware_to_ack_ms=number(), acked_unix_ms=number())
 
 
 def execute(robot: Commander, command: RobotCommand, received_at: float,

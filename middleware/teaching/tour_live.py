@@ -19,6 +19,7 @@ from collections.abc import Callable
 from datetime import UTC, datetime, timedelta
 
 from flask import current_app
+from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user
 from sqlalchemy import delete, select, update
 from sqlalchemy.orm import Session
@@ -135,11 +136,11 @@ def session_channel(ws: WebSocket, session_id: int) -> Continuation | None:
     db = get_session()
     found = db.get(GuidedSession, session_id)
     if found is None:
-        refuse(ws, CLOSE_NOT_FOUND, "unknown_session", "There is no such class.")
+        refuse(ws, CLOSE_NOT_FOUND, "unknown_session", gettext("There is no such class."))
         return None
     follower = db.get(User, user_id)
     if follower is None or not may_follow_class(db, follower, found):
-        refuse(ws, CLOSE_FORBIDDEN, "not_in_course", "This class is for the students of another course.",
+        refuse(ws, CLOSE_FORBIDDEN, "not_in_course", gettext("This class is for the students of another course."),
                "session_id")
         return None
     bus = _bus_for(db)

@@ -12,7 +12,7 @@ from sqlalchemy import select
 
 from middleware.access.coordinator import access_coordinator
 from middleware.accounts.schemas import clean_optional_id
-from middleware.api.contract import BOOLEAN, OBJECT, about, described, obj, one_of
+from middleware.api.contract import BOOLEAN, ID, OBJECT, STRING, about, array, described, nullable, obj, one_of, whole
 from middleware.bookings.services import tutored_courses
 from middleware.db import after_commit, get_session
 from middleware.errors import ApiError
@@ -30,7 +30,14 @@ from middleware.teaching.authority import (
     require_class_rights,
 )
 from middleware.teaching.progress import note_finished
-from middleware.teaching.targets import authoring_catalog, execute, reference_info, reference_skills, resolve_target
+from middleware.teaching.targets import (
+    COMMAND_ANSWER,
+    authoring_catalog,
+    execute,
+    reference_info,
+    reference_skills,
+    resolve_target,
+)
 from middleware.teaching.tours import (
     TourInvalid,
     active_session,
@@ -45,6 +52,17 @@ from middleware.teaching.tours import (
 )
 
 blueprint = Blueprint("tours", __name__)
+STEP = obj(("title", "text", "panel", "command", "condition"), title=STRING, text=STRING, panel=STRING,
+           command=nullable(OBJECT), condition=obj(("type",), type=STRING))
+# A tour with its steps (tours.tour_dict).
+TOUR = obj(("id", "slug", "title", "summary", "topics", "steps"), id=ID, slug=STRING, title=STRING, summary=STRING,
+           topics=array(STRING), steps=array(STEP))
+# A live class's state, as every page of it shows it (tour_live.state).
+LIVE_STATE = obj(("type", "id", "tour_id", "robot", "tutor", "step_index", "step_count", "step", "controller", "ended",
+                  "version", "participants"),
+                 type=one_of("state"), id=ID, tour_id=ID, robot=STRING, tutor=nullable(STRING), step_index=whole(),
+                 step_count=whole(0), step=nullable(STEP), controller=nullable(STRING), ended=BOOLEAN,
+                 version=whole(), participants=array(STRING))
 
 
 def _user_id() -> int:
@@ -118,7 +136,7 @@ def _panel_choices(in_use: list[str]) -> list[tuple[str, str]]:
 
 @blueprint.get("/api/tours/<int:tour_id>")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: TOUR})
 def tour_api(tour_id: int) -> ResponseReturnValue:
     """A tour with its steps."""
     return jsonify(tour_dict(_tour(tour_id)))
@@ -129,7 +147,7 @@ def tour_api(tour_id: int) -> ResponseReturnValue:
 @login_required
 @described(
     body=obj(title=about("the tour's title"), summary=about("what it shows"), steps=about("its steps")),
-    answers={200: OBJECT, 201: OBJECT},
+    answers={200: TOUR, 201: TOUR},
     refusals=(409, 503),
 )
 def save(tour_id: int | None = None) -> ResponseReturnValue:
@@ -145,7 +163,8 @@ def save(tour_id: int | None = None) -> ResponseReturnValue:
 @blueprint.post("/api/tours/<int:tour_id>/steps/<int:index>/run")
 @login_required
 @described(
-    body=obj(target=about('"practice" or a robot the user controls')), answers={202: OBJECT}, refusals=(409, 503)
+    body=obj(target=about('"practice" or a robot the user controls')), answers={202: COMMAND_ANSWER},
+    refusals=(409, 503),
 )
 def run_step(tour_id: int, index: int) -> ResponseReturnValue:
     """Runs the stored command of step index on the learner's target (practice robot or a robot they control)."""
@@ -194,7 +213,7 @@ def start_page(tour_id: int) -> ResponseReturnValue:
         course_id=about("a course's id, or null"),
         override=about("true or false (admins)"),
     ),
-    answers={201: OBJECT},
+    answers={201: LIVE_STATE},
     refusals=(409, 503),
 )
 def start_live(tour_id: int) -> ResponseReturnValue:
@@ -235,7 +254,7 @@ def session_page(session_id: int) -> ResponseReturnValue:
 
 @blueprint.get("/api/tour-sessions/<int:session_id>")
 @login_required
-@described(answers={200: OBJECT})
+@described(answers={200: LIVE_STATE})
 def session_api(session_id: int) -> ResponseReturnValue:
     """The class's state."""
     found = _live(session_id)
@@ -253,7 +272,7 @@ def session_api(session_id: int) -> ResponseReturnValue:
         user=about("a username or null, for control"),
     ),
     body_required=False,
-    answers={200: OBJECT},
+    answers={200: LIVE_STATE},
     refusals=(409, 503),
 )
 def session_action(session_id: int) -> ResponseReturnValue:

@@ -12,10 +12,11 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from datetime import datetime
 
+from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from middleware.errors import Refused
+from middleware.errors import Refused, written_number
 from middleware.models.accounts import utc_now
 from middleware.models.teaching import GuidedSession, Tour
 from middleware.teaching.command_form import CommandInvalid, RobotCommand, SkillSchemas, parse_command
@@ -62,27 +63,28 @@ def _text(value: object, field: str, limit: int, required: bool) -> str:
     if value is None and not required:
         return ""
     if not isinstance(value, str):
-        raise TourInvalid(field, f"{field} must be text.")
+        raise TourInvalid(field, gettext("%(field)s must be text.", field=field))
     value = value.strip()
     if required and not value:
-        raise TourInvalid(field, f"{field} must not be empty.")
+        raise TourInvalid(field, gettext("%(field)s must not be empty.", field=field))
     if len(value) > limit:
-        raise TourInvalid(field, f"{field} has at most {limit} characters.")
+        raise TourInvalid(field, gettext("%(field)s has at most %(limit)s characters.", field=field, limit=limit))
     return value
 
 
 def parse_step(value: object, at: str, skills: SkillSchemas | None) -> TourStep:
     """One step from its JSON form: title, text, panel, command (optional), condition."""
     if not isinstance(value, dict):
-        raise TourInvalid(at, f"{at} must be an object with text, panel and condition.")
+        raise TourInvalid(at, gettext("%(at)s must be an object with text, panel and condition.", at=at))
     unknown = set(value) - {"title", "text", "panel", "command", "condition"}
     if unknown:
-        raise TourInvalid(f"{at}.{sorted(unknown)[0][:40]}", f"Unknown key {sorted(unknown)[0][:40]!r} in {at}.")
+        raise TourInvalid(f"{at}.{sorted(unknown)[0][:40]}", gettext("Unknown key %(key)s in %(at)s.",
+                                                                      key=repr(sorted(unknown)[0][:40]), at=at))
     title = _text(value.get("title"), f"{at}.title", 120, required=False)
     text = _text(value.get("text"), f"{at}.text", MAX_TEXT, required=True)
     panel = value.get("panel")
     if not isinstance(panel, str) or not PANEL_ID.fullmatch(panel):
-        raise TourInvalid(f"{at}.panel", "panel must be a panel id such as camera, map or skill-go_to_goal.")
+        raise TourInvalid(f"{at}.panel", gettext("panel must be a panel id such as camera, map or skill-go_to_goal."))
     command = None
     if value.get("command") is not None:
         try:
@@ -91,37 +93,38 @@ def parse_step(value: object, at: str, skills: SkillSchemas | None) -> TourStep:
             raise TourInvalid(f"{at}.command.{invalid.field}", invalid.message) from None
     condition = value.get("condition", {"type": "manual"})
     if not isinstance(condition, dict) or condition.get("type") not in CONDITIONS:
-        raise TourInvalid(f"{at}.condition", 'condition must be {"type": "skill_finished"}, '
-                                             '{"type": "time", "seconds": n} or {"type": "manual"}.')
+        raise TourInvalid(f"{at}.condition", gettext('condition must be {"type": "skill_finished"}, '
+                                                     '{"type": "time", "seconds": n} or {"type": "manual"}.'))
     kind = condition["type"]
     seconds = 0.0
     if kind == "time":
         raw = condition.get("seconds")
         if isinstance(raw, bool) or not isinstance(raw, int | float) or not MIN_WAIT_S <= raw <= MAX_WAIT_S:
             raise TourInvalid(f"{at}.condition.seconds",
-                              f"seconds must be a number from {MIN_WAIT_S:g} to {MAX_WAIT_S:g}.")
+                              gettext("seconds must be a number from %(low)s to %(high)s.",
+                                      low=written_number(MIN_WAIT_S, "g"), high=written_number(MAX_WAIT_S, "g")))
         seconds = float(raw)
     if kind == "skill_finished" and (command is None or command.kind != "skill"):
-        raise TourInvalid(f"{at}.condition", "'skill finished' needs the step to run a skill.")
+        raise TourInvalid(f"{at}.condition", gettext("'skill finished' needs the step to run a skill."))
     return TourStep(title, text, panel, command, kind, seconds)
 
 
 def parse_steps(value: object, skills: SkillSchemas | None) -> list[TourStep]:
     """Every step of a tour, checked; the first problem is raised with its field."""
     if not isinstance(value, list) or not 1 <= len(value) <= MAX_STEPS:
-        raise TourInvalid("steps", f"A tour has 1 to {MAX_STEPS} steps.")
+        raise TourInvalid("steps", gettext("A tour has 1 to %(max_steps)s steps.", max_steps=MAX_STEPS))
     return [parse_step(step, f"steps[{i}]", skills) for i, step in enumerate(value)]
 
 
 def check_tour(data: object, skills: SkillSchemas | None) -> tuple[str, str, str, list[TourStep]]:
     """(slug, title, summary, steps) of the editor's JSON, checked."""
     if not isinstance(data, dict):
-        raise TourInvalid("body", "Send a JSON object with title, summary and steps.")
+        raise TourInvalid("body", gettext("Send a JSON object with title, summary and steps."))
     title = _text(data.get("title"), "title", 120, required=True)
     summary = _text(data.get("summary"), "summary", 500, required=False)
     slug = data.get("slug") or re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-")[:64] or "tour"
     if not isinstance(slug, str) or not SLUG.fullmatch(slug):
-        raise TourInvalid("slug", "slug may use lower-case letters, digits and '-' (at most 64).")
+        raise TourInvalid("slug", gettext("slug may use lower-case letters, digits and '-' (at most 64)."))
     return slug, title, summary, parse_steps(data.get("steps"), skills)
 
 
@@ -135,7 +138,7 @@ def save_tour(session: Session, data: object, skills: SkillSchemas | None, autho
         raise TourInvalid("topics", str(error)) from None
     clash = session.scalar(select(Tour).where(Tour.slug == slug))
     if clash is not None and clash is not tour:
-        raise TourInvalid("slug", f"Another tour is called {slug!r} already.")
+        raise TourInvalid("slug", gettext("Another tour is called %(slug)s already.", slug=repr(slug)))
     if tour is None:
         tour = Tour(author_id=author_id)
         session.add(tour)
@@ -167,6 +170,11 @@ def active_session(session: Session, robot_name: str) -> GuidedSession | None:
                           .order_by(GuidedSession.id.desc()).limit(1))
 
 
+def robots_in_live_classes(session: Session) -> set[str]:
+    """Every robot a guided session runs on now (with_guided_priority may speak only of these)."""
+    return set(session.scalars(select(GuidedSession.robot_name).where(GuidedSession.ended_at.is_(None))))
+
+
 def start_session(session: Session, tour: Tour, robot_name: str, tutor_id: int, course_id: int | None,
                   now: datetime, priority_override_by_id: int | None = None) -> GuidedSession:
     """Starts a live class (ending any earlier one on the robot); the caller checked teaching/authority.py.
@@ -188,7 +196,7 @@ def start_session(session: Session, tour: Tour, robot_name: str, tutor_id: int, 
 def go_to_step(live: GuidedSession, index: int, step_count: int) -> None:
     """The tutor moves the class to step index."""
     if not 0 <= index < step_count:
-        raise TourInvalid("index", f"index must be from 0 to {step_count - 1}.")
+        raise TourInvalid("index", gettext("index must be from 0 to %(last)s.", last=step_count - 1))
     live.step_index = index
     live.version += 1
 

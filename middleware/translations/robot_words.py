@@ -144,6 +144,10 @@ ROBOT_WORDS = (
     N_("The answer is not a set of choices."),
     N_("The answer names a choice that does not exist."),
     N_("The answer is not a number."),
+    # The experimental task's grader (middleware/assessment/trace_grading.py); those with values: i18n._WITH_VALUES.
+    N_("Nothing was recorded: the robot did not report during the attempt."),
+    N_("No pose was reported."),
+    N_("No obstacle zone was marked."),
     # The skills' help as the skill server words it now.
     N_("Perceptive skill: watches the laser and sonars and announces an obstacle whenever something comes closer to "
        "the robot's rim than the warning distance. Runs beside any motor skill; go-to-goal uses the same obstacle "

@@ -26,7 +26,7 @@ from skill_server.errors import (
     UnknownSkill,
     WorldStopped,
 )
-from skill_server.robot import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS, Robot
+from skill_server.robot import DEFAULT_CAMERA_FPS, MAX_CAMERA_FPS, DriveOrder, DriveOutcome, Robot
 from skill_server.service import convert, perception_convert
 from skill_server.service.plan_convert import plan_from_proto
 
@@ -93,6 +93,15 @@ class RobotService(robot_pb2_grpc.RobotServicer):
         with domain_errors(context):
             ack = self._robot.drive(request.token, request.sequence, request.linear_mps, request.angular_radps)
         return convert.drive_ack_to_proto(ack)
+
+    def DriveStream(self, request_iterator: Iterator[robot_pb2.DriveCommand],
+                    context: grpc.ServicerContext) -> Iterator[robot_pb2.DriveStreamAck]:
+        """Drive for one driver's commands on one call: each answered in order, a refused one by its status code and
+        sentence (the call goes on); the call ends UNAVAILABLE when the world stops."""
+        orders = (DriveOrder(c.token, c.sequence, c.linear_mps, c.angular_radps) for c in request_iterator)
+        with domain_errors(context):
+            for outcome in self._robot.drive_each(orders):
+                yield _drive_answer(outcome)
 
     def SetLimits(self, request: robot_pb2.SetLimitsRequest, context: grpc.ServicerContext) -> robot_pb2.Limits:
         """The controller's velocity ceilings and deadman timeout (0 keeps a value); INVALID_ARGUMENT names the
@@ -287,6 +296,22 @@ class RobotService(robot_pb2_grpc.RobotServicer):
                 yield to_proto(item)
 
 
+def status_of(error: BaseException) -> grpc.StatusCode | None:
+    """The status code STATUS_OF_ERROR gives a domain error (None: not one of the robot's refusals)."""
+    return next((code for error_type, code in STATUS_OF_ERROR if isinstance(error, error_type)), None)
+
+
+def _drive_answer(outcome: DriveOutcome) -> robot_pb2.DriveStreamAck:
+    """One command's answer on a drive stream: its ack, or the status a unary Drive would have ended with."""
+    if outcome.refusal is None and outcome.ack is not None:
+        return robot_pb2.DriveStreamAck(sequence=outcome.sequence, ack=convert.drive_ack_to_proto(outcome.ack))
+    refusal = outcome.refusal
+    code = status_of(refusal) if refusal is not None else None
+    return robot_pb2.DriveStreamAck(sequence=outcome.sequence, refusal=robot_pb2.CommandRefusal(
+        status_code=(code or grpc.StatusCode.UNKNOWN).value[0], message=str(refusal),
+        field=refusal.field if isinstance(refusal, InvalidParameter) else ""))
+
+
 class domain_errors:  # noqa: N801 - used as a context manager, reads like a clause
     """Aborts the RPC with the status code STATUS_OF_ERROR gives a domain error, and the error's sentence."""
 
@@ -299,9 +324,9 @@ class domain_errors:  # noqa: N801 - used as a context manager, reads like a cla
     def __exit__(self, kind: type[BaseException] | None, error: BaseException | None, traceback: Any) -> Literal[False]:
         if error is None:
             return False
-        for error_type, code in STATUS_OF_ERROR:
-            if isinstance(error, error_type):
-                if isinstance(error, InvalidParameter):
-                    self._context.set_trailing_metadata((("field", error.field),))
-                self._context.abort(code, str(error))
+        code = status_of(error)
+        if code is not None:
+            if isinstance(error, InvalidParameter):
+                self._context.set_trailing_metadata((("field", error.field),))
+            self._context.abort(code, str(error))
         return False

@@ -103,6 +103,7 @@ class Localization(SkillController):
         self._published: LocalizationEstimate | None = None
         self._beams: tuple[np.ndarray, np.ndarray] | None = None  # the last update's beams (ranges, angles)
         self._relocalizer = Relocalizer(initial_spread_m, initial_spread_rad)  # the evidence while not trusted
+        self.searches_whole_map = True  # the pose tracking turns it off while the localization skill searches
         perception.localizer = self
 
     def believed_pose(self, odometry: Pose2D) -> Pose2D | None:
@@ -173,6 +174,8 @@ class Localization(SkillController):
         map; the cloud restarts at a place found."""
         if self._converged:
             self._relocalizer.trusted()
+            return
+        if not self.searches_whole_map:
             return
         step = self._relocalizer.after_update(self._lookup(), self._model.log_odds < 0, tick.odometry.pose,
                                               self._estimate)

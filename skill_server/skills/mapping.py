@@ -85,7 +85,7 @@ class EnvironmentModelling(SkillController):
             math.hypot(pose.x_m - self._last_pose[0], pose.y_m - self._last_pose[1]) > 0.05
             or abs(math.remainder(pose.theta_rad - self._last_pose[2], 2 * math.pi)) > math.radians(3)
         )
-        if tick.new_scan and moved:
+        if tick.new_scan and moved and not self._lost(tick):
             at = self._aligned_pose(tick) if self._align else pose
             self._model.integrate_laser(tick, pose=at)
             if self._use_sonar:
@@ -101,6 +101,14 @@ class EnvironmentModelling(SkillController):
         known = float(np.count_nonzero(self._model.log_odds)) * self._model.resolution_m**2
         return 0.0, 0.0, outcome, feedback_for(tick, "mapping", 0.0, scans=float(self._model.scans_integrated),
                                                known_area_m2=known)
+
+    def _lost(self, tick: TickInput) -> bool:
+        """Whether the robot is looking for where it is: a localization skill runs and trusts no pose yet, nor does
+        the pose tracking, so the skills steer by bare odometry. A scan drawn then lands where odometry believes the
+        robot is; after a kidnapping that drew the place the robot was carried to over the one it was carried from
+        (100 scans of a turn flip the floor plan's cells), and localization then converged there, or found two
+        places forever. The map waits until a pose is trusted again."""
+        return self._perception.localizer is not None and tick.pose_source == "odometry"
 
     def _aligned_pose(self, tick: TickInput) -> Pose2D:
         """Where to place this scan: the track moved on by the believed pose's increment, fitted to the map."""

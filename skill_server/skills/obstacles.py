@@ -53,6 +53,13 @@ class ObstacleMap:
         self._ray_steps_m = np.arange(CLEAR_STEP_M, CLEAR_RANGE_M, CLEAR_STEP_M)
         self._disks: dict[float, tuple[np.ndarray, np.ndarray]] = {}  # offsets by radius [m]
 
+    def forget(self) -> None:
+        """Drops every echo, free pass and visit, in place (holders keep the same grid; the version goes on)."""
+        self._hits_flat[:] = 0
+        self._seen_free_flat[:] = False
+        self.visited[:] = False
+        self.version += 1
+
     def cell_of(self, x_m: float, y_m: float) -> tuple[int, int]:
         """Grid indices of a world point (may fall outside the grid)."""
         return (int(math.floor((x_m - self.origin_m) / self.resolution_m)),

@@ -18,6 +18,7 @@ from skill_server.skills.base import TickInput
 from skill_server.skills.environment_model import EnvironmentModel
 from skill_server.skills.localization import Localization
 from skill_server.skills.perception import Perception
+from skill_server.skills.scan_matching import compose, relative
 
 POSE_SOURCE = "map tracking"
 TRACKER_PARTICLES = 200
@@ -38,15 +39,28 @@ class PoseTracker:
         self._filter = self._filter_at(floor_plan.spawn, None)  # a world starts at its spawn, odometry exact
         self._field = self._filter.field  # computed now, and shared by the filters of later restarts
         self._restart_pending = False
+        self._adopted: tuple[Pose2D, Pose2D] | None = None  # a pose trusted elsewhere, and odometry then
 
     def restart(self) -> None:
         """Starts again at the next tick's odometry pose (the robot was placed there: a known pose)."""
         self._restart_pending = True
 
-    def update(self, tick: TickInput) -> None:
-        """One tick: the filter predicts with odometry and weighs each new scan once the robot moved."""
+    def adopt(self, pose: Pose2D, odometry: Pose2D) -> None:
+        """Starts again at pose (at that odometry reading), which the localization skill trusts while this tracker
+        has lost track: after a kidnapping, the skills go on steering by the place found once the skill stops."""
+        self._adopted = (pose, odometry)
+
+    def update(self, tick: TickInput, defer_search: bool = False) -> None:
+        """One tick: the filter predicts with odometry and weighs each new scan once the robot moved. With
+        defer_search (a localization skill runs and searches the map itself), a lost tracker does not search the
+        whole map too: two searches doubled the loop's work."""
         if self._restart_pending:
             self._filter, self._restart_pending = self._filter_at(tick.odometry.pose, self._field), False
+        if self._adopted is not None:
+            pose, odometry = self._adopted
+            self._filter = self._filter_at(compose(pose, relative(odometry, tick.odometry.pose)), self._field)
+            self._adopted = None
+        self._filter.searches_whole_map = not defer_search
         self._filter.track(tick)
 
     def believed_pose(self, odometry: Pose2D) -> Pose2D | None:

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from skill_server.sim.geometry import Pose2D
-from skill_server.skills.global_search import FieldLookup, Panorama, Region, search
+from skill_server.skills.global_search import FieldLookup, Panorama, Region, SlicedSearch, search
 from skill_server.skills.scan_matching import compose, relative
 
 # A guess that does not lead to convergence within this many updates is given up for a search of the whole map
@@ -45,6 +45,7 @@ class Relocalizer:
         self._panorama = Panorama()
         self._unconverged_updates = 0
         self._searched_at = (0.0, 0.0)  # the panorama's sweep and travel at the last search
+        self._search: SlicedSearch | None = None  # a whole-map search under way, one slice per update
 
     def trusted(self) -> None:
         """The estimate is converged: the evidence gathered so far is no longer needed."""
@@ -80,9 +81,10 @@ class Relocalizer:
 
     def after_update(self, lookup: FieldLookup, known_free: np.ndarray, odometry: Pose2D, estimate: Pose2D) -> Step:
         """One unconverged update: gives the guess up after SEARCH_AFTER_UPDATES, then searches the whole map each
-        time the panorama has seen enough more of the lab. A pose found is trusted as confirmed; where it is the
-        estimate's own place, the cloud is kept: the search places coarsely (9 cm off beside an obstacle, where the
-        cloud restarted there converged and stayed), the cloud had refined the place over many scans."""
+        time the panorama has seen enough more of the lab, a slice of the search per update. A pose found is trusted
+        as confirmed; where it is the estimate's own place, the cloud is kept: the search places coarsely (9 cm off
+        beside an obstacle, where the cloud restarted there converged and stayed), the cloud had refined the place
+        over many scans."""
         self._unconverged_updates += 1
         announcement = ""
         if not self.searching and self._unconverged_updates >= SEARCH_AFTER_UPDATES:
@@ -90,12 +92,20 @@ class Relocalizer:
             announcement = "the guess does not fit the map: searching the whole map; turn the robot on the spot or " \
                            "drive it a little"
         panorama = self._panorama
-        swept, travelled = self._searched_at
-        if not (self.searching and panorama.ready and (swept == 0.0 or panorama.swept_rad - swept >= SEARCH_AGAIN_RAD
-                                                        or panorama.travelled_m - travelled >= SEARCH_AGAIN_M)):
+        if self._search is None:
+            swept, travelled = self._searched_at
+            more = (swept == 0.0 or panorama.swept_rad - swept >= SEARCH_AGAIN_RAD
+                    or panorama.travelled_m - travelled >= SEARCH_AGAIN_M)
+            if not (self.searching and panorama.ready and more):
+                return Step(announcement)
+            self._searched_at = (panorama.swept_rad, panorama.travelled_m)
+            # The scans so far, searched over the next updates (a slice each) while the panorama grows on: the
+            # anchor stays put, so a place found for it is placed at the odometry of the update that finishes.
+            self._search = SlicedSearch(lookup, known_free, panorama.points())
+        found = self._search.step()
+        if found is None:
             return Step(announcement)
-        self._searched_at = (panorama.swept_rad, panorama.travelled_m)
-        found = search(lookup, known_free, panorama.points())
+        self._search = None
         if found.anchor_pose is None:
             return Step(f"{found.places} places of the map fit the scans so far; keep turning or drive a little "
                         "further")

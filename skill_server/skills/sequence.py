@@ -98,8 +98,11 @@ class StepSequence(SkillController):
         return succeeded(f"all {len(self._steps)} steps done; last: {last.message}")
 
     def step_started(self) -> None:
-        """Announces the step that begins now."""
-        self.announce(EventKind.STEP_STARTED, f"step {self._index + 1}/{len(self._steps)}: {self.current_step}")
+        """Announces the step that begins now (the first one also says where the sequence will come back to)."""
+        message = f"step {self._index + 1}/{len(self._steps)}: {self.current_step}"
+        if self._index == 0 and self._start_pose is not None:
+            message += f", from {_place(self._start_pose)} by {self._start_source}"
+        self.announce(EventKind.STEP_STARTED, message)
 
     def advance_at_once(self) -> bool:
         """Whether the next step starts in the tick the previous one ended (else the wheels get a stop tick)."""
@@ -120,9 +123,13 @@ class StepSequence(SkillController):
         assert self._start_pose is not None and self._start_odometry is not None
         start = compose(tick.pose, relative(tick.odometry.pose, self._start_odometry))
         moved_m = math.hypot(start.x_m - self._start_pose.x_m, start.y_m - self._start_pose.y_m)
-        self.announce(EventKind.STEP_STARTED, f"steering by {tick.pose_source} now, not {self._start_source}: "
-                                              f"the start is placed again, {moved_m:.2f} m from before")
+        self.announce(EventKind.STEP_STARTED, f"steering by {tick.pose_source} now, not {self._start_source}: the "
+                                              f"start is placed again, {moved_m:.2f} m from before, at {_place(start)}")
         self._start_pose, self._start_source, self._start_odometry = start, tick.pose_source, tick.odometry.pose
+
+
+def _place(pose: Pose2D) -> str:
+    return f"({pose.x_m:.2f}, {pose.y_m:.2f}) m"
 
 
 def round_trip_description(spec: RobotSpec) -> SkillDescription:

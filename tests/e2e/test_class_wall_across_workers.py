@@ -15,7 +15,7 @@ from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer, make_cou
 from tests.e2e.test_class_wall import PHONE
 from tests.integration.middleware.test_events_across_workers import make_test_app_without_user
 
-pytestmark = [pytest.mark.e2e, pytest.mark.postgres]
+pytestmark = [pytest.mark.e2e, pytest.mark.postgres, pytest.mark.alone]
 STUDENTS = ("student1", "student2")
 BANNER_AT_ONCE_S = 5.0  # the click to the banner on the other worker (NOTIFY, the student's channel) on a loaded host
 

@@ -209,11 +209,14 @@ def test_the_lab_view_draws_the_map_on_the_floor_and_the_path_planned_to_a_goal(
     page.locator('map-panel button[data-action="go-there"]').click()
     wait_for_status(page, "go_to_goal", "executing")
     page.locator('lab-view:not([data-path-points="0"])[data-path-points]').wait_for(state="attached", timeout=10_000)
-    view.locator('[data-field="lab-view-summary"]').filter(has_text="planned path of").wait_for()
-    page.locator('map-panel [data-field="map-legend"] [data-layer="path"]').wait_for()
+    # Read at one moment: the ribbon is the path still ahead, and the robot drives on while the test looks.
     on_path = view.evaluate("""(panel) => {
       panel.render();
       const points = panel.plannedPath;
+      const words = () => ({
+        summary: panel.querySelector('[data-field="lab-view-summary"]')?.textContent ?? "",
+        legend: Boolean(document.querySelector('map-panel [data-field="map-legend"] [data-layer="path"]')),
+      });
       // A point 0.3 m along the path from the robot's pose, past its body.
       let left = 0.3;
       for (let i = 1; i < points.length; i += 1) {
@@ -223,12 +226,13 @@ def test_the_lab_view_draws_the_map_on_the_floor_and_the_path_planned_to_a_goal(
         if (length >= left) {
           const x = x0 + ((x1 - x0) * left) / length;
           const y = y0 + ((y1 - y0) * left) / length;
-          return { points, colour: panel.drawnColourAt(x, y, 0.02) };
+          return { points, colour: panel.drawnColourAt(x, y, 0.02), ...words() };
         }
         left -= length;
       }
-      return { points, colour: null };
+      return { points, colour: null, ...words() };
     }""")
+    assert "planned path of" in on_path["summary"] and on_path["legend"], on_path
     assert len(on_path["points"]) >= 2
     assert on_path["points"][-1] == pytest.approx(list(free), abs=0.05), "the path does not end at the goal"
     colour = on_path["colour"]

@@ -4,7 +4,8 @@ LMS's recording AGS endpoint. The same pages framed by an unregistered origin ar
 
 Both origins are http://127.0.0.1 (ports differ): same site, so the browser sends Telelab's cookies inside the
 frame with no TLS and no third-party-cookie flags; frame-ancestors is per origin, so the refusal is real. Over
-HTTPS in production the session cookie is SameSite=None; Secure (tests/integration/lti covers the headers)."""
+HTTPS in production the session cookie is SameSite=None; Secure (tests/integration/lti covers the headers). An LMS
+of another site, with third-party cookies blocked and allowed, over HTTPS: test_lti_cross_site.py."""
 
 from __future__ import annotations
 

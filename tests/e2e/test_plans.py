@@ -256,3 +256,25 @@ def test_the_plan_pages_pure_helpers_work_in_the_page(page, live_server: LiveSer
     assert results == {"points": 2, "apart": 5.0, "none": None, "line": 3, "lineFromState": 7,
                        "aborted": "ABORTED at line 4 (TIMEOUT): the condition did not hold in 10 s",
                        "succeeded": "SUCCEEDED", "running": "Running line 2: drive"}
+
+
+def test_what_a_student_types_while_the_plan_loads_is_not_overwritten(page, live_server: LiveServer) -> None:
+    """On a slow connection the editor takes the stored text only after it arrives; a box a person could type into
+    before then would be overwritten by it (the check's error marks too). It stays read-only until then."""
+    from tests.e2e.test_lessons import log_in
+    from tests.e2e.test_spanish_plans import CREATE
+
+    log_in(page, live_server)
+    page.goto(f"{live_server.url}/plans")
+    plan_id = page.evaluate(CREATE, "slow-load")
+
+    def slowly(route) -> None:
+        time.sleep(1.5)  # Playwright's sync routes run on this thread: the page's fetch waits meanwhile
+        route.continue_()
+
+    page.route(re.compile(rf".*/api/plans/{plan_id}$"), slowly)
+    page.goto(f"{live_server.url}/plans/{plan_id}", wait_until="commit")
+    editor = page.get_by_label("The plan's text, one command a line")
+    editor.fill('say "mine"\n')  # waits while the box is read-only, as a person cannot type into it
+    page.wait_for_timeout(2000)
+    assert editor.input_value() == 'say "mine"\n'

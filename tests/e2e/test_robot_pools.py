@@ -11,7 +11,7 @@ import pytest
 from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer, served_lab
 from tests.e2e.test_lessons import log_in
 
-pytestmark = pytest.mark.e2e
+pytestmark = [pytest.mark.e2e, pytest.mark.alone]  # the turn of 8 s must not pass while a page loads
 
 
 @pytest.fixture

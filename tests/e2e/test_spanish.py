@@ -77,6 +77,23 @@ def look(tab, name: str) -> None:
     tab.set_viewport_size(DESKTOP)
 
 
+def read_console_numbers(tab) -> None:
+    """At desktop and phone sizes, the odometry and the drive pad's speeds write their numbers as Spanish does:
+    "0,00" and "50 % · 0,25 m/s · 0,75 rad/s", never with a decimal point."""
+    x_field = tab.locator('odometry-panel [data-field="x"]')
+    speed = tab.locator("drive-pad #drive-speed-value")
+    for size, viewport in (("desktop", DESKTOP), ("phone", PHONE)):
+        tab.set_viewport_size(viewport)
+        x_field.filter(has_text=",").wait_for()
+        speed.filter(has_text="m/s").wait_for()
+        x_m, speeds = x_field.text_content() or "", speed.text_content() or ""
+        assert re.fullmatch(r"-?\d+,\d\d", x_m), f"odometry x ({size}): {x_m!r}"
+        assert re.fullmatch(r"\d+ % · \d+,\d\d m/s · \d+,\d\d rad/s", speeds), f"drive pad ({size}): {speeds!r}"
+        x_field.scroll_into_view_if_needed()
+        tab.screenshot(path=str(ARTIFACTS_DIR / f"spanish-console-numbers-read-{size}.png"))
+    tab.set_viewport_size(DESKTOP)
+
+
 def spanish_tab(chromium):
     context = chromium.new_context(locale="es-ES", viewport=DESKTOP)
     tab = context.new_page()
@@ -118,7 +135,16 @@ def test_a_students_first_session_is_entirely_in_spanish(chromium, live_server: 
             tab.wait_for_timeout(300)
             assert not english_left(tab), f"console, {view}: {english_left(tab)}"
         tab.get_by_role("tab", name="Navegar").click()
+        # The map says where the robot is as Spanish writes it: decimal commas, the pair split by a semicolon.
+        summary = tab.locator('map-panel [data-field="map-summary"]')
+        summary.filter(has_text="según la odometría").wait_for()
+        said = summary.text_content() or ""
+        assert re.search(r"Robot en \(-?\d+,\d\d; -?\d+,\d\d\) m según la odometría", said), said
+        assert not re.search(r"\d\.\d", said) and "frente a el" not in said, said
         look(tab, "console-navigate")
+        tab.get_by_role("tab", name="Conducir").click()
+        read_console_numbers(tab)
+        look(tab, "console-numbers")
 
         tab.goto(f"{live_server.url}/bookings")
         tab.get_by_role("heading", name="Reservas", exact=True).wait_for()
@@ -161,18 +187,18 @@ def test_a_tutors_correction_is_entirely_in_spanish(chromium, app, live_server: 
         log_in(tab, live_server, "tutor1")
         assert tab.locator('[data-field="role"]').text_content() == "tutor"
         tab.goto(f"{live_server.url}/courses/{spanish_course['course']}")
-        tab.set_viewport_size(DESKTOP)
-        assert not english_left(tab), english_left(tab)  # at 390 px its members' table is 26 px too wide (reported)
+        look(tab, "tutor-course")
         tab.goto(f"{live_server.url}/assessment/exams/{spanish_course['exam']}")
         look(tab, "tutor-exam")
         tab.get_by_role("link", name="Revisión").first.click()
         tab.get_by_label("Nota nueva").wait_for()
         look(tab, "tutor-review")
         tab.get_by_label("Elemento").select_option(index=1)
-        tab.get_by_label("Nota nueva").fill("0.5")
+        tab.get_by_label("Nota nueva").fill("0,5")  # as a Spanish tutor writes it
         tab.get_by_label("Motivo (lo ve el estudiante)").fill("La unidad faltaba, el valor era casi correcto")
         tab.get_by_role("button", name="Cambiar la nota").click()
         tab.locator(".flash--success", has_text="Nota cambiada.").wait_for()
+        assert "0,5/1 puesto por el tutor" in (tab.locator(".result--changed").first.text_content() or "")
         tab.get_by_label("Comentario para el estudiante").fill("Repasa el alcance del láser en el manual.")
         tab.get_by_role("button", name="Añadir el comentario").click()
         tab.locator(".flash--success", has_text="Comentario añadido.").wait_for()
@@ -188,6 +214,49 @@ def test_a_tutors_correction_is_entirely_in_spanish(chromium, app, live_server: 
         finally:
             student_context.close()
         errors += student_errors
+    finally:
+        context.close()
+    assert not errors, f"JavaScript errors: {errors}"
+
+
+def test_the_demo_student_finds_the_demo_tests_and_survey_in_spanish(chromium, app, demo_accounts,
+                                                                     live_server: LiveServer) -> None:
+    """What `telelab up` seeds, read in Spanish: the Spanish demo course's quiz, timed and experimental tests and its
+    survey on the Tests page, the timed test's page in Spanish, and the survey's statements in Spanish."""
+    from middleware.demo_course import (
+        DEMO_COURSE_ES_TITLE,
+        DEMO_SURVEY_TITLE_ES,
+        EXPERIMENTAL_TITLE_ES,
+        QUIZ_TITLE_ES,
+        TIMED_TITLE_ES,
+    )
+    from middleware.lab_runner import seed_demo_course, seed_spanish_demo_course
+
+    seed_demo_course(app)
+    seed_spanish_demo_course(app)
+    context, tab, errors = spanish_tab(chromium)
+    try:
+        tab.goto(f"{live_server.url}/login")
+        tab.fill("#username", "student")
+        tab.fill("#password", demo_accounts["student"])
+        tab.get_by_role("button", name="Iniciar sesión").click()
+        tab.locator('[data-field="username"]').wait_for()
+        tab.get_by_role("link", name="Pruebas").first.click()
+        tab.get_by_role("heading", name=DEMO_COURSE_ES_TITLE).wait_for()
+        for title in (QUIZ_TITLE_ES, TIMED_TITLE_ES, EXPERIMENTAL_TITLE_ES):
+            assert tab.get_by_role("link", name=title).is_visible(), title
+        survey = tab.get_by_role("link", name=re.compile(f"^{DEMO_SURVEY_TITLE_ES}"))
+        assert survey.count() == 1
+        survey.click()
+        tab.get_by_text("El sistema era fiable").wait_for()
+        look(tab, "demo-survey")
+        tab.go_back()
+        tab.get_by_role("link", name=TIMED_TITLE_ES).click()
+        tab.get_by_role("button", name="Empezar").wait_for()
+        look(tab, "demo-timed-test")
+        tab.get_by_role("button", name="Empezar").click()
+        tab.get_by_text("¿Por qué la estimación de la odometría se aleja").wait_for()
+        look(tab, "demo-timed-attempt")
     finally:
         context.close()
     assert not errors, f"JavaScript errors: {errors}"

@@ -51,6 +51,7 @@ ROUTES = (
     "GET POST /lti/login",
     "POST /lti/launch",
     "POST /lti/deep-link",
+    "POST /lti/link-course",
     "GET /lti/jwks.json",
     "GET /admin/pools",
     "POST /admin/pools",

@@ -140,3 +140,42 @@ def test_a_booking_is_written_with_the_days_and_months_of_the_pages_language(cli
     assert spanish in page and starts.strftime("%a %d %b") not in page, spanish
     _, _, page = student.request("GET", "/bookings?tz=UTC")
     assert starts.strftime("%a %d %b, %H:%M") in page
+
+
+def test_the_refusals_of_the_labs_other_areas_speak_spanish_with_the_same_code_and_field(client_as,
+                                                                                        course_people) -> None:
+    """Recordings, the experiment's protocol, a robot's settings, the practice robot's commands, the teaching wall and
+    the login check answer in Spanish when asked, in English otherwise; only the sentence changes."""
+    student, tutor, tutor2, anonymous = client_as("student1"), client_as("tutor1"), client_as("tutor2"), client_as(None)
+    course_id = course_people["course"]
+    asked = {
+        "recording": (student, "GET", "/api/recordings/999999", None),
+        "protocol": (tutor2, "PUT", f"/api/experiment/protocols/{course_id}", {"learning_s": 60}),
+        "settings": (student, "POST", "/api/robots/lab-1/limits", {}),
+        "practice": (student, "POST", "/api/practice/commands", {"command": {"stop": True}}),
+        "wall": (tutor, "POST", f"/api/courses/{course_id}/class-wall", {"action": "stop_all"}),
+        "login": (anonymous, "GET", "/api/recordings", None),
+    }
+    english = {what: api(client, method, path, body) for what, (client, method, path, body) in asked.items()}
+    spanish = {what: api(client, method, path, body, SPANISH) for what, (client, method, path, body) in asked.items()}
+    assert {what: answer["error"]["message"] for what, (_, answer) in spanish.items()} == {
+        "recording": "No existe esa grabación.",
+        "protocol": "Solo los tutores del curso fijan su protocolo experimental.",
+        "settings": "Envía al menos uno de estos valores por encima de 0: max_linear_mps, max_angular_radps, "
+                    "watchdog_s.",
+        "practice": "Arranca primero tu robot de prácticas.",
+        "wall": "No hay ninguna sesión de clase abierta para este curso; inicia una primero.",
+        "login": "Inicia sesión primero; puede que tu sesión haya terminado.",
+    }
+    assert {what: answer["error"]["message"] for what, (_, answer) in english.items()} == {
+        "recording": "There is no such recording.",
+        "protocol": "Only the course's tutors set its experiment protocol.",
+        "settings": "Send at least one of max_linear_mps, max_angular_radps, watchdog_s above 0.",
+        "practice": "Start your practice robot first.",
+        "wall": "No class session is open for this course; start one first.",
+        "login": "Log in first; your session may have ended.",
+    }
+    for what, (status, answer) in spanish.items():
+        assert status == english[what][0] and 400 <= status < 500, (what, status, answer)
+        assert {k: v for k, v in answer["error"].items() if k != "message"} == {
+            k: v for k, v in english[what][1]["error"].items() if k != "message"}, what

@@ -1,7 +1,8 @@
 """The refusals of the converted modules speak the request's language: every Refused, ApiError or InvalidInput
-(or an area's subclass of them, or accounts' `forbidden()`) they make is given its sentence through gettext or
-lazy_gettext with %(name)s placeholders, never as a bare string, an f-string, a concatenation or a choice of bare
-strings, which would reach a Spanish student in English.
+(or an area's subclass of them, accounts' `forbidden()`, or a socket's `refuse()`; a plan's PlanError and the
+StepProblem and reports its readers make) they make is given its sentence through gettext or lazy_gettext with
+%(name)s placeholders, never as a bare string, an f-string, a concatenation or a choice of bare strings, which
+would reach a Spanish student in English.
 
 CONVERTED only grows: add a module once its refusals are converted (and their msgids translated in both .po files,
 tests/unit/test_i18n_catalogue.py checks); never take one off. A sentence held in a variable is not checked (say
@@ -36,9 +37,27 @@ CONVERTED = (
     "middleware/teaching/lesson_uploads.py",
     "middleware/teaching/authority.py",
     "middleware/teaching/targets.py",
+    "middleware/teaching",
+    "middleware/plans",
+    "middleware/exercises",
+    "middleware/recordings",
+    "middleware/experiment",
+    "middleware/farm",
+    "middleware/access",
+    "middleware/auth",
+    "middleware/robots",
+    "middleware/lab",
+    "middleware/live",
+    "middleware/realtime.py",
+    "middleware/web.py",
+    "middleware/extensions.py",
+    "middleware",  # every module of the middleware (issue 29): a new one speaks the request's language from the start
+    "middleware/lti",
 )
-BASES = {"Refused", "ApiError", "InvalidInput"}
-HELPERS = {"forbidden"}  # functions that make a Refused from the sentence they are given
+BASES = {"Refused", "ApiError", "InvalidInput", "PlanError", "StepProblem"}  # a plan's errors reach the user too
+# functions that make a Refused, or close a socket, with the sentence given; and the plan readers' reporters, which
+# make a PlanError at a line and column (place_error, the parsers' report and at, the tokenizer's _bad and _report)
+HELPERS = {"forbidden", "refuse", "place_error", "report", "at", "_bad", "_report"}
 
 
 def _name(node: ast.expr) -> str | None:
@@ -97,7 +116,7 @@ def _modules() -> list[Path]:
     for entry in CONVERTED:
         path = ROOT / entry
         paths.extend(sorted(path.rglob("*.py")) if path.is_dir() else [path])
-    return paths
+    return sorted(set(paths))  # a module listed and inside a package listed is read once
 
 
 def test_every_converted_module_says_its_refusals_through_gettext() -> None:
@@ -115,10 +134,22 @@ def test_every_converted_module_says_its_refusals_through_gettext() -> None:
     ('raise InvalidInput("body", "The JSON is " + kind)', 1),
     ('raise ApiError(409, "x", "Not yet." if early else "Too late.")', 1),
     ('raise forbidden("You can read only your own.")', 1),
+    ('refuse(ws, CLOSE_FORBIDDEN, "forbidden_origin", "This page may not open this channel.")', 1),
+    ('refuse(ws, CLOSE_NOT_FOUND, "unknown_goal", gettext("There is no goal with that id."), "goal_id")', 0),
     ('raise Refused(404, "unknown_course", gettext("There is no course %(id)s.", id=i), "course_id")', 0),
     ('raise Refused(409, "done", lazy_gettext("Already answered."))', 0),
     ('raise InvalidInput(f"{ZONE}.rects[{index}]", gettext("Four numbers."))', 0),
     ('raise Refused(400, "invalid_field", message, field)', 0),
+    ('PlanError(line, column, field, f"line {line}: {message}")', 1),
+    ('PlanError(0, 0, "plan", "The plan is not valid.")', 1),
+    ('raise StepProblem("value", f"{kind} takes no value; got {written}.")', 1),
+    ('errors.append(place_error(step.line, step.column, where, "this on has nothing in its block."))', 1),
+    ('self.report(token.line, token.column, "this } closes no block; remove it.", path)', 1),
+    ('raise self.at(token, path, f"{token.text} is given twice.")', 1),
+    ('self._bad(number, start, written, "this text has no closing quote on its line.")', 1),
+    ('PlanError(line, column, field, gettext("line %(line)s: %(problem)s", line=line, problem=message))', 0),
+    ('raise StepProblem(f"{path}.negate", gettext("negate must be true or false; got %(value)s.", value=v))', 0),
+    ('raise self.at(token, path, gettext("%(name)s is given twice.", name=name))', 0),
 ])
 def test_the_check_finds_english_refusals(source: str, expected: int) -> None:
     classes = BASES | {"BookingRefused"}

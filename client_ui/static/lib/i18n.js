@@ -33,9 +33,16 @@ export function number(value, options = {}) {
   return new Intl.NumberFormat(language, options).format(value);
 }
 
-/** A number with a fixed count of decimals, in the page's language (the translated form of value.toFixed(digits)). */
+// "." in English, "," in Spanish.
+const DECIMAL_SIGN = new Intl.NumberFormat(language).formatToParts(1.5)
+  .find((part) => part.type === "decimal")?.value ?? ".";
+
+/** A number with a fixed count of decimals, in the page's language: value.toFixed(digits) with the language's decimal
+ * sign ("0,25" in Spanish). toFixed rounds it, as before, so English reads exactly what toFixed wrote (Intl would round
+ * 1.005 up where toFixed writes 1.00). */
 export function fixed(value, digits = 1) {
-  return number(value, { minimumFractionDigits: digits, maximumFractionDigits: digits, useGrouping: false });
+  const text = Number(value).toFixed(digits);
+  return DECIMAL_SIGN === "." ? text : text.replace(".", DECIMAL_SIGN);
 }
 
 /** A moment (Date, ms or ISO text) as the page's language writes a date and time, in the browser's time zone. */

@@ -1,6 +1,6 @@
 // Skill parameters for people, shared by the skill panels and the authoring forms: labels, typed values, limits.
 
-import { t } from "./i18n.js";
+import { number, t } from "./i18n.js";
 
 /** "goal_x_m" -> "Goal x"; the unit is shown apart. */
 export function parameterLabel(name) {
@@ -18,8 +18,9 @@ export function readValue(parameter, input) {
   return input.value;
 }
 
-/** A limit for people: 3.141592653589793 -> "3.142". */
+/** A limit for people: 3.141592653589793 -> "3.142" ("3,142" in Spanish). */
 export function shortNumber(value) {
-  return String(Number(Number(value).toPrecision(4)));
+  const rounded = Number(Number(value).toPrecision(4)) + 0; // data, not text: rounds as before; number() writes it
+  return number(rounded, { maximumFractionDigits: 20, useGrouping: false });
 }
 

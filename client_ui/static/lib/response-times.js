@@ -5,7 +5,7 @@
 // and its late and lost messages are the paper's bandwidth and packet-loss measures.
 
 import { legFigures } from "./stats.js";
-import { t } from "./i18n.js";
+import { fixed, t } from "./i18n.js";
 
 export const LATE_AFTER_MS = 1000; // the paper's reference for operability: a command answered later is late
 export const LOST_AFTER_MS = 5000; // a command unanswered this long (or when its socket closed) is lost
@@ -130,7 +130,7 @@ export function reportLine(report, kind) {
   const timed = report?.[kind];
   const total = timed?.total;
   if (!timed?.count || !Number.isFinite(total?.mean)) return t("no {value}", { value: KIND_WORDS[kind] });
-  const ms = (value) => (Number.isFinite(value) ? value.toFixed(1) : "—");
+  const ms = (value) => (Number.isFinite(value) ? fixed(value, 1) : "—");
   return t("{count} {value}: {min}–{max} ms, mean {mean}, ", { count: timed.count, value: KIND_WORDS[kind], min: ms(total.min), max: ms(total.max), mean: ms(total.mean) })
     + t("jitter {jitter}", { jitter: ms(total.jitter) });
 }

@@ -10,7 +10,7 @@ import { SURFACES, aimRobotEye, buildScene, placeRobot, robotEyeCamera } from ".
 function codeMaterial(code, { depthWrite = true } = {}) {
   return new THREE.ShaderMaterial({
     vertexShader: "void main() { gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0); }",
-    fragmentShader: `void main() { gl_FragColor = vec4(${(code / 255).toFixed(6)}, 0.0, 0.0, 1.0); }`,
+    fragmentShader: `void main() { gl_FragColor = vec4(${(code / 255).toFixed(6)}, 0.0, 0.0, 1.0); }`, // data, not text: shader source
     depthWrite,
   });
 }

@@ -75,6 +75,6 @@ export class PolarPanel extends PanelElement {
   /** Show the nearest reading: its words in `field`, its range in data-nearest-m (for tests and scripts). */
   showNearest(field, nearest, words) {
     field.textContent = words;
-    this.dataset.nearestM = nearest ? nearest.range_m.toFixed(3) : "";
+    this.dataset.nearestM = nearest ? nearest.range_m.toFixed(3) : ""; // data, not text: a data attribute
   }
 }

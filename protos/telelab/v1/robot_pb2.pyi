@@ -337,6 +337,26 @@ class DriveAck(_message.Message):
     angular_radps: float
     def __init__(self, applied_sequence: _Optional[int] = ..., linear_mps: _Optional[float] = ..., angular_radps: _Optional[float] = ...) -> None: ...
 
+class DriveStreamAck(_message.Message):
+    __slots__ = ("sequence", "ack", "refusal")
+    SEQUENCE_FIELD_NUMBER: _ClassVar[int]
+    ACK_FIELD_NUMBER: _ClassVar[int]
+    REFUSAL_FIELD_NUMBER: _ClassVar[int]
+    sequence: int
+    ack: DriveAck
+    refusal: CommandRefusal
+    def __init__(self, sequence: _Optional[int] = ..., ack: _Optional[_Union[DriveAck, _Mapping]] = ..., refusal: _Optional[_Union[CommandRefusal, _Mapping]] = ...) -> None: ...
+
+class CommandRefusal(_message.Message):
+    __slots__ = ("status_code", "message", "field")
+    STATUS_CODE_FIELD_NUMBER: _ClassVar[int]
+    MESSAGE_FIELD_NUMBER: _ClassVar[int]
+    FIELD_FIELD_NUMBER: _ClassVar[int]
+    status_code: int
+    message: str
+    field: str
+    def __init__(self, status_code: _Optional[int] = ..., message: _Optional[str] = ..., field: _Optional[str] = ...) -> None: ...
+
 class StreamTelemetryRequest(_message.Message):
     __slots__ = ("rate_hz", "pose_only")
     RATE_HZ_FIELD_NUMBER: _ClassVar[int]

@@ -54,6 +54,11 @@ class RobotStub:
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.DriveCommand.SerializeToString,
                 response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.DriveAck.FromString,
                 _registered_method=True)
+        self.DriveStream = channel.stream_stream(
+                '/telelab.v1.Robot/DriveStream',
+                request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.DriveCommand.SerializeToString,
+                response_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.DriveStreamAck.FromString,
+                _registered_method=True)
         self.StreamTelemetry = channel.unary_stream(
                 '/telelab.v1.Robot/StreamTelemetry',
                 request_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.StreamTelemetryRequest.SerializeToString,
@@ -207,6 +212,15 @@ class RobotServicer:
 
     def Drive(self, request, context):
         """Sets the wheel velocities; refused unless the token is the controller's.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def DriveStream(self, request_iterator, context):
+        """One driver's drive commands on one call, each answered in order by a DriveStreamAck naming its sequence: Drive's
+        rule (token, sequence, limits, the deadman) without a call per command. A refused command is answered with its
+        refusal and the call goes on; the call ends with a status only when the robot cannot take commands at all.
         """
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
         context.set_details('Method not implemented!')
@@ -435,6 +449,11 @@ def add_RobotServicer_to_server(servicer, server):
                     servicer.Drive,
                     request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.DriveCommand.FromString,
                     response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.DriveAck.SerializeToString,
+            ),
+            'DriveStream': grpc.stream_stream_rpc_method_handler(
+                    servicer.DriveStream,
+                    request_deserializer=protos_dot_telelab_dot_v1_dot_robot__pb2.DriveCommand.FromString,
+                    response_serializer=protos_dot_telelab_dot_v1_dot_robot__pb2.DriveStreamAck.SerializeToString,
             ),
             'StreamTelemetry': grpc.unary_stream_rpc_method_handler(
                     servicer.StreamTelemetry,
@@ -670,6 +689,33 @@ class Robot:
             '/telelab.v1.Robot/Drive',
             protos_dot_telelab_dot_v1_dot_robot__pb2.DriveCommand.SerializeToString,
             protos_dot_telelab_dot_v1_dot_robot__pb2.DriveAck.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def DriveStream(request_iterator,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.stream_stream(
+            request_iterator,
+            target,
+            '/telelab.v1.Robot/DriveStream',
+            protos_dot_telelab_dot_v1_dot_robot__pb2.DriveCommand.SerializeToString,
+            protos_dot_telelab_dot_v1_dot_robot__pb2.DriveStreamAck.FromString,
             options,
             channel_credentials,
             insecure,

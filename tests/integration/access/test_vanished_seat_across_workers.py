@@ -57,17 +57,16 @@ def slow_robot_addresses(count: int) -> Iterator[list[str]]:
 
 
 def note_ticks_of(robot_name: str, coordinator, ticked_at: list[float]) -> None:
-    """Notes when coordinator's ticker looks at robot_name's queue (a spy around apply: nothing else changes)."""
-    from middleware.access import round_robin
+    """Notes when coordinator's ticker looks at robot_name's queue (a spy around a ticker's pass, which reads every
+    robot's queue it has a probe's answer for: nothing else changes)."""
+    tick_all = coordinator.tick_all
 
-    apply = coordinator.apply
-
-    def noted(operation, name, *args, **options):
-        if operation is round_robin.tick and name == robot_name:
+    def noted(online):
+        if robot_name in online:
             ticked_at.append(time.monotonic())
-        return apply(operation, name, *args, **options)
+        return tick_all(online)
 
-    coordinator.apply = noted
+    coordinator.tick_all = noted
 
 
 @pytest.mark.parametrize("workers", [1, 2])

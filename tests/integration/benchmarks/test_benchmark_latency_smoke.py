@@ -3,16 +3,13 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
+
+from tests.integration.benchmarks.quick_run import run_quick
 
 
 def test_quick_latency_benchmark_prints_a_table_and_writes_json_and_histograms(tmp_path: Path) -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "benchmarks.latency", "--quick", "--output", str(tmp_path)],
-        capture_output=True, text=True, timeout=300, check=False,
-    )
+    result = run_quick("benchmarks.latency", tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
     assert "skill activation (total)" in result.stdout and "fan-out, 10 viewers" in result.stdout
     report = json.loads((tmp_path / "latency.json").read_text())

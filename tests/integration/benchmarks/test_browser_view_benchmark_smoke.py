@@ -5,16 +5,12 @@ unwatched robot, the browser's frame times, and a pose's capture to glass beside
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from benchmarks.feedback import STATIC_DIR
-
-ROOT = Path(__file__).resolve().parents[3]
-
+from tests.integration.benchmarks.quick_run import run_quick
 
 GRADED = ("server CPU, drawn view / JPEG camera", "marginal server CPU, drawn view / JPEG camera")
 
@@ -23,8 +19,7 @@ def test_quick_browser_view_benchmark_reports_both_viewers_and_the_frame_times(t
     if not (STATIC_DIR / "vendor/node_modules/three/build/three.module.js").exists():
         pytest.fail("three.js is not installed: `make test` (or `make three`) runs npm ci in client_ui/static/vendor.")
     # A process of its own: the suite's browser (sync Playwright, session-wide) runs an event loop in this thread.
-    result = subprocess.run([sys.executable, "-m", "benchmarks.browser_view", "--quick", "--output", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300, check=False, cwd=ROOT)
+    result = run_quick("benchmarks.browser_view", tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
     report = json.loads((tmp_path / "browser_view.json").read_text())
     assert report["quick"] is True

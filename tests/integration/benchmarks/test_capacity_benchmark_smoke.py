@@ -4,20 +4,18 @@ loaded by one asyncio process (a smoke check of its structure: no timings)."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[3]
+from tests.integration.benchmarks.quick_run import run_quick
+
 pytestmark = pytest.mark.postgres
 
 
 def test_quick_capacity_benchmark_loads_one_and_two_workers_and_reports_their_ratio(tmp_path: Path,
                                                                                      postgres_url: str) -> None:
-    result = subprocess.run([sys.executable, "-m", "benchmarks.capacity", "--quick", "--output", str(tmp_path)],
-                            capture_output=True, text=True, timeout=120, check=False, cwd=ROOT)
+    result = run_quick("benchmarks.capacity", tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
     report = json.loads((tmp_path / "capacity.json").read_text())
     assert report["quick"] is True

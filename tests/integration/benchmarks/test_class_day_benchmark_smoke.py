@@ -4,19 +4,16 @@ get in, drive, see the rolling restart and reconnect with their seat)."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[3]
+from tests.integration.benchmarks.quick_run import run_quick
 
 
 @pytest.mark.postgres
 def test_quick_class_day_drives_through_a_rolling_restart_and_keeps_every_seat(tmp_path: Path) -> None:
-    result = subprocess.run([sys.executable, "-m", "benchmarks.class_day", "--quick", "--output", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300, check=False, cwd=ROOT)
+    result = run_quick("benchmarks.class_day", tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
     report = json.loads((tmp_path / "class_day.json").read_text())
     figures = {row["figure"]: row for row in report["rows"]}

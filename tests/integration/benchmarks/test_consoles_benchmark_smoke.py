@@ -4,16 +4,13 @@ nothing, but every console it opens must open and stream)."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[3]
+from tests.integration.benchmarks.quick_run import run_quick
 
 
 def test_quick_consoles_benchmark_opens_every_console_on_one_link_each(tmp_path: Path) -> None:
-    result = subprocess.run([sys.executable, "-m", "benchmarks.consoles", "--quick", "--output", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300, check=False, cwd=ROOT)
+    result = run_quick("benchmarks.consoles", tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
     report = json.loads((tmp_path / "consoles.json").read_text())
     figures = {row["figure"]: row for row in report["rows"]}

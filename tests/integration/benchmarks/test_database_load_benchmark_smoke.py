@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from tests.integration.benchmarks.quick_run import run_quick
 
 ROOT = Path(__file__).resolve().parents[3]
 pytestmark = pytest.mark.postgres
@@ -16,8 +17,7 @@ pytestmark = pytest.mark.postgres
 
 def test_quick_database_load_benchmark_counts_transactions_before_and_after_the_event_bus(
         tmp_path: Path, postgres_url: str) -> None:
-    result = subprocess.run([sys.executable, "-m", "benchmarks.database_load", "--quick", "--output", str(tmp_path)],
-                            capture_output=True, text=True, timeout=120, check=False, cwd=ROOT)
+    result = run_quick("benchmarks.database_load", tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
     report = json.loads((tmp_path / "database_load.json").read_text())
     assert report["quick"] is True

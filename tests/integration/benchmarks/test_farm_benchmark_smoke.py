@@ -3,16 +3,13 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[3]
+from tests.integration.benchmarks.quick_run import run_quick
 
 
 def test_quick_farm_benchmark_starts_a_class_on_both_backends_and_grades_nothing(tmp_path: Path) -> None:
-    result = subprocess.run([sys.executable, "-m", "benchmarks.farm", "--quick", "--output", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300, check=False, cwd=ROOT)
+    result = run_quick("benchmarks.farm", tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
     report = json.loads((tmp_path / "farm.json").read_text())
     figures = {(row["scenario"], row["figure"]): row for row in report["rows"]}

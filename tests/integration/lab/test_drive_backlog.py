@@ -26,11 +26,12 @@ DRIVEN_S = 4.0  # before the fix, 15 commands a second piled up: the bound (50) 
 
 
 class SlowRobot(StandInRobot):
-    """A stand-in robot (the robot protocol without physics) whose Drive answers DRIVE_ANSWER_S late."""
+    """A stand-in robot (the robot protocol without physics) that answers each drive command (a unary Drive or one
+    on the driver's DriveStream) DRIVE_ANSWER_S late."""
 
-    async def Drive(self, request, context):  # noqa: N802 - gRPC's method name
+    async def answer_drive(self, request):  # noqa: ANN001, ANN201 - the stand-in's hook
         await asyncio.sleep(DRIVE_ANSWER_S)
-        return await super().Drive(request, context)
+        return await super().answer_drive(request)
 
 
 @pytest.fixture

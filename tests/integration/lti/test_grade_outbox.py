@@ -96,3 +96,7 @@ def test_two_workers_send_every_grade_once_and_a_failure_keeps_its_reason(engine
         waited = failed.next_try_at - utc_now() if failed.next_try_at.tzinfo else None
     assert waited is None or waited > timedelta(seconds=20)
     assert grades.send_due(factory, http=lms) == (0, 0)  # not due yet
+    # Its backoff over, the sender's next pass sends it with nobody asking (the tutor's "Retry now" only hastens it).
+    assert grades.send_due(factory, now=utc_now() + timedelta(seconds=61), http=lms) == (1, 0)
+    with factory() as session:
+        assert set(session.scalars(select(LtiGradePassback.status))) == {"sent"}

@@ -172,6 +172,24 @@ def test_a_launch_without_its_state_cookie_says_to_open_a_new_window(tool: LiveS
     assert status == 400 and "new window" in _message(body)
 
 
+def test_a_refused_launch_speaks_the_browsers_spanish(tool: LiveServer, lms: LmsPlatform) -> None:
+    client = LabClient(tool.url)
+    nonce, state = begin_login(client, lms)
+    claims = lms.claims(nonce, "es-learner", [LEARNER])
+    claims["exp"] = claims["iat"] - 10
+    before = _counts(tool)
+    status, _, body = client.request("POST", "/lti/launch", {"id_token": lms.sign(claims), "state": state},
+                                     headers={"Accept-Language": "es-ES,es;q=0.9"})
+    assert status == 401 and _message(body) == "El lanzamiento ha caducado. Vuelve a empezarlo desde el LMS."
+    assert 'lang="es"' in body and _counts(tool) == before
+    nonce, state = begin_login(client, lms)  # a library message with a value: the claim it lacks, in place
+    claims = lms.claims(nonce, "es-learner", [LEARNER])
+    claims.pop("sub")
+    status, _, body = client.request("POST", "/lti/launch", {"id_token": lms.sign(claims), "state": state},
+                                     headers={"Accept-Language": "es"})
+    assert status == 400 and _message(body).startswith("Al lanzamiento le falta un claim obligatorio (sub")
+
+
 def test_the_login_first_checks_cookies_and_offers_a_new_window(tool: LiveServer, lms: LmsPlatform) -> None:
     status, _, body = LabClient(tool.url).request("POST", "/lti/login", {
         "iss": lms.issuer, "login_hint": "h", "client_id": lms.client_id})

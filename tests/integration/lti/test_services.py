@@ -88,6 +88,8 @@ def test_a_placed_test_sends_final_and_overridden_marks_to_the_gradebook(tool: L
     # The LMS answers 503 once: the tutor reads why the grade waits, then "Retry now" sends it.
     page = wait_for(lambda: (p := tutor.request("GET", f"/courses/{course}")[2]) and "maintenance" in p and p)
     assert page and "The LMS answered 503" in page and re.search(r"lu-[0-9a-f]{6}", page)
+    spanish = tutor.request("GET", f"/courses/{course}", headers={"Accept-Language": "es"})[2]
+    assert "El LMS respondió 503 SERVICE UNAVAILABLE: gradebook is down for maintenance (intentos: 1)" in spanish
     status, _, _ = tutor.request("POST", f"/courses/{course}/lti/grades/retry",
                                  {"csrf_token": tutor.csrf_token(f"/courses/{course}")})
     assert status == 303

@@ -21,6 +21,8 @@ from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_course,
 from tests.integration.bookings.conftest import api
 from tests.integration.chat.test_chat import next_of
 
+pytestmark = pytest.mark.alone
+
 
 def test_a_message_posted_on_one_worker_reaches_a_socket_on_the_other_at_once(postgres_url: str, tmp_path: Path,
                                                                                 skill_server_address: str) -> None:

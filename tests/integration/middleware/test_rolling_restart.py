@@ -30,6 +30,8 @@ from tests.conftest import LabClient, add_test_account, migrate_to_head, postgre
 from tests.e2e.test_lab_with_workers import _answers, _children, _free_port
 from tests.e2e.test_panels import wait_for
 
+pytestmark = pytest.mark.alone
+
 REPO = Path(__file__).resolve().parents[3]
 WORKERS = 3
 STUDENTS = 12

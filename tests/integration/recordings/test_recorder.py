@@ -8,6 +8,7 @@ from __future__ import annotations
 import io
 import json
 import random
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -17,6 +18,7 @@ from urllib.request import Request
 import pytest
 from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
+from sqlalchemy import event
 
 from tests.conftest import LabClient, LiveServer, add_test_account, make_course, make_test_app
 
@@ -34,6 +36,7 @@ def recording_lab(tmp_path_factory: pytest.TempPathFactory, skill_server_address
     from tests.conftest import _let_go
 
     tmp_path = tmp_path_factory.mktemp("recordings")
+    threads_before = set(threading.enumerate())  # another file's app in this process may still be winding down
     app = make_test_app(f"sqlite:///{tmp_path / 'lab.sqlite3'}", f"{ROBOT}={skill_server_address}", tmp_path)
     app.config.update(RECORDINGS_ENABLED=True, RECORDINGS_DIR=str(tmp_path / "recordings"), ACCESS_GRACE_S=5.0)
     with session_factory(app)() as session:
@@ -42,6 +45,10 @@ def recording_lab(tmp_path_factory: pytest.TempPathFactory, skill_server_address
         session.commit()
     make_course(app, "REC-A", {"student1": "student", "tutor1": "tutor"})
     make_course(app, "REC-B", {"student2": "student", "tutor2": "tutor"})
+    app.config["TEST_THREADS_BEFORE"] = threads_before
+    app.config["TEST_STATEMENTS"] = statements = set()  # (thread, table) of each statement on a recordings table
+    event.listen(session_factory(app).kw["bind"], "before_cursor_execute", lambda _c, _r, sql, *_: statements.update(
+        (threading.current_thread().name, table) for table in ("recordings", "recorded_commands") if table in sql))
     server = LiveServer(app)
     try:
         yield server
@@ -112,12 +119,14 @@ def driven(recording_lab: LiveServer) -> dict:
     from middleware.recordings import files, recordings_of
 
     student = client_for(recording_lab, "student1")
+    telemetry = student.websocket(f"/ws/robots/{ROBOT}/telemetry")  # the console watches before the turn comes
     queue = student.websocket(f"/ws/robots/{ROBOT}/queue")
     queue.send(json.dumps({"type": "join"}))
     wait_for(lambda: receive(queue, "queue", 10).get("is_controller"), 10, "student1 never got the turn")
     wait_for(lambda: any(r.ended_at is None and r.status == "recording" and r.recorder_key
                          for r in recording_rows(recording_lab)), 10, "the turn was never recorded")
-    telemetry = student.websocket(f"/ws/robots/{ROBOT}/telemetry")
+    while telemetry.receive(timeout=0) is not None:
+        pass  # what it showed before the recording began
     camera = student.websocket(f"/ws/robots/{ROBOT}/camera")  # someone watches the server camera meanwhile
     drive = student.websocket(f"/ws/robots/{ROBOT}/drive")
     receive(drive, "ready")
@@ -176,7 +185,13 @@ def test_a_driven_session_reads_back_with_every_command_in_order_each_schema_and
     commands = [m for _, c, _, m in decoded if c.topic == "/commands"]
     drives = [c for c in commands if c.action == "drive"]
     assert [c.sequence for c in drives][-len(driven["sent"]):] == driven["sent"] or len(drives) >= len(driven["sent"])
-    assert all(c.source == "pad" and c.accepted for c in drives)
+    # The stop sent when the drive socket closes races the queue's "leave" sent just after: when the leave is heard
+    # first, that stop is refused (the turn's end stopped the robot already) and recorded so, as it happened.
+    if drives and not drives[-1].accepted and drives[-1].outcome == "not_controller":
+        assert drives[-1].linear_mps == 0 and drives[-1].angular_radps == 0 and drives[-1].sequence > driven["sent"][-1]
+        drives = drives[:-1]
+    assert all(c.source == "pad" and c.accepted for c in drives), [
+        (c.source, c.accepted, c.outcome) for c in drives if c.source != "pad" or not c.accepted]
     assert [c.sent_unix_s for c in commands] == sorted(c.sent_unix_s for c in commands), "in the order sent"
     assert len({c.sequence for c in drives}) == len(drives), "every command once"
     skill = [c for c in commands if c.action == "activate"]
@@ -208,6 +223,21 @@ def test_a_driven_session_reads_back_with_every_command_in_order_each_schema_and
         assert (recorded.x_m, recorded.y_m, recorded.theta_rad) == (pose["x_m"], pose["y_m"], pose["theta_rad"])
         matched += 1
     assert matched >= 5, f"only {matched} of {len(driven['live'])} live samples were in the recording"
+
+
+def test_the_worker_does_none_of_the_recorders_database_work_and_holds_only_its_keepers_thread(
+        recording_lab: LiveServer, driven) -> None:
+    """The session was found, claimed, heartbeated, its commands logged and copied, and completed, all by the writer
+    child: the worker's own engine saw no statement on the recordings' tables from the recorder's threads (the
+    keeper's pass, the command log and a recorder pool made them twice a second before; the routes read them, as
+    they should), and the keeper's is the recorder's one thread left."""
+    statements = recording_lab.app.config["TEST_STATEMENTS"]
+    assert driven["recording"].command_count > 0
+    from_recorder = sorted(s for s in statements if s[0].startswith(("recordings", "command-log", "recorder-io")))
+    assert not from_recorder, f"the recorder's threads used the worker's database: {from_recorder}"
+    ours = set(threading.enumerate()) - recording_lab.app.config["TEST_THREADS_BEFORE"]
+    held = sorted(t.name for t in ours if t.name.startswith(("recordings", "command-log", "recorder")))
+    assert held == ["recordings"], held
 
 
 def test_a_file_cut_at_a_random_byte_is_read_up_to_its_last_complete_chunk(driven) -> None:

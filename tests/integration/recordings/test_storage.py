@@ -83,8 +83,8 @@ def test_a_session_whose_recorder_stopped_goes_on_in_a_new_part_and_exports_as_o
                                              source_text="robot.drive(0.1, 0)\n", source_name="square.py")
         recording_id = recording.id
     first = recordings_of(app).keeper
-    first.check()
-    assert first.recording_now() == [recording_id]
+    first.check()  # nobody watches lab-1: the elected worker records it, after SOLO_AFTER_S for a watching one
+    wait_for(lambda: first.recording_now() == [recording_id], 10, "the session was never recorded")
     time.sleep(2.5)
     first.stop()  # as if its process died: the part is left as flushed, the row still open
     second = RecordingKeeper(app, sessions, robot_registry(app), first.settings)

@@ -15,7 +15,6 @@ from grpc_reflection.v1alpha import reflection_pb2, reflection_pb2_grpc
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 from skill_server.server import SkillServer, create_server
 from skill_server.sim.geometry import Pose2D
-from skill_server.sim.world import PHYSICS_DT_S, PHYSICS_STEPS_PER_TICK
 
 DEADLINE_S = 10.0
 TOKEN = "integration-token"
@@ -119,10 +118,9 @@ def test_telemetry_messages_advance_and_carry_every_sensor(robot: robot_pb2_grpc
     ticks = [m.tick for m in messages]
     sim_times = [m.sim_time_s for m in messages]
     assert ticks == sorted(set(ticks)) and sim_times == sorted(set(sim_times))
-    # The default is 10 Hz of sim time: never closer than a period (less one control tick). In fast mode a busy
-    # machine may deliver later snapshots, so the spacing is bounded below, not pinned.
-    gaps = [b - a for a, b in zip(sim_times, sim_times[1:], strict=False)]
-    assert min(gaps) >= 0.1 - PHYSICS_DT_S * PHYSICS_STEPS_PER_TICK - 1e-9
+    # The default is 10 Hz of sim time, kept on average: the k-th message is at least k periods after the first. A
+    # busy machine may deliver a snapshot late and the next one sooner (the pacer keeps the rate, not each gap).
+    assert all(later - sim_times[0] >= k * 0.1 - 1e-9 for k, later in enumerate(sim_times))
     assert [m.capture_unix_s for m in messages] == sorted(m.capture_unix_s for m in messages)
     last = messages[-1]
     assert len(last.sonar.ranges_m) == 16 and len(last.laser.ranges_m) == 181

@@ -6,7 +6,13 @@ from datetime import UTC, datetime
 
 import pytest
 
-from middleware.experiment.progress import TrackRunNow, finished_in_trial, progress_message, progress_view
+from middleware.experiment.progress import (
+    TrackRunNow,
+    finished_in_trial,
+    progress_message,
+    progress_view,
+    track_route,
+)
 from middleware.models.experiment import Trial
 
 BEGAN = datetime(2025, 3, 1, 10, 0, 0, tzinfo=UTC)
@@ -27,20 +33,36 @@ def run(phase: str, attempt: int = 1, errors: int = 0, last_attempt: int = 0, fi
                         finished - 12.34 if last_attempt else 0.0)
 
 
-@pytest.mark.parametrize(("now", "sentence"), [
-    (run("at_start", attempt=0), "The robot is at A (blue): drive off to start the clock."),
-    (run("to_b"), "Run 1 under way: drive to B (orange)."),
-    (run("to_b", errors=2), "Run 1 under way: drive to B (orange). 2 line contacts so far."),
-    (run("to_a"), "Reached B: now drive back to A (blue)."),
+# Each moment of a run: (the run now, its sentence in English, in Spanish).
+SENTENCES = [
+    (run("at_start", attempt=0), "The robot is at A (blue): drive off to start the clock.",
+     "El robot está en A (azul): arranca para poner en marcha el reloj."),
+    (run("to_b"), "Run 1 under way: drive to B (orange).", "Recorrido 1 en curso: conduce hasta B (naranja)."),
+    (run("to_b", errors=1), "Run 1 under way: drive to B (orange). 1 line contact so far.",
+     "Recorrido 1 en curso: conduce hasta B (naranja). 1 roce con una línea hasta ahora."),
+    (run("to_b", errors=2), "Run 1 under way: drive to B (orange). 2 line contacts so far.",
+     "Recorrido 1 en curso: conduce hasta B (naranja). 2 roces con las líneas hasta ahora."),
+    (run("to_a"), "Reached B: now drive back to A (blue).", "Has llegado a B: ahora vuelve a A (azul)."),
     (run("at_start", errors=1), "The robot touched a white line and is back at A; the clock keeps running. "
-                                "Drive to B again."),
+                                "Drive to B again.",
+     "El robot tocó una línea blanca y ha vuelto a A; el reloj sigue corriendo. Conduce de nuevo hasta B."),
     (run("finished", last_attempt=1, finished_at=datetime(2025, 3, 1, 9, 0, tzinfo=UTC)),
-     "The last run ended or was given up away from A: drive the robot back to A (blue) to begin."),
+     "The last run ended or was given up away from A: drive the robot back to A (blue) to begin.",
+     "El último recorrido terminó o se abandonó lejos de A: lleva el robot de vuelta a A (azul) para empezar."),
     (run("at_start", attempt=1, last_attempt=1, finished_at=datetime(2025, 3, 1, 9, 0, tzinfo=UTC)),
-     "The robot is at A (blue): drive off to start the clock."),
+     "The robot is at A (blue): drive off to start the clock.",
+     "El robot está en A (azul): arranca para poner en marcha el reloj."),
     (run("at_start", attempt=2, last_attempt=2, finished_at=datetime(2025, 3, 1, 10, 5, tzinfo=UTC)),
-     "Finished in 12.3 s with 2 line contacts."),
-])
+     "Finished in 12.3 s with 2 line contacts.", "Terminado en 12,3 s con 2 roces con las líneas."),
+    (run("to_b", started_at=datetime(2025, 3, 1, 9, 59, 40, tzinfo=UTC)),
+     "This run began before your trial, so it will not count: finish it (A to B), return to A (blue) and start "
+     "again.",
+     "Este recorrido empezó antes de tu ensayo, así que no cuenta: termínalo (A a B), vuelve a A (azul) y empieza de "
+     "nuevo."),
+]
+
+
+@pytest.mark.parametrize(("now", "sentence"), [(now, english) for now, english, _ in SENTENCES])
 def test_each_moment_of_a_run_has_its_sentence(now: TrackRunNow, sentence: str) -> None:
     assert progress_message(trial(), now) == sentence
 
@@ -76,3 +98,17 @@ def test_a_robot_that_must_go_back_to_a_is_not_shown_as_finished() -> None:
     earlier = progress_view(trial(), run("finished", last_attempt=1,
                                          finished_at=datetime(2025, 3, 1, 9, 0, tzinfo=UTC)))
     assert earlier["phase"] == "return_to_a" and not earlier["finished"]
+
+
+@pytest.mark.parametrize(("now", "sentence"), [(now, spanish) for now, _, spanish in SENTENCES])
+def test_a_spanish_student_reads_each_moment_of_a_run_in_spanish(now: TrackRunNow, sentence: str) -> None:
+    from flask import Flask
+    from flask_babel import Babel, force_locale  # type: ignore[import-untyped]
+
+    from middleware.translations.build import TRANSLATIONS
+
+    app = Flask(__name__)
+    Babel(app, default_translation_directories=str(TRANSLATIONS))  # the lab's real catalogues
+    with app.test_request_context(), force_locale("es"):
+        assert progress_message(trial(), now) == sentence
+        assert track_route(trial("course-A")) == "A a B y de vuelta"

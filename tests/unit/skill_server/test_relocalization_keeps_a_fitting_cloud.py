@@ -23,7 +23,17 @@ ESTIMATE = Pose2D(1.0, 0.5, 0.3)
 
 def searched(monkeypatch: pytest.MonkeyPatch, found_anchor: Pose2D) -> relocalization.Step:
     """A relocalizer past its guess, with a panorama of a 1 m drive, and a search answering found_anchor."""
-    monkeypatch.setattr(relocalization, "search", lambda *_args, **_kwargs: SearchResult(found_anchor, 0.97, 1))
+    answer = SearchResult(found_anchor, 0.97, 1)
+
+    class AnsweredAtOnce:  # the whole-map search, sliced in the robot, answers in its first slice here
+        def __init__(self, *_args: object, **_kwargs: object) -> None:
+            pass
+
+        def step(self) -> SearchResult:
+            return answer
+
+    monkeypatch.setattr(relocalization, "search", lambda *_args, **_kwargs: answer)
+    monkeypatch.setattr(relocalization, "SlicedSearch", AnsweredAtOnce)
     relocalizer = Relocalizer(0.02, 0.02)
     angles = np.linspace(-2.0, 2.0, 30)
     for step in range(21):  # the odometry's frame equals the map's here: the anchor is (0, 0, 0)

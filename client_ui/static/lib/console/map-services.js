@@ -79,12 +79,12 @@ function actionNote(wiring, mapPanel, text) {
   mapPanel.note = text;
 }
 
-/** Forgets the robot's map (the controller's command); the next poll shows "No map yet". */
+/** Forgets the robot's map (the controller's command); its answer is held over the polls, then "No map yet". */
 async function clearMap(wiring, mapPanel) {
   try {
     const answer = await fetchJson(`/api/robots/${encodeURIComponent(wiring.robotName)}/map`, { method: "DELETE" });
     mapPanel.grid = null;
-    mapPanel.note = String(answer?.message ?? ""); // the next poll's "No map yet" follows on from it
+    actionNote(wiring, mapPanel, String(answer?.message ?? "")); // then the polls' "No map yet"
   } catch (error) {
     mapPanel.note = t("The map was not cleared: {message}", { message: error.message });
   }

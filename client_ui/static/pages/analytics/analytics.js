@@ -56,7 +56,7 @@ function drawStudents(students) {
     h("td", { "data-label": t("Student") }, s.username),
     h("td", { "data-label": t("Sessions") }, number(s.sessions)),
     h("td", { "data-label": t("Time on robots") },
-      styled(h("span", { class: "analytics__bar" }), "--share", (s.seconds / most).toFixed(3)), " ",
+      styled(h("span", { class: "analytics__bar" }), "--share", (s.seconds / most).toFixed(3)), " ", // data, not text: a CSS value
       duration(s.seconds)))));
   root.querySelector('[data-empty="students"]').hidden = students.some((s) => s.sessions > 0);
 }
@@ -70,7 +70,7 @@ function drawWaits(waits) {
   const most = Math.max(1, ...waits.bins.map((b) => b.count));
   fill(root.querySelector(".analytics__bars"), waits.bins.map((bin) => h("li", { class: "analytics__bin" },
     h("span", { class: "analytics__bin-label" }, binLabel(bin)),
-    styled(h("span", { class: "analytics__bin-bar" }), "--share", (bin.count / most).toFixed(3)),
+    styled(h("span", { class: "analytics__bin-bar" }), "--share", (bin.count / most).toFixed(3)), // data, not text: a CSS value
     h("span", { class: "analytics__bin-count" }, number(bin.count)))));
 }
 
@@ -90,7 +90,7 @@ function drawHeatMap(grid) {
       const words = t("{day} {hour}:00: {minutes} min", { day: days[day], hour: String(hour).padStart(2, "0"), minutes: fixed(minutes, 0) });
       const level = most > 0 ? minutes / most : 0;
       return styled(h("td", { title: words, "aria-label": words, "data-minutes": String(minutes),
-        class: minutes > 0 ? "is-used" : "" }), "--level", level.toFixed(3));
+        class: minutes > 0 ? "is-used" : "" }), "--level", level.toFixed(3)); // data, not text: a CSS value
     }))));
 }
 

@@ -7,7 +7,7 @@ import { python } from "@codemirror/lang-python";
 import { fetchJson } from "../../lib/transport.js";
 import { PythonWorker, RobotRun } from "./exercise-run.js";
 import { drawTrace } from "./trace-map.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, number, t } from "../../lib/i18n.js";
 
 const root = document.getElementById("exercise");
 const slug = root.dataset.slug;
@@ -96,7 +96,7 @@ python3.ready.then((message) => {
   pythonReady = true;
   timings.pyodide_load_s = message.load_s;
   root.dataset.pythonReady = "true";
-  say(t("Python {version} is ready (loaded in {load_s} s).", { version: message.version, load_s: message.load_s.toFixed(1) }));
+  say(t("Python {version} is ready (loaded in {load_s} s).", { version: message.version, load_s: fixed(message.load_s, 1) }));
   setRunning(false);
 }, (error) => say(t("Python did not load: {message}", { message: error.message }), "error"));
 
@@ -113,11 +113,12 @@ async function practiceRobot() {
     state = await fetchJson("/api/practice", { method: "POST" });
   }
   const until = Date.now() + PRACTICE_WAIT_MS;
-  while (!state.running && Date.now() < until) {
+  // A robot neither running nor starting any more is a start that died: said now, not after the whole wait.
+  while (!state.running && state.starting && Date.now() < until) {
     await new Promise((resolve) => setTimeout(resolve, PRACTICE_POLL_MS));
     state = await fetchJson("/api/practice");
   }
-  if (!state.running) throw new Error("Your practice robot did not start. Try again in a moment.");
+  if (!state.running) throw new Error(t("Your practice robot did not start. Try again in a moment."));
   return state.name;
 }
 
@@ -144,7 +145,7 @@ async function start(mode) {
     robotRun.addEventListener("state", () => print(t("No robot.tick() for a while: the robot was stopped."), "stderr"));
     robotRun.addEventListener("done", (event) => finish(event.detail));
     const ready = await robotRun.connect();
-    if (ready.is_controller === false) throw new Error("You do not control this robot now.");
+    if (ready.is_controller === false) throw new Error(t("You do not control this robot now."));
     root.dataset.running = "true";
     say(t("Running on {robot_name} ({time_limit_s} s at most). Stop ends it now.", { robot_name: run.robot_name, time_limit_s: answer.exercise.time_limit_s }));
     robotRun.start(code(), { max_linear_mps: ready.max_linear_mps,
@@ -188,11 +189,11 @@ async function finish(outcome) {
 
 function showOdometry(message) {
   const { pose, linear_mps: v } = message.odometry;
-  robotLine.textContent = `${current?.run.robot_name ?? "Robot"}: x ${pose.x_m.toFixed(2)} m, y ${pose.y_m.toFixed(2)} m, `
-    + t("heading {value}°, speed {v} m/s", { value: (pose.theta_rad * 180 / Math.PI).toFixed(0), v: v.toFixed(2) });
+  robotLine.textContent = `${current?.run.robot_name ?? "Robot"}: x ${fixed(pose.x_m, 2)} m, y ${fixed(pose.y_m, 2)} m, `
+    + t("heading {value}°, speed {v} m/s", { value: fixed(pose.theta_rad * 180 / Math.PI, 0), v: fixed(v, 2) });
   const line = message.line?.values;
   if (Array.isArray(line) && line.length) {
-    robotLine.textContent += t(", line sensor {values}", { values: line.map((value) => value.toFixed(1)).join(" ") });
+    robotLine.textContent += t(", line sensor {values}", { values: line.map((value) => fixed(value, 1)).join(" ") });
     robotLine.dataset.line = line.join(" ");
   }
   robotLine.dataset.speed = String(v);
@@ -208,7 +209,8 @@ function showGrade(run, boxes) {
   const body = measurements.querySelector("tbody");
   body.replaceChildren(...run.measurements.map((m) => {
     const row = document.createElement("tr");
-    for (const text of [m.name, `${formatValue(m.value, m.unit)} ${m.unit}`, `${m.lower_is_better ? "≤" : "≥"} ${m.bar} ${m.unit}`,
+    const unit = m.unit === "cells" ? t("cells") : m.unit; // the one unit that is a word
+    for (const text of [m.name, `${formatValue(m.value, m.unit)} ${unit}`, `${m.lower_is_better ? "≤" : "≥"} ${number(m.bar)} ${unit}`,
       `${Math.round(m.fraction * 100)}%`]) {
       const cell = document.createElement("td");
       cell.textContent = text;
@@ -222,15 +224,17 @@ function showGrade(run, boxes) {
 
 function formatValue(value, unit = "") {
   if (unit === "cells") return String(Math.round(value));
-  return Number.isFinite(value) ? (Math.abs(value) >= 10 ? value.toFixed(1) : value.toFixed(2)) : "—";
+  return Number.isFinite(value) ? fixed(value, Math.abs(value) >= 10 ? 1 : 2) : "—";
 }
 
 async function loadRuns() {
   const answer = await fetchJson(`/api/exercises/${encodeURIComponent(slug)}`);
   runsList.replaceChildren(...answer.runs.map((run) => {
     const item = document.createElement("li");
-    const grade = run.grade === null ? run.status : `${Math.round(run.grade * 100)}%`;
-    item.textContent = `#${run.id} ${run.mode === "submission" ? "submission" : "practice"} · ${grade} · ${run.started_at.slice(0, 16).replace("T", " ")}`;
+    const status = run.status === "running" ? t("running") : t("failed"); // a run without a grade
+    const grade = run.grade === null ? status : `${Math.round(run.grade * 100)}%`;
+    const mode = run.mode === "submission" ? t("submission") : t("practice");
+    item.textContent = `#${run.id} ${mode} · ${grade} · ${run.started_at.slice(0, 16).replace("T", " ")}`;
     return item;
   }));
   return answer;

@@ -4,7 +4,7 @@
 
 import { ApiError, fetchJson } from "../../lib/transport.js";
 import { h } from "../../lib/dom.js";
-import { fixed, t } from "../../lib/i18n.js";
+import { LANGUAGE, fixed, t } from "../../lib/i18n.js";
 
 const root = document.querySelector("#experiment");
 const SVG = "http://www.w3.org/2000/svg";
@@ -87,7 +87,7 @@ function updateRun(slot, trial, run) {
   }
   const section = slot.querySelector('[data-field="run"]');
   section.dataset.phase = run.online ? (run.finished ? "finished" : run.phase) : "offline";
-  slot.querySelector('[data-field="run-time"]').textContent = run.online ? `${run.time_s.toFixed(1)} s` : "—";
+  slot.querySelector('[data-field="run-time"]').textContent = run.online ? `${fixed(run.time_s, 1)} s` : "—";
   const errors = slot.querySelector('[data-field="run-errors"]');
   errors.textContent = run.online ? String(run.errors) : "—";
   errors.dataset.count = run.online ? String(run.errors) : "";
@@ -95,7 +95,7 @@ function updateRun(slot, trial, run) {
   if (run.message !== view.message) {
     view.message = run.message;
     const log = slot.querySelector('[data-slot="run-log"]');
-    const stamp = new Date().toLocaleTimeString([], { hour: "2-digit", minute: "2-digit", second: "2-digit" });
+    const stamp = new Date().toLocaleTimeString(LANGUAGE, { hour: "2-digit", minute: "2-digit", second: "2-digit" });
     log.prepend(h("li", {}, h("time", { text: stamp }), ` ${run.message}`));
     while (log.children.length > LOG_LENGTH) log.lastElementChild.remove();
   }
@@ -316,7 +316,7 @@ export function plotCourse(course, trials, summary) {
     const cls = group.feedback ? "plot__on" : "plot__off";
     const cx = x(group.delay_s, group.feedback);
     const se = group.standard_error_s ?? 0;
-    chart.append(svg("path", { class: `plot__err ${cls}`, "data-mean": group.mean_time_s.toFixed(2),
+    chart.append(svg("path", { class: `plot__err ${cls}`, "data-mean": group.mean_time_s.toFixed(2), // data, not text: a data attribute
       d: `M${cx - 5},${y(group.mean_time_s + se)}h10M${cx},${y(group.mean_time_s + se)}V${y(group.mean_time_s - se)}M${cx - 5},${y(group.mean_time_s - se)}h10` }));
     chart.append(svg("rect", { class: cls, x: cx - 4, y: y(group.mean_time_s) - 4, width: 8, height: 8 }));
   }
@@ -339,9 +339,9 @@ async function renderResults() {
   const head = h("tr", {}, ...[t("Course"), t("Delay"), t("Preview"), t("Trials"), t("Mean time"), t("Std. error"), t("Mean errors")].map((label) => h("th", { text: label })));
   const rows = data.summary.map((g) => h("tr", {},
     h("td", { text: g.course }), h("td", { text: `${g.delay_s} s` }), h("td", { text: g.feedback ? t("on") : t("off") }),
-    h("td", { text: String(g.n) }), h("td", { text: `${g.mean_time_s.toFixed(1)} s` }),
-    h("td", { text: g.standard_error_s === null ? "—" : `${g.standard_error_s.toFixed(1)} s` }),
-    h("td", { text: g.mean_errors.toFixed(2) })));
+    h("td", { text: String(g.n) }), h("td", { text: `${fixed(g.mean_time_s, 1)} s` }),
+    h("td", { text: g.standard_error_s === null ? "—" : `${fixed(g.standard_error_s, 1)} s` }),
+    h("td", { text: fixed(g.mean_errors, 2) })));
   table.replaceChildren(h("thead", {}, head), h("tbody", {}, ...(rows.length ? rows : [h("tr", {}, h("td", { colspan: 7, text: t("No completed trials yet.") }))])));
   renderComparisons(root.querySelector('[data-slot="comparisons"]'), data.comparisons);
   renderParticipants(root.querySelector('[data-slot="participants"]'), data.participants, data.orders);

@@ -5,7 +5,7 @@ import { Channel, fetchJson, fetchJsonLines, parseJsonMessage } from "../../lib/
 import { h } from "../../lib/dom.js";
 import { boxCorners, fitView, sceneBounds, worldToCanvas } from "../../lib/map-geometry.js";
 import { addSample, endErrorCm, endStateWords, isFinal, lineOf } from "./plan-trace.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, t } from "../../lib/i18n.js";
 
 const root = document.getElementById("plan-editor");
 const planId = Number(root.dataset.planId);
@@ -93,10 +93,13 @@ async function check() {
 
 function showPlan(plan) {
   text.value = plan.text;
+  // Read-only until the stored text is in: what a person typed before would be overwritten.
+  text.readOnly = text.dataset.editable !== "true";
+  text.removeAttribute("aria-busy");
   state.latest = plan.latest_version;
   state.saved = { text: plan.text, version: plan.version };
   versionSelect.replaceChildren(...plan.versions.map((v) => h("option", { value: v.version,
-    selected: v.version === plan.version }, `${v.version}${v.version === plan.latest_version ? t(" (latest)") : ""}`)));
+    selected: v.version === plan.version }, v.version === plan.latest_version ? t("{version} (latest)", { version: v.version }) : String(v.version))));
   const shared = plan.shared_with ? t("Shared with {code}.", { code: plan.shared_with.code }) : t("Not shared.");
   root.closest("main").querySelector("[data-field=plan-about]").textContent = plan.mine
     ? t("Your plan, version {version} of {latest_version}. {shared}", { version: plan.version, latest_version: plan.latest_version, shared })
@@ -225,7 +228,7 @@ function draw() {
   canvas.dataset.predictedPoints = String(state.traces.predicted.length);
   canvas.dataset.realPoints = String(state.traces.real.length);
   const error = endErrorCm(state.traces.predicted, state.traces.real);
-  endErrorLine.textContent = error == null ? "" : t(" — end points {error} cm apart", { error: error.toFixed(1) });
+  endErrorLine.textContent = error == null ? "" : t(" — end points {error} cm apart", { error: fixed(error, 1) });
 }
 
 async function loadScene(robotName) {
@@ -320,7 +323,7 @@ function onPrediction(run, message) {
     state.traces.predicted = message.trace ?? state.traces.predicted;
     finish(run, message.goal);
     if (message.sim_time_s != null && message.wall_s != null) {
-      startLine.textContent += t(" {sim_time_s} s of plan predicted in {wall_s} s.", { sim_time_s: Number(message.sim_time_s).toFixed(1), wall_s: Number(message.wall_s).toFixed(1) });
+      startLine.textContent += t(" {sim_time_s} s of plan predicted in {wall_s} s.", { sim_time_s: fixed(message.sim_time_s, 1), wall_s: fixed(message.wall_s, 1) });
     }
   } else if (message.type === "error") {
     run.finished = true;

@@ -4,7 +4,7 @@
 
 import { RobotEyeRenderer } from "../../lib/robot-eye.js";
 import { fitView, sceneBounds, worldToCanvas } from "../../lib/map-geometry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, t } from "../../lib/i18n.js";
 import { register as registerLabView } from "../../panels/lab-view/lab-view.js";
 
 registerLabView();
@@ -224,10 +224,10 @@ function draw() {
   const odometry = pose(data.odometry[sampleAt(data.odometry, now)]);
   const truth = pose(data.ground_truth[sampleAt(data.ground_truth, now)]);
   timeInput.value = String(now);
-  $('[data-field="now"]').textContent = `${now.toFixed(2)} s / ${data.duration_s.toFixed(1)} s`;
+  $('[data-field="now"]').textContent = `${fixed(now, 2)} s / ${fixed(data.duration_s, 1)} s`;
   const poseText = $('[data-field="pose"]');
   if (odometry) {
-    poseText.textContent = t("Odometry: x {x} m, y {y} m, heading {th} rad", { x: odometry.x_m.toFixed(3), y: odometry.y_m.toFixed(3), th: odometry.theta_rad.toFixed(3) });
+    poseText.textContent = t("Odometry: x {x} m, y {y} m, heading {th} rad", { x: fixed(odometry.x_m, 3), y: fixed(odometry.y_m, 3), th: fixed(odometry.theta_rad, 3) });
     poseText.dataset.x = String(odometry.x_m);
     poseText.dataset.y = String(odometry.y_m);
     poseText.dataset.t = String(data.odometry[sampleAt(data.odometry, now)][0]);
@@ -273,15 +273,15 @@ function fillLists() {
     button.type = "button";
     const what = c.action === "drive" ? t("drive {linear_mps} m/s, {angular_radps} rad/s", c)
       : c.action === "activate" ? `${c.skill}` : c.action === "run_plan" ? t("plan {name}", { name: c.plan_name }) : c.action;
-    button.textContent = `${c.t.toFixed(2)} s · #${c.sequence} · ${c.source} · ${what}${c.accepted ? "" : ` (${t("refused")}: ${c.outcome})`}`;
+    button.textContent = `${fixed(c.t, 2)} s · #${c.sequence} · ${c.source} · ${what}${c.accepted ? "" : ` (${t("refused")}: ${c.outcome})`}`;
     button.addEventListener("click", () => seek(c.t));
     const item = document.createElement("li");
     item.append(button);
     list.append(item);
   });
   const events = [
-    ...data.goals.map((g) => ({ t: g.t, label: `${g.t.toFixed(2)} s · ${t("goal")} ${g.skill}: ${g.status}` })),
-    ...data.commands.filter((c) => c.action !== "drive").map((c) => ({ t: c.t, label: `${c.t.toFixed(2)} s · ${c.action} ${c.skill || c.plan_name || ""}` })),
+    ...data.goals.map((g) => ({ t: g.t, label: `${fixed(g.t, 2)} s · ${t("goal")} ${g.skill}: ${g.status}` })),
+    ...data.commands.filter((c) => c.action !== "drive").map((c) => ({ t: c.t, label: `${fixed(c.t, 2)} s · ${c.action} ${c.skill || c.plan_name || ""}` })),
   ].sort((a, b) => a.t - b.t);
   for (const event of events) {
     const option = document.createElement("option");
@@ -336,7 +336,7 @@ async function start() {
   const scene = whole.scene ?? first.scene;
   show({ ...whole, scene });
   fillLists();
-  status.textContent = t("{n} s recorded: play it, or drag the time.", { n: data.duration_s.toFixed(1) });
+  status.textContent = t("{n} s recorded: play it, or drag the time.", { n: fixed(data.duration_s, 1) });
   root.dataset.ready = "true";
 }
 

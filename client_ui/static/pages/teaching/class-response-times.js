@@ -3,13 +3,13 @@
 
 import { h } from "../../lib/dom.js";
 import { KINDS, LEGS, reportLine } from "../../lib/response-times.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, t } from "../../lib/i18n.js";
 
 const LEG_LABELS = { total: t("Total"), client: t("Browser → middleware"), robot: t("Middleware → robot") };
 const FIGURES = [["min", t("Min")], ["mean", t("Mean")], ["max", t("Max")], ["jitter", t("Jitter (IQR)")]];
 
 function ms(value) {
-  return Number.isFinite(value) ? value.toFixed(1) : "—";
+  return Number.isFinite(value) ? fixed(value, 1) : "—";
 }
 
 function legsTable(report) {

@@ -224,7 +224,7 @@ function updatePoses(rows) {
     if (!tile) continue;
     tile.pose = pose;
     grow(tile.trail, pose);
-    tile.element.dataset.pose = `${pose.x_m.toFixed(2)},${pose.y_m.toFixed(2)},${pose.theta_rad.toFixed(2)}`;
+    tile.element.dataset.pose = `${pose.x_m.toFixed(2)},${pose.y_m.toFixed(2)},${pose.theta_rad.toFixed(2)}`; // data, not text: a data attribute
     renderWords(tile);
     markDirty(tile);
   }

@@ -4,7 +4,7 @@
 import { h } from "../../lib/dom.js";
 import { CommandBuilder, authoringSkills, describeCommand } from "../../lib/command-builder.js";
 import { ApiError, fetchJson } from "../../lib/transport.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, t } from "../../lib/i18n.js";
 
 const form = document.getElementById("lesson-form");
 const errorList = form.querySelector("[data-slot=errors]");
@@ -24,7 +24,7 @@ let checked = { cues: [], errors: [] };
 function clock(seconds) {
   const whole = Math.max(0, Number(seconds) || 0);
   const minutes = Math.floor(whole / 60);
-  return `${minutes}:${(whole - minutes * 60).toFixed(1).padStart(4, "0")}`;
+  return `${minutes}:${fixed(whole - minutes * 60, 1).padStart(4, "0")}`;
 }
 
 /** 75.25 -> "00:01:15.250", WebVTT's form. */

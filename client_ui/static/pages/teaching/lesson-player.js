@@ -5,7 +5,7 @@ import { fetchJson } from "../../lib/transport.js";
 import { playTone, showCaption } from "./lesson-sound.js";
 import { CuePlayback, cueIndexOf, summarize } from "./lesson-playback.js";
 import { showLessonRobot } from "./lesson-robot.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, t } from "../../lib/i18n.js";
 
 const root = document.getElementById("lesson");
 const video = root.querySelector("video");
@@ -27,7 +27,7 @@ let lastEventStamp = 0;
 function log(text, kind = "info") {
   const item = document.createElement("li");
   item.className = `lesson-log__item lesson-log__item--${kind}`;
-  item.textContent = `${video.currentTime.toFixed(2)} s · ${text}`;
+  item.textContent = `${fixed(video.currentTime, 2)} s · ${text}`;
   item.dataset.kind = kind;
   logList.prepend(item);
   while (logList.children.length > MAX_LOG) logList.lastElementChild.remove();
@@ -39,7 +39,7 @@ function showStatus(text, isError = false) {
 }
 
 function formatMs(value) {
-  return value === null ? "–" : t("{value} ms", { value: value.toFixed(1) });
+  return value === null ? "–" : t("{value} ms", { value: fixed(value, 1) });
 }
 
 function renderLatency() {
@@ -69,14 +69,14 @@ async function run(index, why) {
   log(t("cue {index} ({why}) → {cue}", { index, why, cue: describe(cue) }), "run");
   try {
     const answer = await fetchJson(`/api/lessons/${lessonId}/cues/${index}/run`, {
-      method: "POST", body: { target: targetSelect.value, hold_s: Number(holdS.toFixed(3)) },
+      method: "POST", body: { target: targetSelect.value, hold_s: Number(holdS.toFixed(3)) }, // data, not text: sent to the server
     });
     const total = performance.now() - eventStamp;
     series.cueToAck.push(total);
     series.middlewareToAck.push(answer.middleware_to_ack_ms);
     renderLatency();
     const goal = answer.goal ? t("goal {status}", { status: answer.goal.status }) : t("applied");
-    log(t("cue {index} acknowledged: {goal} in {total} ms", { index, goal, total: total.toFixed(1) }), "ack");
+    log(t("cue {index} acknowledged: {goal} in {total} ms", { index, goal, total: fixed(total, 1) }), "ack");
     root.dataset.lastGoal = answer.goal ? answer.goal.goal_id : "";
     if (answer.sound) {
       playTone(answer.sound);

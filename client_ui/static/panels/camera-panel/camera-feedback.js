@@ -100,8 +100,8 @@ export class FeedbackLayer {
     const depthM = this.#depthM;
     const transform = warpTransform(pose, camera, Number.isFinite(depthM) ? depthM : undefined);
     this.#lastTransform = { ...transform, pose, depthM };
-    canvas.dataset.warpShiftPx = transform.shiftX.toFixed(1);
-    canvas.dataset.warpScale = transform.scale.toFixed(3);
+    canvas.dataset.warpShiftPx = transform.shiftX.toFixed(1); // data, not text: a data attribute
+    canvas.dataset.warpScale = transform.scale.toFixed(3); // data, not text: a data attribute
     canvas.dataset.outstandingCommands = String(this.log.outstanding().length);
     drawWarped(ctx, bitmap, transform, this.fill);
     if (!this.enabled) return false;

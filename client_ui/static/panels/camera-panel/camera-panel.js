@@ -24,7 +24,7 @@ import { FILL_MODES, FeedbackLayer } from "./camera-feedback.js";
 import { DrawnView } from "./drawn-view.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, number, t } from "../../lib/i18n.js";
 
 const FPS_WINDOW_MS = 1000;
 const SOURCES = ["video", "drawn"];
@@ -332,8 +332,11 @@ export class CameraPanel extends PanelElement {
     if (message?.type === "status" && !("robot_online" in message)) return;
     if (message?.type === "status") {
       const offline = message.robot_online === false;
-      const online = this.#videoNote || t(message.message ?? ""); // why the video shows outlasts its "live"
-      this.#showMessage(offline ? t(message.message ?? "") || t("The robot is offline.") : online, offline);
+      const said = message.injected_delay_s > 0 // the server says it in English; the page in its own language
+        ? t("An added delay of {seconds} s is on your video.", { seconds: number(Number(message.injected_delay_s)) })
+        : t(message.message ?? "");
+      const online = this.#videoNote || said; // why the video shows outlasts its "live"
+      this.#showMessage(offline ? said || t("The robot is offline.") : online, offline);
       this.#placeholder.textContent = offline ? t("No video: the robot is offline.") : WORDS.video.waiting;
       if (offline) {
         this.#placeholder.hidden = false;
@@ -404,7 +407,7 @@ export class CameraPanel extends PanelElement {
     const active = Number.isFinite(seconds) && seconds > 0;
     const shown = this.#injectedBadge.textContent;
     this.#injectedBadge.hidden = !active;
-    this.#injectedBadge.textContent = active ? t("Added delay {seconds} s", { seconds: seconds.toFixed(1) }) : "";
+    this.#injectedBadge.textContent = active ? t("Added delay {seconds} s", { seconds: fixed(seconds, 1) }) : "";
     // A delay begun or ended (a delay trial, a tutor's): the preview's lock may have changed with it.
     if (this.#injectedBadge.textContent !== shown) this.emit("camera-injected-delay-change", { delay_s: seconds });
   }
@@ -458,7 +461,7 @@ export class CameraPanel extends PanelElement {
     }
     if (Number.isFinite(Number(header.frame_sequence))) this.#sequenceOutput.textContent = String(header.frame_sequence);
     const delayMs = this.#feedback.videoDelayMs(header, Date.now());
-    this.#delayOutput.textContent = Number.isFinite(delayMs) ? (delayMs / 1000).toFixed(2) : "—";
+    this.#delayOutput.textContent = Number.isFinite(delayMs) ? fixed(delayMs / 1000, 2) : "—";
   }
 }
 

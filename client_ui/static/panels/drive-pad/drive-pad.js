@@ -11,7 +11,7 @@ import { h } from "../../lib/dom.js";
 import { driveCommand, isStill, KEY_DIRECTIONS, stickCommand, stepCommand } from "../../lib/drive-math.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, t } from "../../lib/i18n.js";
 
 const SVG_NS = "http://www.w3.org/2000/svg";
 const BUTTONS = [
@@ -388,8 +388,8 @@ export class DrivePad extends PanelElement {
     const percent = Number(this.#slider.value);
     const fraction = percent / 100;
     this.#slider.setAttribute("aria-valuetext", t("{percent} percent", { percent }));
-    const linear = this.#limits ? (fraction * this.#limits.max_linear_mps).toFixed(2) : null;
-    const angular = this.#limits ? (fraction * this.#limits.max_angular_radps).toFixed(2) : null;
+    const linear = this.#limits ? fixed(fraction * this.#limits.max_linear_mps, 2) : null;
+    const angular = this.#limits ? fixed(fraction * this.#limits.max_angular_radps, 2) : null;
     this.#speedOutput.textContent = linear === null
       ? `${percent} %`
       : t("{percent} % · {linear} m/s · {angular} rad/s", { percent, linear, angular });

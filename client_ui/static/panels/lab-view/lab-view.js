@@ -18,7 +18,7 @@ import { isEcho } from "../../lib/polar.js";
 import { buildScene, placeRobot } from "../../lib/scene-three.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed as localFixed, t } from "../../lib/i18n.js";
 
 const COLOURS = { laser: "#d1390f", sonar: "#c26a00", goal: "#b1261b", path: "#b1261b" };
 const SONAR_SEGMENTS = 6;
@@ -37,8 +37,14 @@ const UNKNOWN_CELL = 255;
 function fixed(value, decimals = 2) {
   const number = Number(value);
   if (!Number.isFinite(number)) return "—";
-  const text = number.toFixed(decimals);
-  return Number(text) === 0 ? (0).toFixed(decimals) : text;
+  const text = number.toFixed(decimals); // data, not text: data attributes; said() writes it for people
+  return Number(text) === 0 ? (0).toFixed(decimals) : text; // data, not text: no "-0.00"
+}
+
+// A number a person reads: as fixed() rounds it, with the page's language's decimal sign ("0,25" in Spanish).
+function said(value, decimals = 2) {
+  const text = fixed(value, decimals);
+  return text === "—" ? text : localFixed(Number(text), decimals);
 }
 
 function isPose(pose) {
@@ -461,13 +467,13 @@ export class LabView extends PanelElement {
     const parts = [];
     if (pose) {
       const heading = Math.round((pose.theta_rad * 180) / Math.PI);
-      parts.push(t("Robot at ({x_m}, {y_m}) m facing {heading}° by odometry", { x_m: fixed(pose.x_m), y_m: fixed(pose.y_m), heading }));
+      parts.push(t("Robot at ({x_m}, {y_m}) m facing {heading}° by odometry", { x_m: said(pose.x_m), y_m: said(pose.y_m), heading }));
       parts.push(t("{hits} laser hits", { hits }));
       if (echoes) parts.push(t("{echoes} sonar echoes", { echoes }));
     } else {
       parts.push(t("The {value} lab; waiting for the robot's pose", { value: this.#scene.scene_name }));
     }
-    if (goal) parts.push(t("goal ({value}, {value2}) m", { value: fixed(goal[0]), value2: fixed(goal[1]) }));
+    if (goal) parts.push(t("goal ({value}, {value2}) m", { value: said(goal[0]), value2: said(goal[1]) }));
     if (this.#pathWaypoints) parts.push(t("planned path of {value} waypoints", { value: this.#pathWaypoints }));
     if (this.#map) parts.push(t("map of {value} scans on the floor", { value: this.#grid.scans_integrated ?? 0 }));
     const text = `${parts.join("; ")}.`;

@@ -5,7 +5,7 @@ import { h } from "../../lib/dom.js";
 import { describeBearing, isEcho, laserBearings, nearestReading, polarToScreen, sectorMinima } from "../../lib/polar.js";
 import { POLAR_STYLESHEET, PolarPanel } from "../polar-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, t } from "../../lib/i18n.js";
 
 const SECTORS = 8;
 
@@ -45,7 +45,7 @@ export class LaserPanel extends PolarPanel {
     const maxRange = Number(this.#laser?.max_range_m) || Math.max(1, ...ranges.filter(Number.isFinite));
     const nearest = nearestReading(ranges, bearings, maxRange);
     this.showNearest(this.#nearest, nearest,
-      nearest ? `${nearest.range_m.toFixed(2)} m, ${describeBearing(nearest.bearing_rad)}` : t("nothing in range"));
+      nearest ? `${fixed(nearest.range_m, 2)} m, ${describeBearing(nearest.bearing_rad)}` : t("nothing in range"));
     this.#count.textContent = String(ranges.filter((r) => isEcho(r, maxRange)).length);
     const body = this.readingsBody;
     const sectors = sectorMinima(ranges, bearings, SECTORS, maxRange);
@@ -55,7 +55,7 @@ export class LaserPanel extends PolarPanel {
         h("td", { text: "—" }))));
     }
     sectors.forEach((sector, index) => {
-      body.children[index].lastElementChild.textContent = sector.range_m === null ? t("nothing") : sector.range_m.toFixed(2);
+      body.children[index].lastElementChild.textContent = sector.range_m === null ? t("nothing") : fixed(sector.range_m, 2);
     });
     this.drawPolar(maxRange, maxRange > 4 ? 1 : 0.5, (ctx, c, scale, size) => {
       // The scanned area, then the hits.

@@ -6,7 +6,7 @@
 import { h } from "../../lib/dom.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, t } from "../../lib/i18n.js";
 
 const SEEN = 0.5;
 
@@ -16,7 +16,7 @@ export function lineWords(values, offsets) {
   const seen = values.map((value, index) => [value, Number(offsets[index]) || 0]).filter(([value]) => value > SEEN);
   if (!seen.length) return t("No line under the sensor.");
   const offset = seen.reduce((sum, [value, at]) => sum + value * at, 0) / seen.reduce((sum, [value]) => sum + value, 0);
-  const cm = Math.abs(offset * 100).toFixed(1);
+  const cm = fixed(Math.abs(offset * 100), 1);
   if (Math.abs(offset) < 0.005) return t("Line under the middle.");
   return offset > 0 ? t("Line {cm} cm to the left.", { cm }) : t("Line {cm} cm to the right.", { cm });
 }
@@ -60,7 +60,7 @@ export class LineSensorPanel extends PanelElement {
       const value = this.#values[index];
       const known = Number.isFinite(value);
       cell.querySelector(".line-sensor__patch").style.setProperty("--tape", known ? String(value) : "0");
-      cell.querySelector(".line-sensor__value").textContent = known ? value.toFixed(2) : "—";
+      cell.querySelector(".line-sensor__value").textContent = known ? fixed(value, 2) : "—";
       cell.toggleAttribute("data-on-line", known && value > SEEN);
     });
     this.#words.textContent = lineWords(this.#values, this.#offsets);

@@ -10,7 +10,7 @@
 import { h } from "../../lib/dom.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed as localFixed, t } from "../../lib/i18n.js";
 
 const SETTINGS = [
   { name: "max_linear_mps", label: t("Max speed"), unit: "m/s", decimals: 2, low: () => 0, high: (l) => l.robot_max_linear_mps },
@@ -33,7 +33,7 @@ export function batteryWords(battery) {
 
 function fixed(value, decimals) {
   const number = Number(value);
-  return Number.isFinite(number) ? number.toFixed(decimals) : "—";
+  return Number.isFinite(number) ? localFixed(number, decimals) : "—";
 }
 
 let panelCount = 0;

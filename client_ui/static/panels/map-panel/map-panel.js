@@ -22,7 +22,7 @@ import {
 import { isEcho } from "../../lib/polar.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed as localFixed, t } from "../../lib/i18n.js";
 
 const CURSOR_STEP_M = 0.1;
 const COLOURS = {
@@ -54,11 +54,18 @@ const LEGEND = {
   grid: ["#444", t("occupancy map"), "cell"],
 };
 
-function fixed(value, decimals = 2) {
+// A number for code to read (a data attribute): always with a decimal point.
+function plain(value, decimals = 2) {
   const number = Number(value);
   if (!Number.isFinite(number)) return "—";
-  const text = number.toFixed(decimals);
-  return Number(text) === 0 ? (0).toFixed(decimals) : text; // no "-0.00"
+  const text = number.toFixed(decimals); // data, not text: a data attribute code reads
+  return Number(text) === 0 ? (0).toFixed(decimals) : text; // data, not text: no "-0.00"
+}
+
+// A number a person reads: as plain() rounds it, with the page's language's decimal sign ("0,25" in Spanish).
+function fixed(value, decimals = 2) {
+  const text = plain(value, decimals);
+  return text === "—" ? text : localFixed(Number(text), decimals);
 }
 
 function isPose(pose) {
@@ -506,13 +513,13 @@ export class MapPanel extends PanelElement {
     const loc = this.#localization;
     if (poses.localized) {
       // "Localized" only once it converged: before, the localization panel may be saying the guess does not fit.
-      const at = `(${fixed(poses.localized.x_m)}, ${fixed(poses.localized.y_m)}) m`;
+      const at = t("({x_m}, {y_m}) m", { x_m: fixed(poses.localized.x_m), y_m: fixed(poses.localized.y_m) });
       parts.push((loc.converged ? t("localized at {at}, converged", { at }) : t("estimate at {at}, not converged yet", { at }))
         + (Number.isFinite(loc.position_error_m) ? t(", {position_error_m} m from the true pose", { position_error_m: fixed(loc.position_error_m, 2) }) : ""));
     }
     if (poses.tracked) {
-      parts.push(t("the skills steer by ({x_m}, {y_m}) m, tracked against ", { x_m: fixed(poses.tracked.x_m), y_m: fixed(poses.tracked.y_m) })
-        + t("the floor plan"));
+      parts.push(t("the skills steer by ({x_m}, {y_m}) m, tracked against the floor plan",
+        { x_m: fixed(poses.tracked.x_m), y_m: fixed(poses.tracked.y_m) }));
     }
     if (poses.odometry && poses.truth) {
       parts.push(t("odometry has drifted {value} m from the true pose", { value: fixed(poseDistance(poses.odometry, poses.truth)) }));
@@ -529,8 +536,8 @@ export class MapPanel extends PanelElement {
   #emitTarget(x_m, y_m) {
     this.#target = [x_m, y_m];
     this.#cursorLine.textContent = t("Target set to ({x_m}, {y_m}) m.", { x_m: fixed(x_m), y_m: fixed(y_m) });
-    this.dataset.targetX = fixed(x_m);
-    this.dataset.targetY = fixed(y_m);
+    this.dataset.targetX = plain(x_m);
+    this.dataset.targetY = plain(y_m);
     this.emit("map-target", { x_m, y_m });
     this.scheduleRender();
   }

@@ -8,7 +8,7 @@
 import { h } from "../../lib/dom.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, t } from "../../lib/i18n.js";
 
 const DEG_PER_RAD = 180 / Math.PI;
 const PLOT_WINDOW_S = 30;
@@ -22,7 +22,7 @@ export function driftNote(message) {
   if (!odometry || !standing) return "";
   const off_m = Math.hypot(odometry.x_m - standing.x_m, odometry.y_m - standing.y_m);
   if (!(off_m >= DRIFT_NOTED_M)) return "";
-  return t("These numbers are {off_m} m off where the robot stands (the camera shows it there), and ", { off_m: off_m.toFixed(1) })
+  return t("These numbers are {off_m} m off where the robot stands (the camera shows it there), and ", { off_m: fixed(off_m, 1) })
     + t("skills and plans steer by them. Localize it (Navigate tab: Localization) or return it to its dock (Navigate tab: the map's \"Return to the dock\").");
 }
 
@@ -46,8 +46,8 @@ export function appliedAgo(appliedAtMs, nowMs) {
 export function formatNumber(value, decimals) {
   const number = Number(value);
   if (value === null || value === undefined || !Number.isFinite(number)) return "—";
-  const text = number.toFixed(decimals);
-  return Number(text) === 0 ? (0).toFixed(decimals) : text;
+  const rounded = Number(number.toFixed(decimals)); // data, not text: rounds first, so -0.001 reads 0.00
+  return fixed(rounded, decimals);
 }
 
 /** Heading in degrees, wrapped to (-180, 180]. */

@@ -9,7 +9,7 @@ import { h } from "../../lib/dom.js";
 import { LATE_AFTER_MS, LEGS } from "../../lib/response-times.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, t } from "../../lib/i18n.js";
 
 const KIND_TITLES = { skill: t("Skill activations"), drive: t("Drive commands") };
 const LEG_LABELS = { total: t("Total"), client: t("Browser → middleware"), robot: t("Middleware → robot") };
@@ -18,13 +18,13 @@ const THROUGHPUT_WINDOW_MS = 10000;
 
 /** Milliseconds with one decimal, "—" for none. */
 export function formatMs(value) {
-  return Number.isFinite(value) ? value.toFixed(1) : "—";
+  return Number.isFinite(value) ? fixed(value, 1) : "—";
 }
 
 /** Bytes per second as a person reads them. */
 export function formatRate(bytesPerS) {
   if (!Number.isFinite(bytesPerS)) return "—";
-  return bytesPerS >= 1000 ? t("{value} kB/s", { value: (bytesPerS / 1000).toFixed(1) }) : `${Math.round(bytesPerS)} B/s`;
+  return bytesPerS >= 1000 ? t("{value} kB/s", { value: fixed(bytesPerS / 1000, 1) }) : `${Math.round(bytesPerS)} B/s`;
 }
 
 export class ResponseTimesPanel extends PanelElement {

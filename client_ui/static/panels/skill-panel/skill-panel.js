@@ -15,7 +15,7 @@ import { GUESS_FIELDS, goalParameterNames } from "../../lib/panel-descriptors.js
 import { parameterLabel, readValue, shortNumber } from "../../lib/parameters.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed as localFixed, t } from "../../lib/i18n.js";
 
 const ACTIVE = new Set(["accepted", "executing", "canceling"]);
 const MAX_EVENTS = 30;
@@ -33,7 +33,7 @@ export function stateWords(state) {
 
 function fixed(value, decimals) {
   const number = Number(value);
-  return Number.isFinite(number) ? number.toFixed(decimals) : "—";
+  return Number.isFinite(number) ? localFixed(number, decimals) : "—";
 }
 
 const PARAMETER_TYPES = new Set(["double", "int", "bool", "enum", "string"]);
@@ -159,7 +159,7 @@ export class SkillPanel extends PanelElement {
   set goalEvent(event) {
     this.ensureBuilt();
     if (!event || typeof event.kind !== "string") return;
-    const time = Number.isFinite(Number(event.sim_time_s)) ? `${Number(event.sim_time_s).toFixed(1)} s · ` : "";
+    const time = Number.isFinite(Number(event.sim_time_s)) ? `${localFixed(event.sim_time_s, 1)} s · ` : "";
     this.#events.prepend(h("li", { "data-event": event.kind }, `${time}${stateWords(event.kind)}`,
       event.message ? `: ${event.message}` : ""));
     if (event.message && event.kind !== "started") { // the newest news stays in sight (the status says it started)
@@ -178,7 +178,7 @@ export class SkillPanel extends PanelElement {
     this.#fields.distance.textContent = fixed(feedback.distance_error_m, 3);
     this.#fields.heading.textContent = fixed(Number(feedback.heading_error_rad) * DEG_PER_RAD, 1);
     const pose = feedback.pose ?? {};
-    this.#fields.pose.textContent = `(${fixed(pose.x_m, 2)}, ${fixed(pose.y_m, 2)}) m, ${fixed(Number(pose.theta_rad) * DEG_PER_RAD, 0)}°`
+    this.#fields.pose.textContent = `${t("({x_m}, {y_m}) m", { x_m: fixed(pose.x_m, 2), y_m: fixed(pose.y_m, 2) })}, ${fixed(Number(pose.theta_rad) * DEG_PER_RAD, 0)}°`
       + (feedback.pose_source ? t(" by {pose_source}", { pose_source: feedback.pose_source }) : "");
   }
 

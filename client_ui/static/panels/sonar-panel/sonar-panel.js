@@ -5,7 +5,7 @@ import { h } from "../../lib/dom.js";
 import { describeBearing, isEcho, nearestReading, polarToScreen } from "../../lib/polar.js";
 import { POLAR_STYLESHEET, PolarPanel } from "../polar-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { fixed, t } from "../../lib/i18n.js";
 
 export class SonarPanel extends PolarPanel {
   #nearest;
@@ -43,11 +43,11 @@ export class SonarPanel extends PolarPanel {
     const maxRange = Math.max(0.5, ...this.#sonars.map((s) => Number(s.max_range_m) || 0));
     const nearest = nearestReading(this.#ranges, bearings, maxRange);
     this.showNearest(this.#nearest, nearest, nearest
-      ? t("{range_m} m, {bearing_rad} (sonar {value})", { range_m: nearest.range_m.toFixed(2), bearing_rad: describeBearing(nearest.bearing_rad), value: nearest.index + 1 })
+      ? t("{range_m} m, {bearing_rad} (sonar {value})", { range_m: fixed(nearest.range_m, 2), bearing_rad: describeBearing(nearest.bearing_rad), value: nearest.index + 1 })
       : this.#ranges.length ? t("nothing in range") : "—");
     this.readingsBody.querySelectorAll("[data-sonar-range]").forEach((cell, index) => {
       const range = this.#ranges[index];
-      cell.textContent = isEcho(range, Number(this.#sonars[index]?.max_range_m) || Infinity) ? range.toFixed(2) : t("no echo");
+      cell.textContent = isEcho(range, Number(this.#sonars[index]?.max_range_m) || Infinity) ? fixed(range, 2) : t("no echo");
     });
     this.drawPolar(maxRange, 0.5, (ctx, c, scale) => this.#drawCones(ctx, c, scale, maxRange));
   }
