@@ -143,14 +143,24 @@ def test_the_class_channels_send_what_they_describe(wall_lab) -> None:  # noqa: 
         assert _api(student, "POST", "/api/class-session/hand", {"text": "Described?"})[0] == 201
         assert _api(tutor, "POST", f"/api/courses/{course_id}/class-wall/seats/{ids['s01']}",
                     {"action": "note", "text": "Look here.", "point": {"x_m": 0.5, "y_m": -0.25}})[0] == 200
+        def posed(messages: list[dict]) -> bool:  # the poses once a robot's telemetry was heard: rows to check
+            return any(m["type"] == "poses" and m["robots"] for m in messages)
+
+        def handed(messages: list[dict]) -> bool:  # the first seats may be read before the hand was saved
+            return any(seat["hand"] for m in messages if m["type"] == "seats" for seat in m["seats"])
+
         wall_messages = heard_all(wall, {"seats", "poses"}, 20)
         deadline = time.monotonic() + 20
-        while not any(m["type"] == "poses" and m["robots"] for m in wall_messages) and time.monotonic() < deadline:
-            wall_messages += heard(wall, 1, 1)  # the poses once a robot's telemetry was heard: rows to check
-        assert any(m["type"] == "poses" and m["robots"] for m in wall_messages), "no robot's pose on the wall"
+        while not (posed(wall_messages) and handed(wall_messages)) and time.monotonic() < deadline:
+            wall_messages += heard(wall, 1, 1)
+        assert posed(wall_messages), "no robot's pose on the wall"
         assert check("/ws/courses/<int:course_id>/class-wall", wall_messages) >= {"seats", "poses"}
-        assert any(seat["hand"] for m in wall_messages if m["type"] == "seats" for seat in m["seats"])
-        seat_messages = heard(mine, 5, 5)
+        assert handed(wall_messages), "the raised hand never reached the wall"
+        seat_messages = heard(mine, 1, 10)
+        deadline = time.monotonic() + 10
+        while not (seat_messages[-1:] and seat_messages[-1]["hand"] and seat_messages[-1]["notices"]) \
+                and time.monotonic() < deadline:
+            seat_messages += heard(mine, 1, 1)
         assert check("/ws/class-session/wall", seat_messages) == {"seat"}
         assert seat_messages[-1]["hand"] and seat_messages[-1]["notices"], seat_messages[-1]
         assert check("/ws/class-session/chat", heard_all(room, {"history"})) == {"history"}
