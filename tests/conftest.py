@@ -377,7 +377,7 @@ class LabClient:
         data = urlencode(form).encode() if form is not None else None
         request = Request(self.base_url + path, data=data, method=method, headers=headers or {})
         try:
-            with self._opener.open(request, timeout=10) as response:
+            with self._opener.open(request, timeout=30) as response:
                 return response.status, dict(response.headers), response.read().decode()
         except Exception as error:  # urllib raises for 4xx/5xx; they are answers here
             if hasattr(error, "code"):
