@@ -1,10 +1,20 @@
 """The exercises the lab ships with (an admin or a tutor adds more through the API); each has a statement, a
 template, a scene, a practice start, a region of hidden random starts for submissions, a time limit and a
-rubric graded from the robot's ground truth (grading.py). All run in the practice robot's scene, "lab"."""
+rubric graded from the robot's ground truth (grading.py). All run in the practice robot's scene, "lab".
+
+A template is stored and graded in English; its comments are said in the reader's language when it is served
+(in_language): each comment of the built-in templates is a message of the catalogue (TEMPLATE_COMMENTS), the code
+itself stays Python with English names."""
 
 from __future__ import annotations
 
+import io
+import textwrap
+import tokenize
+from collections.abc import Callable
 from typing import Any
+
+from flask_babel import gettext  # type: ignore[import-untyped]
 
 from middleware.translations.robot_words import N_  # titles and statements are shown through the catalogue
 
@@ -174,3 +184,71 @@ BUILT_IN: list[dict[str, Any]] = [
         "time_limit_s": 120.0,
     },
 ]
+
+# Every comment of the templates above, as in_language looks it up: a comment's lines joined by single spaces.
+# tests/unit/exercises/test_template_comments.py checks that the two agree.
+TEMPLATE_COMMENTS = (
+    N_("The loop runs at 20 Hz: each robot.tick() waits for the next period, sends your last command and reads the "
+       "sensors. It answers False when the time is up or you press Stop."),
+    N_("Something ahead: back off a little, then turn away."),
+    N_("keep the wall on your left at this distance"),
+    N_("beams pointing left"),
+    N_("Your controller here: turn towards or away from the wall to keep `left` near DISTANCE_M."),
+    N_("in the odometry frame, which starts where the robot is placed"),
+    N_("A virtual force field: an attraction towards the goal, repulsions from the laser's close hits."),
+    N_("A vacuum cleaner: sweep as much of the room's floor as you can before the time is up."),
+    N_("robot.line() gives the line sensor's five cells, left to right (1 over the tape, 0 on bare floor); "
+       "robot.line_position() is where the tape is under them in metres (left positive), or None when no cell sees "
+       "it."),
+    N_("the line is lost: where did you see it last?"),
+    N_("your controller here: turn towards the line"),
+    N_("in the lab's frame"),
+    N_("You were carried somewhere while you were not looking: odometry still believes you are where you were. The "
+       "lab's localization compares the laser with the lab's floor plan:"),
+    N_("no guess: it searches the whole map"),
+    N_("Until it has converged, help it see the room (turn on the spot?), then robot.report_pose(x, y) and go to GOAL "
+       "(robot.run_skill(\"go_to_goal\", goal_x_m=..., goal_y_m=...) steers by the localization)."),
+)
+_TEMPLATE_WIDTH = 116  # the templates' longest line: a translated comment is wrapped within it
+
+
+def comments(code: str) -> list[tuple[int, int, int, str]]:
+    """code's comments as (first line, last line, column, text): a comment's consecutive lines at one column are one
+    comment, their texts joined by spaces; a comment after code on its line is its own. [] for code that does not
+    tokenize (a student's unfinished program)."""
+    found: list[tuple[int, int, int, str]] = []
+    lines = code.splitlines()
+    try:
+        tokens = list(tokenize.generate_tokens(io.StringIO(code).readline))
+    except (tokenize.TokenError, SyntaxError):
+        return []
+    for token in tokens:
+        if token.type != tokenize.COMMENT:
+            continue
+        row, column = token.start
+        text = token.string.removeprefix("#").strip()
+        alone = not lines[row - 1][:column].strip()
+        if found and alone and found[-1][1] == row - 1 and found[-1][2] == column \
+                and not lines[row - 2][:column].strip():
+            first, _, _, before = found[-1]
+            found[-1] = (first, row, column, f"{before} {text}")
+        else:
+            found.append((row, row, column, text))
+    return found
+
+
+def in_language(code: str, translate: Callable[[str], str] = gettext) -> str:
+    """code with each comment the catalogue knows said in the reader's language (translate: gettext, whose language
+    is the request's); everything else, and a comment it does not know, as it is."""
+    lines = code.splitlines()
+    for first, last, column, text in reversed(comments(code)):
+        said = str(translate(text)) if text in TEMPLATE_COMMENTS else text
+        if said == text:
+            continue
+        head = lines[first - 1][:column]
+        if head.strip():  # after code: the comment stays on its line
+            lines[first - 1] = f"{head}# {said}"
+            continue
+        width = max(_TEMPLATE_WIDTH - column - 2, 40)
+        lines[first - 1:last] = [f"{head}# {part}" for part in textwrap.wrap(said, width)]
+    return "\n".join(lines) + ("\n" if code.endswith("\n") else "")

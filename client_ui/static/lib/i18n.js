@@ -33,6 +33,14 @@ export function number(value, options = {}) {
   return new Intl.NumberFormat(language, options).format(value);
 }
 
+const PLURALS = new Intl.PluralRules(language);
+
+/** Whether count takes the singular in the page's language ("1 cell", "1 casilla"; "0 cells", "1,5 casillas"): pick
+ * between two whole sentences, each its own t("..."), so both reach the catalogue. */
+export function isSingular(count) {
+  return PLURALS.select(count) === "one";
+}
+
 // "." in English, "," in Spanish.
 const DECIMAL_SIGN = new Intl.NumberFormat(language).formatToParts(1.5)
   .find((part) => part.type === "decimal")?.value ?? ".";
@@ -41,7 +49,8 @@ const DECIMAL_SIGN = new Intl.NumberFormat(language).formatToParts(1.5)
  * sign ("0,25" in Spanish). toFixed rounds it, as before, so English reads exactly what toFixed wrote (Intl would round
  * 1.005 up where toFixed writes 1.00). */
 export function fixed(value, digits = 1) {
-  const text = Number(value).toFixed(digits);
+  // A small negative that rounds to zero (a robot standing at -0.001 m) reads 0.00, not -0.00.
+  const text = Number(value).toFixed(digits).replace(/^-(?=0(\.0*)?$)/, "");
   return DECIMAL_SIGN === "." ? text : text.replace(".", DECIMAL_SIGN);
 }
 

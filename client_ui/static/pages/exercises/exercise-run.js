@@ -80,11 +80,12 @@ export class PythonWorker extends EventTarget {
 /**
  * One run of the student's code on a robot. Events: "print" (detail: {line, stream}), "state" (detail: text),
  * "sent" (a drive command went), "ack" (detail: the ack, with performance.now() of its command in sent_at),
- * "done" (detail: the worker's outcome plus the report, if the code made one).
+ * "done" (detail: the worker's outcome plus the report, if the code made one, and refused: why the robot stopped
+ * taking the run's commands, if it did).
  */
 export class RobotRun extends EventTarget {
   #python; #robotName; #drive; #telemetry; #localization; #located = null; #session; #watchdog = 0; #lastTick = 0; #skillPending = false;
-  #finished = false; #stopTimer = 0; #report = null; #command = { linear_mps: 0, angular_radps: 0 };
+  #finished = false; #stopTimer = 0; #report = null; #refused = null; #command = { linear_mps: 0, angular_radps: 0 };
   #sentAt = new Map();
   #codeAt = null;
 
@@ -118,7 +119,11 @@ export class RobotRun extends EventTarget {
         std_x_m: message.std_x_m, std_y_m: message.std_y_m, std_theta_rad: message.std_theta_rad,
         sim_time_s: message.sim_time_s } : null;
     });
-    this.#session.addEventListener("error", (event) => this.#print(t("Robot: {message}", { message: event.detail.message }), "stderr"));
+    this.#session.addEventListener("error", (event) => {
+      // The command path refuses a user who no longer controls the robot (a lab robot's turn moved on): the run ends.
+      if (event.detail.code === "not_controller") this.endRefused(event.detail.message);
+      else this.#print(t("Robot: {message}", { message: event.detail.message }), "stderr");
+    });
     this.#session.addEventListener("sent", (event) => {
       this.#sentAt.set(event.detail.sequence, { page: performance.now(), code: this.#codeAt });
       this.dispatchEvent(new CustomEvent("sent", { detail: event.detail }));
@@ -154,6 +159,14 @@ export class RobotRun extends EventTarget {
       this.#python.restart();
       this.#end({ ok: false, stopped: true, message: t("Stopped.") });
     }, STOP_GRACE_MS);
+  }
+
+  /** The robot takes no more of this run's commands (message: why): the program is stopped and the run ends, saying
+   * so, at once rather than at its time limit. */
+  endRefused(message) {
+    if (this.#finished || this.#refused) return;
+    this.#refused = message;
+    this.stop();
   }
 
   /** Closes the channels (the server stops the robot when its drive socket closes). */
@@ -216,7 +229,8 @@ export class RobotRun extends EventTarget {
       }
       this.#python.skillEnded(FINAL_GOAL[status] ?? 2);
     } catch (error) {
-      this.#print(t("Skill {name}: {message}", { name, message: error.message }), "stderr");
+      if (error.code === "not_controller") this.endRefused(error.message);
+      else this.#print(t("Skill {name}: {message}", { name, message: error.message }), "stderr");
       this.#python.skillEnded(4);
     } finally {
       this.#skillPending = false;
@@ -235,6 +249,6 @@ export class RobotRun extends EventTarget {
     clearInterval(this.#watchdog);
     this.#python.removeEventListener("message", this.onWorker);
     this.#session?.stop();
-    this.dispatchEvent(new CustomEvent("done", { detail: { ...outcome, report: this.#report } }));
+    this.dispatchEvent(new CustomEvent("done", { detail: { ...outcome, report: this.#report, refused: this.#refused } }));
   }
 }

@@ -1,13 +1,16 @@
-// An exercise's page: the CodeMirror editor, Run (the practice robot) and Submit (a hidden start, graded), Stop,
-// the console, and the grade with the robot's true path, which the server measured from the robot's own record.
+// An exercise's page: the CodeMirror editor, Run (the practice robot) and Submit (a hidden start, graded, on a fresh
+// simulated robot, or on a lab robot in the student's turn: lab-turn.js), Stop, the console, and the grade with the
+// robot's true path, which the server measured from the robot's own record.
 import { EditorView, basicSetup } from "codemirror";
 import { EditorState, StateEffect, StateField } from "@codemirror/state";
 import { Decoration } from "@codemirror/view";
 import { python } from "@codemirror/lang-python";
 import { fetchJson } from "../../lib/transport.js";
 import { PythonWorker, RobotRun } from "./exercise-run.js";
+import { LabTurn } from "./lab-turn.js";
 import { drawTrace } from "./trace-map.js";
-import { fixed, number, t } from "../../lib/i18n.js";
+import { measurementRow } from "./measurements.js";
+import { fixed, t } from "../../lib/i18n.js";
 
 const root = document.getElementById("exercise");
 const slug = root.dataset.slug;
@@ -20,6 +23,7 @@ const map = root.querySelector("[data-slot=map]");
 const robotLine = root.querySelector("[data-field=robot]");
 let rubric = null;  // what the run is measured by (the trace map draws a follow_line rubric's line)
 const buttons = Object.fromEntries([...root.querySelectorAll("[data-action]")].map((b) => [b.dataset.action, b]));
+const labTurn = new LabTurn(root.querySelector("[data-slot=lab]"));
 const PRACTICE_POLL_MS = 1000;
 const PRACTICE_WAIT_MS = 120000;
 
@@ -88,6 +92,7 @@ function setRunning(running) {
   buttons.run.disabled = buttons.submit.disabled = running || !pythonReady;
   buttons.stop.disabled = !running;
   buttons.reset.disabled = running;
+  labTurn.setBusy({ running, runningOn: current?.run.robot_name, ready: pythonReady });
 }
 
 // ---- Python ----
@@ -123,18 +128,21 @@ async function practiceRobot() {
 }
 
 // ---- a run ----
-async function start(mode) {
+/** Runs the code on robot: "practice" (the user's practice robot, started if need be; a submission restarts it
+ * fresh) or a lab robot in the user's turn. */
+async function start(mode, robot = "practice") {
   setRunning(true);
   editor.dispatch({ effects: markError.of(null) });
   consolePane.textContent = "";
   try {
-    await practiceRobot();
+    if (robot === "practice") await practiceRobot();
     say(mode === "submission" ? t("Placing the robot at a hidden start…") : t("Placing the robot at the start…"));
     const answer = await fetchJson(`/api/exercises/${encodeURIComponent(slug)}/runs`, { method: "POST",
-      body: { code: code(), mode } });
+      body: { code: code(), mode, robot } });
     const run = answer.run;
     const robotRun = new RobotRun(python3, run.robot_name);
     current = { run, robotRun };
+    setRunning(true);  // the lab robot's line says the run keeps the turn
     robotRun.addEventListener("print", (event) => print(event.detail.line, event.detail.stream));
     robotRun.addEventListener("ack", (event) => {
       if (event.detail.sent_at !== undefined) timings.pad_ack_ms.push(performance.now() - event.detail.sent_at);
@@ -162,21 +170,26 @@ async function finish(outcome) {
   const { run, robotRun } = current;
   robotRun.close();
   root.dataset.running = "false";
-  if (outcome.ok) print(t("Your program ended."));
+  // The robot refused the run's commands (the turn on a lab robot ended): said as the command path said it.
+  const ended = outcome.refused ? t("The run ended: {message}", { message: outcome.refused }) : "";
+  if (ended) print(ended, "stderr");
+  else if (outcome.ok) print(t("Your program ended."));
   else if (outcome.stopped) print(t("Stopped: the robot was stopped."), "stderr");
   else {
     if (outcome.traceback) print(outcome.traceback.trimEnd(), "stderr");
     print(outcome.line ? t("Line {line}: {message}", { line: outcome.line, message: outcome.message }) : outcome.message, "stderr");
     showError(outcome.line);
   }
-  say(outcome.ok || outcome.stopped ? t("Measuring the run from the robot's record…")
+  if (ended) say(`${ended} ${t("Measuring the run from the robot's record…")}`, "error");
+  else say(outcome.ok || outcome.stopped ? t("Measuring the run from the robot's record…")
     : t("Your program failed{value}: {message}. Measuring what the robot did…", { value: outcome.line ? t(" at line {line}", { line: outcome.line }) : "", message: outcome.message }),
   outcome.ok || outcome.stopped ? "info" : "error");
   try {
     const body = outcome.report ? { report: outcome.report } : {};
     const answer = await fetchJson(`/api/exercise-runs/${run.id}/finish`, { method: "POST", body });
     showGrade(answer.run, answer.scene_boxes);
-    if (outcome.ok || outcome.stopped) say(answer.run.status === "graded" ? t("Run graded.") : answer.run.feedback);
+    if (ended) say(`${ended} ${t("What the robot did until then is graded below.")}`, "error");
+    else if (outcome.ok || outcome.stopped) say(answer.run.status === "graded" ? t("Run graded.") : answer.run.feedback);
     else say(t("Your program failed{value}: {message}. ", { value: outcome.line ? t(" at line {line}", { line: outcome.line }) : "", message: outcome.message })
       + t("What the robot did until then is graded below."), "error");
   } catch (error) {
@@ -209,9 +222,7 @@ function showGrade(run, boxes) {
   const body = measurements.querySelector("tbody");
   body.replaceChildren(...run.measurements.map((m) => {
     const row = document.createElement("tr");
-    const unit = m.unit === "cells" ? t("cells") : m.unit; // the one unit that is a word
-    for (const text of [m.name, `${formatValue(m.value, m.unit)} ${unit}`, `${m.lower_is_better ? "≤" : "≥"} ${number(m.bar)} ${unit}`,
-      `${Math.round(m.fraction * 100)}%`]) {
+    for (const text of measurementRow(m)) {
       const cell = document.createElement("td");
       cell.textContent = text;
       row.append(cell);
@@ -220,11 +231,6 @@ function showGrade(run, boxes) {
   }));
   measurements.hidden = !run.measurements.length;
   drawTrace(map, boxes ?? [], run.trace ?? [], run.start, rubric);
-}
-
-function formatValue(value, unit = "") {
-  if (unit === "cells") return String(Math.round(value));
-  return Number.isFinite(value) ? fixed(value, Math.abs(value) >= 10 ? 1 : 2) : "—";
 }
 
 async function loadRuns() {
@@ -242,6 +248,14 @@ async function loadRuns() {
 
 buttons.run.addEventListener("click", () => start("practice"));
 buttons.submit.addEventListener("click", () => start("submission"));
+buttons["lab-submit"].addEventListener("click", () => { if (labTurn.controlled) start("submission", labTurn.controlled); });
+// The turn on the run's lab robot ended (it passed, or the student was dropped from the queue): the run ends now,
+// never waits for its time limit while every command is refused.
+labTurn.addEventListener("seat", ({ detail }) => {
+  if (current?.run.robot_name === detail.robot_name && !detail.seat?.is_controller) {
+    current.robotRun.endRefused(t("your turn on {robot_name} ended, so it takes no more of your commands.", { robot_name: detail.robot_name }));
+  }
+});
 buttons.stop.addEventListener("click", () => { say(t("Stopping…")); current?.robotRun.stop(); });
 buttons.reset.addEventListener("click", () => setCode(template));
 // A closed or hidden tab: the robot stops now (the drive socket's close stops it too, and else the deadman).
@@ -253,3 +267,4 @@ loadRuns().then((answer) => {
   setCode(answer.code);
 }, (error) => say(error.message, "error"));
 setRunning(false);
+labTurn.load().catch((error) => say(error.message, "error"));

@@ -110,7 +110,9 @@ async function init(message) {
   pyodide.FS.writeFile("/home/pyodide/telelab.py", api);
   pyodide.registerJsModule("telelab_bridge", bridge);
   pyodide.runPython("import sys\nsys.path.insert(0, '/home/pyodide')\n" + RUNNER);
-  post({ type: "ready", load_s: (performance.now() - began) / 1000, version: pyodide.version });
+  // The page says "Python <version>": the interpreter's (3.14.0), not Pyodide's own numbering (314.0.7).
+  const version = pyodide.runPython("sys.version.split()[0]");
+  post({ type: "ready", load_s: (performance.now() - began) / 1000, version, pyodide_version: pyodide.version });
 }
 
 function run(message) {
