@@ -33,6 +33,7 @@ from middleware.chat import sockets as chat_sockets
 from middleware.courses import routes as courses_routes
 from middleware.errors import register_error_handlers
 from middleware.exercises import routes as exercises_routes
+from middleware.exercises import services as exercises_services
 from middleware.experiment import delay, trial_rules
 from middleware.experiment import routes as experiment_routes
 from middleware.extensions import csrf, login_manager, socket_login_check
@@ -152,6 +153,7 @@ def _register_areas(app: Flask) -> None:
     app.register_blueprint(lti_routes.blueprint)
     lti_setup.init_app(app)
     attempts.on_final_mark(lti_grades.queue_final_mark)  # a final or overridden mark goes to the LMS gradebook
+    exercises_services.on_mark_change(lti_grades.queue_exercise_mark)  # so does a changed mark on an exercise test
     auth_cookies.cross_site_when(app, lti_embedding.embedded)
     app.register_blueprint(recordings_routes.blueprint)
     recordings.init_app(app)

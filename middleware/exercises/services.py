@@ -34,6 +34,9 @@ NO_RECORD = i18n.N_("The robot could not give its record of the run (it restarte
                     "be graded. Run it again.")
 # (robot name, since, until) -> the robot's trace [t_s, gx, gy, gth, ox, oy, oth], or None when it cannot tell
 PoseLogReader = Callable[[str, datetime, datetime], list[list[float]] | None]
+# (session, the course's test, the student's id, their new mark in points or None) in the unit of work that changed it
+MarkListener = Callable[[Session, ExerciseAssignment, int, float | None], object]
+_mark_listeners: list[MarkListener] = []
 
 
 class ExerciseRefused(Refused):
@@ -207,10 +210,14 @@ def finish_run(session: Session, user: User, run: ExerciseRun, report: dict[str,
         session.flush()
         return run
     result = grading.grade(json.loads(exercise.rubric_json), trace, report)
+    tests = _tests_of_student(session, run.user_id, run.exercise_id) if run.mode == "submission" else []
+    before = {test.id: test_grade(session, run.user_id, test) for test in tests}
     run.status, run.fraction, run.feedback = "graded", result.fraction, result.feedback
     run.measurements_json = json.dumps(result.measurements_dict())
     run.trace_json = json.dumps([[s[0], s[1], s[2]] for s in trace])
     session.flush()
+    for test in tests:
+        _tell_if_changed(session, test, run.user_id, before[test.id])
     return run
 
 
@@ -299,8 +306,13 @@ def attach_to_course(session: Session, actor: User, course_id: int, exercise: Ex
         test = ExerciseAssignment(course_id=course_id, exercise_id=exercise.id, created_by_id=actor.id,
                                   deadline_at=deadline, points=points)
         session.add(test)
+        session.flush()
+        return test  # its line items in an LMS come later (placing it there), so no mark is waited for yet
+    before = course_marks(session, test)
     test.deadline_at, test.points = deadline, points
     session.flush()
+    for user_id in set(before) | set(course_marks(session, test)):
+        _tell_if_changed(session, test, user_id, before.get(user_id))
     return test
 
 
@@ -329,6 +341,36 @@ def test_grade(session: Session, user_id: int, test: ExerciseAssignment) -> floa
         ExerciseRun.fraction.is_not(None), ExerciseRun.started_at <= test.deadline_at))
     best = max((f for f in fractions if f is not None), default=None)
     return None if best is None else round(best * test.points, 2)
+
+
+def on_mark_change(listener: MarkListener) -> None:
+    """Makes listener(session, test, user_id, mark) hear of every change of a student's mark on a course's test, in
+    the unit of work that makes it (create_app hands it lti's passback; this area never imports lti)."""
+    if listener not in _mark_listeners:
+        _mark_listeners.append(listener)
+
+
+def _tell_if_changed(session: Session, test: ExerciseAssignment, user_id: int, before: float | None) -> None:
+    mark = test_grade(session, user_id, test)
+    if mark != before:
+        for listener in _mark_listeners:
+            listener(session, test, user_id, mark)
+
+
+def _tests_of_student(session: Session, user_id: int, exercise_id: int) -> list[ExerciseAssignment]:
+    """The exercise's tests in the courses the user is a student of."""
+    return list(session.scalars(select(ExerciseAssignment).join(
+        CourseMembership, CourseMembership.course_id == ExerciseAssignment.course_id).where(
+        CourseMembership.user_id == user_id, CourseMembership.role == "student",
+        ExerciseAssignment.exercise_id == exercise_id).order_by(ExerciseAssignment.id)))
+
+
+def course_marks(session: Session, test: ExerciseAssignment) -> dict[int, float]:
+    """Each student of the test's course who has a mark on it: user id -> mark in points."""
+    students = session.scalars(select(CourseMembership.user_id).where(
+        CourseMembership.course_id == test.course_id, CourseMembership.role == "student"))
+    marks = {user_id: test_grade(session, user_id, test) for user_id in students}
+    return {user_id: mark for user_id, mark in marks.items() if mark is not None}
 
 
 def tests_for(session: Session, user: User, exercise: Exercise) -> list[dict[str, Any]]:

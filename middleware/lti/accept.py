@@ -12,11 +12,13 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from middleware.errors import Refused
-from middleware.lti import launches
+from middleware.exercises.services import course_marks
+from middleware.lti import grades, launches
 from middleware.lti.flow import ValidatedLaunch
 from middleware.lti.launches import LaunchRefused, Target
 from middleware.models import Role, User
 from middleware.models.assessment import Exam
+from middleware.models.exercises import Exercise, ExerciseAssignment
 from middleware.models.lti import LtiContext, LtiIdentity, LtiPlatform
 
 
@@ -78,8 +80,22 @@ def _open(session: Session, claims: dict[str, Any], user: User, context: LtiCont
                                                           "tutor."), 404)
         if not teaches and user.role == Role.STUDENT:
             launches.enrol(session, exam.course_id, user, False)  # the placing tutor shared their test
-        launches.remember_line_item(session, context, exam.id, claims)
+        launches.remember_line_item(session, context, claims, exam_id=exam.id)
+    if target is not None and target.kind == "exercise" and context is not None:
+        _remember_exercise_line_item(session, context, target.key, claims)
     return AcceptedLaunch(user, context.course_id if context else None, target, teaches)
+
+
+def _remember_exercise_line_item(session: Session, context: LtiContext, slug: str, claims: dict[str, Any]) -> None:
+    """Keeps the line item of a placed exercise that is a test of the LMS course's Telelab course; the LMS naming
+    it for the first time gets the marks students already have."""
+    test = session.scalar(select(ExerciseAssignment).join(Exercise, Exercise.id == ExerciseAssignment.exercise_id)
+                          .where(ExerciseAssignment.course_id == context.course_id, Exercise.slug == slug[:64]))
+    if test is None:
+        return  # not a test of this course: a link to practise, with no column
+    item = launches.remember_line_item(session, context, claims, exercise_assignment_id=test.id)
+    if item is not None:
+        grades.queue_marks_of_new_line_item(session, item, test, course_marks(session, test))
 
 
 def _same_person(session: Session, claims: Mapping[str, Any], actor: User, refusal: str) -> None:

@@ -1,7 +1,8 @@
 """What a tutor may place in an LMS course by deep linking, and where each placed link opens.
 
 Targets are "kind:key": console:<robot>, pool:<kind>, lesson:<id>, tour:<id>, exam:<id> (a test: the LMS makes a
-gradebook column for it), exercise:<slug> (a Python exercise), class: (the course's class session).
+gradebook column for it), exercise:<slug> (a Python exercise; a column too when it is a test of the course, out of
+its points), class: (the course's class session).
 Tests are those of the courses the tutor teaches.
 """
 
@@ -21,6 +22,7 @@ from middleware.exercises.services import ensure_catalogue
 from middleware.lti.launches import Target
 from middleware.models import Role, User
 from middleware.models.assessment import Exam
+from middleware.models.exercises import ExerciseAssignment
 from middleware.models.teaching import Lesson, Tour
 
 
@@ -34,8 +36,9 @@ class Placeable:
     score_maximum: float | None = None
 
 
-def placeable(session: Session, actor: User, robot_names: list[str]) -> list[Placeable]:
-    """Everything actor may place, grouped by kind."""
+def placeable(session: Session, actor: User, robot_names: list[str], course_id: int | None = None) -> list[Placeable]:
+    """Everything actor may place, grouped by kind; an exercise that is a test of course_id (the Telelab course of
+    the LMS course asking) gets a gradebook column out of the test's points."""
     items = [Placeable(f"console:{name}", gettext("Robot console"), name) for name in robot_names]
     items += [Placeable(f"pool:{kind}", gettext("Pool of robots"), gettext("Any free robot of kind %(kind)s",
                                                                            kind=kind))
@@ -49,7 +52,13 @@ def placeable(session: Session, actor: User, robot_names: list[str]) -> list[Pla
         exams = exams.where(Exam.course_id.in_(taught_course_ids(actor)))
     items += [Placeable(f"exam:{exam.id}", gettext("Test"), exam.title, 100.0) for exam in session.scalars(exams)]
     ensure_catalogue(session)  # the built-in exercises exist once asked for
-    items += [Placeable(f"exercise:{exercise.slug}", gettext("Python exercise"), exercise.title)
+    points: dict[int, float] = {} if course_id is None else {
+        exercise_id: value for exercise_id, value in session.execute(select(
+            ExerciseAssignment.exercise_id, ExerciseAssignment.points).where(
+            ExerciseAssignment.course_id == course_id, ExerciseAssignment.points > 0))}
+    items += [Placeable(f"exercise:{exercise.slug}", gettext("Python exercise, a test of the course")
+                        if exercise.id in points else gettext("Python exercise"), exercise.title,
+                        points.get(exercise.id))
               for exercise in exercise_catalogue(session)]
     items.append(Placeable("class:", gettext("Class session"), gettext("The course's class session")))
     return items

@@ -1,9 +1,12 @@
 """Grades to the LMS's gradebook (AGS): a test's mark is queued when it is final and again after a tutor's
-override, in the transaction that makes it (the outbox, lti_grade_passbacks), and sent after the commit.
+override, and an exercise's mark (an exercise attached to a course as a test) whenever it changes, in the
+transaction that makes it (the outbox, lti_grade_passbacks), and sent after the commit.
 
-- Queued per LMS line item of the test (the line items the LMS named in launches of the placed test), for people
-  the LMS knows (their LtiIdentity). The best final mark of the person's submitted attempts is sent, as
-  Telelab's own gradebook shows it. A newer mark supersedes one still waiting.
+- Queued per LMS line item of the test or the exercise's test (the line items the LMS named in launches of the
+  placed link), for people the LMS knows (their LtiIdentity). A test sends the best final mark of the person's
+  submitted attempts, as Telelab's own gradebook shows it; an exercise the student's mark on the course's test (their
+  best graded submission begun before the deadline, in points, out of the test's points). A newer mark supersedes
+  one still waiting.
 - Sending claims a row with a conditional UPDATE (claimed_by, claimed_until), so one of several workers sends it;
   a failure keeps the row pending with the reason and the next try after a backoff (30 s doubling, at most an
   hour); the row survives restarts and any worker's GradeSender picks it up.
@@ -23,7 +26,7 @@ from flask import Flask, has_request_context
 from pylti1p3.assignments_grades import AssignmentsGradesService
 from pylti1p3.exception import LtiException
 from pylti1p3.grade import Grade
-from sqlalchemy import func, or_, select, update
+from sqlalchemy import ColumnElement, func, or_, select, update
 from sqlalchemy.orm import Session
 
 from middleware import db
@@ -32,6 +35,7 @@ from middleware.i18n import N_
 from middleware.lti import services
 from middleware.models.accounts import as_utc, utc_now
 from middleware.models.assessment import Attempt
+from middleware.models.exercises import ExerciseAssignment
 from middleware.models.lti import LtiContext, LtiGradePassback, LtiIdentity, LtiLineItem, LtiPlatform
 
 log = logging.getLogger(__name__)
@@ -54,28 +58,63 @@ def best_final(session: Session, attempt: Attempt) -> tuple[float, float] | None
     return best
 
 
-def queue_final_mark(session: Session, attempt: Attempt) -> int:
-    """Queues the person's final mark at the test for every LMS line item it goes to; the number queued.
-    Handed to assessment as its final-mark listener by create_app (assessment never imports lti)."""
-    issuer = session.scalar(select(LtiIdentity.issuer).where(LtiIdentity.user_id == attempt.user_id))
+def _line_items(session: Session, user_id: int, graded_item: ColumnElement[bool]) -> list[LtiLineItem]:
+    """The line items of graded_item (a column of LtiLineItem compared with an id) in the LMS that knows user_id."""
+    issuer = session.scalar(select(LtiIdentity.issuer).where(LtiIdentity.user_id == user_id))
     if issuer is None:
-        return 0
-    items = list(session.scalars(select(LtiLineItem).join(LtiContext, LtiContext.id == LtiLineItem.context_id)
-                                 .where(LtiLineItem.exam_id == attempt.exam_id, LtiContext.issuer == issuer)))
-    mark = best_final(session, attempt) if items else None
-    if mark is None:
-        return 0
+        return []
+    return list(session.scalars(select(LtiLineItem).join(LtiContext, LtiContext.id == LtiLineItem.context_id)
+                                .where(graded_item, LtiContext.issuer == issuer).order_by(LtiLineItem.id)))
+
+
+def _queue(session: Session, items: list[LtiLineItem], user_id: int, mark: tuple[float, float] | None,
+           attempt_id: int | None = None) -> int:
+    """Supersedes what still waits for user_id on items and queues mark (score, maximum) for each; the number."""
     for item in items:
         session.execute(update(LtiGradePassback).where(
-            LtiGradePassback.line_item_id == item.id, LtiGradePassback.user_id == attempt.user_id,
+            LtiGradePassback.line_item_id == item.id, LtiGradePassback.user_id == user_id,
             LtiGradePassback.status == "pending").values(status="superseded"))
-        session.add(LtiGradePassback(attempt_id=attempt.id, line_item_id=item.id, user_id=attempt.user_id,
-                                     score_given=mark[0], score_maximum=mark[1], status="pending",
-                                     next_try_at=utc_now()))
+        if mark is not None:
+            session.add(LtiGradePassback(attempt_id=attempt_id, line_item_id=item.id, user_id=user_id,
+                                         score_given=mark[0], score_maximum=mark[1], status="pending",
+                                         next_try_at=utc_now()))
     session.flush()
+    if mark is None or not items:
+        return 0
     if has_request_context():
         db.after_commit(wake_senders)
     return len(items)
+
+
+def queue_final_mark(session: Session, attempt: Attempt) -> int:
+    """Queues the person's final mark at the test for every LMS line item it goes to; the number queued.
+    Handed to assessment as its final-mark listener by create_app (assessment never imports lti)."""
+    items = _line_items(session, attempt.user_id, LtiLineItem.exam_id == attempt.exam_id)
+    mark = best_final(session, attempt) if items else None
+    return _queue(session, items, attempt.user_id, mark, attempt.id) if mark is not None else 0
+
+
+def queue_exercise_mark(session: Session, test: ExerciseAssignment, user_id: int, mark: float | None) -> int:
+    """Queues a student's changed mark on an exercise's course test (in points, out of the test's points) for every
+    LMS line item it goes to; the number queued. A mark that is gone (the deadline moved before every submission)
+    or out of no points supersedes what waits and sends nothing: the LMS keeps what it was sent. Handed to exercises
+    as its mark listener by create_app (exercises never imports lti)."""
+    items = _line_items(session, user_id, LtiLineItem.exercise_assignment_id == test.id)
+    score = (mark, float(test.points)) if mark is not None and test.points > 0 else None
+    return _queue(session, items, user_id, score)
+
+
+def queue_marks_of_new_line_item(session: Session, item: LtiLineItem, test: ExerciseAssignment,
+                                 marks: dict[int, float]) -> int:
+    """Queues the marks students already have (user id -> points) on an exercise's test whose line item the LMS just
+    named, for those that LMS knows; the number queued."""
+    context = session.get(LtiContext, item.context_id)
+    if context is None or test.points <= 0 or not marks:
+        return 0
+    known = set(session.scalars(select(LtiIdentity.user_id).where(LtiIdentity.issuer == context.issuer,
+                                                                 LtiIdentity.user_id.in_(list(marks)))))
+    return sum(_queue(session, [item], user_id, (mark, float(test.points)))
+               for user_id, mark in sorted(marks.items()) if user_id in known)
 
 
 def _claim(session_factory: Callable[[], Session], now: datetime, key: str) -> list[int]:

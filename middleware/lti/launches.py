@@ -138,6 +138,13 @@ def linkable_courses(session: Session, user: User) -> list[Course]:
                                 .order_by(Course.title, Course.id)))
 
 
+def context_course(session: Session, claims: dict[str, Any]) -> int | None:
+    """The Telelab course of a launch's LMS course, None when it has none (yet)."""
+    found = _context_id(claims)
+    return None if found is None else session.scalar(select(LtiContext.course_id).where(
+        LtiContext.issuer == claims.get("iss"), LtiContext.context_id == found[0]))
+
+
 def map_context(session: Session, platform: LtiPlatform, claims: dict[str, Any],
                 course_id: int | None = None) -> LtiContext | None:
     """The Telelab course of the launch's LMS course, with the service URLs it gave. On its first launch the LMS
@@ -221,16 +228,26 @@ def read_target(claims: dict[str, Any], secret: str) -> Target | None:
     return Target(match.group(1), match.group(2))
 
 
-def remember_line_item(session: Session, context: LtiContext | None, exam_id: int, claims: dict[str, Any]) -> None:
-    """Keeps the LMS line item a test's launch names, where its grades go."""
+def remember_line_item(session: Session, context: LtiContext | None, claims: dict[str, Any], *,
+                       exam_id: int | None = None, exercise_assignment_id: int | None = None) -> LtiLineItem | None:
+    """Keeps the LMS line item the launch of a placed test (exam_id) or exercise test (exercise_assignment_id)
+    names, where its grades go; the row when the LMS named it for the first time, else None."""
     ags = claims.get(AGS_CLAIM)
     url = ags.get("lineitem") if isinstance(ags, dict) else None
     if context is None or not isinstance(url, str) or not url.startswith(("https://", "http://")):
-        return
-    row = session.scalar(select(LtiLineItem).where(LtiLineItem.context_id == context.id,
-                                                   LtiLineItem.exam_id == exam_id))
-    if row is None:
-        session.add(LtiLineItem(context_id=context.id, exam_id=exam_id, lineitem_url=url[:1000]))
-    else:
+        return None
+    graded = LtiLineItem.exam_id == exam_id if exam_id is not None else \
+        LtiLineItem.exercise_assignment_id == exercise_assignment_id
+    row = session.scalar(select(LtiLineItem).where(LtiLineItem.context_id == context.id, graded))
+    if row is not None:
         row.lineitem_url = url[:1000]
-    session.flush()
+        session.flush()
+        return None
+    row = LtiLineItem(context_id=context.id, exam_id=exam_id, exercise_assignment_id=exercise_assignment_id,
+                      lineitem_url=url[:1000])
+    try:
+        with session.begin_nested():
+            session.add(row)
+    except IntegrityError:  # another launch named it at the same moment: it is known, and its marks queued there
+        return None
+    return row

@@ -97,8 +97,15 @@ def link_course() -> ResponseReturnValue:
     return unless_refused(link, lambda refused: _link_page(launch_id, claims, refused.message, refused.status))
 
 
+def _placeable(launch_id: str) -> list[catalog.Placeable]:
+    """What the tutor may place in the LMS course of the deep-linking launch launch_id."""
+    dbs = get_session()
+    course_id = launches.context_course(dbs, dict(flow.restore_launch(dbs, launch_id).get_launch_data()))
+    return catalog.placeable(dbs, current_user, robot_registry(current_app).names(), course_id)
+
+
 def _picker(launch_id: str, error: str | None = None, status: int = 200) -> ResponseReturnValue:
-    items = catalog.placeable(get_session(), current_user, robot_registry(current_app).names())
+    items = _placeable(launch_id)
     return render_template("lti/deep_link.html", items=items, launch_id=launch_id, error=error), status
 
 
@@ -113,7 +120,7 @@ def deep_link() -> ResponseReturnValue:
     chosen = request.form.getlist("target")[:50]
     if not chosen:
         return _picker(launch_id, gettext("Choose at least one item to place in the LMS course."), 400)
-    known = {item.target: item for item in catalog.placeable(dbs, current_user, robot_registry(current_app).names())}
+    known = {item.target: item for item in _placeable(launch_id)}
     if any(target not in known for target in chosen):
         return _picker(launch_id, gettext("One of the chosen items is not offered any more. Choose again."), 400)
     launch_url = url_for("lti.launch", _external=True)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import JSON, DateTime, ForeignKey, Index, String, Text, UniqueConstraint
+from sqlalchemy import JSON, CheckConstraint, DateTime, ForeignKey, Index, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
 from middleware.models.accounts import utc_now
@@ -87,14 +87,21 @@ class LtiContext(Base):
 
 
 class LtiLineItem(Base):
-    """Where a test's grades go in an LMS course's gradebook (the line item a launch or deep link named)."""
+    """Where the grades of a test, or of an exercise attached to a course as a test, go in an LMS course's
+    gradebook (the line item a launch of the placed link named): exactly one of exam_id, exercise_assignment_id."""
 
     __tablename__ = "lti_line_items"
-    __table_args__ = (UniqueConstraint("context_id", "exam_id", name="uq_lti_line_items_context_exam"),)
+    __table_args__ = (
+        UniqueConstraint("context_id", "exam_id", name="uq_lti_line_items_context_exam"),
+        UniqueConstraint("context_id", "exercise_assignment_id", name="uq_lti_line_items_context_exercise"),
+        CheckConstraint("(exam_id IS NULL) <> (exercise_assignment_id IS NULL)", name="one_graded_item"),
+    )
 
     id: Mapped[int] = mapped_column(primary_key=True)
     context_id: Mapped[int] = mapped_column(ForeignKey("lti_contexts.id", ondelete="CASCADE"))
-    exam_id: Mapped[int] = mapped_column(ForeignKey("assessment_exams.id", ondelete="CASCADE"), index=True)
+    exam_id: Mapped[int | None] = mapped_column(ForeignKey("assessment_exams.id", ondelete="CASCADE"), index=True)
+    exercise_assignment_id: Mapped[int | None] = mapped_column(
+        ForeignKey("exercise_assignments.id", ondelete="CASCADE"), index=True)
     lineitem_url: Mapped[str] = mapped_column(String(1000))
 
 
@@ -115,7 +122,9 @@ class LtiGradePassback(Base):
     __table_args__ = (Index("ix_lti_grade_passbacks_due", "status", "next_try_at"),)
 
     id: Mapped[int] = mapped_column(primary_key=True)
-    attempt_id: Mapped[int] = mapped_column(ForeignKey("assessment_attempts.id", ondelete="CASCADE"), index=True)
+    # The test attempt whose mark it is; None for an exercise's mark (its line item names the exercise's test).
+    attempt_id: Mapped[int | None] = mapped_column(ForeignKey("assessment_attempts.id", ondelete="CASCADE"),
+                                                   index=True)
     line_item_id: Mapped[int] = mapped_column(ForeignKey("lti_line_items.id", ondelete="CASCADE"))
     user_id: Mapped[int] = mapped_column(ForeignKey("users.id", ondelete="CASCADE"))
     score_given: Mapped[float] = mapped_column()
