@@ -7,11 +7,13 @@ worker's the only one whose CSP allows WebAssembly ('wasm-unsafe-eval', which Py
 
 from __future__ import annotations
 
+import json
 import logging
 import secrets
 import time
 from datetime import datetime
 from pathlib import Path
+from typing import Any
 
 from flask import Blueprint, Response, current_app, jsonify, render_template, request
 from flask.typing import ResponseReturnValue
@@ -25,6 +27,8 @@ from middleware.browser_modules import csp_hash_source, import_map_text
 from middleware.db import get_session
 from middleware.errors import ApiError, Refused
 from middleware.exercises import schemas, services
+from middleware.exercises.catalogue import TEMPLATE_HEAD
+from middleware.models.exercises import Exercise
 from middleware.robots.link import RobotUnavailable
 from middleware.teaching.targets import PRACTICE_TARGET, resolve_target
 from middleware.web import now
@@ -34,6 +38,7 @@ log = logging.getLogger(__name__)
 blueprint = Blueprint("exercises", __name__)
 FRESH_ROBOT_WAIT_S = 40.0  # a submission's robot restarting: how long the request waits for it to answer again
 PAGE_FOLDER = "pages/exercises"
+NEW_TEMPLATE = TEMPLATE_HEAD + "\nwhile robot.tick():\n    robot.set_velocity(0.0, 0.0)\n"  # a new exercise's code
 ISOLATION_HEADERS = {"Cross-Origin-Opener-Policy": "same-origin", "Cross-Origin-Embedder-Policy": "require-corp"}
 
 
@@ -44,6 +49,14 @@ def _read_log(robot_name: str, since: datetime, until: datetime) -> list[list[fl
 def _map_source() -> str:
     """The CSP source of the page's import map (the same the app's own policy names)."""
     return csp_hash_source(import_map_text(current_app.static_url_path or "/static"))
+
+
+def _editor_policy(nonce: str) -> str:
+    """The Content-Security-Policy of a page with the code editor: CodeMirror writes its styles in a <style> element
+    carrying the response's nonce."""
+    return ("default-src 'self'; img-src 'self' blob: data:; connect-src 'self' ws: wss:; "
+            f"style-src 'self' 'nonce-{nonce}'; script-src 'self' {_map_source()}; object-src 'none'; "
+            "frame-ancestors 'none'")
 
 
 def _isolated(response: Response) -> Response:
@@ -64,6 +77,51 @@ def index() -> ResponseReturnValue:
                            editor=services.may_edit_catalogue(current_user))
 
 
+@blueprint.get("/exercises/new")
+@login_required
+def new_form() -> ResponseReturnValue:
+    """A tutor's or admin's form for a new exercise of the catalogue (it saves through POST /api/exercises)."""
+    _require_catalogue_editor()
+    return _definition_form(None)
+
+
+@blueprint.get("/exercises/<slug>/edit")
+@login_required
+def edit_form(slug: str) -> ResponseReturnValue:
+    """A tutor's or admin's form for an exercise's definition (it saves through PUT /api/exercises/<slug>)."""
+    _require_catalogue_editor()
+    return _definition_form(services.exercise_by_slug(get_session(), slug))
+
+
+def _require_catalogue_editor() -> None:
+    """The API's own rule (services.may_edit_catalogue): anyone else is refused the form as the API refuses them."""
+    if not services.may_edit_catalogue(current_user):
+        raise ApiError(403, "forbidden", gettext("Only tutors and admins change the exercise catalogue."))
+
+
+def _definition_form(exercise: Exercise | None) -> ResponseReturnValue:
+    """The catalogue's form, filled with the exercise's whole definition (its hidden start region too: only an editor
+    reads this page), or a new exercise's starting values."""
+    session = get_session()
+    services.ensure_catalogue(session)
+    if exercise is None:
+        values: dict[str, Any] = {"slug": "", "title": "", "statement": "", "template": NEW_TEMPLATE, "scene": "lab",
+                                  "start": [0.0, 0.0, 0.0], "random_starts": None, "time_limit_s": 60.0,
+                                  "rubric": {"kind": "reach_goal"}}
+    else:
+        values = {"slug": exercise.slug, "title": exercise.title, "statement": exercise.statement,
+                  "template": exercise.template, "scene": exercise.scene, "start": json.loads(exercise.start_json),
+                  "random_starts": json.loads(exercise.random_starts_json), "time_limit_s": exercise.time_limit_s,
+                  "rubric": json.loads(exercise.rubric_json)}
+    scenes = sorted({"lab", *(e.scene for e in services.catalogue(session))})
+    nonce = secrets.token_urlsafe(16)  # the template's editor (CodeMirror) writes its styles in a nonced <style>
+    response = Response(render_template("exercises/form.html", exercise=exercise, values=values, scenes=scenes,
+                                        kinds=schemas.RUBRIC_KIND_NAMES, parameters=schemas.RUBRIC_PARAMETERS,
+                                        style_nonce=nonce))
+    response.headers["Content-Security-Policy"] = _editor_policy(nonce)
+    return response
+
+
 @blueprint.get("/exercises/<slug>")
 @login_required
 def page(slug: str) -> ResponseReturnValue:
@@ -76,10 +134,7 @@ def page(slug: str) -> ResponseReturnValue:
                                         tutor=services.may_edit_catalogue(current_user),
                                         courses=services.attachable_courses(session, current_user, exercise),
                                         tests=services.tests_for(session, current_user, exercise)))
-    response.headers["Content-Security-Policy"] = (
-        "default-src 'self'; img-src 'self' blob: data:; connect-src 'self' ws: wss:; "
-        f"style-src 'self' 'nonce-{nonce}'; script-src 'self' {_map_source()}; object-src 'none'; "
-        "frame-ancestors 'none'")
+    response.headers["Content-Security-Policy"] = _editor_policy(nonce)
     return _isolated(response)
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
 
@@ -21,6 +22,7 @@ from middleware.validation import unstorable, unstorable_place, within_calendar
 MAX_CODE_CHARS = 20_000
 MAX_STATEMENT_CHARS = 4_000
 SLUG_PATTERN = re.compile(r"^[a-z0-9][a-z0-9-]{0,62}$")
+RESERVED_SLUGS = ("new",)  # /exercises/new is the form for a new exercise, so an exercise of that slug had no page
 MODES = ("practice", "submission")
 FORGED_FIELDS = ("grade", "fraction", "trace", "measurements", "start", "started_at", "ended_at", "seed")
 MIN_TIME_LIMIT_S, MAX_TIME_LIMIT_S = 5.0, 600.0
@@ -118,16 +120,107 @@ def _region(value: object, field: str) -> dict[str, list[float]] | None:
     return region
 
 
-RUBRIC_NUMBERS = {
-    "bump_and_go": ("min_travel_m", "min_cells", "stuck_s"),
-    "wall_following": ("x1_m", "y1_m", "x2_m", "y2_m", "distance_m", "tolerance_m", "min_travel_m"),
-    "reach_goal": ("x_m", "y_m", "radius_m"),
-    "cover_room": ("x_min_m", "x_max_m", "y_min_m", "y_max_m", "min_coverage"),
-    "report_pose": ("tolerance_m",),
-    "follow_line": ("x_min_m", "x_max_m", "y_min_m", "y_max_m", "corner_radius_m", "tolerance_m", "min_covered",
-                    "max_off_s"),
-    "kidnapped": ("tolerance_m", "x_m", "y_m", "radius_m"),
+@dataclass(frozen=True)
+class RubricParameter:
+    """One number of a rubric kind as the catalogue's form asks for it: its name in the rubric, its label, its unit
+    ("m", "s", "cells", or "" for a share from 0 to 1), a hint, and for an optional one the grader's default."""
+
+    name: str
+    label: str
+    unit: str
+    hint: str
+    default: float | None = None  # an optional number: what the grader takes when it is left out
+
+    @property
+    def optional(self) -> bool:
+        """Whether the rubric may leave it out."""
+        return self.default is not None
+
+
+_GOAL = N_("The goal, in the lab's frame.")
+_GOAL_RADIUS = N_("Full points when the robot's centre comes within this distance of the goal (half within twice it).")
+_POSE_ERROR = N_("Full points when the reported position is within this distance of where the robot truly was then "
+                 "(half within twice it).")
+_REGION = N_("The rectangle of floor to sweep, in the lab's frame.")
+_LINE = N_("The rectangle the tape's centre draws, in the lab's frame (the lab's line: x from -1.7 to 1.3 m, y from "
+           "-0.8 to 0.8 m).")
+_WALL = N_("A point of the wall's face, in the lab's frame.")
+_CELL = N_("The side of a floor cell.")
+# What each rubric kind is called in the form, and the numbers it takes (grading.py measures them), in that order.
+RUBRIC_KIND_NAMES = {
+    "bump_and_go": N_("Bump and go: distance driven, floor cells visited, time stuck"),
+    "wall_following": N_("Follow a wall: RMS error of the distance to it, distance along it"),
+    "reach_goal": N_("Reach a goal: the closest distance to it"),
+    "cover_room": N_("Sweep a region: the share of it swept"),
+    "report_pose": N_("Report the pose: the reported position's error"),
+    "follow_line": N_("Follow the line of tape: the share followed, the time off it"),
+    "kidnapped": N_("Localize after a kidnapping: the reported position's error, then the goal"),
 }
+RUBRIC_PARAMETERS: dict[str, tuple[RubricParameter, ...]] = {
+    "bump_and_go": (
+        RubricParameter("min_travel_m", N_("Distance to drive"), "m",
+                N_("Full points when the robot truly drives at least this far (half at half of it).")),
+        RubricParameter("min_cells", N_("Floor cells to visit"), "cells",
+                N_("Full points when the robot's centre passes through at least this many floor cells.")),
+        RubricParameter("stuck_s", N_("Longest time stuck"), "s",
+                N_("Full points when the robot never stays in one spot longer than this (half at twice it).")),
+        RubricParameter("cell_m", N_("Floor cell size"), "m", _CELL, 0.5),
+        RubricParameter("stuck_move_m", N_("Stuck radius"), "m",
+                N_("Staying within this distance of one spot counts as stuck."), 0.1),
+    ),
+    "wall_following": (
+        RubricParameter("x1_m", N_("Wall's first point, x"), "m", _WALL),
+        RubricParameter("y1_m", N_("Wall's first point, y"), "m", _WALL),
+        RubricParameter("x2_m", N_("Wall's second point, x"), "m", _WALL),
+        RubricParameter("y2_m", N_("Wall's second point, y"), "m", _WALL),
+        RubricParameter("distance_m", N_("Distance to keep from the wall"), "m",
+                N_("Between the robot's centre and the wall's face.")),
+        RubricParameter("tolerance_m", N_("Allowed RMS error"), "m",
+                N_("Full points when the RMS error of that distance stays within this (half within twice it).")),
+        RubricParameter("min_travel_m", N_("Distance along the wall"), "m",
+                N_("Full points when the robot covers at least this far along the wall (half at half of it).")),
+        RubricParameter("settle_s", N_("Settling time"), "s",
+                N_("The first seconds are not measured: the robot finds the wall."), 5.0),
+    ),
+    "reach_goal": (
+        RubricParameter("x_m", N_("Goal, x"), "m", _GOAL),
+        RubricParameter("y_m", N_("Goal, y"), "m", _GOAL),
+        RubricParameter("radius_m", N_("Goal radius"), "m", _GOAL_RADIUS),
+    ),
+    "cover_room": (
+        RubricParameter("x_min_m", N_("Smallest x"), "m", _REGION),
+        RubricParameter("x_max_m", N_("Largest x"), "m", _REGION),
+        RubricParameter("y_min_m", N_("Smallest y"), "m", _REGION),
+        RubricParameter("y_max_m", N_("Largest y"), "m", _REGION),
+        RubricParameter("min_coverage", N_("Share to sweep"), "",
+                N_("Full points when the robot's body passes over at least this share of the region (0.6 is 60 per "
+                   "cent).")),
+        RubricParameter("cell_m", N_("Floor cell size"), "m", _CELL, 0.25),
+    ),
+    "report_pose": (
+        RubricParameter("tolerance_m", N_("Allowed position error"), "m", _POSE_ERROR),
+    ),
+    "follow_line": (
+        RubricParameter("x_min_m", N_("Smallest x"), "m", _LINE),
+        RubricParameter("x_max_m", N_("Largest x"), "m", _LINE),
+        RubricParameter("y_min_m", N_("Smallest y"), "m", _LINE),
+        RubricParameter("y_max_m", N_("Largest y"), "m", _LINE),
+        RubricParameter("corner_radius_m", N_("Corners' radius"), "m", N_("The lab's line: 0.45 m.")),
+        RubricParameter("tolerance_m", N_("Distance that counts as on the line"), "m",
+                N_("The robot's centre within this distance of the tape's centre is on the line.")),
+        RubricParameter("min_covered", N_("Share of the line to follow"), "",
+                N_("Full points when the robot passes along at least this share of the line (0.85 is 85 per cent).")),
+        RubricParameter("max_off_s", N_("Longest time off the line"), "s",
+                N_("Full points when the robot's centre spends at most this long off the line (half at twice it).")),
+    ),
+    "kidnapped": (
+        RubricParameter("tolerance_m", N_("Allowed position error"), "m", _POSE_ERROR),
+        RubricParameter("x_m", N_("Goal, x"), "m", N_("The goal to reach after the report, in the lab's frame.")),
+        RubricParameter("y_m", N_("Goal, y"), "m", N_("The goal to reach after the report, in the lab's frame.")),
+        RubricParameter("radius_m", N_("Goal radius"), "m", _GOAL_RADIUS),
+    ),
+}
+RUBRIC_NUMBERS = {kind: tuple(p.name for p in numbers if not p.optional) for kind, numbers in RUBRIC_PARAMETERS.items()}
 OPTIONAL_NUMBERS = ("cell_m", "stuck_move_m", "settle_s")
 
 
@@ -161,6 +254,9 @@ def definition(body: object, slug_required: bool = True) -> dict[str, Any]:
         if not isinstance(slug, str) or not SLUG_PATTERN.fullmatch(slug):
             raise InvalidField("slug", gettext("slug is 1 to 63 lower-case letters, digits and -, starting with a "
                                                "letter or digit."))
+        if slug in RESERVED_SLUGS:
+            raise InvalidField("slug", gettext("slug %(slug)s is the address of the form for a new exercise; choose "
+                                               "another.", slug=slug))
         result["slug"] = slug
     result["title"] = text(data.get("title"), "title", 120, N_("the exercise's title"))
     if not result["title"].strip():

@@ -147,6 +147,8 @@ ROUTES = (
     "GET /exercises",
     "GET /exercises/<slug>",
     "GET /exercises/python-worker.js",
+    "GET /exercises/new",
+    "GET /exercises/<slug>/edit",
     "GET /exercises/<slug>/class",
     "GET /api/exercises",
     "POST /api/exercises",
