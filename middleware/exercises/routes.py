@@ -27,7 +27,6 @@ from middleware.browser_modules import csp_hash_source, import_map_text
 from middleware.db import get_session
 from middleware.errors import ApiError, Refused
 from middleware.exercises import schemas, services
-from middleware.exercises.catalogue import TEMPLATE_HEAD
 from middleware.models.exercises import Exercise
 from middleware.robots.link import RobotUnavailable
 from middleware.teaching.targets import PRACTICE_TARGET, resolve_target
@@ -38,7 +37,8 @@ log = logging.getLogger(__name__)
 blueprint = Blueprint("exercises", __name__)
 FRESH_ROBOT_WAIT_S = 40.0  # a submission's robot restarting: how long the request waits for it to answer again
 PAGE_FOLDER = "pages/exercises"
-NEW_TEMPLATE = TEMPLATE_HEAD + "\nwhile robot.tick():\n    robot.set_velocity(0.0, 0.0)\n"  # a new exercise's code
+# A new exercise's starting code: the loop every exercise has, in no language (the tutor writes the rest).
+NEW_TEMPLATE = "from telelab import robot\n\nwhile robot.tick():\n    robot.set_velocity(0.0, 0.0)\n"
 ISOLATION_HEADERS = {"Cross-Origin-Opener-Policy": "same-origin", "Cross-Origin-Embedder-Policy": "require-corp"}
 
 
