@@ -27,7 +27,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from flask_babel import force_locale, gettext  # type: ignore[import-untyped]
+from flask_babel import force_locale, gettext, ngettext  # type: ignore[import-untyped]
 
 from middleware.errors import written_number
 from middleware.i18n import N_
@@ -257,15 +257,19 @@ def grade(rubric: dict[str, Any], trace: list[list[float]], report: dict[str, An
 def feedback_sentence(fraction: float, measurements: Iterable[Mapping[str, Any]]) -> str:
     """The grade's sentence for the student, in the request's language (English outside a request), from its
     measurements as measurements_dict gives them: "72% of the points. distance driven 3.10 m (bar 3 m: 100%); ..."."""
-    parts = "; ".join(gettext("%(name)s %(value)s%(unit)s (bar %(bar)s%(unit)s: %(percent)s%%)",
-                              name=gettext(m["name"]), value=_shown(m["value"]), unit=_unit(m["unit"]),
-                              bar=written_number(m["bar"], "g"), percent=int(m["fraction"] * 100))
+    parts = "; ".join(gettext("%(name)s %(value)s%(unit)s (bar %(bar)s%(bar_unit)s: %(percent)s%%)",
+                              name=gettext(m["name"]), value=_shown(m["value"]), unit=_unit(m["unit"], m["value"]),
+                              bar=written_number(m["bar"], "g"), bar_unit=_unit(m["unit"], m["bar"]),
+                              percent=int(m["fraction"] * 100))
                       for m in measurements)
     return str(gettext("%(percent)s%% of the points. %(parts)s.", percent=int(round(fraction * 100)), parts=parts))
 
 
-def _unit(unit: str) -> str:
-    return f" {gettext(unit)}" if unit == CELLS else f" {unit}" if unit else ""
+def _unit(unit: str, count: float) -> str:
+    """The unit after a number; cells, the one word, agrees with the count ("1 cell", "2 cells")."""
+    if unit == CELLS:
+        return " " + str(ngettext("cell", "cells", 1 if count == 1 else 2))
+    return f" {unit}" if unit else ""
 
 
 def _shown(value: float) -> str:

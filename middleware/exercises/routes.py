@@ -26,9 +26,10 @@ from middleware.assessment.recording import robot_run
 from middleware.browser_modules import csp_hash_source, import_map_text
 from middleware.db import get_session
 from middleware.errors import ApiError, Refused
-from middleware.exercises import schemas, services
+from middleware.exercises import catalogue, schemas, services
 from middleware.models.exercises import Exercise
 from middleware.robots.link import RobotUnavailable
+from middleware.robots.registry import robot_registry
 from middleware.teaching.targets import PRACTICE_TARGET, resolve_target
 from middleware.web import now
 from protos.telelab.v1 import robot_pb2
@@ -133,7 +134,8 @@ def page(slug: str) -> ResponseReturnValue:
     response = Response(render_template("exercises/exercise.html", exercise=exercise, style_nonce=nonce,
                                         tutor=services.may_edit_catalogue(current_user),
                                         courses=services.attachable_courses(session, current_user, exercise),
-                                        tests=services.tests_for(session, current_user, exercise)))
+                                        tests=services.tests_for(session, current_user, exercise),
+                                        lab_robots=robot_registry().names()))
     response.headers["Content-Security-Policy"] = _editor_policy(nonce)
     return _isolated(response)
 
@@ -207,8 +209,10 @@ def detail(slug: str) -> ResponseReturnValue:
     runs = services.own_runs(session, current_user, exercise)
     for run in runs:
         services.finish_if_overdue(session, run, _read_log, now())
-    return jsonify({"exercise": services.exercise_dict(exercise, full=True),
-                    "code": latest.code if latest else exercise.template,
+    shown = services.exercise_dict(exercise, full=True)
+    shown["template"] = catalogue.in_language(exercise.template)  # here only: a tutor's edit form saves it as written
+    return jsonify({"exercise": shown,
+                    "code": latest.code if latest else shown["template"],
                     "runs": [services.run_dict(r) for r in runs],
                     "tests": services.tests_for(session, current_user, exercise)})
 

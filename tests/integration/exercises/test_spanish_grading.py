@@ -31,6 +31,7 @@ def test_a_graded_run_reads_in_the_students_language_and_its_english_is_as_store
     english = answer["run"]
     assert english["feedback"].endswith("%)."), english["feedback"]
     assert "of the points. distance driven " in english["feedback"] and "(bar " in english["feedback"]
+    assert "floor cells visited 1 cell (bar 14 cells: 0%)" in english["feedback"], english["feedback"]  # agrees
     assert [m["name"] for m in english["measurements"]] == [
         "distance driven", "floor cells visited", "longest time stuck"]
 
@@ -42,7 +43,8 @@ def test_a_graded_run_reads_in_the_students_language_and_its_english_is_as_store
         "distancia recorrida", "casillas del suelo visitadas", "mayor tiempo atascado"]
     assert [m["value"] for m in spanish["measurements"]] == [m["value"] for m in english["measurements"]]
     feedback = spanish["feedback"]
-    assert "% de los puntos. distancia recorrida " in feedback and "casillas (umbral 14 casillas" in feedback, feedback
+    assert "% de los puntos. distancia recorrida " in feedback, feedback
+    assert "visitadas 1 casilla (umbral 14 casillas" in feedback, feedback  # the unit agrees with its number
     assert "of the points" not in feedback and "bar " not in feedback and "," in feedback  # 0,00 m
     status, answer = api(ann, "POST", "/api/exercises/no-such-exercise/runs", {"code": STILL})
     assert (status, answer["error"]["code"], answer["error"]["message"]) == (
@@ -50,6 +52,14 @@ def test_a_graded_run_reads_in_the_students_language_and_its_english_is_as_store
     status, answer = api(ann, "POST", "/api/plans", {"name": "bad name", "text": "stop"})
     assert (status, answer["error"]["field"]) == (400, "name"), answer
     assert answer["error"]["message"] == "El nombre de un plan tiene de 1 a 64 letras, dígitos, - y _ (sin espacios)."
+
+    bea = plans_lab.client("student2")  # no code of her own yet
+    _language(bea, "es")
+    status, answer = api(bea, "GET", "/api/exercises/bump-and-go")
+    assert status == 200 and "# El bucle va a 20 Hz" in answer["code"] and "The loop runs" not in answer["code"], answer
+    assert answer["exercise"]["template"] == answer["code"]  # a student without code of their own starts from it
+    status, answer = api(plans_lab.client("tutor1"), "GET", "/api/exercises/bump-and-go")
+    assert "# The loop runs at 20 Hz" in answer["code"], "an English reader gets the template as stored"
 
     _language(ann, "en")
     status, answer = api(ann, "GET", f"/api/exercise-runs/{run_id}")

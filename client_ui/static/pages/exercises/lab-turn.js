@@ -11,16 +11,9 @@ import { t } from "../../lib/i18n.js";
 
 const REMEMBERED = "telelab-exercise-lab-robot";  // this tab's choice, so a reload keeps the seat (sessionStorage)
 
-/** The lab's robots, [{name, title}]: the options the page was served with, else the lab's robot list (/lab). */
-export async function labRobots(select) {
-  const served = [...select.options].map((option) => ({ name: option.value, title: option.textContent.trim() }));
-  if (served.length) return served;
-  // The exercise page is not served the lab's robots (a route field is asked for): the robot list page names them.
-  const response = await fetch("/lab", { credentials: "same-origin" });
-  if (!response.ok) return [];
-  const page = new DOMParser().parseFromString(await response.text(), "text/html");
-  return [...page.querySelectorAll("a[data-robot]")].map((card) => ({ name: card.dataset.robot,
-    title: card.querySelector(".robot-card__title")?.textContent.trim() || card.dataset.robot }));
+/** The lab's robots, [{name, title}]: the options the page was served with. */
+export function labRobots(select) {
+  return [...select.options].map((option) => ({ name: option.value, title: option.textContent.trim() }));
 }
 
 /** The seat in words for this page: the console's sentence, then what it means for submitting here. */
@@ -59,7 +52,7 @@ export class LabTurn extends EventTarget {
 
   /** Lists the lab's robots; rejoins the queue this tab had joined (a reload). */
   async load() {
-    const robots = await labRobots(this.#select);
+    const robots = labRobots(this.#select);
     this.#select.replaceChildren(...robots.map(({ name, title }) => {
       const option = document.createElement("option");
       option.value = name;

@@ -111,7 +111,7 @@ async function init(message) {
   pyodide.registerJsModule("telelab_bridge", bridge);
   pyodide.runPython("import sys\nsys.path.insert(0, '/home/pyodide')\n" + RUNNER);
   // The page says "Python <version>": the interpreter's (3.14.0), not Pyodide's own numbering (314.0.7).
-  const version = pyodide.runPython("sys.version.split()[0]");
+  const version = String(pyodide.globals.get("sys").version).split(" ")[0];
   post({ type: "ready", load_s: (performance.now() - began) / 1000, version, pyodide_version: pyodide.version });
 }
 
