@@ -115,6 +115,8 @@ def test_a_tutor_writes_an_exercise_reads_a_refusal_beside_its_field_and_a_stude
         saved.filter(has_text="Saved").wait_for()
         page.locator("[data-field=saved-link]").click()
         page.locator(".exercise-statement").filter(has_text="wooden crate").wait_for()
+        assert page.get_by_role("link", name="Edit this exercise").get_attribute("href") == \
+            f"/exercises/{slug}/edit"  # a tutor's way back to the form from the exercise itself
 
         # The list offers Edit on it, and the form opens with what was saved, the hidden region too.
         page.goto(f"{form_lab.url}/exercises")
@@ -143,6 +145,7 @@ def test_a_tutor_writes_an_exercise_reads_a_refusal_beside_its_field_and_a_stude
         assert "Drive to the red crate at x = 2 m, y = 1.4 m." in page.locator(".exercise-statement").inner_text()
         page.locator(".cm-content").filter(has_text="Drive to the crate.").wait_for(timeout=30_000)
         assert "robot.set_velocity(0.2, 0.0)" in page.locator(".cm-content").inner_text()
+        assert page.locator("a[href$='/edit']").count() == 0  # nor on the exercise's own page
         page.screenshot(path=str(ARTIFACTS_DIR / f"exercise-form-student-reads-{size}.png"), full_page=True)
         for path in ("/exercises/new", f"/exercises/{slug}/edit"):
             answer = page.goto(f"{form_lab.url}{path}")
