@@ -8,6 +8,7 @@ import time
 from collections.abc import Iterator
 
 import pytest
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
 from tests.conftest import ARTIFACTS_DIR, LiveServer, make_course, served_lab
 from tests.e2e.test_lessons import log_in
@@ -352,12 +353,27 @@ def test_the_consoles_line_sensor_panel_reads_the_tape_under_the_robot(page, exe
     panel.screenshot(path=str(ARTIFACTS_DIR / "line-sensor-panel.png"))
 
 
+# The reference, saying every 5 s what robot.localization() reads while it searches (the journey failed 1 run in 5
+# at load, never localized, cause not known: this says which half failed when it fails again).
+KIDNAPPED_TELLING_ITS_SEARCH = solutions.KIDNAPPED.replace(
+    "where = None\n", "where = None\nsaid_at = 0.0\n", 1).replace("""    robot.set_velocity(0.0, 0.6)
+""", """    if robot.time() >= said_at + 5:
+        said_at = robot.time()
+        print("searching:", None if where is None else (where.converged, round(where.std_m, 2)))
+    robot.set_velocity(0.0, 0.6)
+""", 1)
+assert KIDNAPPED_TELLING_ITS_SEARCH != solutions.KIDNAPPED
+
+
 def test_after_a_kidnapping_the_students_code_localizes_with_the_labs_localization_and_is_graded(
         page, exercise_lab: LiveServer) -> None:
-    run_program(page, exercise_lab, "kidnapped", solutions.KIDNAPPED)
+    run_program(page, exercise_lab, "kidnapped", KIDNAPPED_TELLING_ITS_SEARCH)
     console = page.locator("[data-field=console]")
     console.filter(has_text="localization: EXECUTING").wait_for(timeout=60_000)  # start_skill returned at once
-    console.filter(has_text="localized at").wait_for(timeout=90_000)  # robot.localization() converged in Chromium
+    try:
+        console.filter(has_text="localized at").wait_for(timeout=90_000)  # robot.localization() converged in Chromium
+    except PlaywrightTimeout:  # what the search read meanwhile: no estimate at all, or one that never converged
+        raise AssertionError(f"not localized within 90 s; the page's console: {console.inner_text()[-2000:]}") from None
     grade = page.locator("[data-field=grade]").filter(has_text="Practice run")
     grade.wait_for(timeout=120_000)
     reported = page.locator("[data-slot=measurements] tbody tr").first.inner_text()
