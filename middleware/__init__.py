@@ -112,8 +112,12 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
         response.headers.setdefault(
             "Content-Security-Policy",
             "default-src 'self'; img-src 'self' blob: data:; connect-src 'self' ws: wss:; "
-            f"style-src 'self'; script-src 'self' {import_map_source}; object-src 'none'; frame-ancestors {framers}",
+            f"style-src 'self'; script-src 'self' {import_map_source}; object-src 'none'",
         )
+        # Who may frame a page is decided here alone, for a page with a policy of its own too (the exercises').
+        policy = response.headers["Content-Security-Policy"]
+        if "frame-ancestors" not in policy:
+            response.headers["Content-Security-Policy"] = f"{policy}; frame-ancestors {framers}"
         return response
 
     return app

@@ -56,8 +56,7 @@ def _editor_policy(nonce: str) -> str:
     """The Content-Security-Policy of a page with the code editor: CodeMirror writes its styles in a <style> element
     carrying the response's nonce."""
     return ("default-src 'self'; img-src 'self' blob: data:; connect-src 'self' ws: wss:; "
-            f"style-src 'self' 'nonce-{nonce}'; script-src 'self' {_map_source()}; object-src 'none'; "
-            "frame-ancestors 'none'")
+            f"style-src 'self' 'nonce-{nonce}'; script-src 'self' {_map_source()}; object-src 'none'")
 
 
 def _isolated(response: Response) -> Response:
@@ -149,7 +148,7 @@ def worker() -> ResponseReturnValue:
     response.headers["Cache-Control"] = "no-cache"
     response.headers["Content-Security-Policy"] = (
         "default-src 'self'; connect-src 'self'; "
-        f"script-src 'self' 'wasm-unsafe-eval' {_map_source()}; object-src 'none'; frame-ancestors 'none'")
+        f"script-src 'self' 'wasm-unsafe-eval' {_map_source()}; object-src 'none'")
     return _isolated(response)
 
 

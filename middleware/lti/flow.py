@@ -167,15 +167,32 @@ def launch_platform(session: Session, launch: MessageLaunch) -> LtiPlatform:
     return platform
 
 
+# What runs only in a window of its own: a Python exercise needs cross-origin isolation, which no LMS's frame gives.
+OWN_WINDOW_KINDS = ("exercise:",)
+
+
+class _Resource(DeepLinkResource):
+    """pylti1p3's resource link, with the target it keeps but does not send: "window" asks the LMS to open it in a
+    window (or tab) of its own (LTI Deep Linking 2.0, the content item's window property)."""
+
+    def to_dict(self) -> dict[str, object]:
+        item = super().to_dict()
+        if self._target == "window":
+            item["window"] = {"targetName": "_blank"}
+        return item
+
+
 def deep_link_response(launch: MessageLaunch, items: list[tuple[str, str, str, float | None]],
                        secret: str) -> tuple[str, str]:
     """(the platform's return URL, the signed JWT) placing items: (title, url, target, score maximum or None)."""
     context = cast(dict[str, Any], launch.get_launch_data().get(launches.CONTEXT_CLAIM) or {})
     resources = []
     for title, url, target, maximum in items:
-        resource = DeepLinkResource().set_url(url).set_title(title).set_custom_params(
+        resource = _Resource().set_url(url).set_title(title).set_custom_params(
             {launches.TARGET_PARAM: target, launches.SIGNATURE_PARAM: launches.sign_target(
                 secret, str(context.get("id", "")), target)})
+        if target.startswith(OWN_WINDOW_KINDS):
+            resource.set_target("window")
         if maximum is not None:
             resource.set_lineitem(LineItem().set_label(title).set_score_maximum(maximum).set_tag(target)
                                   .set_resource_id(target))

@@ -201,3 +201,23 @@ def test_an_unregistered_origin_cannot_frame_telelab(page, embedded: tuple[LiveS
     heading.wait_for(timeout=30000)
     assert "instructors" in page.frame_locator("#tool").locator("#error-message").text_content()
     page.screenshot(path=str(ARTIFACTS_DIR / "lti-refused-in-lms-frame-phone.png"))
+
+
+def test_an_exercise_framed_by_the_lms_offers_a_window_of_its_own_where_python_runs(
+        page, embedded: tuple[LiveServer, LmsPlatform]) -> None:
+    """Deep linking asks the LMS to open an exercise in a window (tests/integration/lti/test_deep_link_kinds.py); an
+    LMS that frames it anyway gets a page that loads (the LMS may frame it) and says why it needs a window."""
+    server, lms = embedded
+    lms.pending["code"] = {"sub": "lea-learner", "roles": [LEARNER], "custom": _placed(server, "exercise:bump-and-go")}
+    page.goto(f"{lms.url}/course?login_hint=code")
+    frame = page.frame_locator("#tool")
+    notice = frame.locator("[data-slot=own-window]")
+    notice.wait_for(timeout=30000)
+    assert "a window of their own" in notice.inner_text()
+    page.screenshot(path=str(ARTIFACTS_DIR / "lti-exercise-in-lms-frame.png"))
+    with page.context.expect_page() as opened:
+        notice.get_by_role("link", name="Open in a new window").click()
+    window = opened.value
+    window.get_by_role("status").filter(has_text="is ready").wait_for(timeout=90_000)  # isolated: Pyodide runs
+    assert window.locator("[data-slot=own-window]").is_hidden()
+    window.close()

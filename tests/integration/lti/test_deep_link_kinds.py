@@ -51,6 +51,10 @@ def _offered(picker: str) -> dict[str, str]:
             for m in re.finditer(r'<input[^>]*name="target"[^>]*value="([^"]*)"[^>]*>(.*?)</label>', picker, re.S)}
 
 
+def headers_of(client: LabClient, path: str) -> dict[str, str]:
+    return client.request("GET", path)[1]
+
+
 def test_each_kind_is_placed_from_the_lms_and_its_link_opens_its_page(seeded: tuple[LiveServer, LmsPlatform]) -> None:
     server, lms = seeded
     tutor = LabClient(server.url)
@@ -85,6 +89,9 @@ def test_each_kind_is_placed_from_the_lms_and_its_link_opens_its_page(seeded: tu
     items = {item["custom"]["telelab_target"]: item for item in lms.deep_link_returns[-1][CONTENT_ITEMS]}
     assert set(items) == set(chosen.values())
     assert [t for t, item in items.items() if "lineItem" in item] == [chosen["exam"]]  # a test gets a column
+    # A Python exercise needs a window of its own (cross-origin isolation, which no LMS frame gives); nothing else.
+    assert {t: item.get("window") for t, item in items.items() if "window" in item} == {
+        chosen["exercise"]: {"targetName": "_blank"}}
 
     # Where each placed link opens, and the page's heading the person reads there.
     learner = LabClient(server.url)
@@ -102,5 +109,7 @@ def test_each_kind_is_placed_from_the_lms_and_its_link_opens_its_page(seeded: tu
         assert heading, f"{kind}: {path} has no heading"
         if kind in ("lesson", "tour", "exam", "exercise"):  # the page of the very item placed
             assert items[target]["title"] in html.unescape(page), f"{kind}: {path} is not {items[target]['title']}"
+        framers = headers_of(learner, path)["Content-Security-Policy"].split("frame-ancestors ")[1].split(";")[0]
+        assert lms.issuer in framers.split(), f"{kind}: {path} may not be framed by the LMS ({framers})"
     status, headers, _ = launch(tutor, lms, "pia-instructor", [INSTRUCTOR], custom=items[chosen["class"]]["custom"])
     assert status == 303 and urlsplit(headers["Location"]).path == f"/courses/{course}/class", headers["Location"]

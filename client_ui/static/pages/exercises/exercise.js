@@ -96,8 +96,9 @@ function setRunning(running) {
 }
 
 // ---- Python ----
-const python3 = new PythonWorker();
-python3.ready.then((message) => {
+// The worker shares memory with the page (SharedArrayBuffer), which only an isolated page has: none is made otherwise.
+const python3 = window.crossOriginIsolated ? new PythonWorker() : null;
+python3?.ready.then((message) => {
   pythonReady = true;
   timings.pyodide_load_s = message.load_s;
   root.dataset.pythonReady = "true";
@@ -105,9 +106,14 @@ python3.ready.then((message) => {
   setRunning(false);
 }, (error) => say(t("Python did not load: {message}", { message: error.message }), "error"));
 
-if (!window.crossOriginIsolated) {
+if (window.self !== window.top && !window.crossOriginIsolated) {
+  // Framed by an LMS, the page cannot be isolated (its parent is not): the program needs a window of its own.
+  document.querySelector("[data-slot=own-window]").hidden = false;
+  say(t("Python exercises run in a window of their own, not inside another site's page."), "error");
+} else if (!window.crossOriginIsolated) {
   say(t("This page needs a browser that isolates it (SharedArrayBuffer): a current Chromium, Firefox or Safari."), "error");
 }
+
 
 // ---- the practice robot ----
 async function practiceRobot() {
