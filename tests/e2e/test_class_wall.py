@@ -151,7 +151,12 @@ def test_a_tutor_sees_the_class_moves_takes_over_answers_a_hand_and_stops_every_
         # Assist by keyboard: a note with a pointer moved by the arrow keys on the tile's map.
         tile = page.locator(".wall-tile", has_text="student1")
         tile.get_by_text("Assist").click()
-        tile.locator("canvas").focus()
+        tile.locator("canvas[tabindex='0']").focus()  # the map takes keys once Assist has opened (its toggle event)
+        # The wall's seats come again meanwhile (a hand raised elsewhere): the map keeps the tutor's keys.
+        second.get_by_role("button", name="Raise my hand").click()
+        page.locator(".wall-tile", has_text="student2").locator("[data-field=hand]").filter(
+            has_text="Hand raised").wait_for(timeout=15_000)
+        assert page.evaluate("document.activeElement.tagName") == "CANVAS", "a seats update took the focus"
         for key in ("ArrowRight", "ArrowRight", "ArrowUp"):
             page.keyboard.press(key)
         tile.get_by_text("Pointing at x").wait_for()

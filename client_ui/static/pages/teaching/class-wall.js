@@ -179,6 +179,18 @@ function renderSummary() {
   root.dataset.hands = String(hands);
 }
 
+/** The tiles in the seats' order, moved only when it changed: moving an element takes the focus from whatever the
+ * tutor is using in it (the map's pointer keys, the note being typed), and seats come at every hand or state. */
+function placeInOrder(ordered) {
+  const current = list.children;
+  if (current.length === ordered.length && ordered.every((element, i) => current[i] === element)) return;
+  const focused = document.activeElement;
+  list.replaceChildren(...ordered);
+  if (focused instanceof HTMLElement && focused !== document.activeElement && list.contains(focused)) {
+    focused.focus({ preventScroll: true });
+  }
+}
+
 function updateSeats(seats) {
   lastSeats = seats;
   const seen = new Set();
@@ -196,7 +208,7 @@ function updateSeats(seats) {
       tiles.delete(userId);
     }
   }
-  list.replaceChildren(...ordered);
+  placeInOrder(ordered);
   renderSummary();
   askForScene(seats);
 }
