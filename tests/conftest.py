@@ -239,8 +239,10 @@ def _let_go(application) -> None:
     from middleware.access.coordinator import access_coordinator
     from middleware.farm.setup import robot_farm
     from middleware.robots.registry import robot_registry
+    from middleware.teaching.practice_robots import practice_manager
 
     access_coordinator(application).stop_ticker()
+    practice_manager(application).close()  # its keeper would otherwise query a database the test has dropped
     robot_registry(application).close()
     robot_farm(application).close()
 

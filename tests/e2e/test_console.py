@@ -71,13 +71,20 @@ def test_the_student_sees_the_camera_drives_with_the_keys_and_watches_odometry(
     wait_for(lambda: canvas_pixels(page) != view_before, 3, "the camera view did not change after turning")
 
     x_before, y_before = number(page, "x"), number(page, "y")
+
+    def moved() -> float:
+        return ((number(page, "x") - x_before) ** 2 + (number(page, "y") - y_before) ** 2) ** 0.5
+
     page.keyboard.down("ArrowUp")
     wait_for(lambda: number(page, "linear") > 0.05, 3, "the robot did not speed up while ArrowUp was held")
-    time.sleep(0.8)
+    # Held until odometry shows 0.1 m, as a person holds a key until the robot is where they want it: a fixed
+    # hold measured the loaded host's frame pacing, not the console.
+    wait_for(lambda: moved() > 0.1, 4, "odometry did not move 0.1 m while ArrowUp was held")
     page.keyboard.up("ArrowUp")
     wait_for(lambda: abs(number(page, "linear")) < 0.01, 3, "the robot did not stop when the key was released")
-    moved = ((number(page, "x") - x_before) ** 2 + (number(page, "y") - y_before) ** 2) ** 0.5
-    assert moved > 0.1, f"odometry moved {moved:.3f} m"
+    stopped_at = moved()
+    time.sleep(0.5)
+    assert moved() - stopped_at < 0.02, "the robot kept moving after it reported standing still"
     ARTIFACTS_DIR.mkdir(exist_ok=True)
     page.screenshot(path=str(ARTIFACTS_DIR / "console-after-driving.png"))
 
