@@ -58,14 +58,19 @@ def first_error(ws, timeout_s: float = 5.0) -> dict:
     raise AssertionError("no error message arrived")
 
 
-def link_camera(client) -> tuple[dict | None, dict | None]:
-    """The camera subscribed on a /ws/link of client: (the channel's first error message, its close on sub 0)."""
+def link_camera(client) -> tuple[dict | None, dict | None, bool]:
+    """The camera subscribed on a /ws/link of client: (the channel's first error message, its close on sub 0, whether
+    a frame came), once it closed or a frame came."""
     link = client.websocket("/ws/link")
     link.send(json.dumps({"type": "subscribe", "sub": 1, "path": CAMERA}))
     said = closed = None
-    deadline = time.monotonic() + 5.0
-    while closed is None and (left := deadline - time.monotonic()) > 0:
+    framed = False
+    deadline = time.monotonic() + 10.0
+    while closed is None and not framed and (left := deadline - time.monotonic()) > 0:
         message = link.receive(timeout=left)
+        if isinstance(message, bytes):
+            framed = int.from_bytes(message[:4], "big") == 1
+            continue
         if not isinstance(message, str):
             continue
         sub, _, text = message.partition(" ")
@@ -75,7 +80,7 @@ def link_camera(client) -> tuple[dict | None, dict | None]:
         elif sub == "0" and payload.get("type") == "closed" and payload.get("sub") == 1:
             closed = payload
     link.close()
-    return said, closed
+    return said, closed, framed
 
 
 def test_a_zone_test_hides_the_obstacles_from_its_student_until_it_is_submitted(app, client_as,
@@ -117,7 +122,7 @@ def test_a_zone_test_hides_the_obstacles_from_its_student_until_it_is_submitted(
         said = first_error(camera)
         assert said["code"] == "obstacles_hidden", said
         assert closed_with(camera) == 4403
-        said, closed = link_camera(student)
+        said, closed, _ = link_camera(student)
         assert said is not None and said["code"] == "obstacles_hidden", said
         assert closed is not None and closed["code"] == 4403 and "obstacle-zone test" in closed["reason"], closed
 
@@ -131,8 +136,8 @@ def test_a_zone_test_hides_the_obstacles_from_its_student_until_it_is_submitted(
             ws = viewer.websocket(CAMERA)
             assert camera_frame_arrives(ws)
             ws.close()
-        said, closed = link_camera(tutor)
-        assert closed is None, closed
+        said, closed, framed = link_camera(tutor)
+        assert closed is None and framed, (said, closed)
 
         status, answer = api(student, "POST", f"/api/attempts/{attempt_id}/submit")
         assert status == 200, answer

@@ -38,7 +38,7 @@ def recording_lab(tmp_path_factory: pytest.TempPathFactory, skill_server_address
     tmp_path = tmp_path_factory.mktemp("recordings")
     threads_before = set(threading.enumerate())  # another file's app in this process may still be winding down
     app = make_test_app(f"sqlite:///{tmp_path / 'lab.sqlite3'}", f"{ROBOT}={skill_server_address}", tmp_path)
-    app.config.update(RECORDINGS_ENABLED=True, RECORDINGS_DIR=str(tmp_path / "recordings"), ACCESS_GRACE_S=5.0)
+    app.config.update(RECORDINGS_ENABLED=True, RECORDINGS_DIR=str(tmp_path / "recordings"))
     with session_factory(app)() as session:
         for name, role in (("student2", "student"), ("tutor1", "tutor"), ("tutor2", "tutor"), ("admin1", "admin")):
             add_test_account(session, name, role)

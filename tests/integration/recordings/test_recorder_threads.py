@@ -368,13 +368,13 @@ def test_a_session_is_recorded_where_its_robot_is_streamed_and_a_killed_workers_
         b.check()
         _wait(lambda: streams.open.get(x) == 1, 10, "B's console never streamed X")
         rx = _start(app, [x])[0]
-        _wait(lambda: rx in b.recording_now() and len(_odometry_ns(app, rx)) >= 10, 20, "B never recorded X")
+        _wait(lambda: rx in b.recording_now() and len(_odometry_ns(app, rx)) >= 10, 40, "B never recorded X")
         time.sleep(2 * keeping.SOLO_AFTER_S)  # A has seen the session for a while: it leaves it to B
         assert rx not in a.recording_now()
         assert streams.most[x] == 1, "a worker opened a second stream of X to record it"
 
         ry = _start(app, [y])[0]
-        _wait(lambda: ry in a.recording_now() and len(_odometry_ns(app, ry)) >= 10, 20, "A never recorded Y")
+        _wait(lambda: ry in a.recording_now() and len(_odometry_ns(app, ry)) >= 10, 40, "A never recorded Y")
         assert ry not in b.recording_now() and streams.open.get(y) == 1
         console_y = registry_b.get(y).telemetry.subscribe()
         _wait(lambda: ry in b.recording_now() and ry not in a.recording_now() and streams.open.get(y) == 1, 20,

@@ -305,8 +305,9 @@ export class CameraPanel extends PanelElement {
       const option = this.#sourceSelect.querySelector('option[value="drawn"]');
       option.disabled = true;
       option.textContent = t("drawn here (WebGL is missing)");
-      this.#showMessage(problem, true);
       this.source = "video";
+      this.#videoNote = problem; // outlasts the video's "live", which the fallback's own camera socket soon says
+      this.#showMessage(problem, true);
       this.emit("camera-source-change", { source: "video", fallback: true });
     }
   }
