@@ -66,6 +66,16 @@ export class TimingLog {
     if (oldest) this.answered(kind, oldest.key.slice(kind.length + 1), answeredMs, { ...options, timed: false });
   }
 
+  /** The server sent only the newest of the commands of kind waiting before id (a busy robot or worker): those
+   *  before it were answered, by being superseded, not lost. Untimed: no answer of their own came. */
+  supersededBefore(kind, id, answeredMs) {
+    for (const [key, pending] of this.#pending) {
+      if (pending.kind === kind && Number(key.slice(kind.length + 1)) < Number(id)) {
+        this.answered(kind, key.slice(kind.length + 1), answeredMs, { timed: false });
+      }
+    }
+  }
+
   /** A command of kind never reached its answer (the network failed under it). */
   lost(kind, id) {
     if (this.#pending.delete(`${kind}:${id}`)) this.#counts.lost += 1;

@@ -90,6 +90,21 @@ def test_a_new_drive_connection_counts_what_the_old_one_left_unanswered_as_lost(
     assert result == {"sent": 4, "answered": 1, "late": 0, "lost": 2, "waiting": 1}
 
 
+def test_commands_the_server_superseded_by_a_newer_one_are_answered_untimed_not_lost(module_page) -> None:
+    result = run(module_page, """
+        const log = new rt.TimingLog();
+        for (let sequence = 1; sequence <= 4; sequence += 1) log.sent('drive', sequence, sequence * 50);
+        log.sent('skill', 1, 60);
+        log.supersededBefore('drive', 4, 400);   // the ack of #4 said 3 waiting commands were superseded
+        log.answered('drive', 4, 400, {robotMs: 2});
+        log.sent('drive', 5, 450);
+        log.expire(6000);
+        return {delivery: log.delivery(), timed: log.samples('drive').length};
+    """)
+    # #1-#3 answered by being superseded (untimed), #4 timed; #5 and the skill, never answered, lost.
+    assert result == {"delivery": {"sent": 6, "answered": 4, "late": 0, "lost": 2, "waiting": 0}, "timed": 1}
+
+
 def test_the_odometry_panel_says_how_long_ago_a_command_was_applied_not_its_sequence_number(module_page) -> None:
     result = run(module_page, """return [NaN, 0, 999, 42500, 125000, 7300000].map((ago) =>
         odometry.appliedAgo(Number.isNaN(ago) ? NaN : 1000000 - ago, 1000000));""")

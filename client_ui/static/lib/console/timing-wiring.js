@@ -12,7 +12,9 @@ export function timeDriveCommands(session, log) {
     log.sent("drive", detail.sequence, performance.now(), JSON.stringify(detail).length);
   });
   session.addEventListener("ack", ({ detail }) => {
-    log.answered("drive", detail.sequence, performance.now(),
+    const now = performance.now();
+    if (detail.superseded > 0) log.supersededBefore("drive", detail.sequence, now);
+    log.answered("drive", detail.sequence, now,
       { robotMs: Number(detail.robot_rtt_ms ?? NaN), bytes: JSON.stringify(detail).length });
   });
   // A refused or invalid command is answered without a sequence: the socket keeps order, so it answers the oldest.
