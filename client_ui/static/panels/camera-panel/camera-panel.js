@@ -63,6 +63,7 @@ export class CameraPanel extends PanelElement {
   #drawn = null;          // DrawnView, once made
   #drawnProblem = "";
   #videoNote = "";        // why the video shows though the person chose the drawn picture (a graded run)
+  #videoNoteIsProblem = false; // this browser cannot draw (no WebGL): shown as a problem, which a phone keeps in view
   #drawing = false;       // a drawn frame is being made
   #nextPose = null;       // the newest telemetry not drawn yet: it replaces any older one waiting
   #withheld = false;      // the server refused the video (an obstacle-zone test): its sentence stays
@@ -279,6 +280,7 @@ export class CameraPanel extends PanelElement {
     if (!SOURCES.includes(source)) return;
     this.#source = source;
     this.#videoNote = "";
+    this.#videoNoteIsProblem = false;
     this.#sourceSelect.value = source;
     this.dataset.source = source;
     this.#nextPose = null;
@@ -307,6 +309,7 @@ export class CameraPanel extends PanelElement {
       option.textContent = t("drawn here (WebGL is missing)");
       this.source = "video";
       this.#videoNote = problem; // outlasts the video's "live", which the fallback's own camera socket soon says
+      this.#videoNoteIsProblem = true;
       this.#showMessage(problem, true);
       this.emit("camera-source-change", { source: "video", fallback: true });
     }
@@ -337,7 +340,8 @@ export class CameraPanel extends PanelElement {
         ? t("An added delay of {seconds} s is on your video.", { seconds: number(Number(message.injected_delay_s)) })
         : t(message.message ?? "");
       const online = this.#videoNote || said; // why the video shows outlasts its "live"
-      this.#showMessage(offline ? said || t("The robot is offline.") : online, offline);
+      this.#showMessage(offline ? said || t("The robot is offline.") : online,
+        offline || (Boolean(this.#videoNote) && this.#videoNoteIsProblem));
       this.#placeholder.textContent = offline ? t("No video: the robot is offline.") : WORDS.video.waiting;
       if (offline) {
         this.#placeholder.hidden = false;
