@@ -31,6 +31,17 @@ def drawn_pose(page) -> tuple[float, float, float]:
     return x, y, theta
 
 
+def set_speed_ceiling(page, max_linear_mps: float) -> None:
+    """The robot's linear velocity ceiling, as the low-level panel sets it (the student has control)."""
+    status = page.evaluate("""(value) => fetch('/api/robots/lab-1/limits', {
+      method: 'POST',
+      headers: {'Content-Type': 'application/json',
+                'X-CSRFToken': document.querySelector('meta[name="csrf-token"]').content},
+      body: JSON.stringify({max_linear_mps: value}),
+    }).then((answer) => answer.status)""", max_linear_mps)
+    assert status == 200, f"the speed ceiling was not set: {status}"
+
+
 def open_lab_view(page, live_server: LiveServer) -> None:
     open_console(page, live_server)
     wait_for_control(page)
@@ -63,6 +74,9 @@ def test_the_lab_view_draws_the_robot_where_odometry_says_and_follows_it(page, l
     page.screenshot(path=str(ARTIFACTS_DIR / "lab-view-above-desktop.png"))
 
     # A target picked on the 2D map stands in the 3D view too.
+    # Slowly (a student may lower the speed ceiling), so that on a loaded host the robot is still well short of
+    # the goal when the test reads the path, and the goal is still running when it is cancelled.
+    set_speed_ceiling(page, 0.08)
     canvas = page.locator('map-panel [data-field="map-canvas"]')
     canvas.scroll_into_view_if_needed()
     px, py = page.evaluate("document.querySelector('map-panel').cssPointOf(1.5, -0.5)")
@@ -202,6 +216,9 @@ def test_the_lab_view_draws_the_map_on_the_floor_and_the_path_planned_to_a_goal(
 
     # Go-to-goal to open floor: the path still ahead, from the feedback, is drawn as a red ribbon on the floor, and
     # the 2D map draws it too.
+    # Slowly (a student may lower the speed ceiling), so that on a loaded host the robot is still well short of
+    # the goal when the test reads the path, and the goal is still running when it is cancelled.
+    set_speed_ceiling(page, 0.08)
     canvas = page.locator('map-panel [data-field="map-canvas"]')
     canvas.scroll_into_view_if_needed()
     px, py = page.evaluate("(point) => document.querySelector('map-panel').cssPointOf(...point)", list(free))
@@ -242,6 +259,7 @@ def test_the_lab_view_draws_the_map_on_the_floor_and_the_path_planned_to_a_goal(
     # An ended goal's path goes; its goal pin may stay.
     page.locator('skill-panel[data-skill="go_to_goal"] button[data-action="cancel"]').click()
     page.locator('lab-view[data-path-points="0"]').wait_for(state="attached", timeout=10_000)
+    set_speed_ceiling(page, 0.5)
     page.locator('skill-panel[data-skill="environment_modelling"] button[data-action="cancel"]').click()
     # The session's robot is shared: the next test expects no map.
     page.once("dialog", lambda dialog: dialog.accept())
