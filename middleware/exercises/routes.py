@@ -21,12 +21,12 @@ from flask_babel import gettext  # type: ignore[import-untyped]
 from flask_login import current_user, login_required
 
 from middleware.access.commands import Commander, robot_commands
-from middleware.api.contract import ANY, ID, OBJECT, about, array, described, obj, one_of
+from middleware.api.contract import ANY, BOOLEAN, ID, OBJECT, TIME, about, array, described, obj, one_of
 from middleware.assessment.recording import robot_run
 from middleware.browser_modules import csp_hash_source, import_map_text
 from middleware.db import get_session
 from middleware.errors import ApiError, Refused
-from middleware.exercises import catalogue, schemas, services
+from middleware.exercises import catalogue, leaderboard, schemas, services
 from middleware.models.exercises import Exercise
 from middleware.robots.link import RobotUnavailable
 from middleware.robots.registry import robot_registry
@@ -159,7 +159,8 @@ def class_page(slug: str) -> ResponseReturnValue:
     session = get_session()
     exercise = services.exercise_by_slug(session, slug)
     rows = services.class_overview(session, current_user, exercise)
-    return render_template("exercises/class.html", exercise=exercise, rows=rows)
+    tests = [course for course in services.attachable_courses(session, current_user, exercise) if course["test"]]
+    return render_template("exercises/class.html", exercise=exercise, rows=rows, tests=tests)
 
 
 @blueprint.get("/api/exercises")
@@ -381,3 +382,43 @@ def attach(course_id: int) -> ResponseReturnValue:
     test = services.attach_to_course(session, current_user, course_id, exercise, deadline, points)
     return jsonify({"test": {"course_id": test.course_id, "slug": exercise.slug,
                              "deadline_at": deadline.isoformat(), "points": test.points}}), 201
+
+
+@blueprint.get("/courses/<int:course_id>/exercises/<slug>/leaderboard")
+@login_required
+def leaderboard_page(course_id: int, slug: str) -> ResponseReturnValue:
+    """The course's leaderboard of the exercise, for its members (exercise-leaderboard.js reads it from the API,
+    which says so when it is closed to students)."""
+    session = get_session()
+    exercise = services.exercise_by_slug(session, slug)
+    course, test = leaderboard.course_test(session, course_id, exercise)
+    leaderboard.require_member(session, current_user, test)
+    return render_template("exercises/leaderboard.html", exercise=exercise, course=course)
+
+
+@blueprint.get("/api/courses/<int:course_id>/exercises/<slug>/leaderboard")
+@login_required
+@described(answers={200: obj(
+    ("course", "slug", "open", "may_open", "standings", "unranked"),
+    course=OBJECT, slug=about("the exercise"), deadline_at=TIME, points=about("the test's points"), open=BOOLEAN,
+    may_open=BOOLEAN, standings=array(obj(("rank", "username", "mark", "fraction", "reached_at", "you"))),
+    unranked=about("how many of the course's students have no mark yet, not named"),
+)})
+def read_leaderboard(course_id: int, slug: str) -> ResponseReturnValue:
+    """The course's students ranked by their mark on the exercise's test (best graded submission begun before the
+    deadline; equal marks by who reached theirs first): the course's tutors always, its students while it is open."""
+    session = get_session()
+    exercise = services.exercise_by_slug(session, slug)
+    return jsonify(leaderboard.leaderboard(session, current_user, course_id, exercise))
+
+
+@blueprint.put("/api/courses/<int:course_id>/exercises/<slug>/leaderboard")
+@login_required
+@described(body=obj(("open",), open=BOOLEAN), answers={200: obj(("open",), open=BOOLEAN)})
+def open_leaderboard(course_id: int, slug: str) -> ResponseReturnValue:
+    """A course's tutor opens the exercise's leaderboard to the course's students ({"open": true}) or closes it."""
+    session = get_session()
+    exercise = services.exercise_by_slug(session, slug)
+    body = schemas.body_object(request.get_json(silent=True))  # its "open" is a boolean: the contract checked it
+    test = leaderboard.set_open(session, current_user, course_id, exercise, body["open"] is True)
+    return jsonify({"open": test.leaderboard_open})

@@ -331,16 +331,28 @@ def attachable_courses(session: Session, actor: User, exercise: Exercise) -> lis
 
 
 def _test_terms(test: ExerciseAssignment | None) -> dict[str, Any] | None:
-    return None if test is None else {"deadline_at": as_utc(test.deadline_at).isoformat(), "points": test.points}
+    return None if test is None else {"deadline_at": as_utc(test.deadline_at).isoformat(), "points": test.points,
+                                      "leaderboard_open": test.leaderboard_open}
+
+
+def best_submission(session: Session, user_id: int, test: ExerciseAssignment) -> ExerciseRun | None:
+    """The submission the student's mark on the test comes from: their best graded one begun before the deadline,
+    the first begun of equal ones (when they reached that mark)."""
+    return session.scalar(select(ExerciseRun).where(
+        ExerciseRun.user_id == user_id, ExerciseRun.exercise_id == test.exercise_id, ExerciseRun.mode == "submission",
+        ExerciseRun.fraction.is_not(None), ExerciseRun.started_at <= test.deadline_at)
+        .order_by(ExerciseRun.fraction.desc(), ExerciseRun.started_at, ExerciseRun.id).limit(1))
+
+
+def mark_of(test: ExerciseAssignment, fraction: float) -> float:
+    """A fraction of the test's points, as a mark (to the hundredth)."""
+    return round(fraction * test.points, 2)
 
 
 def test_grade(session: Session, user_id: int, test: ExerciseAssignment) -> float | None:
     """The student's mark on the test: the best graded submission begun before the deadline, in points."""
-    fractions = session.scalars(select(ExerciseRun.fraction).where(
-        ExerciseRun.user_id == user_id, ExerciseRun.exercise_id == test.exercise_id, ExerciseRun.mode == "submission",
-        ExerciseRun.fraction.is_not(None), ExerciseRun.started_at <= test.deadline_at))
-    best = max((f for f in fractions if f is not None), default=None)
-    return None if best is None else round(best * test.points, 2)
+    best = best_submission(session, user_id, test)
+    return None if best is None or best.fraction is None else mark_of(test, best.fraction)
 
 
 def on_mark_change(listener: MarkListener) -> None:
@@ -380,4 +392,5 @@ def tests_for(session: Session, user: User, exercise: Exercise) -> list[dict[str
                            .where(CourseMembership.user_id == user.id, ExerciseAssignment.exercise_id == exercise.id)
                            .order_by(ExerciseAssignment.deadline_at))
     return [{"course_id": course.id, "course": course.title, "deadline_at": as_utc(test.deadline_at).isoformat(),
-             "points": test.points, "mark": test_grade(session, user.id, test)} for test, course in rows]
+             "points": test.points, "mark": test_grade(session, user.id, test),
+             "leaderboard_open": test.leaderboard_open} for test, course in rows]

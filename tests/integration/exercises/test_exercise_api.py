@@ -97,7 +97,7 @@ def test_runs_are_placed_and_graded_by_the_server_and_seen_by_owner_and_tutor_on
     _, answer = api(ann, "GET", "/api/exercises/bump-and-go")
     assert answer["tests"] == [{"course_id": plans_lab.course, "course": "Course ROB1",
                                 "deadline_at": "2100-01-01T12:00:00+00:00", "points": 10.0,
-                                "mark": round(submitted * 10, 2)}]
+                                "mark": round(submitted * 10, 2), "leaderboard_open": False}]
     status, page = api(ann, "GET", "/exercises/bump-and-go")
     assert status == 200 and "A test of Course ROB1: submit before 2100-01-01 12:00 UTC (10.0 points)" in page["body"]
     assert page["headers"]["Cross-Origin-Embedder-Policy"] == "require-corp"
