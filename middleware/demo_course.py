@@ -33,7 +33,8 @@ from middleware.assessment.survey_statements import parse_statements
 from middleware.auth.services import create_user, find_user, generate_password
 from middleware.courses import services as courses
 from middleware.courses.schemas import CourseSettings
-from middleware.exercises.services import ensure_catalogue
+from middleware.exercises import leaderboard
+from middleware.exercises import services as exercises
 from middleware.experiment import protocol as experiment_protocol
 from middleware.experiment import services as experiment
 from middleware.models import Course, Role
@@ -218,8 +219,9 @@ def seed_demo_course(session: Session, now: datetime | None = None) -> DemoCours
     added.append(f"the lab survey the tutor wrote ({len(DEMO_SURVEY_STATEMENTS)} statements)")
     added += _survey_classmates(session, tutor, course.id)
     added += seed_demo_plans(session, course.id)
-    ensure_catalogue(session)  # the Python exercises' built-in catalogue
+    exercises.ensure_catalogue(session)  # the Python exercises' built-in catalogue
     added.append("the Python exercises' catalogue")
+    added += _exercise_test(session, tutor, course.id, now)
     return DemoCourse(course.id, added)
 
 
@@ -309,6 +311,35 @@ def _survey_classmates(session: Session, tutor: Any, course_id: int) -> list[str
     return [f"the lab survey answered by {len(DEMO_SURVEY_ANSWERS)} demo classmates",
             f"{len(DEMO_TRIALS) * len(experiment_protocol.CONDITIONS_PER_COURSE)} experiment trials of theirs on "
             "course-A"]
+
+
+# Where each classmate's graded submission of the obstacle-avoidance test ended, round the pillar (1.8, -1.5):
+# on the goal (full marks), short of it but within twice its radius (half), and stopped before the pillar (none).
+DEMO_EXERCISE = "obstacle-avoidance"
+DEMO_EXERCISE_ENDS = {"demo-classmate-1": (3.15, -1.5), "demo-classmate-2": (2.75, -1.0),
+                      "demo-classmate-3": (1.3, -1.5)}
+ROUND_THE_PILLAR = [(-0.5, -1.5), (1.1, -1.5), (1.8, -0.9), (2.5, -1.2)]
+
+
+def _exercise_test(session: Session, tutor: Any, course_id: int, now: datetime) -> list[str]:
+    """The obstacle-avoidance exercise as a test of the course with its leaderboard open, and a graded submission of
+    each demo classmate (a path round the pillar, as a pose log the grader reads), so the ranking shows at once."""
+    exercise = exercises.exercise_by_slug(session, DEMO_EXERCISE)
+    exercises.attach_to_course(session, tutor, course_id, exercise, now + OPEN_FOR, 10.0)
+    leaderboard.set_open(session, tutor, course_id, exercise, True)
+    classmates = [(find_user(session, name), end) for name, end in DEMO_EXERCISE_ENDS.items()]
+    for hours_ago, (classmate, (end_x, end_y)) in enumerate(classmates, start=1):
+        if classmate is None:
+            continue
+        began = now - timedelta(hours=hours_ago)
+        path = [point for point in ROUND_THE_PILLAR if point[0] < end_x] + [(end_x, end_y)]
+        trace = [[2.0 * i, x, y, 0.0, x, y, 0.0] for i, (x, y) in enumerate(path)]
+        code = exercises.save_code(session, classmate, exercise, exercise.template, began)
+        run = exercises.begin_run(session, classmate, exercise, code, "submission", DEMO_ROBOT, exercise.scene,
+                                  lambda start: None, lambda at=began: at, lambda *_, log=trace: log)
+        exercises.finish_run(session, classmate, run, None, lambda *_, log=trace: log, began + timedelta(seconds=30))
+    return [f"the exercise {DEMO_EXERCISE!r} as a test, its leaderboard open, with "
+            f"{sum(c is not None for c, _ in classmates)} classmates' graded submissions"]
 
 
 def _experiment_trials(session: Session, classmate: Any, course_id: int) -> None:

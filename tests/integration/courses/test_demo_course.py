@@ -132,3 +132,25 @@ def test_a_demo_course_seeded_before_the_classmates_gets_them_once(app, demo_acc
     with session_factory(app)() as session:
         course_id = demo.seed_demo_course(session).course_id
         assert survey.results(session, find_user(session, "tutor"), course_id).respondents == 3
+
+
+def test_the_demo_student_reads_the_open_leaderboard_of_the_course_s_exercise_test(app, demo_accounts) -> None:
+    from middleware.auth.services import find_user
+    from middleware.db import session_factory
+    from middleware.demo_course import DEMO_EXERCISE
+    from middleware.demo_course import seed_demo_course as seed
+    from middleware.exercises import leaderboard, services
+    from middleware.lab_runner import seed_demo_course
+
+    seed_demo_course(app)
+    with session_factory(app)() as session:
+        course_id = seed(session).course_id
+        assert course_id is not None
+        exercise = services.exercise_by_slug(session, DEMO_EXERCISE)
+        board = leaderboard.leaderboard(session, find_user(session, "student"), course_id, exercise)
+        assert board["open"] and not board["may_open"]
+        # Round the pillar to the goal, short of it, and stopped before the pillar: full, half and no marks.
+        assert [(row["username"], row["mark"], row["you"]) for row in board["standings"]] == [
+            ("demo-classmate-1", 10.0, False), ("demo-classmate-2", 5.0, False), ("demo-classmate-3", 0.0, False)]
+        assert board["unranked"] == 1  # the demo student, who has not submitted yet
+    assert seed_demo_course(app) == []
