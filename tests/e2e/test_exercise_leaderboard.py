@@ -35,6 +35,9 @@ WORDS = {
 }
 
 
+DEADLINE = datetime.now(UTC) + timedelta(days=400)
+
+
 @pytest.fixture(scope="module")
 def board_lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
     """ROB1 (tutor1; student1..4) with the exercise as a 15-point test a week ahead: student2 full marks, student1
@@ -54,7 +57,7 @@ def board_lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
         with server.app.app_context(), session_factory(server.app)() as session:
             users = {user.username: user for user in session.query(User)}
             exercise = services.add_exercise(session, users["tutor1"], schemas.definition(EXERCISE))
-            services.attach_to_course(session, users["tutor1"], course, exercise, now + timedelta(days=7), 15.0)
+            services.attach_to_course(session, users["tutor1"], course, exercise, DEADLINE, 15.0)
             for name, hours_ago, end_x_m in (("student2", 3, FULL), ("student1", 2, HALF), ("student3", 1, 0.0)):
                 submit(session, users[name], exercise, now - timedelta(hours=hours_ago), end_x_m)
             session.commit()
@@ -103,6 +106,8 @@ def test_the_tutor_opens_the_leaderboard_and_a_student_reads_their_rank(
         mine = student.locator("[data-slot=standings] tr[aria-current=true] td")
         assert [cell.replace("\u00a0", " ") for cell in mine.all_inner_texts()[:3]] == list(own_row)
         assert student.locator("[data-slot=control]").is_hidden()  # a student has no button to open or close it
+        # A deadline in another year says its year (next year's date is not this year's).
+        assert str(DEADLINE.year) in student.locator("[data-field=terms]").inner_text()
         fits(student)
         student.screenshot(path=str(ARTIFACTS_DIR / f"exercise-leaderboard-student-{size}.png"), full_page=True)
 

@@ -13,6 +13,12 @@ const toggle = root.querySelector("[data-action=toggle]");
 const table = root.querySelector("[data-slot=standings]");
 const MOMENT = { day: "numeric", month: "short", hour: "2-digit", minute: "2-digit" };  // short enough for a phone
 
+/** A moment as MOMENT writes it, with its year when that is not this one (a deadline a year away is not today). */
+function moment(iso) {
+  const sameYear = new Date(iso).getFullYear() === new Date().getFullYear();
+  return dateTime(iso, sameYear ? MOMENT : { ...MOMENT, year: "numeric" });
+}
+
 function say(text, kind = "") {
   field("status").textContent = text;
   field("status").dataset.kind = kind;
@@ -40,7 +46,7 @@ function drawStandings(board) {
     h("td", { class: "leaderboard__name" }, row.you ? t("{name} (you)", { name: row.username }) : row.username),
     h("td", { class: "leaderboard__mark" }, markText(row, board.points)),
     h("td", { class: "leaderboard__reached", "data-label": t("Reached") },
-      h("time", { datetime: row.reached_at }, dateTime(row.reached_at, MOMENT))))));
+      h("time", { datetime: row.reached_at }, moment(row.reached_at))))));
   table.hidden = board.standings.length === 0;
   const count = board.standings.length;
   const mine = board.standings.find((row) => row.you);
@@ -61,7 +67,7 @@ function draw(board) {
   drawControl(board);
   field("terms").hidden = false;
   field("terms").textContent = t("A mark is a student's best graded submission begun before {deadline}; equal marks rank by who reached theirs first.",
-    { deadline: dateTime(board.deadline_at, MOMENT) });
+    { deadline: moment(board.deadline_at) });
   drawStandings(board);
 }
 
