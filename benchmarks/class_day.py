@@ -11,8 +11,10 @@ second (GET /api/robots/<name>). Halfway through the hold, SIGHUP to the gunicor
 at a time; each console reconnects when its link closes with 1012.
 
 Reported per worker count, each beside a floor from the same run: web CPU per student-second (the workers and their
-child processes; floor: the idle workers' CPU over the same time), its ratio to 1 worker's (target: within 10 %),
-the same with everyone in before the restart (neither logins nor the restart in it; the rest of the run apart) and
+child processes; floor: the idle workers' CPU over the same time), its ratio to 1 worker's (target: within 10 %) and to
+1 worker's carrying each worker's share of the class (a worker spends less per message the busier it is, so only this
+ratio tells work done twice across workers; `--no-equal-load` leaves those runs out), the same with everyone in
+before the restart (neither logins nor the restart in it; the rest of the run apart) and
 per 1000 messages (a worker that falls behind supersedes drive commands, so it works less per student-second: the
 commands sent on to the robot per student-second are beside it), threads per worker (floor: idle),
 PostgreSQL transactions per student-second (floor: idle), the p99 of ordinary requests (floor: the same request
@@ -672,7 +674,7 @@ def machine() -> dict[str, object]:
 
 
 def rows_for(figures: RunFigures, one_worker_cpu: float | None, graded: bool,
-             one_worker_steady_cpu: float | None = None) -> list[Measurement]:
+             one_worker_steady_cpu: float | None = None, same_load: RunFigures | None = None) -> list[Measurement]:
     scenario = f"{figures.students} students, {figures.workers} worker(s)"
     reconnect_p50 = statistics.median(figures.reconnects_s) if figures.reconnects_s else float("nan")
     ratio = figures.cpu_per_student_s / one_worker_cpu if one_worker_cpu else None
@@ -719,10 +721,26 @@ def rows_for(figures: RunFigures, one_worker_cpu: float | None, graded: bool,
     if steady_ratio is not None and figures.workers > 1:
         rows.insert(3, Measurement(scenario, "web CPU per student-second before the restart / 1 worker's",
                                    steady_ratio, "ratio", "-", floor=1.0))
+    if same_load is not None and figures.workers > 1:
+        rows[2:2] = _same_load_rows(scenario, figures, same_load)
     if ratio is not None and figures.workers > 1:
         rows.insert(1, Measurement(scenario, "web CPU per student-second / 1 worker's", ratio, "ratio",
                                    f"<= {RATIO_TARGET:g}", floor=1.0,
                                    passed=ratio <= RATIO_TARGET if graded else None))
+    return rows
+
+
+def _same_load_rows(scenario: str, figures: RunFigures, alone: RunFigures) -> list[Measurement]:
+    """The workers' CPU per student-second over one worker's carrying as many students as each of them: a worker
+    spends less per message the busier it is (one wake-up serves more), so this ratio, not the one at the same class
+    size, tells work done twice across workers from a worker's efficiency at its load."""
+    rows = [Measurement(scenario, f"web CPU per student-second / 1 worker's carrying {alone.students} students "
+                                  "(the load of each)", figures.cpu_per_student_s / alone.cpu_per_student_s
+                        if alone.cpu_per_student_s else None, "ratio", "-", floor=1.0)]
+    if not math.isnan(figures.steady.cpu_per_student_s) and not math.isnan(alone.steady.cpu_per_student_s):
+        rows.append(Measurement(scenario, f"web CPU per student-second before the restart / 1 worker's carrying "
+                                          f"{alone.students} students", figures.steady.cpu_per_student_s
+                                / alone.steady.cpu_per_student_s, "ratio", "-", floor=1.0))
     return rows
 
 
@@ -736,7 +754,8 @@ def _write(output: Path, rows: list[Measurement], extra: dict[str, object]) -> N
 
 
 def run(quick: bool, output: Path, students: int | None = None, workers: tuple[int, ...] | None = None,
-        login_window_s: float | None = None, hold_s: float | None = None, thread_climb: bool = True) -> list:
+        login_window_s: float | None = None, hold_s: float | None = None, thread_climb: bool = True,
+        equal_load: bool = True) -> list:
     students = students or (4 if quick else 50)
     workers = workers or ((1,) if quick else (1, 2, 3))
     default_login_s, default_hold_s, idle_s = (1.0, 4.0, 1.0) if quick else (60.0, 40.0, 10.0)
@@ -754,7 +773,13 @@ def run(quick: bool, output: Path, students: int | None = None, workers: tuple[i
         figures = run_class(count, students, login_window_s, hold_s, idle_s, output / "class-day")
         if count == 1:
             one_worker_cpu, one_worker_steady_cpu = figures.cpu_per_student_s, figures.steady.cpu_per_student_s
-        rows += rows_for(figures, one_worker_cpu, not quick, one_worker_steady_cpu)
+        same_load = None
+        if count > 1 and equal_load:
+            each = round(students / count)
+            print(f"a class of {each} (each worker's share) on 1 worker, for the ratio at the same load per worker",
+                  flush=True)
+            same_load = run_class(1, each, login_window_s, hold_s, idle_s, output / "class-day")
+        rows += rows_for(figures, one_worker_cpu, not quick, one_worker_steady_cpu, same_load)
         runs.append({"workers": count, "student_s": figures.student_s, "cpu_s": figures.cpu_s,
                      "steady": dataclasses.asdict(figures.steady), "messages": figures.messages,
                      "restarts_seen": figures.restarts_seen, "reconnects": len(figures.reconnects_s),
@@ -794,9 +819,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--hold", type=float, default=None, help="seconds the class is held after (40)")
     parser.add_argument("--no-thread-climb", action="store_true",
                         help="leave out the threads-with-robots climb (a comparison of the class alone)")
+    parser.add_argument("--no-equal-load", action="store_true",
+                        help="leave out the 1-worker classes of each worker's share (the ratio at the same load)")
     args = parser.parse_args(argv)
     run(args.quick, Path(args.output), args.students, tuple(args.workers) if args.workers else None,
-        args.login_window, args.hold, not args.no_thread_climb)
+        args.login_window, args.hold, not args.no_thread_climb, not args.no_equal_load)
     return 0
 
 
