@@ -33,14 +33,18 @@ def test_a_file_sent_to_a_browser_that_resets_the_connection_is_closed_not_left_
     app = Flask(__name__, static_folder=str(static))
     server = make_threaded_server(app, "127.0.0.1", 0)
     threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True).start()
+    serving = threading.active_count()
     left_open: list[str] = []
     hook, sys.unraisablehook = sys.unraisablehook, lambda seen: left_open.append(repr(seen.object))
     try:
         for _ in range(3):
             _fetch_then_reset(server.server_port, "/static/module.js")
-        for _ in range(10):  # the request threads end on their own time: collect while they do
+        # The request threads end on their own time; then one collection (in a suite's process, with its heap, a
+        # collection takes seconds: ten of them took 37 s).
+        deadline = time.monotonic() + 10
+        while threading.active_count() > serving and time.monotonic() < deadline:
             time.sleep(0.05)
-            gc.collect()
+        gc.collect()
     finally:
         sys.unraisablehook = hook
         server.shutdown()
