@@ -89,15 +89,18 @@ def test_a_student_in_their_turn_on_lab_1_submits_on_it_and_reads_the_grade_and_
         grade.wait_for(timeout=90_000)
         assert "%" in grade.inner_text()
         assert page.locator("[data-slot=measurements] tbody tr").count() == 3
-        # The trace is drawn: the canvas has the path's blue pixels.
+        # The trace is drawn: the canvas has the path's blue pixels (nothing else on the map is blue). Its edges are
+        # antialiased and a short run's path is partly under the start and end marks, so the colour is matched
+        # loosely and a few pixels suffice (a loaded run counted 19 exact ones).
         blue = page.locator("[data-slot=map]").evaluate("""canvas => {
             const data = canvas.getContext("2d").getImageData(0, 0, canvas.width, canvas.height).data;
             let count = 0;
             for (let i = 0; i < data.length; i += 4) {
-                if (data[i] === 0x1d && data[i + 1] === 0x5f && data[i + 2] === 0xc4) count++;
+                const near = Math.abs(data[i] - 0x1d) + Math.abs(data[i + 1] - 0x5f) + Math.abs(data[i + 2] - 0xc4);
+                if (data[i + 3] > 0 && near < 40) count++;
             }
             return count; }""")
-        assert blue > 20, blue
+        assert blue > 10, blue
         runs = page.locator("[data-slot=runs] li").all_inner_texts()
         assert any("submission" in run for run in runs), runs
         assert page.evaluate("document.documentElement.scrollWidth") <= SIZES[size]["width"]

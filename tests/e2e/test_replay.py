@@ -98,8 +98,11 @@ def test_scrubbing_the_replay_shows_the_pose_the_file_holds_for_that_time(
         assert abs(t - expected[0]) < 1e-6 and abs(x - expected[1]) < 1e-3 and abs(y - expected[2]) < 1e-3, (
             fraction, now, (t, x, y), expected)
         assert 0.1 < now / 20 < 1.0
-        drawn = page.locator("lab-view").get_attribute("data-drawn-pose")  # the 3D view drew the robot there too
-        assert drawn is not None and abs(float(drawn.split()[0]) - x) < 1e-2 and abs(float(drawn.split()[1]) - y) < 1e-2
+        # The 3D view draws the robot there too, at its next frame (it draws at most so many a second).
+        page.wait_for_function("""([x, y]) => {
+          const drawn = document.querySelector('lab-view')?.dataset.drawnPose?.split(' ').map(Number);
+          return drawn?.length === 3 && Math.abs(drawn[0] - x) < 1e-2 && Math.abs(drawn[1] - y) < 1e-2;
+        }""", arg=[x, y], timeout=5_000)
     # The keyboard scrubs as well: End goes to the last sample.
     slider.focus()
     page.keyboard.press("End")
