@@ -3,7 +3,8 @@
 // `make translations`) holds the translations. Values go in by name: t("{name} is driving.", { name }).
 //
 // The catalogue is loaded before any module that imports this one runs (top-level await), so module-level
-// constants may call t() too. Numbers, dates and times: number(), dateTime() and time() format per the language.
+// constants may call t() too. Numbers, dates and times: number(), dateTime() and time() format per the language (dates
+// and times in the reader's variant of it: DATE_LOCALE).
 
 const language = (globalThis.document?.documentElement?.lang || "en").split("-")[0].toLowerCase();
 
@@ -20,6 +21,12 @@ const messages = await load();
 
 /** The page's language code, "en" or "es". */
 export const LANGUAGE = language;
+
+/** Dates and times in the reader's own variant of the page's language, from the browser's preferred languages: a
+ * reader in Britain reads "29 Dec, 15:04", one in the United States "Dec 29, 03:04 PM" (the page's language when
+ * the browser prefers no variant of it). */
+export const DATE_LOCALE = (globalThis.navigator?.languages ?? [])
+  .find((tag) => tag.split("-")[0].toLowerCase() === language) ?? language;
 
 /** text in the page's language, with each {name} replaced by values[name]. */
 export function t(text, values = undefined) {
@@ -57,11 +64,11 @@ export function fixed(value, digits = 1) {
 /** A moment (Date, ms or ISO text) as the page's language writes a date and time, in the browser's time zone. */
 export function dateTime(moment, options = { weekday: "short", day: "numeric", month: "short", hour: "2-digit",
   minute: "2-digit" }) {
-  return new Intl.DateTimeFormat(language, options).format(new Date(moment));
+  return new Intl.DateTimeFormat(DATE_LOCALE, options).format(new Date(moment));
 }
 
 /** A moment's time of day, "09:30". */
 export function time(moment) {
-  return new Intl.DateTimeFormat(language, { hour: "2-digit", minute: "2-digit", hourCycle: "h23" })
+  return new Intl.DateTimeFormat(DATE_LOCALE, { hour: "2-digit", minute: "2-digit", hourCycle: "h23" })
     .format(new Date(moment));
 }

@@ -2,7 +2,7 @@
 // student, queue waits, the week-by-hour heat map, the robots' uptime and faults, the sessions; each with its CSV.
 import { fetchJson } from "../../lib/transport.js";
 import { h } from "../../lib/dom.js";
-import { LANGUAGE, dateTime, fixed, number, t } from "../../lib/i18n.js";
+import { DATE_LOCALE, dateTime, fixed, number, t } from "../../lib/i18n.js";
 
 const root = document.getElementById("analytics");
 const form = document.getElementById("analytics-filters");
@@ -75,7 +75,7 @@ function drawWaits(waits) {
 }
 
 function weekdayNames() {
-  const format = new Intl.DateTimeFormat(LANGUAGE, { weekday: "short", timeZone: "UTC" });
+  const format = new Intl.DateTimeFormat(DATE_LOCALE, { weekday: "short", timeZone: "UTC" });
   return [...Array(7).keys()].map((i) => format.format(new Date(Date.UTC(2024, 0, 1 + i))));  // 1 Jan 2024: a Monday
 }
 

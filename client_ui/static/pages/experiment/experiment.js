@@ -4,7 +4,7 @@
 
 import { ApiError, fetchJson } from "../../lib/transport.js";
 import { h } from "../../lib/dom.js";
-import { LANGUAGE, fixed, t } from "../../lib/i18n.js";
+import { DATE_LOCALE, fixed, t } from "../../lib/i18n.js";
 
 const root = document.querySelector("#experiment");
 const SVG = "http://www.w3.org/2000/svg";
@@ -95,7 +95,7 @@ function updateRun(slot, trial, run) {
   if (run.message !== view.message) {
     view.message = run.message;
     const log = slot.querySelector('[data-slot="run-log"]');
-    const stamp = new Date().toLocaleTimeString(LANGUAGE, { hour: "2-digit", minute: "2-digit", second: "2-digit" });
+    const stamp = new Date().toLocaleTimeString(DATE_LOCALE, { hour: "2-digit", minute: "2-digit", second: "2-digit" });
     log.prepend(h("li", {}, h("time", { text: stamp }), ` ${run.message}`));
     while (log.children.length > LOG_LENGTH) log.lastElementChild.remove();
   }

@@ -4,7 +4,7 @@
 
 import { ApiError, fetchJson } from "../../lib/transport.js";
 import { h } from "../../lib/dom.js";
-import { LANGUAGE, fixed, t } from "../../lib/i18n.js";
+import { DATE_LOCALE, fixed, t } from "../../lib/i18n.js";
 
 const root = document.querySelector("#robot-health");
 const POLL_MS = 2000;
@@ -18,7 +18,7 @@ function showError(text) {
 }
 
 function clock(unixSeconds) {
-  return new Date(unixSeconds * 1000).toLocaleString(LANGUAGE, { dateStyle: "short", timeStyle: "medium" });
+  return new Date(unixSeconds * 1000).toLocaleString(DATE_LOCALE, { dateStyle: "short", timeStyle: "medium" });
 }
 
 function duration(seconds) {
@@ -59,7 +59,7 @@ function show(data) {
   root.querySelector('[data-action="restart"]').disabled = !(health.online && health.restartable);
   root.querySelector('[data-slot="maintenance"]').replaceChildren(...(data.maintenance.length
     ? data.maintenance.map((entry) => h("li", { "data-action": entry.action },
-      h("time", { text: new Date(entry.at).toLocaleString(LANGUAGE, { dateStyle: "short", timeStyle: "medium" }) }),
+      h("time", { text: new Date(entry.at).toLocaleString(DATE_LOCALE, { dateStyle: "short", timeStyle: "medium" }) }),
       t("{actor}: {outcome}", { actor: entry.actor ?? t("a deleted account"), outcome: entry.outcome })))
     : [h("li", { class: "muted", text: t("Nothing done yet.") })]));
 }

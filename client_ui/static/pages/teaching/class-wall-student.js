@@ -4,7 +4,7 @@ import { Channel, fetchJson, parseJsonMessage } from "../../lib/transport.js";
 import { connectChat } from "../../lib/console/chat-session.js";
 import { register as registerChatPanel } from "../../panels/chat-panel/chat-panel.js";
 import { drawTile, floorPlan } from "./class-wall-draw.js";
-import { LANGUAGE, t } from "../../lib/i18n.js";
+import { DATE_LOCALE, t } from "../../lib/i18n.js";
 
 const root = document.getElementById("class-help");
 const form = root.querySelector("[data-field=hand-form]");
@@ -39,7 +39,7 @@ function render(seat) {
 function noticeItem(notice) {
   const item = document.createElement("li");
   item.dataset.kind = notice.kind;
-  const when = new Date(notice.at).toLocaleTimeString(LANGUAGE, { hour: "2-digit", minute: "2-digit" });
+  const when = new Date(notice.at).toLocaleTimeString(DATE_LOCALE, { hour: "2-digit", minute: "2-digit" });
   if (notice.kind === "push") {
     item.append(t("{when} · {tutor} sent the class: {title}", { when, tutor: notice.from ?? t("Your tutor"),
       title: notice.title }), " ");

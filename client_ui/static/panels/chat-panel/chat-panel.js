@@ -9,7 +9,7 @@
 import { h } from "../../lib/dom.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
-import { LANGUAGE, t } from "../../lib/i18n.js";
+import { DATE_LOCALE, t } from "../../lib/i18n.js";
 
 const MAX_CHARS = 500;
 
@@ -17,7 +17,7 @@ const MAX_CHARS = 500;
 export function formatTime(iso) {
   const date = new Date(iso);
   if (Number.isNaN(date.getTime())) return "";
-  return date.toLocaleTimeString(LANGUAGE, { hour: "2-digit", minute: "2-digit" });
+  return date.toLocaleTimeString(DATE_LOCALE, { hour: "2-digit", minute: "2-digit" });
 }
 
 export class ChatPanel extends PanelElement {

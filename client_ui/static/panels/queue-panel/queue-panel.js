@@ -8,7 +8,7 @@
 import { h } from "../../lib/dom.js";
 import { PanelElement } from "../panel-base.js";
 import { registerPanel } from "../registry.js";
-import { t } from "../../lib/i18n.js";
+import { DATE_LOCALE, t } from "../../lib/i18n.js";
 
 /** "1:05" from seconds; "—" when unknown. */
 export function formatDuration(seconds) {
@@ -43,9 +43,9 @@ export function describeSeat(seat) {
   return t("{who} You are number {position} of the {waiting} waiting.", { who, position: seat.position, waiting });
 }
 
-const SLOT_FORMAT = new Intl.DateTimeFormat(undefined, { weekday: "short", day: "numeric", month: "short",
+const SLOT_FORMAT = new Intl.DateTimeFormat(DATE_LOCALE, { weekday: "short", day: "numeric", month: "short",
   hour: "2-digit", minute: "2-digit" });
-const END_FORMAT = new Intl.DateTimeFormat(undefined, { hour: "2-digit", minute: "2-digit" });
+const END_FORMAT = new Intl.DateTimeFormat(DATE_LOCALE, { hour: "2-digit", minute: "2-digit" });
 
 /** The bookings still to come or under way, soonest first, at most limit. */
 export function upcomingBookings(bookings, nowMs, limit = 3) {
