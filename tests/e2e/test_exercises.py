@@ -5,6 +5,7 @@ exception shows its line; a closed tab stops the robot within the deadman's time
 from __future__ import annotations
 
 import itertools
+import math
 import time
 from collections.abc import Iterator
 
@@ -385,14 +386,21 @@ def localization_seen(server: LiveServer, robot_name: str) -> str:
     with server.app.app_context():
         link = robot_registry().get(robot_name)
         now = time.time()
-        samples = link.pose_log(now - 1.0, now).samples
+        samples = link.pose_log(now - 90.0, now).samples
         goals = [g for g in link.goals() if g.skill == "localization"]
+        health = link.health()
     truth = samples[-1].ground_truth if samples else None
+    turned = sum(abs(math.remainder(b.ground_truth.theta_rad - a.ground_truth.theta_rad, 2 * math.pi))
+                 for a, b in itertools.pairwise(samples))
+    faults = [(round(f.unix_s - now, 1), f.kind, f.message) for f in health.faults[-8:]]
     said = [(g.status, g.message, g.feedback.state, round(g.feedback.pose.x_m, 2), round(g.feedback.pose.y_m, 2),
              round(g.feedback.pose.theta_rad, 2), {k: round(v, 3) for k, v in g.feedback.values.items()})
             for g in goals[-1:]]
     true_pose = truth and (round(truth.x_m, 2), round(truth.y_m, 2), round(truth.theta_rad, 2))
-    return f"localization goal {said}, truth {true_pose}"
+    return (f"localization goal {said}, truth {true_pose}; over the last 90 s it truly turned {turned:.1f} rad; the "
+            f"robot's loop ran at {health.real_time_factor:.2f} of real time (lag p50 {health.loop_lag_ms_p50:.0f} "
+            f"ms); "
+            f"faults {faults}; log {list(health.log_tail)[-6:]}")
 
 
 def test_after_a_kidnapping_the_students_code_localizes_with_the_labs_localization_and_is_graded(
