@@ -1,14 +1,23 @@
 """A class as it really arrives (issue 31): N students log in over a window, each opens a full console on a robot of
-their own and drives it, and the web workers are restarted in turn in the middle; run with 1, 2 and 3 workers at the
-same load.
+their own and drives it while their tutor watches the class wall, and the web workers are restarted in turn in the
+middle; run with 1, 2 and 3 workers at the same load.
 
 The web tier is gunicorn with the shared configuration (`deploy/gunicorn.conf.py`, as a web host runs it) on a fresh
-PostgreSQL database, behind Debian's nginx with the site the deployment guide gives (`deploy/nginx/telelab.conf`).
-The robots are stand-ins (`standin_robots.py`: the robot protocol on grpc.aio, no physics), so that the web tier is
-what is measured. A student's console is one `/ws/link` carrying telemetry (the drawn view's and the panels' feed),
-localization and drive, driving at the console's rate (a command every 50 ms), and an ordinary request every
-second (GET /api/robots/<name>). Halfway through the hold, SIGHUP to the gunicorn master restarts the workers one
-at a time; each console reconnects when its link closes with 1012.
+PostgreSQL database, behind Debian's nginx with the site the deployment guide gives (`deploy/nginx/telelab.conf`). The
+robots are stand-ins (`standin_robots.py`: the robot protocol on grpc.aio, no physics), so that the web tier is what is
+measured. The class is a class session as the product opens one: the tutor (who created the course and enrolled the
+students, through the courses' services) opens the course's class page and starts the session (POST
+/api/courses/<id>/class-session), and the workers start every seat's robot on the lab's farm; here the farm is a process
+that speaks the protocol of `telelab up`'s farm owner (`middleware/farm/owner.py`) and starts a student's practice robot
+by handing the stand-in of its name the owner's token. A student's console is one `/ws/link` on their own robot carrying
+telemetry (the drawn view's and the panels' feed), localization and drive, driving at the console's rate (a command
+every 50 ms), and an ordinary request every second (GET /api/robots/<name>). The tutor's wall opens first and shows the
+class alone for 5 s (0.5 s in `--quick`) before the first login, then stays open to the end, as its page holds it: the
+page, the wall's state and one robot's scene asked once (GET), then the wall's channel (`/ws/courses/<id>/class-wall`)
+on the page's `/ws/link`, which brings every seat's pose, speed, battery and activity five times a second and the seats
+when they change, the page sending nothing. From the first login on, its work is in the web CPU (the student-seconds do
+not count the tutor) and its messages among the messages. Halfway through the hold, SIGHUP to the gunicorn master
+restarts the workers one at a time; each console, and the wall, reconnects when its link closes with 1012.
 
 Reported per worker count, each beside a floor from the same run: web CPU per student-second (the workers and their
 child processes; floor: the idle workers' CPU over the same time), its ratio to 1 worker's (target: within 10 %) and to
@@ -19,10 +28,11 @@ per 1000 messages (a worker that falls behind supersedes drive commands, so it w
 commands sent on to the robot per student-second are beside it), threads per worker (floor: idle),
 PostgreSQL transactions per student-second (floor: idle), the p99 of ordinary requests (floor: the same request
 with nobody in) and of drive acknowledgements (floor: the robot's own Drive round trip over gRPC), the reconnect
-time after the restart (floor: a console's first opening), and seats lost (target 0); beside them, the share of drive
-commands the server superseded by a newer one waiting (each timed to the ack that answered it) and, among the
-errors, every channel the server closed. The tutor's wall is not in
-the load (it is another part of issue 31). `--quick`: 4 students over 1 s, a 4 s hold, 1 worker only.
+time after the restart (floor: a console's first opening), and seats lost (target 0); the wall's messages received
+per second in the class (floor: the same wall before the first login) and its reconnect time after the restart
+(floor: its first opening), and the students' robots in its last poses (target: every one); beside them, the share
+of drive commands the server superseded by a newer one waiting (each timed to the ack that answered it) and, among
+the errors, every channel the server closed. `--quick`: 4 students over 1 s, a 4 s hold, 1 worker only.
 """
 
 from __future__ import annotations
@@ -35,15 +45,20 @@ import json
 import math
 import os
 import platform
+import re
 import shutil
 import signal
 import statistics
 import subprocess
 import sys
+import tempfile
 import threading
 import time
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
+from urllib.request import Request
 
 import grpc
 
@@ -55,11 +70,13 @@ from benchmarks.web_tier import (
     SECRET_KEY,
     WebServer,
     admin_dsn,
+    cookie_header,
     cpu_seconds,
     create_students,
     free_port,
     fresh_database,
     log_in_one,
+    logged_in,
 )
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 
@@ -80,6 +97,19 @@ CONSOLES_AT_ONCE = 10
 THREADS_ALLOWANCE = 16 + 8 + 10 + 4
 CHANNELS = ("telemetry", "localization", "drive")
 DRIVE_SUB = 3
+TUTOR, COURSE_CODE = "tutor1", "CLASS-DAY"
+# Each student's robot is their practice robot (middleware/teaching/practice_robots.py practice_name), and the
+# stand-in of that name stands for it; one more, nobody's, is the drive floor's.
+STUDENT_PREFIX = "pupil"
+ROBOT_PREFIX = f"practice-{STUDENT_PREFIX}"
+WALL_SUB = 1
+WALL_ALONE_S = 5.0  # the wall shows the class alone this long (at most half the idle floor's) first: its floor
+WALL_WAIT_S = 30.0  # the class begins without the wall's floor if it showed nothing in this time
+READY_WAIT_S = 60.0  # every seat's robot started
+CSRF_META = re.compile(r'<meta name="csrf-token" content="([^"]+)"')
+# The local farm owner's settings (middleware/farm/owner.py ADDRESS_VARIABLE, KEY_VARIABLE), named here because this
+# process does not import the middleware (seconds of a busy host); the farm's own process reads them by those names.
+FARM_ADDRESS_VARIABLE, FARM_KEY_VARIABLE = "TELELAB_LOCAL_FARM", "TELELAB_LOCAL_FARM_KEY"
 
 
 @dataclass
@@ -110,12 +140,40 @@ class Student:
         return self.drives_sent + self.received + len(self.requests_s) + self.request_errors
 
 
-class ClassLoad:
-    """The class on one asyncio loop (this process): every student from their login to the end."""
+@dataclass
+class Wall:
+    """The tutor's class wall, and what its channel brought."""
 
-    def __init__(self, port: int, students: list[Student], end_at: float) -> None:
-        self.port, self.students, self._end_at = port, students, end_at
+    course_id: int
+    cookie: str
+    received_at: list[float] = field(default_factory=list)  # each of its poses and seats messages [monotonic s]
+    poses: int = 0
+    seats: int = 0
+    robots_shown: int = 0  # robots in its latest poses message
+    shown_at: float | None = None  # its first poses message: the class on show [monotonic s]
+    first_open_s: float | None = None
+    reconnects_s: list[float] = field(default_factory=list)
+    restarts_seen: int = 0
+    left_at: float | None = None
+    errors: list[str] = field(default_factory=list)
+
+    def per_s(self, after: float, until: float) -> float | None:
+        """Its messages a second after one moment until another."""
+        if until <= after:
+            return None
+        return sum(after < at <= until for at in self.received_at) / (until - after)
+
+
+class ClassLoad:
+    """The class on one asyncio loop (this process): the tutor's wall from before the first login, and every student
+    from their login to the end, length_s after the class began (or later: see end_at)."""
+
+    def __init__(self, port: int, students: list[Student], wall: Wall, length_s: float) -> None:
+        self.port, self.students, self.wall, self._length_s = port, students, wall, length_s
+        self._end_at = float("inf")
         self.restart_done = False  # the class goes on until the restart is over, however long it takes
+        self.began = threading.Event()  # set at the class's start (started), for the measuring thread
+        self.started = 0.0
 
     @property
     def end_at(self) -> float:
@@ -125,8 +183,17 @@ class ClassLoad:
     def end_at(self, value: float) -> None:
         self._end_at = value
 
-    async def run(self, started: float) -> None:
-        await asyncio.gather(*(self._student(s, started) for s in self.students))
+    async def run(self, alone_s: float) -> None:
+        """The wall opens first; once it shows the class (or WALL_WAIT_S passed) it stays alone for alone_s, its floor,
+        and then the class begins: each student comes their start_s later."""
+        wall = asyncio.ensure_future(self._wall())
+        deadline = time.monotonic() + WALL_WAIT_S
+        while self.wall.shown_at is None and not wall.done() and time.monotonic() < deadline:
+            await asyncio.sleep(0.05)
+        self.started = time.monotonic() + alone_s
+        self._end_at = self.started + self._length_s
+        self.began.set()
+        await asyncio.gather(wall, *(self._student(s, self.started) for s in self.students))
 
     async def _student(self, student: Student, started: float) -> None:
         await asyncio.sleep(max(0.0, started + student.start_s - time.monotonic()))
@@ -138,25 +205,105 @@ class ClassLoad:
             return
         student.in_at = time.monotonic()
         requests = asyncio.ensure_future(self._requests(student, cookie))
-        closed_at: float | None = None
         try:
-            while time.monotonic() < self.end_at:
-                opened = time.monotonic()
-                try:
-                    link = await WebSocketUser.open(self.port, "/ws/link", cookie)
-                except (Refused, OSError) as error:
-                    student.errors.append(f"open: {error}")
-                    await asyncio.sleep(0.1)
-                    continue
-                code = await self._console(student, link, opened, closed_at)
-                if code == 1012:  # the worker is leaving: reconnect at once, as transport.js does
-                    student.restarts_seen += 1
-                    closed_at = time.monotonic()
-                    continue
-                break
+            student.restarts_seen = await self._keep_link(
+                cookie, student.errors, lambda link, opened, closed_at: self._console(student, link, opened, closed_at))
         finally:
             student.out_at = time.monotonic()
             requests.cancel()
+
+    async def _keep_link(self, cookie: str, errors: list[str],
+                         hold: Callable[[WebSocketUser, float, float | None], Awaitable[int]]) -> int:
+        """A page's /ws/link until the class ends, opened again at once when its worker leaves (1012); hold(link,
+        opened at, the last one closed at) holds one link and answers its close code. The restarts seen."""
+        restarts, closed_at = 0, None
+        while time.monotonic() < self.end_at:
+            opened = time.monotonic()
+            try:
+                link = await WebSocketUser.open(self.port, "/ws/link", cookie)
+            except (Refused, OSError) as error:
+                errors.append(f"open: {error}")
+                await asyncio.sleep(0.1)
+                continue
+            if await hold(link, opened, closed_at) != 1012:
+                break
+            restarts += 1  # the worker is leaving: reconnect at once, as the page's link does
+            closed_at = time.monotonic()
+        return restarts
+
+    async def _read_until_closed(self, link: WebSocketUser, on_message: Callable[[int, bytes], None],
+                                 tasks: list[asyncio.Future[None]]) -> int:
+        """Reads link until it closes (its close code; 1006 when it just ended) or the class ends (1000); the tasks
+        end with it."""
+        reader = asyncio.ensure_future(link.read_messages(on_message))
+        try:
+            while not reader.done() and time.monotonic() < self.end_at:  # the end moves while a restart goes on
+                await asyncio.wait([reader], timeout=0.25)
+            return (reader.result() or 1006) if reader.done() else 1000
+        except (ConnectionError, OSError):
+            return 1006
+        finally:
+            for task in tasks:
+                task.cancel()
+            if not reader.done():
+                link.close()
+                reader.cancel()
+
+    async def _wall(self) -> None:
+        """The tutor's wall as its page holds it: the page, the wall's state and a robot's scene asked once, then the
+        wall's channel on the page's link until the class ends."""
+        wall = self.wall
+        user = HttpUser(self.port, wall.cookie)
+        try:
+            for path in (f"/courses/{wall.course_id}/class/wall", f"/api/courses/{wall.course_id}/class-wall",
+                         f"/api/robots/{self.students[0].robot}"):  # the first seat's, as the page asks
+                status = await user.get(path)
+                if status != 200:
+                    wall.errors.append(f"GET {path}: {status}")
+        except (ConnectionError, OSError, asyncio.IncompleteReadError) as error:
+            wall.errors.append(f"GET: {error}")
+        finally:
+            user.close()
+        try:
+            wall.restarts_seen = await self._keep_link(wall.cookie, wall.errors, self._watch_wall)
+        finally:
+            wall.left_at = time.monotonic()
+
+    async def _watch_wall(self, link: WebSocketUser, opened: float, closed_at: float | None) -> int:
+        wall = self.wall
+        link.send_text(json.dumps({"type": "subscribe", "sub": WALL_SUB,
+                                   "path": f"/ws/courses/{wall.course_id}/class-wall"}))
+        heard = False
+
+        def on_message(opcode: int, payload: bytes) -> None:
+            nonlocal heard
+            if opcode != 1:
+                return
+            head, _, text = payload.decode().partition(" ")
+            if head == "0":
+                _note_closed(json.loads(text), wall.errors)
+                return
+            if head != str(WALL_SUB):
+                return
+            at, message = time.monotonic(), json.loads(text)
+            if message.get("type") == "poses":
+                wall.poses += 1
+                wall.robots_shown = len(message["robots"])
+                wall.shown_at = wall.shown_at or at
+            elif message.get("type") == "seats":
+                wall.seats += 1
+            else:  # "ended" or "error": nothing the wall shows
+                wall.errors.append(f"the wall said {message.get('type')}: {message.get('code', '')}")
+                return
+            wall.received_at.append(at)
+            if not heard:
+                heard = True
+                if closed_at is not None:
+                    wall.reconnects_s.append(at - closed_at)
+                elif wall.first_open_s is None:
+                    wall.first_open_s = at - opened
+
+        return await self._read_until_closed(link, on_message, [])
 
     async def _console(self, student: Student, link: WebSocketUser, opened: float, closed_at: float | None) -> int:
         for sub, channel in enumerate(CHANNELS, start=1):
@@ -175,10 +322,7 @@ class ClassLoad:
                 student.telemetry += 1
                 return
             if head == "0":  # the link's own news: a channel the server closed is a console that lost it
-                control = json.loads(text)
-                if control.get("type") == "closed":
-                    student.errors.append(f"closed {CHANNELS[control['sub'] - 1]}: {control.get('code')} "
-                                          f"{control.get('reason', '')[:60]}")
+                _note_closed(json.loads(text), student.errors, CHANNELS)
                 return
             if head != str(DRIVE_SUB):
                 return
@@ -220,20 +364,8 @@ class ClassLoad:
             except TimeoutError:
                 student.seat_lost = True
 
-        tasks = [asyncio.ensure_future(drive()), asyncio.ensure_future(watch_seat())]
-        reader = asyncio.ensure_future(link.read_messages(on_message))
-        try:
-            while not reader.done() and time.monotonic() < self.end_at:  # the end moves while a restart goes on
-                await asyncio.wait([reader], timeout=0.25)
-            return (reader.result() or 1006) if reader.done() else 1000
-        except (ConnectionError, OSError):
-            return 1006
-        finally:
-            for task in tasks:
-                task.cancel()
-            if not reader.done():
-                link.close()
-                reader.cancel()
+        return await self._read_until_closed(link, on_message, [asyncio.ensure_future(drive()),
+                                                                asyncio.ensure_future(watch_seat())])
 
     async def _requests(self, student: Student, cookie: str) -> None:
         user = HttpUser(self.port, cookie)
@@ -252,6 +384,12 @@ class ClassLoad:
                 await asyncio.sleep(REQUEST_INTERVAL_S)
         finally:
             user.close()
+
+
+def _note_closed(control: dict[str, Any], errors: list[str], channels: tuple[str, ...] = ("the wall",)) -> None:
+    """A channel the server closed (the link's own "closed" news) is a page that lost it: an error."""
+    if control.get("type") == "closed":
+        errors.append(f"closed {channels[control['sub'] - 1]}: {control.get('code')} {control.get('reason', '')[:60]}")
 
 
 class Nginx:
@@ -281,6 +419,113 @@ class Nginx:
     def stop(self) -> None:
         self.process.terminate()
         self.process.communicate(timeout=10)
+
+
+class StandInFarm:
+    """The class's farm: a process of its own that speaks the protocol of `telelab up`'s local farm owner
+    (middleware/farm/owner.py), which the web workers reach as their farm, so a class session starts its students'
+    robots as in the product. A start hands the stand-in of the robot's name its owner's token (SetController), as a
+    farm starts a robot that obeys it; a stop takes the token back."""
+
+    def __init__(self, fleet: StandInFleet) -> None:
+        self._folder = Path(tempfile.mkdtemp(prefix="telelab-farm-"))  # mode 0700; a Unix socket's path is short
+        self.environment = {FARM_ADDRESS_VARIABLE: str(self._folder / "farm.sock"),
+                            FARM_KEY_VARIABLE: os.urandom(32).hex()}
+        # Started now: its imports of the middleware overlap the database's set-up and the workers' start.
+        self.process = subprocess.Popen([sys.executable, "-c", "import benchmarks.class_day as c; c.serve_farm()"],
+                                        cwd=ROOT, env={**os.environ, **self.environment,
+                                                       "TELELAB_ROBOTS": fleet.robots_setting},
+                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+
+    def wait_until_serving(self) -> None:
+        assert self.process.stdout is not None
+        if self.process.stdout.readline().strip() != "serving":
+            raise RuntimeError(f"the stand-in farm did not start (exit code {self.process.wait()})")
+
+    def stop(self) -> None:
+        if self.process.stdin is not None:
+            self.process.stdin.close()  # it serves until its stdin closes
+        try:
+            self.process.wait(10)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait(10)
+        shutil.rmtree(self._folder, ignore_errors=True)
+
+
+def serve_farm() -> None:
+    """The stand-in farm's process (StandInFarm): the robots of TELELAB_ROBOTS, served until stdin closes."""
+    from multiprocessing.managers import BaseManager
+
+    from middleware.config import parse_robots
+    from middleware.farm.base import Capacity, FarmRobot, RobotSpec
+    from middleware.farm.owner import ADDRESS_VARIABLE, FARM_METHODS, KEY_VARIABLE
+
+    addresses = {robot.name: robot.address for robot in parse_robots(os.environ["TELELAB_ROBOTS"])}
+    started: dict[str, FarmRobot] = {}
+
+    def hand_over(address: str, token: str) -> None:
+        with grpc.insecure_channel(address) as channel:
+            robot_pb2_grpc.RobotStub(channel).SetController(robot_pb2.SetControllerRequest(token=token), timeout=10)
+
+    class Farm:
+        backend = "local"
+
+        def start(self, spec: RobotSpec) -> FarmRobot:
+            hand_over(addresses[spec.name], spec.controller_token)
+            started[spec.name] = FarmRobot(spec.name, spec.scene, addresses[spec.name], "localhost", self.backend)
+            return started[spec.name]
+
+        def find(self, name: str) -> FarmRobot | None:
+            return started.get(name)
+
+        def stop(self, name: str) -> bool:
+            robot = started.pop(name, None)
+            if robot is not None:
+                hand_over(robot.address, "")
+            return robot is not None
+
+        def robots(self) -> list[FarmRobot]:
+            return list(started.values())
+
+        def capacity(self) -> Capacity:
+            return Capacity(len(addresses), len(started), 1)
+
+    class Owner(BaseManager):
+        pass
+
+    farm = Farm()
+    Owner.register("farm", callable=lambda: farm, exposed=FARM_METHODS)
+    server = Owner(address=os.environ[ADDRESS_VARIABLE], authkey=bytes.fromhex(os.environ[KEY_VARIABLE])).get_server()
+    threading.Thread(target=lambda: (sys.stdin.read(), os._exit(0)), daemon=True).start()
+    print("serving", flush=True)
+    server.serve_forever()
+
+
+def open_class_session(base_url: str, seats: int) -> tuple[int, str]:
+    """The tutor opens their course's class page and starts the class session (its Start button's request), then
+    waits until every seat's robot is ready, as the page says; the course's id and the tutor's Cookie header."""
+    opener, cookies = logged_in(base_url, TUTOR)
+
+    def answer(path: str, body: bytes | None = None, token: str = "") -> Any:
+        headers = {"Accept": "application/json"}
+        if body is not None:
+            headers |= {"Content-Type": "application/json", "X-CSRFToken": token}
+        with opener.open(Request(base_url + path, data=body, headers=headers), timeout=60) as reply:
+            return json.loads(reply.read())
+
+    (course_id,) = [course["id"] for course in answer("/api/courses")["courses"] if course["code"] == COURSE_CODE]
+    with opener.open(f"{base_url}/courses/{course_id}/class", timeout=60) as page:
+        found = CSRF_META.search(page.read().decode())
+    if found is None:
+        raise RuntimeError("the class page has no CSRF token")
+    answer(f"/api/courses/{course_id}/class-session", b"{}", found.group(1))
+    deadline = time.monotonic() + READY_WAIT_S
+    while (counts := answer(f"/api/courses/{course_id}/class-session")["counts"])["ready"] < seats:
+        if counts["failed"] or time.monotonic() > deadline:
+            raise RuntimeError(f"the class session's robots did not all start: {counts}")
+        time.sleep(0.2)
+    return course_id, cookie_header(cookies)
 
 
 def _answers(port: int) -> bool:
@@ -434,6 +679,20 @@ class Stretch:
 
 
 @dataclass
+class WallFigures:
+    """The tutor's wall in one class: its messages a second in the class and before it (None: none came), its first
+    opening and reconnects [s], and the students' robots in its last poses."""
+
+    per_s: float | None = None
+    alone_per_s: float | None = None
+    first_open_s: float | None = None
+    reconnects_s: list[float] = field(default_factory=list)
+    messages: int = 0
+    restarts_seen: int = 0
+    robots_shown: int = 0
+
+
+@dataclass
 class RunFigures:
     workers: int
     students: int
@@ -460,6 +719,7 @@ class RunFigures:
     steady: Stretch = field(default_factory=Stretch)
     idle_cpu_per_s: float = 0.0
     messages: int = 0
+    wall: WallFigures = field(default_factory=WallFigures)
 
     @property
     def cpu_per_student_s(self) -> float:
@@ -469,27 +729,31 @@ class RunFigures:
 
 def run_class(workers: int, students: int, login_window_s: float, hold_s: float, idle_s: float,
               folder: Path) -> RunFigures:
-    """One class on `workers` workers: the idle floors, then the class with a rolling restart halfway through the
-    hold."""
-    names = [f"pupil{i + 1}" for i in range(students)]
-    fleet = StandInFleet(students + 1, "class-robot-")
+    """One class on `workers` workers: its session opened by the tutor, the idle floors, the tutor's wall alone, then
+    the class with a rolling restart halfway through the hold."""
+    names = [f"{STUDENT_PREFIX}{i + 1}" for i in range(students)]
+    fleet = StandInFleet(students + 1, ROBOT_PREFIX)
     robots = list(fleet.addresses)
+    farm = StandInFarm(fleet)
     try:
         with fresh_database() as database_url:
             phase = time.monotonic()
-            create_students(database_url, names)
-            print(f"  database and {students} students ready in {time.monotonic() - phase:.1f} s", flush=True)
+            create_students(database_url, names, course_code=COURSE_CODE, tutor=TUTOR)
+            print(f"  database and {students} students in a course ready in {time.monotonic() - phase:.1f} s",
+                  flush=True)
             phase = time.monotonic()
             web_port = free_port()
             server = WebServer([sys.executable, "-m", "gunicorn", "-c", "deploy/gunicorn.conf.py", "-w", str(workers),
                                 "-b", "127.0.0.1:{port}", "middleware:create_app()"],
                                {"TELELAB_DATABASE_URL": database_url, "TELELAB_SECRET_KEY": SECRET_KEY,
-                                "TELELAB_ROBOTS": fleet.robots_setting}, port=web_port)
+                                "TELELAB_ROBOTS": "", **farm.environment}, port=web_port)
             nginx = None
             try:
                 server.wait_for_workers(workers)
                 nginx = Nginx(web_port, folder / f"nginx-{workers}")
-                print(f"  {workers} worker(s) and nginx serving in {time.monotonic() - phase:.1f} s", flush=True)
+                farm.wait_until_serving()  # the workers reach it once the class session starts
+                print(f"  {workers} worker(s), nginx and the farm serving in {time.monotonic() - phase:.1f} s",
+                      flush=True)
                 return _measure(server, nginx.port, fleet, robots, names, database_url, workers, login_window_s,
                                 hold_s, idle_s)
             finally:
@@ -497,18 +761,22 @@ def run_class(workers: int, students: int, login_window_s: float, hold_s: float,
                     nginx.stop()
                 server.stop(signal.SIGTERM)
     finally:
+        farm.stop()
         fleet.stop()
 
 
 def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str], names: list[str],
              database_url: str, workers: int, login_window_s: float, hold_s: float, idle_s: float) -> RunFigures:
+    phase = time.monotonic()
+    course_id, tutor_cookie = open_class_session(f"http://127.0.0.1:{port}", len(names))
+    print(f"  the class session open, every seat's robot ready, in {time.monotonic() - phase:.1f} s", flush=True)
     probe_cookie = log_in_one(f"http://127.0.0.1:{port}", names[0])
     drive_floor = _drive_floor(fleet.addresses[robots[-1]], 200)
-    # The idle floors: nobody in but one probe asking the ordinary request.
+    # The idle floors: nobody in but one probe asking the ordinary request (of their own robot, as a student does).
     meter = WorkerMeter(server)
     meter.start()
     transactions_before = _transactions(database_url)
-    idle_requests = asyncio.run(_idle_requests(port, probe_cookie, f"/api/robots/{robots[-1]}", idle_s))
+    idle_requests = asyncio.run(_idle_requests(port, probe_cookie, f"/api/robots/{robots[0]}", idle_s))
     meter.sample_threads()
     idle_threads = max(meter.threads)
     idle_cpu_per_s = meter.stop() / idle_s
@@ -516,25 +784,27 @@ def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str
     # The class.
     students = [Student(name, robots[i], login_window_s * i / max(1, len(names) - 1) if len(names) > 1 else 0.0)
                 for i, name in enumerate(names)]
+    wall = Wall(course_id, tutor_cookie)
     meter = WorkerMeter(server)
-    meter.start()
-    transactions_before = _transactions(database_url)
-    started = time.monotonic()
-    end_at = started + login_window_s + hold_s
-    restart_at = started + login_window_s + hold_s / 2
-    load = ClassLoad(port, students, end_at)
-
-    # The steady class: everyone in (the last login a moment ago) until the restart; its CPU and transactions apart,
-    # as neither the logins nor the restart weigh on them.
-    steady_from = started + login_window_s + min(STEADY_AFTER_LOGINS_S, hold_s / 4)
-    readings: list[tuple[float, Stretch]] = []  # (when, the totals so far) at the stretch's start and end
+    class_began: list[float] = []  # the transactions when the class began
+    load = ClassLoad(port, students, wall, login_window_s + hold_s)
+    readings: list[tuple[float, Stretch]] = []  # (when, the totals so far) at the steady stretch's start and end
 
     def read_totals() -> None:
         readings.append((time.monotonic(), Stretch(meter.used_s(), 0.0, _transactions(database_url),
-                                                   sum(s.messages for s in students))))
+                                                   sum(s.messages for s in students) + len(wall.received_at))))
 
     def restart_in_the_middle() -> None:
         try:
+            load.began.wait()  # the class is measured from its start, the wall's floor before it
+            started = load.started
+            time.sleep(max(0.0, started - time.monotonic()))
+            meter.start()
+            class_began.append(_transactions(database_url))
+            # The steady class: everyone in (the last login a moment ago) until the restart; its CPU and transactions
+            # apart, as neither the logins nor the restart weigh on them.
+            steady_from = started + login_window_s + min(STEADY_AFTER_LOGINS_S, hold_s / 4)
+            restart_at = started + login_window_s + hold_s / 2
             time.sleep(max(0.0, steady_from - time.monotonic()))
             read_totals()
             time.sleep(max(0.0, restart_at - 1.0 - time.monotonic()))
@@ -553,21 +823,28 @@ def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str
 
     restarter = threading.Thread(target=restart_in_the_middle, daemon=True)
     restarter.start()
-    asyncio.run(load.run(started))
+    asyncio.run(load.run(min(WALL_ALONE_S, idle_s / 2)))
+    started = load.started
     elapsed_s = time.monotonic() - started
     cpu_s = meter.stop()
     restarter.join(120)
     time.sleep(1.0)  # pg_stat_database's counters lag up to a second behind the transactions
-    transactions = _transactions(database_url) - transactions_before
+    transactions = _transactions(database_url) - class_began[0]
     student_s = sum((s.out_at or 0) - (s.in_at or 0) for s in students if s.in_at is not None)
-    errors = [f"{s.name}: {e}" for s in students for e in s.errors]
+    errors = [f"{TUTOR}'s wall: {e}" for e in wall.errors] + [f"{s.name}: {e}" for s in students for e in s.errors]
+    wall_figures = WallFigures(  # its floor from its first poses (the seats come just before, once)
+        per_s=wall.per_s(started, wall.left_at or started), first_open_s=wall.first_open_s,
+        alone_per_s=wall.per_s(wall.shown_at, started) if wall.shown_at is not None else None,
+        reconnects_s=wall.reconnects_s, messages=len(wall.received_at), restarts_seen=wall.restarts_seen,
+        robots_shown=wall.robots_shown)
     steady = Stretch()
     if len(readings) == 2:
         (start, first), (end, last) = readings
         steady = Stretch(last.cpu_s - first.cpu_s, _student_s_between(students, start, end),
                          last.transactions - first.transactions, last.messages - first.messages)
     return RunFigures(
-        steady=steady, idle_cpu_per_s=idle_cpu_per_s, messages=sum(s.messages for s in students),
+        steady=steady, idle_cpu_per_s=idle_cpu_per_s, wall=wall_figures,
+        messages=sum(s.messages for s in students) + sum(at > started for at in wall.received_at),
         workers=workers, students=len(students), student_s=student_s, cpu_s=cpu_s,
         idle_cpu_s=idle_cpu_per_s * elapsed_s, threads_per_worker=max(meter.threads or [0]),
         idle_threads_per_worker=idle_threads, transactions=transactions,
@@ -709,6 +986,7 @@ def rows_for(figures: RunFigures, one_worker_cpu: float | None, graded: bool,
                     floor=statistics.median(figures.first_consoles_s) * 1000 if figures.first_consoles_s else None),
         Measurement(scenario, "reconnect after the restart, max", max(figures.reconnects_s, default=float("nan"))
                     * 1000, "ms", "-"),
+        *_wall_rows(scenario, figures.wall, figures.students, graded),
         Measurement(scenario, "drive commands sent on to the robot per student-second (the rest superseded)",
                     (figures.drives_sent - figures.superseded) / figures.student_s if figures.student_s else None,
                     "count", "-"),
@@ -728,6 +1006,21 @@ def rows_for(figures: RunFigures, one_worker_cpu: float | None, graded: bool,
                                    f"<= {RATIO_TARGET:g}", floor=1.0,
                                    passed=ratio <= RATIO_TARGET if graded else None))
     return rows
+
+
+def _wall_rows(scenario: str, wall: WallFigures, students: int, graded: bool) -> list[Measurement]:
+    """The tutor's wall: what it received, how soon it came back after the restart, and whether it showed the class."""
+    def ms(seconds: float | None) -> float | None:
+        return None if seconds is None else seconds * 1000
+
+    return [
+        Measurement(scenario, "tutor's wall: messages received per second (floor: the wall before the first login)",
+                    wall.per_s, "count", "-", floor=wall.alone_per_s),
+        Measurement(scenario, "tutor's wall: reconnect after the restart, max (floor: its first opening)",
+                    ms(max(wall.reconnects_s, default=None)), "ms", "-", floor=ms(wall.first_open_s)),
+        Measurement(scenario, "tutor's wall: students' robots in its last poses", float(wall.robots_shown), "count",
+                    f"= {students}", passed=wall.robots_shown == students if graded else None),
+    ]
 
 
 def _same_load_rows(scenario: str, figures: RunFigures, alone: RunFigures) -> list[Measurement]:
@@ -785,7 +1078,7 @@ def run(quick: bool, output: Path, students: int | None = None, workers: tuple[i
                      "restarts_seen": figures.restarts_seen, "reconnects": len(figures.reconnects_s),
                      "acks": len(figures.acks_s), "drives_sent": figures.drives_sent,
                      "superseded": figures.superseded, "requests": len(figures.requests_s),
-                     "errors": figures.errors})
+                     "wall": dataclasses.asdict(figures.wall), "errors": figures.errors})
     extra: dict[str, object] = {"students": students, "workers": list(workers), "login_window_s": login_window_s,
                                 "hold_s": hold_s, "machine": the_machine, "runs": runs,
                                 "recordings": os.environ.get("TELELAB_RECORDINGS", "1")}

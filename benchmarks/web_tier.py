@@ -19,7 +19,7 @@ from http.cookiejar import CookieJar
 from pathlib import Path
 from urllib.error import HTTPError
 from urllib.parse import urlencode, urlsplit
-from urllib.request import HTTPCookieProcessor, HTTPRedirectHandler, Request, build_opener
+from urllib.request import HTTPCookieProcessor, HTTPRedirectHandler, OpenerDirector, Request, build_opener
 
 ROOT = Path(__file__).resolve().parents[1]
 POSTGRES_URL = os.environ.get("TELELAB_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/test")
@@ -35,7 +35,7 @@ import sys
 import middleware.auth.services as services
 from middleware import create_app
 from middleware.db import session_factory, upgrade_to_head
-url, password, names = sys.argv[1], sys.argv[2], sys.argv[3:]
+url, password, course_code, tutor_name, names = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5:]
 upgrade_to_head(url)
 one_hash = services.generate_password_hash(password, method=services.PASSWORD_METHOD)
 services.generate_password_hash = lambda *_args, **_kwargs: one_hash
@@ -44,6 +44,18 @@ with session_factory(app)() as session:
     for name in names:
         services.create_user(session, name, "student", password)
     session.commit()
+    if course_code:  # the tutor creates the course and enrols the students, through the courses' services
+        from sqlalchemy import select
+        from middleware.courses import services as courses
+        from middleware.courses.schemas import CourseSettings
+        from middleware.models import Course, User
+        tutor = (session.scalar(select(User).where(User.username == tutor_name))
+                 or services.create_user(session, tutor_name, "tutor", password))
+        course = (session.scalar(select(Course).where(Course.code == course_code.upper()))
+                  or courses.create_course(session, tutor, course_code, "A class day", CourseSettings()))
+        for name in names:
+            courses.enrol(session, tutor, course.id, name)
+        session.commit()
 print("created", len(names), flush=True)
 import os
 os._exit(0)  # the app's background threads need no goodbye
@@ -112,10 +124,12 @@ def admin_dsn() -> str:
 
 
 def create_students(database_url: str, names: list[str], code_root: Path = ROOT,
-                    environment: dict[str, str] | None = None) -> None:
-    """Migrates the database with code_root's code and adds the students (password PASSWORD)."""
+                    environment: dict[str, str] | None = None, course_code: str = "", tutor: str = "") -> None:
+    """Migrates the database with code_root's code and adds the students (password PASSWORD); with course_code, also
+    the tutor (the same password), who creates that course and enrols the students."""
     for start in range(0, len(names), 2000):  # the command line stays short
-        subprocess.run([sys.executable, "-c", _CREATE_STUDENTS, database_url, PASSWORD, *names[start:start + 2000]],
+        subprocess.run([sys.executable, "-c", _CREATE_STUDENTS, database_url, PASSWORD, course_code, tutor,
+                        *names[start:start + 2000]],
                        cwd=code_root, env={**os.environ, **(environment or {})}, check=True, capture_output=True)
 
 
@@ -126,6 +140,17 @@ class _NoRedirect(HTTPRedirectHandler):
 
 def log_in_one(base_url: str, name: str) -> str:
     """The student logs in through the login page (its form, its CSRF token); returns the Cookie header."""
+    return cookie_header(logged_in(base_url, name)[1])
+
+
+def cookie_header(cookies: CookieJar) -> str:
+    """The Cookie header of what cookies hold now."""
+    return "; ".join(f"{cookie.name}={cookie.value}" for cookie in cookies)
+
+
+def logged_in(base_url: str, name: str) -> tuple[OpenerDirector, CookieJar]:
+    """The user logs in through the login page (its form, its CSRF token); an opener that keeps their session (and
+    follows no redirect), and its cookies."""
     cookies = CookieJar()
     opener = build_opener(HTTPCookieProcessor(cookies), _NoRedirect())
     with opener.open(base_url + "/login", timeout=60) as page:
@@ -137,7 +162,7 @@ def log_in_one(base_url: str, name: str) -> str:
     except HTTPError as answer:  # the redirect to the lab, which is not followed
         if answer.code != 302:
             raise RuntimeError(f"{name} could not log in ({answer.code})") from None
-    return "; ".join(f"{cookie.name}={cookie.value}" for cookie in cookies)
+    return opener, cookies
 
 
 def log_in(base_url: str, names: list[str], parallel: int = 8) -> list[str]:

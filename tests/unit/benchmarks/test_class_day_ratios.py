@@ -1,9 +1,12 @@
 """The class-day benchmark's ratios: to 1 worker at the same class size, and to 1 worker carrying each worker's
-share of the class (which alone tells work done twice across workers from a worker's efficiency at its load)."""
+share of the class (which alone tells work done twice across workers from a worker's efficiency at its load); and the
+tutor's wall's rows, each beside its own floor."""
 
 from __future__ import annotations
 
-from benchmarks.class_day import RunFigures, Stretch, rows_for
+import pytest
+
+from benchmarks.class_day import RunFigures, Stretch, WallFigures, rows_for
 
 
 def figures(workers: int, students: int, cpu_s: float, student_s: float, steady_cpu_s: float) -> RunFigures:
@@ -30,3 +33,21 @@ def test_two_workers_are_compared_with_one_at_the_class_size_and_with_one_carryi
 def test_one_worker_has_no_ratio_rows() -> None:
     one = figures(1, 50, cpu_s=50.0, student_s=5000.0, steady_cpu_s=20.0)
     assert not any(row.unit == "ratio" for row in rows_for(one, one.cpu_per_student_s, True))
+
+
+def test_the_walls_figures_stand_beside_its_own_floors_and_it_must_show_every_students_robot() -> None:
+    one = figures(1, 50, cpu_s=50.0, student_s=5000.0, steady_cpu_s=20.0)
+    one.wall = WallFigures(per_s=4.8, alone_per_s=5.1, first_open_s=0.05, reconnects_s=[0.4, 1.2], messages=480,
+                           restarts_seen=2, robots_shown=50)
+    rows = {row.figure: row for row in rows_for(one, one.cpu_per_student_s, True)}
+    received = rows["tutor's wall: messages received per second (floor: the wall before the first login)"]
+    assert (received.measured, received.floor) == (4.8, 5.1)
+    back = rows["tutor's wall: reconnect after the restart, max (floor: its first opening)"]
+    assert (back.measured, back.floor) == (pytest.approx(1200.0), pytest.approx(50.0))
+    assert rows["tutor's wall: students' robots in its last poses"].passed is True
+
+    one.wall = WallFigures(per_s=0.0, robots_shown=0)  # a wall that never showed anything
+    rows = {row.figure: row for row in rows_for(one, one.cpu_per_student_s, True)}
+    back = rows["tutor's wall: reconnect after the restart, max (floor: its first opening)"]
+    assert (back.measured, back.floor) == (None, None)
+    assert rows["tutor's wall: students' robots in its last poses"].passed is False
