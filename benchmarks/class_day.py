@@ -39,39 +39,31 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import dataclasses
 import json
-import math
 import os
-import platform
 import re
-import shutil
 import signal
-import statistics
-import subprocess
 import sys
-import tempfile
 import threading
 import time
-from collections.abc import Awaitable, Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 from urllib.request import Request
 
 import grpc
 
+from benchmarks.class_farm import StandInFarm
+from benchmarks.class_figures import RunFigures, Stretch, WallFigures, machine, rows_for, write_figures
+from benchmarks.class_host import Nginx, WorkerMeter, database_transactions, settled_threads, worker_pids
+from benchmarks.class_load import CHANNELS, ClassLoad, Student, Wall
 from benchmarks.load_client import HttpUser, Refused, WebSocketUser
-from benchmarks.report import Measurement, percentile_ms, print_table, write_json
+from benchmarks.report import Measurement, print_table
 from benchmarks.standin_robots import StandInFleet
 from benchmarks.web_tier import (
-    ROOT,
     SECRET_KEY,
     WebServer,
-    admin_dsn,
     cookie_header,
-    cpu_seconds,
     create_students,
     free_port,
     fresh_database,
@@ -80,12 +72,7 @@ from benchmarks.web_tier import (
 )
 from protos.telelab.v1 import robot_pb2, robot_pb2_grpc
 
-NGINX = shutil.which("nginx") or "/usr/sbin/nginx"
-DRIVE_INTERVAL_S = 0.05  # the console's rate (middleware/lab/sockets.py DRIVE_SEND_INTERVAL_MS)
-REQUEST_INTERVAL_S = 1.0
 RESTART_SETTLE_S = 3.0  # the class goes on at least this long after the last old worker left
-SEAT_WAIT_S = 10.0  # a student who gets no acknowledgement this long after reconnecting has lost their seat
-RATIO_TARGET = 1.10
 STEADY_AFTER_LOGINS_S = 3.0  # the steady class is measured from this long after the last login to the restart
 CONSOLE_WAIT_S = 60.0
 # Consoles opened at once in the thread climb: gunicorn's gthread worker keeps the request threads that
@@ -95,411 +82,14 @@ CONSOLES_AT_ONCE = 10
 # probes, 8), and gunicorn's request threads kept from CONSOLES_AT_ONCE handshakes at once. A pump thread per
 # stream was 3 a robot.
 THREADS_ALLOWANCE = 16 + 8 + 10 + 4
-CHANNELS = ("telemetry", "localization", "drive")
-DRIVE_SUB = 3
 TUTOR, COURSE_CODE = "tutor1", "CLASS-DAY"
 # Each student's robot is their practice robot (middleware/teaching/practice_robots.py practice_name), and the
 # stand-in of that name stands for it; one more, nobody's, is the drive floor's.
 STUDENT_PREFIX = "pupil"
 ROBOT_PREFIX = f"practice-{STUDENT_PREFIX}"
-WALL_SUB = 1
 WALL_ALONE_S = 5.0  # the wall shows the class alone this long (at most half the idle floor's) first: its floor
-WALL_WAIT_S = 30.0  # the class begins without the wall's floor if it showed nothing in this time
 READY_WAIT_S = 60.0  # every seat's robot started
 CSRF_META = re.compile(r'<meta name="csrf-token" content="([^"]+)"')
-# The local farm owner's settings (middleware/farm/owner.py ADDRESS_VARIABLE, KEY_VARIABLE), named here because this
-# process does not import the middleware (seconds of a busy host); the farm's own process reads them by those names.
-FARM_ADDRESS_VARIABLE, FARM_KEY_VARIABLE = "TELELAB_LOCAL_FARM", "TELELAB_LOCAL_FARM_KEY"
-
-
-@dataclass
-class Student:
-    """One student's console, and what it measured."""
-
-    name: str
-    robot: str
-    start_s: float
-    acks_s: list[float] = field(default_factory=list)
-    requests_s: list[float] = field(default_factory=list)
-    request_errors: int = 0
-    first_console_s: float | None = None
-    reconnects_s: list[float] = field(default_factory=list)
-    restarts_seen: int = 0
-    seat_lost: bool = False
-    in_at: float | None = None
-    out_at: float | None = None
-    telemetry: int = 0
-    superseded: int = 0  # drive commands the server replaced by a newer one waiting behind them
-    drives_sent: int = 0
-    received: int = 0  # every message the console's link brought (stream messages, acks, the link's own)
-    errors: list[str] = field(default_factory=list)
-
-    @property
-    def messages(self) -> int:
-        """The messages this student's console exchanged: drive commands sent, messages received, requests."""
-        return self.drives_sent + self.received + len(self.requests_s) + self.request_errors
-
-
-@dataclass
-class Wall:
-    """The tutor's class wall, and what its channel brought."""
-
-    course_id: int
-    cookie: str
-    received_at: list[float] = field(default_factory=list)  # each of its poses and seats messages [monotonic s]
-    poses: int = 0
-    seats: int = 0
-    robots_shown: int = 0  # robots in its latest poses message
-    shown_at: float | None = None  # its first poses message: the class on show [monotonic s]
-    first_open_s: float | None = None
-    reconnects_s: list[float] = field(default_factory=list)
-    restarts_seen: int = 0
-    left_at: float | None = None
-    errors: list[str] = field(default_factory=list)
-
-    def per_s(self, after: float, until: float) -> float | None:
-        """Its messages a second after one moment until another."""
-        if until <= after:
-            return None
-        return sum(after < at <= until for at in self.received_at) / (until - after)
-
-
-class ClassLoad:
-    """The class on one asyncio loop (this process): the tutor's wall from before the first login, and every student
-    from their login to the end, length_s after the class began (or later: see end_at)."""
-
-    def __init__(self, port: int, students: list[Student], wall: Wall, length_s: float) -> None:
-        self.port, self.students, self.wall, self._length_s = port, students, wall, length_s
-        self._end_at = float("inf")
-        self.restart_done = False  # the class goes on until the restart is over, however long it takes
-        self.began = threading.Event()  # set at the class's start (started), for the measuring thread
-        self.started = 0.0
-
-    @property
-    def end_at(self) -> float:
-        return self._end_at if self.restart_done else float("inf")
-
-    @end_at.setter
-    def end_at(self, value: float) -> None:
-        self._end_at = value
-
-    async def run(self, alone_s: float) -> None:
-        """The wall opens first; once it shows the class (or WALL_WAIT_S passed) it stays alone for alone_s, its floor,
-        and then the class begins: each student comes their start_s later."""
-        wall = asyncio.ensure_future(self._wall())
-        deadline = time.monotonic() + WALL_WAIT_S
-        while self.wall.shown_at is None and not wall.done() and time.monotonic() < deadline:
-            await asyncio.sleep(0.05)
-        self.started = time.monotonic() + alone_s
-        self._end_at = self.started + self._length_s
-        self.began.set()
-        await asyncio.gather(wall, *(self._student(s, self.started) for s in self.students))
-
-    async def _student(self, student: Student, started: float) -> None:
-        await asyncio.sleep(max(0.0, started + student.start_s - time.monotonic()))
-        loop = asyncio.get_running_loop()
-        try:
-            cookie = await loop.run_in_executor(None, log_in_one, f"http://127.0.0.1:{self.port}", student.name)
-        except Exception as error:  # noqa: BLE001 - reported: a login that failed is a student who never came in
-            student.errors.append(f"login: {error}")
-            return
-        student.in_at = time.monotonic()
-        requests = asyncio.ensure_future(self._requests(student, cookie))
-        try:
-            student.restarts_seen = await self._keep_link(
-                cookie, student.errors, lambda link, opened, closed_at: self._console(student, link, opened, closed_at))
-        finally:
-            student.out_at = time.monotonic()
-            requests.cancel()
-
-    async def _keep_link(self, cookie: str, errors: list[str],
-                         hold: Callable[[WebSocketUser, float, float | None], Awaitable[int]]) -> int:
-        """A page's /ws/link until the class ends, opened again at once when its worker leaves (1012); hold(link,
-        opened at, the last one closed at) holds one link and answers its close code. The restarts seen."""
-        restarts, closed_at = 0, None
-        while time.monotonic() < self.end_at:
-            opened = time.monotonic()
-            try:
-                link = await WebSocketUser.open(self.port, "/ws/link", cookie)
-            except (Refused, OSError) as error:
-                errors.append(f"open: {error}")
-                await asyncio.sleep(0.1)
-                continue
-            if await hold(link, opened, closed_at) != 1012:
-                break
-            restarts += 1  # the worker is leaving: reconnect at once, as the page's link does
-            closed_at = time.monotonic()
-        return restarts
-
-    async def _read_until_closed(self, link: WebSocketUser, on_message: Callable[[int, bytes], None],
-                                 tasks: list[asyncio.Future[None]]) -> int:
-        """Reads link until it closes (its close code; 1006 when it just ended) or the class ends (1000); the tasks
-        end with it."""
-        reader = asyncio.ensure_future(link.read_messages(on_message))
-        try:
-            while not reader.done() and time.monotonic() < self.end_at:  # the end moves while a restart goes on
-                await asyncio.wait([reader], timeout=0.25)
-            return (reader.result() or 1006) if reader.done() else 1000
-        except (ConnectionError, OSError):
-            return 1006
-        finally:
-            for task in tasks:
-                task.cancel()
-            if not reader.done():
-                link.close()
-                reader.cancel()
-
-    async def _wall(self) -> None:
-        """The tutor's wall as its page holds it: the page, the wall's state and a robot's scene asked once, then the
-        wall's channel on the page's link until the class ends."""
-        wall = self.wall
-        user = HttpUser(self.port, wall.cookie)
-        try:
-            for path in (f"/courses/{wall.course_id}/class/wall", f"/api/courses/{wall.course_id}/class-wall",
-                         f"/api/robots/{self.students[0].robot}"):  # the first seat's, as the page asks
-                status = await user.get(path)
-                if status != 200:
-                    wall.errors.append(f"GET {path}: {status}")
-        except (ConnectionError, OSError, asyncio.IncompleteReadError) as error:
-            wall.errors.append(f"GET: {error}")
-        finally:
-            user.close()
-        try:
-            wall.restarts_seen = await self._keep_link(wall.cookie, wall.errors, self._watch_wall)
-        finally:
-            wall.left_at = time.monotonic()
-
-    async def _watch_wall(self, link: WebSocketUser, opened: float, closed_at: float | None) -> int:
-        wall = self.wall
-        link.send_text(json.dumps({"type": "subscribe", "sub": WALL_SUB,
-                                   "path": f"/ws/courses/{wall.course_id}/class-wall"}))
-        heard = False
-
-        def on_message(opcode: int, payload: bytes) -> None:
-            nonlocal heard
-            if opcode != 1:
-                return
-            head, _, text = payload.decode().partition(" ")
-            if head == "0":
-                _note_closed(json.loads(text), wall.errors)
-                return
-            if head != str(WALL_SUB):
-                return
-            at, message = time.monotonic(), json.loads(text)
-            if message.get("type") == "poses":
-                wall.poses += 1
-                wall.robots_shown = len(message["robots"])
-                wall.shown_at = wall.shown_at or at
-            elif message.get("type") == "seats":
-                wall.seats += 1
-            else:  # "ended" or "error": nothing the wall shows
-                wall.errors.append(f"the wall said {message.get('type')}: {message.get('code', '')}")
-                return
-            wall.received_at.append(at)
-            if not heard:
-                heard = True
-                if closed_at is not None:
-                    wall.reconnects_s.append(at - closed_at)
-                elif wall.first_open_s is None:
-                    wall.first_open_s = at - opened
-
-        return await self._read_until_closed(link, on_message, [])
-
-    async def _console(self, student: Student, link: WebSocketUser, opened: float, closed_at: float | None) -> int:
-        for sub, channel in enumerate(CHANNELS, start=1):
-            link.send_text(json.dumps({"type": "subscribe", "sub": sub, "path": f"/ws/robots/{student.robot}/"
-                                                                                  f"{channel}"}))
-        sent: dict[int, float] = {}
-        ready = asyncio.Event()
-        acked = asyncio.Event()
-
-        def on_message(opcode: int, payload: bytes) -> None:
-            student.received += 1
-            if opcode != 1:
-                return
-            head, _, text = payload.decode().partition(" ")
-            if head == "1":
-                student.telemetry += 1
-                return
-            if head == "0":  # the link's own news: a channel the server closed is a console that lost it
-                _note_closed(json.loads(text), student.errors, CHANNELS)
-                return
-            if head != str(DRIVE_SUB):
-                return
-            message = json.loads(text)
-            if message.get("type") == "ready":
-                ready.set()
-            elif message.get("type") == "ack":
-                at = time.monotonic()
-                # A command the channel superseded by a newer one (it was behind) is answered by that one's ack:
-                # its time counts to this moment, so a backlog shows in the p99 rather than vanishing from it.
-                for sequence in [number for number in sent if number <= message["sequence"]]:
-                    student.acks_s.append(at - sent.pop(sequence))
-                student.superseded += int(message.get("superseded", 0))
-                if not acked.is_set():
-                    acked.set()
-                    if closed_at is not None:
-                        student.reconnects_s.append(at - closed_at)
-                    elif student.first_console_s is None:
-                        student.first_console_s = at - opened
-            elif message.get("type") == "error":
-                student.errors.append(f"drive: {message.get('code')}")
-
-        async def drive() -> None:
-            await ready.wait()
-            sequence = 0
-            next_at = time.monotonic()
-            while time.monotonic() < self.end_at:
-                sequence += 1
-                sent[sequence] = time.monotonic()
-                student.drives_sent += 1
-                link.send_text(f"{DRIVE_SUB} " + json.dumps({"type": "drive", "sequence": sequence,
-                                                             "linear_mps": 0.1, "angular_radps": 0.3}))
-                next_at += DRIVE_INTERVAL_S
-                await asyncio.sleep(max(0.0, next_at - time.monotonic()))
-
-        async def watch_seat() -> None:
-            try:
-                await asyncio.wait_for(acked.wait(), SEAT_WAIT_S)
-            except TimeoutError:
-                student.seat_lost = True
-
-        return await self._read_until_closed(link, on_message, [asyncio.ensure_future(drive()),
-                                                                asyncio.ensure_future(watch_seat())])
-
-    async def _requests(self, student: Student, cookie: str) -> None:
-        user = HttpUser(self.port, cookie)
-        try:
-            while True:
-                started = time.perf_counter()
-                try:
-                    status = await user.get(f"/api/robots/{student.robot}")
-                    if status == 200:
-                        student.requests_s.append(time.perf_counter() - started)
-                    else:
-                        student.request_errors += 1
-                except (ConnectionError, OSError, asyncio.IncompleteReadError):
-                    student.request_errors += 1
-                    user.close()
-                await asyncio.sleep(REQUEST_INTERVAL_S)
-        finally:
-            user.close()
-
-
-def _note_closed(control: dict[str, Any], errors: list[str], channels: tuple[str, ...] = ("the wall",)) -> None:
-    """A channel the server closed (the link's own "closed" news) is a page that lost it: an error."""
-    if control.get("type") == "closed":
-        errors.append(f"closed {channels[control['sub'] - 1]}: {control.get('code')} {control.get('reason', '')[:60]}")
-
-
-class Nginx:
-    """Debian's nginx with the deployment's site, its upstream the given web port."""
-
-    def __init__(self, upstream_port: int, folder: Path) -> None:
-        self.port = free_port()
-        site = (ROOT / "deploy" / "nginx" / "telelab.conf").read_text()
-        site = site.replace("server 127.0.0.1:5000;", f"server 127.0.0.1:{upstream_port};")
-        site = site.replace("listen 8080;", f"listen 127.0.0.1:{self.port};")
-        folder.mkdir(parents=True, exist_ok=True)
-        (folder / "telelab.conf").write_text(site)
-        (folder / "nginx.conf").write_text(
-            ("user root;\n" if os.geteuid() == 0 else "")
-            + f"pid {folder}/nginx.pid;\nerror_log {folder}/error.log;\nworker_processes 1;\n"
-            + "events { worker_connections 4096; }\n"
-            + f"http {{\n  access_log off;\n  client_body_temp_path {folder}/body;\n  proxy_temp_path {folder}/proxy;\n"
-            + f"  include {folder}/telelab.conf;\n}}\n")
-        self.process = subprocess.Popen([NGINX, "-p", str(folder), "-c", str(folder / "nginx.conf"), "-g",
-                                         "daemon off;"], stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 20
-        while not _answers(self.port):
-            if self.process.poll() is not None or time.monotonic() > deadline:
-                raise RuntimeError(f"nginx did not start: {self.process.stderr.read() if self.process.stderr else ''}")
-            time.sleep(0.1)
-
-    def stop(self) -> None:
-        self.process.terminate()
-        self.process.communicate(timeout=10)
-
-
-class StandInFarm:
-    """The class's farm: a process of its own that speaks the protocol of `telelab up`'s local farm owner
-    (middleware/farm/owner.py), which the web workers reach as their farm, so a class session starts its students'
-    robots as in the product. A start hands the stand-in of the robot's name its owner's token (SetController), as a
-    farm starts a robot that obeys it; a stop takes the token back."""
-
-    def __init__(self, fleet: StandInFleet) -> None:
-        self._folder = Path(tempfile.mkdtemp(prefix="telelab-farm-"))  # mode 0700; a Unix socket's path is short
-        self.environment = {FARM_ADDRESS_VARIABLE: str(self._folder / "farm.sock"),
-                            FARM_KEY_VARIABLE: os.urandom(32).hex()}
-        # Started now: its imports of the middleware overlap the database's set-up and the workers' start.
-        self.process = subprocess.Popen([sys.executable, "-c", "import benchmarks.class_day as c; c.serve_farm()"],
-                                        cwd=ROOT, env={**os.environ, **self.environment,
-                                                       "TELELAB_ROBOTS": fleet.robots_setting},
-                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
-
-    def wait_until_serving(self) -> None:
-        assert self.process.stdout is not None
-        if self.process.stdout.readline().strip() != "serving":
-            raise RuntimeError(f"the stand-in farm did not start (exit code {self.process.wait()})")
-
-    def stop(self) -> None:
-        if self.process.stdin is not None:
-            self.process.stdin.close()  # it serves until its stdin closes
-        try:
-            self.process.wait(10)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait(10)
-        shutil.rmtree(self._folder, ignore_errors=True)
-
-
-def serve_farm() -> None:
-    """The stand-in farm's process (StandInFarm): the robots of TELELAB_ROBOTS, served until stdin closes."""
-    from multiprocessing.managers import BaseManager
-
-    from middleware.config import parse_robots
-    from middleware.farm.base import Capacity, FarmRobot, RobotSpec
-    from middleware.farm.owner import ADDRESS_VARIABLE, FARM_METHODS, KEY_VARIABLE
-
-    addresses = {robot.name: robot.address for robot in parse_robots(os.environ["TELELAB_ROBOTS"])}
-    started: dict[str, FarmRobot] = {}
-
-    def hand_over(address: str, token: str) -> None:
-        with grpc.insecure_channel(address) as channel:
-            robot_pb2_grpc.RobotStub(channel).SetController(robot_pb2.SetControllerRequest(token=token), timeout=10)
-
-    class Farm:
-        backend = "local"
-
-        def start(self, spec: RobotSpec) -> FarmRobot:
-            hand_over(addresses[spec.name], spec.controller_token)
-            started[spec.name] = FarmRobot(spec.name, spec.scene, addresses[spec.name], "localhost", self.backend)
-            return started[spec.name]
-
-        def find(self, name: str) -> FarmRobot | None:
-            return started.get(name)
-
-        def stop(self, name: str) -> bool:
-            robot = started.pop(name, None)
-            if robot is not None:
-                hand_over(robot.address, "")
-            return robot is not None
-
-        def robots(self) -> list[FarmRobot]:
-            return list(started.values())
-
-        def capacity(self) -> Capacity:
-            return Capacity(len(addresses), len(started), 1)
-
-    class Owner(BaseManager):
-        pass
-
-    farm = Farm()
-    Owner.register("farm", callable=lambda: farm, exposed=FARM_METHODS)
-    server = Owner(address=os.environ[ADDRESS_VARIABLE], authkey=bytes.fromhex(os.environ[KEY_VARIABLE])).get_server()
-    threading.Thread(target=lambda: (sys.stdin.read(), os._exit(0)), daemon=True).start()
-    print("serving", flush=True)
-    server.serve_forever()
 
 
 def open_class_session(base_url: str, seats: int) -> tuple[int, str]:
@@ -528,114 +118,6 @@ def open_class_session(base_url: str, seats: int) -> tuple[int, str]:
     return course_id, cookie_header(cookies)
 
 
-def _answers(port: int) -> bool:
-    import socket
-
-    try:
-        with socket.create_connection(("127.0.0.1", port), timeout=0.5):
-            return True
-    except OSError:
-        return False
-
-
-def _settled_threads(pid: int, window_s: float = 1.0) -> int:
-    """The fewest threads of pid over window_s (a request thread in flight is not the worker's own)."""
-    least, deadline = _threads(pid), time.monotonic() + window_s
-    while time.monotonic() < deadline:
-        time.sleep(0.1)
-        least = min(least, _threads(pid))
-    return least
-
-
-def worker_pids(server: WebServer) -> list[int]:
-    """The master's workers now (a worker leaving between the listing and the look is skipped)."""
-    for _attempt in range(20):
-        try:
-            return server.worker_pids()
-        except OSError:
-            time.sleep(0.05)
-    return []
-
-
-def _descendants(pid: int) -> list[int]:
-    """The processes under pid (its children, theirs, ...), from /proc/<pid>/task/<tid>/children."""
-    found: list[int] = []
-    with contextlib.suppress(OSError):
-        for task in Path(f"/proc/{pid}/task").iterdir():
-            with contextlib.suppress(OSError, ValueError):
-                for child in map(int, (task / "children").read_text().split()):
-                    found += [child, *_descendants(child)]
-    return found
-
-
-def _threads(pid: int) -> int:
-    try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("Threads:"):
-                return int(line.split()[1])
-    except OSError:
-        pass
-    return 0
-
-
-class WorkerMeter:
-    """Samples every worker of a gunicorn master (they change in a rolling restart): CPU per pid, threads."""
-
-    def __init__(self, server: WebServer) -> None:
-        self._server = server
-        self._first: dict[int, float] = {}
-        self._last: dict[int, float] = {}
-        self.threads: list[int] = []
-        self._stop = threading.Event()
-        self._lock = threading.Lock()
-        self._thread = threading.Thread(target=self._sample_forever, daemon=True)
-
-    def start(self) -> None:
-        self._sample(first=True)
-        self._thread.start()
-
-    def _sample(self, first: bool = False) -> None:
-        # A worker's own child processes (a recordings writer, say) are web CPU too.
-        for pid in [found for worker in worker_pids(self._server) for found in (worker, *_descendants(worker))]:
-            try:
-                used = cpu_seconds(pid)
-            except OSError:
-                continue
-            with self._lock:
-                self._first.setdefault(pid, used if first else 0.0)
-                self._last[pid] = used
-
-    def used_s(self) -> float:
-        """The workers' CPU seconds since start, now (a phase's CPU is the difference of two readings)."""
-        self._sample()
-        with self._lock:
-            return sum(self._last[pid] - self._first[pid] for pid in self._last)
-
-    def _sample_forever(self) -> None:
-        while not self._stop.wait(0.2):
-            self._sample()
-
-    def sample_threads(self) -> None:
-        self.threads.extend(_threads(pid) for pid in worker_pids(self._server))
-
-    def stop(self) -> float:
-        """The workers' CPU seconds since start."""
-        self._stop.set()
-        self._thread.join(5)
-        return self.used_s()
-
-
-def _transactions(database_url: str) -> int:
-    import psycopg
-
-    name = database_url.rsplit("/", 1)[1]
-    with psycopg.connect(admin_dsn(), autocommit=True) as admin:
-        admin.execute("SELECT pg_stat_clear_snapshot()")
-        row = admin.execute("SELECT xact_commit + xact_rollback FROM pg_stat_database WHERE datname = %s",
-                            (name,)).fetchone()
-    return int(row[0]) if row else 0
-
-
 def _drive_floor(address: str, samples: int) -> list[float]:
     """The robot's own Drive round trip over gRPC (what the middleware's leg adds to)."""
     with grpc.insecure_channel(address) as channel:
@@ -661,70 +143,6 @@ async def _idle_requests(port: int, cookie: str, path: str, seconds: float) -> l
     finally:
         user.close()
     return found
-
-
-@dataclass
-class Stretch:
-    """What the web tier did in a stretch of a class: its workers' CPU, the student-seconds, PostgreSQL's
-    transactions and the consoles' messages (drive commands sent, messages received, requests)."""
-
-    cpu_s: float = 0.0
-    student_s: float = 0.0
-    transactions: float = 0.0
-    messages: float = 0.0
-
-    @property
-    def cpu_per_student_s(self) -> float:
-        return self.cpu_s / self.student_s if self.student_s else float("nan")
-
-
-@dataclass
-class WallFigures:
-    """The tutor's wall in one class: its messages a second in the class and before it (None: none came), its first
-    opening and reconnects [s], and the students' robots in its last poses."""
-
-    per_s: float | None = None
-    alone_per_s: float | None = None
-    first_open_s: float | None = None
-    reconnects_s: list[float] = field(default_factory=list)
-    messages: int = 0
-    restarts_seen: int = 0
-    robots_shown: int = 0
-
-
-@dataclass
-class RunFigures:
-    workers: int
-    students: int
-    student_s: float
-    cpu_s: float
-    idle_cpu_s: float
-    threads_per_worker: int
-    idle_threads_per_worker: int
-    transactions: int
-    idle_transactions: float
-    requests_s: list[float]
-    idle_requests_s: list[float]
-    request_errors: int
-    acks_s: list[float]
-    drive_floor_s: list[float]
-    reconnects_s: list[float]
-    first_consoles_s: list[float]
-    seats_lost: int
-    never_in: int
-    drives_sent: int
-    superseded: int
-    restarts_seen: int
-    errors: list[str]
-    steady: Stretch = field(default_factory=Stretch)
-    idle_cpu_per_s: float = 0.0
-    messages: int = 0
-    wall: WallFigures = field(default_factory=WallFigures)
-
-    @property
-    def cpu_per_student_s(self) -> float:
-        return self.cpu_s / self.student_s if self.student_s else float("nan")
-
 
 
 def run_class(workers: int, students: int, login_window_s: float, hold_s: float, idle_s: float,
@@ -775,12 +193,12 @@ def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str
     # The idle floors: nobody in but one probe asking the ordinary request (of their own robot, as a student does).
     meter = WorkerMeter(server)
     meter.start()
-    transactions_before = _transactions(database_url)
+    transactions_before = database_transactions(database_url)
     idle_requests = asyncio.run(_idle_requests(port, probe_cookie, f"/api/robots/{robots[0]}", idle_s))
     meter.sample_threads()
     idle_threads = max(meter.threads)
     idle_cpu_per_s = meter.stop() / idle_s
-    idle_transactions_per_s = (_transactions(database_url) - transactions_before) / idle_s
+    idle_transactions_per_s = (database_transactions(database_url) - transactions_before) / idle_s
     # The class.
     students = [Student(name, robots[i], login_window_s * i / max(1, len(names) - 1) if len(names) > 1 else 0.0)
                 for i, name in enumerate(names)]
@@ -791,7 +209,7 @@ def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str
     readings: list[tuple[float, Stretch]] = []  # (when, the totals so far) at the steady stretch's start and end
 
     def read_totals() -> None:
-        readings.append((time.monotonic(), Stretch(meter.used_s(), 0.0, _transactions(database_url),
+        readings.append((time.monotonic(), Stretch(meter.used_s(), 0.0, database_transactions(database_url),
                                                    sum(s.messages for s in students) + len(wall.received_at))))
 
     def restart_in_the_middle() -> None:
@@ -800,7 +218,7 @@ def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str
             started = load.started
             time.sleep(max(0.0, started - time.monotonic()))
             meter.start()
-            class_began.append(_transactions(database_url))
+            class_began.append(database_transactions(database_url))
             # The steady class: everyone in (the last login a moment ago) until the restart; its CPU and transactions
             # apart, as neither the logins nor the restart weigh on them.
             steady_from = started + login_window_s + min(STEADY_AFTER_LOGINS_S, hold_s / 4)
@@ -829,7 +247,7 @@ def _measure(server: WebServer, port: int, fleet: StandInFleet, robots: list[str
     cpu_s = meter.stop()
     restarter.join(120)
     time.sleep(1.0)  # pg_stat_database's counters lag up to a second behind the transactions
-    transactions = _transactions(database_url) - class_began[0]
+    transactions = database_transactions(database_url) - class_began[0]
     student_s = sum((s.out_at or 0) - (s.in_at or 0) for s in students if s.in_at is not None)
     errors = [f"{TUTOR}'s wall: {e}" for e in wall.errors] + [f"{s.name}: {e}" for s in students for e in s.errors]
     wall_figures = WallFigures(  # its floor from its first poses (the seats come just before, once)
@@ -924,7 +342,7 @@ def threads_with_robots(steps: tuple[int, ...], students: int) -> list[tuple[int
                         opened += links
                         asked = step
                         await asyncio.sleep(2.0)  # the handshakes' request threads return to the server
-                        found.append((step, _settled_threads(worker), not_whole))
+                        found.append((step, settled_threads(worker), not_whole))
                         missing = f" ({not_whole} consoles not whole in {CONSOLE_WAIT_S:g} s)" if not_whole else ""
                         print(f"  {step} robots with a console open: {found[-1][1]} threads in the worker{missing}",
                               flush=True)
@@ -937,113 +355,6 @@ def threads_with_robots(steps: tuple[int, ...], students: int) -> list[tuple[int
     finally:
         fleet.stop()
     return found
-
-
-def machine() -> dict[str, object]:
-    """What the machine was."""
-    model = ""
-    with contextlib.suppress(OSError):
-        model = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                      if line.startswith("model name")), "")
-    memory_gb = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 1e9
-    return {"cores": os.cpu_count(), "cpu": model, "memory_gb": round(memory_gb, 1), "system": platform.platform(),
-            "python": platform.python_version(), "load_average_at_start": os.getloadavg()[0]}
-
-
-def rows_for(figures: RunFigures, one_worker_cpu: float | None, graded: bool,
-             one_worker_steady_cpu: float | None = None, same_load: RunFigures | None = None) -> list[Measurement]:
-    scenario = f"{figures.students} students, {figures.workers} worker(s)"
-    reconnect_p50 = statistics.median(figures.reconnects_s) if figures.reconnects_s else float("nan")
-    ratio = figures.cpu_per_student_s / one_worker_cpu if one_worker_cpu else None
-    steady = figures.steady
-    steady_ratio = (steady.cpu_per_student_s / one_worker_steady_cpu
-                    if one_worker_steady_cpu and not math.isnan(steady.cpu_per_student_s) else None)
-    request_p99, ack_p99 = percentile_ms(figures.requests_s, 99), percentile_ms(figures.acks_s, 99)
-    rows = [
-        Measurement(scenario, "web CPU per student-second (floor: idle workers)", figures.cpu_per_student_s * 1000,
-                    "ms", "-", floor=figures.idle_cpu_s / figures.student_s * 1000 if figures.student_s else None),
-        Measurement(scenario, "web CPU per student-second, everyone in before the restart (floor: idle workers)",
-                    steady.cpu_per_student_s * 1000, "ms", "-", floor=figures.idle_cpu_per_s / figures.students * 1000),
-        Measurement(scenario, "web CPU per 1000 messages, everyone in before the restart (drive commands, messages "
-                              "received, requests)", steady.cpu_s / steady.messages * 1e6 if steady.messages else None,
-                    "ms", "-"),
-        Measurement(scenario, "PostgreSQL transactions per student-second, everyone in before the restart",
-                    steady.transactions / steady.student_s if steady.student_s else None, "count", "-"),
-        Measurement(scenario, "web CPU per student-second of the rest: the logins, the restart and after",
-                    (figures.cpu_s - steady.cpu_s) / (figures.student_s - steady.student_s) * 1000
-                    if figures.student_s > steady.student_s else None, "ms", "-"),
-        Measurement(scenario, "threads per worker, everyone in (floor: idle)", float(figures.threads_per_worker),
-                    "count", "-", floor=float(figures.idle_threads_per_worker)),
-        Measurement(scenario, "PostgreSQL transactions per student-second (floor: idle)",
-                    figures.transactions / figures.student_s if figures.student_s else None, "count", "-",
-                    floor=figures.idle_transactions / figures.student_s if figures.student_s else None),
-        Measurement(scenario, "ordinary request p99 (floor: nobody in)", request_p99, "ms", "-",
-                    floor=percentile_ms(figures.idle_requests_s, 99)),
-        Measurement(scenario, "drive acknowledgement p99 (floor: the robot's own gRPC Drive)", ack_p99, "ms", "-",
-                    floor=percentile_ms(figures.drive_floor_s, 99)),
-        Measurement(scenario, "reconnect after the restart, p50 (floor: a console's first opening)",
-                    reconnect_p50 * 1000, "ms", "-",
-                    floor=statistics.median(figures.first_consoles_s) * 1000 if figures.first_consoles_s else None),
-        Measurement(scenario, "reconnect after the restart, max", max(figures.reconnects_s, default=float("nan"))
-                    * 1000, "ms", "-"),
-        *_wall_rows(scenario, figures.wall, figures.students, graded),
-        Measurement(scenario, "drive commands sent on to the robot per student-second (the rest superseded)",
-                    (figures.drives_sent - figures.superseded) / figures.student_s if figures.student_s else None,
-                    "count", "-"),
-        Measurement(scenario, "drive commands superseded by a newer one waiting (share of those sent)",
-                    figures.superseded / figures.drives_sent * 100 if figures.drives_sent else None, "%", "-"),
-        Measurement(scenario, "seats lost", float(figures.seats_lost + figures.never_in), "count", "= 0",
-                    passed=figures.seats_lost + figures.never_in == 0 if graded else None),
-        Measurement(scenario, "ordinary request errors", float(figures.request_errors), "count", "-"),
-    ]
-    if steady_ratio is not None and figures.workers > 1:
-        rows.insert(3, Measurement(scenario, "web CPU per student-second before the restart / 1 worker's",
-                                   steady_ratio, "ratio", "-", floor=1.0))
-    if same_load is not None and figures.workers > 1:
-        rows[2:2] = _same_load_rows(scenario, figures, same_load)
-    if ratio is not None and figures.workers > 1:
-        rows.insert(1, Measurement(scenario, "web CPU per student-second / 1 worker's", ratio, "ratio",
-                                   f"<= {RATIO_TARGET:g}", floor=1.0,
-                                   passed=ratio <= RATIO_TARGET if graded else None))
-    return rows
-
-
-def _wall_rows(scenario: str, wall: WallFigures, students: int, graded: bool) -> list[Measurement]:
-    """The tutor's wall: what it received, how soon it came back after the restart, and whether it showed the class."""
-    def ms(seconds: float | None) -> float | None:
-        return None if seconds is None else seconds * 1000
-
-    return [
-        Measurement(scenario, "tutor's wall: messages received per second (floor: the wall before the first login)",
-                    wall.per_s, "count", "-", floor=wall.alone_per_s),
-        Measurement(scenario, "tutor's wall: reconnect after the restart, max (floor: its first opening)",
-                    ms(max(wall.reconnects_s, default=None)), "ms", "-", floor=ms(wall.first_open_s)),
-        Measurement(scenario, "tutor's wall: students' robots in its last poses", float(wall.robots_shown), "count",
-                    f"= {students}", passed=wall.robots_shown == students if graded else None),
-    ]
-
-
-def _same_load_rows(scenario: str, figures: RunFigures, alone: RunFigures) -> list[Measurement]:
-    """The workers' CPU per student-second over one worker's carrying as many students as each of them: a worker
-    spends less per message the busier it is (one wake-up serves more), so this ratio, not the one at the same class
-    size, tells work done twice across workers from a worker's efficiency at its load."""
-    rows = [Measurement(scenario, f"web CPU per student-second / 1 worker's carrying {alone.students} students "
-                                  "(the load of each)", figures.cpu_per_student_s / alone.cpu_per_student_s
-                        if alone.cpu_per_student_s else None, "ratio", "-", floor=1.0)]
-    if not math.isnan(figures.steady.cpu_per_student_s) and not math.isnan(alone.steady.cpu_per_student_s):
-        rows.append(Measurement(scenario, f"web CPU per student-second before the restart / 1 worker's carrying "
-                                          f"{alone.students} students", figures.steady.cpu_per_student_s
-                                / alone.steady.cpu_per_student_s, "ratio", "-", floor=1.0))
-    return rows
-
-
-def _write(output: Path, rows: list[Measurement], extra: dict[str, object]) -> None:
-    for row in rows:  # a figure with no sample (no reconnect in a run) is absent, not NaN
-        if row.measured is not None and math.isnan(row.measured):
-            row.measured = None
-        if row.floor is not None and math.isnan(row.floor):
-            row.floor = None
-    write_json(output / "class_day.json", rows, extra)
 
 
 def run(quick: bool, output: Path, students: int | None = None, workers: tuple[int, ...] | None = None,
@@ -1082,7 +393,7 @@ def run(quick: bool, output: Path, students: int | None = None, workers: tuple[i
     extra: dict[str, object] = {"students": students, "workers": list(workers), "login_window_s": login_window_s,
                                 "hold_s": hold_s, "machine": the_machine, "runs": runs,
                                 "recordings": os.environ.get("TELELAB_RECORDINGS", "1")}
-    _write(output, rows, extra)  # the class's figures are kept whatever the climb below does
+    write_figures(output, rows, extra)  # the class's figures are kept whatever the climb below does
     if not thread_climb:
         print_table(f"A class of {students} on its own robots, behind nginx, with a rolling restart", rows)
         return rows
@@ -1098,7 +409,7 @@ def run(quick: bool, output: Path, students: int | None = None, workers: tuple[i
     print_table(f"A class of {students} on its own robots, behind nginx, with a rolling restart", rows)
     extra["threads_with_robots"] = [{"robots": step, "threads": threads, "consoles_not_whole": not_whole}
                                     for step, threads, not_whole in climb]
-    _write(output, rows, extra)
+    write_figures(output, rows, extra)
     return rows
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from benchmarks.class_day import RunFigures, Stretch, WallFigures, rows_for
+from benchmarks.class_figures import RunFigures, Stretch, WallFigures, rows_for
 
 
 def figures(workers: int, students: int, cpu_s: float, student_s: float, steady_cpu_s: float) -> RunFigures:
