@@ -7,17 +7,21 @@ embedded default) in this process, queued by the session's after-commit hook. `l
 calls callback(key) for each announcement of topic, in the bus's own thread (never in the announcer's, which may
 hold locks the callback takes); the receiver reads what changed from the tables. When the PostgreSQL listener
 loses its connection it reconnects and calls every callback with key None: "anything may have changed
-meanwhile, read it all again".
+meanwhile, read it all again". `KeptAnswers` is the receiving side most readers want: answers read from the tables,
+kept by this process until an announcement of their topic drops them.
 """
 
 from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import queue
 import threading
+import time
 from collections import defaultdict
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
+from typing import Generic, TypeVar
 
 from sqlalchemy import Connection, Engine, event, text
 from sqlalchemy.orm import Session
@@ -30,6 +34,8 @@ RECONNECT_MAX_S = 30.0
 DISPATCHER_IDLE_S = 5.0
 
 Callback = Callable[[str | None], None]
+K = TypeVar("K", bound=Hashable)
+V = TypeVar("V")
 
 
 class EventBus:
@@ -170,3 +176,66 @@ def announce(session: Session, topic: str, key: str) -> None:
         return
     bus = bus_of(engine)
     event.listen(session, "after_commit", lambda _session: bus.post(topic, key[:MAX_PAYLOAD]), once=True)
+
+
+class KeptAnswers(Generic[K, V]):
+    """Answers read from the tables, kept by this process until an announcement of their topic drops them.
+
+    An answer is kept heard_s while the process hears the announcements (PostgreSQL's listener connected), else
+    short_s (SQLite's bus reaches no other process; a listener may be reconnecting), and never longer than the reader
+    says of it. An announcement drops its key (keyed: the topic is announced with these keys) or every answer; a
+    listener that reconnected drops every answer. An answer read while anything was dropped is given but not kept, so a
+    read that raced a change never outlives the change's announcement.
+    """
+
+    def __init__(self, engine: Engine, topic: str, short_s: float, heard_s: float, keyed: bool = True) -> None:
+        self._engine, self._topic, self._keyed = engine, topic, keyed
+        self._short_s, self._heard_s = short_s, heard_s
+        self._lock = threading.Lock()
+        self._answers: dict[K, tuple[V, float]] = {}  # key -> (answer, kept until [monotonic s])
+        self._drops = 0
+        self._bus: EventBus | None = None
+
+    def known(self, key: K) -> tuple[bool, V | None]:
+        """(True, the answer) while one is kept for key, else (False, None): memory only, never a read."""
+        with self._lock:
+            kept = self._answers.get(key)
+        if kept is not None and kept[1] > time.monotonic():
+            return True, kept[0]
+        return False, None
+
+    def get(self, key: K, read: Callable[[], V], longest_s: Callable[[V], float] = lambda _answer: math.inf) -> V:
+        """The answer kept for key, else read()'s, then kept at most longest_s(answer) seconds (0: not kept)."""
+        found, answer = self.known(key)
+        if found:
+            return answer  # type: ignore[return-value]  # kept answers are V
+        bus = self._listen()
+        with self._lock:
+            drops = self._drops
+        answer = read()
+        lifetime_s = min(self._heard_s if bus.shared and bus.listening.is_set() else self._short_s,
+                         longest_s(answer))
+        with self._lock:
+            if lifetime_s > 0 and drops == self._drops:
+                self._answers[key] = (answer, time.monotonic() + lifetime_s)
+        return answer
+
+    def drop(self, key: K | None = None) -> None:
+        """Forgets key's answer (every answer: None), and any read under way is not kept."""
+        with self._lock:
+            self._drops += 1
+            if key is None:
+                self._answers.clear()
+            else:
+                self._answers.pop(key, None)
+
+    def _heard(self, key: str | None) -> None:
+        self.drop(key if self._keyed else None)  # type: ignore[arg-type]  # keyed: the topic's keys are K
+
+    def _listen(self) -> EventBus:
+        """The bus, listened to from the first read on (a process that never asks starts no listener)."""
+        with self._lock:  # subscribed before any read is kept (the bus calls _heard without its own lock held)
+            if self._bus is None:
+                self._bus = bus_of(self._engine)
+                self._bus.listen(self._topic, self._heard)
+            return self._bus

@@ -507,11 +507,12 @@ class RobotCommands:
     def reachable(self, robot_name: str, user_id: int | None) -> RobotLink | None:
         """The robot's link if user_id may see it: any lab robot, a personal robot for its owner (and its
         overseers: a tutor of the owner's open class) only."""
-        link = self._registry.get(robot_name)
-        if link is None:
+        if not self._registry.is_personal_name(robot_name):
+            return self._registry.get(robot_name)
+        personal = self._registry.personal(robot_name)  # one lookup gives the link and the owner
+        if personal is None:
             return None
-        owner_id = self._registry.owner_of(robot_name)
-        return link if owner_id is None or owner_id == user_id or self._oversees(robot_name, user_id) else None
+        return personal.link if personal.owner_id == user_id or self._oversees(robot_name, user_id) else None
 
     def _oversees(self, robot_name: str, user_id: int | None) -> bool:
         return self._oversight is not None and user_id is not None and self._oversight.oversees(robot_name, user_id)

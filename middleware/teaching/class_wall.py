@@ -10,8 +10,7 @@ leaves (a closed tab, a dead worker) gives the robot back by themselves. The com
 
 from __future__ import annotations
 
-import threading
-import time
+import math
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
@@ -37,7 +36,8 @@ from middleware.validation import MAX_ROW_ID
 TOPIC = "class-wall"
 TAKEOVER_FRESH_S = 12.0  # a takeover whose wall was not heard of for this long has ended (the tutor left)
 TAKEOVER_REFRESH_S = 4.0  # how often an open wall says its tutor is still there
-HELD_CACHE_S = 1.0  # a process re-reads who holds a robot at most this often between announcements
+HELD_CACHE_S = 1.0  # how long a process keeps a holder, or "nobody" while it may miss an announcement
+HELD_HEARD_S = 15.0  # "nobody holds it" while it hears them: a takeover's announcement drops it at once
 OVERSEES_CACHE_S = 5.0
 HAND_TEXT_MAX = 200
 NOTE_TEXT_MAX = 300
@@ -358,66 +358,48 @@ def student_view(session: Session, actor: User) -> dict[str, object]:
 
 class WallOversight:
     """The command path's `Oversight`: a class's tutors (and admins) reach its students' robots, and a live
-    takeover gives its tutor the robot. Answers are kept briefly per process and dropped when the wall's topic is
-    announced, so a student's 20 commands a second cost no read each."""
+    takeover gives its tutor the robot. Answers are kept per process (events.KeptAnswers) and dropped when the wall's
+    topic is announced, as every takeover's start and end is, so a student's 20 commands a second cost no read each:
+    "nobody holds it" is kept while this process hears the announcements, a holder HELD_CACHE_S (a takeover whose
+    tutor went quiet ends unannounced)."""
 
     def __init__(self, sessions: sessionmaker[Session]) -> None:
         self._sessions = sessions
-        self._held: dict[str, tuple[int | None, float]] = {}
-        self._oversees: dict[tuple[str, int], tuple[bool, float]] = {}
-        self._listening = False
-        self._lock = threading.Lock()
-
-    def _listen(self) -> None:
-        with self._lock:
-            if self._listening:
-                return
-            self._listening = True
-        events.listen(self._sessions.kw["bind"], TOPIC, self._forget)
-
-    def _forget(self, _key: str | None) -> None:
-        self._held.clear()
-        self._oversees.clear()
+        engine = sessions.kw["bind"]
+        self._held: events.KeptAnswers[str, int | None] = events.KeptAnswers(
+            engine, TOPIC, HELD_CACHE_S, HELD_HEARD_S, keyed=False)
+        self._oversees: events.KeptAnswers[tuple[str, int], bool] = events.KeptAnswers(
+            engine, TOPIC, OVERSEES_CACHE_S, OVERSEES_CACHE_S, keyed=False)
 
     def held_by(self, robot_name: str) -> int | None:
         """The tutor holding robot_name now, or None."""
-        self._listen()
-        now = time.monotonic()
-        cached = self._held.get(robot_name)
-        if cached is not None and cached[1] > now:
-            return cached[0]
+        return self._held.get(robot_name, lambda: self._read_holder(robot_name),
+                              lambda holder: math.inf if holder is None else HELD_CACHE_S)
+
+    def _read_holder(self, robot_name: str) -> int | None:
         with self._sessions() as session:
-            holder = session.scalar(select(ClassTakeover.tutor_id).where(
+            return session.scalar(select(ClassTakeover.tutor_id).where(
                 ClassTakeover.robot_name == robot_name, ClassTakeover.ended_at.is_(None),
                 ClassTakeover.heard_at > _fresh_after()))
-        self._held[robot_name] = (holder, now + HELD_CACHE_S)
-        return holder
 
     def remembered_holder(self, robot_name: str) -> tuple[bool, int | None]:
         """(True, the tutor holding robot_name or None) when this process's answer is fresh, else (False, None)."""
-        cached = self._held.get(robot_name)
-        if cached is not None and cached[1] > time.monotonic():
-            return True, cached[0]
-        return False, None
+        return self._held.known(robot_name)
 
     def oversees(self, robot_name: str, user_id: int) -> bool:
         """Whether user_id teaches the course of the open class session robot_name was started for."""
-        self._listen()
-        now = time.monotonic()
-        cached = self._oversees.get((robot_name, user_id))
-        if cached is not None and cached[1] > now:
-            return cached[0]
+        return self._oversees.get((robot_name, user_id), lambda: self._read_oversees(robot_name, user_id))
+
+    def _read_oversees(self, robot_name: str, user_id: int) -> bool:
         with self._sessions() as session:
             course_id = session.scalar(select(ClassSession.course_id).join(
                 PersonalRobotRecord, PersonalRobotRecord.class_session_id == ClassSession.id).where(
                 PersonalRobotRecord.name == robot_name, ClassSession.ended_at.is_(None)))
             actor = session.get(User, user_id)
-            answer = False
-            if course_id is not None and actor is not None and actor.is_active:
-                try:
-                    managed_course(session, actor, course_id)
-                    answer = True
-                except Refused:
-                    answer = False
-        self._oversees[(robot_name, user_id)] = (answer, now + OVERSEES_CACHE_S)
-        return answer
+            if course_id is None or actor is None or not actor.is_active:
+                return False
+            try:
+                managed_course(session, actor, course_id)
+            except Refused:
+                return False
+            return True

@@ -7,7 +7,9 @@ given to the robot when it starts and again by the farm after a restart, so nobo
 
 Looking a robot up (every request and channel of a practice robot does) writes nothing: the use, and the new
 address of a robot the farm moved, are noted in memory and written by the keeper (write_noted), the background
-duty that also stops idle robots.
+duty that also stops idle robots. Nor does it read each time: a running robot's row is kept by the process
+(events.KeptAnswers) until its change is announced (TOPIC, the robot's name, in the transaction of every insert,
+delete and new address), which every worker hears at once; this process drops it at once after its own changes.
 
 A start is two steps: the row is claimed in the caller's unit of work (begin_start), and the farm starts the
 robot once that is committed (PendingStart.run, an after_commit hook of the request), so other workers see the
@@ -25,6 +27,7 @@ from __future__ import annotations
 import atexit
 import contextlib
 import logging
+import math
 import os
 import re
 import secrets
@@ -40,8 +43,9 @@ from flask_babel import gettext  # type: ignore[import-untyped]
 from sqlalchemy import delete, func, or_, select, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.exc import DBAPIError
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session, sessionmaker
 
+from middleware import events
 from middleware.config import ConfigError
 from middleware.db import session_factory
 from middleware.errors import Refused
@@ -59,6 +63,9 @@ PRACTICE_PREFIX = "practice-"
 PLAIN_USERNAME = re.compile(r"^[a-z0-9][a-z0-9_-]{0,22}$")  # fits the 32-character robot names as it is
 START_DEADLINE_S = 120.0  # a claim still without an address this long after it was written is a start that died
 REFIND_AFTER_S = 1.0  # a robot unreachable this long is looked up on the farm again (it may have moved)
+TOPIC = "practice-robots"  # announced with a robot's name whenever its row is inserted, deleted or moved
+KNOWN_S = 1.0  # how long a process keeps a running robot's row while it may miss an announcement
+HEARD_KNOWN_S = 15.0  # while it hears them: the change's announcement drops the row at once
 
 
 class PracticeCapReached(Refused):
@@ -107,6 +114,22 @@ class PendingStart:
             log.warning("practice robot %s did not start: %s", self.name, refusal.message)
         except Exception:  # noqa: BLE001 - the request is answered already; the claim is released
             log.exception("practice robot %s did not start", self.name)
+
+
+@dataclass(frozen=True)
+class _Row:
+    """What a lookup reads of a running robot's row."""
+
+    name: str
+    owner_id: int
+    username: str
+    token: str
+    address: str
+
+
+def announce_change(session: Session, name: str) -> None:
+    """Announces that the row of the practice robot called name changes in session's transaction."""
+    events.announce(session, TOPIC, name)
 
 
 @dataclass(frozen=True)
@@ -166,7 +189,7 @@ def read_limits(environ: dict[str, str] | None = None) -> tuple[int | None, floa
 class PracticeManager:
     """The lab's practice robots: as many as the farm holds (or `cap`), each stopped after `idle_s` unused."""
 
-    def __init__(self, farm: RobotFarm, sessions: Callable[[], Session], idle_s: float, cap: int | None = None,
+    def __init__(self, farm: RobotFarm, sessions: sessionmaker[Session], idle_s: float, cap: int | None = None,
                  rpc_timeout_s: float = 1.0, scene: str = "lab", clock: Callable[[], datetime] = utc_now,
                  start_deadline_s: float = START_DEADLINE_S) -> None:
         self.farm, self.cap, self.idle_s, self.scene = farm, cap, idle_s, scene
@@ -181,6 +204,8 @@ class PracticeManager:
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._keeper: threading.Thread | None = None
+        self._rows: events.KeptAnswers[str, _Row | None] = events.KeptAnswers(sessions.kw["bind"], TOPIC, KNOWN_S,
+                                                                             HEARD_KNOWN_S)
 
     def get(self, owner_id: int) -> PracticeRobot | None:
         """owner_id's running practice robot, if any (and counts as a use)."""
@@ -190,7 +215,7 @@ class PracticeManager:
         """The running practice robot called name, whoever owns it (the caller checks the owner)."""
         if not name.startswith(PRACTICE_PREFIX):
             return None
-        return self._running(PersonalRobotRecord.name == name)
+        return self._running(PersonalRobotRecord.name == name, name)
 
     def personal_robot(self, name: str) -> PersonalRobot | None:
         """The registry's view of the practice robot called name (its resolver)."""
@@ -240,6 +265,7 @@ class PracticeManager:
             replaced = record.name
             session.delete(record)
             session.flush()
+            announce_change(session, replaced)
         limit = self.limit()
         if (session.scalar(select(func.count()).select_from(PersonalRobotRecord)) or 0) >= limit:
             raise PracticeCapReached(gettext("All %(limit)s practice robots are in use. Try again in a few minutes, "
@@ -250,6 +276,7 @@ class PracticeManager:
                  "class_session_id": class_session_id}
         if not _insert_unless_taken(session, claim):  # another request claimed it first: that start is under way
             return None
+        announce_change(session, name)
         self.start_keeper()  # this process releases the claim if its start dies
         return PendingStart(self, name, token, wanted, replaced)
 
@@ -271,6 +298,8 @@ class PracticeManager:
             recorded = rows_matched(session, update(PersonalRobotRecord).where(
                 PersonalRobotRecord.name == name, PersonalRobotRecord.token == token)
                 .values(address=robot.address, last_used_at=self._clock()))  # running from now: not idle yet
+            announce_change(session, name)
+        self._rows.drop(name)
         started = self.by_name(name) if recorded else None
         if started is None or started.token != token:
             if not recorded:  # released meanwhile: nobody's robot
@@ -300,6 +329,7 @@ class PracticeManager:
             return None
         session.delete(record)
         session.flush()
+        announce_change(session, record.name)
         return record.name
 
     def finish_stop(self, name: str) -> None:
@@ -383,6 +413,7 @@ class PracticeManager:
             for name, token in dead:
                 session.execute(delete(PersonalRobotRecord).where(PersonalRobotRecord.name == name,
                                                                   PersonalRobotRecord.token == token))
+                announce_change(session, name)
         for name, _token in dead:
             log.warning("practice robot %s: its start did not finish within %.0f s; its claim is released",
                         name, self.start_deadline_s)
@@ -410,13 +441,14 @@ class PracticeManager:
             self._release(name)
         return lost
 
-    def _running(self, where) -> PracticeRobot | None:
-        with self._sessions() as session:
-            record = session.scalar(select(PersonalRobotRecord).where(where))
-            if record is None or not record.address:
-                return None
-            name, owner_id, username, token, address = (record.name, record.owner_id, record.owner_name,
-                                                         record.token, record.address)
+    def _running(self, where, kept_as: str | None = None) -> PracticeRobot | None:
+        """The running robot whose row where finds; kept_as: its name, under which this process keeps the row (only a
+        running robot's: a robot starting is looked up again)."""
+        row = self._read_row(where) if kept_as is None else self._rows.get(
+            kept_as, lambda: self._read_row(where), lambda found: math.inf if found is not None else 0.0)
+        if row is None:
+            return None
+        name, owner_id, username, token, address = row.name, row.owner_id, row.username, row.token, row.address
         moved = self._moved.get(name)
         if moved is not None and moved[0] == address:  # found elsewhere, not written yet: go where it is now
             address = moved[1]
@@ -426,6 +458,13 @@ class PracticeManager:
             link = self._refind(name, link)
         self._touch(name)
         return PracticeRobot(name, owner_id, username, link, token)
+
+    def _read_row(self, where) -> _Row | None:
+        with self._sessions() as session:
+            record = session.scalar(select(PersonalRobotRecord).where(where))
+            if record is None or not record.address:
+                return None
+            return _Row(record.name, record.owner_id, record.owner_name, record.token, record.address)
 
     def _link(self, name: str, address: str) -> RobotLink:
         with self._lock:
@@ -475,10 +514,13 @@ class PracticeManager:
                 session.execute(update(PersonalRobotRecord).where(PersonalRobotRecord.name == name,
                                                                   PersonalRobotRecord.address == was)
                                 .values(address=now))
+                announce_change(session, name)
         with self._lock:
             for name, move in moves.items():
                 if self._moved.get(name) == move:
                     del self._moved[name]
+        for name in moves:
+            self._rows.drop(name)
 
     def scene_of(self, name: str) -> str | None:
         """The scene the practice robot called name runs."""
@@ -489,8 +531,11 @@ class PracticeManager:
         with self._sessions() as session, session.begin():
             session.execute(delete(PersonalRobotRecord).where(
                 PersonalRobotRecord.name == name, *([PersonalRobotRecord.token == token] if token else [])))
+            announce_change(session, name)
+        self._rows.drop(name)
 
     def _forget(self, name: str) -> None:
+        self._rows.drop(name)
         with self._lock:
             link = self._links.pop(name, None)
             self._used_at.pop(name, None)
