@@ -149,8 +149,9 @@ class SupervisorTokens:
 class OwnerToken:
     """A robot with one controller for its whole life (a practice robot, the demo recorder's robot)."""
 
-    def __init__(self, link: RobotLink, token: Callable[[], str]) -> None:
-        self._link, self._token = link, token
+    def __init__(self, link: RobotLink, token: Callable[[], str],
+                 still_ours: Callable[[], bool] = lambda: True) -> None:
+        self._link, self._token, self._still_ours = link, token, still_ours
 
     def token(self, fresh: bool) -> str | None:
         """The owner's token."""
@@ -161,8 +162,9 @@ class OwnerToken:
         return self._token() or None
 
     def resend(self, token: str) -> bool:
-        """Hands the robot the owner's token again."""
-        return hand_over(self._link, token)
+        """Hands the robot the owner's token again, while the robot at the link's address is still the owner's: a
+        farm that gave the address to another robot would otherwise hand that robot the old owner's token."""
+        return self._still_ours() and hand_over(self._link, token)
 
     def nobody_controls(self) -> bool:
         """The owner always holds it."""
@@ -519,12 +521,20 @@ class RobotCommands:
 
     def _personal_tokens(self, link: RobotLink, personal: PersonalRobot, user_id: int) -> TokenSource:
         """The owner's token, to whoever holds the personal robot now (its owner, or an overseer who took it over)."""
-        owner = OwnerToken(link, lambda: personal.token)
+        owner = self._owner_token(link, personal)
         oversight = self._oversight
         if oversight is None:
             return owner
         return HeldTokens(owner, lambda: oversight.held_by(link.name), user_id, personal.owner_id,
                           lambda: oversight.remembered_holder(link.name))
+
+    def _owner_token(self, link: RobotLink, personal: PersonalRobot) -> OwnerToken:
+        """The personal robot's owner token, handed back to it only while the registry still says the robot at
+        link's address is that owner's (a fresh lookup: a resend happens once per refusal, never per command)."""
+        def still_ours() -> bool:
+            now = self._registry.personal(link.name)
+            return now is not None and now.token == personal.token and now.link.address == link.address
+        return OwnerToken(link, lambda: personal.token, still_ours)
 
     def require(self, robot_name: str, user_id: int | None, field: str = "robot_name") -> RobotLink:
         """reachable(), or a 404 naming field (a robot of someone else's is answered like a missing one)."""
@@ -558,7 +568,7 @@ class RobotCommands:
         if personal is not None and supervisor and personal.owner_id != user_id and self._oversees(robot_name,
                                                                                                   user_id):
             # A class's tutor stops or docks a student's robot whoever holds it.
-            return Commander(commander.link, OwnerToken(commander.link, lambda: personal.token), field)
+            return Commander(commander.link, self._owner_token(commander.link, personal), field)
         if not supervisor or personal is not None or commander.is_controller():
             return commander
         return Commander(commander.link, SupervisorTokens(self._coordinator, robot_name), field,
@@ -575,7 +585,7 @@ class RobotCommands:
                                                          value=repr(robot_name[:64])), field)
         personal = self._registry.personal(robot_name)
         if personal is not None:
-            return Commander(link, OwnerToken(link, lambda: personal.token), field)
+            return Commander(link, self._owner_token(link, personal), field)
         return Commander(link, SupervisorTokens(self._coordinator, robot_name), field, observers=tuple(
             _as_tutor(observer) for observer in self._observers))
 
