@@ -92,7 +92,10 @@ def relaying(address: str, streams: tuple[str, ...]) -> Iterator[int | None]:
     if not streams:
         yield None
         return
-    context = multiprocessing.get_context("spawn")
+    # A new process, not a fork of this one (its threads and channels): a fork of a fork server that imported the
+    # relay's code once, where a spawned one spent about 2 s of CPU importing the middleware.
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(["middleware.robots.link"])
     stop, ready, received = context.Event(), context.Event(), context.Value("i", 0)
     process = context.Process(target=relay, args=(address, streams, ready, stop, received), daemon=True)
     process.start()
@@ -194,8 +197,8 @@ FRAME_TIMES = """async ([scene, size, frames, warmup]) => {
 
 
 @contextmanager
-def chromium_page() -> Iterator[tuple[Any, list[str]]]:
-    """A tab of headless Chromium (Debian's, as the suite's) at 1280x800, and the JavaScript errors it raises."""
+def chromium() -> Iterator[Any]:
+    """Headless Chromium (Debian's, as the suite's), launched once for every page of the run."""
     from playwright.sync_api import sync_playwright
 
     from benchmarks.feedback import CHROMIUM_ARGS, CHROMIUM_PATH
@@ -203,12 +206,22 @@ def chromium_page() -> Iterator[tuple[Any, list[str]]]:
     with sync_playwright() as playwright:
         browser = playwright.chromium.launch(executable_path=CHROMIUM_PATH, args=CHROMIUM_ARGS)
         try:
-            page = browser.new_context(viewport={"width": 1280, "height": 800}).new_page()
-            errors: list[str] = []
-            page.on("pageerror", lambda error: errors.append(str(error)))
-            yield page, errors
+            yield browser
         finally:
             browser.close()
+
+
+@contextmanager
+def chromium_page(browser: Any) -> Iterator[tuple[Any, list[str]]]:
+    """A tab at 1280x800 in a context of its own, and the JavaScript errors it raises."""
+    context = browser.new_context(viewport={"width": 1280, "height": 800})
+    try:
+        page = context.new_page()
+        errors: list[str] = []
+        page.on("pageerror", lambda error: errors.append(str(error)))
+        yield page, errors
+    finally:
+        context.close()
 
 
 def open_console(page: Any, base_url: str, username: str, password: str, robot: str = "lab-1") -> None:
@@ -221,12 +234,12 @@ def open_console(page: Any, base_url: str, username: str, password: str, robot: 
     page.goto(f"{base_url}/lab/{robot}")
 
 
-def measure_browser(scene: dict[str, Any], frames: int, warmup: int) -> dict[str, Any]:
+def measure_browser(browser: Any, scene: dict[str, Any], frames: int, warmup: int) -> dict[str, Any]:
     """Frame times [ms] of the robot's-eye view at VIEW_SIZE in headless Chromium: {draw, whole, renderer}."""
     from benchmarks.feedback import static_server
     from middleware.browser_modules import import_map_text
 
-    with static_server() as url, chromium_page() as (page, errors):
+    with static_server() as url, chromium_page(browser) as (page, errors):
         page.goto(f"{url}/lib/")
         page.evaluate("(text) => { const map = document.createElement('script'); map.type = 'importmap';"
                       " map.textContent = text; document.head.append(map); }", import_map_text("/"))
@@ -247,7 +260,7 @@ GLASS_LISTENER = """() => {
 }"""
 
 
-def measure_glass(window_s: float, warmup_s: float = 1.0) -> dict[str, list[float]]:
+def measure_glass(browser: Any, window_s: float, warmup_s: float = 1.0) -> dict[str, list[float]]:
     """Capture-to-glass delays [ms] in a student's console in headless Chromium, the JPEG camera's for window_s, then
     the drawn view's for window_s, on one lab (skill server, middleware) started for it: {"video": [...], "drawn":
     [...]}."""
@@ -258,7 +271,7 @@ def measure_glass(window_s: float, warmup_s: float = 1.0) -> dict[str, list[floa
     lab = LabUnderTest(users=1)
     delays: dict[str, list[float]] = {}
     try:
-        with chromium_page() as (page, errors):
+        with chromium_page(browser) as (page, errors):
             open_console(page, lab.middleware.url, lab.usernames[0], PASSWORD)
             page.locator('camera-panel[data-frame-source="video"]').wait_for(state="attached", timeout=30_000)
             page.evaluate(GLASS_LISTENER)
@@ -344,8 +357,9 @@ def run(quick: bool, output: Path) -> list[Measurement]:
     glass_window_s, glass_warmup_s = (1.0, 0.5) if quick else (30.0, 1.0)
     measured, scene = measure_servers(window_s, settle_s)
     load = os.getloadavg()[0]
-    browser = measure_browser(scene, frames, warmup)
-    glass = measure_glass(glass_window_s, glass_warmup_s)
+    with chromium() as chromium_browser:
+        browser = measure_browser(chromium_browser, scene, frames, warmup)
+        glass = measure_glass(chromium_browser, glass_window_s, glass_warmup_s)
     rows = server_rows(measured, quick, load) + browser_rows(browser) + glass_rows(glass)
     print_table("The robot's-eye view drawn by the browser: server CPU per watched robot, browser frame time, and a "
                 "pose's capture to glass", rows)

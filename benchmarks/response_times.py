@@ -117,12 +117,12 @@ def activate_and_drive(page: Any, activations: int, drive_s: float) -> list[floa
 
 def measure(activations: int, drive_s: float) -> dict[str, Any]:
     """One student's console on a lab started for it: the panel's samples, its table and the middleware's legs."""
-    from benchmarks.browser_view import chromium_page, open_console
+    from benchmarks.browser_view import chromium, chromium_page, open_console
     from benchmarks.lab_under_test import PASSWORD, LabUnderTest
 
     lab = LabUnderTest(users=1)
     try:
-        with chromium_page() as (page, errors):
+        with chromium() as browser, chromium_page(browser) as (page, errors):
             open_console(page, lab.middleware.url, lab.usernames[0], PASSWORD)
             page.locator('queue-panel[data-role="controller"]').wait_for(timeout=30_000)
             page.locator('odometry-panel [data-field="heading-rad"]').filter(has_text=".").wait_for()
