@@ -247,7 +247,10 @@ def measure_capacity(lab: LabUnderTest, usernames: list[str], duration_s: float)
     """
     import multiprocessing
 
-    context = multiprocessing.get_context("spawn")
+    # New processes, not forks of this one (its threads and sockets): forks of a fork server that imported this module
+    # once. Spawned, each load process spent about 2 s of CPU importing the middleware before its users logged in.
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(["benchmarks.latency"])
     results = context.Queue()
     go = context.Event()
     half = len(usernames) // 2
