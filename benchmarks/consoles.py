@@ -23,10 +23,13 @@ import tempfile
 import threading
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from benchmarks.lab_under_test import Browser
 from benchmarks.report import Measurement, percentile_ms, print_table, write_json
 from benchmarks.web_tier import create_students
+
+if TYPE_CHECKING:
+    from benchmarks.lab_under_test import Browser
 
 USERS_FULL = 100  # each user has consoles open in several tabs (a class's students and their second screens)
 CONSOLES_FULL, STREAMING_FULL = 1000, 100
@@ -233,6 +236,10 @@ def run(quick: bool, output: Path, consoles: int | None = None, streaming: int |
     streaming = streaming if streaming is not None else (4 if quick else STREAMING_FULL)
     users = min(USERS_FULL, max(1, consoles // 10))
     measure_s = 2.0 if quick else 30.0
+    # Imported here, not above: the load process (spawned, it imports this module again) needs no middleware, whose
+    # import cost it about 2 s of CPU before any console opened.
+    from benchmarks.lab_under_test import Browser
+
     print(f"starting the lab and logging {users} users in", flush=True)
     lab = Lab(users)
     context = multiprocessing.get_context("spawn")
