@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import socket
 import subprocess
@@ -23,6 +24,7 @@ from urllib.parse import urlsplit
 
 from benchmarks.lab_under_test import PASSWORD, Browser
 from benchmarks.report import Measurement, percentile_ms, print_table, write_json
+from middleware.chat.services import RATE_LIMIT_MESSAGES
 
 POSTGRES_URL = os.environ.get("TELELAB_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/test")
 P99_TARGET_MS = 50.0
@@ -171,7 +173,9 @@ def run(quick: bool, output: Path) -> list[Measurement]:
             _prepare(database_url)
             with _workers(database_url, robot.address, 2) as urls:
                 near, far, near_again = Browser(urls[0], "near"), Browser(urls[1], "far"), Browser(urls[0], "far")
-                per_way = min(count, WRITERS)  # a writer logged in (a password hash) for each one who writes
+                # As many writers as the chat's rate limit needs (RATE_LIMIT_MESSAGES each), at most WRITERS: each one
+                # logs in (a password check); a writer per message made a quick run's ten logins take 7 of its 32 s.
+                per_way = min(WRITERS, math.ceil(count / RATE_LIMIT_MESSAGES))
                 writers = [Browser(urls[0], f"writer{i}") for i in range(2 * per_way)]
                 across_chat = chat_latencies(writers[:per_way], far, count)
                 same_chat = chat_latencies(writers[per_way:], near_again, count)
