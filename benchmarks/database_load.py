@@ -251,6 +251,21 @@ def prepare(tree: Path, robots: str, names: list[str], stack: ExitStack) -> str:
     return database_url
 
 
+def prepare_all(servers: list[tuple[Code, Path]], robots: str, names: list[str], stack: ExitStack,
+                pool: ThreadPoolExecutor) -> list[str]:
+    """Each server's database: one per checkout prepared (at once), and a copy of it for each further server of that
+    checkout (today's code serves two; preparing one is a process that imports the middleware and migrates)."""
+    trees = list(dict.fromkeys(tree for _, tree in servers))
+    prepared = dict(zip(trees, pool.map(lambda tree: prepare(tree, robots, names, stack), trees), strict=True))
+    databases: list[str] = []
+    given: set[Path] = set()
+    for _, tree in servers:
+        first = tree not in given
+        given.add(tree)
+        databases.append(prepared[tree] if first else stack.enter_context(fresh_database(copy_of=prepared[tree])))
+    return databases
+
+
 def measure(code: Code, tree: Path, database_url: str, robots: str, names: list[str], quick: bool) -> Outcome:
     """One server on its own database: nobody connected, then one idle console per student (held by a load process
     of its own)."""
@@ -341,7 +356,7 @@ def run(quick: bool, output: Path, users: int | None = None) -> list[Measurement
         servers = versions(extract_before(Path(stack.enter_context(tempfile.TemporaryDirectory(
             prefix="telelab-before-")))))
         with ThreadPoolExecutor(len(servers)) as pool:
-            databases = list(pool.map(lambda server: prepare(server[1], addresses, names, stack), servers))
+            databases = prepare_all(servers, addresses, names, stack, pool)
             measured = [(code, tree, database_url, addresses, names, quick)
                         for (code, tree), database_url in zip(servers, databases, strict=True)]
             outcomes = (list(pool.map(lambda arguments: measure(*arguments), measured)) if quick

@@ -105,13 +105,15 @@ def children(pid: int) -> list[int]:
 
 
 @contextmanager
-def fresh_database() -> Iterator[str]:
-    """A new PostgreSQL database on the benchmark server (TELELAB_TEST_POSTGRES_URL), dropped on leaving."""
+def fresh_database(copy_of: str | None = None) -> Iterator[str]:
+    """A new PostgreSQL database on the benchmark server (TELELAB_TEST_POSTGRES_URL), dropped on leaving: empty, or a
+    copy of the database at copy_of (nobody may be connected to that one meanwhile)."""
     import psycopg
 
     name = f"telelab_bench_{uuid.uuid4().hex[:10]}"
+    template = f' TEMPLATE "{urlsplit(copy_of).path.lstrip("/")}"' if copy_of else ""
     with psycopg.connect(admin_dsn(), autocommit=True) as admin:
-        admin.execute(f'CREATE DATABASE "{name}"')
+        admin.execute(f'CREATE DATABASE "{name}"{template}')
         try:
             yield urlsplit(POSTGRES_URL)._replace(path=f"/{name}").geturl()
         finally:
