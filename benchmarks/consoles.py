@@ -25,6 +25,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from benchmarks.ports import free_port
 from benchmarks.report import Measurement, percentile_ms, print_table, write_json
 from benchmarks.web_tier import create_students
 
@@ -35,12 +36,6 @@ USERS_FULL = 100  # each user has consoles open in several tabs (a class's stude
 CONSOLES_FULL, STREAMING_FULL = 1000, 100
 REQUEST_P99_TARGET_MS = 100.0
 ROBOTS = ("lab-1", "lab-2")
-
-
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 def _children(pid: int) -> list[int]:
@@ -71,7 +66,7 @@ class Lab:
 
     def __init__(self, users: int) -> None:
         self.folder = Path(tempfile.mkdtemp(prefix="telelab-consoles-"))
-        self.port = _free_port()
+        self.port = free_port(neighbours=2)
         self.url = f"http://127.0.0.1:{self.port}"
         environment = {**os.environ, "TELELAB_DATABASE_URL": f"sqlite:///{self.folder / 'lab.sqlite3'}",
                        "TELELAB_SECRET_KEY": "consoles-benchmark", "PYTHONUNBUFFERED": "1"}

@@ -21,6 +21,8 @@ from urllib.error import HTTPError
 from urllib.parse import urlencode, urlsplit
 from urllib.request import HTTPCookieProcessor, HTTPRedirectHandler, OpenerDirector, Request, build_opener
 
+from benchmarks.ports import free_port
+
 ROOT = Path(__file__).resolve().parents[1]
 POSTGRES_URL = os.environ.get("TELELAB_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/test")
 SECRET_KEY = "web-tier-benchmark"
@@ -60,13 +62,6 @@ print("created", len(names), flush=True)
 import os
 os._exit(0)  # the app's background threads need no goodbye
 """
-
-
-def free_port() -> int:
-    """A TCP port nobody listens on now."""
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 def load_average() -> float:
@@ -178,7 +173,7 @@ class WebServer:
 
     def __init__(self, command: list[str], environment: dict[str, str], code_root: Path = ROOT,
                  ready_line: str | None = None, port: int | None = None) -> None:
-        self.port = port or free_port()
+        self.port = port or free_port(neighbours=2)  # `telelab up` takes the next one for its demo LMS
         self.url = f"http://127.0.0.1:{self.port}"
         command = [part.replace("{port}", str(self.port)) for part in command]
         self.process = subprocess.Popen(command, cwd=code_root, env={**os.environ, "PYTHONUNBUFFERED": "1",

@@ -23,18 +23,13 @@ from pathlib import Path
 from urllib.parse import urlsplit
 
 from benchmarks.lab_under_test import PASSWORD, Browser
+from benchmarks.ports import free_port
 from benchmarks.report import Measurement, percentile_ms, print_table, write_json
 from middleware.chat.services import RATE_LIMIT_MESSAGES
 
 POSTGRES_URL = os.environ.get("TELELAB_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/test")
 P99_TARGET_MS = 50.0
 WRITERS = 10  # chat takes 5 messages per 10 s from a user: the messages come from several writers in turn
-
-
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 @contextmanager
@@ -77,7 +72,7 @@ def _prepare(database_url: str) -> None:
 def _workers(database_url: str, robot_address: str, count: int) -> Iterator[list[str]]:
     environment = {**os.environ, "TELELAB_DATABASE_URL": database_url, "TELELAB_SECRET_KEY": "workers-benchmark",
                    "TELELAB_ROBOTS": f"lab-1={robot_address}"}
-    ports = [_free_port() for _ in range(count)]
+    ports = [free_port() for _ in range(count)]
     processes = [subprocess.Popen([sys.executable, "-m", "gunicorn", "-k", "gthread", "--threads", "50", "-w", "1",
                                    "-b", f"127.0.0.1:{port}", "--log-level", "warning", "middleware:create_app()"],
                                   env=environment) for port in ports]

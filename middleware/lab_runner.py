@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import sys
 
 from middleware.models import Role
@@ -13,6 +14,22 @@ DEMO_ACCOUNTS = (("student", Role.STUDENT), ("tutor", Role.TUTOR), ("admin", Rol
 # The teleoperation-under-delay experiment's robots (thesis chapter 4): one per course scene, idle until driven.
 COURSE_ROBOTS = (("course-a", "course-A"), ("course-b", "course-B"))
 MAX_WORKERS = 64
+
+
+class PortTaken(RuntimeError):
+    """The lab's port has a listener already: said before the robots start and the banner claims the lab runs."""
+
+
+def check_port_free(host: str, port: int) -> None:
+    """Binds host:port as gunicorn will (SO_REUSEADDR) and lets go; PortTaken when something listens there."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind((host, port))
+        except OSError as error:
+            raise PortTaken(f"Port {port} on {host} is in use ({error.strerror}): another Telelab, or another "
+                            "server, listens there. Stop it, or choose another port with --port.") from None
 
 
 class LabStopRequested(Exception):
@@ -134,8 +151,10 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
     owner: FarmOwner | None = None
     demo_lms: DemoLmsProcess | None = None
     launcher = os.getpid()
+    status = 0
     stop_on_termination_signals()
     try:
+        check_port_free(host, port)
         choose_farm(farm)
         for robot in robots:
             robot.serve()
@@ -153,13 +172,18 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
         _let_go(app)
         _print_banner(host, port, created, seeded + lms_seeded, worker_count, demo_lms.url if demo_lms else None)
         serve_with_gunicorn(host, port, worker_count)
-    except (SkillServerStartError, FarmUnavailable) as error:
+    except (PortTaken, SkillServerStartError, FarmUnavailable) as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
-    except (KeyboardInterrupt, LabStopRequested, SystemExit):
+    except (KeyboardInterrupt, LabStopRequested, SystemExit) as stop:
         if os.getpid() != launcher:
             raise  # a gunicorn worker (a fork of this process) leaving: the lab, its robots and farm stay up
-        print("\nstopping the lab", flush=True)
+        status = stop.code if isinstance(stop, SystemExit) and isinstance(stop.code, int) else 0
+        if status:  # gunicorn halted: its port was taken, or a worker could not boot (its log above says which)
+            print(f"error: the web server stopped with status {status}; stopping the lab", file=sys.stderr,
+                  flush=True)
+        else:
+            print("\nstopping the lab", flush=True)
     finally:
         if os.getpid() == launcher:
             if owner is not None:
@@ -169,7 +193,7 @@ def run_lab(host: str, port: int, robot_count: int, scene: str, course_robots: b
             for robot in robots:
                 robot.stop()
     print("the lab has stopped", flush=True)
-    return 0
+    return status
 
 
 def start_demo_lms(app, host: str, port: int):

@@ -35,9 +35,10 @@ import pytest
 import simple_websocket
 
 from benchmarks.lab_under_test import WebSocketClient
+from benchmarks.ports import free_port
 from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LabClient, postgres_database, ready_for_trials
 from tests.e2e.test_experiment import place
-from tests.e2e.test_lab_with_workers import NGINX, _answers, _children, _command, _free_port, _listens
+from tests.e2e.test_lab_with_workers import NGINX, _answers, _children, _command, _listens
 from tests.e2e.test_panels import wait_for
 from tests.integration.lab.test_robot_channels import closed_with
 
@@ -135,7 +136,7 @@ def _prepare(database_url: str) -> tuple[dict[str, int], int]:
 
 
 def _start_host(index: int, database_url: str, robot_address: str, logs: Path) -> WebHost:
-    port = _free_port()
+    port = free_port()
     environment = {**os.environ, "TELELAB_DATABASE_URL": database_url, "TELELAB_SECRET_KEY": "three-hosts-one-key",
                    "TELELAB_ROBOTS": f"lab-1={robot_address}", "TELELAB_TRUSTED_PROXIES": "1",
                    "TELELAB_DEFAULT_TURN_S": str(TURN_S), "PGAPPNAME": f"web-{index}", "PYTHONUNBUFFERED": "1"}
@@ -154,7 +155,7 @@ def _nginx(upstreams: list[str], prefix: Path, tls: tuple[Path, Path] | None = N
     (certificate, key for localhost) over HTTPS, as the README's HTTPS set-up adds (test_lti_cross_site.py)."""
     if not os.path.exists(NGINX):
         pytest.fail(f"{NGINX} is missing: `make test` installs Debian's nginx package.")
-    port = _free_port()
+    port = free_port()
     site = (REPO / "deploy" / "nginx" / "telelab.conf").read_text()
     servers = "".join(f"    server {address.removeprefix('http://')};\n" for address in upstreams)
     site, replaced = re.subn(r"^ *server 127\.0\.0\.1:5000;.*\n", servers, site, flags=re.MULTILINE)

@@ -16,6 +16,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 import urllib.request
 from collections.abc import Iterator
@@ -25,6 +26,7 @@ from pathlib import Path
 import pytest
 import simple_websocket
 
+from benchmarks.ports import free_port
 from tests.conftest import ARTIFACTS_DIR, postgres_database
 from tests.e2e.test_panels import odometry, wait_for
 
@@ -51,6 +53,12 @@ class RunningLab:
         return {pid for pid in _children(self.process.pid) if _command(pid) == launcher}
 
 
+def _keep_reading(process: subprocess.Popen[str], output: list[str]) -> None:
+    assert process.stdout is not None
+    for line in process.stdout:
+        output.append(line)
+
+
 def _children(pid: int) -> list[int]:
     found = []
     for task in Path("/proc").glob("[0-9]*"):
@@ -67,12 +75,6 @@ def _command(pid: int) -> str:
         return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode().strip()
     except OSError:
         return ""
-
-
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 def _answers(url: str) -> bool:
@@ -94,7 +96,7 @@ def _listens(address: str) -> bool:
 def lab() -> Iterator[RunningLab]:
     """The whole lab with two web workers on a fresh PostgreSQL database; stopped with Ctrl-C at the end."""
     with postgres_database() as database_url:
-        port = _free_port()
+        port = free_port(neighbours=2)
         environment = {**os.environ, "TELELAB_DATABASE_URL": database_url, "TELELAB_TRUSTED_PROXIES": "1",
                        "PYTHONUNBUFFERED": "1"}
         process = subprocess.Popen(
@@ -113,15 +115,22 @@ def lab() -> Iterator[RunningLab]:
                 break
         assert len(running.passwords) == 3, "".join(running.output)
         assert "with 2 web workers" in "".join(running.output)
-        wait_for(lambda: _answers(f"{running.url}/healthz"), 60, "the lab's workers never answered")
+        reader = threading.Thread(target=_keep_reading, args=(process, running.output), daemon=True)
+        reader.start()  # the lab's log never fills the pipe, and a failure below can show it
+        wait_for(lambda: process.poll() is not None or _answers(f"{running.url}/healthz"), 60,
+                 "the lab's workers never answered")
+        time.sleep(1)  # gunicorn halts when a worker fails to boot: the second worker has had its chance
+        assert process.poll() is None, f"the lab stopped as it started:\n{''.join(running.output)}"
         try:
             yield running
         finally:
             process.send_signal(signal.SIGINT)
-            rest, _ = process.communicate(timeout=90)
-            running.output.append(rest)
+            process.wait(timeout=90)
+            reader.join(timeout=10)
+            process.stdout.close()
         assert process.returncode == 0, "".join(running.output)
-        assert rest.count("the lab has stopped") == 1, rest  # the launcher stops it; its workers only leave
+        stopped = "".join(running.output).count("the lab has stopped")
+        assert stopped == 1, "".join(running.output)  # the launcher stops it; its workers only leave
         assert not any(_listens(address) for address in running.robot_addresses), "a robot outlived the lab"
 
 
@@ -131,7 +140,7 @@ def nginx(lab: RunningLab, tmp_path_factory: pytest.TempPathFactory) -> Iterator
     if not os.path.exists(NGINX):
         pytest.fail(f"{NGINX} is missing: `make test` installs Debian's nginx package.")
     prefix = tmp_path_factory.mktemp("nginx")
-    port = _free_port()
+    port = free_port()
     site = (REPO / "deploy" / "nginx" / "telelab.conf").read_text()
     site = site.replace("server 127.0.0.1:5000;", f"server {lab.url.removeprefix('http://')};")
     site = site.replace("listen 8080;", f"listen 127.0.0.1:{port};")

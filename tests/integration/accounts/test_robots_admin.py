@@ -2,15 +2,8 @@
 
 from __future__ import annotations
 
-import socket
-
+from benchmarks.ports import free_port
 from tests.integration.bookings.conftest import api
-
-
-def _closed_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 def test_a_robot_added_at_a_closed_port_shows_offline_and_disabling_it_closes_its_console(client_as,
@@ -18,7 +11,7 @@ def test_a_robot_added_at_a_closed_port_shows_offline_and_disabling_it_closes_it
     admin, student = client_as("admin1"), client_as("student1")
     token = admin.csrf_token("/admin/robots")
     status, headers, _ = admin.request("POST", "/admin/robots", {"name": "lab-9", "title": "Lab nine",
-                                                                 "address": f"127.0.0.1:{_closed_port()}",
+                                                                 "address": f"127.0.0.1:{free_port()}",
                                                                  "csrf_token": token})
     assert status == 303
     _, _, page = admin.request("GET", "/admin/robots")

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import os
 import secrets
-import socket
 import subprocess
 import sys
 import time
@@ -15,16 +14,11 @@ from pathlib import Path
 
 import pytest
 
+from benchmarks.ports import free_port
 from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, migrate_to_head
 
 ROOT = Path(__file__).resolve().parents[3]
 REFUSED_WITHIN_S = 10.0  # a worker keeps a verdict RECHECK_S (1 s); the margin is for a loaded machine
-
-
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 @pytest.fixture
@@ -43,7 +37,7 @@ def workers(database_url: str, tmp_path: Path) -> Iterator[tuple[LiveServer, str
         add_test_account(session, "admin1", "admin")
         session.commit()
     first = LiveServer(app)
-    port = _free_port()
+    port = free_port()
     env = {**os.environ, "TELELAB_DATABASE_URL": database_url, "TELELAB_SECRET_KEY": secret, "TELELAB_ROBOTS": ""}
     second = subprocess.Popen([sys.executable, "-m", "middleware.cli", "web", "--host", "127.0.0.1", "--port",
                                str(port)], cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)

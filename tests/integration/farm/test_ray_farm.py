@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 
+from benchmarks.ports import free_port
 from middleware.farm.ray_farm import prepare_for
 
 prepare_for("127.0.0.1:0")  # before Ray is imported: keep the nodes on loopback
@@ -183,12 +184,6 @@ def test_an_unreachable_farm_is_a_clear_error() -> None:
         RayFarm(f"127.0.0.1:{port}").start(RobotSpec("nowhere", "empty"))
 
 
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
-
-
 def _web_process(port: int, environment: dict[str, str], log: Path) -> subprocess.Popen[bytes]:
     with log.open("wb") as output:  # the child keeps its own copy of the descriptor
         return subprocess.Popen([sys.executable, "-m", "middleware.cli", "web", "--port", str(port)],
@@ -245,7 +240,7 @@ def test_two_web_processes_find_and_drive_the_same_farm_robot(cluster: Cluster, 
     engine.dispose()
     environment = {**os.environ, "TELELAB_DATABASE_URL": database_url, "TELELAB_SECRET_KEY": "same-for-both",
                    "TELELAB_FARM": "ray", "TELELAB_RAY_ADDRESS": cluster.address, "TELELAB_ROBOTS": ""}
-    ports = [_free_port(), _free_port()]
+    ports = [free_port(), free_port()]
     logs = [tmp_path / f"web-{i}.log" for i in range(2)]
     processes = [_web_process(port, environment, log) for port, log in zip(ports, logs, strict=True)]
     clients = [LabClient(f"http://127.0.0.1:{port}") for port in ports]
@@ -296,7 +291,7 @@ def test_a_pool_started_from_the_command_line_serves_a_web_process_and_survives_
         environment, "farm", "start", "--pool", "raysim", "--scene", "empty", "--count", "2")
     assert "count must be a whole number" in _telelab(environment, "farm", "start", "--pool", "raysim", "--count",
                                                       "0", code=1)
-    port, log = _free_port(), tmp_path / "web.log"
+    port, log = free_port(), tmp_path / "web.log"
     process = _web_process(port, environment, log)
     client = LabClient(f"http://127.0.0.1:{port}")
     try:

@@ -29,8 +29,9 @@ import simple_websocket
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from benchmarks.ports import free_port
 from tests.conftest import LabClient, add_test_account, migrate_to_head, postgres_database
-from tests.e2e.test_lab_with_workers import _answers, _children, _free_port
+from tests.e2e.test_lab_with_workers import _answers, _children
 from tests.e2e.test_panels import wait_for
 
 pytestmark = pytest.mark.alone
@@ -133,7 +134,7 @@ def web(tmp_path, skill_server_address: str) -> Iterator[dict]:
         config = tmp_path / "gunicorn.noted.py"
         config.write_text(NOTED_CONFIG.format(deployed=str(REPO / "deploy" / "gunicorn.conf.py")))
         events = tmp_path / "events.log"
-        port = _free_port()
+        port = free_port()
         environment = {**os.environ, "TELELAB_DATABASE_URL": database_url, "TELELAB_SECRET_KEY": "rolling-restart",
                        "TELELAB_ROBOTS": f"lab-1={skill_server_address}", "ROLL_EVENTS": str(events),
                        "PYTHONUNBUFFERED": "1"}

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 import os
-import socket
 import statistics
 import subprocess
 import sys
@@ -20,6 +19,7 @@ from urllib.request import urlopen
 import pytest
 import simple_websocket
 
+from benchmarks.ports import free_port
 from tests.conftest import STUDENT_PASSWORD, LabClient, make_test_app
 from tests.integration.lab.test_robot_channels import closed_with, receive_json
 
@@ -61,12 +61,6 @@ class WebProcess:
         return client
 
 
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
-
-
 @pytest.fixture(scope="module")
 def web_process(tmp_path_factory: pytest.TempPathFactory, skill_server_address: str) -> Iterator[WebProcess]:
     from middleware.auth.services import create_user
@@ -82,7 +76,7 @@ def web_process(tmp_path_factory: pytest.TempPathFactory, skill_server_address: 
             create_user(session, flooder, "student", STUDENT_PASSWORD)
         session.commit()
     robot_registry(app).close()
-    port = _free_port()
+    port = free_port()
     env = {**os.environ, "TELELAB_DATABASE_URL": database_url, "TELELAB_ROBOTS": robots,
            "TELELAB_SECRET_KEY": "back-pressure-test", "PYTHONUNBUFFERED": "1"}
     with open(tmp_path / "web.log", "wb") as log:  # the child keeps its own copy of the descriptor

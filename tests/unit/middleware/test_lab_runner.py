@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 
 import pytest
 
-from middleware.lab_runner import LabStopRequested, lab_robots, stop_on_termination_signals
+from middleware.lab_runner import LabStopRequested, lab_robots, run_lab, stop_on_termination_signals
 
 
 def test_the_lab_starts_its_robots_and_one_robot_per_course() -> None:
@@ -49,3 +50,20 @@ def test_workers_are_one_per_core_on_postgresql_and_one_on_sqlite() -> None:
         choose_workers("sqlite:///x.sqlite3", 2)
     with pytest.raises(SkillServerStartError, match="--workers must be between 1 and 64"):
         choose_workers("postgresql+psycopg://db/telelab", 0)
+
+
+def test_a_lab_whose_port_is_taken_says_so_before_starting_anything(capsys: pytest.CaptureFixture[str]) -> None:
+    saved = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGHUP)}
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        try:
+            status = run_lab("127.0.0.1", port, robot_count=1, scene="lab", course_robots=False)
+        finally:
+            for signum, handler in saved.items():
+                signal.signal(signum, handler)
+    printed = capsys.readouterr()
+    assert status == 1
+    assert f"Port {port} on 127.0.0.1 is in use" in printed.err and "--port" in printed.err
+    assert "skill server" not in printed.out and "Telelab is running" not in printed.out
