@@ -10,9 +10,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
+from typing import Any
 
 from flask_babel import gettext  # type: ignore[import-untyped]
-from sqlalchemy import delete, func, select, update
+from sqlalchemy import ColumnElement, delete, func, select, update
 from sqlalchemy.orm import Session
 
 from middleware.courses.authority import taught_student_ids, teaches_student
@@ -40,29 +41,44 @@ class WantedSession:
     ref_id: int | None
 
 
-def _kind_for(session: Session, user_id: int, robot_name: str) -> tuple[str, int | None]:
-    attempt_id = session.scalar(select(Attempt.id).where(Attempt.user_id == user_id, Attempt.status == "in_progress",
-                                                         Attempt.robot_name == robot_name).limit(1))
-    if attempt_id is not None:
-        return "test_attempt", attempt_id
-    trial_id = session.scalar(select(Trial.id).where(Trial.user_id == user_id, Trial.status == "assigned",
-                                                     Trial.robot_name == robot_name).limit(1))
-    if trial_id is not None:
-        return "experiment_trial", trial_id
-    return "turn", None
+class _Kinds:
+    """What each (person, robot) is doing that gives its session a kind: an attempt in progress, then a trial
+    assigned; read in two queries for every session at once (the elected keeper asks every second)."""
+
+    def __init__(self, session: Session) -> None:
+        self._attempts = self._first_ids(session, Attempt.id, Attempt.user_id, Attempt.robot_name,
+                                         Attempt.status == "in_progress")
+        self._trials = self._first_ids(session, Trial.id, Trial.user_id, Trial.robot_name, Trial.status == "assigned")
+
+    @staticmethod
+    def _first_ids(session: Session, id_column: Any, user_column: Any, robot_column: Any,
+                   condition: ColumnElement[bool]) -> dict[tuple[int, str], int]:
+        rows = session.execute(select(user_column, robot_column, func.min(id_column)).where(condition)
+                               .group_by(user_column, robot_column))
+        return {(user_id, robot_name): first for user_id, robot_name, first in rows if robot_name is not None}
+
+    def of(self, user_id: int, robot_name: str) -> tuple[str, int | None]:
+        attempt_id = self._attempts.get((user_id, robot_name))
+        if attempt_id is not None:
+            return "test_attempt", attempt_id
+        trial_id = self._trials.get((user_id, robot_name))
+        if trial_id is not None:
+            return "experiment_trial", trial_id
+        return "turn", None
 
 
 def wanted_sessions(session: Session) -> dict[str, WantedSession]:
     """The controlled sessions going on now, by robot, from the tables every worker shares."""
     wanted: dict[str, WantedSession] = {}
+    kinds = _Kinds(session)
     for control in session.scalars(select(RobotControl).where(RobotControl.controller_id.is_not(None))):
         assert control.controller_id is not None
-        kind, ref_id = _kind_for(session, control.controller_id, control.robot_name)
+        kind, ref_id = kinds.of(control.controller_id, control.robot_name)
         started = as_utc(control.turn_started_at or control.updated_at)
         wanted[control.robot_name] = WantedSession(control.robot_name, control.controller_id, started, kind, ref_id)
     for robot in session.scalars(select(PersonalRobotRecord).where(PersonalRobotRecord.address != "")):
         kind, ref_id = ("class_session", robot.class_session_id) if robot.class_session_id else ("practice", None)
-        attempt_kind, attempt_ref = _kind_for(session, robot.owner_id, robot.name)
+        attempt_kind, attempt_ref = kinds.of(robot.owner_id, robot.name)
         if attempt_kind != "turn":
             kind, ref_id = attempt_kind, attempt_ref
         wanted[robot.name] = WantedSession(robot.name, robot.owner_id, as_utc(robot.started_at), kind, ref_id)
