@@ -2,8 +2,10 @@
 
 One pump per stream pulls from the robot while anyone watches, as a task on the process's asyncio loop (the channel
 loop of live/loop.py, which serves every WebSocket): no thread per stream, so a worker's threads stay flat however
-many robots its consoles watch. Each message is packed once and handed to every viewer. A slow viewer skips to the
-newest message: it never slows the others and never builds a backlog. Viewers on the loop wait with `listen`;
+many robots its consoles watch. Each message is packed once, when a viewer first asks for it, and handed to every
+viewer that asks: a message no viewer reads (a viewer that samples, as the class wall does, or reads the upstream's own
+message with `next_item`) is never packed. A slow viewer skips to the newest message: it never slows the others and
+never builds a backlog. Viewers on the loop wait with `listen`;
 viewers on threads of their own (a recorder, the demo video) wait with `Subscription.next_message`.
 """
 
@@ -50,6 +52,11 @@ class Subscription(Generic[Packed]):
         message, self._seen_version = self._hub.wait_newer(self._seen_version, timeout_s)
         return message
 
+    def next_item(self, timeout_s: float) -> object | None:
+        """As next_message, but the upstream's message as it came (for a viewer that reads a few fields of it)."""
+        item, self._seen_version = self._hub.wait_newer(self._seen_version, timeout_s, packed=False)
+        return item
+
     def status_change(self) -> StreamStatus | None:
         """The upstream status if it changed since the last call."""
         status, version = self._hub.status_with_version()
@@ -85,8 +92,11 @@ class FanoutHub(Generic[Packed]):
         self._backoff_min_s, self._backoff_max_s = backoff_s
         self._lock = threading.Condition()
         self._subscribers: set[Subscription[Packed]] = set()
-        self._latest: Packed | None = None
+        self._latest_item: object | None = None  # the upstream's newest message, as it came
         self._version = 0
+        self._latest: Packed | None = None  # it packed, once a viewer asked (for version _packed_version)
+        self._packed_version = 0
+        self._pack_failing = False
         self._status = StreamStatus(True, "connecting")
         self._status_version = 0
         self._loop = loop
@@ -145,8 +155,9 @@ class FanoutHub(Generic[Packed]):
         with self._lock:
             return self._closed
 
-    def wait_newer(self, seen_version: int, timeout_s: float) -> tuple[Packed | None, int]:
-        """The latest message if newer than seen_version (waiting up to timeout_s), and its version."""
+    def wait_newer(self, seen_version: int, timeout_s: float, packed: bool = True) -> tuple[Any, int]:
+        """The latest message if newer than seen_version (waiting up to timeout_s), packed (or as it came), and its
+        version."""
         deadline = time.monotonic() + timeout_s
         with self._lock:
             while self._version <= seen_version and not self._closed:
@@ -155,7 +166,22 @@ class FanoutHub(Generic[Packed]):
                     return None, seen_version
             if self._version <= seen_version:
                 return None, seen_version
-            return self._latest, self._version
+            return (self._packed_latest() if packed else self._latest_item), self._version
+
+    def _packed_latest(self) -> Packed | None:
+        """The newest message packed, packing it if no viewer has yet (under the lock: once per message)."""
+        if self._packed_version != self._version:
+            self._packed_version = self._version
+            try:
+                self._latest = self._pack(self._latest_item)
+                self._pack_failing = False
+            except Exception:  # noqa: BLE001 - a message that cannot be packed is skipped, the stream goes on
+                if not self._pack_failing:  # once per run of failures, not at the stream's rate
+                    log.exception("%s: a message could not be packed", self.name)
+                self._pack_failing = True
+                self._latest = None
+            self.messages_packed += 1
+        return self._latest
 
     def status_with_version(self) -> tuple[StreamStatus, int]:
         """The upstream status and a number that changes whenever it does."""
@@ -214,11 +240,9 @@ class FanoutHub(Generic[Packed]):
             try:
                 stream = self._open_stream()
                 async for item in stream:
-                    packed = self._pack(item)
                     with self._lock:
-                        self._latest = packed
+                        self._latest_item = item
                         self._version += 1
-                        self.messages_packed += 1
                         self._lock.notify_all()
                     self._tell_listeners()
                     self._set_status(StreamStatus(True, "live"))

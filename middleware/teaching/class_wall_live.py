@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import threading
 import time
 from collections.abc import Callable
@@ -41,6 +40,7 @@ from middleware.robots.link import RobotLink
 from middleware.robots.refusals import RobotUnavailable
 from middleware.teaching import class_sessions, class_wall
 from middleware.validation import decimal_int
+from protos.telelab.v1 import robot_pb2
 
 POSE_PERIOD_S = 0.2  # 5 poses a second per robot: smooth enough to see a robot move, light for 200 of them
 SEATS_EVERY_S = 2.0
@@ -141,16 +141,14 @@ def _goals_of(links: dict[int, RobotLink]) -> dict[int, str]:
     return found
 
 
-def pose_row(user_id: int, packed: Any, goal_activity: str, online: bool) -> list[object] | None:
-    """[user id, x, y, theta, linear, angular, battery charge, activity] from a packed telemetry message."""
-    try:
-        message = json.loads(packed[1] if isinstance(packed, tuple) else packed)
-        odometry = message["odometry"]
-        pose = odometry["pose"]
-        linear, angular = float(odometry["linear_mps"]), float(odometry["angular_radps"])
-        charge = message.get("battery", {}).get("charge")
-    except (ValueError, KeyError, TypeError, IndexError):
+def pose_row(user_id: int, telemetry: Any, goal_activity: str, online: bool) -> list[object] | None:
+    """[user id, x, y, theta, linear, angular, battery charge, activity] from the robot's telemetry message as it
+    came (read here in a few fields: the wall never packs a message it does not send whole)."""
+    if not isinstance(telemetry, robot_pb2.Telemetry):
         return None
+    odometry = telemetry.odometry
+    pose, linear, angular = odometry.pose, odometry.linear_mps, odometry.angular_radps
+    charge = telemetry.battery.charge
     if not online:
         state = "faulted"
     elif goal_activity and goal_activity != "driving":
@@ -159,8 +157,8 @@ def pose_row(user_id: int, packed: Any, goal_activity: str, online: bool) -> lis
         state = "driving"
     else:
         state = "idle"
-    return [user_id, round(pose["x_m"], 3), round(pose["y_m"], 3), round(pose["theta_rad"], 3), round(linear, 3),
-            round(angular, 3), None if charge is None else round(float(charge), 3), state]
+    return [user_id, round(pose.x_m, 3), round(pose.y_m, 3), round(pose.theta_rad, 3), round(linear, 3),
+            round(angular, 3), round(charge, 3), state]
 
 
 class _Robots:
@@ -203,10 +201,10 @@ class _Robots:
     def poses(self) -> list[list[object]]:
         """Every followed robot's newest row (the last one again for a robot with nothing new)."""
         for user_id, subscription in self._subscriptions.items():
-            packed = subscription.next_message(0)
+            telemetry = subscription.next_item(0)
             online = self.links[user_id].telemetry.status_with_version()[0].online
-            if packed is not None:
-                row = pose_row(user_id, packed, self.activities.get(user_id, ""), online)
+            if telemetry is not None:
+                row = pose_row(user_id, telemetry, self.activities.get(user_id, ""), online)
                 if row is not None:
                     self.rows[user_id] = row
             elif user_id in self.rows and not online:

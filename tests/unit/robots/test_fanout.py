@@ -211,3 +211,20 @@ def test_a_viewer_arriving_as_the_last_one_leaves_gets_a_pump_again() -> None:
         time.sleep(0.01)
     assert not hub.pumping, "the pump retires once nobody watches"
     hub.close()
+
+
+def test_a_message_is_packed_only_when_a_viewer_asks_for_it_packed() -> None:
+    upstream = Upstream()
+    hub = FanoutHub("t", upstream.open, upstream.pack, upstream.cancel)
+    sampler = hub.subscribe()  # the class wall: a few fields of the message as it came, now and then
+    items = [sampler.next_item(2.0) for _ in range(5)]
+    assert all(isinstance(item, int) for item in items)
+    time.sleep(0.1)  # dozens more arrive
+    assert upstream.packs == 0, "messages nobody asked for packed were packed"
+    reader = hub.subscribe()  # a console: every message it reads, packed
+    packed = [reader.next_message(2.0) for _ in range(3)]
+    assert all(message is not None and message[0] == "packed" for message in packed)
+    assert upstream.packs == hub.messages_packed == 3
+    for viewer in (sampler, reader):
+        viewer.close()
+    hub.close()
