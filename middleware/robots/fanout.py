@@ -124,6 +124,8 @@ class FanoutHub(Generic[Packed]):
                 raise RuntimeError(f"{self.name} is closed")
             self._subscribers.add(subscription)
             if self._pumping is None:
+                # What the hub holds is from when it last pumped (maybe minutes ago): the viewer waits for a new one.
+                subscription._seen_version = self._version
                 loop = self._pumping = self._loop()
                 asyncio.run_coroutine_threadsafe(self._run(), loop)
         return subscription

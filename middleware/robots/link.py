@@ -26,6 +26,7 @@ CHANNEL_OPTIONS = [
     ("grpc.keepalive_time_ms", 10000),
     ("grpc.keepalive_timeout_ms", 5000),
 ]
+POSES_HZ = 5.0  # the poses hub's rate: the class wall draws each robot five times a second
 
 Message = TypeVar("Message", covariant=True)
 
@@ -77,6 +78,9 @@ class RobotLink:
         self.telemetry = FanoutHub(f"{name}-telemetry", self._open_telemetry, pack_telemetry, _cancel_call)
         self.localization = FanoutHub(f"{name}-localization", self._open_localization, pack_localization,
                                       _cancel_call)
+        # The pose, speeds and battery alone, POSES_HZ times a second: for a viewer of many robots (the class wall)
+        # where no console of this process pumps the robot's whole telemetry anyway.
+        self.poses = FanoutHub(f"{name}-poses", self._open_poses, pack_telemetry, _cancel_call)
         self._skills: list[robot_pb2.SkillDescription] | None = None
         self._scene: robot_pb2.SceneDescription | None = None
         self._scene_at = 0.0
@@ -360,6 +364,7 @@ class RobotLink:
         self.camera.close()
         self.telemetry.close()
         self.localization.close()
+        self.poses.close()
         self._closed = True
         self._channel.close()
         if self._aio is not None:
@@ -377,6 +382,9 @@ class RobotLink:
 
     def _open_telemetry(self) -> AsyncIterator[object]:
         return self._aio_stub().StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=10))
+
+    def _open_poses(self) -> AsyncIterator[object]:
+        return self._aio_stub().StreamTelemetry(robot_pb2.StreamTelemetryRequest(rate_hz=POSES_HZ, pose_only=True))
 
     def _call(self, method, request, not_found_code: str = "unknown_skill"):
         try:

@@ -27,7 +27,7 @@ from flask_login import current_user
 from sqlalchemy.orm import Session
 
 from middleware import events
-from middleware.access.commands import robot_commands
+from middleware.access.commands import RobotCommands, robot_commands
 from middleware.chat.sockets import room_channel
 from middleware.db import get_session, unit_of_work
 from middleware.errors import Refused
@@ -36,6 +36,7 @@ from middleware.live.wire import LiveSocket
 from middleware.models import User
 from middleware.models.farm import ClassSession
 from middleware.realtime import CLOSE_FORBIDDEN, CLOSE_NOT_FOUND, Channels, WebSocket, as_json, refuse
+from middleware.robots.fanout import FanoutHub, Subscription
 from middleware.robots.link import RobotLink
 from middleware.robots.refusals import RobotUnavailable
 from middleware.teaching import class_sessions, class_wall
@@ -127,11 +128,11 @@ def activity(goals: list[Any]) -> str:
     return "driving" if running else ""
 
 
-def _goals_of(links: dict[int, RobotLink]) -> dict[int, str]:
+def _goals_of(links: dict[int, RobotLink], online: Callable[[int], bool]) -> dict[int, str]:
     """Each robot's activity from its goals (one call each, in turn; a robot whose stream is down is not asked)."""
     found = {}
     for user_id, link in links.items():
-        if not link.telemetry.status_with_version()[0].online:
+        if not online(user_id):
             found[user_id] = "faulted"
             continue
         try:
@@ -162,13 +163,16 @@ def pose_row(user_id: int, telemetry: Any, goal_activity: str, online: bool) -> 
 
 
 class _Robots:
-    """The wall's subscriptions to its robots' telemetry hubs, following the seats."""
+    """The wall's subscriptions to its robots, following the seats. A robot whose whole telemetry this worker pumps
+    anyway (a console here watches it) is read from that hub; any other from its poses hub (pose, speeds, battery,
+    POSES_HZ a second): the wall alone never pulls 181 laser ranges ten times a second of a robot whose console is
+    on another worker."""
 
-    def __init__(self, tutor_id: int) -> None:
+    def __init__(self, tutor_id: int, commands: RobotCommands) -> None:
         self._tutor_id = tutor_id
-        self._commands = robot_commands()
+        self._commands = commands
         self.links: dict[int, RobotLink] = {}
-        self._subscriptions: dict[int, Any] = {}
+        self._subscriptions: dict[int, tuple[FanoutHub[Any], Subscription[Any]]] = {}
         self.rows: dict[int, list[object]] = {}
         self.activities: dict[int, str] = {}
 
@@ -189,26 +193,47 @@ class _Robots:
             if link is None or link.telemetry.closed:
                 continue
             self.links[user_id] = link
-            self._subscriptions[user_id] = link.telemetry.subscribe()
+            self._read_from(user_id, self._source(link, None))
+
+    @staticmethod
+    def _source(link: RobotLink, current: FanoutHub[Any] | None) -> FanoutHub[Any]:
+        """The hub to read the robot from: its telemetry while someone else in this worker watches that."""
+        others = link.telemetry.viewer_count - (1 if current is link.telemetry else 0)
+        return link.telemetry if others > 0 else link.poses
+
+    def _read_from(self, user_id: int, hub: FanoutHub[Any]) -> None:
+        held = self._subscriptions.get(user_id)
+        if held is not None and held[0] is hub:
+            return
+        with contextlib.suppress(RuntimeError):  # the hub closed: the application is ending
+            self._subscriptions[user_id] = (hub, hub.subscribe())
+            if held is not None:
+                held[1].close()
 
     def _leave(self, user_id: int) -> None:
         self.links.pop(user_id, None)
         self.rows.pop(user_id, None)
-        subscription = self._subscriptions.pop(user_id, None)
-        if subscription is not None:
-            subscription.close()
+        held = self._subscriptions.pop(user_id, None)
+        if held is not None:
+            held[1].close()
+
+    def online(self, user_id: int) -> bool:
+        """Whether the robot's stream the wall reads is delivering."""
+        held = self._subscriptions.get(user_id)
+        return held is None or held[0].status_with_version()[0].online
 
     def poses(self) -> list[list[object]]:
         """Every followed robot's newest row (the last one again for a robot with nothing new)."""
-        for user_id, subscription in self._subscriptions.items():
+        for user_id, (hub, subscription) in list(self._subscriptions.items()):
             telemetry = subscription.next_item(0)
-            online = self.links[user_id].telemetry.status_with_version()[0].online
+            online = hub.status_with_version()[0].online
             if telemetry is not None:
                 row = pose_row(user_id, telemetry, self.activities.get(user_id, ""), online)
                 if row is not None:
                     self.rows[user_id] = row
             elif user_id in self.rows and not online:
                 self.rows[user_id][-1] = "faulted"
+            self._read_from(user_id, self._source(self.links[user_id], hub))
         return list(self.rows.values())
 
     def take_activities(self, done: asyncio.Future[dict[int, str]]) -> None:
@@ -243,7 +268,7 @@ def wall_channel(ws: WebSocket, course_id: int) -> Continuation | None:
     _listen(db)
     db.close()  # a socket lives long: no transaction stays open between reads
     work = blocking_work()
-    robots = _Robots(tutor_id)
+    robots = _Robots(tutor_id, robot_commands())
 
     async def follow(live: LiveSocket) -> None:
         wake = _Wake(class_session_id, live)
@@ -268,7 +293,7 @@ def wall_channel(ws: WebSocket, course_id: int) -> Continuation | None:
                         sent_seats = seats
                 if now - goals_at >= GOALS_EVERY_S and robots.links and (goals is None or goals.done()):
                     goals_at = now  # asked beside the poses: a robot slow to answer never holds them back
-                    goals = asyncio.ensure_future(work(_goals_of, dict(robots.links)))
+                    goals = asyncio.ensure_future(work(_goals_of, dict(robots.links), robots.online))
                     goals.add_done_callback(lambda done: robots.take_activities(done))
                 if now - poses_at >= POSE_PERIOD_S:
                     poses_at = now

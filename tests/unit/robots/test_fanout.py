@@ -228,3 +228,34 @@ def test_a_message_is_packed_only_when_a_viewer_asks_for_it_packed() -> None:
     for viewer in (sampler, reader):
         viewer.close()
     hub.close()
+
+
+class NumberedUpstream(Upstream):
+    """Each message says which opening of the stream it came from; the first comes 0.2 s after the opening (a robot
+    answers a new call after a round trip)."""
+
+    async def _messages(self) -> AsyncIterator[object]:
+        opening = self.opened
+        await asyncio.sleep(0.2)
+        while not self.cancelled.is_set():
+            yield opening
+            await asyncio.sleep(0.005)
+
+
+def test_a_viewer_after_the_pump_stopped_waits_for_a_new_message_not_the_one_left_from_before() -> None:
+    upstream = NumberedUpstream()
+    hub = FanoutHub("t", upstream.open, upstream.pack, upstream.cancel)
+    first = hub.subscribe()
+    assert first.next_message(2.0) == ("packed", 1)
+    first.close()
+    assert upstream.cancelled.wait(2.0)
+    deadline = time.monotonic() + 2
+    while hub.pumping and time.monotonic() < deadline:
+        time.sleep(0.01)
+    upstream.cancelled.clear()
+    later = hub.subscribe()
+    try:
+        assert later.next_message(2.0) == ("packed", 2)  # from the stream opened for it, not what was left before
+    finally:
+        later.close()
+        hub.close()
