@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import queue
 import threading
@@ -337,10 +338,10 @@ class World:
         return self._sim_time_s - self._rest_since_s >= PARK_AFTER_S
 
     def _at_rest(self) -> bool:
-        """Nothing but a command can change the world: no drive target or motion, no goal, no camera viewer."""
+        """Nothing but a command can change the world: no drive target or motion, no goal. A camera viewer does not
+        wake it: what the camera sees stands still too (the parked loop sends its frame again)."""
         if (self._gate.latest().version != self._seen_target_version or self._deadman_armed
                 or self._target_linear_mps or self._target_angular_radps or self._linear_mps or self._angular_radps
-                or self._publication.requested_camera_fps > 0
                 or (self._autonomy is not None and not self._autonomy.at_rest())):
             return False
         linear, angular = self._client.getBaseVelocity(self._robot)
@@ -348,20 +349,29 @@ class World:
 
     def _stay_parked(self) -> None:
         """Publishes fresh sensor readings every PARKED_PERIOD_S without stepping the physics, sim time following
-        the wall clock, until something can move the robot again (a command wakes the loop at once)."""
+        the wall clock, and to a camera viewer at its rate the frame rendered once when parked (nothing it shows
+        moves), until something can move the robot again: a drive wakes the loop at once, and so does any command
+        the loop runs (a placed or docked robot is stepped again, so the track monitor and the sensors see it)."""
         self.parked = True
         last_wall_s = time.monotonic()
         publish_due_s = last_wall_s + PARKED_PERIOD_S  # on a grid: a late wake-up does not delay the next one
+        frame: CameraFrame | None = None
+        frame_due_s = last_wall_s
         try:
             while not self._stop.is_set():
-                if self._command_waiting.wait(max(0.0, publish_due_s - time.monotonic())):
+                fps = self._publication.requested_camera_fps
+                wake_s = min(publish_due_s, frame_due_s) if fps > 0 else publish_due_s
+                if self._command_waiting.wait(max(0.0, wake_s - time.monotonic())):
                     self._command_waiting.clear()
-                    self._run_pending_commands()
+                    if self._run_pending_commands():
+                        self._rest_since_s = None
+                        return
                 now_s = time.monotonic()
+                published_due = now_s >= publish_due_s
                 while publish_due_s <= now_s:
                     publish_due_s += PARKED_PERIOD_S
                 ticks = int((now_s - last_wall_s) / self.tick_dt_s)
-                if ticks:
+                if ticks and published_due:
                     last_wall_s += ticks * self.tick_dt_s
                     self._sim_time_s += ticks * self.tick_dt_s
                     self._tick += ticks
@@ -369,11 +379,24 @@ class World:
                     self._drain_battery(ticks * self.tick_dt_s, ground_truth, 0.0, 0.0)
                     self._sense(ground_truth)
                     self._publish_snapshot(ground_truth)
+                if fps > 0 and now_s >= frame_due_s:
+                    frame = self._frame_again(frame)
+                    frame_due_s = max(frame_due_s + 1.0 / fps, now_s)
                 if not self._at_rest():
                     self._rest_since_s = None
                     return
         finally:
             self.parked = False
+
+    def _frame_again(self, frame: CameraFrame | None) -> CameraFrame:
+        """The parked robot's frame published anew (rendered the first time)."""
+        if frame is None:
+            return self.render_frame()
+        self._frame_sequence += 1
+        again = dataclasses.replace(frame, frame_sequence=self._frame_sequence, capture_unix_s=time.time(),
+                                    sim_time_s=self._sim_time_s)
+        self._publication.publish_frame(again)
+        return again
 
     def _serve_commands_for(self, duration_s: float, tick_on_drive: bool) -> None:
         """Waits until the next tick is due, running commands as they arrive rather than at the tick.
@@ -402,12 +425,15 @@ class World:
         self._command_waiting.set()
         return future.result(timeout=10.0)
 
-    def _run_pending_commands(self) -> None:
+    def _run_pending_commands(self) -> bool:
+        """Runs the commands queued for the loop; whether there was any."""
+        ran = False
         while True:
             try:
                 action, future = self._commands.get_nowait()
             except queue.Empty:
-                return
+                return ran
+            ran = True
             try:
                 future.set_result(action())
             except Exception as error:  # handed to the caller, who re-raises it in its own thread

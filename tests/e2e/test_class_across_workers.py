@@ -497,8 +497,7 @@ def test_a_host_killed_mid_trial_leaves_the_trial_to_end_correctly_on_another(cl
     trial = answer["trial"]
     telemetry = trialist.socket(host1, "/ws/robots/lab-1/telemetry")
     message_until(telemetry, "status", lambda status: status.get("injected_delay_s") == trial["delay_s"])
-    # The console's camera, as during a real trial: a robot nobody watches parks, and a parked world does not show
-    # the track monitor a robot placed by the test (skill_server/sim/world.py, _stay_parked).
+    # The console's camera, as during a real trial (a placement wakes a parked robot, so the track monitor sees it).
     camera = trialist.socket(host1, "/ws/robots/lab-1/camera")
     first_frame(camera)
 

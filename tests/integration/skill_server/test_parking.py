@@ -1,5 +1,6 @@
-"""A real-time robot nobody commands or watches parks (no physics steps, sensors still published, sim time
-following the wall clock) and wakes at once for a drive, a camera viewer or a skill."""
+"""A real-time robot nobody commands parks (no physics steps, sensors still published, sim time following the wall
+clock; a camera viewer gets the frame rendered once, again at its rate) and wakes at once for a drive, a skill or
+any command its loop runs (a robot placed elsewhere is stepped again)."""
 
 from __future__ import annotations
 
@@ -74,14 +75,46 @@ def test_a_drive_wakes_a_parked_robot_at_once_and_it_parks_again_once_stopped(se
     assert world.snapshot.odometry.pose.x_m - start.x_m > 0.05
 
 
-def test_a_camera_viewer_or_a_running_skill_keeps_the_robot_awake(server: SkillServer) -> None:
+def test_a_camera_viewer_of_a_parked_robot_gets_frames_at_its_rate_rendered_once(server: SkillServer) -> None:
     world = server.world
     _within(PARK_AFTER_S + 2.0, lambda: world.parked)
-    subscription = world.subscribe_camera(5)
-    _within(0.2, lambda: not world.parked)
+    rendered = 0
+    render = world.render_frame
+
+    def counted() -> object:
+        nonlocal rendered
+        rendered += 1
+        return render()
+
+    world.render_frame = counted  # type: ignore[method-assign]
+    subscription = world.subscribe_camera(10)
+    time.sleep(0.1)
     first = world.latest_frame
-    _within(1.0, lambda: world.latest_frame is not None and world.latest_frame is not first)
+    assert first is not None
+    time.sleep(2.0)
+    last = world.latest_frame
+    assert world.parked and rendered == 1  # the world stands still: one image, sent again
+    assert last is not None and last.jpeg == first.jpeg
+    assert 15 <= last.frame_sequence - first.frame_sequence <= 21  # 10 a second
+    assert 1.5 < last.sim_time_s - first.sim_time_s < 2.5
     subscription.close()
+
+
+def test_a_placed_robot_is_stepped_again_and_its_camera_renders_the_new_view(server: SkillServer) -> None:
+    world = server.world
+    subscription = world.subscribe_camera(10)
+    _within(PARK_AFTER_S + 2.0, lambda: world.parked)
+    before = world.latest_frame
+    start = world.snapshot.ground_truth
+    world.set_pose(type(start)(start.x_m + 0.5, start.y_m, start.theta_rad))
+    _within(0.2, lambda: not world.parked)
+    _within(2.0, lambda: world.latest_frame is not None and world.latest_frame.jpeg != before.jpeg)
+    _within(PARK_AFTER_S + 2.0, lambda: world.parked)
+    subscription.close()
+
+
+def test_a_running_skill_keeps_the_robot_awake(server: SkillServer) -> None:
+    world = server.world
     _within(PARK_AFTER_S + 2.0, lambda: world.parked)
     server.robot.activate(TOKEN, "environment_modelling", {}, preempt=False)
     _within(0.2, lambda: not world.parked)
