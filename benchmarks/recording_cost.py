@@ -99,7 +99,7 @@ class TelemetryViewer:
 
 def switch(lab: LabUnderTest, on: bool) -> None:
     """The recorder on (the keeper records the turn, commands are noted) or off (paused: nothing recorded)."""
-    from middleware.recordings import recordings_of
+    from middleware.recordings.parts import recordings_of
 
     recordings = recordings_of(lab.app)
     recordings._active = on  # noqa: SLF001 - the command path's observer notes commands only while on
@@ -144,7 +144,7 @@ def _thread_cpu_s() -> dict[int, tuple[str, float]]:
 def cpu_seconds(lab: LabUnderTest) -> dict[str, Any]:
     """CPU seconds so far: this process ("worker": the middleware, its recorder and the benchmark's client), its
     recording writer child, and each thread of this process."""
-    from middleware.recordings import recordings_of
+    from middleware.recordings.parts import recordings_of
 
     pid = recordings_of(lab.app).keeper.writer.pid
     child = _stat_cpu_s(Path(f"/proc/{pid}/stat")) if pid is not None else 0.0
@@ -274,7 +274,8 @@ def ratio_rows(name: str, blocks: list[tuple[str, list[float]]], quick: bool) ->
 def bytes_window(lab: LabUnderTest, browser: Browser, window_s: float) -> tuple[float, float, float]:
     """One part recorded over window_s of driving with the console open, completed: (bytes a minute on disk,
     the messages' own bytes a minute, the part's seconds)."""
-    from middleware.recordings import files, recordings_of
+    from middleware.recordings import files
+    from middleware.recordings.parts import recordings_of
 
     switch(lab, True)
     viewer = TelemetryViewer(browser)
@@ -304,7 +305,8 @@ def synthetic_recording(lab: LabUnderTest, seconds: float) -> int:
     from middleware.db import session_factory
     from middleware.models import User
     from middleware.models.recordings import Recording
-    from middleware.recordings import channels, files, recordings_of
+    from middleware.recordings import channels, files
+    from middleware.recordings.parts import recordings_of
     from middleware.robots.registry import robot_registry
     from protos.telelab.v1 import robot_pb2
 
@@ -387,7 +389,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pairs", type=int, help=f"on/off pairs (default {PAIRS}; 2 with --quick)")
     parser.add_argument("--live-only", action="store_true", help="the live path's figures only (no size, no replay)")
     args = parser.parse_args(argv)
-    from middleware.recordings import recordings_of
+    from middleware.recordings.parts import recordings_of
 
     # Quick: 3 s of driving, a part of about 6 s with the recorder's settling (683 kB a minute, against 687 with 15 s
     # of driving, one run each): the smoke run sizes a part and grades nothing.

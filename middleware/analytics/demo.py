@@ -18,7 +18,8 @@ from middleware.models.analytics import LearningEvent, QueueWait, RobotOutage
 from middleware.models.recordings import Recording
 from middleware.models.robots import RobotMaintenance
 from middleware.models.teaching import Lesson, Tour
-from middleware.recordings import channels, files, recordings_of
+from middleware.recordings import channels, files
+from middleware.recordings.parts import recordings_of
 from protos.telelab.v1 import robot_pb2
 
 DAYS = 21

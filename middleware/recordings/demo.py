@@ -13,7 +13,8 @@ from sqlalchemy import select
 from middleware.db import session_factory
 from middleware.models import User
 from middleware.models.recordings import Recording
-from middleware.recordings import channels, files, recordings_of
+from middleware.recordings import channels, files
+from middleware.recordings.parts import recordings_of
 from middleware.robots.registry import robot_registry
 from protos.telelab.v1 import robot_pb2
 

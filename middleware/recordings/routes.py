@@ -17,7 +17,8 @@ from middleware.db import after_commit, get_session
 from middleware.errors import ApiError, Refused, written_number
 from middleware.models.accounts import Role, User, as_utc
 from middleware.models.recordings import RECORDING_KINDS, Recording
-from middleware.recordings import export, files, recordings_of, services
+from middleware.recordings import export, files, services
+from middleware.recordings.parts import recordings_of
 
 blueprint = Blueprint("recordings", __name__)
 MAX_RANGE_S = 7 * 24 * 3600.0

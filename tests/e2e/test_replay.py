@@ -28,7 +28,7 @@ def write_recording(app, skill_server_address: str, kind: str = "turn",
     from middleware.db import session_factory
     from middleware.models import User
     from middleware.models.recordings import Recording
-    from middleware.recordings import recordings_of
+    from middleware.recordings.parts import recordings_of
     from protos.telelab.v1 import robot_pb2_grpc
 
     with grpc.insecure_channel(skill_server_address) as channel:

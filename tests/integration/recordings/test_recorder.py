@@ -32,7 +32,7 @@ def recording_lab(tmp_path_factory: pytest.TempPathFactory, skill_server_address
     turn, and the accounts the privacy checks need: student2 (another student), tutor1 (teaches student1), tutor2
     (teaches another course), admin1."""
     from middleware.db import session_factory
-    from middleware.recordings import recordings_of
+    from middleware.recordings.parts import recordings_of
     from tests.conftest import _let_go
 
     tmp_path = tmp_path_factory.mktemp("recordings")
@@ -116,7 +116,8 @@ def recording_rows(server: LiveServer) -> list:
 def driven(recording_lab: LiveServer) -> dict:
     """student1 takes a turn on lab-1, drives 1.5 s at 20 Hz (the live telemetry read meanwhile), starts a skill,
     and leaves; the recording completed. What was sent and seen, and the recording's file."""
-    from middleware.recordings import files, recordings_of
+    from middleware.recordings import files
+    from middleware.recordings.parts import recordings_of
 
     student = client_for(recording_lab, "student1")
     telemetry = student.websocket(f"/ws/robots/{ROBOT}/telemetry")  # the console watches before the turn comes
@@ -337,7 +338,8 @@ def test_hostile_ids_and_ranges_are_refused_naming_the_field(
 def test_deleting_an_account_deletes_its_recordings_and_their_files(recording_lab: LiveServer, driven) -> None:
     from middleware.db import session_factory
     from middleware.models import User
-    from middleware.recordings import files, recordings_of
+    from middleware.recordings import files
+    from middleware.recordings.parts import recordings_of
 
     app = recording_lab.app
     root: Path = recordings_of(app).settings.directory

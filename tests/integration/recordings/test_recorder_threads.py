@@ -47,7 +47,7 @@ class _Streams:
 
 @pytest.fixture(scope="module")
 def fleet_app(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[object, StandInFleet, _Streams]]:
-    from middleware.recordings import recordings_of
+    from middleware.recordings.parts import recordings_of
     from tests.conftest import _let_go
 
     streams = _Streams()
@@ -89,7 +89,8 @@ def _start(app, robot_names: list[str]) -> list[int]:
 
 
 def _chunks_written(app, recording_ids: list[int]) -> bool:
-    from middleware.recordings import files, recordings_of
+    from middleware.recordings import files
+    from middleware.recordings.parts import recordings_of
 
     root = recordings_of(app).settings.directory
     return all(sum(1 for m in files.read_recording(root, rid) if m.topic == "/odometry") >= 5
@@ -106,7 +107,8 @@ def _wait(condition, timeout_s: float, what: str) -> None:
 def test_twenty_recorded_sessions_hold_no_more_threads_than_one_and_share_the_viewers_stream(fleet_app) -> None:
     from middleware.db import session_factory
     from middleware.models.recordings import Recording
-    from middleware.recordings import files, recordings_of, services
+    from middleware.recordings import files, services
+    from middleware.recordings.parts import recordings_of
     from middleware.robots.registry import robot_registry
 
     app, fleet, streams = fleet_app
@@ -164,7 +166,8 @@ def test_a_slow_disk_never_holds_the_loop_the_viewers_share(fleet_app, monkeypat
 
     from middleware.db import session_factory
     from middleware.live.loop import channel_loop
-    from middleware.recordings import recordings_of, services
+    from middleware.recordings import services
+    from middleware.recordings.parts import recordings_of
     from middleware.recordings.writer import WriterProcess
 
     app, fleet, _ = fleet_app
@@ -201,7 +204,8 @@ def test_a_slow_disk_never_holds_the_loop_the_viewers_share(fleet_app, monkeypat
 
 def _recorder_of(app, recording_id: int, name: str, timeout_s: float = 20):
     """The session's recorder once it taps the robot's telemetry hub, and its telemetry sink."""
-    from middleware.recordings import recorder, recordings_of
+    from middleware.recordings import recorder
+    from middleware.recordings.parts import recordings_of
     from middleware.robots.registry import robot_registry
 
     keeper = recordings_of(app).keeper
@@ -220,7 +224,8 @@ def _recorder_of(app, recording_id: int, name: str, timeout_s: float = 20):
 
 def _stop(app, recording_id: int) -> None:
     from middleware.db import session_factory
-    from middleware.recordings import recordings_of, services
+    from middleware.recordings import services
+    from middleware.recordings.parts import recordings_of
 
     with session_factory(app)() as session, session.begin():
         services.stop_recording(session, recording_id, "finished")
@@ -285,7 +290,8 @@ def test_a_killed_writer_loses_at_most_its_last_second_and_the_session_goes_on_i
 
     from middleware.db import session_factory
     from middleware.models.recordings import Recording
-    from middleware.recordings import files, recordings_of
+    from middleware.recordings import files
+    from middleware.recordings.parts import recordings_of
 
     app, fleet, _ = fleet_app
     keeper = recordings_of(app).keeper
@@ -334,7 +340,7 @@ def _second_worker(app, key: str):
     """Another worker of the cluster in this process: links and hubs of its own (its consoles' streams), a keeper
     with a key of its own and its own writer child, over the same database and recordings directory."""
     from middleware.db import session_factory
-    from middleware.recordings import recordings_of
+    from middleware.recordings.parts import recordings_of
     from middleware.recordings.recorder import RecordingKeeper
     from middleware.robots.registry import RobotRegistry
 
@@ -344,7 +350,8 @@ def _second_worker(app, key: str):
 
 
 def _odometry_ns(app, recording_id: int) -> list[int]:
-    from middleware.recordings import files, recordings_of
+    from middleware.recordings import files
+    from middleware.recordings.parts import recordings_of
 
     root = recordings_of(app).settings.directory
     return [m.log_time_ns for m in files.read_recording(root, recording_id) if m.topic == "/odometry"]
@@ -363,7 +370,8 @@ def test_a_session_is_recorded_where_its_robot_is_streamed_and_a_killed_workers_
 
     from middleware.db import session_factory
     from middleware.models.recordings import Recording
-    from middleware.recordings import files, keeping, recordings_of
+    from middleware.recordings import files, keeping
+    from middleware.recordings.parts import recordings_of
 
     app, fleet, streams = fleet_app
     a = recordings_of(app).keeper

@@ -71,7 +71,8 @@ def test_a_session_whose_recorder_stopped_goes_on_in_a_new_part_and_exports_as_o
     from middleware.db import session_factory
     from middleware.models import User
     from middleware.models.recordings import Recording
-    from middleware.recordings import export, files, recordings_of, services
+    from middleware.recordings import export, files, services
+    from middleware.recordings.parts import recordings_of
     from middleware.recordings.recorder import RecordingKeeper
     from middleware.robots.registry import robot_registry
 
