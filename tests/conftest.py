@@ -192,8 +192,31 @@ def skill_server_address() -> Iterator[str]:
         robot.stop()
 
 
-# The scrypt hash of STUDENT_PASSWORD per test account, made once per session by the product's own hash_password
-# (about 0.1 s each); per username, so that two accounts of one test never share a hash, as with create_user.
+# Passwords hashed in the suite's own processes use scrypt at N=4096, not the product's 32768: a login checks a
+# password with the parameters its hash carries, so every login takes the product's own path at a tenth of its CPU
+# (9 ms, not 100 ms; the suite logs in and fails logins thousands of times). Labs the suite starts as processes of
+# their own (`telelab up`, the benchmarks) keep the product's cost, which test_password_cost.py checks.
+TEST_PASSWORD_METHOD = "scrypt:4096:8:1"
+
+
+@pytest.fixture(scope="session", autouse=True)
+def product_password_method() -> Iterator[str]:
+    """The product's password hash method, while the suite's processes hash at TEST_PASSWORD_METHOD."""
+    from unittest import mock
+
+    from werkzeug.security import generate_password_hash
+
+    from middleware.auth import services
+
+    product = services.PASSWORD_METHOD
+    dummy = generate_password_hash("telelab-timing-equaliser", method=TEST_PASSWORD_METHOD)
+    with mock.patch.object(services, "PASSWORD_METHOD", TEST_PASSWORD_METHOD), \
+            mock.patch.object(services, "_DUMMY_HASH", dummy):
+        yield product
+
+
+# The hash of STUDENT_PASSWORD per test account, made once per session by the product's own hash_password; per
+# username, so that two accounts of one test never share a hash, as with create_user.
 _student_password_hashes: dict[str, str] = {}
 
 
