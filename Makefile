@@ -52,11 +52,14 @@ test: $(TEST_STAMP) $(THREE_STAMP) chromium ffmpeg nginx
 	$(VENV)/bin/mypy
 	$(PY) -m pytest -n $(TEST_PROCESSES) --dist loadfile --no-loadscope-reorder
 
+# The browser tests run in Chromium's headless shell (Playwright's choice for headless), the benchmarks and the
+# third-party-cookie test in the full browser: both are Debian's build of one Chromium release.
 chromium:
-	@command -v chromium >/dev/null 2>&1 || { \
-	  echo "Installing Debian's chromium for the browser tests"; \
+	@command -v chromium >/dev/null 2>&1 && command -v chromium-headless-shell >/dev/null 2>&1 || { \
+	  echo "Installing Debian's chromium and chromium-headless-shell for the browser tests"; \
 	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
-	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq chromium; }
+	  $$SUDO apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq chromium chromium-headless-shell; }
 
 ffmpeg:
 	@command -v ffmpeg >/dev/null 2>&1 || { \

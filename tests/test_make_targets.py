@@ -29,6 +29,11 @@ def test_make_bench_installs_three_js_chromium_and_nginx_for_the_browser_and_pro
     assert commands.rstrip().endswith("telelab bench"), commands
 
 
+def test_make_test_installs_the_headless_shell_the_browser_tests_run_in() -> None:
+    assert "chromium chromium-headless-shell" in dry_run("test")
+    assert conftest.CHROMIUM_PATH == "/usr/bin/chromium-headless-shell"
+
+
 def test_make_test_runs_the_files_in_parallel_processes_with_rays_files_in_one() -> None:
     pytest_line = next(line for line in dry_run("test").splitlines() if " -m pytest" in line)
     assert "--dist loadfile" in pytest_line and " -n " in pytest_line, pytest_line

@@ -31,7 +31,7 @@ from cryptography.hazmat.primitives import hashes, serialization
 from cryptography.hazmat.primitives.asymmetric import ec
 from cryptography.x509.oid import NameOID
 
-from tests.conftest import ARTIFACTS_DIR, CHROMIUM_ARGS, CHROMIUM_PATH, LiveServer, served_lab
+from tests.conftest import ARTIFACTS_DIR, CHROMIUM_ARGS, CHROMIUM_BROWSER_PATH, LiveServer, served_lab
 from tests.e2e.test_class_across_workers import _nginx
 from tests.e2e.test_panels import wait_for
 from tests.integration.lti.conftest import register
@@ -91,7 +91,7 @@ def _browser(chromium, profile: Path, third_party_cookies: int):
     (profile / "Default" / "Preferences").write_text(json.dumps({"profile": {
         "cookie_controls_mode": third_party_cookies}}))
     browser = chromium.browser_type.launch_persistent_context(
-        str(profile), executable_path=CHROMIUM_PATH, args=CHROMIUM_ARGS, ignore_https_errors=True,
+        str(profile), executable_path=CHROMIUM_BROWSER_PATH, args=CHROMIUM_ARGS, ignore_https_errors=True,
         viewport={"width": 1280, "height": 800})
     errors: list[str] = []  # every page's uncaught errors (the page fixture's rule), checked at the end
     browser.on("page", lambda page: page.on("pageerror", lambda error: errors.append(str(error))))
