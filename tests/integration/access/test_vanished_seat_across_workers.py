@@ -14,7 +14,7 @@ from pathlib import Path
 import grpc
 import pytest
 
-from tests.conftest import LabClient, LiveServer, make_test_app
+from tests.conftest import LabClient, LiveServer, _let_go, make_test_app
 from tests.integration.access.test_vanished_client_seat import GRACE_S, _open_and_vanish, wait_for_the_seat
 from tests.integration.middleware.test_events_across_workers import make_test_app_without_user
 
@@ -69,7 +69,9 @@ def note_ticks_of(robot_name: str, coordinator, ticked_at: list[float]) -> None:
     coordinator.tick_all = noted
 
 
-@pytest.mark.parametrize("workers", [1, 2])
+# With two workers the seat's loss is seen through the other worker's events: a wall-clock bound across workers, so
+# it runs alone (tests/conftest.py); under the other suite process's load it once came 0.15 s past its bound.
+@pytest.mark.parametrize("workers", [1, pytest.param(2, marks=pytest.mark.alone)])
 def test_a_vanished_client_loses_its_seat_within_the_grace_while_robots_do_not_answer(
         postgres_url: str, tmp_path: Path, skill_server_address: str, workers: int) -> None:
     from middleware.access.coordinator import access_coordinator
@@ -109,4 +111,4 @@ def test_a_vanished_client_loses_its_seat_within_the_grace_while_robots_do_not_a
             for server in servers:
                 server.stop()
             for app in apps:
-                access_coordinator(app).stop_ticker()
+                _let_go(app)  # its ticker, and the practice keeper that would query the dropped database after
