@@ -26,6 +26,7 @@ from middleware.assessment import pages as assessment_pages
 from middleware.assessment import routes as assessment_routes
 from middleware.auth import cookies as auth_cookies
 from middleware.auth import routes as auth_routes
+from middleware.auth import services as auth_services
 from middleware.bookings import routes as bookings_routes
 from middleware.bookings import services as bookings_services
 from middleware.chat import routes as chat_routes
@@ -88,6 +89,7 @@ def create_app(config: dict[str, Any] | None = None) -> Flask:
     app.add_template_filter(number_words, "number")
     db.init_app(app)
     auth_cookies.init_app(app)
+    auth_services.make_timing_equaliser()
     csrf.init_app(app)
     login_manager.init_app(app)
     register_error_handlers(app)

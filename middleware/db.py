@@ -16,13 +16,14 @@ import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from alembic import command
-from alembic.config import Config as AlembicConfig
 from flask import Flask, Response, current_app, g
 from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.orm import Session, sessionmaker
+
+if TYPE_CHECKING:
+    from alembic.config import Config as AlembicConfig
 
 MIGRATIONS_DIR = Path(__file__).resolve().parent.parent / "migrations"
 _EXTENSION_KEY = "telelab.db"
@@ -173,6 +174,8 @@ def get_session() -> Session:
 
 def alembic_config(database_url: str) -> AlembicConfig:
     """An Alembic configuration pointing at migrations/ and database_url, with no ini file."""
+    from alembic.config import Config as AlembicConfig  # alembic costs every process 0.3 s: only migrating needs it
+
     config = AlembicConfig()
     config.set_main_option("script_location", str(MIGRATIONS_DIR))
     config.set_main_option("path_separator", "os")
@@ -184,4 +187,6 @@ def upgrade_to_head(database_url: str) -> None:
     """Migrates the database at database_url to the newest revision."""
     if database_url.startswith("sqlite:///") and not database_url.startswith("sqlite:///:memory:"):
         Path(database_url.removeprefix("sqlite:///")).parent.mkdir(parents=True, exist_ok=True)
+    from alembic import command  # as in alembic_config
+
     command.upgrade(alembic_config(database_url), "head")

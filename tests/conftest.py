@@ -265,14 +265,10 @@ def product_password_method() -> Iterator[str]:
     """The product's password hash method, while the suite's processes hash at TEST_PASSWORD_METHOD."""
     from unittest import mock
 
-    from werkzeug.security import generate_password_hash
-
     from middleware.auth import services
 
     product = services.PASSWORD_METHOD
-    dummy = generate_password_hash("telelab-timing-equaliser", method=TEST_PASSWORD_METHOD)
-    with mock.patch.object(services, "PASSWORD_METHOD", TEST_PASSWORD_METHOD), \
-            mock.patch.object(services, "_DUMMY_HASH", dummy):
+    with mock.patch.object(services, "PASSWORD_METHOD", TEST_PASSWORD_METHOD):
         yield product
 
 
@@ -591,6 +587,16 @@ SAME_PROCESS_FILES = {
         "tests/integration/middleware/test_rolling_restart.py",
     ], "postgresql-labs"),
 }
+
+
+SUITE_PROCESSES_MAX = 4  # each holds up to a PostgreSQL lab's 15 connections and its tests' own of the server's 100
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+    """`-n logical` (`make test`): one process more than the logical cores, at most SUITE_PROCESSES_MAX. A browser or
+    robot test waits on a robot's or a page's real time much of its run, and a third process on 2 cores fills it."""
+    return min(len(os.sched_getaffinity(0)) + 1, SUITE_PROCESSES_MAX)
 
 
 @pytest.hookimpl(optionalhook=True)

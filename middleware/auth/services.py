@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import secrets
 from dataclasses import dataclass
 from datetime import datetime
@@ -17,8 +18,18 @@ from middleware.models import Role, User
 
 # scrypt is a memory-hard KDF; werkzeug salts it and encodes the parameters in the hash.
 PASSWORD_METHOD = "scrypt"
-# Checking a password for an unknown username still costs one hash, so timing does not reveal accounts.
-_DUMMY_HASH = generate_password_hash("telelab-timing-equaliser", method=PASSWORD_METHOD)
+
+
+@functools.cache
+def _timing_equaliser(method: str) -> str:
+    """Checking a password for an unknown username still costs one hash of the method's cost, so timing does not
+    reveal accounts (made on first use: a process that never checks a password, such as a writer child, makes none)."""
+    return generate_password_hash("telelab-timing-equaliser", method=method)
+
+
+def make_timing_equaliser() -> None:
+    """Makes the unknown-username hash now (create_app), so that a first failed login costs one hash as any other."""
+    _timing_equaliser(PASSWORD_METHOD)
 
 
 class AccountExists(ValueError):
@@ -73,7 +84,7 @@ def matching_account(session: Session, username: str, password: str) -> User | N
     """The account whose password matches, active or disabled, or None; costs one hash either way."""
     user = find_user(session, username)
     if user is None:
-        check_password_hash(_DUMMY_HASH, password)
+        check_password_hash(_timing_equaliser(PASSWORD_METHOD), password)
         return None
     return user if check_password_hash(user.password_hash, password) else None
 
