@@ -40,11 +40,12 @@ DEMO_VIDEO := instance/lessons/demo-first-moves.webm
 run: $(RUN_STAMP) $(THREE_STAMP) $(if $(wildcard $(DEMO_VIDEO)),,ffmpeg)
 	$(VENV)/bin/telelab up
 
-# The suite's files run in parallel processes, one per logical core (at most 4: PostgreSQL's 100 connections);
-# TEST_PROCESSES=0 runs them in this one. tests/conftest.py says what each process has of its own, which files share
-# one, and why tests marked `alone` (their bounds are wall-clock times across processes) run while the others wait.
-# One process more than the cores was no faster from a clean clone (27:27 against 26:25) and timed out browser waits
-# (a kidnapped robot's localization, 90 s). Collection order is kept.
+# The suite's files run in parallel processes, one more than the logical cores and at most 4 (PostgreSQL's 100
+# connections; tests/conftest.py caps them): most of a browser or robot test's time is a robot's or a page's real
+# time, not the CPU's. From a clean clone on 2 cores, 3 processes took 1201 s (the machine 82 % busy), 2 took 1311 s
+# (70 %). TEST_PROCESSES=0 runs them in this one. tests/conftest.py says what each process has of its own, which files
+# share one, and why tests marked `alone` (their bounds are wall-clock times across processes) run while the others
+# wait. Collection order is kept.
 TEST_PROCESSES ?= logical
 
 test: $(TEST_STAMP) $(THREE_STAMP) chromium ffmpeg nginx

@@ -45,6 +45,12 @@ def test_make_test_runs_the_files_in_parallel_processes_with_rays_files_in_one()
     assert scheduler._split_scope("tests/e2e/test_turns.py::test_a") == "tests/e2e/test_turns.py"
 
 
+def test_make_test_runs_one_process_more_than_the_cores_and_never_more_than_four(monkeypatch) -> None:
+    for cores, processes in ((1, 2), (2, 3), (3, 4), (16, 4)):
+        monkeypatch.setattr(conftest.os, "sched_getaffinity", lambda _pid, cores=cores: set(range(cores)))
+        assert conftest.pytest_xdist_auto_num_workers(SimpleNamespace()) == processes
+
+
 def test_the_files_that_share_a_process_exist() -> None:
     missing = [path for path in conftest.SAME_PROCESS_FILES if not (ROOT / path).is_file()]
     assert not missing, f"renamed or removed: update tests/conftest.py's SAME_PROCESS_FILES ({missing})"
