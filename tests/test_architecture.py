@@ -215,6 +215,7 @@ FUNCTION_LEVEL_IMPORTS_ALLOW_LIST = {
     "middleware/farm/setup.py": "only the farm backend TELELAB_FARM names is imported",
     "middleware/farm/ray_farm.py": "ray is optional and slow to import: only a lab using the Ray farm imports it",
     "middleware/events.py": "psycopg is needed only with PostgreSQL",
+    "middleware/db.py": "alembic (0.3 s) only where a database is migrated: a worker or writer child never imports it",
 }
 
 
