@@ -19,8 +19,9 @@ import math
 import queue
 import threading
 import time
-from collections import defaultdict
+from collections import defaultdict, deque
 from collections.abc import Callable, Hashable
+from itertools import islice
 from typing import Generic, TypeVar
 
 from sqlalchemy import Connection, Engine, event, text
@@ -29,6 +30,7 @@ from sqlalchemy.orm import Session
 log = logging.getLogger(__name__)
 CHANNEL = "telelab_events"
 MAX_PAYLOAD = 200
+RECENT_DROPS = 256  # the drops a kept answer's read is compared with (a read outlasting more keeps nothing)
 RECONNECT_S = 1.0
 RECONNECT_MAX_S = 30.0
 DISPATCHER_IDLE_S = 5.0
@@ -184,8 +186,9 @@ class KeptAnswers(Generic[K, V]):
     An answer is kept heard_s while the process hears the announcements (PostgreSQL's listener connected), else
     short_s (SQLite's bus reaches no other process; a listener may be reconnecting), and never longer than the reader
     says of it. An announcement drops its key (keyed: the topic is announced with these keys) or every answer; a
-    listener that reconnected drops every answer. An answer read while anything was dropped is given but not kept, so a
-    read that raced a change never outlives the change's announcement.
+    listener that reconnected drops every answer. An answer read while its key (or every answer) was dropped is given
+    but not kept, so a read that raced a change never outlives the change's announcement; a drop of another key does
+    not stop it being kept (a class starting 50 robots announces 50 names while each is read).
     """
 
     def __init__(self, engine: Engine, topic: str, short_s: float, heard_s: float, keyed: bool = True) -> None:
@@ -194,6 +197,7 @@ class KeptAnswers(Generic[K, V]):
         self._lock = threading.Lock()
         self._answers: dict[K, tuple[V, float]] = {}  # key -> (answer, kept until [monotonic s])
         self._drops = 0
+        self._dropped: deque[K | None] = deque(maxlen=RECENT_DROPS)  # the latest drops' keys (None: every answer)
         self._bus: EventBus | None = None
 
     def known(self, key: K) -> tuple[bool, V | None]:
@@ -216,14 +220,23 @@ class KeptAnswers(Generic[K, V]):
         lifetime_s = min(self._heard_s if bus.shared and bus.listening.is_set() else self._short_s,
                          longest_s(answer))
         with self._lock:
-            if lifetime_s > 0 and drops == self._drops:
+            if lifetime_s > 0 and not self._dropped_since(drops, key):
                 self._answers[key] = (answer, time.monotonic() + lifetime_s)
         return answer
+
+    def _dropped_since(self, drops: int, key: K) -> bool:
+        """Whether key's answer was dropped after the first `drops` drops (the lock held): a read outlasting more
+        drops than are remembered is taken to have raced its own."""
+        since = self._drops - drops
+        if since > len(self._dropped):
+            return True
+        return any(dropped is None or dropped == key for dropped in islice(reversed(self._dropped), since))
 
     def drop(self, key: K | None = None) -> None:
         """Forgets key's answer (every answer: None), and any read under way is not kept."""
         with self._lock:
             self._drops += 1
+            self._dropped.append(key)
             if key is None:
                 self._answers.clear()
             else:

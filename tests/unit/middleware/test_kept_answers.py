@@ -1,6 +1,6 @@
 """events.KeptAnswers: an answer is kept until its topic's announcement drops it (its key, or every answer), never
-longer than its reader allows, briefly where announcements may go unheard, and not at all when a drop came while it
-was read (a read that raced a change never outlives the change's announcement)."""
+longer than its reader allows, briefly where announcements may go unheard, and not at all when its key (or every
+answer) was dropped while it was read (a read that raced a change never outlives the change's announcement)."""
 
 from __future__ import annotations
 
@@ -44,11 +44,12 @@ def test_an_unkeyed_topic_drops_every_answer(engine: Engine) -> None:
     assert kept.known("robot-1") == (False, None) and kept.known("robot-2") == (False, None)
 
 
-def test_an_answer_read_while_a_drop_came_is_given_but_not_kept(engine: Engine) -> None:
+@pytest.mark.parametrize("announced", [("things", "a"), ("", None)], ids=["its key", "a reconnected listener"])
+def test_an_answer_read_while_its_key_was_dropped_is_given_but_not_kept(engine: Engine, announced) -> None:
     kept: KeptAnswers[str, str] = KeptAnswers(engine, "things", short_s=60.0, heard_s=60.0)
 
     def read_racing_a_change() -> str:
-        bus_of(engine).deliver("things", "other")  # the change commits and is announced while this reads
+        bus_of(engine).deliver(*announced)  # the change commits and is announced while this reads
         return "before the change"
 
     assert kept.get("a", read_racing_a_change) == "before the change"
@@ -63,3 +64,28 @@ def test_an_answer_lives_no_longer_than_its_reader_allows_nor_short_s_unheard(en
     assert kept.known("one") == (True, 1)
     time.sleep(0.25)
     assert kept.known("one") == (False, None), "kept past short_s where announcements go unheard"
+
+
+def test_an_answer_read_while_another_key_was_dropped_is_kept(engine: Engine) -> None:
+    kept: KeptAnswers[str, str] = KeptAnswers(engine, "things", short_s=60.0, heard_s=60.0)
+
+    def read_while_another_changes() -> str:
+        bus_of(engine).deliver("things", "b")  # another robot of the class started meanwhile
+        return "a's answer"
+
+    assert kept.get("a", read_while_another_changes) == "a's answer"
+    assert kept.known("a") == (True, "a's answer")
+
+
+def test_a_read_outlasting_more_drops_than_are_remembered_is_not_kept(engine: Engine) -> None:
+    from middleware.events import RECENT_DROPS
+
+    kept: KeptAnswers[str, str] = KeptAnswers(engine, "things", short_s=60.0, heard_s=60.0)
+
+    def read_while_many_change() -> str:
+        for index in range(RECENT_DROPS + 1):
+            bus_of(engine).deliver("things", f"other-{index}")
+        return "maybe stale"
+
+    assert kept.get("a", read_while_many_change) == "maybe stale"
+    assert kept.known("a") == (False, None)
