@@ -165,6 +165,42 @@ def test_a_claim_whose_start_died_is_released_by_the_keeper_or_replaced_by_its_o
         manager.shutdown()
 
 
+@pytest.mark.postgres
+def test_an_owner_replacing_a_dead_claim_while_the_keeper_releases_it_gets_a_new_claim(practice_lab) -> None:
+    """The owner's start reads its dead claim; the keeper releases that claim and commits; the start's delete then
+    finds no row. That is no error (it was an ORM delete expecting one row): the start claims anew."""
+    from sqlalchemy import event
+
+    from middleware.db import session_factory
+    from middleware.farm.setup import robot_farm
+    from middleware.models import User
+    from middleware.teaching.practice_robots import PracticeManager
+
+    if not practice_lab.app.config["DATABASE_URL"].startswith("postgresql"):
+        pytest.skip("SQLite serialises the two writers: the keeper cannot commit inside the start's transaction")
+    sessions = session_factory(practice_lab.app)
+    keeper = PracticeManager(robot_farm(practice_lab.app), sessions, idle_s=600, start_deadline_s=0.2)
+    with sessions() as session:
+        owner = session.query(User.id).filter(User.username == "p04").scalar()
+    try:
+        with sessions() as session, session.begin():
+            assert keeper.begin_start(session, owner, "p04") is not None  # its process dies before run()
+        time.sleep(0.3)
+        released: list[list[str]] = []
+
+        def keeper_releases_meanwhile(_conn, _cursor, statement, *_args) -> None:
+            if not released and statement.lstrip().startswith("SELECT") and "personal_robots" in statement:
+                released.append(keeper.release_dead_starts())  # its own session, committed
+
+        with sessions() as session, session.begin():
+            event.listen(session.connection(), "after_cursor_execute", keeper_releases_meanwhile)
+            assert keeper.begin_start(session, owner, "p04") is not None
+        assert released == [["practice-p04"]]
+        assert keeper.starting(owner)  # the new claim, committed
+    finally:
+        keeper.shutdown()
+
+
 def test_a_claim_released_as_dead_while_its_start_was_under_way_leaves_no_robot(practice_lab) -> None:
     from middleware.db import session_factory
     from middleware.farm.setup import robot_farm
