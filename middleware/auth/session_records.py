@@ -30,7 +30,9 @@ from middleware.models.accounts import as_utc
 
 log = logging.getLogger(__name__)
 RECHECK_S = 1.0  # a verdict's lifetime while this process may miss an ended login's announcement
-HEARD_RECHECK_S = 15.0  # while it hears them: the announcement drops the verdict at once (within milliseconds)
+HEARD_RECHECK_S = 60.0  # while it hears them: the announcement drops the verdict at once (within milliseconds);
+# the lifetime is a net under that, a read per login per worker a minute (at 15 s, a seventh of a 3-worker class's
+# transactions)
 # Announced (middleware/events.py) with the user's id when logins of the user end, so every worker's sockets of
 # that user check their login at once instead of on their next periodic check.
 ACCOUNTS_TOPIC = "accounts"
