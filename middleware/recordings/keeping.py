@@ -144,7 +144,9 @@ class Keeping:
         if time.monotonic() - part.goals_at >= files.FLUSH_S or until_unix_s is not None:
             part.goals_at = time.monotonic()
             records += self._goal_changes(part)
-        write_second(part.writer, kept, records, self._commands(part, until_unix_s) if commands is None else commands)
+        if commands is None:
+            commands = self._new_commands([part], until_unix_s)[part.recording_id]
+        write_second(part.writer, kept, records, commands)
 
     def _stub(self, part: _Part) -> robot_pb2_grpc.RobotStub | None:
         address = part.address
@@ -197,45 +199,33 @@ class Keeping:
                 changes.append((channels.GOALS, goal.SerializeToString(), time.time_ns()))
         return changes
 
-    def _new_commands(self, parts: list[_Part]) -> dict[int, list[CommandRow]]:
-        """Each part's commands logged after its cursor, read for every part at once: a query a second, not one per
-        session (a class of 50 recorded sessions was 50 of the database's transactions a second)."""
+    def _new_commands(self, parts: list[_Part], until_unix_s: float | None = None) -> dict[int, list[CommandRow]]:
+        """Each part's commands logged on its robot after its cursor (sent since its session began, and until its
+        end), read for every part at once: a query a tick, not one per session (a class of 50 recorded sessions
+        was 50 of the database's transactions a second)."""
         if not parts:
             return {}
         c = _COMMANDS.c
         query = (select(c.id, c.robot_name, c.sent_unix_s, c.user_id, c.sequence, c.source, c.action, c.detail,
                         c.accepted, c.outcome)
                  .where(or_(*(and_(c.robot_name == part.robot_name, c.id > part.cursor,
-                                        c.sent_unix_s >= part.started_unix_s - 0.5) for part in parts)))
+                                   c.sent_unix_s >= part.started_unix_s - 0.5) for part in parts)))
                  .order_by(c.id))
+        if until_unix_s is not None:
+            query = query.where(c.sent_unix_s <= until_unix_s)
         with self.engine.connect() as connection:
             found = connection.execute(query).all()
         by_robot: dict[str, list[Any]] = {}
         for row in found:
             by_robot.setdefault(row.robot_name, []).append(row)
         commands: dict[int, list[CommandRow]] = {}
-        for part in parts:
+        for part in parts:  # two sessions of one robot share its rows: each takes those past its own cursor
             rows = [row for row in by_robot.get(part.robot_name, ())
                     if row.id > part.cursor and row.sent_unix_s >= part.started_unix_s - 0.5]
             if rows:
                 part.cursor = rows[-1].id
             commands[part.recording_id] = [_command_row(row) for row in rows]
         return commands
-
-    def _commands(self, part: _Part, until_unix_s: float | None) -> list[CommandRow]:
-        """The commands logged on the robot after the cursor (sent since the session began, and until its end)."""
-        c = _COMMANDS.c
-        query = (select(c.id, c.sent_unix_s, c.user_id, c.sequence, c.source, c.action, c.detail, c.accepted,
-                        c.outcome)
-                 .where(c.robot_name == part.robot_name, c.id > part.cursor, c.sent_unix_s >= part.started_unix_s - 0.5)
-                 .order_by(c.id))
-        if until_unix_s is not None:
-            query = query.where(c.sent_unix_s <= until_unix_s)
-        with self.engine.connect() as connection:
-            found = connection.execute(query).all()
-        if found:
-            part.cursor = max(row.id for row in found)
-        return [_command_row(row) for row in found]
 
     # Claims: which process records which session, in the rows.
     def _heartbeat_and_claim(self, session: Session, open_rows: list[Recording], present: dict[str, Present],

@@ -30,7 +30,8 @@ def test_every_recorded_session_gets_its_own_commands_from_one_query_a_tick(engi
     first_id = 3  # lab-3's first command: this session has copied that much already
     parts = [_part(1, "lab-1", STARTED_S), _part(2, "lab-2", STARTED_S + 3.0), _part(3, "lab-3", STARTED_S, first_id),
              _part(4, "lab-4", STARTED_S)]
-    alone = {part.recording_id: keeping._commands(copy.copy(part), None) for part in parts}  # as each would alone
+    alone = {part.recording_id: keeping._new_commands([copy.copy(part)])[part.recording_id]  # as each would alone
+             for part in parts}
     statements: list[str] = []
     event.listen(engine, "before_cursor_execute", lambda _c, _r, sql, *_: statements.append(sql))
 
