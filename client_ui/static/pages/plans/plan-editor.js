@@ -108,7 +108,12 @@ function showPlan(plan) {
   const skillBox = root.querySelector("input[name=console_skill]");
   if (skillBox) skillBox.checked = Boolean(plan.console_skill);
   const shareSelect = root.querySelector("[data-field=share-course]");
-  if (shareSelect) shareSelect.value = plan.shared_with ? String(plan.shared_with.id) : "";
+  if (shareSelect) {
+    // Disabled until the stored sharing is in, as the text is: a course chosen before would be reset.
+    shareSelect.value = plan.shared_with ? String(plan.shared_with.id) : "";
+    shareSelect.disabled = false;
+    button("share").disabled = false;
+  }
   showErrors([]);
 }
 
