@@ -218,7 +218,7 @@ def _let_go(app) -> None:
     from middleware.db import session_factory
     from middleware.robots.registry import robot_registry
 
-    access_coordinator(app).stop_ticker()
+    access_coordinator(app).close()
     robot_registry(app).close()
     session_factory(app).kw["bind"].dispose()
 

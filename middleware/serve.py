@@ -78,7 +78,7 @@ def serve_forever(app: Flask, host: str, port: int) -> None:
         server.serve_forever()
     finally:
         server.server_close()
-        access_coordinator(app).stop_ticker()
+        access_coordinator(app).close()
         robot_registry(app).close()
 
 
@@ -196,7 +196,7 @@ def leave_worker(_server: Any, worker: Any) -> None:
     if not isinstance(app, Flask):
         return  # it never made its app
     with contextlib.suppress(Exception):  # the worker is leaving either way; a failed close must not hide why
-        access_coordinator(app).stop_ticker()
+        access_coordinator(app).close()
         robot_registry(app).close()
 
 

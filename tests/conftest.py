@@ -321,7 +321,7 @@ def _let_go(application) -> None:
     from middleware.robots.registry import robot_registry
     from middleware.teaching.practice_robots import practice_manager
 
-    access_coordinator(application).stop_ticker()
+    access_coordinator(application).close()
     practice_manager(application).close()  # its keeper would otherwise query a database the test has dropped
     robot_registry(application).close()
     robot_farm(application).close()

@@ -245,6 +245,11 @@ class AccessCoordinator:
             self._liveness = None
         self.election.resign()
 
+    def close(self) -> None:
+        """This process is leaving: the ticker stops and what it heard of its seats last is written."""
+        self.stop_ticker()
+        self.heard.close()
+
     def _tick_forever(self) -> None:
         # Every process with a channel open runs this loop, but only the elected one ticks (PostgreSQL: one per
         # cluster; another takes over within a tick when it dies). Operations of users still run in their process.

@@ -36,6 +36,7 @@ class HeardBook:
         self._heard: dict[tuple[str, int], datetime] = {}
         self._lock = threading.Lock()
         self._writer: threading.Thread | None = None
+        self._closed = threading.Event()
 
     def note(self, robot_name: str, user_id: int, heard_at: datetime) -> None:
         """The user's client on robot_name was heard at heard_at (memory only; written with the next batch)."""
@@ -44,7 +45,7 @@ class HeardBook:
             known = self._heard.get(key)
             if known is None or heard_at > known:
                 self._heard[key] = heard_at
-            if self._writer is None:
+            if self._writer is None and not self._closed.is_set():
                 self._writer = threading.Thread(target=self._write_forever, name="heard-book", daemon=True)
                 self._writer.start()
 
@@ -58,10 +59,21 @@ class HeardBook:
                     {"seat_robot": robot, "seat_user": user, "heard_at": at} for (robot, user), at in heard.items()])
         return len(heard)
 
+    def close(self) -> None:
+        """Ends the writer after writing what is pending (a process leaving); later notes stay in memory."""
+        self._closed.set()
+        with self._lock:
+            writer = self._writer
+        if writer is not None and writer is not threading.current_thread():
+            writer.join(5)
+        try:
+            self.write()
+        except Exception:  # noqa: BLE001 - the process is leaving; the seat's grace absorbs one lost batch
+            log.exception("writing when seats were last heard failed")
+
     def _write_forever(self) -> None:
         idle = 0
-        while True:
-            threading.Event().wait(self._interval_s)
+        while not self._closed.wait(self._interval_s):
             try:
                 idle = 0 if self.write() else idle + 1
             except Exception:  # noqa: BLE001 - a failed batch is retried with the next one's newer times
@@ -70,3 +82,5 @@ class HeardBook:
                 if idle >= IDLE_WRITES and not self._heard:  # nobody connected for a while: the next note restarts it
                     self._writer = None
                     return
+        with self._lock:
+            self._writer = None

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_course, make_test_app
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, _let_go, make_course, make_test_app
 from tests.integration.bookings.conftest import api
 from tests.integration.chat.test_chat import next_of
 
@@ -26,7 +26,6 @@ pytestmark = pytest.mark.alone
 
 def test_a_message_posted_on_one_worker_reaches_a_socket_on_the_other_at_once(postgres_url: str, tmp_path: Path,
                                                                                 skill_server_address: str) -> None:
-    from middleware.access.coordinator import access_coordinator
     from middleware.auth.services import create_user
     from middleware.db import session_factory
     from middleware.events import bus_of
@@ -84,7 +83,7 @@ def test_a_message_posted_on_one_worker_reaches_a_socket_on_the_other_at_once(po
         for server in servers:
             server.stop()
         for app in (first, second):
-            access_coordinator(app).stop_ticker()
+            _let_go(app)  # its ticker, and a practice keeper that would query the dropped database after
             session_factory(app).kw["bind"].dispose()
 
 
@@ -144,7 +143,6 @@ def test_who_follows_a_live_class_on_one_worker_is_listed_on_the_other(postgres_
                                                                          skill_server_address: str) -> None:
     import json
 
-    from middleware.access.coordinator import access_coordinator
     from middleware.auth.services import create_user
     from middleware.db import session_factory
     from middleware.models.teaching import GuidedSession, Tour
@@ -183,13 +181,12 @@ def test_who_follows_a_live_class_on_one_worker_is_listed_on_the_other(postgres_
         for server in servers:
             server.stop()
         for app in (first, second):
-            access_coordinator(app).stop_ticker()
+            _let_go(app)  # its ticker, and a practice keeper that would query the dropped database after
             session_factory(app).kw["bind"].dispose()
 
 
 def test_a_password_changed_on_one_worker_closes_the_sockets_on_the_other_at_once(
         postgres_url: str, tmp_path: Path, skill_server_address: str) -> None:
-    from middleware.access.coordinator import access_coordinator
     from middleware.auth.services import set_password
     from middleware.db import session_factory
     from middleware.realtime import CLOSE_NOT_LOGGED_IN
@@ -214,7 +211,7 @@ def test_a_password_changed_on_one_worker_closes_the_sockets_on_the_other_at_onc
     finally:
         server.stop()
         for app in (first, second):
-            access_coordinator(app).stop_ticker()
+            _let_go(app)  # its ticker, and a practice keeper that would query the dropped database after
             session_factory(app).kw["bind"].dispose()
 
 
@@ -241,7 +238,7 @@ class Crowd:
 def crowd(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory,
           skill_server_address: str) -> Iterator[Crowd]:
     from middleware.db import session_factory
-    from tests.conftest import _let_go, add_test_account, postgres_database
+    from tests.conftest import add_test_account, postgres_database
 
     robots = f"lab-1={skill_server_address}"
     folder = tmp_path_factory.mktemp(f"crowd-{request.param}")
