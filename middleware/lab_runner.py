@@ -216,10 +216,12 @@ def _let_go(app) -> None:
     """The launcher's own app has done its set-up: its connections and threads must not be forked into workers."""
     from middleware.access.coordinator import access_coordinator
     from middleware.db import session_factory
+    from middleware.farm.setup import robot_farm
     from middleware.robots.registry import robot_registry
 
     access_coordinator(app).close()
     robot_registry(app).close()
+    robot_farm(app).close()
     session_factory(app).kw["bind"].dispose()
 
 

@@ -18,7 +18,7 @@ import tempfile
 import threading
 import time
 from multiprocessing import AuthenticationError
-from multiprocessing.managers import BaseManager
+from multiprocessing.managers import BaseManager, BaseProxy
 from pathlib import Path
 
 from flask_babel import gettext  # type: ignore[import-untyped]
@@ -118,14 +118,22 @@ class SharedLocalFarm:
         self.address = address
         self._manager = _FarmManager(address=address, authkey=key)
         self._farm = None
+        self._connected_in: int | None = None  # the process whose connection the proxy holds
         self._lock = threading.Lock()
 
     def _call(self, method: str, *args: object):
         try:
             with self._lock:
-                if self._farm is None:
+                # A fork (gunicorn's workers of the launcher that started the lab) inherits the proxy's socket: two
+                # processes reading one connection unpickle each other's answers. Each process connects its own.
+                if self._farm is None or self._connected_in != os.getpid():
+                    if self._connected_in not in (None, os.getpid()):
+                        # Proxies share one connection per address and thread, kept by class: a fork's new proxy
+                        # would reuse the inherited one (multiprocessing resets it only in the processes it forks).
+                        BaseProxy._address_to_local.pop(self.address, None)  # type: ignore[attr-defined]
                     self._manager.connect()
                     self._farm = self._manager.farm()  # type: ignore[attr-defined]
+                    self._connected_in = os.getpid()
             return getattr(self._farm, method)(*args)
         except (OSError, EOFError, AuthenticationError) as error:
             with self._lock:

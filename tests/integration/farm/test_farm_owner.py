@@ -72,3 +72,22 @@ def test_the_robots_end_with_the_owner() -> None:
             return
         time.sleep(0.2)
     raise AssertionError("the robot still answers after its owner stopped")
+
+
+def test_a_forked_worker_talks_to_the_owner_on_a_connection_of_its_own(owner: FarmOwner) -> None:
+    """gunicorn forks its workers from the launcher, whose app asked the farm before: a worker reading the launcher's
+    connection unpickled the other's answers ("invalid load key") and died at start."""
+    farm = SharedLocalFarm(owner.address, owner.key.hex())
+    assert farm.capacity().running == 0  # the launcher's connection, made before the fork
+    children = []
+    for _ in range(2):
+        pid = os.fork()
+        if pid == 0:  # a worker: asks as the launcher goes on asking
+            code = 1
+            try:
+                code = 0 if all(farm.capacity().running == 0 for _ in range(200)) else 1
+            finally:
+                os._exit(code)
+        children.append(pid)
+    assert all(farm.capacity().running == 0 for _ in range(200))
+    assert [os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]) for pid in children] == [0, 0]
