@@ -130,7 +130,7 @@ class SharedLocalFarm:
                     if self._connected_in not in (None, os.getpid()):
                         # Proxies share one connection per address and thread, kept by class: a fork's new proxy
                         # would reuse the inherited one (multiprocessing resets it only in the processes it forks).
-                        BaseProxy._address_to_local.pop(self.address, None)  # type: ignore[attr-defined]
+                        BaseProxy._address_to_local.pop(self.address, None)
                     self._manager.connect()
                     self._farm = self._manager.farm()  # type: ignore[attr-defined]
                     self._connected_in = os.getpid()
