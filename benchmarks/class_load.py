@@ -224,6 +224,10 @@ class ClassLoad:
         sent: dict[int, float] = {}
         ready = asyncio.Event()
         acked = asyncio.Event()
+        received_before = student.received
+
+        def received_here() -> int:
+            return student.received - received_before
 
         def on_message(opcode: int, payload: bytes) -> None:
             student.received += 1
@@ -274,7 +278,11 @@ class ClassLoad:
             try:
                 await asyncio.wait_for(acked.wait(), SEAT_WAIT_S)
             except TimeoutError:
-                student.seat_lost = True
+                student.seat_lost = True  # what the console saw meanwhile says where the seat went
+                opened_how = "reopened" if closed_at is not None else "opened"
+                student.errors.append(f"seat lost: no drive acknowledgement {SEAT_WAIT_S:.0f} s after the console "
+                                      f"{opened_how} (channel ready: {ready.is_set()}, commands unanswered: "
+                                      f"{len(sent)}, messages received on this link: {received_here()})")
 
         return await self._read_until_closed(link, on_message, [asyncio.ensure_future(drive()),
                                                                 asyncio.ensure_future(watch_seat())])
