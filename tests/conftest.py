@@ -20,9 +20,10 @@ from urllib.request import HTTPCookieProcessor, HTTPRedirectHandler, Request, bu
 
 import pytest
 
-from tests import shared_url_builders
+from tests import shared_templates, shared_url_builders
 
 shared_url_builders.install()
+shared_templates.install()
 
 POSTGRES_SERVER_URL = os.environ.get("TELELAB_TEST_POSTGRES_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/test")
 STUDENT_PASSWORD = "correct-horse-battery"
