@@ -50,13 +50,18 @@ class HeardBook:
                 self._writer.start()
 
     def write(self) -> int:
-        """Writes what was heard since the last write; how many seats."""
+        """Writes what was heard since the last write; how many seats. A failed batch is kept for the next one."""
         with self._lock:
             heard, self._heard = self._heard, {}
         if heard:
-            with self._sessions() as session, session.begin():
-                session.connection().execute(_BY_SEAT, [
-                    {"seat_robot": robot, "seat_user": user, "heard_at": at} for (robot, user), at in heard.items()])
+            try:
+                with self._sessions() as session, session.begin():
+                    session.connection().execute(_BY_SEAT, [{"seat_robot": robot, "seat_user": user, "heard_at": at}
+                                                            for (robot, user), at in heard.items()])
+            except Exception:
+                with self._lock:  # a seat heard again meanwhile keeps its newer time
+                    self._heard = {**heard, **self._heard}
+                raise
         return len(heard)
 
     def close(self) -> None:
@@ -76,7 +81,7 @@ class HeardBook:
         while not self._closed.wait(self._interval_s):
             try:
                 idle = 0 if self.write() else idle + 1
-            except Exception:  # noqa: BLE001 - a failed batch is retried with the next one's newer times
+            except Exception:  # noqa: BLE001 - a failed batch goes again with the next one
                 log.exception("writing when seats were last heard failed")
             with self._lock:
                 if idle >= IDLE_WRITES and not self._heard:  # nobody connected for a while: the next note restarts it
