@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer, make_course, make_test_app
+from tests.conftest import ARTIFACTS_DIR, STUDENT_PASSWORD, LiveServer, _let_go, make_course, make_test_app
 from tests.e2e.test_class_wall import PHONE
 from tests.integration.middleware.test_events_across_workers import make_test_app_without_user
 
@@ -31,11 +31,9 @@ def _log_in(tab, server: LiveServer, username: str) -> None:
 def test_a_takeover_on_one_worker_shows_at_once_in_the_students_console_on_another(
         page, chromium, postgres_url: str, tmp_path: Path, skill_server_address: str) -> None:
     from middleware.access.commands import robot_commands
-    from middleware.access.coordinator import access_coordinator
     from middleware.auth.services import create_user
     from middleware.db import session_factory
     from middleware.models import User
-    from middleware.robots.registry import robot_registry
     from middleware.teaching.practice_robots import practice_manager
 
     robots = f"lab-1={skill_server_address}"
@@ -126,6 +124,5 @@ def test_a_takeover_on_one_worker_shows_at_once_in_the_students_console_on_anoth
         for server in (wall_server, console_server):
             server.stop()
         for app in apps:
-            access_coordinator(app).stop_ticker()
-            robot_registry(app).close()
+            _let_go(app)  # its ticker, links, farm and practice keeper
             session_factory(app).kw["bind"].dispose()

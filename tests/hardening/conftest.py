@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.conftest import _let_go
+
 ROLES = ("anonymous", "student", "tutor", "admin")
 # Nothing listens on port 9: robot routes meet an unreachable robot, fast, as when a robot is down.
 UNREACHABLE_ROBOTS = "lab-1=127.0.0.1:9,course-a=127.0.0.1:9"
@@ -38,12 +40,9 @@ def seeded_lab(database_url: str, tmp_path: Path):
 
 def stop_lab(app) -> None:
     """Stops the app's background work (the access ticker, robot channels) and closes its database connections."""
-    from middleware.access.coordinator import access_coordinator
     from middleware.db import session_factory
-    from middleware.robots.registry import robot_registry
 
-    access_coordinator(app).stop_ticker()
-    robot_registry(app).close()
+    _let_go(app)  # its ticker, links, farm and practice keeper
     session_factory(app).kw["bind"].dispose()
 
 

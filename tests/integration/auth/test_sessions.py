@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from benchmarks.ports import free_port
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, migrate_to_head
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, _let_go, add_test_account, migrate_to_head
 
 ROOT = Path(__file__).resolve().parents[3]
 REFUSED_WITHIN_S = 10.0  # a worker keeps a verdict RECHECK_S (1 s); the margin is for a loaded machine
@@ -25,9 +25,7 @@ REFUSED_WITHIN_S = 10.0  # a worker keeps a verdict RECHECK_S (1 s); the margin 
 def workers(database_url: str, tmp_path: Path) -> Iterator[tuple[LiveServer, str]]:
     """Worker 1 served in this process, worker 2 a `telelab web` process; same database and secret key."""
     from middleware import create_app
-    from middleware.access.coordinator import access_coordinator
     from middleware.db import session_factory
-    from middleware.robots.registry import robot_registry
 
     secret = secrets.token_hex(16)
     migrate_to_head(database_url)
@@ -57,8 +55,7 @@ def workers(database_url: str, tmp_path: Path) -> Iterator[tuple[LiveServer, str
         second.terminate()
         second.wait(timeout=30)
         first.stop()
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+        _let_go(app)  # its ticker, links, farm and practice keeper
         session_factory(app).kw["bind"].dispose()  # before the database is dropped
 
 

@@ -17,7 +17,7 @@ import pytest
 
 from benchmarks.standin_robots import StandInRobot
 from protos.telelab.v1 import robot_pb2_grpc
-from tests.conftest import LabClient, LiveServer, make_test_app
+from tests.conftest import LabClient, LiveServer, _let_go, make_test_app
 from tests.integration.lab.test_robot_channels import receive_json
 
 DRIVE_ANSWER_S = 0.2  # the robot's Drive takes this long: it answers 5 of the console's 20 commands a second
@@ -59,9 +59,7 @@ def slow_robot_address() -> Iterator[str]:
 
 def test_a_driver_ahead_of_a_slow_robot_keeps_the_channel_and_the_robot_gets_the_newest_command(
         tmp_path: Path, slow_robot_address: str) -> None:
-    from middleware.access.coordinator import access_coordinator
     from middleware.db import session_factory
-    from middleware.robots.registry import robot_registry
 
     app = make_test_app(f"sqlite:///{tmp_path / 'lab.sqlite3'}", f"slow-1={slow_robot_address}", tmp_path)
     server = LiveServer(app)
@@ -94,8 +92,7 @@ def test_a_driver_ahead_of_a_slow_robot_keeps_the_channel_and_the_robot_gets_the
         drive.close()
     finally:
         server.stop()
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+        _let_go(app)  # its ticker, links, farm and practice keeper
         session_factory(app).kw["bind"].dispose()
 
 

@@ -7,17 +7,17 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from tests.conftest import _let_go
+
 
 def test_every_socket_is_answered_from_one_read_a_second_and_a_new_run_is_seen(
         tmp_path: Path, skill_server_address: str) -> None:
     from sqlalchemy import event
 
-    from middleware.access.coordinator import access_coordinator
     from middleware.db import session_factory
     from middleware.lab.sockets import GRADED_RUN_RECHECK_S, GradedRunBook
     from middleware.models import User
     from middleware.models.experiment import TRIAL_OPEN, Trial
-    from middleware.robots.registry import robot_registry
     from tests.conftest import make_test_app
 
     app = make_test_app(f"sqlite:///{tmp_path / 'book.sqlite3'}", f"lab-1={skill_server_address}", tmp_path)
@@ -46,6 +46,5 @@ def test_every_socket_is_answered_from_one_read_a_second_and_a_new_run_is_seen(
         assert not book.holds("lab-2", student_id)
         assert len([s for s in statements if s.lstrip().upper().startswith("SELECT")]) <= 2 * 2 + 2
     finally:
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+        _let_go(app)  # its ticker, links, farm and practice keeper
         engine.dispose()

@@ -19,7 +19,7 @@ from skill_server.goals import GoalFeedback
 from skill_server.schema import ParameterSchema, ParameterType, SkillDescription
 from skill_server.skills import catalog
 from skill_server.skills.base import Outcome, SkillController, TickInput, succeeded
-from tests.conftest import LabClient, LiveServer, make_test_app
+from tests.conftest import LabClient, LiveServer, _let_go, make_test_app
 from tests.integration.lab.test_skills_api import api, take_control
 
 
@@ -71,8 +71,6 @@ def robot_with_a_new_skill(monkeypatch: pytest.MonkeyPatch) -> Iterator[str]:
 
 
 def test_a_new_skill_gets_a_panel_and_runs_through_the_middleware(robot_with_a_new_skill: str, tmp_path: Path) -> None:
-    from middleware.access.coordinator import access_coordinator
-    from middleware.robots.registry import robot_registry
 
     app = make_test_app(f"sqlite:///{tmp_path / 'app.sqlite3'}", f"lab-1={robot_with_a_new_skill}", tmp_path)
     server = LiveServer(app)
@@ -108,8 +106,7 @@ def test_a_new_skill_gets_a_panel_and_runs_through_the_middleware(robot_with_a_n
         queue.close()
     finally:
         server.stop()
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+        _let_go(app)  # its ticker, links, farm and practice keeper
 
 
 def _heading(telemetry) -> float:
@@ -139,8 +136,6 @@ def robot_with_a_new_sensor(monkeypatch: pytest.MonkeyPatch) -> Iterator[str]:
 
 def test_a_new_sensor_gets_a_panel_through_the_contract_and_a_silent_robot_a_console_that_says_so(
         robot_with_a_new_sensor: str, tmp_path: Path) -> None:
-    from middleware.access.coordinator import access_coordinator
-    from middleware.robots.registry import robot_registry
 
     robots = f"lab-1={robot_with_a_new_sensor},lab-2=127.0.0.1:1"  # nothing listens on lab-2's port
     app = make_test_app(f"sqlite:///{tmp_path / 'app.sqlite3'}", robots, tmp_path)
@@ -169,5 +164,4 @@ def test_a_new_sensor_gets_a_panel_through_the_contract_and_a_silent_robot_a_con
         assert "does not answer" in body["notice"]
     finally:
         server.stop()
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+        _let_go(app)  # its ticker, links, farm and practice keeper

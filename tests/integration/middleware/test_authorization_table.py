@@ -23,7 +23,7 @@ from middleware.models import Course, CourseMembership
 from middleware.models.experiment import Trial, VideoDelay
 from middleware.models.teaching import GuidedSession, Lesson, Tour
 from middleware.teaching.demo_content import DEMO_CUES, DEMO_TOURS
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_test_app
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, _let_go, make_test_app
 
 README = Path(__file__).resolve().parents[3] / "middleware" / "README.md"
 COLUMNS = ("anonymous", "student", "tutor of the course", "tutor of another course", "admin")
@@ -264,8 +264,6 @@ def lab(module_database_url: str, tmp_path_factory: pytest.TempPathFactory,
     """The app on one database for the whole table, wired to the session's skill server (saving tours checks
     their skills). Each row first resets what it acts on (running classes, delays), so rows cannot see each
     other's effects."""
-    from middleware.access.coordinator import access_coordinator
-    from middleware.robots.registry import robot_registry
 
     app = make_test_app(module_database_url, f"lab-1={skill_server_address}", tmp_path_factory.mktemp("lab"))
     (Path(app.instance_path) / "lessons").mkdir(parents=True)
@@ -277,8 +275,7 @@ def lab(module_database_url: str, tmp_path_factory: pytest.TempPathFactory,
         yield Lab(server, ids)
     finally:
         server.stop()
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+        _let_go(app)  # its ticker, links, farm and practice keeper
         session_factory(app).kw["bind"].dispose()  # before the PostgreSQL database is dropped
 
 

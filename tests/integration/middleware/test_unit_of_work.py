@@ -11,17 +11,15 @@ import pytest
 from flask import Flask, redirect
 from sqlalchemy import func, select
 
-from tests.conftest import make_test_app
+from tests.conftest import _let_go, make_test_app
 
 
 @pytest.fixture
 def uow_app(database_url: str, tmp_path: Path) -> Iterator[Flask]:
     """The app (no robot answers) with views that write a preference, then succeed or fail in each way."""
-    from middleware.access.coordinator import access_coordinator
     from middleware.db import after_commit, get_session, session_factory
     from middleware.errors import Refused, unless_refused
     from middleware.models import User, UserPreference
-    from middleware.robots.registry import robot_registry
 
     app = make_test_app(database_url, "ghost=127.0.0.1:9", tmp_path)
     app.config["AFTER_COMMIT_RAN"] = []
@@ -59,8 +57,7 @@ def uow_app(database_url: str, tmp_path: Path) -> Iterator[Flask]:
                        ("/test/refuse", refuse), ("/test/form", form), ("/test/redirected", redirected)):
         app.add_url_rule(rule, endpoint=rule, view_func=view)
     yield app
-    access_coordinator(app).stop_ticker()
-    robot_registry(app).close()
+    _let_go(app)  # its ticker, links, farm and practice keeper
     session_factory(app).kw["bind"].dispose()  # before the PostgreSQL database is dropped
 
 

@@ -11,7 +11,15 @@ from urllib.request import Request
 
 import pytest
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, make_course, make_test_app
+from tests.conftest import (
+    STUDENT_PASSWORD,
+    LabClient,
+    LiveServer,
+    _let_go,
+    add_test_account,
+    make_course,
+    make_test_app,
+)
 
 PEOPLE = {"student2": "student", "student3": "student", "tutor1": "tutor", "tutor2": "tutor", "admin1": "admin"}
 
@@ -34,9 +42,7 @@ class PlansLab:
 @pytest.fixture
 def plans_lab(database_url: str, tmp_path: Path, skill_server_address: str) -> Iterator[PlansLab]:
     """The app on database_url (SQLite, then PostgreSQL) with the people above, served."""
-    from middleware.access.coordinator import access_coordinator
     from middleware.db import session_factory
-    from middleware.robots.registry import robot_registry
     from middleware.teaching.practice_robots import practice_manager
 
     app = make_test_app(database_url, f"lab-1={skill_server_address}", tmp_path)
@@ -52,8 +58,7 @@ def plans_lab(database_url: str, tmp_path: Path, skill_server_address: str) -> I
     finally:
         practice_manager(app).shutdown()
         server.stop()
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+        _let_go(app)  # its ticker, links, farm and practice keeper
         session_factory(app).kw["bind"].dispose()  # before the PostgreSQL database is dropped
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from middleware.robots.processes import SkillServerProcess
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, make_test_app
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, _let_go, make_test_app
 from tests.integration.lab.test_skills_api import take_control
 from tests.integration.plans.conftest import PlansLab, api, run_on_practice
 
@@ -136,9 +136,7 @@ def test_a_plan_refused_for_its_watchdog_line_starts_no_practice_robot(plans_lab
 def fresh_lab_and_robot(tmp_path: Path) -> Iterator[tuple[LiveServer, SkillServerProcess]]:
     """A lab whose lab-1 is a skill server of its own, fresh at its dock in the lab scene (the session's robot
     has been moved by other tests), on SQLite; and lab-1's process."""
-    from middleware.access.coordinator import access_coordinator
     from middleware.robots.processes import wait_until_serving
-    from middleware.robots.registry import robot_registry
     from middleware.teaching.practice_robots import practice_manager
 
     robot = SkillServerProcess("lab-1", "lab", echo=False)
@@ -155,8 +153,7 @@ def fresh_lab_and_robot(tmp_path: Path) -> Iterator[tuple[LiveServer, SkillServe
             server.stop()
         if app is not None:
             practice_manager(app).shutdown()
-            access_coordinator(app).stop_ticker()
-            robot_registry(app).close()
+            _let_go(app)  # its ticker, links, farm and practice keeper
         robot.stop()
 
 

@@ -15,6 +15,7 @@ from tests.conftest import (
     STUDENT_PASSWORD,
     LabClient,
     LiveServer,
+    _let_go,
     add_test_account,
     make_course,
     make_test_app,
@@ -27,12 +28,10 @@ from tests.integration.teaching.test_practice_console_and_uploads import _api
 @pytest.fixture
 def small_class(tmp_path: Path, skill_server_address: str) -> Iterator[tuple[LiveServer, int, int]]:
     """tutor1 teaching ann and bob, an experimental test on lab-1 (scene lab) open now; (server, course, exam)."""
-    from middleware.access.coordinator import access_coordinator
     from middleware.assessment import bank
     from middleware.assessment.schemas import parse_exam
     from middleware.auth.services import find_user
     from middleware.db import session_factory
-    from middleware.robots.registry import robot_registry
     from middleware.teaching.practice_robots import practice_manager
 
     app = make_test_app(f"sqlite:///{tmp_path / 'class.sqlite3'}", f"lab-1={skill_server_address}", tmp_path)
@@ -56,8 +55,7 @@ def small_class(tmp_path: Path, skill_server_address: str) -> Iterator[tuple[Liv
     finally:
         practice_manager(app).shutdown()
         server.stop()
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+        _let_go(app)  # its ticker, links, farm and practice keeper
 
 
 def _login(server: LiveServer, name: str) -> LabClient:

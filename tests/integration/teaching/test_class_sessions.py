@@ -11,7 +11,15 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, make_course, make_test_app
+from tests.conftest import (
+    STUDENT_PASSWORD,
+    LabClient,
+    LiveServer,
+    _let_go,
+    add_test_account,
+    make_course,
+    make_test_app,
+)
 from tests.integration.teaching.test_practice_console_and_uploads import CHANNELS, _api, refusal
 
 STUDENTS = [f"s{i:02}" for i in range(1, 11)]
@@ -20,9 +28,7 @@ STUDENTS = [f"s{i:02}" for i in range(1, 11)]
 @pytest.fixture
 def class_lab(database_url: str, tmp_path: Path, skill_server_address: str) -> Iterator[tuple[LiveServer, int]]:
     """The app with tutor1 teaching a course of 10 students, tutor2 teaching nothing, and an empty course."""
-    from middleware.access.coordinator import access_coordinator
     from middleware.db import session_factory
-    from middleware.robots.registry import robot_registry
     from middleware.teaching.practice_robots import practice_manager
 
     app = make_test_app(database_url, f"lab-1={skill_server_address}", tmp_path)
@@ -40,8 +46,7 @@ def class_lab(database_url: str, tmp_path: Path, skill_server_address: str) -> I
     finally:
         practice_manager(app).shutdown()
         server.stop()
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+        _let_go(app)  # its ticker, links, farm and practice keeper
         session_factory(app).kw["bind"].dispose()
 
 

@@ -13,7 +13,15 @@ from collections.abc import Iterator
 import pytest
 import simple_websocket
 
-from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, make_course, make_test_app
+from tests.conftest import (
+    STUDENT_PASSWORD,
+    LabClient,
+    LiveServer,
+    _let_go,
+    add_test_account,
+    make_course,
+    make_test_app,
+)
 from tests.integration.lab.test_robot_channels import closed_with, receive_json
 from tests.integration.teaching.test_practice_console_and_uploads import _api
 
@@ -25,10 +33,8 @@ def wall_lab(module_database_url: str, tmp_path_factory: pytest.TempPathFactory,
              skill_server_address: str) -> Iterator[tuple[LiveServer, int, dict[str, int]]]:
     """tutor1 teaching a course of two students whose class session runs (a robot each), tutor2 teaching another
     course, and s03 a student of that other course."""
-    from middleware.access.coordinator import access_coordinator
     from middleware.db import session_factory
     from middleware.models import User
-    from middleware.robots.registry import robot_registry
     from middleware.teaching.practice_robots import practice_manager
 
     app = make_test_app(module_database_url, f"lab-1={skill_server_address}", tmp_path_factory.mktemp("wall"))
@@ -54,8 +60,7 @@ def wall_lab(module_database_url: str, tmp_path_factory: pytest.TempPathFactory,
     finally:
         practice_manager(app).shutdown()
         server.stop()
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+        _let_go(app)  # its ticker, links, farm and practice keeper
         session_factory(app).kw["bind"].dispose()
 
 

@@ -5,18 +5,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from tests.conftest import _let_go
+
 
 def test_the_demo_class_shows_tiles_a_raised_hand_and_the_chat_and_is_seeded_once(
         tmp_path: Path, skill_server_address: str) -> None:
     from sqlalchemy import select
 
-    from middleware.access.coordinator import access_coordinator
     from middleware.chat.services import recent_messages
     from middleware.db import session_factory
     from middleware.demo_course import DEMO_COURSE_CODE
     from middleware.lab_runner import ensure_demo_accounts, seed_demo_course
     from middleware.models import Course
-    from middleware.robots.registry import robot_registry
     from middleware.teaching import class_sessions, class_wall
     from middleware.teaching.class_wall_live import chat_room
     from middleware.teaching.demo_class import DEMO_CHAT, DEMO_HAND, DEMO_PUPILS, seed_demo_class
@@ -48,6 +48,5 @@ def test_the_demo_class_shows_tiles_a_raised_hand_and_the_chat_and_is_seeded_onc
             assert len(recent_messages(session, chat_room(opened.id))) == len(DEMO_CHAT)
     finally:
         practice_manager(app).shutdown()
-        access_coordinator(app).stop_ticker()
-        robot_registry(app).close()
+        _let_go(app)  # its ticker, links, farm and practice keeper
         session_factory(app).kw["bind"].dispose()
