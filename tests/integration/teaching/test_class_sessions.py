@@ -11,15 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import (
-    STUDENT_PASSWORD,
-    LabClient,
-    LiveServer,
-    _let_go,
-    add_test_account,
-    make_course,
-    make_test_app,
-)
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, make_course, make_test_app
 from tests.integration.teaching.test_practice_console_and_uploads import CHANNELS, _api, refusal
 
 STUDENTS = [f"s{i:02}" for i in range(1, 11)]
@@ -30,6 +22,7 @@ def class_lab(database_url: str, tmp_path: Path, skill_server_address: str) -> I
     """The app with tutor1 teaching a course of 10 students, tutor2 teaching nothing, and an empty course."""
     from middleware.db import session_factory
     from middleware.teaching.practice_robots import practice_manager
+    from tests.conftest import _let_go
 
     app = make_test_app(database_url, f"lab-1={skill_server_address}", tmp_path)
     with session_factory(app)() as session:

@@ -13,15 +13,7 @@ from collections.abc import Iterator
 import pytest
 import simple_websocket
 
-from tests.conftest import (
-    STUDENT_PASSWORD,
-    LabClient,
-    LiveServer,
-    _let_go,
-    add_test_account,
-    make_course,
-    make_test_app,
-)
+from tests.conftest import STUDENT_PASSWORD, LabClient, LiveServer, add_test_account, make_course, make_test_app
 from tests.integration.lab.test_robot_channels import closed_with, receive_json
 from tests.integration.teaching.test_practice_console_and_uploads import _api
 
@@ -36,6 +28,7 @@ def wall_lab(module_database_url: str, tmp_path_factory: pytest.TempPathFactory,
     from middleware.db import session_factory
     from middleware.models import User
     from middleware.teaching.practice_robots import practice_manager
+    from tests.conftest import _let_go
 
     app = make_test_app(module_database_url, f"lab-1={skill_server_address}", tmp_path_factory.mktemp("wall"))
     with session_factory(app)() as session:
