@@ -121,7 +121,7 @@ class Localization(SkillController):
             tick, state, 1.0 if self._converged else 0.0,
             math.hypot(std_x, std_y), std_theta, std_x_m=std_x, std_y_m=std_y, std_theta_rad=std_theta,
             estimate_x_m=self._estimate.x_m, estimate_y_m=self._estimate.y_m,
-            estimate_theta_rad=self._estimate.theta_rad,
+            estimate_theta_rad=self._estimate.theta_rad, **self._relocalizer.figures,
         )
 
     def track(self, tick: TickInput) -> None:
