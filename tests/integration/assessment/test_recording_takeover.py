@@ -37,6 +37,22 @@ def _stored_trace(factory, attempt_id: int) -> list:
         return list(session.get(Attempt, attempt_id).trace or [])
 
 
+def _recording_seen(factory, attempt_id: int) -> str:
+    """What this process's recorder of the attempt holds and what its row says: whether a recording that stored
+    nothing never started, got no telemetry, or flushed into a row it no longer held (seen once under load)."""
+    from middleware.assessment import recorder
+    from middleware.models.assessment import Attempt
+
+    held = recorder._recorders.get(attempt_id)  # a diagnostic of this process's own recorders
+    taken = "no recorder in this process" if held is None else (
+        f"a recorder with {len(held.samples())} samples, stopped {held._stopped.is_set()}, "
+        f"ended {held._ended.is_set()}, its task done {held._future.done()}")
+    with factory() as session:
+        row = session.get(Attempt, attempt_id)
+        return (f"{taken}; the row: status {row.status}, recorder {row.recorder_key} (this process "
+                f"{recorder.process_key()}), heard at {row.recorder_heard_at}, {len(row.trace or [])} samples")
+
+
 def test_a_recording_whose_worker_died_is_taken_over_and_the_whole_run_is_graded(app, client_as,
                                                                                    course_people) -> None:
     from middleware.assessment import attempts, recorder
@@ -56,13 +72,14 @@ def test_a_recording_whose_worker_died_is_taken_over_and_the_whole_run_is_graded
     flushed_by = time.monotonic() + 15  # a loaded machine flushes later, not never
     while not _stored_trace(factory, attempt_id) and time.monotonic() < flushed_by:
         time.sleep(0.2)
+    seen = _recording_seen(factory, attempt_id)
     recorder.stop(attempt_id)  # the recording worker dies: its recorder stops, its claim stays behind
     with factory() as session, session.begin():
         died_at = datetime.now(UTC) - timedelta(seconds=recorder.STALE_S + 1)
         session.execute(update(Attempt).where(Attempt.id == attempt_id)
                         .values(recorder_key="dead-host:1", recorder_heard_at=died_at))
         stored = list(session.get(Attempt, attempt_id).trace or [])
-    assert stored, "the first worker had stored samples"
+    assert stored, f"the first worker had stored samples: {seen}"
 
     with factory() as session, session.begin():  # a live recorder is never taken over
         assert attempts.claim_recording(session, attempt_id, "someone-else:2", datetime.now(UTC),
