@@ -43,15 +43,19 @@ run: $(RUN_STAMP) $(THREE_STAMP) $(if $(wildcard $(DEMO_VIDEO)),,ffmpeg)
 # The suite's files run in parallel processes, one more than the logical cores and at most 4 (PostgreSQL's 100
 # connections; tests/conftest.py caps them): most of a browser or robot test's time is a robot's or a page's real
 # time, not the CPU's. From a clean clone on 2 cores, 3 processes took 1201 s (the machine 82 % busy), 2 took 1311 s
-# (70 %). TEST_PROCESSES=0 runs them in this one. tests/conftest.py says what each process has of its own, which files
-# share one, and why tests marked `alone` (their bounds are wall-clock times across processes) run while the others
-# wait. Collection order is kept.
+# (70 %); with 4 the first 1022 tests took 4112 s of their processes' time against 2524 with 3 (that run shared the
+# machine with a benchmark for a few minutes, not enough for the gap). TEST_PROCESSES=0 runs them in this one.
+# tests/conftest.py says what each process has of its own, which files share one, and why tests marked `alone` (their
+# bounds are wall-clock times across processes) run while the others wait. Collection order is kept. The suite starts
+# some hundreds of Python processes (skill servers, labs, writer children, benchmarks): with bytecode caching off in
+# the environment (PYTHONDONTWRITEBYTECODE, as some images set it) each compiled the repository's modules again; on,
+# the teaching and skill-server tests took 9 % less CPU.
 TEST_PROCESSES ?= logical
 
 test: $(TEST_STAMP) $(THREE_STAMP) chromium ffmpeg nginx
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/mypy
-	$(PY) -m pytest -n $(TEST_PROCESSES) --dist loadfile --no-loadscope-reorder
+	env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest -n $(TEST_PROCESSES) --dist loadfile --no-loadscope-reorder
 
 # The browser tests run in Chromium's headless shell (Playwright's choice for headless), the benchmarks and the
 # third-party-cookie test in the full browser: both are Debian's build of one Chromium release.
