@@ -10,13 +10,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from skill_server.sim.geometry import Pose2D
-from skill_server.skills.global_search import FieldLookup, Panorama, Region, SlicedSearch, search
+from skill_server.skills.global_search import MIN_INLIERS, FieldLookup, Panorama, Region, SlicedSearch, search
 from skill_server.skills.scan_matching import compose, relative
 
 # A guess that does not lead to convergence within this many updates is given up for a search of the whole map
 # with the scans gathered since the start; the filter keeps running beside it.
 SEARCH_AFTER_UPDATES = 20
 SEARCH_AGAIN_RAD, SEARCH_AGAIN_M = math.radians(120.0), 0.5  # more sweep or travel before searching again
+# A panorama searched in vain this long is gathered again: odometry's drift over turns smears it (8 turns in the
+# kidnapping exercise: 52 % of its points on the map at the best place, 80 % needed), and no later search of it
+# can answer; a fresh one can. Below this, a search that does not answer waits for more of the same panorama.
+PANORAMA_RESTART_RAD, PANORAMA_RESTART_M = 3 * 2 * math.pi, 3.0
 REGION_MAX_M = 2.0  # the places near a guess that must not fit as well as the estimate
 CONFIRM_M, CONFIRM_RAD = 0.15, math.radians(8.0)  # the search's best place must be the estimate's
 PANORAMA_BEAM_STEP = 3
@@ -129,6 +133,11 @@ class Relocalizer:
         self._search = None
         self.last_search = SearchFigures(self.last_search.count + 1, found.places, found.inliers)
         if found.anchor_pose is None:
+            if found.inliers < MIN_INLIERS and (panorama.swept_rad >= PANORAMA_RESTART_RAD
+                                               or panorama.travelled_m >= PANORAMA_RESTART_M):
+                self._panorama, self._searched_at = Panorama(), (0.0, 0.0)
+                return Step(f"no place of the map fits the scans so far ({found.inliers:.0%} of them on the map at "
+                            "the best): gathering them again; keep turning or drive a little further")
             return Step(f"{found.places} places of the map fit the scans so far; keep turning or drive a little "
                         "further")
         pose = panorama.pose_now(found.anchor_pose, odometry)

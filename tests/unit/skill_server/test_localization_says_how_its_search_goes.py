@@ -25,15 +25,21 @@ TOKEN = "t"
 EXERCISE_START = Pose2D(2.9, -0.2, 2.5)  # the kidnapping exercise's practice start; odometry believes the dock
 
 
-def test_a_search_that_finds_two_places_says_so_in_the_figures(monkeypatch: pytest.MonkeyPatch) -> None:
-    class TwoPlaces:  # the whole-map search, sliced in the robot, answers "2 places" in its first slice here
+def answering(result: SearchResult) -> type:
+    """A stand-in for the whole-map search, sliced in the robot, that answers result in its first slice."""
+
+    class Answering:
         def __init__(self, *_args: object, **_kwargs: object) -> None:
             pass
 
         def step(self) -> SearchResult:
-            return SearchResult(None, 0.93, 2)
+            return result
 
-    monkeypatch.setattr(relocalization, "SlicedSearch", TwoPlaces)
+    return Answering
+
+
+def test_a_search_that_finds_two_places_says_so_in_the_figures(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(relocalization, "SlicedSearch", answering(SearchResult(None, 0.93, 2)))
     relocalizer = Relocalizer(0.5, 0.2)
     assert relocalizer.figures["searches"] == 0
     angles = np.linspace(-2.0, 2.0, 30)
@@ -46,6 +52,27 @@ def test_a_search_that_finds_two_places_says_so_in_the_figures(monkeypatch: pyte
     assert (figures["searches"], figures["places_fitting"]) == (1, 2)
     assert figures["search_inliers"] == pytest.approx(0.93)
     assert figures["panorama_travelled_m"] == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize(("turns", "gathered_again"), [(1.0, False), (3.5, True)])
+def test_a_panorama_that_fits_no_place_after_three_turns_is_gathered_again(monkeypatch: pytest.MonkeyPatch,
+                                                                           turns: float, gathered_again: bool) -> None:
+    """The exercise's browser journey once searched 23 times in 90 s of turning, the panorama grown to 53.7 rad and
+    52 % of it on the map at the best place: smeared by odometry's drift, it could never answer."""
+    monkeypatch.setattr(relocalization, "SlicedSearch", answering(SearchResult(None, 0.52, 1)))
+    relocalizer = Relocalizer(0.5, 0.2)
+    angles = np.linspace(-2.0, 2.0, 30)
+    scans = 200
+    for step in range(scans + 1):  # turning on the spot
+        relocalizer.gather(Pose2D(0.0, 0.0, turns * 2 * math.pi * step / scans), np.full(30, 2.0), angles, 8.0)
+    for _ in range(SEARCH_AFTER_UPDATES):
+        said = relocalizer.after_update(None, None, Pose2D(), Pose2D())  # type: ignore[arg-type]
+    assert relocalizer.figures["searches"] == 1
+    swept = relocalizer.figures["panorama_swept_rad"]
+    if gathered_again:
+        assert swept == 0 and "gathering them again" in said.announcement
+    else:
+        assert swept == pytest.approx(turns * 2 * math.pi) and "keep turning" in said.announcement
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
