@@ -38,6 +38,16 @@ print("looping forever")
 while True:
     pass
 """
+STUBBORN = """from telelab import robot
+robot.tick()
+print("ignoring Stop")
+while True:
+    try:
+        while True:
+            pass
+    except KeyboardInterrupt:
+        pass
+"""
 FAILING = """from telelab import robot
 robot.tick()
 
@@ -149,6 +159,15 @@ def test_a_student_runs_submits_stops_and_reads_errors_in_the_browser(page, exer
     console.filter(has_text="Stopped").wait_for(timeout=10_000)
     wait_until(lambda: truth_speed(exercise_lab, "practice-student1") < 0.02, 5, "an endless loop kept the robot going")
     page.get_by_role("button", name="Run on my practice robot").wait_for()
+
+    # A program that swallows the interrupt: Python is replaced, and the next run waits until it has loaded again
+    # (it once started on the loading worker and never ended).
+    set_code(page, STUBBORN)
+    page.get_by_role("button", name="Run on my practice robot").click()
+    console.filter(has_text="ignoring Stop").wait_for(timeout=30_000)
+    page.get_by_role("button", name="Stop").click()
+    console.filter(has_text="Python is restarted").wait_for(timeout=10_000)
+    console.filter(has_text="Python has loaded again").wait_for(timeout=60_000)
 
     # An exception: the student's line and the traceback.
     set_code(page, FAILING)

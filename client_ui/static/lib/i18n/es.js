@@ -390,6 +390,7 @@ export default {
 "Put consenting participants' details in the CSV": "Incluir en el CSV los datos de los participantes que consintieron",
 "Python did not load: {message}": "Python no se cargó: {message}",
 "Python exercises run in a window of their own, not inside another site's page.": "Los ejercicios de Python se ejecutan en una ventana propia, no dentro de la página de otro sitio.",
+"Python has loaded again: you can run your program.": "Python se ha cargado de nuevo: puedes ejecutar tu programa.",
 "Python {version} is ready (loaded in {load_s} s).": "Python {version} está listo (cargado en {load_s} s).",
 "Queue": "Cola",
 "Raise my hand": "Levantar la mano",

@@ -41,10 +41,11 @@ export class PythonWorker extends EventTarget {
     }).then((message) => { this.loaded = true; return message; });
   }
 
-  /** Replace a worker that does not answer (the interpreter reloads). */
+  /** Replace a worker that does not answer (the interpreter reloads; "restarting" says so, with the new ready). */
   restart() {
     this.loaded = false;
     this.ready = this.#spawn();
+    this.dispatchEvent(new CustomEvent("restarting", { detail: this.ready }));
     return this.ready;
   }
 
@@ -140,7 +141,10 @@ export class RobotRun extends EventTarget {
     return Promise.all([ready, heard]).then(([message]) => message);
   }
 
-  start(code, limits) {
+  /** Runs the code once the interpreter is loaded (a worker replaced after a Stop may still be loading). */
+  async start(code, limits) {
+    await this.#python.ready;
+    if (this.#finished) return;
     this.#python.addEventListener("message", this.onWorker);
     this.#lastTick = performance.now();
     this.#watchdog = setInterval(() => this.#checkTicks(), 50);

@@ -98,13 +98,26 @@ function setRunning(running) {
 // ---- Python ----
 // The worker shares memory with the page (SharedArrayBuffer), which only an isolated page has: none is made otherwise.
 const python3 = window.crossOriginIsolated ? new PythonWorker() : null;
-python3?.ready.then((message) => {
-  pythonReady = true;
-  timings.pyodide_load_s = message.load_s;
-  root.dataset.pythonReady = "true";
-  say(t("Python {version} is ready (loaded in {load_s} s).", { version: message.version, load_s: fixed(message.load_s, 1) }));
-  setRunning(false);
-}, (error) => say(t("Python did not load: {message}", { message: error.message }), "error"));
+function awaitPython(ready, again = false) {
+  ready.then((message) => {
+    pythonReady = true;
+    timings.pyodide_load_s ??= message.load_s;
+    root.dataset.pythonReady = "true";
+    // Loaded again after a Stop: said in the console, so the run's grade stays on the status line.
+    if (again) print(t("Python has loaded again: you can run your program."));
+    else say(t("Python {version} is ready (loaded in {load_s} s).", { version: message.version, load_s: fixed(message.load_s, 1) }));
+    setRunning(Boolean(current));
+  }, (error) => say(t("Python did not load: {message}", { message: error.message }), "error"));
+}
+if (python3) {
+  awaitPython(python3.ready);
+  // A program that ignored Stop had its worker replaced: Run waits until the new interpreter has loaded.
+  python3.addEventListener("restarting", (event) => {
+    pythonReady = false;
+    root.dataset.pythonReady = "false";
+    awaitPython(event.detail, true);
+  });
+}
 
 if (window.self !== window.top && !window.crossOriginIsolated) {
   // Framed by an LMS, the page cannot be isolated (its parent is not): the program needs a window of its own.

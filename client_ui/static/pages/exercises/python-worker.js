@@ -12,6 +12,7 @@ const STOP = 0, TELEMETRY_VERSION = 1, SKILL_STATE = 2, SKILL_RESULT = 3, TELEME
 const SKILL_STATUSES = ["", "SUCCEEDED", "ABORTED", "CANCELED", "REFUSED", "EXECUTING"];
 
 let pyodide = null;
+let initialized = null;  // a run waits for it: a restarted worker may be asked to run before Pyodide has loaded
 let control = null;
 let telemetry = null;
 let startedAt = 0;
@@ -125,7 +126,7 @@ function run(message) {
   } catch (error) {
     outcome = { ok: false, message: String(error?.message ?? error) };
   } finally {
-    runStudent.destroy();
+    runStudent?.destroy();
   }
   post({ type: "done", ...outcome });
 }
@@ -133,8 +134,11 @@ function run(message) {
 self.onmessage = async (event) => {
   const message = event.data;
   try {
-    if (message.type === "init") await init(message);
-    else if (message.type === "run") run(message);
+    if (message.type === "init") await (initialized = init(message));
+    else if (message.type === "run") {
+      await initialized;
+      run(message);
+    }
   } catch (error) {
     post({ type: "failed", message: String(error?.message ?? error) });
   }
