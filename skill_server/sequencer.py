@@ -191,14 +191,17 @@ class Sequencer:
             self._end(self._motor, GoalStatus.ABORTED, "CONTROL_REVOKED", "the controller changed; the base stops",
                       EventKind.FAILED)
 
-    def on_reset(self, reason: str) -> None:
-        """The world was reset or the robot moved by hand: every goal ends, the obstacle grid is redrawn."""
+    def on_reset(self, reason: str, pose_known: bool = True) -> None:
+        """The world was reset or the robot moved by hand: every goal ends, the obstacle grid is redrawn. A robot
+        carried off without being told (pose_known False, a kidnapping) leaves the pose tracking lost."""
         for running in [*([self._motor] if self._motor else []), *self._perceptive.values()]:
             self._end(running, GoalStatus.ABORTED, "RESET", f"the world was {reason}", EventKind.FAILED)
         self.perception.obstacles = ObstacleMap()
         self._last_belief = None
-        if self._tracker is not None:
+        if self._tracker is not None and pose_known:
             self._tracker.restart()  # the robot was placed: its pose is known again
+        elif self._tracker is not None:
+            self._tracker.lose()
         self._last_laser = None
         self._stop_wheels = False
 

@@ -47,7 +47,7 @@ class Autonomy(Protocol):
 
     def on_controller_changed(self, version: int) -> None: ...
 
-    def on_reset(self, reason: str) -> None: ...
+    def on_reset(self, reason: str, pose_known: bool = True) -> None: ...
 
     def at_rest(self) -> bool:
         """No goal runs: nothing but a command can make the robot move."""
@@ -509,7 +509,7 @@ class World:
         self._sense(self._ground_truth())
         self._publish_snapshot()
         if self._autonomy is not None:
-            self._autonomy.on_reset("moved to a new pose")
+            self._autonomy.on_reset("moved to a new pose", pose_known=not kidnap)
 
     def _tick_once(self) -> None:
         self._follow_drive_target()

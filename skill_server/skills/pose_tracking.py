@@ -40,20 +40,31 @@ class PoseTracker:
         self._field = self._filter.field  # computed now, and shared by the filters of later restarts
         self._restart_pending = False
         self._adopted: tuple[Pose2D, Pose2D] | None = None  # a pose trusted elsewhere, and odometry then
+        self._lost = False  # carried off: nothing tracked until a pose is known again
 
     def restart(self) -> None:
         """Starts again at the next tick's odometry pose (the robot was placed there: a known pose)."""
-        self._restart_pending = True
+        self._restart_pending, self._lost = True, False
+
+    def lose(self) -> None:
+        """The robot was carried off without being told: its pose is unknown until the localization skill finds it
+        (adopt) or it is placed again. Restarted at odometry's belief instead, the tight cloud converged at a place
+        looking like the one the robot was carried to (4 of 8 kidnappings to the room's mirror place), the skills
+        steered by it and the environment model drew the search's scans there (133-403 cells of the floor plan
+        flipped)."""
+        self._lost, self._restart_pending, self._adopted = True, False, None
 
     def adopt(self, pose: Pose2D, odometry: Pose2D) -> None:
         """Starts again at pose (at that odometry reading), which the localization skill trusts while this tracker
         has lost track: after a kidnapping, the skills go on steering by the place found once the skill stops."""
-        self._adopted = (pose, odometry)
+        self._adopted, self._lost = (pose, odometry), False
 
     def update(self, tick: TickInput, defer_search: bool = False) -> None:
         """One tick: the filter predicts with odometry and weighs each new scan once the robot moved. With
         defer_search (a localization skill runs and searches the map itself), a lost tracker does not search the
         whole map too: two searches doubled the loop's work."""
+        if self._lost:
+            return
         if self._restart_pending:
             self._filter, self._restart_pending = self._filter_at(tick.odometry.pose, self._field), False
         if self._adopted is not None:
@@ -65,7 +76,7 @@ class PoseTracker:
 
     def believed_pose(self, odometry: Pose2D) -> Pose2D | None:
         """The tracked pose now, or None before the first scan or after losing track (odometry it is, then)."""
-        return self._filter.believed_pose(odometry)
+        return None if self._lost else self._filter.believed_pose(odometry)
 
     def _filter_at(self, start: Pose2D, field: np.ndarray | None) -> Localization:
         own = Perception()
