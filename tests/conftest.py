@@ -577,6 +577,8 @@ def demo_accounts(app) -> dict[str, str]:
 # every Ray of the machine), and labs of several web processes on PostgreSQL (each process's pool holds up to 15 of
 # the server's 100 connections, and two such labs at once would also slow each other's measured steps). A group runs
 # at its first file's place, before files that come earlier than its others, so its files leave lab-1 as they found it.
+# The files of tests marked `alone` join the labs' group and run at its end, one after another (pytest_collection_
+# modifyitems): the machine is emptied for them once, not once per test (each wait idled the suite's processes).
 SAME_PROCESS_FILES = {
     "tests/integration/farm/test_ray_farm.py": "ray",
     "tests/integration/benchmarks/test_farm_benchmark_smoke.py": "ray",
@@ -587,8 +589,22 @@ SAME_PROCESS_FILES = {
         "tests/integration/benchmarks/test_database_load_benchmark_smoke.py",
         "tests/integration/benchmarks/test_workers_benchmark_smoke.py",
         "tests/integration/middleware/test_rolling_restart.py",
+        "tests/e2e/test_class_wall_across_workers.py",
+        "tests/e2e/test_robot_pools.py",
+        "tests/integration/access/test_vanished_seat_across_workers.py",
+        "tests/integration/middleware/test_events_across_workers.py",
     ], "postgresql-labs"),
 }
+
+
+def _alone(item: pytest.Item) -> bool:
+    return item.get_closest_marker("alone") is not None
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """The modules holding tests marked `alone` last, each whole and in its order (every suite process sorts alike)."""
+    alone_modules = {item.module for item in items if _alone(item)}  # type: ignore[attr-defined]
+    items.sort(key=lambda item: getattr(item, "module", None) in alone_modules)
 
 
 SUITE_PROCESSES_MAX = 4  # each holds up to a PostgreSQL lab's 15 connections and its tests' own of the server's 100
@@ -620,7 +636,8 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log):
 # second", a restart's chat lines answered in time): with several suite processes it starts only once every other
 # process has ended its current test, and they start none until it ends, so its bounds are not the other tests' load.
 # flock(2) on one file per run, shared by every other test and held alone by a marked one, behind a turnstile that
-# the marked test holds while it waits (else the others' overlapping turns could hold the file shared forever).
+# the marked test holds while it waits (else the others' overlapping turns could hold the file shared forever). A
+# marked test followed by another keeps the machine for it.
 def _suite_lock_files() -> tuple[Path, Path] | None:
     run = os.environ.get("PYTEST_XDIST_TESTRUNUID")
     if run is None:
@@ -629,31 +646,72 @@ def _suite_lock_files() -> tuple[Path, Path] | None:
     return base.with_suffix(".turnstile"), base.with_suffix(".share")
 
 
+class MachineShare:
+    """One suite process's share of the machine: shared for an ordinary test, the whole of it for a marked one."""
+
+    def __init__(self) -> None:
+        self._share = None  # the lock file, open while a share is held (flock holds while it is open)
+        self._alone = False
+
+    def take(self, alone: bool) -> None:
+        if self._share is not None and alone and self._alone:
+            return  # kept since the marked test before
+        self.give_back()
+        files = _suite_lock_files()
+        if files is None:
+            return
+        import fcntl
+
+        with files[0].open("a") as turnstile:
+            fcntl.flock(turnstile, fcntl.LOCK_EX)
+            share = files[1].open("a")
+            try:
+                fcntl.flock(share, fcntl.LOCK_EX if alone else fcntl.LOCK_SH)
+            except BaseException:
+                share.close()
+                raise
+            finally:
+                fcntl.flock(turnstile, fcntl.LOCK_UN)
+        self._share, self._alone = share, alone
+
+    def give_back(self) -> None:
+        if self._share is not None:
+            self._share.close()
+            self._share, self._alone = None, False
+
+
 @contextmanager
 def share_of_the_machine(alone: bool) -> Iterator[None]:
     """The machine shared with the suite's other processes' tests, or, alone, to this test by itself."""
-    files = _suite_lock_files()
-    if files is None:
+    share = MachineShare()
+    share.take(alone)
+    try:
         yield
-        return
-    import fcntl
+    finally:
+        share.give_back()
 
-    with files[0].open("a") as turnstile, files[1].open("a") as share:
-        fcntl.flock(turnstile, fcntl.LOCK_EX)
-        try:
-            fcntl.flock(share, fcntl.LOCK_EX if alone else fcntl.LOCK_SH)
-        finally:
-            fcntl.flock(turnstile, fcntl.LOCK_UN)
-        try:
-            yield
-        finally:
-            fcntl.flock(share, fcntl.LOCK_UN)
+
+_machine = MachineShare()
+_next_items: dict[str, pytest.Item | None] = {}
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None):
+    _next_items[item.nodeid] = nextitem
+    try:
+        return (yield)
+    finally:
+        _next_items.pop(item.nodeid, None)
 
 
 @pytest.fixture(autouse=True)
 def _share_of_the_machine(request: pytest.FixtureRequest) -> Iterator[None]:
-    with share_of_the_machine(alone=request.node.get_closest_marker("alone") is not None):
-        yield
+    alone = _alone(request.node)
+    _machine.take(alone)
+    yield
+    following = _next_items.get(request.node.nodeid)
+    if not (alone and following is not None and _alone(following)):
+        _machine.give_back()
 
 
 # Figures a test wants read at the end of `make test` (record_property("summary", line)), from any xdist worker.

@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from tests.conftest import share_of_the_machine
+from tests.conftest import MachineShare, share_of_the_machine
 
 
 @pytest.fixture
@@ -75,3 +75,25 @@ def test_others_taking_overlapping_turns_do_not_starve_an_alone_test(suite_run) 
     for thread in (waiter, *turns):
         thread.join(5)
     assert got_it and waited_s < 1.0, "the alone test waited while others took overlapping turns"
+
+
+def test_a_marked_test_followed_by_another_keeps_the_machine_for_it(suite_run) -> None:
+    events: list[str] = []
+    machine = MachineShare()
+    machine.take(alone=True)
+
+    def other() -> None:
+        with share_of_the_machine(alone=False):
+            events.append("other runs")
+
+    waiting = threading.Thread(target=other)
+    waiting.start()
+    time.sleep(0.2)
+    began = time.monotonic()
+    machine.take(alone=True)  # the next marked test: no turn is given away in between
+    assert time.monotonic() - began < 0.1 and events == []
+    time.sleep(0.2)
+    assert events == [], "another test ran between two marked ones"
+    machine.give_back()
+    waiting.join(5)
+    assert events == ["other runs"]
