@@ -602,9 +602,17 @@ def _alone(item: pytest.Item) -> bool:
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """The modules holding tests marked `alone` last, each whole and in its order (every suite process sorts alike)."""
+    """The modules holding tests marked `alone` last, each whole and in its order (every suite process sorts alike),
+    those that also hold unmarked tests first among them (an unmarked test between two marked ones gives the machine
+    back, and the next marked one waits for it again)."""
     alone_modules = {item.module for item in items if _alone(item)}  # type: ignore[attr-defined]
-    items.sort(key=lambda item: getattr(item, "module", None) in alone_modules)
+    mixed_modules = {item.module for item in items if not _alone(item)} & alone_modules  # type: ignore[attr-defined]
+
+    def place(item: pytest.Item) -> int:
+        module = getattr(item, "module", None)
+        return 0 if module not in alone_modules else 1 if module in mixed_modules else 2
+
+    items.sort(key=place)
 
 
 SUITE_PROCESSES_MAX = 4  # each holds up to a PostgreSQL lab's 15 connections and its tests' own of the server's 100
