@@ -102,7 +102,7 @@ class Localization(SkillController):
         self._std = (initial_spread_m, initial_spread_m, initial_spread_rad)
         self._published: LocalizationEstimate | None = None
         self._beams: tuple[np.ndarray, np.ndarray] | None = None  # the last update's beams (ranges, angles)
-        self._relocalizer = Relocalizer(initial_spread_m, initial_spread_rad)  # the evidence while not trusted
+        self._relocalizer = Relocalizer(initial_spread_m)  # the evidence while not trusted
         self.searches_whole_map = True  # the pose tracking turns it off while the localization skill searches
         perception.localizer = self
 

@@ -21,7 +21,7 @@ SEARCH_AGAIN_RAD, SEARCH_AGAIN_M = math.radians(120.0), 0.5  # more sweep or tra
 # kidnapping exercise: 52 % of its points on the map at the best place, 80 % needed), and no later search of it
 # can answer; a fresh one can. Below this, a search that does not answer waits for more of the same panorama.
 PANORAMA_RESTART_RAD, PANORAMA_RESTART_M = 3 * 2 * math.pi, 3.0
-REGION_MAX_M = 2.0  # the places near a guess that must not fit as well as the estimate
+REGION_MAX_M = 2.0  # the places near a guess that must not fit as well as the estimate, at any heading
 CONFIRM_M, CONFIRM_RAD = 0.15, math.radians(8.0)  # the search's best place must be the estimate's
 PANORAMA_BEAM_STEP = 3
 
@@ -47,9 +47,12 @@ class SearchFigures:
 class Relocalizer:
     """The evidence localization gathers while its estimate is not trusted."""
 
-    def __init__(self, spread_m: float, spread_rad: float) -> None:
+    def __init__(self, spread_m: float) -> None:
         self._region_m = min(REGION_MAX_M, 3.0 * spread_m)
-        self._region_rad = min(math.pi, 3.0 * spread_rad)
+        # Every heading, whatever the guess's: a rectangular room fits as well half a turn round its centre, and a
+        # robot 0.5 m from the dock, facing away, converged on its mirror place inside the default guess (1 start
+        # of 20 drawn from the whole lab's floor); the mirror's heading lay outside 3 spreads of the guess's.
+        self._region_rad = math.pi
         self.searching = False
         self._restart()
         self._confirmed = False  # the estimate was checked against the places near it (or found by a search)
@@ -88,7 +91,8 @@ class Relocalizer:
         self._panorama.add(odometry, ranges_m[echoed], angles_rad[echoed])
 
     def confirms(self, lookup: FieldLookup, known_free: np.ndarray, estimate: Pose2D, odometry: Pose2D) -> bool:
-        """Whether the scans gathered fit the estimate and no other place near it (within 3 initial spreads): a
+        """Whether the scans gathered fit the estimate and no other place near it (within 3 initial spreads, at any
+        heading): a
         tight cloud fitting 84 % of one scan's echoes sat 0.6 m off on a map built from readings, where a truer
         place fitted too. While it fails, checked again only after SEARCH_AGAIN more motion."""
         panorama = self._panorama

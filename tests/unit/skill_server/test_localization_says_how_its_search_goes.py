@@ -40,7 +40,7 @@ def answering(result: SearchResult) -> type:
 
 def test_a_search_that_finds_two_places_says_so_in_the_figures(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(relocalization, "SlicedSearch", answering(SearchResult(None, 0.93, 2)))
-    relocalizer = Relocalizer(0.5, 0.2)
+    relocalizer = Relocalizer(0.5)
     assert relocalizer.figures["searches"] == 0
     angles = np.linspace(-2.0, 2.0, 30)
     for step in range(21):  # a 1 m drive: a panorama ready to search
@@ -60,7 +60,7 @@ def test_a_panorama_that_fits_no_place_after_three_turns_is_gathered_again(monke
     """The exercise's browser journey once searched 23 times in 90 s of turning, the panorama grown to 53.7 rad and
     52 % of it on the map at the best place: smeared by odometry's drift, it could never answer."""
     monkeypatch.setattr(relocalization, "SlicedSearch", answering(SearchResult(None, 0.52, 1)))
-    relocalizer = Relocalizer(0.5, 0.2)
+    relocalizer = Relocalizer(0.5)
     angles = np.linspace(-2.0, 2.0, 30)
     scans = 200
     for step in range(scans + 1):  # turning on the spot

@@ -34,7 +34,7 @@ def searched(monkeypatch: pytest.MonkeyPatch, found_anchor: Pose2D) -> relocaliz
 
     monkeypatch.setattr(relocalization, "search", lambda *_args, **_kwargs: answer)
     monkeypatch.setattr(relocalization, "SlicedSearch", AnsweredAtOnce)
-    relocalizer = Relocalizer(0.02, 0.02)
+    relocalizer = Relocalizer(0.02)
     angles = np.linspace(-2.0, 2.0, 30)
     for step in range(21):  # the odometry's frame equals the map's here: the anchor is (0, 0, 0)
         relocalizer.gather(Pose2D(0.05 * step, 0.0, 0.0), np.full(30, 2.0), angles, 8.0)
