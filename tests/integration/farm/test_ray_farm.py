@@ -41,16 +41,20 @@ def _print_ray_logs(made: Cluster) -> None:
 
 def _two_nodes() -> Cluster:
     """Ray waits a fixed 30 s for a node's raylet to register; on a loaded CI machine it once did not, so a node
-    that does not come up is reported with Ray's logs and the whole cluster is started once more."""
+    that does not come up is reported with Ray's logs and the whole cluster is started once more. The head too: its
+    GCS server once died before it ran (a segmentation fault in the forked child, where Ray's preexec_fn runs Python
+    in a copy of the suite's process and its many threads), and Ray waited 60 s for a port it never wrote."""
     for attempt in (1, 2):
-        made = Cluster(initialize_head=True, head_node_args={
-            "num_cpus": 2, "node_ip_address": "127.0.0.1", "include_dashboard": False})
+        made: Cluster | None = None
         try:
+            made = Cluster(initialize_head=True, head_node_args={
+                "num_cpus": 2, "node_ip_address": "127.0.0.1", "include_dashboard": False})
             made.add_node(num_cpus=2, node_ip_address="127.0.0.1")
             made.wait_for_nodes()
             return made
         except Exception:
-            _print_ray_logs(made)
+            if made is not None:
+                _print_ray_logs(made)
             subprocess.run([sys.executable, "-m", "ray.scripts.scripts", "stop", "--force"], check=False,
                            capture_output=True)
             if attempt == 2:
