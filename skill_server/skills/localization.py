@@ -102,7 +102,8 @@ class Localization(SkillController):
         self._std = (initial_spread_m, initial_spread_m, initial_spread_rad)
         self._published: LocalizationEstimate | None = None
         self._beams: tuple[np.ndarray, np.ndarray] | None = None  # the last update's beams (ranges, angles)
-        self._relocalizer = Relocalizer(initial_spread_m)  # the evidence while not trusted
+        guess = Pose2D(initial_x_m, initial_y_m, initial_theta_rad)
+        self._relocalizer = Relocalizer(initial_spread_m, guess)  # the evidence while not trusted
         self.searches_whole_map = True  # the pose tracking turns it off while the localization skill searches
         perception.localizer = self
 

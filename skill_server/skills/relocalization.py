@@ -47,8 +47,11 @@ class SearchFigures:
 class Relocalizer:
     """The evidence localization gathers while its estimate is not trusted."""
 
-    def __init__(self, spread_m: float) -> None:
+    def __init__(self, spread_m: float, guess: Pose2D | None = None) -> None:
         self._region_m = min(REGION_MAX_M, 3.0 * spread_m)
+        # The first panorama's places are the guess's: a cloud converged 1 m from the dock on the mirror of the
+        # truth, which lay 1 m from the dock too, within the guess, but 2 m from the estimate (2 starts of 40 near it).
+        self._guess = guess
         # Every heading, whatever the guess's: a rectangular room fits as well half a turn round its centre, and a
         # robot 0.5 m from the dock, facing away, converged on its mirror place inside the default guess (1 start
         # of 20 drawn from the whole lab's floor); the mirror's heading lay outside 3 spreads of the guess's.
@@ -76,8 +79,8 @@ class Relocalizer:
         self._search: SlicedSearch | None = None  # a whole-map search under way, one slice per update
 
     def trusted(self) -> None:
-        """The estimate is converged: the evidence gathered so far is no longer needed."""
-        self.searching = False
+        """The estimate is converged: the evidence gathered so far is no longer needed (nor the guess)."""
+        self.searching, self._guess = False, None
         self._restart()
 
     def lost(self) -> None:
@@ -91,10 +94,10 @@ class Relocalizer:
         self._panorama.add(odometry, ranges_m[echoed], angles_rad[echoed])
 
     def confirms(self, lookup: FieldLookup, known_free: np.ndarray, estimate: Pose2D, odometry: Pose2D) -> bool:
-        """Whether the scans gathered fit the estimate and no other place near it (within 3 initial spreads, at any
-        heading): a
-        tight cloud fitting 84 % of one scan's echoes sat 0.6 m off on a map built from readings, where a truer
-        place fitted too. While it fails, checked again only after SEARCH_AGAIN more motion."""
+        """Whether the scans gathered fit the estimate and no other place near it (within 3 initial spreads of the
+        guess, or of the estimate once the panorama was gathered again, at any heading): a tight cloud fitting 84 %
+        of one scan's echoes sat 0.6 m off on a map built from readings, where a truer place fitted too. While it
+        fails, checked again only after SEARCH_AGAIN more motion."""
         panorama = self._panorama
         if self._confirmed or panorama.anchor is None:
             return True
@@ -104,7 +107,8 @@ class Relocalizer:
             return False
         self._confirm_at = moved
         anchor_estimate = compose(estimate, relative(odometry, panorama.anchor))
-        found = search(lookup, known_free, panorama.points(), Region(anchor_estimate, self._region_m, self._region_rad))
+        centre = anchor_estimate if self._guess is None else self._guess
+        found = search(lookup, known_free, panorama.points(), Region(centre, self._region_m, self._region_rad))
         self._confirmed = found.anchor_pose is not None and is_same_place(found.anchor_pose, anchor_estimate)
         return self._confirmed
 
@@ -139,13 +143,13 @@ class Relocalizer:
         if found.anchor_pose is None:
             if found.inliers < MIN_INLIERS and (panorama.swept_rad >= PANORAMA_RESTART_RAD
                                                or panorama.travelled_m >= PANORAMA_RESTART_M):
-                self._panorama, self._searched_at = Panorama(), (0.0, 0.0)
+                self._panorama, self._searched_at, self._guess = Panorama(), (0.0, 0.0), None
                 return Step(f"no place of the map fits the scans so far ({found.inliers:.0%} of them on the map at "
                             "the best): gathering them again; keep turning or drive a little further")
             return Step(f"{found.places} places of the map fit the scans so far; keep turning or drive a little "
                         "further")
         pose = panorama.pose_now(found.anchor_pose, odometry)
-        self.searching, self._confirmed = False, True  # the whole map was searched: no other place fits
+        self.searching, self._confirmed, self._guess = False, True, None  # the whole map was searched: no rival
         self._restart()
         if is_same_place(pose, estimate):
             return Step(f"the scans fit one place, the estimate's, {found.inliers:.0%} of them on the map")
